@@ -1,0 +1,77 @@
+#include "handshare/common/options.hpp"
+
+#include <gtest/gtest.h>
+
+namespace handshare::common {
+namespace {
+
+Options Make() {
+  Options o("prog", "test program");
+  o.Value("domain", "D", "DDS domain", "0").Value("session", "S", "session", std::nullopt, true)
+      .Flag("headless", "no window");
+  return o;
+}
+
+TEST(Options, ParsesValuesFlagsAndDefaults) {
+  Options o = Make();
+  const char* argv[] = {"prog", "--session", "demo", "--headless", "--domain=7"};
+  ASSERT_TRUE(o.Parse(5, argv));
+  EXPECT_EQ(o.GetString("session"), "demo");
+  EXPECT_TRUE(o.FlagSet("headless"));
+  EXPECT_EQ(o.GetInt("domain", 0, 232), 7);
+}
+
+TEST(Options, RejectsUnknownMissingAndMalformed) {
+  {
+    Options o = Make();
+    const char* argv[] = {"prog", "--session", "s", "--bogus"};
+    EXPECT_THROW(o.Parse(4, argv), OptionError);
+  }
+  {
+    Options o = Make();
+    const char* argv[] = {"prog", "--domain", "3"};
+    EXPECT_THROW(o.Parse(3, argv), OptionError);  // --session is required
+  }
+  {
+    Options o = Make();
+    const char* argv[] = {"prog", "--session"};
+    EXPECT_THROW(o.Parse(2, argv), OptionError);  // value missing
+  }
+  {
+    Options o = Make();
+    const char* argv[] = {"prog", "--session", "s", "--domain", "12x"};
+    ASSERT_TRUE(o.Parse(5, argv));
+    EXPECT_THROW(o.GetInt("domain", 0, 232), OptionError);
+  }
+  {
+    Options o = Make();
+    const char* argv[] = {"prog", "--session", "s", "--domain", "500"};
+    ASSERT_TRUE(o.Parse(5, argv));
+    EXPECT_THROW(o.GetInt("domain", 0, 232), OptionError);  // out of range
+  }
+}
+
+TEST(Options, ErrorNamesTheOption) {
+  Options o = Make();
+  const char* argv[] = {"prog", "--session", "s", "--domain", "abc"};
+  ASSERT_TRUE(o.Parse(5, argv));
+  try {
+    o.GetInt("domain", 0, 232);
+    FAIL() << "expected OptionError";
+  } catch (const OptionError& e) {
+    EXPECT_NE(std::string(e.what()).find("--domain"), std::string::npos);
+    EXPECT_NE(std::string(e.what()).find("abc"), std::string::npos);
+  }
+}
+
+TEST(Options, HelpReturnsFalse) {
+  Options o = Make();
+  const char* argv[] = {"prog", "--help"};
+  testing::internal::CaptureStdout();
+  EXPECT_FALSE(o.Parse(2, argv));
+  const std::string out = testing::internal::GetCapturedStdout();
+  EXPECT_NE(out.find("--session S"), std::string::npos);
+}
+
+}  // namespace
+}  // namespace handshare::common

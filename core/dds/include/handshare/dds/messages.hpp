@@ -1,0 +1,40 @@
+#pragma once
+/// The generated message types (handshare.idl) and their registration with the DDS layer.
+/// Node libraries include this; they never include Fast DDS headers themselves.
+#include <handshare/idl/handshare.h>
+
+#include "handshare/dds/participant.hpp"
+#include "handshare/dds/topics.hpp"
+
+namespace handshare::dds {
+
+namespace detail {
+#define HANDSHARE_DECLARE_DDS_TYPE(T)                  \
+  template <>                                          \
+  const char* TypeOf<msg::T>::Name();                  \
+  template <>                                          \
+  std::shared_ptr<void> TypeOf<msg::T>::MakeSupport();
+HANDSHARE_DECLARE_DDS_TYPE(MemberInfo)
+HANDSHARE_DECLARE_DDS_TYPE(SceneState)
+HANDSHARE_DECLARE_DDS_TYPE(DeviceState)
+HANDSHARE_DECLARE_DDS_TYPE(ContactSet)
+HANDSHARE_DECLARE_DDS_TYPE(Deformation)
+HANDSHARE_DECLARE_DDS_TYPE(ObjectState)
+HANDSHARE_DECLARE_DDS_TYPE(ControlEvent)
+HANDSHARE_DECLARE_DDS_TYPE(MessageBoard)
+HANDSHARE_DECLARE_DDS_TYPE(LoopStatistics)
+#undef HANDSHARE_DECLARE_DDS_TYPE
+}  // namespace detail
+
+/// A writer for a topic of topics.hpp with its writer profile.
+template <class T>
+Writer<T> MakeWriter(Participant& p, const topics::TopicSpec& spec) {
+  return p.CreateWriter<T>(spec.name, spec.writer_profile);
+}
+/// A reader for a topic of topics.hpp with its reader profile.
+template <class T>
+Reader<T> MakeReader(Participant& p, const topics::TopicSpec& spec) {
+  return p.CreateReader<T>(spec.name, spec.reader_profile);
+}
+
+}  // namespace handshare::dds

@@ -1,0 +1,140 @@
+#pragma once
+/// The thin typed DDS layer: the only code in handshare that includes Fast DDS headers.
+///
+/// One Participant per process and domain; writers and readers are typed by the generated
+/// message types (handshare/idl/handshare.h) and get their QoS from named profiles in
+/// deploy/qos/*.xml. Every entity creation is checked and a failure throws DdsError naming
+/// the entity, topic and profile. Not real-time: the haptic thread never calls this layer.
+#include <array>
+#include <chrono>
+#include <cstdint>
+#include <memory>
+#include <stdexcept>
+#include <string>
+
+namespace handshare::dds {
+
+class DdsError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+/// Where the QoS profiles come from: $HANDSHARE_QOS_FILE if set, else the file given here,
+/// else the project's deploy/qos/handshare_qos.xml (path compiled in).
+std::string DefaultQosFile();
+
+enum class InstanceState { kAlive, kDisposed, kNoWriters };
+
+/// What a reader learns besides the sample.
+struct SampleMeta {
+  bool valid_data = false;        // false: only the instance state changed (leave, lost writer)
+  InstanceState instance_state = InstanceState::kAlive;
+  std::array<std::uint8_t, 16> instance{};  // key hash: identifies the instance (e.g. a member)
+  std::int64_t source_timestamp_ns = 0;     // writer's clock (UTC)
+};
+
+namespace detail {
+class TypeHandle;          // a registered type support (defined in the .cpp)
+class ParticipantImpl;
+
+/// Type-erased writer/reader: the templates below only cast.
+class UntypedWriter {
+ public:
+  virtual ~UntypedWriter() = default;
+  virtual void Write(const void* sample) = 0;
+  virtual void Dispose(const void* sample) = 0;
+  virtual int matched_readers() const = 0;
+};
+class UntypedReader {
+ public:
+  virtual ~UntypedReader() = default;
+  virtual bool TakeNext(void* sample, SampleMeta& meta) = 0;
+  virtual bool WaitForData(std::chrono::nanoseconds timeout) = 0;
+  virtual int matched_writers() const = 0;
+};
+
+/// Defined in types.cpp for every message type of handshare.idl.
+template <class T>
+struct TypeOf {
+  static const char* Name();
+  static std::shared_ptr<void> MakeSupport();  // eprosima TypeSupport, type-erased
+};
+}  // namespace detail
+
+template <class T>
+class Writer {
+ public:
+  Writer() = default;
+  explicit Writer(std::unique_ptr<detail::UntypedWriter> w) : w_(std::move(w)) {}
+  /// Publishes one sample. Throws DdsError if the middleware refuses it.
+  void Write(const T& sample) { w_->Write(&sample); }
+  /// Disposes the instance whose key is in sample (keyed topics: a clean leave).
+  void Dispose(const T& sample) { w_->Dispose(&sample); }
+  /// Readers currently matched: writers of optional streams skip work when this is 0.
+  int matched_readers() const { return w_->matched_readers(); }
+  explicit operator bool() const { return w_ != nullptr; }
+
+ private:
+  std::unique_ptr<detail::UntypedWriter> w_;
+};
+
+template <class T>
+class Reader {
+ public:
+  Reader() = default;
+  explicit Reader(std::unique_ptr<detail::UntypedReader> r) : r_(std::move(r)) {}
+  /// Takes the next sample if any (non-blocking).
+  bool TakeNext(T& sample, SampleMeta& meta) { return r_->TakeNext(&sample, meta); }
+  /// Blocks on a WaitSet until data is available or the timeout passes.
+  bool WaitForData(std::chrono::nanoseconds timeout) { return r_->WaitForData(timeout); }
+  int matched_writers() const { return r_->matched_writers(); }
+  explicit operator bool() const { return r_ != nullptr; }
+
+ private:
+  std::unique_ptr<detail::UntypedReader> r_;
+};
+
+class Participant {
+ public:
+  /// @param domain_id   DDS domain (0..232).
+  /// @param session     the session: publisher and subscriber partition, so sessions on one
+  ///                    domain never see each other's samples.
+  /// @param name        participant name shown by DDS tools.
+  /// @param qos_file    XML profiles; empty: DefaultQosFile().
+  Participant(int domain_id, const std::string& session, const std::string& name,
+              const std::string& qos_file = "");
+  ~Participant();
+  Participant(const Participant&) = delete;
+  Participant& operator=(const Participant&) = delete;
+
+  /// @param profile  a data_writer profile name of the QoS file, e.g. "state".
+  template <class T>
+  Writer<T> CreateWriter(const std::string& topic, const std::string& profile) {
+    return Writer<T>(CreateUntypedWriter(topic, detail::TypeOf<T>::Name(),
+                                         detail::TypeOf<T>::MakeSupport(), profile));
+  }
+  /// @param profile  a data_reader profile name of the QoS file.
+  template <class T>
+  Reader<T> CreateReader(const std::string& topic, const std::string& profile) {
+    return Reader<T>(CreateUntypedReader(topic, detail::TypeOf<T>::Name(),
+                                         detail::TypeOf<T>::MakeSupport(), profile));
+  }
+
+  int domain_id() const noexcept { return domain_id_; }
+  const std::string& session() const noexcept { return session_; }
+
+ private:
+  std::unique_ptr<detail::UntypedWriter> CreateUntypedWriter(const std::string& topic,
+                                                             const char* type_name,
+                                                             std::shared_ptr<void> support,
+                                                             const std::string& profile);
+  std::unique_ptr<detail::UntypedReader> CreateUntypedReader(const std::string& topic,
+                                                             const char* type_name,
+                                                             std::shared_ptr<void> support,
+                                                             const std::string& profile);
+  int domain_id_;
+  std::string session_;
+  std::unique_ptr<detail::ParticipantImpl> impl_;
+};
+
+}  // namespace handshare::dds

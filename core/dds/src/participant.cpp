@@ -1,0 +1,235 @@
+// Fast DDS lives here and in types.cpp only. Every C-style return code and null entity is
+// turned into a DdsError that names what failed.
+#include "handshare/dds/participant.hpp"
+
+#include <fastdds/dds/core/condition/StatusCondition.hpp>
+#include <fastdds/dds/core/condition/WaitSet.hpp>
+#include <fastdds/dds/domain/DomainParticipant.hpp>
+#include <fastdds/dds/domain/DomainParticipantFactory.hpp>
+#include <fastdds/dds/publisher/DataWriter.hpp>
+#include <fastdds/dds/publisher/Publisher.hpp>
+#include <fastdds/dds/subscriber/DataReader.hpp>
+#include <fastdds/dds/subscriber/SampleInfo.hpp>
+#include <fastdds/dds/subscriber/Subscriber.hpp>
+#include <fastdds/dds/topic/Topic.hpp>
+#include <fastdds/dds/topic/TypeSupport.hpp>
+
+#include <cstdlib>
+#include <filesystem>
+#include <map>
+#include <mutex>
+#include <set>
+
+namespace handshare::dds {
+
+namespace fdds = eprosima::fastdds::dds;
+using eprosima::fastrtps::types::ReturnCode_t;
+
+namespace {
+
+constexpr const char* kParticipantProfile = "handshare_participant";
+
+void Check(const ReturnCode_t& rc, const std::string& what) {
+  if (rc != ReturnCode_t::RETCODE_OK) {
+    throw DdsError("DDS: " + what + " failed (return code " + std::to_string(rc()) + ")");
+  }
+}
+
+template <class P>
+P* CheckEntity(P* entity, const std::string& what) {
+  if (entity == nullptr) throw DdsError("DDS: could not create " + what);
+  return entity;
+}
+
+// XML profiles are process-wide in Fast DDS: load each file once.
+void LoadProfilesOnce(const std::string& file) {
+  static std::mutex mutex;
+  static std::set<std::string> loaded;
+  std::lock_guard<std::mutex> lock(mutex);
+  if (loaded.count(file)) return;
+  if (!std::filesystem::exists(file)) {
+    throw DdsError("DDS: QoS profile file not found: " + file +
+                   " (set HANDSHARE_QOS_FILE or run from the source tree)");
+  }
+  Check(fdds::DomainParticipantFactory::get_instance()->load_XML_profiles_file(file),
+        "loading QoS profiles from " + file);
+  loaded.insert(file);
+}
+
+std::int64_t ToNs(const eprosima::fastrtps::rtps::Time_t& t) {
+  return static_cast<std::int64_t>(t.seconds()) * 1000000000LL + t.nanosec();
+}
+
+class WriterImpl final : public detail::UntypedWriter {
+ public:
+  WriterImpl(fdds::DataWriter* w, std::string topic) : w_(w), topic_(std::move(topic)) {}
+  void Write(const void* sample) override {
+    if (!w_->write(const_cast<void*>(sample))) throw DdsError("DDS: write on " + topic_ + " failed");
+  }
+  void Dispose(const void* sample) override {
+    Check(w_->dispose(const_cast<void*>(sample), fdds::HANDLE_NIL), "dispose on " + topic_);
+  }
+  int matched_readers() const override {
+    fdds::PublicationMatchedStatus status;
+    Check(w_->get_publication_matched_status(status), "matched status of " + topic_);
+    return status.current_count;
+  }
+
+ private:
+  fdds::DataWriter* w_;  // owned by the publisher; deleted with the participant
+  std::string topic_;
+};
+
+class ReaderImpl final : public detail::UntypedReader {
+ public:
+  ReaderImpl(fdds::DataReader* r, std::string topic) : r_(r), topic_(std::move(topic)) {
+    fdds::StatusCondition& condition = r_->get_statuscondition();
+    Check(condition.set_enabled_statuses(fdds::StatusMask::data_available()),
+          "status mask of " + topic_);
+    Check(waitset_.attach_condition(condition), "attaching wait set of " + topic_);
+  }
+  ~ReaderImpl() override { waitset_.detach_condition(r_->get_statuscondition()); }
+
+  bool TakeNext(void* sample, SampleMeta& meta) override {
+    fdds::SampleInfo info;
+    const ReturnCode_t rc = r_->take_next_sample(sample, &info);
+    if (rc == ReturnCode_t::RETCODE_NO_DATA) return false;
+    Check(rc, "take on " + topic_);
+    meta.valid_data = info.valid_data;
+    switch (info.instance_state) {
+      case fdds::NOT_ALIVE_DISPOSED_INSTANCE_STATE:
+        meta.instance_state = InstanceState::kDisposed;
+        break;
+      case fdds::NOT_ALIVE_NO_WRITERS_INSTANCE_STATE:
+        meta.instance_state = InstanceState::kNoWriters;
+        break;
+      default:
+        meta.instance_state = InstanceState::kAlive;
+    }
+    const auto& handle = info.instance_handle.value;
+    for (std::size_t i = 0; i < meta.instance.size(); ++i) meta.instance[i] = handle[i];
+    meta.source_timestamp_ns = ToNs(info.source_timestamp);
+    return true;
+  }
+
+  bool WaitForData(std::chrono::nanoseconds timeout) override {
+    fdds::ConditionSeq active;
+    const auto s = std::chrono::duration_cast<std::chrono::seconds>(timeout);
+    const auto ns = std::chrono::duration_cast<std::chrono::nanoseconds>(timeout - s);
+    const ReturnCode_t rc = waitset_.wait(
+        active, eprosima::fastrtps::Duration_t(static_cast<std::int32_t>(s.count()),
+                                               static_cast<std::uint32_t>(ns.count())));
+    if (rc == ReturnCode_t::RETCODE_TIMEOUT) return false;
+    Check(rc, "wait on " + topic_);
+    return !active.empty();
+  }
+
+  int matched_writers() const override {
+    fdds::SubscriptionMatchedStatus status;
+    Check(r_->get_subscription_matched_status(status), "matched status of " + topic_);
+    return status.current_count;
+  }
+
+ private:
+  fdds::DataReader* r_;
+  std::string topic_;
+  fdds::WaitSet waitset_;
+};
+
+}  // namespace
+
+std::string DefaultQosFile() {
+  if (const char* env = std::getenv("HANDSHARE_QOS_FILE"); env != nullptr && *env != '\0') {
+    return env;
+  }
+  return HANDSHARE_DEFAULT_QOS_FILE;
+}
+
+namespace detail {
+class ParticipantImpl {
+ public:
+  fdds::DomainParticipant* participant = nullptr;
+  fdds::Publisher* publisher = nullptr;
+  fdds::Subscriber* subscriber = nullptr;
+  std::map<std::string, fdds::Topic*> topics;
+  std::map<std::string, std::shared_ptr<void>> types;  // keeps type supports alive
+
+  fdds::Topic* TopicFor(const std::string& name, const char* type_name,
+                        std::shared_ptr<void> support) {
+    if (!types.count(type_name)) {
+      auto* ts = static_cast<fdds::TypeSupport*>(support.get());
+      // Keep wire interop with other DDS implementations (see docs/dds.md).
+      (*ts)->auto_fill_type_information(false);
+      (*ts)->auto_fill_type_object(false);
+      Check(ts->register_type(participant), std::string("registering type ") + type_name);
+      types[type_name] = std::move(support);
+    }
+    if (auto it = topics.find(name); it != topics.end()) return it->second;
+    fdds::Topic* topic = CheckEntity(
+        participant->create_topic(name, type_name, fdds::TOPIC_QOS_DEFAULT), "topic " + name);
+    topics[name] = topic;
+    return topic;
+  }
+};
+}  // namespace detail
+
+Participant::Participant(int domain_id, const std::string& session, const std::string& name,
+                         const std::string& qos_file)
+    : domain_id_(domain_id), session_(session), impl_(std::make_unique<detail::ParticipantImpl>()) {
+  if (domain_id < 0 || domain_id > 232) {
+    throw DdsError("DDS: domain id " + std::to_string(domain_id) + " is outside 0..232");
+  }
+  if (session.empty()) throw DdsError("DDS: session name is empty");
+  const std::string file = qos_file.empty() ? DefaultQosFile() : qos_file;
+  LoadProfilesOnce(file);
+
+  auto* factory = fdds::DomainParticipantFactory::get_instance();
+  fdds::DomainParticipantQos pqos;
+  Check(factory->get_participant_qos_from_profile(kParticipantProfile, pqos),
+        std::string("reading participant profile '") + kParticipantProfile + "' from " + file);
+  pqos.name(name);
+  impl_->participant = CheckEntity(factory->create_participant(domain_id, pqos),
+                                   "participant '" + name + "' on domain " +
+                                       std::to_string(domain_id));
+  // The session is the partition: sessions sharing a domain never exchange samples.
+  fdds::PublisherQos pub_qos = fdds::PUBLISHER_QOS_DEFAULT;
+  pub_qos.partition().push_back(session.c_str());
+  impl_->publisher = CheckEntity(impl_->participant->create_publisher(pub_qos), "publisher");
+  fdds::SubscriberQos sub_qos = fdds::SUBSCRIBER_QOS_DEFAULT;
+  sub_qos.partition().push_back(session.c_str());
+  impl_->subscriber = CheckEntity(impl_->participant->create_subscriber(sub_qos), "subscriber");
+}
+
+Participant::~Participant() {
+  if (impl_ && impl_->participant != nullptr) {
+    // Deleting every entity and the participant releases its shared-memory segments.
+    impl_->participant->delete_contained_entities();
+    fdds::DomainParticipantFactory::get_instance()->delete_participant(impl_->participant);
+  }
+}
+
+std::unique_ptr<detail::UntypedWriter> Participant::CreateUntypedWriter(
+    const std::string& topic, const char* type_name, std::shared_ptr<void> support,
+    const std::string& profile) {
+  fdds::Topic* t = impl_->TopicFor(topic, type_name, std::move(support));
+  fdds::DataWriterQos qos;
+  Check(impl_->publisher->get_datawriter_qos_from_profile(profile, qos),
+        "reading data_writer profile '" + profile + "'");
+  fdds::DataWriter* w = CheckEntity(impl_->publisher->create_datawriter(t, qos),
+                                    "writer on " + topic + " (profile " + profile + ")");
+  return std::make_unique<WriterImpl>(w, topic);
+}
+
+std::unique_ptr<detail::UntypedReader> Participant::CreateUntypedReader(
+    const std::string& topic, const char* type_name, std::shared_ptr<void> support,
+    const std::string& profile) {
+  fdds::Topic* t = impl_->TopicFor(topic, type_name, std::move(support));
+  fdds::DataReaderQos qos;
+  Check(impl_->subscriber->get_datareader_qos_from_profile(profile, qos),
+        "reading data_reader profile '" + profile + "'");
+  fdds::DataReader* r = CheckEntity(impl_->subscriber->create_datareader(t, qos),
+                                    "reader on " + topic + " (profile " + profile + ")");
+  return std::make_unique<ReaderImpl>(r, topic);
+}
+
+}  // namespace handshare::dds

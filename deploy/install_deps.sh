@@ -1,0 +1,46 @@
+#!/usr/bin/env bash
+# Installs every Debian 12 package handshare needs to build, run and test.
+# Idempotent: packages already present are skipped without touching the network.
+set -euo pipefail
+
+PACKAGES=(
+  # toolchain
+  build-essential cmake ninja-build pkg-config git
+  # middleware: Fast DDS 2.9 and its IDL generator
+  libfastrtps-dev libfastcdr-dev fastddsgen fastdds-tools
+  # numerics: Eigen, CHOLMOD (SuiteSparse), an optimized BLAS
+  libeigen3-dev libsuitesparse-dev libopenblas-dev
+  # geometry: collision and mesh import
+  libfcl-dev libassimp-dev
+  # tests and benchmarks
+  libgtest-dev libgmock-dev libbenchmark-dev
+  # presentation: software OpenGL (offscreen), a window where a display exists, PNG, speech
+  libosmesa6-dev libgl-dev libglfw3-dev libpng-dev espeak-ng libespeak-ng-dev
+  # presentation: audio playback (ALSA) and a virtual X display for window tests
+  libasound2-dev xvfb
+  # session log, config parsing
+  libsqlite3-dev sqlite3 nlohmann-json3-dev
+  # asset preparation and independent FEM oracle (called as external programs)
+  tetgen calculix-ccx
+  # plots for bench/ and WAV checks
+  python3 python3-matplotlib python3-numpy sox
+)
+
+missing=()
+for p in "${PACKAGES[@]}"; do
+  if ! dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed"; then
+    missing+=("$p")
+  fi
+done
+
+if [ ${#missing[@]} -eq 0 ]; then
+  echo "install_deps: all ${#PACKAGES[@]} packages present"
+  exit 0
+fi
+
+echo "install_deps: installing ${#missing[@]} packages: ${missing[*]}"
+SUDO=""
+if [ "$(id -u)" -ne 0 ]; then SUDO="sudo"; fi
+export DEBIAN_FRONTEND=noninteractive
+$SUDO apt-get update -q
+$SUDO apt-get install -y -q --no-install-recommends "${missing[@]}"
