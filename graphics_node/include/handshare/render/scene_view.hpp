@@ -1,0 +1,117 @@
+#pragma once
+/// @file
+/// Plain data that the renderers draw: a camera and one frame's worth of scene content.
+/// Nothing here depends on OpenGL or on the middleware; the graphics node fills these from DDS.
+
+#include <array>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include <Eigen/Geometry>
+
+namespace handshare::render {
+
+/// A colour with components in [0, 1] (linear, no gamma handling).
+struct Rgb {
+  float r = 1.0F;
+  float g = 1.0F;
+  float b = 1.0F;
+};
+
+/// How the two eyes of a stereo camera are laid out in the output.
+enum class StereoMode {
+  kMono,        ///< one image from the camera's eye.
+  kSideBySide,  ///< left eye in the left half, right eye in the right half (twice the width).
+  kAnaglyph,    ///< red from the left eye, green and blue from the right eye (red/cyan glasses).
+};
+
+/// A pinhole camera in the OpenGL convention.
+///
+/// Projection convention (identical to gluLookAt + gluPerspective + a full-image viewport):
+///   f = normalize(target_W - eye_W), s = normalize(f x up_W), u = s x f.
+///   For a world point p_W, camera coordinates are
+///     x_C = s . (p_W - eye_W),  y_C = u . (p_W - eye_W),  depth = f . (p_W - eye_W)  (> 0 in front).
+///   With aspect = width_px / height_px and c = cot(fov_y_rad / 2):
+///     x_ndc = (c / aspect) * x_C / depth,   y_ndc = c * y_C / depth.
+///   Continuous image coordinates (pixel (col, row) covers [col, col+1) x [row, row+1)):
+///     col = (x_ndc + 1) / 2 * width_px,   row = (1 - y_ndc) / 2 * height_px,
+///   so row 0 is the TOP row of the image (and of the PNG), column 0 the leftmost.
+///   Only points with near_m <= depth <= far_m are drawn.
+///
+/// Stereo (StereoMode::kSideBySide, kAnaglyph): each eye E is the camera translated by
+/// e = -/+ stereo_eye_separation_m / 2 (left/right) along s, looking along the same f (parallel
+/// axes, no toe-in), with an asymmetric (off-axis) frustum whose zero-parallax plane lies at the
+/// focal distance d = |target_W - eye_W|:
+///     x_ndc = (c / aspect) * ((x_C - e) / depth + e / d),   y_ndc as in mono,
+/// with x_C, depth measured from the mono eye. Points at depth d land on the same pixel in both
+/// eyes; nearer points shift left in the right eye's image, farther points shift right.
+struct Camera {
+  Eigen::Vector3d eye_W{0.0, -1.0, 0.5};    ///< eye (centre of projection) in world W [m].
+  Eigen::Vector3d target_W{0.0, 0.0, 0.0};  ///< point looked at in W [m]; sets the stereo focal distance.
+  Eigen::Vector3d up_W{0.0, 0.0, 1.0};      ///< up direction in W (need not be unit or orthogonal to f).
+  double fov_y_rad = 0.8;                    ///< vertical field of view [rad], in (0, pi).
+  int width_px = 640;                        ///< image width of one eye [pixels].
+  int height_px = 480;                       ///< image height [pixels].
+  double near_m = 0.01;                      ///< near clip distance [m], > 0.
+  double far_m = 100.0;                      ///< far clip distance [m], > near_m.
+  double stereo_eye_separation_m = 0.065;    ///< interocular distance [m], used in stereo modes only.
+};
+
+/// Throws std::invalid_argument naming the offending field if `camera` cannot define a projection
+/// (non-finite vectors, eye == target, up parallel to the view direction, bad fov, size or clip).
+void ValidateCamera(const Camera& camera);
+
+/// A shaded sphere, e.g. a fingertip.
+struct Sphere {
+  Eigen::Vector3d p_W = Eigen::Vector3d::Zero();  ///< centre in W [m].
+  double radius_m = 0.01;                          ///< radius [m], > 0.
+  Rgb rgb;                                         ///< colour.
+};
+
+/// A shaded box B.
+struct Box {
+  Eigen::Vector3d p_W = Eigen::Vector3d::Zero();                  ///< centre of B in W [m].
+  Eigen::Vector3d half_extents_m{0.05, 0.05, 0.05};               ///< half sizes along B's axes [m].
+  Eigen::Quaterniond q_WB = Eigen::Quaterniond::Identity();       ///< orientation of B in W.
+  Rgb rgb;                                                        ///< colour.
+};
+
+/// A triangle mesh in its own frame M (for example a deformable object's surface, whose vertex
+/// positions change every frame). Triangles are counter-clockwise seen from outside; both sides
+/// are lit.
+struct TriangleMesh {
+  Eigen::Isometry3d X_WM = Eigen::Isometry3d::Identity();  ///< pose of mesh frame M in W.
+  std::vector<Eigen::Vector3d> p_MV;                        ///< vertex positions in M [m].
+  std::vector<std::array<std::uint32_t, 3>> triangles;      ///< vertex indices into p_MV.
+  /// Optional per-vertex normals in M (any length, normalized when drawn). Empty: area-weighted
+  /// vertex normals are computed from the triangles. Otherwise the size must equal p_MV's.
+  std::vector<Eigen::Vector3d> n_MV;
+  Rgb rgb;                                                  ///< colour.
+};
+
+/// A square grid of lines on a plane, drawn unlit.
+struct GroundGrid {
+  bool visible = true;                                       ///< draw it at all.
+  Eigen::Vector3d center_W = Eigen::Vector3d::Zero();        ///< centre of the grid in W [m].
+  Eigen::Vector3d normal_W = Eigen::Vector3d::UnitZ();       ///< plane normal in W (non-zero).
+  double half_size_m = 1.0;                                  ///< grid spans +- half_size_m [m].
+  double spacing_m = 0.1;                                    ///< distance between lines [m], > 0.
+  Rgb rgb{0.45F, 0.45F, 0.5F};                               ///< line colour.
+};
+
+/// Everything drawn in one frame.
+struct SceneView {
+  std::vector<Sphere> spheres;
+  std::vector<Box> boxes;
+  std::vector<TriangleMesh> meshes;
+  GroundGrid grid;
+  /// One line of text (the message board), UTF-8, drawn at the bottom of the image over a dark
+  /// band. Printable ASCII uses a built-in 5x7 bitmap font; other characters are drawn as hollow
+  /// boxes; text that does not fit is cut and ends in "...". Empty: no band.
+  std::string caption;
+  Rgb caption_rgb{1.0F, 1.0F, 1.0F};            ///< caption text colour.
+  Rgb background_rgb{0.08F, 0.09F, 0.12F};      ///< clear colour.
+};
+
+}  // namespace handshare::render

@@ -1,0 +1,60 @@
+#pragma once
+/// @file
+/// On-screen rendering of a SceneView in a GLFW window (needs a display; X11 on Debian).
+
+#include <memory>
+#include <string>
+
+#include "handshare/render/image.hpp"
+#include "handshare/render/scene_view.hpp"
+
+namespace handshare::render {
+
+/// A window that shows one SceneView per Render() call. GLFW requires that every call, including
+/// construction and destruction, happens on the process's main thread. Several windows may exist;
+/// GLFW is initialized with the first and terminated with the last.
+class WindowRenderer {
+ public:
+  struct Options {
+    std::string title = "handshare";
+    int width_px = 1280;                     ///< initial window size [screen coordinates].
+    int height_px = 720;
+    StereoMode stereo = StereoMode::kMono;   ///< side by side splits the window in two halves.
+    bool fullscreen = false;                 ///< on the primary monitor, at its current mode.
+    bool vsync = true;                       ///< swap interval 1 (otherwise 0).
+    bool visible = true;                     ///< false: hidden window (tests, screenshots).
+  };
+
+  /// Opens the window. Throws std::runtime_error with GLFW's reason if there is no display or no
+  /// OpenGL context can be created.
+  explicit WindowRenderer(const Options& options);
+  ~WindowRenderer();
+  WindowRenderer(const WindowRenderer&) = delete;
+  WindowRenderer& operator=(const WindowRenderer&) = delete;
+
+  /// Draws `scene` into the whole framebuffer (its current size sets the aspect ratio; the
+  /// camera's width_px / height_px are ignored), swaps buffers and polls window events.
+  /// Throws std::invalid_argument for an invalid camera or mesh.
+  void Render(const SceneView& scene, const Camera& camera);
+
+  /// True once the user asked to close the window (close button, or Escape).
+  [[nodiscard]] bool ShouldClose() const;
+
+  /// Current framebuffer size [pixels] (may differ from the window size on HiDPI screens).
+  [[nodiscard]] int framebuffer_width_px() const;
+  [[nodiscard]] int framebuffer_height_px() const;
+
+  /// Like Render(), and also returns the drawn frame (row 0 at the top), read back before the
+  /// swap: screenshots and tests. (Reading the front buffer after the swap is unreliable: its
+  /// pixels belong to the window system.)
+  [[nodiscard]] ImageRgb8 RenderAndCapture(const SceneView& scene, const Camera& camera);
+
+  /// True if GLFW can be initialized here (a display is reachable); never throws.
+  [[nodiscard]] static bool DisplayAvailable() noexcept;
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace handshare::render

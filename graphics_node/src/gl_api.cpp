@@ -1,0 +1,66 @@
+#include "gl_api.hpp"
+
+#include <cstdio>
+#include <stdexcept>
+#include <string>
+
+namespace handshare::render::detail {
+
+namespace {
+
+template <typename Fn>
+void Resolve(GlApi::Loader loader, const char* name, Fn& fn) {
+  const GlApi::Proc address = loader(name);
+  if (address == nullptr) {
+    throw std::runtime_error(std::string("OpenGL: the context does not provide ") + name);
+  }
+  fn = reinterpret_cast<Fn>(address);
+}
+
+}  // namespace
+
+void GlApi::Load(Loader loader) {
+  Resolve(loader, "glBegin", Begin);
+  Resolve(loader, "glBlendFunc", BlendFunc);
+  Resolve(loader, "glClear", Clear);
+  Resolve(loader, "glClearColor", ClearColor);
+  Resolve(loader, "glColor3f", Color3f);
+  Resolve(loader, "glColor4f", Color4f);
+  Resolve(loader, "glColorMask", ColorMask);
+  Resolve(loader, "glColorMaterial", ColorMaterial);
+  Resolve(loader, "glDepthFunc", DepthFunc);
+  Resolve(loader, "glDisable", Disable);
+  Resolve(loader, "glEnable", Enable);
+  Resolve(loader, "glEnd", End);
+  Resolve(loader, "glFinish", Finish);
+  Resolve(loader, "glGetError", GetError);
+  Resolve(loader, "glLightModelfv", LightModelfv);
+  Resolve(loader, "glLightModeli", LightModeli);
+  Resolve(loader, "glLightfv", Lightfv);
+  Resolve(loader, "glLineWidth", LineWidth);
+  Resolve(loader, "glLoadIdentity", LoadIdentity);
+  Resolve(loader, "glLoadMatrixd", LoadMatrixd);
+  Resolve(loader, "glMatrixMode", MatrixMode);
+  Resolve(loader, "glNormal3d", Normal3d);
+  Resolve(loader, "glPixelStorei", PixelStorei);
+  Resolve(loader, "glReadBuffer", ReadBuffer);
+  Resolve(loader, "glReadPixels", ReadPixels);
+  Resolve(loader, "glScissor", Scissor);
+  Resolve(loader, "glShadeModel", ShadeModel);
+  Resolve(loader, "glVertex2d", Vertex2d);
+  Resolve(loader, "glVertex3d", Vertex3d);
+  Resolve(loader, "glViewport", Viewport);
+}
+
+void GlApi::CheckError(const char* what) const {
+  const GLenum error = GetError();
+  if (error != GL_NO_ERROR) {
+    throw std::runtime_error(std::string("OpenGL error 0x") + [error] {
+      char hex[16];
+      std::snprintf(hex, sizeof hex, "%04x", static_cast<unsigned>(error));
+      return std::string(hex);
+    }() + " during " + what);
+  }
+}
+
+}  // namespace handshare::render::detail

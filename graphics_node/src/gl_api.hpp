@@ -1,0 +1,56 @@
+#pragma once
+// OpenGL entry points used by the scene drawer, loaded through the context's own
+// GetProcAddress. Why not call gl* directly: the library links both libOSMesa (offscreen) and
+// GLVND's libGL (GLFW windows), which export the same gl* symbols; whichever the dynamic linker
+// binds first would silently swallow the other's calls (verified: with libGL first, glClear on
+// an OSMesa context draws nothing). Loading per context makes each path call its own driver.
+
+#include <GL/gl.h>
+
+namespace handshare::render::detail {
+
+struct GlApi {
+  using Proc = void (*)();
+  using Loader = Proc (*)(const char* name);
+
+  // Filled by Load(); every pointer is non-null after a successful load.
+  decltype(&::glBegin) Begin = nullptr;
+  decltype(&::glBlendFunc) BlendFunc = nullptr;
+  decltype(&::glClear) Clear = nullptr;
+  decltype(&::glClearColor) ClearColor = nullptr;
+  decltype(&::glColor3f) Color3f = nullptr;
+  decltype(&::glColor4f) Color4f = nullptr;
+  decltype(&::glColorMask) ColorMask = nullptr;
+  decltype(&::glColorMaterial) ColorMaterial = nullptr;
+  decltype(&::glDepthFunc) DepthFunc = nullptr;
+  decltype(&::glDisable) Disable = nullptr;
+  decltype(&::glEnable) Enable = nullptr;
+  decltype(&::glEnd) End = nullptr;
+  decltype(&::glFinish) Finish = nullptr;
+  decltype(&::glGetError) GetError = nullptr;
+  decltype(&::glLightModelfv) LightModelfv = nullptr;
+  decltype(&::glLightModeli) LightModeli = nullptr;
+  decltype(&::glLightfv) Lightfv = nullptr;
+  decltype(&::glLineWidth) LineWidth = nullptr;
+  decltype(&::glLoadIdentity) LoadIdentity = nullptr;
+  decltype(&::glLoadMatrixd) LoadMatrixd = nullptr;
+  decltype(&::glMatrixMode) MatrixMode = nullptr;
+  decltype(&::glNormal3d) Normal3d = nullptr;
+  decltype(&::glPixelStorei) PixelStorei = nullptr;
+  decltype(&::glReadBuffer) ReadBuffer = nullptr;
+  decltype(&::glReadPixels) ReadPixels = nullptr;
+  decltype(&::glScissor) Scissor = nullptr;
+  decltype(&::glShadeModel) ShadeModel = nullptr;
+  decltype(&::glVertex2d) Vertex2d = nullptr;
+  decltype(&::glVertex3d) Vertex3d = nullptr;
+  decltype(&::glViewport) Viewport = nullptr;
+
+  /// Resolves every entry point with `loader` (the current context's GetProcAddress).
+  /// Throws std::runtime_error naming the first missing function.
+  void Load(Loader loader);
+
+  /// Throws std::runtime_error with `what` if glGetError reports an error.
+  void CheckError(const char* what) const;
+};
+
+}  // namespace handshare::render::detail

@@ -1,0 +1,27 @@
+#pragma once
+// Draws a SceneView with fixed-function OpenGL through a GlApi table; shared by the offscreen
+// (OSMesa) and window (GLFW) renderers so both show exactly the same picture.
+
+#include <atomic>
+#include <cstdint>
+
+#include "gl_api.hpp"
+#include "handshare/render/scene_view.hpp"
+
+namespace handshare::render::detail {
+
+/// Throws std::invalid_argument if the camera or any mesh of `scene` is malformed.
+void ValidateScene(const SceneView& scene, const Camera& camera);
+
+/// Clears and draws the whole framebuffer (fb_width_px x fb_height_px, GL origin bottom-left)
+/// in `mode`; side by side splits it into two halves. The caption goes into every eye view.
+/// Expects the context of `gl` to be current. Throws on GL errors.
+void DrawFrame(const GlApi& gl, const SceneView& scene, const Camera& camera, StereoMode mode,
+               int fb_width_px, int fb_height_px);
+
+/// Bumped each time an OSMesa context is made current in this process. OSMesa and Mesa's GLX
+/// driver share libglapi's per-thread current dispatch, so a window context must really be
+/// re-bound (not just "made current again", which GLVND skips) after an offscreen render.
+inline std::atomic<std::uint64_t> g_offscreen_binds{0};
+
+}  // namespace handshare::render::detail

@@ -1,0 +1,165 @@
+#include "handshare/render/window_renderer.hpp"
+
+#include <GLFW/glfw3.h>
+
+#include <algorithm>
+#include <mutex>
+#include <stdexcept>
+#include <string>
+
+#include "gl_api.hpp"
+#include "scene_drawer.hpp"
+
+namespace handshare::render {
+
+namespace {
+
+// GLFW is process-global: initialize with the first window, terminate with the last.
+std::mutex g_glfw_mutex;
+int g_glfw_users = 0;
+std::string g_glfw_last_error;  // guarded by g_glfw_mutex while a constructor runs
+
+void RecordGlfwError(int code, const char* description) {
+  g_glfw_last_error = "GLFW error " + std::to_string(code) + ": " + (description ? description : "");
+}
+
+// Call with g_glfw_mutex held. Returns false (and leaves the reason in g_glfw_last_error).
+bool AcquireGlfw() {
+  if (g_glfw_users == 0) {
+    glfwSetErrorCallback(RecordGlfwError);
+    g_glfw_last_error.clear();
+    if (glfwInit() == GLFW_FALSE) return false;
+  }
+  ++g_glfw_users;
+  return true;
+}
+
+void ReleaseGlfw() {
+  if (--g_glfw_users == 0) glfwTerminate();
+}
+
+}  // namespace
+
+struct WindowRenderer::Impl {
+  GLFWwindow* window = nullptr;
+  StereoMode stereo = StereoMode::kMono;
+  detail::GlApi gl;
+  std::uint64_t offscreen_binds_seen = 0;
+
+  // Makes the window's context current; forces a real re-bind if an OSMesa context was bound
+  // since (see detail::g_offscreen_binds).
+  void MakeCurrent() {
+    const std::uint64_t binds = detail::g_offscreen_binds.load();
+    if (binds != offscreen_binds_seen) {
+      glfwMakeContextCurrent(nullptr);
+      offscreen_binds_seen = binds;
+    }
+    glfwMakeContextCurrent(window);
+  }
+};
+
+WindowRenderer::WindowRenderer(const Options& options) : impl_(std::make_unique<Impl>()) {
+  std::lock_guard lock(g_glfw_mutex);
+  if (!AcquireGlfw()) {
+    throw std::runtime_error("WindowRenderer: cannot initialize GLFW (no display?): " +
+                             g_glfw_last_error);
+  }
+  glfwDefaultWindowHints();
+  // A compatibility context: the scene drawer uses fixed-function OpenGL.
+  glfwWindowHint(GLFW_CLIENT_API, GLFW_OPENGL_API);
+  glfwWindowHint(GLFW_DEPTH_BITS, 24);
+  glfwWindowHint(GLFW_VISIBLE, options.visible ? GLFW_TRUE : GLFW_FALSE);
+  GLFWmonitor* monitor = options.fullscreen ? glfwGetPrimaryMonitor() : nullptr;
+  int width = options.width_px;
+  int height = options.height_px;
+  if (monitor != nullptr) {
+    const GLFWvidmode* mode = glfwGetVideoMode(monitor);
+    width = mode->width;
+    height = mode->height;
+  }
+  impl_->window = glfwCreateWindow(width, height, options.title.c_str(), monitor, nullptr);
+  if (impl_->window == nullptr) {
+    const std::string reason = g_glfw_last_error;
+    ReleaseGlfw();
+    throw std::runtime_error("WindowRenderer: cannot create a " + std::to_string(width) + " x " +
+                             std::to_string(height) + " OpenGL window: " + reason);
+  }
+  impl_->stereo = options.stereo;
+  glfwSetKeyCallback(impl_->window, [](GLFWwindow* window, int key, int, int action, int) {
+    if (key == GLFW_KEY_ESCAPE && action == GLFW_PRESS) glfwSetWindowShouldClose(window, GLFW_TRUE);
+  });
+  impl_->offscreen_binds_seen = detail::g_offscreen_binds.load();
+  glfwMakeContextCurrent(impl_->window);
+  glfwSwapInterval(options.vsync ? 1 : 0);
+  try {
+    impl_->gl.Load([](const char* name) -> detail::GlApi::Proc { return glfwGetProcAddress(name); });
+  } catch (...) {
+    glfwDestroyWindow(impl_->window);
+    ReleaseGlfw();
+    throw;
+  }
+}
+
+WindowRenderer::~WindowRenderer() {
+  std::lock_guard lock(g_glfw_mutex);
+  glfwDestroyWindow(impl_->window);
+  ReleaseGlfw();
+}
+
+void WindowRenderer::Render(const SceneView& scene, const Camera& camera) {
+  impl_->MakeCurrent();
+  int width_px = 0;
+  int height_px = 0;
+  glfwGetFramebufferSize(impl_->window, &width_px, &height_px);
+  detail::DrawFrame(impl_->gl, scene, camera, impl_->stereo, width_px, height_px);
+  glfwSwapBuffers(impl_->window);
+  glfwPollEvents();
+}
+
+ImageRgb8 WindowRenderer::RenderAndCapture(const SceneView& scene, const Camera& camera) {
+  impl_->MakeCurrent();
+  int width_px = 0;
+  int height_px = 0;
+  glfwGetFramebufferSize(impl_->window, &width_px, &height_px);
+  detail::DrawFrame(impl_->gl, scene, camera, impl_->stereo, width_px, height_px);
+  ImageRgb8 image(width_px, height_px);
+  if (width_px > 0 && height_px > 0) {
+    ImageRgb8 bottom_up(width_px, height_px);
+    impl_->gl.ReadBuffer(GL_BACK);
+    impl_->gl.PixelStorei(GL_PACK_ALIGNMENT, 1);
+    impl_->gl.ReadPixels(0, 0, width_px, height_px, GL_RGB, GL_UNSIGNED_BYTE, bottom_up.rgb.data());
+    impl_->gl.CheckError("reading the back buffer");
+    // OpenGL rows start at the bottom; images start at the top.
+    const std::size_t row_bytes = 3 * static_cast<std::size_t>(width_px);
+    for (int row = 0; row < height_px; ++row) {
+      const std::uint8_t* src = bottom_up.At(0, height_px - 1 - row);
+      std::copy(src, src + row_bytes, image.At(0, row));
+    }
+  }
+  glfwSwapBuffers(impl_->window);
+  glfwPollEvents();
+  return image;
+}
+
+bool WindowRenderer::ShouldClose() const { return glfwWindowShouldClose(impl_->window) != 0; }
+
+int WindowRenderer::framebuffer_width_px() const {
+  int width_px = 0;
+  glfwGetFramebufferSize(impl_->window, &width_px, nullptr);
+  return width_px;
+}
+
+int WindowRenderer::framebuffer_height_px() const {
+  int height_px = 0;
+  glfwGetFramebufferSize(impl_->window, nullptr, &height_px);
+  return height_px;
+}
+
+bool WindowRenderer::DisplayAvailable() noexcept {
+  std::lock_guard lock(g_glfw_mutex);
+  if (!AcquireGlfw()) return false;
+  ReleaseGlfw();
+  return true;
+}
+
+}  // namespace handshare::render
