@@ -9,6 +9,7 @@
 #include <fastdds/dds/publisher/DataWriter.hpp>
 #include <fastdds/dds/publisher/Publisher.hpp>
 #include <fastdds/dds/subscriber/DataReader.hpp>
+#include <fastdds/dds/subscriber/DataReaderListener.hpp>
 #include <fastdds/dds/subscriber/SampleInfo.hpp>
 #include <fastdds/dds/subscriber/Subscriber.hpp>
 #include <fastdds/dds/topic/Topic.hpp>
@@ -19,6 +20,7 @@
 #include <map>
 #include <mutex>
 #include <set>
+#include <vector>
 
 namespace handshare::dds {
 
@@ -60,14 +62,62 @@ std::int64_t ToNs(const eprosima::fastrtps::rtps::Time_t& t) {
   return static_cast<std::int64_t>(t.seconds()) * 1000000000LL + t.nanosec();
 }
 
+}  // namespace
+
+namespace detail {
+class ParticipantImpl {
+ public:
+  fdds::DomainParticipant* participant = nullptr;
+  fdds::Publisher* publisher = nullptr;
+  fdds::Subscriber* subscriber = nullptr;
+  std::map<std::string, fdds::Topic*> topics;
+  std::map<std::string, std::shared_ptr<void>> types;  // keeps type supports alive
+  std::mutex mutex;  // topics and types are created from any thread
+
+  // Owned by shared_ptr: every writer and reader holds one, so the DDS participant is deleted
+  // only after its last endpoint, whatever order the owners are destroyed in.
+  ~ParticipantImpl() {
+    if (participant == nullptr) return;
+    // Deleting every entity and the participant releases its shared-memory segments.
+    participant->delete_contained_entities();
+    fdds::DomainParticipantFactory::get_instance()->delete_participant(participant);
+  }
+
+  fdds::Topic* TopicFor(const std::string& name, const char* type_name,
+                        std::shared_ptr<void> support) {
+    std::lock_guard<std::mutex> lock(mutex);
+    if (!types.count(type_name)) {
+      auto* ts = static_cast<fdds::TypeSupport*>(support.get());
+      // Keep wire interop with other DDS implementations (see docs/dds.md).
+      (*ts)->auto_fill_type_information(false);
+      (*ts)->auto_fill_type_object(false);
+      Check(ts->register_type(participant), std::string("registering type ") + type_name);
+      types[type_name] = std::move(support);
+    }
+    if (auto it = topics.find(name); it != topics.end()) return it->second;
+    fdds::Topic* topic = CheckEntity(
+        participant->create_topic(name, type_name, fdds::TOPIC_QOS_DEFAULT), "topic " + name);
+    topics[name] = topic;
+    return topic;
+  }
+};
+}  // namespace detail
+
+namespace {
+
 class WriterImpl final : public detail::UntypedWriter {
  public:
-  WriterImpl(fdds::DataWriter* w, std::string topic) : w_(w), topic_(std::move(topic)) {}
+  WriterImpl(std::shared_ptr<detail::ParticipantImpl> owner, fdds::DataWriter* w, std::string topic)
+      : owner_(std::move(owner)), w_(w), topic_(std::move(topic)) {}
+  ~WriterImpl() override { owner_->publisher->delete_datawriter(w_); }
   void Write(const void* sample) override {
     if (!w_->write(const_cast<void*>(sample))) throw DdsError("DDS: write on " + topic_ + " failed");
   }
   void Dispose(const void* sample) override {
     Check(w_->dispose(const_cast<void*>(sample), fdds::HANDLE_NIL), "dispose on " + topic_);
+    // A dispose usually precedes deleting the writer: give reliable readers up to 0.5 s to
+    // acknowledge it, so a clean leave is not mistaken for a lost member.
+    w_->wait_for_acknowledgments(eprosima::fastrtps::Duration_t(0, 500000000));
   }
   int matched_readers() const override {
     fdds::PublicationMatchedStatus status;
@@ -76,19 +126,61 @@ class WriterImpl final : public detail::UntypedWriter {
   }
 
  private:
-  fdds::DataWriter* w_;  // owned by the publisher; deleted with the participant
+  std::shared_ptr<detail::ParticipantImpl> owner_;
+  fdds::DataWriter* w_;
   std::string topic_;
+};
+
+// Writers that went away (unmatched: killed, lost, or deleted) or lost liveliness. The
+// listener only records them; the reader's owner takes them on its own thread.
+class LostWriterListener final : public fdds::DataReaderListener {
+ public:
+  void on_subscription_matched(fdds::DataReader*, const fdds::SubscriptionMatchedStatus& s) override {
+    if (s.current_count_change < 0) Push(s.last_publication_handle);
+  }
+  void on_liveliness_changed(fdds::DataReader*, const fdds::LivelinessChangedStatus& s) override {
+    if (s.not_alive_count_change > 0) Push(s.last_publication_handle);
+  }
+  bool Take(std::array<std::uint8_t, 16>& out) {
+    std::lock_guard<std::mutex> lock(mutex_);
+    if (lost_.empty()) return false;
+    out = lost_.back();
+    lost_.pop_back();
+    return true;
+  }
+
+ private:
+  void Push(const fdds::InstanceHandle_t& h) {
+    std::array<std::uint8_t, 16> key{};
+    for (std::size_t i = 0; i < key.size(); ++i) key[i] = h.value[i];
+    std::lock_guard<std::mutex> lock(mutex_);
+    lost_.push_back(key);
+  }
+  std::mutex mutex_;
+  std::vector<std::array<std::uint8_t, 16>> lost_;
 };
 
 class ReaderImpl final : public detail::UntypedReader {
  public:
-  ReaderImpl(fdds::DataReader* r, std::string topic) : r_(r), topic_(std::move(topic)) {
+  ReaderImpl(std::shared_ptr<detail::ParticipantImpl> owner, fdds::Topic* topic,
+             const fdds::DataReaderQos& qos, std::string topic_name)
+      : owner_(std::move(owner)), topic_(std::move(topic_name)) {
+    r_ = CheckEntity(owner_->subscriber->create_datareader(
+                         topic, qos, &listener_,
+                         fdds::StatusMask::subscription_matched() << fdds::StatusMask::liveliness_changed()),
+                     "reader on " + topic_);
     fdds::StatusCondition& condition = r_->get_statuscondition();
     Check(condition.set_enabled_statuses(fdds::StatusMask::data_available()),
           "status mask of " + topic_);
     Check(waitset_.attach_condition(condition), "attaching wait set of " + topic_);
   }
-  ~ReaderImpl() override { waitset_.detach_condition(r_->get_statuscondition()); }
+  ~ReaderImpl() override {
+    waitset_.detach_condition(r_->get_statuscondition());
+    r_->set_listener(nullptr);
+    owner_->subscriber->delete_datareader(r_);
+  }
+
+  bool TakeLostWriter(std::array<std::uint8_t, 16>& writer) override { return listener_.Take(writer); }
 
   bool TakeNext(void* sample, SampleMeta& meta) override {
     fdds::SampleInfo info;
@@ -109,6 +201,8 @@ class ReaderImpl final : public detail::UntypedReader {
     const auto& handle = info.instance_handle.value;
     for (std::size_t i = 0; i < meta.instance.size(); ++i) meta.instance[i] = handle[i];
     meta.source_timestamp_ns = ToNs(info.source_timestamp);
+    const auto& writer = info.publication_handle.value;
+    for (std::size_t i = 0; i < meta.writer.size(); ++i) meta.writer[i] = writer[i];
     return true;
   }
 
@@ -131,8 +225,10 @@ class ReaderImpl final : public detail::UntypedReader {
   }
 
  private:
-  fdds::DataReader* r_;
+  std::shared_ptr<detail::ParticipantImpl> owner_;
   std::string topic_;
+  LostWriterListener listener_;
+  fdds::DataReader* r_ = nullptr;
   fdds::WaitSet waitset_;
 };
 
@@ -145,37 +241,10 @@ std::string DefaultQosFile() {
   return HANDSHARE_DEFAULT_QOS_FILE;
 }
 
-namespace detail {
-class ParticipantImpl {
- public:
-  fdds::DomainParticipant* participant = nullptr;
-  fdds::Publisher* publisher = nullptr;
-  fdds::Subscriber* subscriber = nullptr;
-  std::map<std::string, fdds::Topic*> topics;
-  std::map<std::string, std::shared_ptr<void>> types;  // keeps type supports alive
-
-  fdds::Topic* TopicFor(const std::string& name, const char* type_name,
-                        std::shared_ptr<void> support) {
-    if (!types.count(type_name)) {
-      auto* ts = static_cast<fdds::TypeSupport*>(support.get());
-      // Keep wire interop with other DDS implementations (see docs/dds.md).
-      (*ts)->auto_fill_type_information(false);
-      (*ts)->auto_fill_type_object(false);
-      Check(ts->register_type(participant), std::string("registering type ") + type_name);
-      types[type_name] = std::move(support);
-    }
-    if (auto it = topics.find(name); it != topics.end()) return it->second;
-    fdds::Topic* topic = CheckEntity(
-        participant->create_topic(name, type_name, fdds::TOPIC_QOS_DEFAULT), "topic " + name);
-    topics[name] = topic;
-    return topic;
-  }
-};
-}  // namespace detail
 
 Participant::Participant(int domain_id, const std::string& session, const std::string& name,
                          const std::string& qos_file)
-    : domain_id_(domain_id), session_(session), impl_(std::make_unique<detail::ParticipantImpl>()) {
+    : domain_id_(domain_id), session_(session), impl_(std::make_shared<detail::ParticipantImpl>()) {
   if (domain_id < 0 || domain_id > 232) {
     throw DdsError("DDS: domain id " + std::to_string(domain_id) + " is outside 0..232");
   }
@@ -200,13 +269,7 @@ Participant::Participant(int domain_id, const std::string& session, const std::s
   impl_->subscriber = CheckEntity(impl_->participant->create_subscriber(sub_qos), "subscriber");
 }
 
-Participant::~Participant() {
-  if (impl_ && impl_->participant != nullptr) {
-    // Deleting every entity and the participant releases its shared-memory segments.
-    impl_->participant->delete_contained_entities();
-    fdds::DomainParticipantFactory::get_instance()->delete_participant(impl_->participant);
-  }
-}
+Participant::~Participant() = default;
 
 std::unique_ptr<detail::UntypedWriter> Participant::CreateUntypedWriter(
     const std::string& topic, const char* type_name, std::shared_ptr<void> support,
@@ -217,7 +280,7 @@ std::unique_ptr<detail::UntypedWriter> Participant::CreateUntypedWriter(
         "reading data_writer profile '" + profile + "'");
   fdds::DataWriter* w = CheckEntity(impl_->publisher->create_datawriter(t, qos),
                                     "writer on " + topic + " (profile " + profile + ")");
-  return std::make_unique<WriterImpl>(w, topic);
+  return std::make_unique<WriterImpl>(impl_, w, topic);
 }
 
 std::unique_ptr<detail::UntypedReader> Participant::CreateUntypedReader(
@@ -227,9 +290,7 @@ std::unique_ptr<detail::UntypedReader> Participant::CreateUntypedReader(
   fdds::DataReaderQos qos;
   Check(impl_->subscriber->get_datareader_qos_from_profile(profile, qos),
         "reading data_reader profile '" + profile + "'");
-  fdds::DataReader* r = CheckEntity(impl_->subscriber->create_datareader(t, qos),
-                                    "reader on " + topic + " (profile " + profile + ")");
-  return std::make_unique<ReaderImpl>(r, topic);
+  return std::make_unique<ReaderImpl>(impl_, t, qos, topic + " (profile " + profile + ")");
 }
 
 }  // namespace handshare::dds

@@ -27,10 +27,12 @@ enum class InstanceState { kAlive, kDisposed, kNoWriters };
 
 /// What a reader learns besides the sample.
 struct SampleMeta {
+  using Key = std::array<std::uint8_t, 16>;
   bool valid_data = false;        // false: only the instance state changed (leave, lost writer)
   InstanceState instance_state = InstanceState::kAlive;
   std::array<std::uint8_t, 16> instance{};  // key hash: identifies the instance (e.g. a member)
   std::int64_t source_timestamp_ns = 0;     // writer's clock (UTC)
+  std::array<std::uint8_t, 16> writer{};    // the writer that sent it (see TakeLostWriter)
 };
 
 namespace detail {
@@ -51,6 +53,7 @@ class UntypedReader {
   virtual bool TakeNext(void* sample, SampleMeta& meta) = 0;
   virtual bool WaitForData(std::chrono::nanoseconds timeout) = 0;
   virtual int matched_writers() const = 0;
+  virtual bool TakeLostWriter(std::array<std::uint8_t, 16>& writer) = 0;
 };
 
 /// Defined in types.cpp for every message type of handshare.idl.
@@ -88,6 +91,10 @@ class Reader {
   /// Blocks on a WaitSet until data is available or the timeout passes.
   bool WaitForData(std::chrono::nanoseconds timeout) { return r_->WaitForData(timeout); }
   int matched_writers() const { return r_->matched_writers(); }
+  /// A writer that went away (killed process, lost network, deleted) or lost liveliness,
+  /// identified as in SampleMeta::writer. Fast DDS 2.9 does not reliably turn a killed writer
+  /// into a NOT_ALIVE_NO_WRITERS sample, so owners match these against the writers they saw.
+  bool TakeLostWriter(std::array<std::uint8_t, 16>& writer) { return r_->TakeLostWriter(writer); }
   explicit operator bool() const { return r_ != nullptr; }
 
  private:
@@ -134,7 +141,7 @@ class Participant {
                                                              const std::string& profile);
   int domain_id_;
   std::string session_;
-  std::unique_ptr<detail::ParticipantImpl> impl_;
+  std::shared_ptr<detail::ParticipantImpl> impl_;
 };
 
 }  // namespace handshare::dds

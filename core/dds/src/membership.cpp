@@ -1,0 +1,50 @@
+#include "handshare/dds/membership.hpp"
+
+#include <unistd.h>
+
+#include <chrono>
+#include <iostream>
+
+namespace handshare::dds {
+
+MemberAnnouncement::MemberAnnouncement(Participant& participant, const std::string& user,
+                                       msg::NodeKind kind, const std::string& device)
+    : writer_(MakeWriter<msg::MemberInfo>(participant, topics::kMemberInfo)) {
+  if (user.empty() || user.size() > 40) {
+    throw DdsError("member name '" + user + "' must have 1..40 characters");
+  }
+  char host[64] = {};
+  gethostname(host, sizeof(host) - 1);
+  info_.member_id(participant.session() + "/" + user);
+  info_.session(participant.session());
+  info_.user(user);
+  info_.kind(kind);
+  info_.device(device);
+  info_.host(host);
+  info_.pid(static_cast<std::int32_t>(getpid()));
+  info_.joined_unix_ns(static_cast<std::uint64_t>(
+      std::chrono::duration_cast<std::chrono::nanoseconds>(
+          std::chrono::system_clock::now().time_since_epoch()).count()));
+  writer_.Write(info_);
+}
+
+MemberAnnouncement::~MemberAnnouncement() {
+  try {
+    writer_.Dispose(info_);
+  } catch (const std::exception& e) {
+    // A destructor must not throw; the world server then sees the member lost instead.
+    std::cerr << "member " << info_.user().c_str() << ": leave not announced: " << e.what() << "\n";
+  }
+}
+
+const char* ToString(msg::NodeKind kind) {
+  switch (kind) {
+    case msg::NODE_WORLD_SERVER: return "world_server";
+    case msg::NODE_HAPTIC: return "haptic";
+    case msg::NODE_GRAPHICS: return "graphics";
+    case msg::NODE_AUDIO_GUIDE: return "audio_guide";
+  }
+  return "unknown";
+}
+
+}  // namespace handshare::dds

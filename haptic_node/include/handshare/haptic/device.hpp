@@ -1,0 +1,42 @@
+#pragma once
+/// One interface for every haptic device (HIRO II, simulated hands, replay): fingertip poses
+/// in, fingertip forces out. Layer 1: no middleware, no rendering. Read() and Command() are
+/// called from the haptic thread and must be real-time safe (no allocation, locks, I/O).
+#include <Eigen/Core>
+#include <array>
+#include <cstdint>
+
+namespace handshare::haptic {
+
+inline constexpr int kFingers = 5;  // thumb, index, middle, ring, little
+
+/// What a device reports each haptic step. Positions in world W [m].
+struct DeviceReading {
+  std::uint64_t stamp_ns = 0;                  // steady clock at sampling
+  Eigen::Vector3d p_WH = Eigen::Vector3d::Zero();            // hand base H
+  Eigen::Vector4d q_WH_wxyz = Eigen::Vector4d(1, 0, 0, 0);  // hand base orientation
+  std::array<Eigen::Vector3d, kFingers> p_WE{};              // fingertips E
+  std::array<double, 15> q_hand_rad{};
+  std::array<double, 6> q_arm_rad{};
+  bool valid = false;                          // false: device lost or data not trustworthy
+};
+
+struct DeviceCapabilities {
+  int fingers = kFingers;
+  double max_fingertip_force_N = 3.5;  // HIRO II: about 3.5 N at the fingertip
+  double fingertip_radius_m = 0.008;
+};
+
+class Device {
+ public:
+  virtual ~Device() = default;
+  virtual DeviceCapabilities capabilities() const noexcept = 0;
+  /// Samples the device at time t_s since the loop started. Real-time safe.
+  virtual void Read(double t_s, DeviceReading& out) noexcept = 0;
+  /// Commands fingertip forces f_E_W [N] (already clamped by the caller). Real-time safe.
+  virtual void Command(const std::array<Eigen::Vector3d, kFingers>& f_E_W) noexcept = 0;
+  /// Short name: "sim", "hiro", "replay".
+  virtual const char* name() const noexcept = 0;
+};
+
+}  // namespace handshare::haptic

@@ -1,0 +1,32 @@
+#pragma once
+/// A haptic node: one user at one device. The haptic loop runs on its own thread; this class
+/// is the bridge thread around it: it joins the session, publishes the device state at viewer
+/// rate and the loop statistics at 1 Hz, and prints the loop statistics at exit.
+#include <chrono>
+#include <string>
+
+namespace handshare::haptic {
+
+struct HapticNodeConfig {
+  int domain_id = 0;
+  std::string session;
+  std::string user;
+  std::string device = "sim";
+  std::string script;                            // sim: hand script file ("" = default motion)
+  std::chrono::duration<double> duration{0.0};  // 0: until SIGINT/SIGTERM
+  double rate_Hz = 1000.0;
+  double publish_Hz = 100.0;                     // device state for viewers (60-120 Hz)
+  std::string trace_file;                        // CSV of every published device state
+  std::string qos_file;
+};
+
+class HapticNode {
+ public:
+  explicit HapticNode(HapticNodeConfig config);
+  int Run();
+
+ private:
+  HapticNodeConfig config_;
+};
+
+}  // namespace handshare::haptic

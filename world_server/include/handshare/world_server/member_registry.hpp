@@ -1,0 +1,55 @@
+#pragma once
+/// Who is in the session: members join (a member-info sample), leave cleanly (disposed) or
+/// vanish (no writer alive: killed process, lost network). Pure bookkeeping, no DDS: the
+/// world server feeds it what its reader takes.
+#include <array>
+#include <cstdint>
+#include <map>
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace handshare::world {
+
+using InstanceKey = std::array<std::uint8_t, 16>;
+
+struct Member {
+  std::string member_id;
+  std::string user;
+  std::string kind;    // "haptic", "graphics", "audio_guide", "world_server"
+  std::string device;  // haptic nodes only
+  std::int64_t pid = 0;
+};
+
+enum class MemberChange { kJoined, kLeft, kLost };
+
+struct MemberEvent {
+  MemberChange change;
+  Member member;
+};
+
+class MemberRegistry {
+ public:
+  /// A valid member-info sample from `writer`. Returns kJoined the first time it is seen.
+  std::optional<MemberEvent> OnInfo(const InstanceKey& key, const InstanceKey& writer,
+                                    const Member& member);
+  /// The instance was disposed (clean leave) or lost its writers (kill, lost network).
+  std::optional<MemberEvent> OnGone(const InstanceKey& key, bool disposed);
+  /// A writer went away: every member it announced is lost (if not already gone).
+  std::vector<MemberEvent> OnWriterLost(const InstanceKey& writer);
+
+  std::vector<Member> present() const;
+  std::size_t joined_total() const { return joined_total_; }
+
+ private:
+  struct Entry {
+    Member member;
+    InstanceKey writer;
+  };
+  std::map<InstanceKey, Entry> present_;
+  std::size_t joined_total_ = 0;
+};
+
+const char* ToString(MemberChange change);
+
+}  // namespace handshare::world

@@ -1,0 +1,52 @@
+#include "handshare/world_server/member_registry.hpp"
+
+namespace handshare::world {
+
+std::optional<MemberEvent> MemberRegistry::OnInfo(const InstanceKey& key, const InstanceKey& writer,
+                                                  const Member& member) {
+  const auto [it, inserted] = present_.try_emplace(key, Entry{member, writer});
+  if (!inserted) {
+    it->second = Entry{member, writer};  // an update of a present member is not a join
+    return std::nullopt;
+  }
+  ++joined_total_;
+  return MemberEvent{MemberChange::kJoined, member};
+}
+
+std::optional<MemberEvent> MemberRegistry::OnGone(const InstanceKey& key, bool disposed) {
+  const auto it = present_.find(key);
+  if (it == present_.end()) return std::nullopt;  // unknown or already gone: report once
+  MemberEvent event{disposed ? MemberChange::kLeft : MemberChange::kLost, it->second.member};
+  present_.erase(it);
+  return event;
+}
+
+std::vector<MemberEvent> MemberRegistry::OnWriterLost(const InstanceKey& writer) {
+  std::vector<MemberEvent> events;
+  for (auto it = present_.begin(); it != present_.end();) {
+    if (it->second.writer == writer) {
+      events.push_back(MemberEvent{MemberChange::kLost, it->second.member});
+      it = present_.erase(it);
+    } else {
+      ++it;
+    }
+  }
+  return events;
+}
+
+std::vector<Member> MemberRegistry::present() const {
+  std::vector<Member> out;
+  for (const auto& [key, e] : present_) out.push_back(e.member);
+  return out;
+}
+
+const char* ToString(MemberChange change) {
+  switch (change) {
+    case MemberChange::kJoined: return "joined";
+    case MemberChange::kLeft: return "left";
+    case MemberChange::kLost: return "lost";
+  }
+  return "?";
+}
+
+}  // namespace handshare::world

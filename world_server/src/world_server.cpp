@@ -1,0 +1,127 @@
+#include "handshare/world_server/world_server.hpp"
+
+#include <cstdio>
+#include <iostream>
+#include <sstream>
+#include <thread>
+
+#include "handshare/common/shutdown.hpp"
+#include "handshare/dds/membership.hpp"
+#include "handshare/dds/messages.hpp"
+#include "handshare/scene/scene.hpp"
+#include "handshare/world_server/member_registry.hpp"
+
+namespace handshare::world {
+
+namespace {
+
+msg::SceneState ToMessage(const scene::Scene& s, const std::string& session, unsigned revision) {
+  msg::SceneState out;
+  out.session(session);
+  out.scene(s.name);
+  out.revision(revision);
+  out.gravity_W_m_per_s2({s.gravity_W_m_per_s2.x(), s.gravity_W_m_per_s2.y(), s.gravity_W_m_per_s2.z()});
+  for (const auto& o : s.objects) {
+    msg::SceneObject m;
+    m.object_id(o.id);
+    m.kind(o.kind == scene::ObjectKind::kRigid        ? msg::OBJECT_RIGID
+           : o.kind == scene::ObjectKind::kDeformable ? msg::OBJECT_DEFORMABLE
+                                                      : msg::OBJECT_CONTROL);
+    m.shape(o.shape == scene::Shape::kSphere ? "sphere" : o.shape == scene::Shape::kBox ? "box" : "mesh");
+    m.mesh_uri(o.mesh_uri);
+    m.p_WO_m({o.p_WO_m.x(), o.p_WO_m.y(), o.p_WO_m.z()});
+    m.q_WO_wxyz({o.q_WO.w(), o.q_WO.x(), o.q_WO.y(), o.q_WO.z()});
+    m.half_extent_m({o.half_extent_m.x(), o.half_extent_m.y(), o.half_extent_m.z()});
+    m.mass_kg(o.mass_kg);
+    m.rgb({o.rgb[0], o.rgb[1], o.rgb[2]});
+    out.objects().push_back(m);
+  }
+  return out;
+}
+
+Member FromMessage(const msg::MemberInfo& info) {
+  return Member{info.member_id().to_string(), info.user().to_string(),
+                dds::ToString(info.kind()), info.device().to_string(), info.pid()};
+}
+
+}  // namespace
+
+WorldServer::WorldServer(WorldServerConfig config) : config_(std::move(config)) {}
+
+int WorldServer::Run() {
+  using Clock = std::chrono::steady_clock;
+  const scene::Scene scene = scene::LoadSceneByName(config_.scene);
+
+  dds::Participant participant(config_.domain_id, config_.session, "world_server", config_.qos_file);
+  auto scene_writer = dds::MakeWriter<msg::SceneState>(participant, dds::topics::kSceneState);
+  auto board_writer = dds::MakeWriter<msg::MessageBoard>(participant, dds::topics::kMessageBoard);
+  auto member_reader = dds::MakeReader<msg::MemberInfo>(participant, dds::topics::kMemberInfo);
+
+  const auto start = Clock::now();
+  auto log = [&](const std::string& line) {
+    const double t = std::chrono::duration<double>(Clock::now() - start).count();
+    std::printf("[world_server %8.3f s] %s\n", t, line.c_str());
+    std::fflush(stdout);
+  };
+
+  scene_writer.Write(ToMessage(scene, config_.session, 1));
+  log("session '" + config_.session + "' on domain " + std::to_string(config_.domain_id) +
+      ": scene '" + scene.name + "' (" + std::to_string(scene.objects.size()) + " objects)");
+
+  // The message board shows the scene's first message in each language in turn; transient-
+  // local keeps the newest for late joiners.
+  unsigned message_id = 0;
+  for (const auto& m : scene.messages) {
+    if (m.language != "en") continue;  // the board shows one language at a time
+    msg::MessageBoard board;
+    board.session(config_.session);
+    board.message_id(++message_id);
+    board.language(m.language);
+    board.text(m.text);
+    board.next_action(m.next_action);
+    board_writer.Write(board);
+    log("message board #" + std::to_string(message_id) + ": " + m.text);
+    break;
+  }
+
+  MemberRegistry members;
+  const auto period = std::chrono::duration_cast<Clock::duration>(
+      std::chrono::duration<double>(1.0 / config_.tick_Hz));
+  auto next = Clock::now();
+  msg::MemberInfo info;
+  dds::SampleMeta meta;
+  while (!common::ShutdownRequested()) {
+    if (config_.duration.count() > 0 && Clock::now() - start >= config_.duration) break;
+    std::vector<MemberEvent> events;
+    while (member_reader.TakeNext(info, meta)) {
+      std::optional<MemberEvent> event;
+      if (meta.valid_data && meta.instance_state == dds::InstanceState::kAlive) {
+        event = members.OnInfo(meta.instance, meta.writer, FromMessage(info));
+      } else if (meta.instance_state != dds::InstanceState::kAlive) {
+        event = members.OnGone(meta.instance, meta.instance_state == dds::InstanceState::kDisposed);
+      }
+      if (event) events.push_back(*event);
+    }
+    // Writers that vanished without disposing: killed processes, lost hosts.
+    dds::SampleMeta::Key lost_writer;
+    while (member_reader.TakeLostWriter(lost_writer)) {
+      for (auto& e : members.OnWriterLost(lost_writer)) events.push_back(e);
+    }
+    for (const auto& event : events) {
+      const Member& m = event.member;
+      std::ostringstream line;
+      line << "member " << ToString(event.change) << ": user=" << m.user << " kind=" << m.kind;
+      if (!m.device.empty()) line << " device=" << m.device;
+      line << " pid=" << m.pid << " present=" << members.present().size();
+      log(line.str());
+    }
+    next += period;
+    if (Clock::now() > next + 5 * period) next = Clock::now();
+    std::this_thread::sleep_until(next);
+  }
+  log("shutting down: " + std::to_string(members.joined_total()) + " members joined, " +
+      std::to_string(members.present().size()) + " still present");
+  return 0;
+}
+
+}  // namespace handshare::world
