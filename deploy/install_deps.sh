@@ -23,7 +23,7 @@ PACKAGES=(
   # asset preparation and independent FEM oracle (called as external programs)
   tetgen calculix-ccx
   # plots for bench/ and WAV checks
-  python3 python3-matplotlib python3-numpy sox
+  python3 python3-matplotlib python3-numpy python3-pil sox
 )
 
 missing=()

@@ -1,0 +1,41 @@
+#pragma once
+/// The graphics node: a spectator's view of a session. Reads the scene state, every user's
+/// device state and the message board over DDS and draws them: headless into PNG files, or in
+/// a window where a display exists (large screen, mono or stereo).
+#include <chrono>
+#include <string>
+
+namespace handshare::graphics {
+
+enum class StereoOutput { kMono, kSideBySide, kAnaglyph };
+
+struct SpectatorConfig {
+  int domain_id = 0;
+  std::string session;
+  std::string name;                  // member name; "" = graphics-<pid>
+  bool headless = false;
+  int frames = 0;                    // headless: frames to write (required > 0)
+  std::string out_dir;               // headless: where frame_NNNNN.png go
+  int width_px = 640, height_px = 480;
+  double fps = 30.0;
+  StereoOutput stereo = StereoOutput::kMono;
+  bool fullscreen = false;
+  std::chrono::duration<double> duration{0.0};  // window mode: 0 = until closed or signal
+  std::chrono::duration<double> wait_for_scene{5.0};  // headless: wait this long for the scene
+  std::string qos_file;
+};
+
+class Spectator {
+ public:
+  explicit Spectator(SpectatorConfig config);
+  int Run();
+
+ private:
+  SpectatorConfig config_;
+};
+
+/// Fingertip colours, thumb first: red, green, blue, yellow, cyan (as in the paper's figures).
+inline constexpr float kFingertipRgb[5][3] = {
+    {1.0f, 0.0f, 0.0f}, {0.0f, 1.0f, 0.0f}, {0.0f, 0.0f, 1.0f}, {1.0f, 1.0f, 0.0f}, {0.0f, 1.0f, 1.0f}};
+
+}  // namespace handshare::graphics

@@ -1,0 +1,51 @@
+// graphics_node: a spectator's view of a session, headless (PNG frames) or in a window.
+#include "handshare/common/node_main.hpp"
+#include "handshare/graphics/spectator.hpp"
+#include "handshare/render/window_renderer.hpp"
+
+int main(int argc, char** argv) {
+  using handshare::common::OptionError;
+  handshare::common::Options options(
+      "graphics_node", "Spectates a handshare session: the scene and every user's five fingertips "
+                       "(red, green, blue, yellow, cyan), headless into PNG frames or in a window.");
+  options.Value("domain", "D", "DDS domain id (0..232)", "0")
+      .Value("session", "S", "session name", std::nullopt, true)
+      .Value("name", "NAME", "member name (default graphics-<pid>)", "")
+      .Flag("headless", "render offscreen (software GL) into PNG files, no display needed")
+      .Value("frames", "N", "headless: number of frames to write", "0")
+      .Value("out", "DIR", "headless: output folder for frame_NNNNN.png, camera.json, frames.csv", "")
+      .Value("width", "PX", "image or window width", "640")
+      .Value("height", "PX", "image or window height", "480")
+      .Value("fps", "HZ", "frames per second", "30")
+      .Value("stereo", "MODE", "mono, side-by-side or anaglyph", "mono")
+      .Flag("fullscreen", "window: full screen on the primary monitor (large screen)")
+      .Value("duration", "SEC", "window: run this long (0: until closed or SIGINT/SIGTERM)", "0")
+      .Value("qos", "FILE", "QoS profile XML (default: deploy/qos/handshare_qos.xml)", "");
+  return handshare::common::RunNodeMain(argc, argv, options, [](const auto& o) {
+    handshare::graphics::SpectatorConfig c;
+    c.domain_id = static_cast<int>(o.GetInt("domain", 0, 232));
+    c.session = o.GetString("session");
+    c.name = o.GetString("name");
+    c.headless = o.FlagSet("headless");
+    c.width_px = static_cast<int>(o.GetInt("width", 16, 8192));
+    c.height_px = static_cast<int>(o.GetInt("height", 16, 8192));
+    c.fps = o.GetDouble("fps", 0.1, 240.0);
+    c.fullscreen = o.FlagSet("fullscreen");
+    c.duration = std::chrono::duration<double>(o.GetDouble("duration", 0.0, 1e7));
+    c.qos_file = o.GetString("qos");
+    const std::string stereo = o.GetString("stereo");
+    if (stereo == "mono") c.stereo = handshare::graphics::StereoOutput::kMono;
+    else if (stereo == "side-by-side") c.stereo = handshare::graphics::StereoOutput::kSideBySide;
+    else if (stereo == "anaglyph") c.stereo = handshare::graphics::StereoOutput::kAnaglyph;
+    else throw OptionError("option --stereo: '" + stereo + "' is not mono, side-by-side or anaglyph");
+    if (c.headless) {
+      if (!o.Has("frames")) throw OptionError("option --frames N is required with --headless");
+      c.frames = static_cast<int>(o.GetInt("frames", 1, 1000000));
+      c.out_dir = o.GetString("out");
+      if (c.out_dir.empty()) throw OptionError("option --out DIR is required with --headless");
+    } else if (!handshare::render::WindowRenderer::DisplayAvailable()) {
+      throw OptionError("no display is reachable for a window: use --headless --frames N --out DIR");
+    }
+    return handshare::graphics::Spectator(c).Run();
+  });
+}
