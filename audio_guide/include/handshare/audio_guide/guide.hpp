@@ -1,0 +1,28 @@
+#pragma once
+/// The audio guide node: speaks every new message-board text (and its next action) with
+/// eSpeak NG, to the sound device or, with an output folder, into one WAV file per message.
+#include <chrono>
+#include <string>
+
+namespace handshare::audio_guide {
+
+struct GuideConfig {
+  int domain_id = 0;
+  std::string session;
+  std::string name;                              // member name; "" = audio-<pid>
+  std::string out_dir;                           // "" = play on alsa_device
+  std::string alsa_device = "default";
+  std::chrono::duration<double> duration{0.0};  // 0: until SIGINT/SIGTERM
+  std::string qos_file;
+};
+
+class Guide {
+ public:
+  explicit Guide(GuideConfig config);
+  int Run();
+
+ private:
+  GuideConfig config_;
+};
+
+}  // namespace handshare::audio_guide

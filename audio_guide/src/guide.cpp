@@ -1,0 +1,70 @@
+#include "handshare/audio_guide/guide.hpp"
+
+#include <unistd.h>
+
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+
+#include "handshare/common/shutdown.hpp"
+#include "handshare/dds/membership.hpp"
+#include "handshare/dds/messages.hpp"
+#include "handshare/speech/audio_clip.hpp"
+#include "handshare/speech/playback.hpp"
+#include "handshare/speech/speech_synthesizer.hpp"
+
+namespace handshare::audio_guide {
+
+Guide::Guide(GuideConfig config) : config_(std::move(config)) {}
+
+int Guide::Run() {
+  using Clock = std::chrono::steady_clock;
+  const std::string name = config_.name.empty() ? "audio-" + std::to_string(getpid()) : config_.name;
+  if (!config_.out_dir.empty()) std::filesystem::create_directories(config_.out_dir);
+  speech::SpeechSynthesizer synthesizer;  // fails early if eSpeak NG data is missing
+
+  dds::Participant participant(config_.domain_id, config_.session, name, config_.qos_file);
+  dds::MemberAnnouncement member(participant, name, msg::NODE_AUDIO_GUIDE);
+  auto board_reader = dds::MakeReader<msg::MessageBoard>(participant, dds::topics::kMessageBoard);
+
+  const auto start = Clock::now();
+  std::uint32_t last_id = 0;
+  int spoken = 0;
+  msg::MessageBoard board;
+  dds::SampleMeta meta;
+  while (!common::ShutdownRequested()) {
+    if (config_.duration.count() > 0 && Clock::now() - start >= config_.duration) break;
+    if (!board_reader.TakeNext(board, meta)) {
+      board_reader.WaitForData(std::chrono::milliseconds(50));
+      continue;
+    }
+    if (!meta.valid_data || board.message_id() == last_id) continue;  // already spoken
+    last_id = board.message_id();
+    std::string text = board.text().to_string();
+    if (board.next_action().size() > 0) text += " " + board.next_action().to_string();
+    const speech::Utterance u = synthesizer.Synthesize(text, board.language().to_string());
+    ++spoken;
+    if (!config_.out_dir.empty()) {
+      const auto base = std::filesystem::path(config_.out_dir) / ("message_" + std::to_string(last_id));
+      speech::WriteWav(base.string() + ".wav", u.audio.samples, u.audio.sample_rate_hz);
+      std::ofstream(base.string() + ".txt") << text << "\n";
+      std::printf("[audio_guide %s] message #%u (%s, %.1f s) -> %s.wav\n", name.c_str(), last_id,
+                  u.language.c_str(), u.audio.duration_s(), base.c_str());
+    } else {
+      const speech::PlaybackStatus status = speech::Play(u.audio.samples, u.audio.sample_rate_hz, config_.alsa_device);
+      if (!status.ok()) {
+        // No sound device is an expected condition on a headless box: say so, keep going.
+        std::fprintf(stderr, "[audio_guide %s] cannot play message #%u: %s\n", name.c_str(), last_id,
+                     status.message.c_str());
+      } else {
+        std::printf("[audio_guide %s] spoke message #%u (%s, %.1f s)\n", name.c_str(), last_id,
+                    u.language.c_str(), u.audio.duration_s());
+      }
+    }
+    std::fflush(stdout);
+  }
+  std::printf("[audio_guide %s] spoke %d messages\n", name.c_str(), spoken);
+  return 0;
+}
+
+}  // namespace handshare::audio_guide

@@ -1,0 +1,340 @@
+#!/usr/bin/env python3
+"""Cross-process tests of a handshare session over real Fast DDS on loopback.
+
+Each case starts the real executables as separate processes on a DDS domain of its own and
+checks what a user would check: the server's member log, the spectator's PNG frames against
+the haptic nodes' own record of where the fingertips were, and the speech WAV. Every process
+is killed and shared-memory leftovers of killed participants are cleaned, even on failure.
+
+usage: session_test.py CASE --bin-dir DIR --domain D --work DIR
+"""
+import argparse
+import glob
+import json
+import math
+import os
+import signal
+import subprocess
+import sys
+import tempfile
+import time
+import wave
+from array import array
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+DATA = os.path.join(HERE, "data")
+FINGER_RGB = [(1, 0, 0), (0, 1, 0), (0, 0, 1), (1, 1, 0), (0, 1, 1)]  # thumb first
+
+
+class Failure(Exception):
+    pass
+
+
+def check(cond, what):
+    if not cond:
+        raise Failure(what)
+
+
+class Harness:
+    """Starts processes, records their output in files, and always cleans up."""
+
+    def __init__(self, bin_dir, work):
+        self.bin_dir = bin_dir
+        self.work = work
+        self.procs = {}
+
+    def exe(self, name):
+        path = os.path.join(self.bin_dir, name, name)
+        check(os.access(path, os.X_OK), f"executable not built: {path}")
+        return path
+
+    def start(self, label, name, *args):
+        log = open(os.path.join(self.work, label + ".log"), "w")
+        proc = subprocess.Popen([self.exe(name), *map(str, args)], stdout=log, stderr=subprocess.STDOUT)
+        self.procs[label] = (proc, log)
+        return proc
+
+    def wait(self, label, timeout):
+        proc, log = self.procs[label]
+        try:
+            rc = proc.wait(timeout=timeout)
+        except subprocess.TimeoutExpired:
+            raise Failure(f"{label} did not end within {timeout} s")
+        log.flush()
+        return rc
+
+    def log(self, label):
+        self.procs[label][1].flush()
+        with open(os.path.join(self.work, label + ".log")) as f:
+            return f.read()
+
+    def wait_for_line(self, label, text, timeout):
+        end = time.monotonic() + timeout
+        while time.monotonic() < end:
+            if text in self.log(label):
+                return time.monotonic()
+            time.sleep(0.02)
+        raise Failure(f"'{text}' not in {label}'s output within {timeout} s:\n{self.log(label)}")
+
+    def cleanup(self):
+        for label, (proc, log) in self.procs.items():
+            if proc.poll() is None:
+                proc.kill()
+                proc.wait()
+            log.close()
+        # Killed participants leave shared-memory segments behind; Fast DDS's tool removes
+        # the ones no live process holds.
+        subprocess.run(["fastdds", "shm", "clean"], stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+
+    def dump_logs(self):
+        for label in self.procs:
+            sys.stderr.write(f"----- {label} -----\n{self.log(label)}\n")
+
+
+# --- independent checks -------------------------------------------------------------------
+
+def project(camera, p):
+    """World point -> (col, row) with the documented OpenGL convention (gluLookAt +
+    gluPerspective, row 0 at the top), written here from the convention, not from the code."""
+    eye, target, up = camera["eye_W_m"], camera["target_W_m"], camera["up_W"]
+    sub = lambda a, b: [a[i] - b[i] for i in range(3)]
+    dot = lambda a, b: sum(a[i] * b[i] for i in range(3))
+    cross = lambda a, b: [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]]
+    norm = lambda a: [x / math.sqrt(dot(a, a)) for x in a]
+    f = norm(sub(target, eye))
+    s = norm(cross(f, up))
+    u = cross(s, f)
+    d = sub(p, eye)
+    depth = dot(f, d)
+    c = 1.0 / math.tan(camera["fov_y_rad"] / 2)
+    w, h = camera["width_px"], camera["height_px"]
+    x_ndc = (c / (w / h)) * dot(s, d) / depth
+    y_ndc = c * dot(u, d) / depth
+    return (x_ndc + 1) / 2 * w, (1 - y_ndc) / 2 * h, depth, c * h / 2
+
+
+def colour_matches(pixel, rgb):
+    """True when the channels that should be lit are bright and the others clearly darker."""
+    on = [pixel[i] for i in range(3) if rgb[i]]
+    off = [pixel[i] for i in range(3) if not rgb[i]]
+    return min(on) >= 110 and (not off or max(off) <= 0.5 * min(on))
+
+
+def last_trace_row(path):
+    with open(path) as f:
+        rows = [line.strip().split(",") for line in f if line.strip()]
+    header, last = rows[0], rows[-1]
+    check(len(rows) > 10, f"{path}: only {len(rows) - 1} device states traced")
+    values = dict(zip(header, last))
+    check(values["fault"] == "0", f"{path}: last device state is a fault")
+    return [[float(values[f"{a}{i}"]) for a in "xyz"] for i in range(5)]
+
+
+def check_frames(frames_dir, expected_users):
+    """The last frame shows every expected user's five fingertips where their haptic nodes
+    traced them, in the right colours."""
+    from PIL import Image
+
+    with open(os.path.join(frames_dir, "camera.json")) as f:
+        camera = json.load(f)
+    pngs = sorted(glob.glob(os.path.join(frames_dir, "frame_*.png")))
+    check(pngs, "no frames written")
+    last_png = pngs[-1]
+    frame_no = int(os.path.basename(last_png)[6:11])
+    drawn = {}
+    with open(os.path.join(frames_dir, "frames.csv")) as f:
+        next(f)
+        for line in f:
+            frame, _, user, finger, x, y, z, radius = line.strip().split(",")
+            if int(frame) == frame_no:
+                drawn[(user, int(finger))] = ([float(x), float(y), float(z)], float(radius))
+    image = Image.open(last_png).convert("RGB")
+    check(image.size == (camera["width_px"], camera["height_px"]), f"frame size {image.size} != camera")
+    checked = 0
+    for user, tips in expected_users.items():
+        for i, p in enumerate(tips):
+            check((user, i) in drawn, f"frame {frame_no} does not show {user}'s finger {i}")
+            p_drawn, radius = drawn[(user, i)]
+            # The spectator drew the fingertip where the haptic node last put it (held still).
+            check(max(abs(a - b) for a, b in zip(p, p_drawn)) < 1e-6,
+                  f"{user} finger {i}: drawn at {p_drawn}, traced at {p}")
+            col, row, depth, focal_px = project(camera, p)
+            radius_px = radius * focal_px / depth
+            check(radius_px >= 2.0, f"{user} finger {i}: {radius_px:.1f} px is too small to check")
+            pixel = image.getpixel((int(col), int(row)))
+            check(colour_matches(pixel, FINGER_RGB[i]),
+                  f"{user} finger {i} at pixel ({col:.1f}, {row:.1f}): colour {pixel}, expected {FINGER_RGB[i]}")
+            # Negative control: well outside the sphere the colour is not the fingertip's.
+            away = image.getpixel((int(col), int(row - 3.5 * radius_px)))
+            check(not colour_matches(away, FINGER_RGB[i]),
+                  f"{user} finger {i}: colour {away} also found 3.5 radii above the fingertip")
+            checked += 1
+    return checked
+
+
+def check_speech(wav_path):
+    """Non-silent speech: long enough, loud enough, with voiced stretches and pauses."""
+    with wave.open(wav_path) as w:
+        check(w.getnchannels() == 1 and w.getsampwidth() == 2, f"{wav_path}: not 16-bit mono")
+        rate = w.getframerate()
+        samples = array("h", w.readframes(w.getnframes()))
+    duration = len(samples) / rate
+    check(duration > 1.0, f"{wav_path}: only {duration:.2f} s")
+    rms = math.sqrt(sum(x * x for x in samples) / len(samples))
+    check(rms > 300, f"{wav_path}: RMS {rms:.0f} is near silence")
+    frame = int(0.02 * rate)
+    energies, zcrs = [], []
+    for k in range(0, len(samples) - frame, frame):
+        chunk = samples[k:k + frame]
+        energies.append(math.sqrt(sum(x * x for x in chunk) / frame))
+        zcrs.append(sum(1 for a, b in zip(chunk, chunk[1:]) if (a < 0) != (b < 0)) / frame)
+    loud = max(energies)
+    active = [i for i, e in enumerate(energies) if e > 0.1 * loud]
+    fraction = len(active) / len(energies)
+    check(0.3 < fraction < 0.97, f"{wav_path}: active fraction {fraction:.2f} is not speech-like")
+    zcr = sorted(zcrs[i] for i in active)[len(active) // 2]
+    check(0.01 < zcr < 0.4, f"{wav_path}: median zero-crossing rate {zcr:.3f} is not speech-like")
+    return duration, rms
+
+
+# --- cases ----------------------------------------------------------------------------------
+
+def case_shared_session(h, domain):
+    """World server, two simulated haptic nodes, a headless spectator and the audio guide."""
+    session = "it-shared"
+    w = h.work
+    h.start("world_server", "world_server", "--domain", domain, "--session", session, "--duration", 14)
+    h.start("audio_guide", "audio_guide", "--domain", domain, "--session", session,
+            "--out", os.path.join(w, "speech"), "--duration", 11)
+    for user in ("alice", "bob"):
+        h.start(user, "haptic_node", "--domain", domain, "--session", session, "--user", user,
+                "--device", "sim", "--script", os.path.join(DATA, user + ".hand"),
+                "--duration", 9, "--trace", os.path.join(w, user + ".csv"))
+    # The hands reach their hold poses within 1 s of starting; the spectator joins late.
+    h.wait_for_line("world_server", "member joined: user=bob", 10)
+    h.wait_for_line("world_server", "member joined: user=alice", 10)
+    time.sleep(1.5)
+    h.start("graphics", "graphics_node", "--domain", domain, "--session", session, "--headless",
+            "--frames", 15, "--fps", 10, "--out", os.path.join(w, "frames"))
+    check(h.wait("graphics", 60) == 0, "graphics_node failed")
+    for label in ("alice", "bob"):
+        check(h.wait(label, 30) == 0, f"haptic_node {label} failed")
+        check("loop statistics: rate" in h.log(label), f"{label} printed no loop statistics")
+    check(h.wait("audio_guide", 30) == 0, "audio_guide failed")
+    check(h.wait("world_server", 30) == 0, "world_server failed")
+
+    log = h.log("world_server")
+    for user in ("alice", "bob"):
+        check(f"member joined: user={user} kind=haptic device=sim" in log, f"server did not see {user} join")
+        check(f"member left: user={user} kind=haptic" in log, f"server did not see {user} leave")
+    check("member joined: user=graphics-" in log, "server did not see the spectator join")
+    check("member joined: user=audio-" in log, "server did not see the audio guide join")
+
+    tips = {u: last_trace_row(os.path.join(w, u + ".csv")) for u in ("alice", "bob")}
+    checked = check_frames(os.path.join(w, "frames"), tips)
+    wavs = sorted(glob.glob(os.path.join(w, "speech", "*.wav")))
+    check(len(wavs) == 1, f"expected one message WAV, found {wavs}")
+    duration, rms = check_speech(wavs[0])
+    print(f"shared session: {checked} fingertips checked in the last frame; speech {duration:.1f} s, RMS {rms:.0f}")
+
+
+def case_killed_member(h, domain):
+    """A member killed with SIGKILL (no goodbye) is noticed as lost within 2 s."""
+    session = "it-killed"
+    h.start("world_server", "world_server", "--domain", domain, "--session", session, "--duration", 30)
+    carol = h.start("carol", "haptic_node", "--domain", domain, "--session", session, "--user", "carol")
+    h.wait_for_line("world_server", "member joined: user=carol", 10)
+    time.sleep(0.5)
+    carol.kill()
+    killed_at = time.monotonic()
+    seen_at = h.wait_for_line("world_server", "member lost: user=carol", 5)
+    latency = seen_at - killed_at
+    check(latency <= 2.0, f"lost member noticed after {latency:.2f} s (> 2 s)")
+    h.procs["world_server"][0].send_signal(signal.SIGTERM)
+    check(h.wait("world_server", 10) == 0, "world_server did not end cleanly on SIGTERM")
+    check("shutting down" in h.log("world_server"), "world_server did not shut down cleanly")
+    print(f"killed member noticed after {latency:.2f} s")
+
+
+def shm_segments():
+    # Per-participant segments; port files (fastrtps_port*) are shared and reused by design.
+    return {f for f in os.listdir("/dev/shm") if f.startswith("fastrtps_") and "port" not in f}
+
+
+def case_signals(h, domain):
+    """SIGINT and SIGTERM end every node cleanly (exit 0) without leaving shared memory."""
+    session = "it-signals"
+    before = shm_segments()
+    h.start("world_server", "world_server", "--domain", domain, "--session", session)
+    h.start("haptic", "haptic_node", "--domain", domain, "--session", session, "--user", "dave")
+    h.start("audio", "audio_guide", "--domain", domain, "--session", session, "--out", os.path.join(h.work, "speech"))
+    h.wait_for_line("world_server", "member joined: user=dave", 10)
+    h.wait_for_line("world_server", "member joined: user=audio-", 10)
+    time.sleep(0.5)
+    h.procs["haptic"][0].send_signal(signal.SIGINT)
+    h.procs["audio"][0].send_signal(signal.SIGTERM)
+    check(h.wait("haptic", 10) == 0, "haptic_node did not exit 0 on SIGINT")
+    check(h.wait("audio", 10) == 0, "audio_guide did not exit 0 on SIGTERM")
+    h.wait_for_line("world_server", "member left: user=dave", 5)  # a clean leave, not a loss
+    h.procs["world_server"][0].send_signal(signal.SIGTERM)
+    check(h.wait("world_server", 10) == 0, "world_server did not exit 0 on SIGTERM")
+    left = shm_segments() - before
+    check(not left, f"shared-memory segments left behind: {sorted(left)}")
+    print("signals: every node ended cleanly, no shared memory left")
+
+
+def case_bad_input(h, domain):
+    domain = str(domain)
+    """Every executable explains a bad option and exits non-zero; --help exits 0."""
+    for name in ("world_server", "haptic_node", "graphics_node", "audio_guide"):
+        r = subprocess.run([h.exe(name), "--bogus"], capture_output=True, text=True, timeout=20)
+        check(r.returncode == 2 and "--bogus" in r.stderr, f"{name} --bogus: rc {r.returncode}, {r.stderr!r}")
+        r = subprocess.run([h.exe(name), "--help"], capture_output=True, text=True, timeout=20)
+        check(r.returncode == 0 and "usage:" in r.stdout, f"{name} --help: rc {r.returncode}")
+        user = ["--user", "u"] if name == "haptic_node" else []
+        r = subprocess.run([h.exe(name), "--session", "x", *user, "--domain", "500"],
+                           capture_output=True, text=True, timeout=20)
+        check(r.returncode == 2 and "--domain" in r.stderr, f"{name} --domain 500: rc {r.returncode}, {r.stderr!r}")
+    bad_script = os.path.join(h.work, "bad.hand")
+    with open(bad_script, "w") as f:
+        f.write("start 0 0 0.1\nmove 1.0 0 0\n")
+    r = subprocess.run([h.exe("haptic_node"), "--domain", domain, "--session", "x", "--user", "u",
+                        "--script", bad_script], capture_output=True, text=True, timeout=20)
+    check(r.returncode == 1 and f"{bad_script}:2: missing z" in r.stderr,
+          f"bad script: rc {r.returncode}, {r.stderr!r}")
+    r = subprocess.run([h.exe("world_server"), "--domain", domain, "--session", "x", "--scene", "atlantis"],
+                       capture_output=True, text=True, timeout=20)
+    check(r.returncode == 1 and "unknown scene 'atlantis'" in r.stderr, f"bad scene: rc {r.returncode}, {r.stderr!r}")
+    r = subprocess.run([h.exe("graphics_node"), "--session", "x", "--headless", "--out", h.work],
+                       capture_output=True, text=True, timeout=20)
+    check(r.returncode == 2 and "--frames" in r.stderr, f"headless without frames: rc {r.returncode}, {r.stderr!r}")
+    print("bad input: clear messages and non-zero exits")
+
+
+CASES = {"shared_session": case_shared_session, "killed_member": case_killed_member,
+         "signals": case_signals, "bad_input": case_bad_input}
+
+
+def main():
+    parser = argparse.ArgumentParser()
+    parser.add_argument("case", choices=sorted(CASES))
+    parser.add_argument("--bin-dir", required=True)
+    parser.add_argument("--domain", type=int, required=True)
+    parser.add_argument("--work", default="")
+    args = parser.parse_args()
+    work = args.work or tempfile.mkdtemp(prefix=f"handshare-{args.case}-")
+    os.makedirs(work, exist_ok=True)
+    h = Harness(args.bin_dir, work)
+    try:
+        CASES[args.case](h, args.domain)
+    except Failure as e:
+        h.dump_logs()
+        print(f"FAILED: {args.case}: {e}\n(work folder: {work})", file=sys.stderr)
+        return 1
+    finally:
+        h.cleanup()
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
