@@ -21,7 +21,8 @@ void DrawFrame(const GlApi& gl, const SceneView& scene, const Camera& camera, St
 
 /// Bumped each time an OSMesa context is made current in this process. OSMesa and Mesa's GLX
 /// driver share libglapi's per-thread current dispatch, so a window context must really be
-/// re-bound (not just "made current again", which GLVND skips) after an offscreen render.
+/// re-bound (not just "made current again", which GLVND skips) after an offscreen render;
+/// without that the next window draw crashes in Mesa (seen with llvmpipe under Xvfb).
 inline std::atomic<std::uint64_t> g_offscreen_binds{0};
 
 }  // namespace handshare::render::detail
