@@ -169,6 +169,10 @@ def check_frames(frames_dir, expected_users):
             check(not colour_matches(away, FINGER_RGB[i]),
                   f"{user} finger {i}: colour {away} also found 3.5 radii above the fingertip")
             checked += 1
+    # The message board reached the spectator: its caption is white text on the bottom band.
+    w, hgt = image.size
+    white = sum(1 for y in range(hgt - 24, hgt) for x in range(w) if min(image.getpixel((x, y))) > 200)
+    check(white > 50, f"no caption text in the bottom band of {last_png} ({white} white pixels)")
     return checked
 
 
@@ -228,6 +232,9 @@ def case_shared_session(h, domain):
         check(f"member joined: user={user} kind=haptic device=sim" in log, f"server did not see {user} join")
         check(f"member left: user={user} kind=haptic" in log, f"server did not see {user} leave")
     check("member joined: user=graphics-" in log, "server did not see the spectator join")
+    # The spectator joined seconds after the scene and the message board were published: as a
+    # late joiner it must still have received both (transient-local).
+    check("no scene state received" not in h.log("graphics"), "late spectator did not get the scene")
     check("member joined: user=audio-" in log, "server did not see the audio guide join")
 
     tips = {u: last_trace_row(os.path.join(w, u + ".csv")) for u in ("alice", "bob")}
