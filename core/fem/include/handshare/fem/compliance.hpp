@@ -1,0 +1,142 @@
+#pragma once
+/// @file
+/// The precomputed compliance of an object: the 3x3 blocks C_nk = (K_ff^-1)_nk [m/N] between
+/// its compliance nodes (by default every free surface node), stored once per symmetric pair
+/// (upper-triangle blocks, packed by columns), in float32 or float64, with a versioned,
+/// checksummed cache file. Precompute and file I/O are offline; the block accessors are
+/// real-time safe (noexcept, no allocation).
+
+#include <cstdint>
+#include <filesystem>
+#include <functional>
+#include <span>
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "handshare/fem/assembly.hpp"
+#include "handshare/fem/mesh.hpp"
+
+namespace handshare::fem {
+
+/// Storage precision of the compliance blocks (the value is the scalar size in bytes).
+enum class Precision : std::uint32_t { kFloat32 = 4, kFloat64 = 8 };
+
+/// What to precompute.
+struct ComplianceOptions {
+  Precision precision = Precision::kFloat64;
+  /// Compliance nodes (mesh indices, distinct, not fixed, used by an element). Empty: every
+  /// surface node that is not fixed, in increasing index order.
+  std::vector<std::int32_t> nodes;
+  /// Right-hand sides solved together, in nodes (3 columns each); 0 picks a size that keeps the
+  /// block under about 256 MiB.
+  int block_nodes = 0;
+};
+
+/// Timings and sizes of one precomputation.
+struct PrecomputeStats {
+  std::int64_t free_dofs = 0;
+  std::int64_t factor_nonzeros = 0;
+  double assemble_s = 0, analyze_s = 0, factor_s = 0, solve_s = 0, total_s = 0;
+};
+
+/// Progress callback: (compliance nodes done, total). Called from the precomputing thread.
+using ProgressFn = std::function<void(std::int64_t done, std::int64_t total)>;
+
+/// Compliance blocks of one object for one material and one fixed boundary.
+class Compliance {
+ public:
+  Compliance() = default;
+
+  /// Assembles K, factors K_ff once (CHOLMOD supernodal), and solves for the unit loads of all
+  /// compliance nodes in blocks of right-hand sides.
+  /// @throws InputError for bad nodes or material; FemError if K_ff is singular.
+  static Compliance Precompute(const TetMesh& mesh, const Material& material,
+                               std::span<const std::int32_t> fixed_nodes,
+                               const ComplianceOptions& options = {},
+                               const ProgressFn& progress = {}, PrecomputeStats* stats = nullptr);
+
+  /// Hash of everything the blocks depend on: node positions, elements, material, fixed nodes,
+  /// compliance nodes (resolved as Precompute would) and precision.
+  static std::uint64_t InputHash(const TetMesh& mesh, const Material& material,
+                                 std::span<const std::int32_t> fixed_nodes,
+                                 const ComplianceOptions& options);
+
+  /// Writes the cache file (header, node lists, blocks; checksums), atomically (temp + rename).
+  /// @throws CacheError if it cannot be written.
+  void Save(const std::filesystem::path& file) const;
+  /// Reads and verifies a cache file.
+  /// @param expected_hash  InputHash of the current mesh and material; 0 skips that check.
+  /// @throws CacheError naming the file: missing, not a cache, version, stale (hash), truncated,
+  ///         corrupt (checksum).
+  static Compliance Load(const std::filesystem::path& file, std::uint64_t expected_hash = 0);
+
+  /// Loads `cache` if it matches the inputs, else precomputes and saves it.
+  /// @param note  if given, receives why the cache was (not) used.
+  static Compliance LoadOrPrecompute(const std::filesystem::path& cache, const TetMesh& mesh,
+                                     const Material& material,
+                                     std::span<const std::int32_t> fixed_nodes,
+                                     const ComplianceOptions& options = {},
+                                     const ProgressFn& progress = {},
+                                     std::string* note = nullptr,
+                                     PrecomputeStats* stats = nullptr);
+
+  // ---- Accessors (real-time safe) ----
+
+  /// Number N of compliance nodes ("slots").
+  std::int32_t num_nodes() const noexcept { return static_cast<std::int32_t>(nodes_.size()); }
+  /// Number of nodes of the mesh it was computed for.
+  std::int32_t num_mesh_nodes() const noexcept { return static_cast<std::int32_t>(slot_of_.size()); }
+  /// Slot -> mesh node index.
+  std::span<const std::int32_t> nodes() const noexcept { return nodes_; }
+  /// Fixed mesh nodes (sorted).
+  std::span<const std::int32_t> fixed_nodes() const noexcept { return fixed_; }
+  /// Mesh node index -> slot, -1 if not a compliance node or out of range.
+  std::int32_t SlotOf(std::int32_t mesh_node) const noexcept {
+    return (mesh_node >= 0 && mesh_node < num_mesh_nodes()) ? slot_of_[mesh_node] : -1;
+  }
+  /// True if the mesh node is fixed.
+  bool IsFixed(std::int32_t mesh_node) const noexcept {
+    return mesh_node >= 0 && mesh_node < num_mesh_nodes() && fixed_flag_[mesh_node] != 0;
+  }
+  Precision precision() const noexcept { return precision_; }
+  const Material& material() const noexcept { return material_; }
+  std::uint64_t input_hash() const noexcept { return hash_; }
+
+  /// C_nk [m/N] for slots n, k in any order (C_kn = C_nk^T).
+  Eigen::Matrix3d Block(std::int32_t n, std::int32_t k) const noexcept;
+
+  /// Index of the stored block (n, k), n <= k: k (k + 1) / 2 + n. Each block is 9 scalars,
+  /// column-major.
+  static std::int64_t PackedIndex(std::int32_t n, std::int32_t k) noexcept {
+    return static_cast<std::int64_t>(k) * (k + 1) / 2 + n;
+  }
+  /// Raw packed storage (valid for the matching precision, else nullptr).
+  const float* data_f32() const noexcept { return f32_.empty() ? nullptr : f32_.data(); }
+  const double* data_f64() const noexcept { return f64_.empty() ? nullptr : f64_.data(); }
+  /// Bytes of block storage: 9 N (N + 1) / 2 scalars.
+  std::size_t storage_bytes() const noexcept {
+    return f32_.size() * sizeof(float) + f64_.size() * sizeof(double);
+  }
+
+ private:
+  void BuildLookup(std::int32_t num_mesh_nodes);
+
+  Precision precision_ = Precision::kFloat64;
+  Material material_;
+  std::uint64_t hash_ = 0;
+  std::vector<std::int32_t> nodes_;
+  std::vector<std::int32_t> fixed_;
+  std::vector<std::int32_t> slot_of_;
+  std::vector<std::uint8_t> fixed_flag_;
+  std::vector<float> f32_;
+  std::vector<double> f64_;
+};
+
+/// Resolves ComplianceOptions::nodes (empty -> free surface nodes) and checks them.
+std::vector<std::int32_t> ResolveComplianceNodes(const TetMesh& mesh,
+                                                 std::span<const std::int32_t> fixed_nodes,
+                                                 std::span<const std::int32_t> requested);
+
+}  // namespace handshare::fem

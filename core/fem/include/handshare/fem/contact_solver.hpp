@@ -1,0 +1,155 @@
+#pragma once
+/// @file
+/// Real-time contact solve on a precomputed Compliance (the symmetric compliance form of the
+/// elementary displacement method, see docs/fem.md):
+///   solve (G C_cc G^T + eps I) lambda = G d*,  f = G^T lambda           (contact forces)
+///   u_n = sum_j C_n,kj f_j                                               (surface field)
+/// where c are the touched nodes, d* their imposed displacements and G selects all three
+/// components (sticking contact) or the normal one (frictionless). This is the exact static FEM
+/// solution with the touched nodes held at d* (Schur complement identity). The force path costs
+/// O(m^3) for m contacts, independent of the mesh size; the surface field costs O(N m).
+/// Solve() and the displacement queries are noexcept and do not allocate: everything is sized by
+/// the constructor for ContactSolverOptions::max_contacts.
+
+#include <cstdint>
+#include <memory>
+#include <span>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "handshare/fem/compliance.hpp"
+
+namespace handshare::fem {
+
+/// How a touched node is held.
+enum class ContactMode : std::uint8_t {
+  kFull3d,      ///< all three components imposed (sticking fingertip).
+  kNormalOnly,  ///< only n_out . u imposed; tangential motion free (frictionless).
+};
+
+/// One touched node. Plain data, trivially copyable.
+struct ContactInput {
+  std::int32_t node = -1;                                  ///< mesh node index.
+  Eigen::Vector3d u_m = Eigen::Vector3d::Zero();           ///< imposed displacement [m].
+  Eigen::Vector3d n_out = Eigen::Vector3d::Zero();         ///< unit outward normal (push-only,
+                                                           ///< kNormalOnly); zero = none.
+  ContactMode mode = ContactMode::kFull3d;
+};
+
+/// What became of one input contact.
+enum class ContactState : std::uint8_t {
+  kActive,               ///< held as requested; carries force.
+  kSlipping,             ///< push-only: a sticking contact that would pull cannot hold
+                         ///< friction, so it slips (held along n_out only).
+  kReleased,             ///< push-only: would pull, so released (zero force).
+  kRejectedFixed,        ///< the node is fixed: ignored (zero force).
+  kRejectedUnknownNode,  ///< not a compliance node (interior, out of range): ignored.
+};
+
+/// Outcome of a Solve() call.
+enum class StepStatus : std::uint8_t {
+  kOk,
+  kSomeRejected,      ///< solved; some contacts were rejected (see states()), or there were
+                      ///< more than max_contacts inputs and only the first max_contacts
+                      ///< were used (forces_N() and states() cover only those).
+  kInvalidInput,      ///< NaN/Inf displacement or normal, or a zero normal where one is needed:
+                      ///< all forces set to zero.
+  kNotConverged,      ///< push-only active set hit its iteration cap: last iterate returned.
+  kNumericalFailure,  ///< Cholesky of the contact matrix failed: all forces set to zero.
+};
+
+/// Options, fixed at construction.
+struct ContactSolverOptions {
+  /// Most contacts (touched nodes, before merging) one Solve() accepts; sizes all buffers.
+  std::int32_t max_contacts = 15;
+  /// Tikhonov regularization eps [m/N]: (C_cc + eps I) f = d*. 0 = exact.
+  double regularization_m_per_N = 0.0;
+  /// Virtual coupling stiffness k_c [N/m]: (C_cc + I / k_c) f = d* (a spring between the
+  /// fingertip proxy and the node). 0 = off. Adds to regularization_m_per_N.
+  double coupling_stiffness_N_per_m = 0.0;
+  /// Unilateral contact, needs n_out on every contact. A frictionless contact that would pull
+  /// (f . n_out > 0) is released; a sticking one first slips (friction needs pressure, so it
+  /// keeps only its normal constraint), then is released if it still pulls. A released node the
+  /// surface would push into the fingertip is re-engaged (frictionless). Sticking contacts that
+  /// push hold any tangential force (no friction cone).
+  bool push_only = false;
+  /// Cap on active-set changes per Solve() when push_only.
+  std::int32_t max_active_set_iterations = 64;
+};
+
+/// The real-time contact solver. Not thread-safe; one per haptic thread and object.
+class ContactSolver {
+ public:
+  /// Allocates every buffer for options.max_contacts (the Init of the real-time rules).
+  /// @throws InputError for a null compliance or bad options.
+  ContactSolver(std::shared_ptr<const Compliance> compliance, const ContactSolverOptions& options);
+
+  /// Solves for the given touched nodes. Nodes touched more than once are merged (mean imposed
+  /// displacement; the node's force is split evenly between the inputs). Fixed and unknown nodes
+  /// are rejected, not thrown. Real-time: noexcept, no allocation, O(m^3).
+  StepStatus Solve(std::span<const ContactInput> contacts) noexcept;
+
+  /// Force on the object at each input contact [N] (push: along -n_out), same order as the
+  /// inputs of the last Solve().
+  std::span<const Eigen::Vector3d> forces_N() const noexcept {
+    return {forces_N_.data(), static_cast<std::size_t>(num_inputs_)};
+  }
+  std::span<const ContactState> states() const noexcept {
+    return {states_.data(), static_cast<std::size_t>(num_inputs_)};
+  }
+  /// Sum of all contact forces on the object [N].
+  Eigen::Vector3d total_force_N() const noexcept;
+  /// Distinct touched nodes in the last Solve() and how many of them are held.
+  std::int32_t num_unique() const noexcept { return num_unique_; }
+  std::int32_t num_active() const noexcept;
+  /// Active-set changes in the last Solve().
+  std::int32_t active_set_iterations() const noexcept { return iterations_; }
+
+  /// Displacement [m] of every compliance node (slot order) for the last Solve(): O(N m).
+  /// u_m.size() must be num_nodes(); returns false (and writes nothing) otherwise.
+  bool SurfaceDisplacements(std::span<Eigen::Vector3d> u_m) const noexcept;
+  /// Displacement [m] of the given mesh nodes (e.g. the visible ones). Fixed nodes get 0; nodes
+  /// that are not compliance nodes get NaN. Returns the number of NaN entries, or -1 if the
+  /// sizes differ.
+  std::int32_t Displacements(std::span<const std::int32_t> mesh_nodes,
+                             std::span<Eigen::Vector3d> u_m) const noexcept;
+
+  const Compliance& compliance() const noexcept { return *compliance_; }
+  const ContactSolverOptions& options() const noexcept { return options_; }
+
+ private:
+  bool SolveActiveSet() noexcept;
+  void ComputeContactDisplacements() noexcept;
+  void ZeroOutputs() noexcept;
+
+  std::shared_ptr<const Compliance> compliance_;
+  ContactSolverOptions options_;
+  double eps_m_per_N_ = 0.0;
+
+  std::int32_t num_inputs_ = 0;
+  std::int32_t num_unique_ = 0;
+  std::int32_t iterations_ = 0;
+
+  // Per input contact.
+  std::vector<Eigen::Vector3d> forces_N_;
+  std::vector<ContactState> states_;
+  std::vector<std::int32_t> unique_of_input_;
+  // Per unique node.
+  std::vector<std::int32_t> slot_;
+  std::vector<std::int32_t> multiplicity_;
+  std::vector<Eigen::Vector3d> d_m_;
+  std::vector<Eigen::Vector3d> n_;
+  std::vector<ContactMode> mode_;
+  std::vector<std::uint8_t> active_;
+  std::vector<std::uint8_t> slipping_;
+  std::vector<Eigen::Vector3d> f_N_;
+  std::vector<Eigen::Vector3d> u_c_m_;
+  // Dense work: C_cc (3M x 3M), the reduced matrix and its factor, right-hand side.
+  std::vector<double> Ccc_;
+  std::vector<double> A_;
+  std::vector<double> rhs_;
+  std::vector<std::int32_t> row_of_;
+};
+
+}  // namespace handshare::fem

@@ -1,0 +1,339 @@
+#include "handshare/fem/contact_solver.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <string>
+
+#include "dense_small.hpp"
+#include "handshare/fem/error.hpp"
+#include "kernels.hpp"
+
+namespace handshare::fem {
+
+ContactSolver::ContactSolver(std::shared_ptr<const Compliance> compliance,
+                             const ContactSolverOptions& options)
+    : compliance_(std::move(compliance)), options_(options) {
+  if (!compliance_) throw InputError("", 0, "compliance", "null");
+  if (compliance_->num_nodes() == 0) throw InputError("", 0, "compliance", "empty");
+  if (options_.max_contacts < 1 || options_.max_contacts > 1024) {
+    throw InputError("", 0, "max_contacts", "must be in 1..1024, got " + std::to_string(options_.max_contacts));
+  }
+  if (!std::isfinite(options_.regularization_m_per_N) || options_.regularization_m_per_N < 0.0) {
+    throw InputError("", 0, "regularization_m_per_N", "must be finite and >= 0");
+  }
+  if (!std::isfinite(options_.coupling_stiffness_N_per_m) || options_.coupling_stiffness_N_per_m < 0.0) {
+    throw InputError("", 0, "coupling_stiffness_N_per_m", "must be finite and >= 0 (0 = off)");
+  }
+  if (options_.max_active_set_iterations < 0) {
+    throw InputError("", 0, "max_active_set_iterations", "must be >= 0");
+  }
+  eps_m_per_N_ = options_.regularization_m_per_N;
+  if (options_.coupling_stiffness_N_per_m > 0.0) eps_m_per_N_ += 1.0 / options_.coupling_stiffness_N_per_m;
+
+  const auto M = static_cast<std::size_t>(options_.max_contacts);
+  forces_N_.assign(M, Eigen::Vector3d::Zero());
+  states_.assign(M, ContactState::kActive);
+  unique_of_input_.assign(M, -1);
+  slot_.assign(M, -1);
+  multiplicity_.assign(M, 0);
+  d_m_.assign(M, Eigen::Vector3d::Zero());
+  n_.assign(M, Eigen::Vector3d::Zero());
+  mode_.assign(M, ContactMode::kFull3d);
+  active_.assign(M, 0);
+  slipping_.assign(M, 0);
+  f_N_.assign(M, Eigen::Vector3d::Zero());
+  u_c_m_.assign(M, Eigen::Vector3d::Zero());
+  Ccc_.assign(9 * M * M, 0.0);
+  A_.assign(9 * M * M, 0.0);
+  rhs_.assign(3 * M, 0.0);
+  row_of_.assign(M, -1);
+}
+
+void ContactSolver::ZeroOutputs() noexcept {
+  for (std::int32_t i = 0; i < num_inputs_; ++i) forces_N_[i].setZero();
+  for (std::int32_t j = 0; j < num_unique_; ++j) {
+    f_N_[j].setZero();
+    active_[j] = 0;
+  }
+}
+
+Eigen::Vector3d ContactSolver::total_force_N() const noexcept {
+  Eigen::Vector3d s = Eigen::Vector3d::Zero();
+  for (std::int32_t i = 0; i < num_inputs_; ++i) s += forces_N_[i];
+  return s;
+}
+
+std::int32_t ContactSolver::num_active() const noexcept {
+  std::int32_t n = 0;
+  for (std::int32_t j = 0; j < num_unique_; ++j) n += active_[j] ? 1 : 0;
+  return n;
+}
+
+StepStatus ContactSolver::Solve(std::span<const ContactInput> contacts) noexcept {
+  const Compliance& C = *compliance_;
+  const std::int32_t M = options_.max_contacts;
+  const bool overflow = contacts.size() > static_cast<std::size_t>(M);
+  num_inputs_ = overflow ? M : static_cast<std::int32_t>(contacts.size());
+  num_unique_ = 0;
+  iterations_ = 0;
+  bool rejected = overflow;
+  bool invalid = false;
+
+  // Stage 1: validate and merge repeated nodes (m is small: O(m^2) search).
+  for (std::int32_t i = 0; i < num_inputs_; ++i) {
+    const ContactInput& c = contacts[i];
+    unique_of_input_[i] = -1;
+    forces_N_[i].setZero();
+    if (!c.u_m.allFinite() || !c.n_out.allFinite()) {
+      invalid = true;
+      states_[i] = ContactState::kRejectedUnknownNode;
+      continue;
+    }
+    if (C.IsFixed(c.node)) {
+      states_[i] = ContactState::kRejectedFixed;
+      rejected = true;
+      continue;
+    }
+    const std::int32_t slot = C.SlotOf(c.node);
+    if (slot < 0) {
+      states_[i] = ContactState::kRejectedUnknownNode;
+      rejected = true;
+      continue;
+    }
+    const bool needs_normal = c.mode == ContactMode::kNormalOnly || options_.push_only;
+    const double nn = c.n_out.norm();
+    if (needs_normal && !(nn > 0.5 && nn < 2.0)) {  // must be (about) unit length
+      invalid = true;
+      states_[i] = ContactState::kRejectedUnknownNode;
+      continue;
+    }
+    std::int32_t j = 0;
+    while (j < num_unique_ && slot_[j] != slot) ++j;
+    if (j == num_unique_) {
+      slot_[j] = slot;
+      multiplicity_[j] = 0;
+      d_m_[j].setZero();
+      n_[j].setZero();
+      mode_[j] = c.mode;
+      ++num_unique_;
+    }
+    ++multiplicity_[j];
+    d_m_[j] += c.u_m;
+    if (nn > 0.0) n_[j] += c.n_out / nn;
+    if (c.mode == ContactMode::kFull3d) mode_[j] = ContactMode::kFull3d;
+    unique_of_input_[i] = j;
+    states_[i] = ContactState::kActive;
+  }
+  for (std::int32_t j = 0; j < num_unique_; ++j) {
+    d_m_[j] /= static_cast<double>(multiplicity_[j]);
+    const double nn = n_[j].norm();
+    if (nn > 1e-12) {
+      n_[j] /= nn;
+    } else if (mode_[j] == ContactMode::kNormalOnly || options_.push_only) {
+      invalid = true;  // merged inputs with opposite normals
+    }
+    active_[j] = 1;
+    slipping_[j] = 0;
+  }
+  if (invalid) {
+    ZeroOutputs();
+    return StepStatus::kInvalidInput;
+  }
+  if (num_unique_ == 0) return rejected ? StepStatus::kSomeRejected : StepStatus::kOk;
+
+  // Stage 2: gather C_cc (3u x 3u, full symmetric) from the packed upper-triangle blocks.
+  const int ld = 3 * M;
+  detail::GatherBlocks(C, slot_.data(), num_unique_, Ccc_.data(), ld);
+
+  // Stage 3: solve. With push-only, change one contact per iteration:
+  //  a) a sticking contact that pulls slips (keeps its normal constraint only). Sticking -> slipping
+  //     never reverts, so this happens at most m times;
+  //  b) otherwise the frictionless part is a linear complementarity problem with a P-matrix:
+  //     release a pulling contact or re-engage a released node the surface pushes into the tip,
+  //     the most violating first, then (past half the iteration budget) by Murty's least-index
+  //     rule, which terminates.
+  StepStatus status = StepStatus::kOk;
+  while (true) {
+    if (!SolveActiveSet()) {
+      ZeroOutputs();
+      return StepStatus::kNumericalFailure;
+    }
+    if (!options_.push_only) break;
+    ComputeContactDisplacements();
+    double f_scale = 0.0, d_scale = 0.0;
+    for (std::int32_t j = 0; j < num_unique_; ++j) {
+      f_scale = std::max(f_scale, f_N_[j].norm());
+      d_scale = std::max(d_scale, d_m_[j].norm());
+    }
+    if (f_scale == 0.0) f_scale = 1.0;
+    if (d_scale == 0.0) d_scale = 1.0;
+    constexpr double kTol = 1e-9;
+    std::int32_t slip = -1;
+    double worst = kTol;
+    for (std::int32_t j = 0; j < num_unique_; ++j) {
+      const double pull = f_N_[j].dot(n_[j]) / f_scale;
+      if (active_[j] && mode_[j] == ContactMode::kFull3d && pull > worst) {
+        worst = pull;
+        slip = j;
+      }
+    }
+    std::int32_t flip = -1;
+    if (slip < 0) {
+      const bool least_index = iterations_ >= options_.max_active_set_iterations / 2;
+      worst = kTol;
+      for (std::int32_t j = 0; j < num_unique_; ++j) {
+        const double v = active_[j] ? f_N_[j].dot(n_[j]) / f_scale
+                                    : (u_c_m_[j] - d_m_[j]).dot(n_[j]) / d_scale;
+        if (v > worst) {
+          worst = v;
+          flip = j;
+          if (least_index) break;
+        }
+      }
+      if (flip < 0) break;
+    }
+    if (iterations_ >= options_.max_active_set_iterations) {
+      status = StepStatus::kNotConverged;
+      break;
+    }
+    if (slip >= 0) {
+      mode_[slip] = ContactMode::kNormalOnly;
+      slipping_[slip] = 1;
+    } else if (active_[flip]) {
+      active_[flip] = 0;
+    } else {
+      active_[flip] = 1;
+      if (mode_[flip] == ContactMode::kFull3d) {  // re-engages frictionless
+        mode_[flip] = ContactMode::kNormalOnly;
+        slipping_[flip] = 1;
+      }
+    }
+    ++iterations_;
+  }
+
+  // Stage 4: per-input outputs (a merged node's force split evenly).
+  for (std::int32_t i = 0; i < num_inputs_; ++i) {
+    const std::int32_t j = unique_of_input_[i];
+    if (j < 0) continue;
+    if (active_[j]) {
+      forces_N_[i] = f_N_[j] / static_cast<double>(multiplicity_[j]);
+      states_[i] = slipping_[j] ? ContactState::kSlipping : ContactState::kActive;
+    } else {
+      forces_N_[i].setZero();
+      states_[i] = ContactState::kReleased;
+    }
+  }
+  if (status != StepStatus::kOk) return status;
+  return rejected ? StepStatus::kSomeRejected : StepStatus::kOk;
+}
+
+bool ContactSolver::SolveActiveSet() noexcept {
+  // Rows of G: 3 per sticking contact, 1 per frictionless one (n^T).
+  const int ld = 3 * options_.max_contacts;
+  int r = 0;
+  for (std::int32_t j = 0; j < num_unique_; ++j) {
+    if (!active_[j]) {
+      row_of_[j] = -1;
+      f_N_[j].setZero();
+      continue;
+    }
+    row_of_[j] = r;
+    r += mode_[j] == ContactMode::kFull3d ? 3 : 1;
+  }
+  if (r == 0) return true;
+  // A = G C_cc G^T + eps I (lower triangle is enough for the Cholesky, fill it all: m is small).
+  for (std::int32_t j = 0; j < num_unique_; ++j) {
+    if (!active_[j]) continue;
+    const bool fj = mode_[j] == ContactMode::kFull3d;
+    for (std::int32_t i = 0; i < num_unique_; ++i) {
+      if (!active_[i]) continue;
+      const bool fi = mode_[i] == ContactMode::kFull3d;
+      Eigen::Map<const Eigen::Matrix3d, 0, Eigen::OuterStride<>> Cij(
+          Ccc_.data() + static_cast<std::ptrdiff_t>(3 * j) * ld + 3 * i, 3, 3, Eigen::OuterStride<>(ld));
+      double* a = A_.data() + static_cast<std::ptrdiff_t>(row_of_[j]) * ld + row_of_[i];
+      if (fi && fj) {
+        for (int c = 0; c < 3; ++c)
+          for (int rr = 0; rr < 3; ++rr) a[c * ld + rr] = Cij(rr, c);
+      } else if (fi) {  // column n_j
+        const Eigen::Vector3d v = Cij * n_[j];
+        for (int rr = 0; rr < 3; ++rr) a[rr] = v[rr];
+      } else if (fj) {  // row n_i^T
+        const Eigen::RowVector3d v = n_[i].transpose() * Cij;
+        for (int c = 0; c < 3; ++c) a[c * ld] = v[c];
+      } else {
+        a[0] = n_[i].dot(Cij * n_[j]);
+      }
+    }
+    if (fj) {
+      for (int c = 0; c < 3; ++c) rhs_[row_of_[j] + c] = d_m_[j][c];
+    } else {
+      rhs_[row_of_[j]] = n_[j].dot(d_m_[j]);
+    }
+  }
+  if (eps_m_per_N_ > 0.0) {
+    for (int k = 0; k < r; ++k) A_[static_cast<std::ptrdiff_t>(k) * ld + k] += eps_m_per_N_;
+  }
+  if (!detail::CholeskyInPlace(A_.data(), r, ld)) return false;
+  detail::CholeskySolveInPlace(A_.data(), r, ld, rhs_.data());
+  for (std::int32_t j = 0; j < num_unique_; ++j) {
+    if (!active_[j]) continue;
+    const int k = row_of_[j];
+    if (mode_[j] == ContactMode::kFull3d) {
+      f_N_[j] = Eigen::Vector3d(rhs_[k], rhs_[k + 1], rhs_[k + 2]);
+    } else {
+      f_N_[j] = rhs_[k] * n_[j];
+    }
+    if (!f_N_[j].allFinite()) return false;
+  }
+  return true;
+}
+
+void ContactSolver::ComputeContactDisplacements() noexcept {
+  const int ld = 3 * options_.max_contacts;
+  for (std::int32_t i = 0; i < num_unique_; ++i) {
+    Eigen::Vector3d u = Eigen::Vector3d::Zero();
+    for (std::int32_t j = 0; j < num_unique_; ++j) {
+      if (!active_[j]) continue;
+      Eigen::Map<const Eigen::Matrix3d, 0, Eigen::OuterStride<>> Cij(
+          Ccc_.data() + static_cast<std::ptrdiff_t>(3 * j) * ld + 3 * i, 3, 3, Eigen::OuterStride<>(ld));
+      u.noalias() += Cij * f_N_[j];
+    }
+    u_c_m_[i] = u;
+  }
+}
+
+bool ContactSolver::SurfaceDisplacements(std::span<Eigen::Vector3d> u_m) const noexcept {
+  const Compliance& C = *compliance_;
+  if (u_m.size() != static_cast<std::size_t>(C.num_nodes())) return false;
+  detail::ApplyColumns(C, slot_.data(), f_N_.data(), active_.data(), num_unique_, u_m);
+  return true;
+}
+
+std::int32_t ContactSolver::Displacements(std::span<const std::int32_t> mesh_nodes,
+                                          std::span<Eigen::Vector3d> u_m) const noexcept {
+  if (mesh_nodes.size() != u_m.size()) return -1;
+  const Compliance& C = *compliance_;
+  std::int32_t missing = 0;
+  for (std::size_t i = 0; i < mesh_nodes.size(); ++i) {
+    const std::int32_t v = mesh_nodes[i];
+    if (C.IsFixed(v)) {
+      u_m[i].setZero();
+      continue;
+    }
+    const std::int32_t n = C.SlotOf(v);
+    if (n < 0) {
+      u_m[i].setConstant(std::numeric_limits<double>::quiet_NaN());
+      ++missing;
+      continue;
+    }
+    Eigen::Vector3d u = Eigen::Vector3d::Zero();
+    for (std::int32_t j = 0; j < num_unique_; ++j) {
+      if (active_[j]) u.noalias() += C.Block(n, slot_[j]) * f_N_[j];
+    }
+    u_m[i] = u;
+  }
+  return missing;
+}
+
+}  // namespace handshare::fem

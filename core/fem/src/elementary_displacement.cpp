@@ -1,0 +1,211 @@
+#include "handshare/fem/elementary_displacement.hpp"
+
+#include <string>
+
+#include <Eigen/LU>
+
+#include "dense_small.hpp"
+#include "handshare/fem/error.hpp"
+
+namespace handshare::fem {
+namespace {
+
+template <class S>
+void FillTd(const Compliance& C, const std::vector<double>& tf, std::vector<S>& td) {
+  const std::int32_t N = C.num_nodes();
+  td.resize(static_cast<std::size_t>(N) * N * 9);
+  for (std::int32_t k = 0; k < N; ++k) {
+    const Eigen::Map<const Eigen::Matrix3d> Ckk_inv(tf.data() + 9 * static_cast<std::size_t>(k));
+    S* col = td.data() + static_cast<std::size_t>(k) * N * 9;
+    for (std::int32_t n = 0; n < N; ++n) {
+      // T^d_nk = C_nk C_kk^-1 (paper eq. 6: displacement of n per unit displacement of k).
+      const Eigen::Matrix3d T = (n == k) ? Eigen::Matrix3d::Identity().eval()
+                                         : (C.Block(n, k) * Ckk_inv).eval();
+      Eigen::Map<Eigen::Matrix<S, 3, 3>>(col + 9 * static_cast<std::size_t>(n)) = T.cast<S>();
+    }
+  }
+}
+
+}  // namespace
+
+ElementaryDisplacementTensors ElementaryDisplacementTensors::FromCompliance(
+    const Compliance& C, Precision precision) {
+  ElementaryDisplacementTensors t;
+  t.n_ = C.num_nodes();
+  t.precision_ = precision;
+  t.tf_.resize(9 * static_cast<std::size_t>(t.n_));
+  for (std::int32_t k = 0; k < t.n_; ++k) {
+    // T^f_k = C_kk^-1: the force at k per unit elementary displacement of k (paper eq. 8).
+    Eigen::FullPivLU<Eigen::Matrix3d> lu(C.Block(k, k));
+    if (!lu.isInvertible()) {
+      throw FemError("elementary displacement: C_kk of slot " + std::to_string(k) + " is singular");
+    }
+    Eigen::Map<Eigen::Matrix3d>(t.tf_.data() + 9 * static_cast<std::size_t>(k)) = lu.inverse();
+  }
+  if (precision == Precision::kFloat32) {
+    FillTd(C, t.tf_, t.td32_);
+  } else {
+    FillTd(C, t.tf_, t.td64_);
+  }
+  t.slot_of_.resize(static_cast<std::size_t>(C.num_mesh_nodes()));
+  t.fixed_flag_.resize(static_cast<std::size_t>(C.num_mesh_nodes()));
+  for (std::int32_t v = 0; v < C.num_mesh_nodes(); ++v) {
+    t.slot_of_[v] = C.SlotOf(v);
+    t.fixed_flag_[v] = C.IsFixed(v) ? 1 : 0;
+  }
+  return t;
+}
+
+Eigen::Matrix3d ElementaryDisplacementTensors::Td(std::int32_t n, std::int32_t k) const noexcept {
+  const std::size_t off = (static_cast<std::size_t>(k) * n_ + n) * 9;
+  if (precision_ == Precision::kFloat32) {
+    return Eigen::Map<const Eigen::Matrix3f>(td32_.data() + off).cast<double>();
+  }
+  return Eigen::Map<const Eigen::Matrix3d>(td64_.data() + off);
+}
+
+Eigen::Matrix3d ElementaryDisplacementTensors::Tf(std::int32_t k) const noexcept {
+  return Eigen::Map<const Eigen::Matrix3d>(tf_.data() + 9 * static_cast<std::size_t>(k));
+}
+
+ElementaryDisplacementSolver::ElementaryDisplacementSolver(
+    std::shared_ptr<const ElementaryDisplacementTensors> tensors, std::int32_t max_contacts)
+    : t_(std::move(tensors)), max_contacts_(max_contacts) {
+  if (!t_) throw InputError("", 0, "tensors", "null");
+  if (max_contacts < 1 || max_contacts > 1024) {
+    throw InputError("", 0, "max_contacts", "must be in 1..1024");
+  }
+  const auto M = static_cast<std::size_t>(max_contacts);
+  forces_N_.assign(M, Eigen::Vector3d::Zero());
+  states_.assign(M, ContactState::kActive);
+  unique_of_input_.assign(M, -1);
+  slot_.assign(M, -1);
+  multiplicity_.assign(M, 0);
+  d_m_.assign(M, Eigen::Vector3d::Zero());
+  e_m_.assign(M, Eigen::Vector3d::Zero());
+  A_.assign(9 * M * M, 0.0);
+  rhs_.assign(3 * M, 0.0);
+  piv_.assign(3 * M, 0);
+}
+
+StepStatus ElementaryDisplacementSolver::Solve(std::span<const ContactInput> contacts) noexcept {
+  const bool overflow = contacts.size() > static_cast<std::size_t>(max_contacts_);
+  num_inputs_ = overflow ? max_contacts_ : static_cast<std::int32_t>(contacts.size());
+  num_unique_ = 0;
+  bool rejected = overflow;
+  for (std::int32_t i = 0; i < num_inputs_; ++i) {
+    const ContactInput& c = contacts[i];
+    forces_N_[i].setZero();
+    unique_of_input_[i] = -1;
+    if (!c.u_m.allFinite()) {
+      for (std::int32_t j = 0; j < num_unique_; ++j) e_m_[j].setZero();
+      for (std::int32_t q = 0; q < num_inputs_; ++q) forces_N_[q].setZero();
+      num_unique_ = 0;
+      return StepStatus::kInvalidInput;
+    }
+    if (t_->IsFixed(c.node)) {
+      states_[i] = ContactState::kRejectedFixed;
+      rejected = true;
+      continue;
+    }
+    const std::int32_t slot = t_->SlotOf(c.node);
+    if (slot < 0) {
+      states_[i] = ContactState::kRejectedUnknownNode;
+      rejected = true;
+      continue;
+    }
+    std::int32_t j = 0;
+    while (j < num_unique_ && slot_[j] != slot) ++j;
+    if (j == num_unique_) {
+      slot_[j] = slot;
+      multiplicity_[j] = 0;
+      d_m_[j].setZero();
+      ++num_unique_;
+    }
+    ++multiplicity_[j];
+    d_m_[j] += c.u_m;
+    unique_of_input_[i] = j;
+    states_[i] = ContactState::kActive;
+  }
+  if (num_unique_ == 0) return rejected ? StepStatus::kSomeRejected : StepStatus::kOk;
+
+  // A_ij = T^d_{k_i k_j}: the displacement of touched node k_i per unit elementary displacement
+  // of k_j. Solving A e = d* is Cotin's correction: e are the elementary displacements whose
+  // superposition (eq. 7) puts every touched node exactly at d*.
+  const int ld = 3 * max_contacts_;
+  const int n = 3 * num_unique_;
+  for (std::int32_t j = 0; j < num_unique_; ++j) {
+    d_m_[j] /= static_cast<double>(multiplicity_[j]);
+    for (std::int32_t i = 0; i < num_unique_; ++i) {
+      const Eigen::Matrix3d T = t_->Td(slot_[i], slot_[j]);
+      double* a = A_.data() + static_cast<std::ptrdiff_t>(3 * j) * ld + 3 * i;
+      for (int c = 0; c < 3; ++c)
+        for (int r = 0; r < 3; ++r) a[c * ld + r] = T(r, c);
+    }
+    for (int c = 0; c < 3; ++c) rhs_[3 * j + c] = d_m_[j][c];
+  }
+  if (!detail::LuInPlace(A_.data(), n, ld, piv_.data())) {
+    for (std::int32_t j = 0; j < num_unique_; ++j) e_m_[j].setZero();
+    num_unique_ = 0;
+    return StepStatus::kNumericalFailure;
+  }
+  detail::LuSolveInPlace(A_.data(), n, ld, piv_.data(), rhs_.data());
+  for (std::int32_t j = 0; j < num_unique_; ++j) {
+    e_m_[j] = Eigen::Vector3d(rhs_[3 * j], rhs_[3 * j + 1], rhs_[3 * j + 2]);
+  }
+  // f_j = T^f_{k_j} e_j (eq. 8), split evenly over merged inputs.
+  for (std::int32_t i = 0; i < num_inputs_; ++i) {
+    const std::int32_t j = unique_of_input_[i];
+    if (j < 0) continue;
+    forces_N_[i] = t_->Tf(slot_[j]) * e_m_[j] / static_cast<double>(multiplicity_[j]);
+  }
+  return rejected ? StepStatus::kSomeRejected : StepStatus::kOk;
+}
+
+namespace {
+// out[n] += sum_j T^d_{n k_j} e_j; cols[j] is the stored T^d column of k_j (N blocks).
+template <class S>
+void AccumulateColumns(const S* const* cols, const Eigen::Vector3d* e, std::int32_t m,
+                       std::int32_t N, Eigen::Vector3d* out) noexcept {
+  for (std::int32_t j = 0; j < m; ++j) {
+    const S* blk = cols[j];
+    const double e0 = e[j][0], e1 = e[j][1], e2 = e[j][2];
+    for (std::int32_t n = 0; n < N; ++n, blk += 9) {
+      double* o = out[n].data();
+      o[0] += blk[0] * e0 + blk[3] * e1 + blk[6] * e2;
+      o[1] += blk[1] * e0 + blk[4] * e1 + blk[7] * e2;
+      o[2] += blk[2] * e0 + blk[5] * e1 + blk[8] * e2;
+    }
+  }
+}
+
+template <class S, class ColumnFn>
+void SurfaceField(std::int32_t N, std::int32_t u, const std::int32_t* slots,
+                  const Eigen::Vector3d* e, const ColumnFn& column, Eigen::Vector3d* out) noexcept {
+  for (std::int32_t n = 0; n < N; ++n) out[n].setZero();
+  constexpr std::int32_t kChunk = 16;
+  const S* cols[kChunk];
+  for (std::int32_t j0 = 0; j0 < u; j0 += kChunk) {
+    const std::int32_t m = std::min(kChunk, u - j0);
+    for (std::int32_t j = 0; j < m; ++j) cols[j] = column(slots[j0 + j]);
+    AccumulateColumns(cols, e + j0, m, N, out);
+  }
+}
+}  // namespace
+
+bool ElementaryDisplacementSolver::SurfaceDisplacements(
+    std::span<Eigen::Vector3d> u_m) const noexcept {
+  const std::int32_t N = t_->num_nodes();
+  if (u_m.size() != static_cast<std::size_t>(N)) return false;
+  // u_n = sum_j T^d_{n k_j} e_j (eq. 7): T^d is stored by touched node, so each term streams.
+  if (t_->precision() == Precision::kFloat32) {
+    SurfaceField<float>(N, num_unique_, slot_.data(), e_m_.data(),
+                        [this](std::int32_t k) { return t_->td_f32(k); }, u_m.data());
+  } else {
+    SurfaceField<double>(N, num_unique_, slot_.data(), e_m_.data(),
+                         [this](std::int32_t k) { return t_->td_f64(k); }, u_m.data());
+  }
+  return true;
+}
+
+}  // namespace handshare::fem

@@ -1,0 +1,204 @@
+// Surface meshes through assimp, tetrahedralization through the external tetgen program.
+// TetGen is GPL: it is only ever run as a separate process (posix_spawn), never linked.
+
+#include <fcntl.h>
+#include <spawn.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <cerrno>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <fstream>
+#include <map>
+#include <random>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include <assimp/Importer.hpp>
+#include <assimp/postprocess.h>
+#include <assimp/scene.h>
+
+#include "handshare/fem/error.hpp"
+#include "handshare/fem/mesh_io.hpp"
+
+extern char** environ;
+
+namespace handshare::fem {
+namespace {
+
+namespace fs = std::filesystem;
+
+// A temporary directory removed on scope exit.
+class TempDir {
+ public:
+  TempDir() {
+    std::string tmpl = (fs::temp_directory_path() / "handshare-tetgen-XXXXXX").string();
+    if (::mkdtemp(tmpl.data()) == nullptr) {
+      throw FemError(std::string("cannot create a temporary directory: ") + std::strerror(errno));
+    }
+    path_ = tmpl;
+  }
+  ~TempDir() {
+    std::error_code ec;
+    fs::remove_all(path_, ec);
+  }
+  TempDir(const TempDir&) = delete;
+  TempDir& operator=(const TempDir&) = delete;
+  const fs::path& path() const noexcept { return path_; }
+
+ private:
+  fs::path path_;
+};
+
+std::string Tail(const fs::path& file, std::size_t max_chars) {
+  std::ifstream in(file);
+  std::stringstream ss;
+  ss << in.rdbuf();
+  std::string s = ss.str();
+  if (s.size() > max_chars) s = "..." + s.substr(s.size() - max_chars);
+  return s;
+}
+
+// Runs argv[0] (looked up in PATH) in `cwd` with stdout+stderr into `log`; returns the exit code.
+int RunProgram(const std::vector<std::string>& args, const fs::path& cwd, const fs::path& log) {
+  posix_spawn_file_actions_t actions;
+  posix_spawn_file_actions_init(&actions);
+  const std::string log_s = log.string();
+  posix_spawn_file_actions_addopen(&actions, STDOUT_FILENO, log_s.c_str(),
+                                   O_WRONLY | O_CREAT | O_TRUNC, 0644);
+  posix_spawn_file_actions_adddup2(&actions, STDOUT_FILENO, STDERR_FILENO);
+  posix_spawn_file_actions_addopen(&actions, STDIN_FILENO, "/dev/null", O_RDONLY, 0);
+  const std::string cwd_s = cwd.string();
+  // The child must run in cwd (tetgen writes next to its input); glibc 2.29+ has addchdir_np.
+  posix_spawn_file_actions_addchdir_np(&actions, cwd_s.c_str());
+  std::vector<char*> argv;
+  for (const auto& a : args) argv.push_back(const_cast<char*>(a.c_str()));
+  argv.push_back(nullptr);
+  pid_t pid = 0;
+  const int rc = posix_spawnp(&pid, argv[0], &actions, nullptr, argv.data(), environ);
+  posix_spawn_file_actions_destroy(&actions);
+  if (rc != 0) {
+    throw FemError("cannot run '" + args[0] + "': " + std::strerror(rc) +
+                   (rc == ENOENT ? " (install the Debian package tetgen)" : ""));
+  }
+  int status = 0;
+  while (::waitpid(pid, &status, 0) < 0) {
+    if (errno != EINTR) throw FemError("waitpid failed for '" + args[0] + "'");
+  }
+  if (WIFEXITED(status)) return WEXITSTATUS(status);
+  return 128 + (WIFSIGNALED(status) ? WTERMSIG(status) : 0);
+}
+
+std::string FormatG(double v) {
+  char buf[40];
+  std::snprintf(buf, sizeof buf, "%.17g", v);
+  return buf;
+}
+
+}  // namespace
+
+SurfaceMeshData ReadSurfaceMesh(const fs::path& file) {
+  const std::string name = file.string();
+  if (!fs::exists(file)) throw InputError(name, 0, "file", "does not exist");
+  Assimp::Importer importer;
+  const aiScene* scene =
+      importer.ReadFile(name, aiProcess_Triangulate | aiProcess_PreTransformVertices);
+  if (scene == nullptr) {
+    throw InputError(name, 0, "surface mesh", std::string("assimp: ") + importer.GetErrorString());
+  }
+  SurfaceMeshData out;
+  // Weld bitwise-identical positions: STL repeats every vertex per triangle.
+  std::map<std::array<double, 3>, std::int32_t> index;
+  for (unsigned m = 0; m < scene->mNumMeshes; ++m) {
+    const aiMesh* mesh = scene->mMeshes[m];
+    std::vector<std::int32_t> local(mesh->mNumVertices);
+    for (unsigned v = 0; v < mesh->mNumVertices; ++v) {
+      const aiVector3D& a = mesh->mVertices[v];
+      const std::array<double, 3> key = {a.x, a.y, a.z};
+      if (!std::isfinite(key[0]) || !std::isfinite(key[1]) || !std::isfinite(key[2])) {
+        throw InputError(name, 0, "vertex " + std::to_string(v), "coordinate is not finite");
+      }
+      auto [it, inserted] = index.emplace(key, static_cast<std::int32_t>(out.p_m.size()));
+      if (inserted) out.p_m.emplace_back(key[0], key[1], key[2]);
+      local[v] = it->second;
+    }
+    for (unsigned f = 0; f < mesh->mNumFaces; ++f) {
+      const aiFace& face = mesh->mFaces[f];
+      if (face.mNumIndices != 3) continue;  // points and lines
+      const std::array<std::int32_t, 3> t = {local[face.mIndices[0]], local[face.mIndices[1]],
+                                             local[face.mIndices[2]]};
+      if (t[0] == t[1] || t[1] == t[2] || t[0] == t[2]) continue;  // collapsed by welding
+      out.triangles.push_back(t);
+    }
+  }
+  if (out.triangles.empty()) throw InputError(name, 0, "surface mesh", "no triangles");
+  return out;
+}
+
+void CheckClosed(const SurfaceMeshData& s, const std::string& source) {
+  std::map<std::pair<std::int32_t, std::int32_t>, int> edge_use;
+  for (const auto& t : s.triangles) {
+    for (int e = 0; e < 3; ++e) {
+      auto a = t[e], b = t[(e + 1) % 3];
+      if (a > b) std::swap(a, b);
+      ++edge_use[{a, b}];
+    }
+  }
+  for (const auto& [edge, n] : edge_use) {
+    if (n != 2) {
+      throw InputError(source, 0, "surface",
+                       "not a closed surface: the edge between vertices " +
+                           std::to_string(edge.first + 1) + " and " + std::to_string(edge.second + 1) +
+                           " belongs to " + std::to_string(n) + " triangle(s), not 2");
+    }
+  }
+}
+
+TetMesh TetrahedralizeSurface(const SurfaceMeshData& s, const TetgenOptions& options,
+                              const std::string& source) {
+  CheckClosed(s, source);
+  TempDir dir;
+  {
+    // TetGen .smesh: nodes (0-based), facets, no holes, no regions.
+    std::ofstream out(dir.path() / "surface.smesh");
+    out << s.p_m.size() << " 3 0 0\n";
+    for (std::size_t i = 0; i < s.p_m.size(); ++i) {
+      out << i << ' ' << FormatG(s.p_m[i].x()) << ' ' << FormatG(s.p_m[i].y()) << ' '
+          << FormatG(s.p_m[i].z()) << '\n';
+    }
+    out << s.triangles.size() << " 0\n";
+    for (const auto& t : s.triangles) out << "3 " << t[0] << ' ' << t[1] << ' ' << t[2] << '\n';
+    out << "0\n0\n";
+    if (!out) throw FemError("cannot write " + (dir.path() / "surface.smesh").string());
+  }
+  // -p: tetrahedralize a piecewise linear complex; -z: number from zero; -Q: quiet;
+  // -q: radius-edge quality bound; -a: volume bound.
+  std::string flags = "-pzQ";
+  if (options.max_radius_edge_ratio > 0.0) flags += "q" + FormatG(options.max_radius_edge_ratio);
+  if (options.max_volume_m3 > 0.0) flags += "a" + FormatG(options.max_volume_m3);
+  const fs::path log = dir.path() / "tetgen.log";
+  const int rc = RunProgram({options.program, flags, "surface.smesh"}, dir.path(), log);
+  if (rc != 0 || !fs::exists(dir.path() / "surface.1.ele")) {
+    throw FemError("tetgen failed on " + source + " (exit code " + std::to_string(rc) +
+                   ", flags " + flags + "): " + Tail(log, 600));
+  }
+  TetMesh tetgen_mesh = ReadTetgen(dir.path() / "surface.1");
+  // Keep the node sets but name the original surface as the source in later messages.
+  std::vector<Eigen::Vector3d> p = tetgen_mesh.positions_m();
+  std::vector<Tet> tets = tetgen_mesh.tets();
+  std::vector<std::int64_t> ids = tetgen_mesh.node_ids();
+  TetMesh mesh(std::move(p), std::move(tets), std::move(ids), source + " (tetgen " + flags + ")");
+  for (const auto& [name, nodes] : tetgen_mesh.node_sets()) mesh.SetNodeSet(name, nodes);
+  return mesh;
+}
+
+TetMesh TetrahedralizeSurfaceFile(const fs::path& surface_file, const TetgenOptions& options) {
+  return TetrahedralizeSurface(ReadSurfaceMesh(surface_file), options, surface_file.string());
+}
+
+}  // namespace handshare::fem

@@ -1,0 +1,100 @@
+#pragma once
+// Helpers shared by the FEM tests: procedural meshes, temporary files, error norms, the direct
+// reference solve of a contact set.
+
+#include <cstdint>
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <random>
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "handshare/fem/assembly.hpp"
+#include "handshare/fem/contact_solver.hpp"
+#include "handshare/fem/mesh.hpp"
+#include "handshare/fem/static_solver.hpp"
+
+namespace handshare::fem::test {
+
+// A temporary directory, removed at scope exit.
+class TempDir {
+ public:
+  TempDir() {
+    std::string tmpl = (std::filesystem::temp_directory_path() / "handshare-fem-test-XXXXXX").string();
+    if (::mkdtemp(tmpl.data()) == nullptr) std::abort();
+    path_ = tmpl;
+  }
+  ~TempDir() {
+    std::error_code ec;
+    std::filesystem::remove_all(path_, ec);
+  }
+  TempDir(const TempDir&) = delete;
+  TempDir& operator=(const TempDir&) = delete;
+  const std::filesystem::path& path() const { return path_; }
+  std::filesystem::path Write(const std::string& name, const std::string& text) const {
+    const auto p = path_ / name;
+    std::ofstream(p, std::ios::binary) << text;
+    return p;
+  }
+
+ private:
+  std::filesystem::path path_;
+};
+
+// A box [0,L]^3-ish block with its bottom face (z = 0) fixed.
+struct Block {
+  TetMesh mesh;
+  std::vector<std::int32_t> fixed;
+};
+
+inline Block MakeFixedBottomBox(const Eigen::Vector3d& size_m, const std::array<int, 3>& cells) {
+  Block b{MakeBoxMesh(size_m, cells), {}};
+  b.fixed = NodesOnPlane(b.mesh, 2, 0.0, 1e-12);
+  return b;
+}
+
+// "1.234e-05": for RecordProperty and messages.
+inline std::string Sci(double v) {
+  char b[32];
+  std::snprintf(b, sizeof b, "%.3e", v);
+  return b;
+}
+
+// ||a - b|| / ||b|| over stacked 3-vectors.
+inline double RelError(const std::vector<Eigen::Vector3d>& a, const std::vector<Eigen::Vector3d>& b) {
+  double num = 0.0, den = 0.0;
+  for (std::size_t i = 0; i < a.size(); ++i) {
+    num += (a[i] - b[i]).squaredNorm();
+    den += b[i].squaredNorm();
+  }
+  return den > 0.0 ? std::sqrt(num / den) : std::sqrt(num);
+}
+
+// The exact static FEM answer for a set of touched nodes held at u (direct sparse solve):
+// contact forces are the reactions at the touched nodes.
+struct DirectContact {
+  std::vector<Eigen::Vector3d> forces_N;  // per contact
+  StaticSolution solution;
+};
+
+inline DirectContact SolveDirect(const TetMesh& mesh, const Material& mat,
+                                 const std::vector<std::int32_t>& fixed,
+                                 const std::vector<ContactInput>& contacts) {
+  std::vector<std::int32_t> nodes;
+  std::vector<Eigen::Vector3d> u;
+  for (const auto& c : contacts) {
+    nodes.push_back(c.node);
+    u.push_back(c.u_m);
+  }
+  StaticSolver solver(mesh, mat, fixed, nodes);
+  DirectContact d;
+  d.solution = solver.Solve(u);
+  for (const auto& c : contacts) d.forces_N.push_back(d.solution.reaction_N[c.node]);
+  return d;
+}
+
+}  // namespace handshare::fem::test
