@@ -28,7 +28,7 @@ echo "demo: session '$session' on DDS domain $domain; logs, frames and speech in
   --duration 12 > "$out/audio_guide.log" 2>&1 & pids+=($!)
 for user in alice bob; do
   "$bin/haptic_node/haptic_node" --domain "$domain" --session "$session" --user "$user" \
-    --device sim --script "tests/data/$user.hand" --duration 10 \
+    --device sim --script "haptic_node/scripts/demo_$user.hand" --duration 10 \
     --trace "$out/$user.csv" > "$out/$user.log" 2>&1 & pids+=($!)
 done
 sleep 2
