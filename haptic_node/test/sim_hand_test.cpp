@@ -2,6 +2,8 @@
 
 #include <gtest/gtest.h>
 
+#include <filesystem>
+
 namespace handshare::haptic {
 namespace {
 
@@ -63,6 +65,29 @@ TEST(SimFingertips, FiveDistinctFingertipsThatCloseTogether) {
     EXPECT_LT((po[i] - open.p_WH).norm(), 0.15);  // within a hand's reach of its base
   }
   EXPECT_LT(spread_closed, 0.5 * spread_open);
+}
+
+}  // namespace
+}  // namespace handshare::haptic
+
+namespace handshare::haptic {
+namespace {
+
+// Every script the project ships (demo and tests) parses and stays within the table's reach.
+TEST(HandScript, ShippedScriptsParse) {
+  int count = 0;
+  for (const char* dir : {HANDSHARE_SCRIPT_DIR, HANDSHARE_TEST_DATA_DIR}) {
+    for (const auto& entry : std::filesystem::directory_iterator(dir)) {
+      if (entry.path().extension() != ".hand") continue;
+      const HandScript s = HandScript::Load(entry.path());
+      EXPECT_GT(s.duration_s(), 1.0) << entry.path();
+      for (double t = 0.0; t <= s.duration_s(); t += 0.1) {
+        EXPECT_LT(s.PoseAt(t).p_WH.norm(), 0.5) << entry.path() << " at " << t << " s";
+      }
+      ++count;
+    }
+  }
+  EXPECT_GE(count, 4);
 }
 
 }  // namespace
