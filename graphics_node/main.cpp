@@ -8,9 +8,8 @@ int main(int argc, char** argv) {
   handshare::common::Options options(
       "graphics_node", "Spectates a handshare session: the scene and every user's five fingertips "
                        "(red, green, blue, yellow, cyan), headless into PNG frames or in a window.");
-  options.Value("domain", "D", "DDS domain id (0..232)", "0")
-      .Value("session", "S", "session name", std::nullopt, true)
-      .Value("name", "NAME", "member name (default graphics-<pid>)", "")
+  handshare::common::DeclareSessionOptions(options);
+  options.Value("name", "NAME", "member name (default graphics-<pid>)", "")
       .Flag("headless", "render offscreen (software GL) into PNG files, no display needed")
       .Value("frames", "N", "headless: number of frames to write", "0")
       .Value("out", "DIR", "headless: output folder for frame_NNNNN.png, camera.json, frames.csv", "")
@@ -18,21 +17,16 @@ int main(int argc, char** argv) {
       .Value("height", "PX", "image or window height", "480")
       .Value("fps", "HZ", "frames per second", "30")
       .Value("stereo", "MODE", "mono, side-by-side or anaglyph", "mono")
-      .Flag("fullscreen", "window: full screen on the primary monitor (large screen)")
-      .Value("duration", "SEC", "window: run this long (0: until closed or SIGINT/SIGTERM)", "0")
-      .Value("qos", "FILE", "QoS profile XML (default: deploy/qos/handshare_qos.xml)", "");
+      .Flag("fullscreen", "window: full screen on the primary monitor (large screen)");
   return handshare::common::RunNodeMain(argc, argv, options, [](const auto& o) {
     handshare::graphics::SpectatorConfig c;
-    c.domain_id = static_cast<int>(o.GetInt("domain", 0, 232));
-    c.session = o.GetString("session");
+    c.where = handshare::common::ReadSessionOptions(o);
     c.name = o.GetString("name");
     c.headless = o.FlagSet("headless");
     c.width_px = static_cast<int>(o.GetInt("width", 16, 8192));
     c.height_px = static_cast<int>(o.GetInt("height", 16, 8192));
     c.fps = o.GetDouble("fps", 0.1, 240.0);
     c.fullscreen = o.FlagSet("fullscreen");
-    c.duration = std::chrono::duration<double>(o.GetDouble("duration", 0.0, 1e7));
-    c.qos_file = o.GetString("qos");
     const std::string stereo = o.GetString("stereo");
     if (stereo == "mono") c.stereo = handshare::graphics::StereoOutput::kMono;
     else if (stereo == "side-by-side") c.stereo = handshare::graphics::StereoOutput::kSideBySide;

@@ -5,20 +5,16 @@
 int main(int argc, char** argv) {
   handshare::common::Options options(
       "haptic_node", "Joins a handshare session with a haptic device and runs the haptic loop.");
-  options.Value("domain", "D", "DDS domain id (0..232)", "0")
-      .Value("session", "S", "session name", std::nullopt, true)
-      .Value("user", "U", "user name, unique in the session", std::nullopt, true)
+  handshare::common::DeclareSessionOptions(options);
+  options.Value("user", "U", "user name, unique in the session", std::nullopt, true)
       .Value("device", "KIND", "device driver: sim", "sim")
       .Value("script", "FILE", "sim: hand script (see haptic_node/scripts/)", "")
-      .Value("duration", "SEC", "run this long, then end (0: until SIGINT/SIGTERM)", "0")
       .Value("rate", "HZ", "haptic loop rate", "1000")
       .Value("publish-rate", "HZ", "device state rate for viewers", "100")
-      .Value("trace", "FILE", "write every published device state to a CSV file", "")
-      .Value("qos", "FILE", "QoS profile XML (default: deploy/qos/handshare_qos.xml)", "");
+      .Value("trace", "FILE", "write every published device state to a CSV file", "");
   return handshare::common::RunNodeMain(argc, argv, options, [](const auto& o) {
     handshare::haptic::HapticNodeConfig c;
-    c.domain_id = static_cast<int>(o.GetInt("domain", 0, 232));
-    c.session = o.GetString("session");
+    c.where = handshare::common::ReadSessionOptions(o);
     c.user = o.GetString("user");
     c.device = o.GetString("device");
     if (c.device != "sim") {
@@ -26,11 +22,9 @@ int main(int argc, char** argv) {
                                            "' is not available (this build has: sim)");
     }
     c.script = o.GetString("script");
-    c.duration = std::chrono::duration<double>(o.GetDouble("duration", 0.0, 1e7));
     c.rate_Hz = o.GetDouble("rate", 100.0, 20000.0);
     c.publish_Hz = o.GetDouble("publish-rate", 1.0, 1000.0);
     c.trace_file = o.GetString("trace");
-    c.qos_file = o.GetString("qos");
     return handshare::haptic::HapticNode(c).Run();
   });
 }

@@ -6,18 +6,12 @@ int main(int argc, char** argv) {
   handshare::common::Options options(
       "world_server", "Owns a shared handshare session: publishes the scene and the message board, "
                       "tracks members joining and leaving.");
-  options.Value("domain", "D", "DDS domain id (0..232)", "0")
-      .Value("session", "S", "session name (DDS partition)", std::nullopt, true)
-      .Value("scene", "NAME", "scene to start with (assets/scenes/NAME.json)", "start_menu")
-      .Value("duration", "SEC", "run this long, then end (0: until SIGINT/SIGTERM)", "0")
-      .Value("qos", "FILE", "QoS profile XML (default: deploy/qos/handshare_qos.xml)", "");
+  handshare::common::DeclareSessionOptions(options);
+  options.Value("scene", "NAME", "scene to start with (assets/scenes/NAME.json)", "start_menu");
   return handshare::common::RunNodeMain(argc, argv, options, [](const auto& o) {
     handshare::world::WorldServerConfig config;
-    config.domain_id = static_cast<int>(o.GetInt("domain", 0, 232));
-    config.session = o.GetString("session");
+    config.where = handshare::common::ReadSessionOptions(o);
     config.scene = o.GetString("scene");
-    config.duration = std::chrono::duration<double>(o.GetDouble("duration", 0.0, 1e7));
-    config.qos_file = o.GetString("qos");
     return handshare::world::WorldServer(config).Run();
   });
 }

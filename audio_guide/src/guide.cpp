@@ -23,7 +23,7 @@ int Guide::Run() {
   if (!config_.out_dir.empty()) std::filesystem::create_directories(config_.out_dir);
   speech::SpeechSynthesizer synthesizer;  // fails early if eSpeak NG data is missing
 
-  dds::Participant participant(config_.domain_id, config_.session, name, config_.qos_file);
+  dds::Participant participant(config_.where.domain_id, config_.where.session, name, config_.where.qos_file);
   dds::MemberAnnouncement member(participant, name, msg::NODE_AUDIO_GUIDE);
   auto board_reader = dds::MakeReader<msg::MessageBoard>(participant, dds::topics::kMessageBoard);
 
@@ -33,7 +33,7 @@ int Guide::Run() {
   msg::MessageBoard board;
   dds::SampleMeta meta;
   while (!common::ShutdownRequested()) {
-    if (config_.duration.count() > 0 && Clock::now() - start >= config_.duration) break;
+    if (config_.where.duration.count() > 0 && Clock::now() - start >= config_.where.duration) break;
     if (!board_reader.TakeNext(board, meta)) {
       board_reader.WaitForData(std::chrono::milliseconds(50));
       continue;

@@ -162,7 +162,7 @@ int Spectator::Run() {
     index << "frame,file,user,finger,x_m,y_m,z_m,radius_m\n" << std::setprecision(9);
   }
 
-  dds::Participant participant(config_.domain_id, config_.session, name, config_.qos_file);
+  dds::Participant participant(config_.where.domain_id, config_.where.session, name, config_.where.qos_file);
   dds::MemberAnnouncement member(participant, name, msg::NODE_GRAPHICS);
   WorldView world(participant);
 
@@ -203,7 +203,7 @@ int Spectator::Run() {
   }
 
   render::WindowRenderer::Options options;
-  options.title = "handshare - " + config_.session;
+  options.title = "handshare - " + config_.where.session;
   options.width_px = config_.width_px;
   options.height_px = config_.height_px;
   options.stereo = ToRender(config_.stereo);
@@ -211,7 +211,7 @@ int Spectator::Run() {
   render::WindowRenderer window(options);
   auto next = Clock::now();
   while (!window.ShouldClose() && !common::ShutdownRequested()) {
-    if (config_.duration.count() > 0 && Clock::now() - start >= config_.duration) break;
+    if (config_.where.duration.count() > 0 && Clock::now() - start >= config_.where.duration) break;
     world.Update();
     window.Render(world.Build(), camera);
     next += period;

@@ -75,8 +75,8 @@ int HapticNode::Run() {
     trace << "\n" << std::setprecision(9);
   }
 
-  dds::Participant participant(config_.domain_id, config_.session, "haptic_node/" + config_.user,
-                               config_.qos_file);
+  dds::Participant participant(config_.where.domain_id, config_.where.session, "haptic_node/" + config_.user,
+                               config_.where.qos_file);
   dds::MemberAnnouncement member(participant, config_.user, msg::NODE_HAPTIC, device->name());
   auto state_writer = dds::MakeWriter<msg::DeviceState>(participant, dds::topics::kDeviceState);
   auto stats_writer = dds::MakeWriter<msg::LoopStatistics>(participant, dds::topics::kLoopStatistics);
@@ -84,16 +84,16 @@ int HapticNode::Run() {
   HapticLoop loop(*device, HapticLoopConfig{config_.rate_Hz, true});
   const bool realtime = loop.Start();
   std::printf("[haptic_node %s] joined session '%s' on domain %d: device %s, loop %.0f Hz%s\n",
-              config_.user.c_str(), config_.session.c_str(), config_.domain_id, device->name(),
+              config_.user.c_str(), config_.where.session.c_str(), config_.where.domain_id, device->name(),
               config_.rate_Hz, realtime ? " (SCHED_FIFO)" : " (normal priority: no permission for SCHED_FIFO)");
   std::fflush(stdout);
 
   msg::DeviceState state;
   state.user(config_.user);
-  state.session(config_.session);
+  state.session(config_.where.session);
   msg::LoopStatistics stats_msg;
   stats_msg.node("haptic_node/" + config_.user);
-  stats_msg.session(config_.session);
+  stats_msg.session(config_.where.session);
 
   const auto start = Clock::now();
   const auto period = std::chrono::duration_cast<Clock::duration>(
@@ -104,7 +104,7 @@ int HapticNode::Run() {
   common::LoopStats stats;
   std::uint64_t published = 0;
   while (!common::ShutdownRequested()) {
-    if (config_.duration.count() > 0 && Clock::now() - start >= config_.duration) break;
+    if (config_.where.duration.count() > 0 && Clock::now() - start >= config_.where.duration) break;
     if (loop.TakeSnapshot(snapshot)) {
       Fill(state, snapshot);
       // Skip what nobody needs: no viewer matched, nothing sent (the trace still records).

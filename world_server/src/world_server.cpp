@@ -52,7 +52,7 @@ int WorldServer::Run() {
   using Clock = std::chrono::steady_clock;
   const scene::Scene scene = scene::LoadSceneByName(config_.scene);
 
-  dds::Participant participant(config_.domain_id, config_.session, "world_server", config_.qos_file);
+  dds::Participant participant(config_.where.domain_id, config_.where.session, "world_server", config_.where.qos_file);
   auto scene_writer = dds::MakeWriter<msg::SceneState>(participant, dds::topics::kSceneState);
   auto board_writer = dds::MakeWriter<msg::MessageBoard>(participant, dds::topics::kMessageBoard);
   auto member_reader = dds::MakeReader<msg::MemberInfo>(participant, dds::topics::kMemberInfo);
@@ -64,8 +64,8 @@ int WorldServer::Run() {
     std::fflush(stdout);
   };
 
-  scene_writer.Write(ToMessage(scene, config_.session, 1));
-  log("session '" + config_.session + "' on domain " + std::to_string(config_.domain_id) +
+  scene_writer.Write(ToMessage(scene, config_.where.session, 1));
+  log("session '" + config_.where.session + "' on domain " + std::to_string(config_.where.domain_id) +
       ": scene '" + scene.name + "' (" + std::to_string(scene.objects.size()) + " objects)");
 
   // The message board shows the scene's first message in each language in turn; transient-
@@ -74,7 +74,7 @@ int WorldServer::Run() {
   for (const auto& m : scene.messages) {
     if (m.language != "en") continue;  // the board shows one language at a time
     msg::MessageBoard board;
-    board.session(config_.session);
+    board.session(config_.where.session);
     board.message_id(++message_id);
     board.language(m.language);
     board.text(m.text);
@@ -91,7 +91,7 @@ int WorldServer::Run() {
   msg::MemberInfo info;
   dds::SampleMeta meta;
   while (!common::ShutdownRequested()) {
-    if (config_.duration.count() > 0 && Clock::now() - start >= config_.duration) break;
+    if (config_.where.duration.count() > 0 && Clock::now() - start >= config_.where.duration) break;
     std::vector<MemberEvent> events;
     while (member_reader.TakeNext(info, meta)) {
       std::optional<MemberEvent> event;

@@ -7,6 +7,22 @@
 
 namespace handshare::common {
 
+void DeclareSessionOptions(Options& options) {
+  options.Value("domain", "D", "DDS domain id (0..232)", "0")
+      .Value("session", "S", "session name (the DDS partition)", std::nullopt, true)
+      .Value("duration", "SEC", "run this long, then end (0: until SIGINT/SIGTERM)", "0")
+      .Value("qos", "FILE", "QoS profile XML (default: deploy/qos/handshare_qos.xml)", "");
+}
+
+SessionOptions ReadSessionOptions(const Options& options) {
+  SessionOptions s;
+  s.domain_id = static_cast<int>(options.GetInt("domain", 0, 232));
+  s.session = options.GetString("session");
+  s.duration = std::chrono::duration<double>(options.GetDouble("duration", 0.0, 1e7));
+  s.qos_file = options.GetString("qos");
+  return s;
+}
+
 int RunNodeMain(int argc, const char* const argv[], Options& options,
                 const std::function<int(const Options&)>& body) {
   try {

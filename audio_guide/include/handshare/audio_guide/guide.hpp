@@ -4,16 +4,15 @@
 #include <chrono>
 #include <string>
 
+#include "handshare/common/node_main.hpp"
+
 namespace handshare::audio_guide {
 
 struct GuideConfig {
-  int domain_id = 0;
-  std::string session;
+  common::SessionOptions where;  // domain, session, duration, QoS file
   std::string name;                              // member name; "" = audio-<pid>
   std::string out_dir;                           // "" = play on alsa_device
   std::string alsa_device = "default";
-  std::chrono::duration<double> duration{0.0};  // 0: until SIGINT/SIGTERM
-  std::string qos_file;
 };
 
 class Guide {

@@ -5,13 +5,14 @@
 #include <chrono>
 #include <string>
 
+#include "handshare/common/node_main.hpp"
+
 namespace handshare::graphics {
 
 enum class StereoOutput { kMono, kSideBySide, kAnaglyph };
 
 struct SpectatorConfig {
-  int domain_id = 0;
-  std::string session;
+  common::SessionOptions where;  // domain, session, duration, QoS file
   std::string name;                  // member name; "" = graphics-<pid>
   bool headless = false;
   int frames = 0;                    // headless: frames to write (required > 0)
@@ -20,9 +21,7 @@ struct SpectatorConfig {
   double fps = 30.0;
   StereoOutput stereo = StereoOutput::kMono;
   bool fullscreen = false;
-  std::chrono::duration<double> duration{0.0};  // window mode: 0 = until closed or signal
   std::chrono::duration<double> wait_for_scene{5.0};  // headless: wait this long for the scene
-  std::string qos_file;
 };
 
 class Spectator {

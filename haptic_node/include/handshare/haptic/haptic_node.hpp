@@ -5,19 +5,18 @@
 #include <chrono>
 #include <string>
 
+#include "handshare/common/node_main.hpp"
+
 namespace handshare::haptic {
 
 struct HapticNodeConfig {
-  int domain_id = 0;
-  std::string session;
+  common::SessionOptions where;  // domain, session, duration, QoS file
   std::string user;
   std::string device = "sim";
   std::string script;                            // sim: hand script file ("" = default motion)
-  std::chrono::duration<double> duration{0.0};  // 0: until SIGINT/SIGTERM
   double rate_Hz = 1000.0;
   double publish_Hz = 100.0;                     // device state for viewers (60-120 Hz)
   std::string trace_file;                        // CSV of every published device state
-  std::string qos_file;
 };
 
 class HapticNode {

@@ -5,15 +5,14 @@
 #include <chrono>
 #include <string>
 
+#include "handshare/common/node_main.hpp"
+
 namespace handshare::world {
 
 struct WorldServerConfig {
-  int domain_id = 0;
-  std::string session;
+  common::SessionOptions where;  // domain, session, duration, QoS file
   std::string scene = "start_menu";
-  std::chrono::duration<double> duration{0.0};  // 0: until SIGINT/SIGTERM
   double tick_Hz = 60.0;
-  std::string qos_file;  // empty: the default profiles
 };
 
 class WorldServer {
