@@ -6,12 +6,21 @@
 #include <fstream>
 #include <string>
 #include <system_error>
+#include <type_traits>
 #include <utility>
 
 #include "handshare/fem/error.hpp"
 #include "handshare/fem/sparse_cholesky.hpp"
 #include "hash.hpp"
 #include "reduce.hpp"
+
+// LAPACK (OpenBLAS through the Debian liblapack.so.3 alternative). Trailing arguments: the
+// hidden lengths of the character arguments (gfortran convention).
+extern "C" {
+void dtrtri_(const char* uplo, const char* diag, const int* n, double* a, const int* lda, int* info,
+             std::size_t uplo_len, std::size_t diag_len);
+void dlauum_(const char* uplo, const int* n, double* a, const int* lda, int* info, std::size_t uplo_len);
+}
 
 namespace handshare::fem {
 namespace {
@@ -170,51 +179,128 @@ Compliance Compliance::Precompute(const TetMesh& mesh, const Material& material,
   const detail::DofMap map = detail::MakeDofMap(mesh, c.fixed_);
   const Eigen::SparseMatrix<double> K = AssembleStiffness(mesh, material);
   const Eigen::SparseMatrix<double> Kff = detail::FreeBlock(K, map);
-  const auto t1 = Clock::now();
-  SparseCholesky chol;
-  chol.Analyze(Kff);
-  const auto t2 = Clock::now();
-  chol.Factorize(Kff);
-  const auto t3 = Clock::now();
-
   const auto N = static_cast<std::int32_t>(c.nodes_.size());
   const auto nf = static_cast<std::int64_t>(map.free_dofs.size());
-  std::vector<std::int64_t> row_of_slot(3 * static_cast<std::size_t>(N));
+  const std::int64_t ns = 3 * static_cast<std::int64_t>(N);
+  // Free index of each compliance DOF, slot-major (3 s + axis).
+  std::vector<std::int64_t> row_of_slot(static_cast<std::size_t>(ns));
   for (std::int32_t s = 0; s < N; ++s)
     for (int r = 0; r < 3; ++r) row_of_slot[3 * s + r] = map.free_of_dof[3 * c.nodes_[s] + r];
-
   const std::uint64_t scalars = NumScalars(static_cast<std::uint64_t>(N));
   if (c.precision_ == Precision::kFloat32) {
     c.f32_.resize(scalars);
   } else {
     c.f64_.resize(scalars);
   }
-  int block = options.block_nodes;
-  if (block <= 0) {
-    // About 256 MiB of right-hand sides, at most 128 nodes (384 columns): past that the BLAS-3
-    // supernodal solve gains little.
-    const std::int64_t by_memory = (256ll << 20) / (24 * std::max<std::int64_t>(nf, 1));
-    block = static_cast<int>(std::clamp<std::int64_t>(by_memory, 1, 128));
+  const auto t1 = Clock::now();
+
+  // Analyse the candidates. Rates (flop/s) of this 2-core machine with OpenBLAS, measured by
+  // bench/fem: supernodal factorization, blocked supernodal solves, dense triangular inversion.
+  constexpr double kRateFactor = 3.0e10, kRateSolve = 1.0e10, kRateDense = 4.0e10;
+  PrecomputeMethod method = options.method;
+  SparseCholesky solves_chol, schur_chol;
+  double t_solves = 0.0, t_schur = 0.0;
+  if (method != PrecomputeMethod::kSchurComplement) {
+    solves_chol.Analyze(Kff);
+    t_solves = solves_chol.factor_flops() / kRateFactor +
+               4.0 * static_cast<double>(solves_chol.factor_nonzeros()) * static_cast<double>(ns) / kRateSolve;
   }
-  Eigen::MatrixXd X;
-  if (progress) progress(0, N);
-  for (std::int32_t s0 = 0; s0 < N; s0 += block) {
-    const std::int32_t s1 = std::min(N, s0 + block);
-    X.setZero(nf, 3 * (s1 - s0));
-    for (std::int32_t k = s0; k < s1; ++k)
-      for (int a = 0; a < 3; ++a) X(row_of_slot[3 * k + a], 3 * (k - s0) + a) = 1.0;
-    chol.SolveInPlace(X);
-    if (c.precision_ == Precision::kFloat32) {
-      ExtractBlocks(X, s0, s1, row_of_slot, c.f32_.data());
-    } else {
-      ExtractBlocks(X, s0, s1, row_of_slot, c.f64_.data());
+  if (method != PrecomputeMethod::kBlockedSolves) {
+    // Interior (non-compliance) DOFs first in their own fill-reducing order, compliance DOFs
+    // last in slot order.
+    std::vector<std::uint8_t> is_compliance(static_cast<std::size_t>(nf), 0);
+    for (std::int64_t r : row_of_slot) is_compliance[r] = 1;
+    detail::DofMap interior;
+    interior.free_of_dof.assign(static_cast<std::size_t>(nf), -1);
+    for (std::int64_t i = 0; i < nf; ++i) {
+      if (!is_compliance[i]) {
+        interior.free_of_dof[i] = static_cast<std::int64_t>(interior.free_dofs.size());
+        interior.free_dofs.push_back(i);
+      }
     }
-    if (progress) progress(s1, N);
+    std::vector<int> perm;
+    perm.reserve(static_cast<std::size_t>(nf));
+    if (!interior.free_dofs.empty()) {
+      SparseCholesky ordering;
+      ordering.Analyze(detail::FreeBlock(Kff, interior));
+      for (int k : ordering.Permutation()) perm.push_back(static_cast<int>(interior.free_dofs[k]));
+    }
+    for (std::int64_t r : row_of_slot) perm.push_back(static_cast<int>(r));
+    schur_chol.AnalyzeWithOrdering(Kff, perm);
+    const double n = static_cast<double>(ns);
+    t_schur = schur_chol.factor_flops() / kRateFactor + (2.0 / 3.0) * n * n * n / kRateDense;
+  }
+  if (method == PrecomputeMethod::kAuto) {
+    method = t_schur < t_solves ? PrecomputeMethod::kSchurComplement : PrecomputeMethod::kBlockedSolves;
+  }
+  SparseCholesky& chol = method == PrecomputeMethod::kSchurComplement ? schur_chol : solves_chol;
+  const auto t2 = Clock::now();
+  chol.Factorize(Kff);
+  const auto t3 = Clock::now();
+  if (progress) progress(0, N);
+
+  if (method == PrecomputeMethod::kSchurComplement) {
+    // C = S^-1 = L_ss^-T L_ss^-1: LAPACK dtrtri then dlauum, the two halves of dpotri.
+    Eigen::MatrixXd A = chol.TrailingFactor(ns);
+    const int n = static_cast<int>(ns);
+    int info = 0;
+    if (n > 0) {
+      dtrtri_("L", "N", &n, A.data(), &n, &info, 1, 1);
+      if (info != 0) throw FemError("dense inversion of the condensed stiffness failed (dtrtri info " + std::to_string(info) + ")");
+      if (progress) progress(N / 2, N);
+      dlauum_("L", &n, A.data(), &n, &info, 1);
+      if (info != 0) throw FemError("dense inversion of the condensed stiffness failed (dlauum info " + std::to_string(info) + ")");
+    }
+    // The lower triangle of A holds C; blocks (n <= k) of the packed storage are C_nk = C_kn^T.
+    auto extract = [&](auto* store) {
+      using S = std::remove_pointer_t<decltype(store)>;
+      for (std::int32_t k = 0; k < N; ++k) {
+        S* dst = store + 9 * PackedIndex(0, k);
+        for (std::int32_t m = 0; m <= k; ++m, dst += 9) {
+          for (int a = 0; a < 3; ++a)
+            for (int r = 0; r < 3; ++r) {
+              // C_mk(r, a) = C(3m + r, 3k + a); read from the lower triangle.
+              const std::int64_t i = 3 * m + r, j = 3 * k + a;
+              dst[3 * a + r] = static_cast<S>(i >= j ? A(i, j) : A(j, i));
+            }
+        }
+      }
+    };
+    if (c.precision_ == Precision::kFloat32) {
+      extract(c.f32_.data());
+    } else {
+      extract(c.f64_.data());
+    }
+    if (progress) progress(N, N);
+  } else {
+    int block = options.block_nodes;
+    if (block <= 0) {
+      // About 256 MiB of right-hand sides, at most 128 nodes (384 columns): past that the BLAS-3
+      // supernodal solve gains little.
+      const std::int64_t by_memory = (256ll << 20) / (24 * std::max<std::int64_t>(nf, 1));
+      block = static_cast<int>(std::clamp<std::int64_t>(by_memory, 1, 128));
+    }
+    Eigen::MatrixXd X;
+    for (std::int32_t s0 = 0; s0 < N; s0 += block) {
+      const std::int32_t s1 = std::min(N, s0 + block);
+      X.setZero(nf, 3 * (s1 - s0));
+      for (std::int32_t k = s0; k < s1; ++k)
+        for (int a = 0; a < 3; ++a) X(row_of_slot[3 * k + a], 3 * (k - s0) + a) = 1.0;
+      chol.SolveInPlace(X);
+      if (c.precision_ == Precision::kFloat32) {
+        ExtractBlocks(X, s0, s1, row_of_slot, c.f32_.data());
+      } else {
+        ExtractBlocks(X, s0, s1, row_of_slot, c.f64_.data());
+      }
+      if (progress) progress(s1, N);
+    }
   }
   const auto t4 = Clock::now();
   if (stats != nullptr) {
+    stats->method = method;
     stats->free_dofs = nf;
     stats->factor_nonzeros = chol.factor_nonzeros();
+    stats->factor_flops = chol.factor_flops();
     stats->assemble_s = Seconds(t0, t1);
     stats->analyze_s = Seconds(t1, t2);
     stats->factor_s = Seconds(t2, t3);

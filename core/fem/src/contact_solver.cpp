@@ -146,14 +146,17 @@ StepStatus ContactSolver::Solve(std::span<const ContactInput> contacts) noexcept
   const int ld = 3 * M;
   detail::GatherBlocks(C, slot_.data(), num_unique_, Ccc_.data(), ld);
 
-  // Stage 3: solve. With push-only, change one contact per iteration:
-  //  a) a sticking contact that pulls slips (keeps its normal constraint only). Sticking -> slipping
-  //     never reverts, so this happens at most m times;
-  //  b) otherwise the frictionless part is a linear complementarity problem with a P-matrix:
-  //     release a pulling contact or re-engage a released node the surface pushes into the tip,
-  //     the most violating first, then (past half the iteration budget) by Murty's least-index
-  //     rule, which terminates.
+  // Stage 3: solve. With push-only, iterate on the set of held contacts:
+  //  a) sticking contacts that pull slip (keep their normal constraint only; friction needs
+  //     pressure). Sticking -> slipping never reverts, so this happens at most m times;
+  //  b) the rest is a linear complementarity problem with a P-matrix (frictionless contacts):
+  //     block principal pivoting (Judice and Pires 1994) flips every violating contact at once
+  //     while the number of violations keeps falling (3 tries of grace), else one contact by
+  //     Murty's least-index rule, which terminates. A pulling contact is released; a released
+  //     node the surface pushes into the tip is re-engaged (frictionless).
   StepStatus status = StepStatus::kOk;
+  std::int32_t best_violations = num_unique_ + 1;
+  int grace = 3;
   while (true) {
     if (!SolveActiveSet()) {
       ZeroOutputs();
@@ -169,47 +172,55 @@ StepStatus ContactSolver::Solve(std::span<const ContactInput> contacts) noexcept
     if (f_scale == 0.0) f_scale = 1.0;
     if (d_scale == 0.0) d_scale = 1.0;
     constexpr double kTol = 1e-9;
-    std::int32_t slip = -1;
-    double worst = kTol;
+    auto violates = [&](std::int32_t j) {
+      return active_[j] ? f_N_[j].dot(n_[j]) / f_scale > kTol
+                        : (u_c_m_[j] - d_m_[j]).dot(n_[j]) / d_scale > kTol;
+    };
+    bool slipped = false;
+    std::int32_t violations = 0;
     for (std::int32_t j = 0; j < num_unique_; ++j) {
-      const double pull = f_N_[j].dot(n_[j]) / f_scale;
-      if (active_[j] && mode_[j] == ContactMode::kFull3d && pull > worst) {
-        worst = pull;
-        slip = j;
+      if (active_[j] && mode_[j] == ContactMode::kFull3d && f_N_[j].dot(n_[j]) / f_scale > kTol) {
+        slipped = true;
       }
+      violations += violates(j) ? 1 : 0;
     }
-    std::int32_t flip = -1;
-    if (slip < 0) {
-      const bool least_index = iterations_ >= options_.max_active_set_iterations / 2;
-      worst = kTol;
-      for (std::int32_t j = 0; j < num_unique_; ++j) {
-        const double v = active_[j] ? f_N_[j].dot(n_[j]) / f_scale
-                                    : (u_c_m_[j] - d_m_[j]).dot(n_[j]) / d_scale;
-        if (v > worst) {
-          worst = v;
-          flip = j;
-          if (least_index) break;
-        }
-      }
-      if (flip < 0) break;
-    }
+    if (!slipped && violations == 0) break;
     if (iterations_ >= options_.max_active_set_iterations) {
       status = StepStatus::kNotConverged;
       break;
     }
-    if (slip >= 0) {
-      mode_[slip] = ContactMode::kNormalOnly;
-      slipping_[slip] = 1;
-    } else if (active_[flip]) {
-      active_[flip] = 0;
-    } else {
-      active_[flip] = 1;
-      if (mode_[flip] == ContactMode::kFull3d) {  // re-engages frictionless
-        mode_[flip] = ContactMode::kNormalOnly;
-        slipping_[flip] = 1;
-      }
-    }
     ++iterations_;
+    if (slipped) {
+      for (std::int32_t j = 0; j < num_unique_; ++j) {
+        if (active_[j] && mode_[j] == ContactMode::kFull3d && f_N_[j].dot(n_[j]) / f_scale > kTol) {
+          mode_[j] = ContactMode::kNormalOnly;
+          slipping_[j] = 1;
+        }
+      }
+      continue;
+    }
+    bool block = false;
+    if (violations < best_violations) {
+      best_violations = violations;
+      grace = 3;
+      block = true;
+    } else if (grace > 0) {
+      --grace;
+      block = true;
+    }
+    for (std::int32_t j = 0; j < num_unique_; ++j) {
+      if (!violates(j)) continue;
+      if (active_[j]) {
+        active_[j] = 0;
+      } else {
+        active_[j] = 1;
+        if (mode_[j] == ContactMode::kFull3d) {  // re-engages frictionless
+          mode_[j] = ContactMode::kNormalOnly;
+          slipping_[j] = 1;
+        }
+      }
+      if (!block) break;  // least index
+    }
   }
 
   // Stage 4: per-input outputs (a merged node's force split evenly).

@@ -1,5 +1,6 @@
 #include "handshare/fem/sparse_cholesky.hpp"
 
+#include <algorithm>
 #include <cstring>
 #include <string>
 
@@ -91,6 +92,67 @@ void SparseCholesky::Analyze(const Eigen::SparseMatrix<double>& A) {
   impl_->Check("analyze");
   if (impl_->L == nullptr) throw FemError("CHOLMOD analyze returned no factor");
   impl_->n = A.rows();
+}
+
+void SparseCholesky::AnalyzeWithOrdering(const Eigen::SparseMatrix<double>& A,
+                                         const std::vector<int>& perm) {
+  if (static_cast<Eigen::Index>(perm.size()) != A.rows()) {
+    throw FemError("SparseCholesky::AnalyzeWithOrdering: permutation has the wrong size");
+  }
+  cholmod_sparse s = Impl::View(A);
+  cholmod_free_factor(&impl_->L, &impl_->c);
+  impl_->factorized = false;
+  const int nmethods = impl_->c.nmethods;
+  const int ordering = impl_->c.method[0].ordering;
+  const int postorder = impl_->c.postorder;
+  impl_->c.nmethods = 1;
+  impl_->c.method[0].ordering = CHOLMOD_GIVEN;
+  impl_->c.postorder = 0;
+  std::vector<int> p = perm;
+  impl_->L = cholmod_analyze_p(&s, p.data(), nullptr, 0, &impl_->c);
+  impl_->c.nmethods = nmethods;
+  impl_->c.method[0].ordering = ordering;
+  impl_->c.postorder = postorder;
+  impl_->Check("analyze (given ordering)");
+  if (impl_->L == nullptr) throw FemError("CHOLMOD analyze returned no factor");
+  impl_->n = A.rows();
+}
+
+std::vector<int> SparseCholesky::Permutation() const {
+  if (!impl_ || impl_->L == nullptr) return {};
+  const int* p = static_cast<const int*>(impl_->L->Perm);
+  return std::vector<int>(p, p + impl_->L->n);
+}
+
+Eigen::MatrixXd SparseCholesky::TrailingFactor(std::int64_t t) const {
+  const cholmod_factor* L = impl_ ? impl_->L : nullptr;
+  if (L == nullptr || !impl_->factorized || !L->is_super) {
+    throw FemError("SparseCholesky::TrailingFactor: needs a supernodal numeric factor");
+  }
+  const auto n = static_cast<std::int64_t>(L->n);
+  if (t < 0 || t > n) throw FemError("SparseCholesky::TrailingFactor: bad size");
+  const std::int64_t first = n - t;
+  Eigen::MatrixXd out = Eigen::MatrixXd::Zero(t, t);
+  const int* super = static_cast<const int*>(L->super);
+  const int* pi = static_cast<const int*>(L->pi);
+  const int* px = static_cast<const int*>(L->px);
+  const int* rows = static_cast<const int*>(L->s);
+  const double* x = static_cast<const double*>(L->x);
+  for (std::size_t s = 0; s < L->nsuper; ++s) {
+    const std::int64_t k0 = super[s], k1 = super[s + 1];
+    if (k1 <= first) continue;
+    const std::int64_t nrows = pi[s + 1] - pi[s];
+    const int* r = rows + pi[s];
+    const double* v = x + px[s];
+    // Supernode s: columns k0..k1-1, a dense nrows x (k1-k0) column-major block.
+    for (std::int64_t j = std::max(k0, first); j < k1; ++j) {
+      const double* col = v + (j - k0) * nrows;
+      for (std::int64_t q = 0; q < nrows; ++q) {
+        if (r[q] >= j) out(r[q] - first, j - first) = col[q];
+      }
+    }
+  }
+  return out;
 }
 
 void SparseCholesky::Factorize(const Eigen::SparseMatrix<double>& A) {

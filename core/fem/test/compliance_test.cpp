@@ -71,6 +71,32 @@ TEST_F(ComplianceTest, BlocksMatchDirectUnitLoadSolves) {
   }
 }
 
+// The two precomputation methods (blocked solves; dense inverse of the Schur complement) give
+// the same blocks to round-off. Bound 1e-11 of the largest diagonal block.
+TEST_F(ComplianceTest, BothPrecomputeMethodsAgree) {
+  ComplianceOptions o;
+  o.method = PrecomputeMethod::kBlockedSolves;
+  PrecomputeStats s1, s2;
+  const Compliance a = Compliance::Precompute(block_->mesh, kMat, block_->fixed, o, {}, &s1);
+  o.method = PrecomputeMethod::kSchurComplement;
+  const Compliance b = Compliance::Precompute(block_->mesh, kMat, block_->fixed, o, {}, &s2);
+  EXPECT_EQ(s1.method, PrecomputeMethod::kBlockedSolves);
+  EXPECT_EQ(s2.method, PrecomputeMethod::kSchurComplement);
+  ASSERT_EQ(a.num_nodes(), b.num_nodes());
+  double scale = 0.0, diff = 0.0;
+  for (std::int32_t k = 0; k < a.num_nodes(); ++k) {
+    scale = std::max(scale, a.Block(k, k).norm());
+    for (std::int32_t n = 0; n <= k; ++n) diff = std::max(diff, (a.Block(n, k) - b.Block(n, k)).norm());
+  }
+  EXPECT_LT(diff, 1e-11 * scale);
+  // Progress reports reach the total.
+  std::int64_t last = -1, total = 0;
+  Compliance::Precompute(block_->mesh, kMat, block_->fixed, o,
+                         [&](std::int64_t d, std::int64_t t) { last = d; total = t; });
+  EXPECT_EQ(last, total);
+  EXPECT_EQ(total, a.num_nodes());
+}
+
 TEST_F(ComplianceTest, SymmetricPositiveDefiniteAndFloat32Close) {
   for (std::int32_t n = 0; n < c64_->num_nodes(); n += 13) {
     for (std::int32_t k = 0; k < c64_->num_nodes(); k += 11) {

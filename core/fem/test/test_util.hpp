@@ -57,6 +57,30 @@ inline Block MakeFixedBottomBox(const Eigen::Vector3d& size_m, const std::array<
   return b;
 }
 
+// Coordinates from 0 to `extent_m`: spacing h_m up to `fine_m`, then growing by `growth` per cell
+// (graded meshes keep the fine region small and the far boundary far).
+inline std::vector<double> GradedAxis(double fine_m, double h_m, double extent_m, double growth) {
+  std::vector<double> x = {0.0};
+  double step = h_m;
+  while (x.back() < extent_m - 1e-12 * extent_m) {
+    if (x.back() >= fine_m - 1e-12 * fine_m) step *= growth;
+    double next = x.back() + step;
+    // Do not leave a sliver of a last cell.
+    if (next > extent_m - 0.5 * step) next = extent_m;
+    x.push_back(next);
+  }
+  return x;
+}
+
+// The same, mirrored about 0: -extent .. extent.
+inline std::vector<double> SymmetricGradedAxis(double fine_m, double h_m, double extent_m, double growth) {
+  const std::vector<double> half = GradedAxis(fine_m, h_m, extent_m, growth);
+  std::vector<double> x;
+  for (auto it = half.rbegin(); it != half.rend(); ++it) x.push_back(-*it);
+  x.insert(x.end(), half.begin() + 1, half.end());
+  return x;
+}
+
 // "1.234e-05": for RecordProperty and messages.
 inline std::string Sci(double v) {
   char b[32];

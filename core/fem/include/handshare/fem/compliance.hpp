@@ -23,6 +23,21 @@ namespace handshare::fem {
 /// Storage precision of the compliance blocks (the value is the scalar size in bytes).
 enum class Precision : std::uint32_t { kFloat32 = 4, kFloat64 = 8 };
 
+/// How the blocks are computed (same numbers to round-off, different cost).
+enum class PrecomputeMethod : std::uint32_t {
+  /// Pick the cheaper of the two from CHOLMOD's flop estimates.
+  kAuto,
+  /// Factor K_ff with a fill-reducing ordering, solve for 3 unit loads per compliance node in
+  /// blocks of right-hand sides: about 4 nnz(L) flops per column. Best when most nodes are on
+  /// the surface (thin objects).
+  kBlockedSolves,
+  /// Order the compliance DOFs last: the trailing block of the factor is the Cholesky factor of
+  /// the Schur complement S onto them (the condensed surface stiffness), and C = S^-1 is one dense
+  /// inversion (LAPACK dpotri, (2/3) (3N)^3 flops). Best for solid objects with many interior
+  /// nodes.
+  kSchurComplement,
+};
+
 /// What to precompute.
 struct ComplianceOptions {
   Precision precision = Precision::kFloat64;
@@ -30,14 +45,17 @@ struct ComplianceOptions {
   /// surface node that is not fixed, in increasing index order.
   std::vector<std::int32_t> nodes;
   /// Right-hand sides solved together, in nodes (3 columns each); 0 picks a size that keeps the
-  /// block under about 256 MiB.
+  /// block under about 256 MiB. kBlockedSolves only.
   int block_nodes = 0;
+  PrecomputeMethod method = PrecomputeMethod::kAuto;
 };
 
 /// Timings and sizes of one precomputation.
 struct PrecomputeStats {
+  PrecomputeMethod method = PrecomputeMethod::kAuto;  ///< the one used
   std::int64_t free_dofs = 0;
   std::int64_t factor_nonzeros = 0;
+  double factor_flops = 0;
   double assemble_s = 0, analyze_s = 0, factor_s = 0, solve_s = 0, total_s = 0;
 };
 

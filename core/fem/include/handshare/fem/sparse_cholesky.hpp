@@ -6,6 +6,7 @@
 
 #include <cstdint>
 #include <memory>
+#include <vector>
 
 #include <Eigen/Core>
 #include <Eigen/SparseCore>
@@ -25,6 +26,9 @@ class SparseCholesky {
   /// Fill-reducing ordering and symbolic factorization of the pattern of A (square, compressed;
   /// only the upper triangle is read).
   void Analyze(const Eigen::SparseMatrix<double>& A);
+  /// Symbolic analysis with a given ordering and no postordering: column perm[k] of A becomes
+  /// column k of the factored P A P^T (so the last columns of perm stay last).
+  void AnalyzeWithOrdering(const Eigen::SparseMatrix<double>& A, const std::vector<int>& perm);
   /// Numeric factorization of A, which must have the analysed pattern.
   /// @throws FemError "not positive definite at column j" (e.g. an unfixed, floating object).
   void Factorize(const Eigen::SparseMatrix<double>& A);
@@ -40,11 +44,18 @@ class SparseCholesky {
   /// Returns A^-1 B.
   Eigen::MatrixXd Solve(const Eigen::MatrixXd& B);
 
+  /// The ordering in use: perm[k] = column of A factored k-th (after Analyze).
+  std::vector<int> Permutation() const;
+  /// Dense lower-triangular trailing block L(n-t.., n-t..) of the factor of P A P^T (after
+  /// Factorize; supernodal only). With the last t columns of the ordering being a set S, this is
+  /// the Cholesky factor of the Schur complement of A onto S.
+  Eigen::MatrixXd TrailingFactor(std::int64_t t) const;
+
   /// Dimension of A (0 before Analyze).
   std::int64_t rows() const noexcept;
-  /// Nonzeros in L (after Factorize).
+  /// Nonzeros in L (known after Analyze).
   std::int64_t factor_nonzeros() const noexcept;
-  /// Floating-point operations of the numeric factorization, as counted by CHOLMOD.
+  /// Floating-point operations of the numeric factorization (estimated by Analyze).
   double factor_flops() const noexcept;
   /// True if the factor is supernodal.
   bool is_supernodal() const noexcept;
