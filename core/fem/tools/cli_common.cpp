@@ -92,7 +92,14 @@ LoadCase ReadLoadCase(const std::filesystem::path& path, const TetMesh& mesh, bo
       if (!a[i].is_object() || !a[i].contains("node") || !a[i].contains("u_m")) {
         throw InputError(file, 0, f, "expected {\"node\": id, \"u_m\": [x, y, z]}");
       }
-      lc.problem.imposed_u_m.push_back({Node(a[i]["node"], mesh, file, f + ".node"), Vec3(a[i]["u_m"], file, f + ".u_m")});
+      const std::int32_t v = Node(a[i]["node"], mesh, file, f + ".node");
+      for (std::int32_t fixed : lc.problem.fixed_nodes) {
+        if (fixed == v) throw InputError(file, 0, f + ".node", "node id " + std::to_string(mesh.node_ids()[v]) + " is also fixed");
+      }
+      for (const auto& prev : lc.problem.imposed_u_m) {
+        if (prev.node == v) throw InputError(file, 0, f + ".node", "node id " + std::to_string(mesh.node_ids()[v]) + " is imposed twice");
+      }
+      lc.problem.imposed_u_m.push_back({v, Vec3(a[i]["u_m"], file, f + ".u_m")});
     }
   } else if (require_imposed) {
     throw InputError(file, 0, "imposed", "missing");
