@@ -310,6 +310,26 @@ Compliance Compliance::Precompute(const TetMesh& mesh, const Material& material,
   return c;
 }
 
+Compliance Compliance::ConvertedTo(Precision precision) const {
+  Compliance c;
+  c.precision_ = precision;
+  c.material_ = material_;
+  c.nodes_ = nodes_;
+  c.fixed_ = fixed_;
+  c.slot_of_ = slot_of_;
+  c.fixed_flag_ = fixed_flag_;
+  detail::Hasher64 h;
+  h.Pod(hash_);
+  h.Pod(static_cast<std::uint32_t>(precision));
+  c.hash_ = precision == precision_ ? hash_ : h.digest();
+  if (precision == Precision::kFloat32) {
+    c.f32_ = f32_.empty() ? std::vector<float>(f64_.begin(), f64_.end()) : f32_;
+  } else {
+    c.f64_ = f64_.empty() ? std::vector<double>(f32_.begin(), f32_.end()) : f64_;
+  }
+  return c;
+}
+
 Eigen::Matrix3d Compliance::Block(std::int32_t n, std::int32_t k) const noexcept {
   const bool transpose = n > k;
   if (transpose) std::swap(n, k);

@@ -13,7 +13,7 @@ namespace handshare::fem {
 
 ContactSolver::ContactSolver(std::shared_ptr<const Compliance> compliance,
                              const ContactSolverOptions& options)
-    : compliance_(std::move(compliance)), options_(options) {
+    : compliance_(compliance), options_(options), field_(compliance) {
   if (!compliance_) throw InputError("", 0, "compliance", "null");
   if (compliance_->num_nodes() == 0) throw InputError("", 0, "compliance", "empty");
   if (options_.max_contacts < 1 || options_.max_contacts > 1024) {
@@ -48,9 +48,11 @@ ContactSolver::ContactSolver(std::shared_ptr<const Compliance> compliance,
   A_.assign(9 * M * M, 0.0);
   rhs_.assign(3 * M, 0.0);
   row_of_.assign(M, -1);
+  loads_.assign(M, NodeLoad{});
 }
 
 void ContactSolver::ZeroOutputs() noexcept {
+  num_loads_ = 0;
   for (std::int32_t i = 0; i < num_inputs_; ++i) forces_N_[i].setZero();
   for (std::int32_t j = 0; j < num_unique_; ++j) {
     f_N_[j].setZero();
@@ -76,6 +78,7 @@ StepStatus ContactSolver::Solve(std::span<const ContactInput> contacts) noexcept
   const bool overflow = contacts.size() > static_cast<std::size_t>(M);
   num_inputs_ = overflow ? M : static_cast<std::int32_t>(contacts.size());
   num_unique_ = 0;
+  num_loads_ = 0;
   iterations_ = 0;
   bool rejected = overflow;
   bool invalid = false;
@@ -235,6 +238,9 @@ StepStatus ContactSolver::Solve(std::span<const ContactInput> contacts) noexcept
       states_[i] = ContactState::kReleased;
     }
   }
+  for (std::int32_t j = 0; j < num_unique_; ++j) {
+    if (active_[j]) loads_[num_loads_++] = NodeLoad{slot_[j], f_N_[j]};
+  }
   if (status != StepStatus::kOk) return status;
   return rejected ? StepStatus::kSomeRejected : StepStatus::kOk;
 }
@@ -315,10 +321,7 @@ void ContactSolver::ComputeContactDisplacements() noexcept {
 }
 
 bool ContactSolver::SurfaceDisplacements(std::span<Eigen::Vector3d> u_m) const noexcept {
-  const Compliance& C = *compliance_;
-  if (u_m.size() != static_cast<std::size_t>(C.num_nodes())) return false;
-  detail::ApplyColumns(C, slot_.data(), f_N_.data(), active_.data(), num_unique_, u_m);
-  return true;
+  return field_.Evaluate(loads(), u_m);
 }
 
 std::int32_t ContactSolver::Displacements(std::span<const std::int32_t> mesh_nodes,

@@ -5,6 +5,8 @@
 #include <Eigen/LU>
 
 #include "dense_small.hpp"
+#include "kernels.hpp"
+#include "handshare/fem/surface_field.hpp"
 #include "handshare/fem/error.hpp"
 
 namespace handshare::fem {
@@ -86,6 +88,11 @@ ElementaryDisplacementSolver::ElementaryDisplacementSolver(
   A_.assign(9 * M * M, 0.0);
   rhs_.assign(3 * M, 0.0);
   piv_.assign(3 * M, 0);
+  cols32_.assign(M, nullptr);
+  cols64_.assign(M, nullptr);
+  if (t_->precision() == Precision::kFloat32 && CpuHasAvx512()) {
+    scratch_.assign(9 * static_cast<std::size_t>(t_->num_nodes()) + 16, 0.0f);
+  }
 }
 
 StepStatus ElementaryDisplacementSolver::Solve(std::span<const ContactInput> contacts) noexcept {
@@ -162,48 +169,18 @@ StepStatus ElementaryDisplacementSolver::Solve(std::span<const ContactInput> con
   return rejected ? StepStatus::kSomeRejected : StepStatus::kOk;
 }
 
-namespace {
-// out[n] += sum_j T^d_{n k_j} e_j; cols[j] is the stored T^d column of k_j (N blocks).
-template <class S>
-void AccumulateColumns(const S* const* cols, const Eigen::Vector3d* e, std::int32_t m,
-                       std::int32_t N, Eigen::Vector3d* out) noexcept {
-  for (std::int32_t j = 0; j < m; ++j) {
-    const S* blk = cols[j];
-    const double e0 = e[j][0], e1 = e[j][1], e2 = e[j][2];
-    for (std::int32_t n = 0; n < N; ++n, blk += 9) {
-      double* o = out[n].data();
-      o[0] += blk[0] * e0 + blk[3] * e1 + blk[6] * e2;
-      o[1] += blk[1] * e0 + blk[4] * e1 + blk[7] * e2;
-      o[2] += blk[2] * e0 + blk[5] * e1 + blk[8] * e2;
-    }
-  }
-}
-
-template <class S, class ColumnFn>
-void SurfaceField(std::int32_t N, std::int32_t u, const std::int32_t* slots,
-                  const Eigen::Vector3d* e, const ColumnFn& column, Eigen::Vector3d* out) noexcept {
-  for (std::int32_t n = 0; n < N; ++n) out[n].setZero();
-  constexpr std::int32_t kChunk = 16;
-  const S* cols[kChunk];
-  for (std::int32_t j0 = 0; j0 < u; j0 += kChunk) {
-    const std::int32_t m = std::min(kChunk, u - j0);
-    for (std::int32_t j = 0; j < m; ++j) cols[j] = column(slots[j0 + j]);
-    AccumulateColumns(cols, e + j0, m, N, out);
-  }
-}
-}  // namespace
-
 bool ElementaryDisplacementSolver::SurfaceDisplacements(
     std::span<Eigen::Vector3d> u_m) const noexcept {
   const std::int32_t N = t_->num_nodes();
   if (u_m.size() != static_cast<std::size_t>(N)) return false;
   // u_n = sum_j T^d_{n k_j} e_j (eq. 7): T^d is stored by touched node, so each term streams.
   if (t_->precision() == Precision::kFloat32) {
-    SurfaceField<float>(N, num_unique_, slot_.data(), e_m_.data(),
-                        [this](std::int32_t k) { return t_->td_f32(k); }, u_m.data());
+    for (std::int32_t j = 0; j < num_unique_; ++j) cols32_[j] = t_->td_f32(slot_[j]);
+    detail::SumContiguousColumns(cols32_.data(), e_m_.data(), num_unique_, N, u_m.data(),
+                                 scratch_.empty() ? nullptr : scratch_.data(), !scratch_.empty());
   } else {
-    SurfaceField<double>(N, num_unique_, slot_.data(), e_m_.data(),
-                         [this](std::int32_t k) { return t_->td_f64(k); }, u_m.data());
+    for (std::int32_t j = 0; j < num_unique_; ++j) cols64_[j] = t_->td_f64(slot_[j]);
+    detail::SumContiguousColumns(cols64_.data(), e_m_.data(), num_unique_, N, u_m.data());
   }
   return true;
 }

@@ -44,43 +44,11 @@ inline void GatherBlocks(const Compliance& C, const std::int32_t* slots, std::in
   }
 }
 
-// out[n] = sum_j C_{n, slots[j]} f[j] over the active j, for every slot n.
-template <class S>
-void ApplyColumnsT(const S* data, std::int32_t N, const std::int32_t* slots,
-                   const Eigen::Vector3d* f, const std::uint8_t* active, std::int32_t u,
-                   Eigen::Vector3d* out) noexcept {
-  for (std::int32_t n = 0; n < N; ++n) out[n].setZero();
-  for (std::int32_t j = 0; j < u; ++j) {
-    if (!active[j]) continue;
-    const std::int32_t k = slots[j];
-    const double f0 = f[j][0], f1 = f[j][1], f2 = f[j][2];
-    // n <= k: blocks C_nk are contiguous in packed column k.
-    const S* blk = data + 9 * Compliance::PackedIndex(0, k);
-    for (std::int32_t n = 0; n <= k; ++n, blk += 9) {
-      double* o = out[n].data();
-      o[0] += blk[0] * f0 + blk[3] * f1 + blk[6] * f2;
-      o[1] += blk[1] * f0 + blk[4] * f1 + blk[7] * f2;
-      o[2] += blk[2] * f0 + blk[5] * f1 + blk[8] * f2;
-    }
-    // n > k: C_nk = (stored C_kn)^T, found in packed column n at row k.
-    for (std::int32_t n = k + 1; n < N; ++n) {
-      const S* b = data + 9 * Compliance::PackedIndex(k, n);
-      double* o = out[n].data();
-      o[0] += b[0] * f0 + b[1] * f1 + b[2] * f2;
-      o[1] += b[3] * f0 + b[4] * f1 + b[5] * f2;
-      o[2] += b[6] * f0 + b[7] * f1 + b[8] * f2;
-    }
-  }
-}
-
-inline void ApplyColumns(const Compliance& C, const std::int32_t* slots, const Eigen::Vector3d* f,
-                         const std::uint8_t* active, std::int32_t u,
-                         std::span<Eigen::Vector3d> out) noexcept {
-  if (C.precision() == Precision::kFloat32) {
-    ApplyColumnsT(C.data_f32(), C.num_nodes(), slots, f, active, u, out.data());
-  } else {
-    ApplyColumnsT(C.data_f64(), C.num_nodes(), slots, f, active, u, out.data());
-  }
-}
+// out[n] = sum_j T_j[n] e_j, where cols[j] points at N contiguous column-major 3x3 blocks (the
+// paper's T^d columns). The float version uses AVX-512 when simd and scratch (9 N + 16 floats).
+void SumContiguousColumns(const float* const* cols, const Eigen::Vector3d* e, std::int32_t m,
+                          std::int32_t N, Eigen::Vector3d* out, float* scratch, bool simd) noexcept;
+void SumContiguousColumns(const double* const* cols, const Eigen::Vector3d* e, std::int32_t m,
+                          std::int32_t N, Eigen::Vector3d* out) noexcept;
 
 }  // namespace handshare::fem::detail

@@ -13,6 +13,7 @@
 #include "handshare/fem/contact_solver.hpp"
 #include "handshare/fem/elementary_displacement.hpp"
 #include "handshare/fem/error.hpp"
+#include "handshare/fem/surface_field.hpp"
 #include "test_util.hpp"
 
 namespace handshare::fem {
@@ -485,6 +486,40 @@ TEST(ContactSolver, MillionRandomStepsStayFiniteAndBounded) {
   EXPECT_EQ(not_ok, 0);
   EXPECT_LT(worst_ratio, lambda_bound);
   EXPECT_GT(worst_ratio, 0.0);
+}
+
+// The AVX-512 kernel (float32 storage, when the CPU has it) and the portable one compute the same
+// field; more loads than one SIMD chunk (32), and an invalid slot that must be skipped. Bound
+// 1e-6: the SIMD kernel accumulates in float (relative 6e-8 per operation over ~100 terms).
+TEST(SurfaceField, SimdAndPortableKernelsAgree) {
+  const Model& m = BoxModel();
+  SurfaceField simd(m.c32, true), portable(m.c32, false), f64(m.c64, true);
+  EXPECT_EQ(simd.uses_simd(), CpuHasAvx512());
+  EXPECT_FALSE(portable.uses_simd());
+  EXPECT_FALSE(f64.uses_simd());
+  std::mt19937 rng(11);
+  std::uniform_int_distribution<std::int32_t> slot(0, m.c32->num_nodes() - 1);
+  std::uniform_real_distribution<double> f(-1.0, 1.0);
+  std::vector<NodeLoad> loads;
+  for (int i = 0; i < 40; ++i) loads.push_back({slot(rng), {f(rng), f(rng), f(rng)}});
+  loads.push_back({m.c32->num_nodes() + 5, {1, 1, 1}});
+  loads.push_back({0, {0.5, 0, 0}});
+  loads.push_back({m.c32->num_nodes() - 1, {0, 0, 0.5}});
+  std::vector<Eigen::Vector3d> a(m.c32->num_nodes()), b(m.c32->num_nodes()), c(m.c32->num_nodes());
+  ASSERT_TRUE(simd.Evaluate(loads, a));
+  ASSERT_TRUE(portable.Evaluate(loads, b));
+  ASSERT_TRUE(f64.Evaluate(loads, c));
+  EXPECT_LT(test::RelError(a, b), 1e-6);
+  EXPECT_LT(test::RelError(b, c), 1e-6);
+  std::vector<Eigen::Vector3d> wrong(3);
+  EXPECT_FALSE(simd.Evaluate(loads, wrong));
+  // The solver's loads() reproduce its own surface field through a separate SurfaceField.
+  ContactSolver solver(m.c32, {.max_contacts = 8});
+  ASSERT_EQ(solver.Solve(RandomContacts(*m.c32, 6, rng)), StepStatus::kOk);
+  ASSERT_EQ(solver.loads().size(), 6u);
+  ASSERT_TRUE(solver.SurfaceDisplacements(a));
+  ASSERT_TRUE(portable.Evaluate(solver.loads(), b));
+  EXPECT_LT(test::RelError(a, b), 1e-6);
 }
 
 TEST(ContactSolver, OptionsAreValidated) {

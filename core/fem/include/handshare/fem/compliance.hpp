@@ -100,6 +100,10 @@ class Compliance {
                                      std::string* note = nullptr,
                                      PrecomputeStats* stats = nullptr);
 
+  /// A copy stored in another precision (e.g. a float64 cache used as float32). The input hash
+  /// is recomputed from the stored one, so caches of both precisions can live side by side.
+  Compliance ConvertedTo(Precision precision) const;
+
   // ---- Accessors (real-time safe) ----
 
   /// Number N of compliance nodes ("slots").

@@ -19,6 +19,7 @@
 #include <Eigen/Core>
 
 #include "handshare/fem/compliance.hpp"
+#include "handshare/fem/surface_field.hpp"
 
 namespace handshare::fem {
 
@@ -106,8 +107,15 @@ class ContactSolver {
   /// Active-set changes in the last Solve().
   std::int32_t active_set_iterations() const noexcept { return iterations_; }
 
-  /// Displacement [m] of every compliance node (slot order) for the last Solve(): O(N m).
-  /// u_m.size() must be num_nodes(); returns false (and writes nothing) otherwise.
+  /// The held nodes' loads of the last Solve() (one per distinct active node): hand these to a
+  /// SurfaceField on the graphics thread to get the surface field there.
+  std::span<const NodeLoad> loads() const noexcept {
+    return {loads_.data(), static_cast<std::size_t>(num_loads_)};
+  }
+
+  /// Displacement [m] of every compliance node (slot order) for the last Solve(): O(N m), see
+  /// SurfaceField. u_m.size() must be num_nodes(); returns false (and writes nothing) otherwise.
+  /// Uses scratch memory of this solver: call it from the thread that calls Solve().
   bool SurfaceDisplacements(std::span<Eigen::Vector3d> u_m) const noexcept;
   /// Displacement [m] of the given mesh nodes (e.g. the visible ones). Fixed nodes get 0; nodes
   /// that are not compliance nodes get NaN. Returns the number of NaN entries, or -1 if the
@@ -150,6 +158,9 @@ class ContactSolver {
   std::vector<double> A_;
   std::vector<double> rhs_;
   std::vector<std::int32_t> row_of_;
+  std::vector<NodeLoad> loads_;
+  std::int32_t num_loads_ = 0;
+  mutable SurfaceField field_;
 };
 
 }  // namespace handshare::fem

@@ -104,6 +104,9 @@ class ElementaryDisplacementSolver {
   std::vector<double> A_;
   std::vector<double> rhs_;
   std::vector<std::int32_t> piv_;
+  mutable std::vector<float> scratch_;  // expanded partial products (float32 SIMD path)
+  mutable std::vector<const float*> cols32_;
+  mutable std::vector<const double*> cols64_;
 };
 
 }  // namespace handshare::fem
