@@ -1,0 +1,127 @@
+#!/usr/bin/python3
+"""Plots `fem_bench --csv` output.
+
+usage: /usr/bin/python3 plot_fem_bench.py BENCH.csv OUT_DIR
+
+Writes OUT_DIR/fem_fig10.png (update frequency against surface node count: the paper's Fig. 10
+and its extension to 10,000 nodes) and OUT_DIR/fem_error_vs_time.png (error against step time
+for float32/float64 storage, regularization and mesh resolution), and prints markdown tables of
+the numbers for docs/fem.md.
+"""
+
+import csv
+import sys
+from collections import defaultdict
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402
+
+
+def load(path):
+    rows = defaultdict(dict)  # method -> {surface_nodes: (contacts, step_us, rel_error)}
+    with open(path) as f:
+        for r in csv.DictReader(f):
+            rows[r["method"]][int(r["surface_nodes"])] = (
+                int(r["contacts"]), float(r["step_us"]), float(r["rel_error"]))
+    return rows
+
+
+FIG10 = [
+    ("elementary_displacement", "elementary displacement (paper form, T^d f32, full surface)", "o-"),
+    ("compliance_full_update_float32", "compliance form, full surface (f32)", "s-"),
+    ("compliance_force_only", "compliance form, forces only", "^-"),
+    ("sherman_morrison_woodbury", "Sherman-Morrison-Woodbury (dense K^-1)", "d-"),
+    ("gauss_elimination", "Gauss elimination (dense LU of full K)", "x-"),
+    ("cholmod_direct", "CHOLMOD direct solve per step", "v-"),
+]
+
+
+def fig10(rows, out):
+    fig, axes = plt.subplots(1, 2, figsize=(13, 5))
+    for ax, (lo, hi, log) in zip(axes, [(0, 700, False), (0, 20000, True)]):
+        for method, label, style in FIG10:
+            pts = sorted((n, 1e6 / v[1]) for n, v in rows.get(method, {}).items() if lo < n <= hi)
+            if pts:
+                ax.plot([p[0] for p in pts], [p[1] for p in pts], style, label=label)
+        ax.axhline(1000, color="grey", ls="--", lw=1)
+        ax.text(ax.get_xlim()[0] if not log else 110, 1150, "1 kHz haptic rate", color="grey", fontsize=8)
+        ax.set_yscale("log")
+        if log:
+            ax.set_xscale("log")
+        ax.set_xlabel("free surface nodes")
+        ax.set_ylabel("update frequency [Hz] (5 contacts)")
+        ax.grid(True, which="both", alpha=0.3)
+    axes[0].set_title("HIRO II Fig. 10 range (cubes, 100-600 surface nodes)")
+    axes[1].set_title("extended to 10,149 surface nodes (plate)")
+    axes[1].legend(fontsize=7, loc="lower left")
+    fig.tight_layout()
+    fig.savefig(out, dpi=110)
+
+
+def error_vs_time(rows, out):
+    fig, ax = plt.subplots(figsize=(11, 6))
+    # Storage precision: each (N) point of the float64 and float32 force-only/full-update series.
+    for method, label, marker, color, hollow in [
+        ("compliance_force_only", "forces, float64 storage", "o", "C0", False),
+        ("compliance_force_only_float32", "forces, float32 storage", "o", "C0", True),
+        ("compliance_full_update", "full surface, float64", "s", "C1", False),
+        ("compliance_full_update_float32", "full surface, float32", "s", "C1", True),
+    ]:
+        pts = sorted(rows.get(method, {}).items())
+        ax.scatter([v[1] for _, v in pts], [max(v[2], 1e-17) for _, v in pts], marker=marker,
+                   label=label, facecolors="none" if hollow else color, edgecolors=color, s=40)
+    # Regularization (eps relative to the mean diagonal compliance), at every model size.
+    for rel, marker in [("0.001", "1"), ("0.01", "2"), ("0.1", "3")]:
+        pts = sorted(rows.get("compliance_force_only_reg_" + rel, {}).items())
+        ax.scatter([v[1] for _, v in pts], [v[2] for _, v in pts], marker=marker, s=70,
+                   label=f"forces, regularized eps = {rel} x mean C_kk")
+    # Mesh resolution: a Hertz fingertip patch (push-only), error against the finest mesh.
+    res = sorted((v[1], v[2], m) for m, d in rows.items() if m.startswith("sphere_patch_a_over_h_")
+                 for _, v in d.items())
+    if res:
+        ax.plot([r[0] for r in res], [r[1] for r in res], "k*-", label="fingertip patch: mesh a/h = 2, 3, 4, 6")
+        for t, e, m in res:
+            ax.annotate("a/h=" + m.rsplit("_", 1)[1], (t, e), fontsize=7, xytext=(4, 4), textcoords="offset points")
+    ax.set_xscale("log")
+    ax.set_yscale("log")
+    ax.set_xlabel("step time [us]")
+    ax.set_ylabel("relative error")
+    ax.set_title("accuracy against run time (errors vs direct sparse solve; resolution vs finest mesh)")
+    ax.grid(True, which="both", alpha=0.3)
+    ax.legend(fontsize=7, loc="upper left", bbox_to_anchor=(1.01, 1.0))
+    fig.tight_layout()
+    fig.savefig(out, dpi=110)
+
+
+def tables(rows):
+    sizes = sorted({n for m in FIG10 for n in rows.get(m[0], {})})
+    methods = [m for m, *_ in FIG10] + ["compliance_full_update", "compliance_full_update_float32_coherent",
+                                        "elementary_displacement_coherent", "elementary_displacement_float64"]
+    print("| method | " + " | ".join(str(n) for n in sizes) + " |")
+    print("|---|" + "---|" * len(sizes))
+    for m in methods:
+        cells = []
+        for n in sizes:
+            v = rows.get(m, {}).get(n)
+            cells.append("-" if v is None else (f"{v[1]:.3g}" if v[1] < 1e4 else f"{v[1] / 1e3:.3g} ms"))
+        print(f"| {m} | " + " | ".join(cells) + " |")
+    print()
+    print("| method | worst rel_error |")
+    print("|---|---|")
+    for m in sorted(rows):
+        print(f"| {m} | {max(v[2] for v in rows[m].values()):.2e} |")
+
+
+def main():
+    if len(sys.argv) != 3:
+        sys.exit(__doc__)
+    rows = load(sys.argv[1])
+    fig10(rows, f"{sys.argv[2]}/fem_fig10.png")
+    error_vs_time(rows, f"{sys.argv[2]}/fem_error_vs_time.png")
+    tables(rows)
+
+
+if __name__ == "__main__":
+    main()
