@@ -91,7 +91,7 @@ ElementaryDisplacementSolver::ElementaryDisplacementSolver(
   cols32_.assign(M, nullptr);
   cols64_.assign(M, nullptr);
   if (t_->precision() == Precision::kFloat32 && CpuHasAvx512()) {
-    scratch_.assign(9 * static_cast<std::size_t>(t_->num_nodes()) + 16, 0.0f);
+    scratch_.assign(9 * static_cast<std::size_t>(t_->num_nodes()) + 32, 0.0f);
   }
 }
 
@@ -177,7 +177,7 @@ bool ElementaryDisplacementSolver::SurfaceDisplacements(
   if (t_->precision() == Precision::kFloat32) {
     for (std::int32_t j = 0; j < num_unique_; ++j) cols32_[j] = t_->td_f32(slot_[j]);
     detail::SumContiguousColumns(cols32_.data(), e_m_.data(), num_unique_, N, u_m.data(),
-                                 scratch_.empty() ? nullptr : scratch_.data(), !scratch_.empty());
+                                 scratch_.empty() ? nullptr : detail::Align64(scratch_), !scratch_.empty());
   } else {
     for (std::int32_t j = 0; j < num_unique_; ++j) cols64_[j] = t_->td_f64(slot_[j]);
     detail::SumContiguousColumns(cols64_.data(), e_m_.data(), num_unique_, N, u_m.data());

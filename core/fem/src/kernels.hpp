@@ -5,6 +5,7 @@
 #include <cstdint>
 #include <span>
 #include <utility>
+#include <vector>
 
 #include <Eigen/Core>
 
@@ -44,8 +45,12 @@ inline void GatherBlocks(const Compliance& C, const std::int32_t* slots, std::in
   }
 }
 
+// The first 64-byte aligned float of v (scratch vectors carry 16 floats of slack for it).
+float* Align64(std::vector<float>& v) noexcept;
+
 // out[n] = sum_j T_j[n] e_j, where cols[j] points at N contiguous column-major 3x3 blocks (the
-// paper's T^d columns). The float version uses AVX-512 when simd and scratch (9 N + 16 floats).
+// paper's T^d columns). The float version uses AVX-512 when simd and scratch (9 N + 16 floats,
+// 64-byte aligned).
 void SumContiguousColumns(const float* const* cols, const Eigen::Vector3d* e, std::int32_t m,
                           std::int32_t N, Eigen::Vector3d* out, float* scratch, bool simd) noexcept;
 void SumContiguousColumns(const double* const* cols, const Eigen::Vector3d* e, std::int32_t m,

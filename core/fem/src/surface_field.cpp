@@ -82,21 +82,23 @@ void SumColumnsGeneric(const S* const* cols, const Eigen::Vector3d* e, std::int3
 // "may be used uninitialized" (a known false positive); silence it for these kernels only.
 #pragma GCC diagnostic push
 #pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
+#pragma GCC diagnostic ignored "-Wuninitialized"
 
 HS_AVX512 void ExpandedFma(float* E, const float* x, std::int64_t len, float f0, float f1,
                            float f2) noexcept {
-  alignas(64) float pat[144];
-  for (int e = 0; e < 144; ++e) {
-    const int r = e % 9;
-    pat[e] = r < 3 ? f0 : (r < 6 ? f1 : f2);
-  }
+  // P[t] lane l = f_{((16 t + l) mod 9) / 3}: built by permuting (f0, f1, f2).
+  const __m512 f = _mm512_setr_ps(f0, f1, f2, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0);
   __m512 P[9];
-  for (int t = 0; t < 9; ++t) P[t] = _mm512_load_ps(pat + 16 * t);
+  for (int t = 0; t < 9; ++t) {
+    alignas(64) std::int32_t idx[16];
+    for (int l = 0; l < 16; ++l) idx[l] = ((16 * t + l) % 9) / 3;
+    P[t] = _mm512_permutexvar_ps(_mm512_load_si512(idx), f);
+  }
   std::int64_t i = 0;
   for (; i + 144 <= len; i += 144) {
     for (int t = 0; t < 9; ++t) {
-      const __m512 acc = _mm512_loadu_ps(E + i + 16 * t);
-      _mm512_storeu_ps(E + i + 16 * t, _mm512_fmadd_ps(_mm512_loadu_ps(x + i + 16 * t), P[t], acc));
+      const __m512 acc = _mm512_load_ps(E + i + 16 * t);  // E is 64-byte aligned
+      _mm512_store_ps(E + i + 16 * t, _mm512_fmadd_ps(_mm512_loadu_ps(x + i + 16 * t), P[t], acc));
     }
   }
   for (int t = 0; i < len; i += 16, ++t) {
@@ -181,6 +183,11 @@ HS_AVX512 void SumColumnsAvx512(const float* const* cols, const Eigen::Vector3d*
 
 namespace detail {
 
+float* Align64(std::vector<float>& v) noexcept {
+  auto p = reinterpret_cast<std::uintptr_t>(v.data());
+  return reinterpret_cast<float*>((p + 63) & ~static_cast<std::uintptr_t>(63));
+}
+
 void SumContiguousColumns(const float* const* cols, const Eigen::Vector3d* e, std::int32_t m,
                           std::int32_t N, Eigen::Vector3d* out, float* scratch, bool simd) noexcept {
   if (simd && scratch != nullptr) {
@@ -201,7 +208,7 @@ SurfaceField::SurfaceField(std::shared_ptr<const Compliance> compliance, bool al
     : compliance_(std::move(compliance)) {
   if (!compliance_) throw InputError("", 0, "compliance", "null");
   simd_ = allow_simd && compliance_->precision() == Precision::kFloat32 && CpuHasAvx512();
-  if (simd_) expanded_.assign(9 * static_cast<std::size_t>(compliance_->num_nodes()) + 16, 0.0f);
+  if (simd_) expanded_.assign(9 * static_cast<std::size_t>(compliance_->num_nodes()) + 32, 0.0f);
 }
 
 bool SurfaceField::Evaluate(std::span<const NodeLoad> loads, std::span<Eigen::Vector3d> u_m) noexcept {
@@ -209,7 +216,7 @@ bool SurfaceField::Evaluate(std::span<const NodeLoad> loads, std::span<Eigen::Ve
   const std::int32_t N = C.num_nodes();
   if (u_m.size() != static_cast<std::size_t>(N)) return false;
   if (simd_) {
-    ApplyPackedAvx512(C.data_f32(), N, loads, u_m.data(), expanded_.data());
+    ApplyPackedAvx512(C.data_f32(), N, loads, u_m.data(), detail::Align64(expanded_));
   } else if (C.precision() == Precision::kFloat32) {
     ApplyPackedGeneric(C.data_f32(), N, loads, u_m.data());
   } else {
