@@ -90,7 +90,7 @@ StepStatus ContactSolver::Solve(std::span<const ContactInput> contacts) noexcept
     forces_N_[i].setZero();
     if (!c.u_m.allFinite() || !c.n_out.allFinite()) {
       invalid = true;
-      states_[i] = ContactState::kRejectedUnknownNode;
+      states_[i] = ContactState::kRejectedInvalid;
       continue;
     }
     if (C.IsFixed(c.node)) {
@@ -108,7 +108,7 @@ StepStatus ContactSolver::Solve(std::span<const ContactInput> contacts) noexcept
     const double nn = c.n_out.norm();
     if (needs_normal && !(nn > 0.5 && nn < 2.0)) {  // must be (about) unit length
       invalid = true;
-      states_[i] = ContactState::kRejectedUnknownNode;
+      states_[i] = ContactState::kRejectedInvalid;
       continue;
     }
     std::int32_t j = 0;

@@ -194,7 +194,11 @@ TEST(ContactSolver, FixedUnknownAndInvalidContactsAreRejectedNotThrown) {
   // NaN: nothing is rendered.
   in[1].u_m.x() = std::nan("");
   EXPECT_EQ(solver.Solve(in), StepStatus::kInvalidInput);
+  EXPECT_EQ(solver.states()[1], ContactState::kRejectedInvalid);
   for (const auto& f : solver.forces_N()) EXPECT_EQ(f.norm(), 0.0);
+  // A frictionless contact needs its normal.
+  EXPECT_EQ(solver.Solve(std::vector<ContactInput>{{a, {0, 0, -1e-3}, Eigen::Vector3d::Zero(), ContactMode::kNormalOnly}}),
+            StepStatus::kInvalidInput);
   // More inputs than max_contacts: the first ones are used.
   std::vector<ContactInput> many(6, ContactInput{a, {0, 0, -1e-3}});
   EXPECT_EQ(solver.Solve(many), StepStatus::kSomeRejected);

@@ -139,6 +139,9 @@ TEST(FemPrecomputeTool, WritesReusesAndRebuildsTheCache) {
   r = RunTool(HANDSHARE_FEM_PRECOMPUTE, mesh + " " + lc.string() + " --bogus", dir);
   EXPECT_EQ(r.exit_code, 1);
   EXPECT_NE(r.err.find("unknown option '--bogus'"), std::string::npos) << r.err;
+  r = RunTool(HANDSHARE_FEM_PRECOMPUTE, mesh + " " + lc.string() + " --block many", dir);
+  EXPECT_EQ(r.exit_code, 1);
+  EXPECT_NE(r.err.find("field '--block'"), std::string::npos) << r.err;
 }
 
 }  // namespace

@@ -5,6 +5,7 @@
 // reported and rebuilt. Only E_Pa, nu, fixed_nodes / fixed_nset of the load case are used.
 
 #include <chrono>
+#include <cstdlib>
 #include <cstdio>
 #include <iostream>
 #include <string>
@@ -72,7 +73,13 @@ int main(int argc, char** argv) {
       } else if (a == "--float64") {
         options.precision = Precision::kFloat64;
       } else if (a == "--block" && i + 1 < argc) {
-        options.block_nodes = std::stoi(argv[++i]);
+        const std::string v = argv[++i];
+        char* end = nullptr;
+        const long n = std::strtol(v.c_str(), &end, 10);
+        if (end == v.c_str() || *end != '\0' || n < 1 || n > 100000) {
+          throw InputError("", 0, "--block", "expected a node count in 1..100000, got '" + v + "'");
+        }
+        options.block_nodes = static_cast<int>(n);
       } else {
         throw InputError("", 0, "argument", "unknown option '" + a + "'\n" + kUsage);
       }

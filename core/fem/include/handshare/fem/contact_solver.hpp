@@ -46,6 +46,8 @@ enum class ContactState : std::uint8_t {
   kReleased,             ///< push-only: would pull, so released (zero force).
   kRejectedFixed,        ///< the node is fixed: ignored (zero force).
   kRejectedUnknownNode,  ///< not a compliance node (interior, out of range): ignored.
+  kRejectedInvalid,      ///< NaN/Inf, or no usable normal where one is needed (the whole
+                         ///< step then returns kInvalidInput).
 };
 
 /// Outcome of a Solve() call.
