@@ -152,6 +152,26 @@ TEST(ContactPatch, SphereMatchesHertzWithPushOnly) {
   EXPECT_LT(-sticky.total_force_N().z(), F);
 }
 
+// Force against depth follows Hertz's delta^1.5 as the patch grows with depth: doubling the depth
+// (contact radius 0.53 a -> 0.75 a) multiplies the force by 2^1.5 = 2.83. Tolerance 10%: the
+// smaller contact disc is resolved by only ~2 spacings.
+TEST(ContactPatch, SphereForceGrowsLikeDepthToThreeHalves) {
+  const PunchModel& m = Model(24, 1.5, 4);
+  const double R = 4 * kA;
+  const double depth = 0.75 * kA * 0.75 * kA / R;
+  auto force = [&](double d) {
+    std::vector<ContactInput> patch(static_cast<std::size_t>(m.c->num_nodes()));
+    const PatchResult r = m.finder->Sphere({0, 0, 0}, Eigen::Vector3d::UnitZ(), R, d,
+                                           ContactMode::kNormalOnly, patch);
+    ContactSolver solver(m.c, {.max_contacts = m.c->num_nodes(), .push_only = true});
+    EXPECT_EQ(solver.Solve(std::span(patch.data(), static_cast<std::size_t>(r.count))), StepStatus::kOk);
+    return -solver.total_force_N().z();
+  };
+  const double ratio = force(depth) / force(depth / 2);
+  RecordProperty("force_ratio_for_double_depth", test::Sci(ratio));
+  EXPECT_NEAR(ratio, std::pow(2.0, 1.5), 0.1 * std::pow(2.0, 1.5));
+}
+
 // The pitfall the patch avoids: a single touched node's stiffness 1 / (n^T C_kk n) is about
 // 1.1 E h and goes to zero with refinement (ratio of the two meshes ~ h4 / h3 = 0.75).
 TEST(ContactPatch, SingleNodeStiffnessVanishesWithRefinement) {
