@@ -436,7 +436,7 @@ TetMesh ReadAbaqusInp(const fs::path& path) {
   Block block = Block::kNone;
   std::string nset_name;         // for *NODE, NSET= and *NSET
   bool generate = false;
-  std::vector<std::string_view> pending;  // element data continued over lines
+  bool continued = false;  // the last element line ended with ',': data goes on
   std::string pending_text;
   std::size_t pending_line = 0;
   std::string line;
@@ -470,7 +470,7 @@ TetMesh ReadAbaqusInp(const fs::path& path) {
     std::string_view t = Trim(line);
     if (t.empty() || t.substr(0, 2) == "**") continue;
     if (t.front() == '*') {
-      if (!pending.empty()) r.Fail("element", "element data ends with ',' but no continuation line follows");
+      if (continued) r.Fail("element", "element data ends with ',' but no continuation line follows");
       auto [kw, params] = keyword_params(t);
       block = Block::kSkip;
       if (kw == "NODE") {
@@ -515,13 +515,10 @@ TetMesh ReadAbaqusInp(const fs::path& path) {
       }
       case Block::kElement: {
         // A trailing comma continues the element on the next line.
-        if (pending.empty()) pending_line = r.line();
+        if (!continued) pending_line = r.line();
         pending_text += std::string(t);
-        if (t.back() == ',') {
-          pending.assign(1, std::string_view{});
-          break;
-        }
-        pending.clear();
+        continued = t.back() == ',';
+        if (continued) break;
         auto tok = SplitComma(pending_text);
         finish_element(tok, pending_line);
         pending_text.clear();
@@ -552,7 +549,7 @@ TetMesh ReadAbaqusInp(const fs::path& path) {
               if (it == b.sets.end() || Upper(tk) == nset_name) {
                 r.Fail("*NSET " + nset_name, "unknown node set '" + std::string(tk) + "'");
               }
-              // Copy before appending: the source may reallocate with the destination.
+              // Copy first: the source is another entry of the same map.
               const PendingSet src = it->second;
               set.ids.insert(set.ids.end(), src.ids.begin(), src.ids.end());
               set.lines.insert(set.lines.end(), src.lines.begin(), src.lines.end());
@@ -563,7 +560,7 @@ TetMesh ReadAbaqusInp(const fs::path& path) {
       }
     }
   }
-  if (!pending.empty()) r.Fail("element", "file ends inside a continued element line");
+  if (continued) r.Fail("element", "file ends inside a continued element line");
   if (b.p.empty()) throw InputError(r.file(), 0, "*NODE", "no nodes in the file");
   return b.Build();
 }

@@ -173,6 +173,8 @@ TEST(MeshIo, AbaqusErrors) {
   ExpectInputError([&] { ReadAbaqusInp(f); }, {f + ":13", "node set A", "unknown node id 12"}, 13);
   f = with("A, B", "A, Q");
   ExpectInputError([&] { ReadAbaqusInp(f); }, {f + ":17", "unknown node set 'Q'"}, 17);
+  f = with(" 4, 5\n*NSET", "*NSET");
+  ExpectInputError([&] { ReadAbaqusInp(f); }, {f + ":11", "no continuation line"}, 11);
   f = with("2, 2, 3,\n 4, 5", "2, 3, 2,\n 4, 5");
   ExpectInputError([&] { ReadAbaqusInp(f); }, {f + ":10", "element 2", "inverted"}, 10);
 }
