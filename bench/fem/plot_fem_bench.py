@@ -39,7 +39,7 @@ FIG10 = [
 
 
 def fig10(rows, out):
-    fig, axes = plt.subplots(1, 2, figsize=(13, 5))
+    fig, axes = plt.subplots(1, 2, figsize=(13, 5.8))
     for ax, (lo, hi, log) in zip(axes, [(0, 700, False), (0, 20000, True)]):
         for method, label, style in FIG10:
             pts = sorted((n, 1e6 / v[1]) for n, v in rows.get(method, {}).items() if lo < n <= hi)
@@ -55,8 +55,9 @@ def fig10(rows, out):
         ax.grid(True, which="both", alpha=0.3)
     axes[0].set_title("HIRO II Fig. 10 range (cubes, 100-600 surface nodes)")
     axes[1].set_title("extended to 10,149 surface nodes (plate)")
-    axes[1].legend(fontsize=7, loc="lower left")
-    fig.tight_layout()
+    handles, labels = axes[1].get_legend_handles_labels()
+    fig.legend(handles, labels, loc="lower center", ncol=3, fontsize=8)
+    fig.tight_layout(rect=(0, 0.1, 1, 1))
     fig.savefig(out, dpi=110)
 
 
