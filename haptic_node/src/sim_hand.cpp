@@ -3,7 +3,9 @@
 #include <algorithm>
 #include <cmath>
 #include <fstream>
+#include <numbers>
 #include <sstream>
+#include <string_view>
 
 namespace handshare::haptic {
 
@@ -48,11 +50,63 @@ constexpr double kMaxDuration_s = 1e5;
 
 }  // namespace
 
+namespace {
+
+// Fingertip offsets from the hand base for a grip value: an open flat hand, four fingers
+// 24 mm apart (HIRO-II.md), thumb 60 mm back and 45 mm to the side; closed: every fingertip
+// near a grasp centre 60 mm in front of the palm. Grip interpolates linearly.
+std::array<Eigen::Vector3d, kFingers> GripOffsets(double grip) noexcept {
+  static const std::array<Eigen::Vector3d, kFingers> kOpen = {
+      Eigen::Vector3d(-0.060, 0.040, -0.010),  // thumb
+      Eigen::Vector3d(-0.036, 0.100, 0.000),   // index
+      Eigen::Vector3d(-0.012, 0.105, 0.000),   // middle
+      Eigen::Vector3d(0.012, 0.100, 0.000),    // ring
+      Eigen::Vector3d(0.036, 0.090, 0.000)};   // little
+  static const std::array<Eigen::Vector3d, kFingers> kClosed = {
+      Eigen::Vector3d(-0.025, 0.060, -0.030), Eigen::Vector3d(0.000, 0.075, -0.020),
+      Eigen::Vector3d(0.012, 0.070, -0.025), Eigen::Vector3d(0.020, 0.062, -0.028),
+      Eigen::Vector3d(0.024, 0.055, -0.030)};
+  const double g = std::clamp(grip, 0.0, 1.0);
+  std::array<Eigen::Vector3d, kFingers> p_HE;
+  for (int i = 0; i < kFingers; ++i) p_HE[i] = (1.0 - g) * kOpen[i] + g * kClosed[i];
+  return p_HE;
+}
+
+// Pointing hand: the index fingertip 40 mm below and ahead of the curled fingers, so only it
+// touches what it pokes or presses.
+constexpr int kThumb = 0, kIndex = 1;
+const std::array<Eigen::Vector3d, kFingers> kPointShape = {
+    Eigen::Vector3d(-0.040, 0.040, 0.000), Eigen::Vector3d(-0.030, 0.100, -0.040),
+    Eigen::Vector3d(-0.010, 0.050, 0.010), Eigen::Vector3d(0.010, 0.045, 0.010),
+    Eigen::Vector3d(0.030, 0.040, 0.010)};
+
+// A hand pose whose fingertips are at the given world points (shape weight 1).
+HandPose ShapedAt(const Eigen::Vector3d& p_WH, const std::array<Eigen::Vector3d, kFingers>& p_WE) {
+  HandPose pose;
+  pose.p_WH = p_WH;
+  pose.shape_weight = 1.0;
+  for (int i = 0; i < kFingers; ++i) pose.p_HE_shape[i] = p_WE[i] - p_WH;
+  return pose;
+}
+
+}  // namespace
+
 HandScript HandScript::Parse(const std::string& text, const std::string& origin) {
   HandScript script;
   bool started = false;
   double t = 0.0;
   HandPose current;
+  // Appends a segment from the current pose. An unshaped end carries its grip offsets as its
+  // shape, so blending between grip and task shapes moves every fingertip along a straight,
+  // minimum-jerk path.
+  auto add = [&](double duration, HandPose target) {
+    HandPose from = current;
+    if (from.shape_weight == 0.0) from.p_HE_shape = GripOffsets(from.grip);
+    if (target.shape_weight == 0.0) target.p_HE_shape = GripOffsets(target.grip);
+    script.segments_.push_back(ScriptSegment{t, t + duration, from, target});
+    t += duration;
+    current = target;
+  };
   std::istringstream lines(text);
   std::string raw;
   int line_no = 0;
@@ -63,45 +117,136 @@ HandScript HandScript::Parse(const std::string& text, const std::string& origin)
     std::string cmd;
     if (!p.Word(cmd)) continue;  // blank or comment
     HandPose target = current;
-    double duration = 0.0;
-    auto read_position = [&] {
-      target.p_WH.x() = p.Number("x", -kMaxReach_m, kMaxReach_m);
-      target.p_WH.y() = p.Number("y", -kMaxReach_m, kMaxReach_m);
-      target.p_WH.z() = p.Number("z", -kMaxReach_m, kMaxReach_m);
+    auto read_point = [&] {
+      Eigen::Vector3d v;
+      v.x() = p.Number("x", -kMaxReach_m, kMaxReach_m);
+      v.y() = p.Number("y", -kMaxReach_m, kMaxReach_m);
+      v.z() = p.Number("z", -kMaxReach_m, kMaxReach_m);
+      return v;
+    };
+    auto read_delta = [&] {
+      Eigen::Vector3d v;
+      v.x() = p.Number("dx", -kMaxReach_m, kMaxReach_m);
+      v.y() = p.Number("dy", -kMaxReach_m, kMaxReach_m);
+      v.z() = p.Number("dz", -kMaxReach_m, kMaxReach_m);
+      return v;
     };
     auto read_optional_grip = [&] {
       std::string word;
       if (!p.Word(word)) return;
       if (word != "grip") p.Fail("expected 'grip' or end of line, got '" + word + "'");
       target.grip = p.Number("grip", 0.0, 1.0);
+      target.shape_weight = 0.0;
       if (p.Word(word)) p.Fail("unexpected '" + word + "' at end of line");
+    };
+    auto end_of_line = [&] {
+      std::string extra;
+      if (p.Word(extra)) p.Fail("unexpected '" + extra + "' at end of line");
+    };
+    auto optional_number = [&](const char* field, double min, double max, double fallback) {
+      std::string word;
+      if (!p.Word(word)) return fallback;
+      LineParser q(origin, line_no, word);
+      const double v = q.Number(field, min, max);
+      end_of_line();
+      return v;
     };
     if (cmd == "start") {
       if (started || !script.segments_.empty()) p.Fail("'start' must be the first command");
-      read_position();
+      target.p_WH = read_point();
       read_optional_grip();
       script.start_ = current = target;
       started = true;
       continue;
     }
     if (!started) p.Fail("the script must begin with 'start X Y Z'");
-    if (cmd == "move") {
-      duration = p.Number("duration", 1e-3, kMaxDuration_s);
-      read_position();
-      read_optional_grip();
-    } else if (cmd == "grip") {
-      duration = p.Number("duration", 1e-3, kMaxDuration_s);
-      target.grip = p.Number("grip", 0.0, 1.0);
-    } else if (cmd == "hold") {
-      duration = p.Number("duration", 1e-3, kMaxDuration_s);
-    } else {
-      p.Fail("unknown command '" + cmd + "' (start, move, grip, hold)");
+    static constexpr std::array<std::string_view, 11> kVerbs = {
+        "move", "reach", "grip", "hold", "poke", "press", "pinch", "grasp", "lift", "pull", "release"};
+    if (std::find(kVerbs.begin(), kVerbs.end(), cmd) == kVerbs.end()) {
+      p.Fail("unknown command '" + cmd +
+             "' (start, move, reach, grip, hold, poke, press, pinch, grasp, lift, pull, release)");
     }
-    std::string extra;
-    if (cmd != "move" && p.Word(extra)) p.Fail("unexpected '" + extra + "' at end of line");
-    script.segments_.push_back(ScriptSegment{t, t + duration, current, target});
-    t += duration;
-    current = target;
+    const double duration = p.Number("duration", 1e-3, kMaxDuration_s);
+    if (cmd == "move") {
+      target.p_WH = read_point();
+      read_optional_grip();
+      add(duration, target);
+    } else if (cmd == "reach") {
+      target = HandPose{read_point(), 0.2};
+      end_of_line();
+      add(duration, target);
+    } else if (cmd == "grip") {
+      target.grip = p.Number("grip", 0.0, 1.0);
+      target.shape_weight = 0.0;
+      end_of_line();
+      add(duration, target);
+    } else if (cmd == "hold") {
+      end_of_line();
+      add(duration, target);
+    } else if (cmd == "poke" || cmd == "press") {
+      const Eigen::Vector3d p_WI = read_point();
+      const double depth = cmd == "press" ? p.Number("depth", 0.0, 0.2) : 0.0;
+      end_of_line();
+      std::array<Eigen::Vector3d, kFingers> p_WE;
+      const Eigen::Vector3d p_WH = p_WI - kPointShape[kIndex];
+      for (int i = 0; i < kFingers; ++i) p_WE[i] = p_WH + kPointShape[i];
+      const HandPose at = ShapedAt(p_WH, p_WE);
+      if (cmd == "poke") {
+        add(duration, at);
+      } else {
+        HandPose down = at;
+        down.p_WH.z() -= depth;
+        add(duration / 3.0, at);
+        add(duration / 3.0, down);
+        add(duration / 3.0, at);
+      }
+    } else if (cmd == "pinch") {
+      const Eigen::Vector3d p_WC = read_point();
+      const double width = optional_number("width", 0.0, 0.2, 2.0 * kSimFingertipRadius_m);
+      const Eigen::Vector3d p_WH = p_WC + Eigen::Vector3d(0.0, -0.07, 0.02);
+      std::array<Eigen::Vector3d, kFingers> p_WE;
+      for (int i = 0; i < kFingers; ++i) p_WE[i] = p_WH + kPointShape[i] + Eigen::Vector3d(0, 0, 0.02);
+      p_WE[kThumb] = p_WC - Eigen::Vector3d(0.5 * width, 0, 0);
+      p_WE[kIndex] = p_WC + Eigen::Vector3d(0.5 * width, 0, 0);
+      add(duration, ShapedAt(p_WH, p_WE));
+    } else if (cmd == "grasp") {
+      const Eigen::Vector3d p_WC = read_point();
+      const double radius = p.Number("radius", 1e-3, 1.0);
+      const double squeeze = optional_number("squeeze", 0.0, kSimFingertipRadius_m, 0.002);
+      // Five fingertips 72 deg apart around the vertical (their pushes cancel sideways), the
+      // thumb on the user's side, 15 deg below the equator (their pushes hold the object up).
+      const double contact_m = radius + kSimFingertipRadius_m - squeeze;
+      const double elevation = -15.0 * std::numbers::pi / 180.0;
+      std::array<Eigen::Vector3d, kFingers> p_WE;
+      for (int i = 0; i < kFingers; ++i) {
+        const double azimuth = -0.5 * std::numbers::pi + 2.0 * std::numbers::pi * i / kFingers;
+        const Eigen::Vector3d n(std::cos(elevation) * std::cos(azimuth),
+                                std::cos(elevation) * std::sin(azimuth), std::sin(elevation));
+        p_WE[i] = p_WC + contact_m * n;
+      }
+      add(duration, ShapedAt(p_WC + Eigen::Vector3d(0.0, -0.02, radius + 0.05), p_WE));
+    } else if (cmd == "lift" || cmd == "pull") {
+      Eigen::Vector3d d = Eigen::Vector3d::Zero();
+      if (cmd == "lift") {
+        d.z() = p.Number("dz", -kMaxReach_m, kMaxReach_m);
+      } else {
+        d = read_delta();
+      }
+      end_of_line();
+      target.p_WH += d;
+      add(duration, target);
+    } else if (cmd == "release") {
+      end_of_line();
+      const auto p_WE = SimFingertips(current);
+      Eigen::Vector3d centroid = Eigen::Vector3d::Zero();
+      for (const auto& e : p_WE) centroid += e / kFingers;
+      std::array<Eigen::Vector3d, kFingers> away;
+      for (int i = 0; i < kFingers; ++i) {
+        const Eigen::Vector3d r = p_WE[i] - centroid;
+        away[i] = p_WE[i] + (r.norm() > 1e-9 ? Eigen::Vector3d(0.03 * r.normalized()) : Eigen::Vector3d(0, 0, 0.03));
+      }
+      add(duration, ShapedAt(current.p_WH, away));
+    }
   }
   if (!started) throw ScriptError(origin + ": empty script (needs at least 'start X Y Z')");
   return script;
@@ -134,6 +279,10 @@ HandPose HandScript::PoseAt(double t_s) const noexcept {
       HandPose pose;
       pose.p_WH = seg.from.p_WH + s * (seg.to.p_WH - seg.from.p_WH);
       pose.grip = seg.from.grip + s * (seg.to.grip - seg.from.grip);
+      pose.shape_weight = seg.from.shape_weight + s * (seg.to.shape_weight - seg.from.shape_weight);
+      for (int i = 0; i < kFingers; ++i) {
+        pose.p_HE_shape[i] = seg.from.p_HE_shape[i] + s * (seg.to.p_HE_shape[i] - seg.from.p_HE_shape[i]);
+      }
       return pose;
     }
   }
@@ -141,22 +290,10 @@ HandPose HandScript::PoseAt(double t_s) const noexcept {
 }
 
 std::array<Eigen::Vector3d, kFingers> SimFingertips(const HandPose& pose) noexcept {
-  // Open hand: fingertips of a flat hand, four fingers 24 mm apart (HIRO-II.md), thumb
-  // 60 mm back and 45 mm to the side. Closed: every fingertip near a grasp centre 60 mm in
-  // front of the palm. Grip interpolates linearly between the two.
-  static const std::array<Eigen::Vector3d, kFingers> kOpen = {
-      Eigen::Vector3d(-0.060, 0.040, -0.010),  // thumb
-      Eigen::Vector3d(-0.036, 0.100, 0.000),   // index
-      Eigen::Vector3d(-0.012, 0.105, 0.000),   // middle
-      Eigen::Vector3d(0.012, 0.100, 0.000),    // ring
-      Eigen::Vector3d(0.036, 0.090, 0.000)};   // little
-  static const std::array<Eigen::Vector3d, kFingers> kClosed = {
-      Eigen::Vector3d(-0.025, 0.060, -0.030), Eigen::Vector3d(0.000, 0.075, -0.020),
-      Eigen::Vector3d(0.012, 0.070, -0.025), Eigen::Vector3d(0.020, 0.062, -0.028),
-      Eigen::Vector3d(0.024, 0.055, -0.030)};
-  const double g = std::clamp(pose.grip, 0.0, 1.0);
+  const auto grip = GripOffsets(pose.grip);
+  const double w = std::clamp(pose.shape_weight, 0.0, 1.0);
   std::array<Eigen::Vector3d, kFingers> p_WE;
-  for (int i = 0; i < kFingers; ++i) p_WE[i] = pose.p_WH + (1.0 - g) * kOpen[i] + g * kClosed[i];
+  for (int i = 0; i < kFingers; ++i) p_WE[i] = pose.p_WH + (1.0 - w) * grip[i] + w * pose.p_HE_shape[i];
   return p_WE;
 }
 

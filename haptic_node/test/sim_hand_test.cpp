@@ -92,3 +92,95 @@ TEST(HandScript, ShippedScriptsParse) {
 
 }  // namespace
 }  // namespace handshare::haptic
+
+namespace handshare::haptic {
+namespace {
+
+std::array<Eigen::Vector3d, kFingers> TipsAt(const HandScript& s, double t) { return SimFingertips(s.PoseAt(t)); }
+
+TEST(HandScriptVerbs, GraspPlacesFiveFingertipsOnTheSphereAroundTheCentre) {
+  const HandScript s = HandScript::Parse("start 0 -0.2 0.2\ngrasp 1.5 0.01 0.05 0.04 0.04 0.003\n", "t");
+  const Eigen::Vector3d c(0.01, 0.05, 0.04);
+  const auto tips = TipsAt(s, 1.5);
+  Eigen::Vector3d sum_n = Eigen::Vector3d::Zero();
+  for (const auto& p : tips) {
+    EXPECT_NEAR((p - c).norm(), 0.04 + kSimFingertipRadius_m - 0.003, 1e-12);
+    EXPECT_LT(p.z(), c.z());  // below the equator: pushes hold the object up
+    sum_n += (p - c).normalized();
+  }
+  // Equal squeezes cancel sideways: the normals' horizontal sum vanishes.
+  EXPECT_NEAR(sum_n.x(), 0.0, 1e-12);
+  EXPECT_NEAR(sum_n.y(), 0.0, 1e-12);
+  EXPECT_LT(tips[0].y(), c.y());  // thumb on the user's side
+}
+
+TEST(HandScriptVerbs, PressGoesDownByDepthAndBackWithOnlyTheIndexLowest) {
+  const HandScript s = HandScript::Parse("start 0 -0.2 0.2\npress 3 0.1 0.1 0.05 0.012\n", "t");
+  EXPECT_TRUE(TipsAt(s, 1.0)[1].isApprox(Eigen::Vector3d(0.1, 0.1, 0.05), 1e-12));
+  EXPECT_TRUE(TipsAt(s, 2.0)[1].isApprox(Eigen::Vector3d(0.1, 0.1, 0.038), 1e-12));
+  EXPECT_TRUE(TipsAt(s, 3.0)[1].isApprox(Eigen::Vector3d(0.1, 0.1, 0.05), 1e-12));
+  const auto tips = TipsAt(s, 2.0);
+  for (int i = 0; i < kFingers; ++i) {
+    if (i != 1) {
+      EXPECT_GT(tips[i].z() - tips[1].z(), 0.03) << i;
+    }
+  }
+}
+
+TEST(HandScriptVerbs, PinchPokeLiftPullRelease) {
+  const HandScript s = HandScript::Parse(
+      "start 0 -0.2 0.2\npinch 1 0 0 0.1 0.03\nlift 1 0.05\npull 1 0.01 -0.02 0\n"
+      "poke 1 0.2 0.1 0.1\nrelease 0.5\n", "t");
+  auto tips = TipsAt(s, 1.0);
+  EXPECT_NEAR((tips[0] - tips[1]).norm(), 0.03, 1e-12);
+  EXPECT_TRUE((0.5 * (tips[0] + tips[1])).isApprox(Eigen::Vector3d(0, 0, 0.1), 1e-12));
+  const auto lifted = TipsAt(s, 2.0), pulled = TipsAt(s, 3.0);
+  for (int i = 0; i < kFingers; ++i) {
+    EXPECT_TRUE((lifted[i] - tips[i]).isApprox(Eigen::Vector3d(0, 0, 0.05), 1e-12)) << i;
+    EXPECT_TRUE((pulled[i] - lifted[i]).isApprox(Eigen::Vector3d(0.01, -0.02, 0), 1e-12)) << i;
+  }
+  const auto poked = TipsAt(s, 4.0), released = TipsAt(s, 4.5);
+  EXPECT_TRUE(poked[1].isApprox(Eigen::Vector3d(0.2, 0.1, 0.1), 1e-12));
+  Eigen::Vector3d centroid = Eigen::Vector3d::Zero();
+  for (const auto& p : poked) centroid += p / kFingers;
+  for (int i = 0; i < kFingers; ++i) {
+    EXPECT_NEAR((released[i] - centroid).norm() - (poked[i] - centroid).norm(), 0.03, 1e-12) << i;
+  }
+}
+
+// Human-like motion: every fingertip moves continuously across verbs of every kind, with a
+// speed below what a hand does (under 2 m/s for these short scripted moves).
+TEST(HandScriptVerbs, FingertipPathsAreContinuousAcrossVerbs) {
+  const HandScript s = HandScript::Parse(
+      "start 0 -0.2 0.2\nreach 1 0 0 0.15\ngrasp 1 0 0.05 0.04 0.04\nlift 1 0.05\nrelease 0.5\n"
+      "grip 0.5 1\npress 1.5 0.1 0.1 0.05 0.01\nmove 1 0 0 0.2\n", "t");
+  const double dt = 1e-3;
+  double max_speed = 0.0;
+  auto prev = TipsAt(s, 0.0);
+  for (double t = dt; t <= s.duration_s() + dt; t += dt) {
+    const auto now = TipsAt(s, t);
+    for (int i = 0; i < kFingers; ++i) max_speed = std::max(max_speed, (now[i] - prev[i]).norm() / dt);
+    prev = now;
+  }
+  EXPECT_GT(max_speed, 0.05);
+  EXPECT_LT(max_speed, 2.0);
+}
+
+TEST(HandScriptVerbs, BadArgumentsNameTheLine) {
+  auto error_of = [](const std::string& text) {
+    try {
+      HandScript::Parse(text, "h");
+    } catch (const ScriptError& e) {
+      return std::string(e.what());
+    }
+    return std::string();
+  };
+  EXPECT_NE(error_of("start 0 0 0\ngrasp 1 0 0 0\n").find("h:2: missing radius"), std::string::npos);
+  EXPECT_NE(error_of("start 0 0 0\ngrasp 1 0 0 0 0.04 0.5\n").find("h:2: squeeze"), std::string::npos);
+  EXPECT_NE(error_of("start 0 0 0\npress 1 0 0 0 -1\n").find("h:2: depth"), std::string::npos);
+  EXPECT_NE(error_of("start 0 0 0\nlift 1 0.1 2\n").find("unexpected '2'"), std::string::npos);
+  EXPECT_NE(error_of("start 0 0 0\nrelease\n").find("h:2: missing duration"), std::string::npos);
+}
+
+}  // namespace
+}  // namespace handshare::haptic

@@ -1,14 +1,31 @@
 #pragma once
 /// A simulated hand driven by a script file, for everyone without the robot (and for every
-/// test). The hand base follows minimum-jerk segments between script poses (human reaching
-/// motion, Flash and Hogan 1985); the fingers open and close with a grip value in [0, 1].
+/// test). Every change follows a minimum-jerk profile (human reaching motion, Flash and Hogan
+/// 1985). The hand is a base position plus five fingertip offsets; the offsets either come
+/// from a grip value in [0, 1] (flat open hand .. closed fist) or from a task shape (poke,
+/// pinch, grasp) that places fingertips at world points.
 ///
-/// Script format, one command per line, '#' starts a comment:
-///   start X Y Z [grip G]        initial hand-base position [m] and grip (default 0: open)
-///   move DURATION X Y Z [grip G] minimum-jerk move of the hand base (and grip) over DURATION s
-///   grip DURATION G              close (G -> 1) or open (G -> 0) the hand over DURATION s
-///   hold DURATION                stay still for DURATION s
+/// Script format, one command per line, '#' starts a comment, positions in world W [m]
+/// (x right, y away from the user, z up), durations [s]:
+///   start X Y Z [grip G]          initial hand-base position and grip (default 0: open)
+///   move DUR X Y Z [grip G]       move the hand base (and grip); a shaped hand keeps its shape
+///   reach DUR X Y Z               move the hand base to X Y Z with a relaxed open hand
+///   grip DUR G                    close (G -> 1) or open (G -> 0) the hand
+///   hold DUR                      stay still
+///   poke DUR X Y Z                index fingertip centre to X Y Z, other fingers curled
+///   press DUR X Y Z DEPTH         index fingertip centre to X Y Z, down by DEPTH, back up
+///                                 (a third of DUR each; a push button from above)
+///   pinch DUR X Y Z [WIDTH]       thumb and index fingertip centres WIDTH apart (default
+///                                 0.016, touching) on either side of X Y Z along x
+///   grasp DUR X Y Z RADIUS [SQ]   five fingertips on a sphere of RADIUS around X Y Z, thumb
+///                                 opposite the fingers, slightly below the equator, each
+///                                 fingertip centre SQ (default 0.002) inside its contact
+///                                 distance RADIUS + fingertip radius (squeeze)
+///   lift DUR DZ                   the whole hand up by DZ (keeps its shape)
+///   pull DUR DX DY DZ             the whole hand by DX DY DZ (a hooked finger on a lever)
+///   release DUR                   fingertips move 0.03 m away from their centroid
 /// After the last command the hand holds its final pose. Errors name the file and line.
+#include <array>
 #include <filesystem>
 #include <stdexcept>
 #include <string>
@@ -23,9 +40,18 @@ class ScriptError : public std::runtime_error {
   using std::runtime_error::runtime_error;
 };
 
+/// Fingertip radius the scripts plan with [m]: DeviceCapabilities' default.
+inline constexpr double kSimFingertipRadius_m = 0.008;
+
 struct HandPose {
   Eigen::Vector3d p_WH = Eigen::Vector3d::Zero();
   double grip = 0.0;  // 0: open, 1: closed
+  /// Task shape: fingertip offsets from the hand base [m], blended in with shape_weight
+  /// (0: fingertips from grip only, 1: from the shape only).
+  std::array<Eigen::Vector3d, kFingers> p_HE_shape = {
+      Eigen::Vector3d::Zero(), Eigen::Vector3d::Zero(), Eigen::Vector3d::Zero(),
+      Eigen::Vector3d::Zero(), Eigen::Vector3d::Zero()};
+  double shape_weight = 0.0;
 };
 
 struct ScriptSegment {
@@ -50,7 +76,7 @@ class HandScript {
   std::vector<ScriptSegment> segments_;
 };
 
-/// Fingertip positions of the simulated hand for a hand-base position and grip.
+/// Fingertip positions of the simulated hand for a hand pose (grip blended with task shape).
 /// Hand frame: x right, y forward (fingers point +y), z up; identity orientation.
 std::array<Eigen::Vector3d, kFingers> SimFingertips(const HandPose& pose) noexcept;
 
