@@ -7,8 +7,10 @@ int main(int argc, char** argv) {
       "haptic_node", "Joins a handshare session with a haptic device and runs the haptic loop.");
   handshare::common::DeclareSessionOptions(options);
   options.Value("user", "U", "user name, unique in the session", std::nullopt, true)
-      .Value("device", "KIND", "device driver: sim", "sim")
+      .Value("device", "KIND", "device driver: sim, replay", "sim")
       .Value("script", "FILE", "sim: hand script (see haptic_node/scripts/)", "")
+      .Value("replay", "FILE", "replay: device-state log to play back (a --trace file)", "")
+      .Flag("replay-loop", "replay: start over at the end of the log")
       .Value("rate", "HZ", "haptic loop rate", "1000")
       .Value("publish-rate", "HZ", "device state rate for viewers", "100")
       .Value("trace", "FILE", "write every published device state to a CSV file", "");
@@ -17,11 +19,16 @@ int main(int argc, char** argv) {
     c.where = handshare::common::ReadSessionOptions(o);
     c.user = o.GetString("user");
     c.device = o.GetString("device");
-    if (c.device != "sim") {
+    if (c.device != "sim" && c.device != "replay") {
       throw handshare::common::OptionError("option --device: '" + c.device +
-                                           "' is not available (this build has: sim)");
+                                           "' is not available (this build has: sim, replay)");
     }
     c.script = o.GetString("script");
+    c.replay_file = o.GetString("replay");
+    c.replay_loop = o.FlagSet("replay-loop");
+    if (c.device == "replay" && c.replay_file.empty()) {
+      throw handshare::common::OptionError("option --device replay needs --replay FILE");
+    }
     c.rate_Hz = o.GetDouble("rate", 100.0, 20000.0);
     c.publish_Hz = o.GetDouble("publish-rate", 1.0, 1000.0);
     c.trace_file = o.GetString("trace");

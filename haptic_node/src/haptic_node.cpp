@@ -12,6 +12,7 @@
 #include "handshare/dds/membership.hpp"
 #include "handshare/dds/messages.hpp"
 #include "handshare/haptic/haptic_loop.hpp"
+#include "handshare/haptic/replay.hpp"
 #include "handshare/haptic/sim_hand.hpp"
 
 namespace handshare::haptic {
@@ -27,7 +28,8 @@ std::unique_ptr<Device> MakeDevice(const HapticNodeConfig& c) {
                                          : HandScript::Load(c.script);
     return std::make_unique<SimDevice>(std::move(script));
   }
-  throw std::invalid_argument("device '" + c.device + "' is not available (this build has: sim)");
+  if (c.device == "replay") return std::make_unique<ReplayDevice>(ReplayLog::Load(c.replay_file), c.replay_loop);
+  throw std::invalid_argument("device '" + c.device + "' is not available (this build has: sim, replay)");
 }
 
 void Fill(msg::DeviceState& out, const HapticSnapshot& s) {
@@ -70,9 +72,8 @@ int HapticNode::Run() {
   if (!config_.trace_file.empty()) {
     trace.open(config_.trace_file);
     if (!trace) throw std::runtime_error("cannot write trace file " + config_.trace_file);
-    trace << "seq,t_s,fault";
-    for (int i = 0; i < kFingers; ++i) trace << ",x" << i << ",y" << i << ",z" << i;
-    trace << "\n" << std::setprecision(9);
+    trace << std::setprecision(9);
+    WriteTraceHeader(trace);
   }
 
   dds::Participant participant(config_.where.domain_id, config_.where.session, "haptic_node/" + config_.user,
@@ -112,11 +113,7 @@ int HapticNode::Run() {
         state_writer.Write(state);
         ++published;
       }
-      if (trace) {
-        trace << snapshot.seq << "," << snapshot.t_s << "," << snapshot.fault;
-        for (const auto& p : snapshot.p_WE_m) trace << "," << p[0] << "," << p[1] << "," << p[2];
-        trace << "\n";
-      }
+      if (trace) WriteTraceRow(trace, snapshot);
     }
     if (Clock::now() >= next_stats) {
       next_stats += std::chrono::seconds(1);

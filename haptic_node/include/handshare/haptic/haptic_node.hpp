@@ -14,6 +14,8 @@ struct HapticNodeConfig {
   std::string user;
   std::string device = "sim";
   std::string script;                            // sim: hand script file ("" = default motion)
+  std::string replay_file;                       // replay: device-state log (a --trace file)
+  bool replay_loop = false;                      // replay: start over at the end
   double rate_Hz = 1000.0;
   double publish_Hz = 100.0;                     // device state for viewers (60-120 Hz)
   std::string trace_file;                        // CSV of every published device state
