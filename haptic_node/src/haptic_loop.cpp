@@ -3,6 +3,7 @@
 #include <pthread.h>
 #include <sched.h>
 
+#include <algorithm>
 #include <cmath>
 
 #include "handshare/common/clock.hpp"
@@ -19,8 +20,20 @@ bool AllFinite(const DeviceReading& r) noexcept {
 }
 }  // namespace
 
+namespace {
+ForceSafetyConfig SafetyFor(const HapticLoopConfig& c, const DeviceCapabilities& caps) {
+  ForceSafetyConfig s = c.safety;
+  s.period = std::chrono::duration<double>(1.0 / c.rate_Hz);
+  s.max_force_N = std::min(s.max_force_N, caps.max_fingertip_force_N);
+  return s;
+}
+}  // namespace
+
 HapticLoop::HapticLoop(Device& device, HapticLoopConfig config)
-    : device_(device), config_(config), caps_(device.capabilities()) {
+    : device_(device),
+      config_(config),
+      caps_(device.capabilities()),
+      safety_(SafetyFor(config, caps_)) {
   for (auto& f : f_E_W_) f.setZero();
 }
 
@@ -40,31 +53,68 @@ void HapticLoop::Stop() {
   if (thread_.joinable()) thread_.join();
 }
 
-void HapticLoop::Step(double t_s) noexcept {
-  device_.Read(t_s, reading_);
-  const bool fault = !reading_.valid || !AllFinite(reading_);
-  if (fault) faults_.fetch_add(1, std::memory_order_relaxed);
+void HapticLoop::SetRenderer(std::shared_ptr<ForceRenderer> renderer) {
+  if (renderer) owned_.push_back(renderer);
+  pending_.store(renderer.get(), std::memory_order_release);
+  has_pending_.store(true, std::memory_order_release);
+  CollectRetired();
+}
 
-  // Contact rendering fills f_E_W_ here (later layers). A fault means zero force, always.
-  for (auto& f : f_E_W_) {
-    if (fault || !f.allFinite()) f.setZero();
-    const double n = f.norm();
-    if (n > caps_.max_fingertip_force_N) f *= caps_.max_fingertip_force_N / n;
+void HapticLoop::CollectRetired() {
+  const ForceRenderer* used = in_use_.load(std::memory_order_acquire);
+  const ForceRenderer* next = has_pending_.load(std::memory_order_acquire) ? pending_.load() : nullptr;
+  std::erase_if(owned_, [&](const std::shared_ptr<ForceRenderer>& r) { return r.get() != used && r.get() != next; });
+}
+
+void HapticLoop::Step(double t_s) noexcept {
+  if (has_pending_.exchange(false, std::memory_order_acq_rel)) {
+    renderer_ = pending_.load(std::memory_order_acquire);
+    in_use_.store(renderer_, std::memory_order_release);
   }
-  device_.Command(f_E_W_);
+  const double dt_s = last_t_s_ < 0.0 ? 1.0 / config_.rate_Hz : std::max(0.0, t_s - last_t_s_);
+  last_t_s_ = t_s;
+
+  // 1. Read and check the device: invalid, non-finite or stale data is a fault.
+  device_.Read(t_s, reading_);
+  const std::uint64_t now_ns = common::SteadyNowNs();
+  const bool stale = reading_.stamp_ns != 0 && now_ns > reading_.stamp_ns &&
+                     static_cast<double>(now_ns - reading_.stamp_ns) * 1e-9 > config_.stale_after_s;
+  const bool device_fault = !reading_.valid || !AllFinite(reading_) || stale;
+
+  // 2. Contacts and controls: the forces the world asks for.
+  for (auto& f : f_E_W_) f.setZero();
+  if (renderer_ != nullptr) {
+    if (device_fault) {
+      renderer_->ReleaseAll();
+    } else {
+      renderer_->Render(t_s, dt_s, reading_, f_E_W_);
+    }
+  }
+
+  // 3. Safety: clamp, passivity, rate bound; a fault ramps the force to zero.
+  safety_in_.device_fault = device_fault;
+  for (int i = 0; i < kFingers; ++i) {
+    safety_in_.finger[i].f_desired_E_W = f_E_W_[i];
+    safety_in_.finger[i].p_WE = reading_.p_WE[i];
+    safety_in_.finger[i].fault = false;
+  }
+  safety_.Step(safety_in_, safety_out_);
+  const bool fault = device_fault || safety_out_.any_fault;
+  if (fault) faults_.fetch_add(1, std::memory_order_relaxed);
+  device_.Command(safety_out_.f_E_W);
 
   HapticSnapshot& s = snapshots_.WriteSlot();
   s.seq = ++seq_;
-  s.stamp_ns = common::SteadyNowNs();
+  s.stamp_ns = now_ns;
   s.t_s = t_s;
   s.fault = fault;
   s.fingertip_radius_m = caps_.fingertip_radius_m;
-  for (int k = 0; k < 3; ++k) s.p_WH_m[k] = fault ? 0.0 : reading_.p_WH[k];
-  for (int k = 0; k < 4; ++k) s.q_WH_wxyz[k] = fault ? (k == 0 ? 1.0 : 0.0) : reading_.q_WH_wxyz[k];
+  for (int k = 0; k < 3; ++k) s.p_WH_m[k] = device_fault ? 0.0 : reading_.p_WH[k];
+  for (int k = 0; k < 4; ++k) s.q_WH_wxyz[k] = device_fault ? (k == 0 ? 1.0 : 0.0) : reading_.q_WH_wxyz[k];
   for (int i = 0; i < kFingers; ++i) {
     for (int k = 0; k < 3; ++k) {
-      s.p_WE_m[i][k] = fault ? 0.0 : reading_.p_WE[i][k];
-      s.f_E_W_N[i][k] = f_E_W_[i][k];
+      s.p_WE_m[i][k] = device_fault ? 0.0 : reading_.p_WE[i][k];
+      s.f_E_W_N[i][k] = safety_out_.f_E_W[i][k];
     }
   }
   snapshots_.Publish();

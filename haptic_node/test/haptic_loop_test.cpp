@@ -7,6 +7,9 @@
 #include <limits>
 #include <new>
 #include <thread>
+#include <vector>
+
+#include "handshare/common/clock.hpp"
 
 #include "handshare/haptic/sim_hand.hpp"
 
@@ -104,6 +107,100 @@ TEST(HapticLoop, ThreadRunsAndHandsOffMonotonicSnapshots) {
   EXPECT_GT(seen, 0u);
   EXPECT_GE(stats.steps, last);  // every handed-off snapshot was a counted step
   EXPECT_GT(stats.jitter.count(), 0u);
+}
+
+/// A renderer that asks every fingertip for a fixed force.
+class ConstantRenderer final : public ForceRenderer {
+ public:
+  explicit ConstantRenderer(Eigen::Vector3d f) : f_(f) {}
+  void Render(double, double, const DeviceReading&, std::array<Eigen::Vector3d, kFingers>& out) noexcept override {
+    for (auto& f : out) f = f_;
+    ++renders;
+  }
+  void ReleaseAll() noexcept override { ++releases; }
+  Eigen::Vector3d f_;
+  int renders = 0, releases = 0;
+};
+
+// A fault mid-contact (device lost) ramps the commanded force linearly to zero within the
+// configured ramp time, not at once and not later; it comes back through the rate bound.
+TEST(HapticLoop, FaultMidContactRampsForceToZeroWithinTheConfiguredTime) {
+  FakeDevice device;
+  HapticLoopConfig config{1000.0, false};
+  config.safety.fault_ramp_time = std::chrono::milliseconds(20);
+  config.safety.passivity = false;  // the fingertip does not move: nothing to observe
+  HapticLoop loop(device, config);
+  auto renderer = std::make_shared<ConstantRenderer>(Eigen::Vector3d(0, 0, 5.0));
+  loop.SetRenderer(renderer);
+  int k = 0;
+  for (; k < 200; ++k) loop.Step(k * 1e-3);
+  EXPECT_NEAR(device.last[1].z(), 3.5, 1e-12);  // clamped at the device's limit
+  device.valid = false;
+  std::vector<double> ramp;
+  for (int j = 0; j < 30; ++j, ++k) {
+    loop.Step(k * 1e-3);
+    ramp.push_back(device.last[1].z());
+  }
+  EXPECT_GT(ramp[0], 0.5 * 3.5);  // no jump to zero: a ramp
+  for (std::size_t j = 1; j < ramp.size(); ++j) EXPECT_LE(ramp[j], ramp[j - 1]);
+  EXPECT_EQ(ramp[19], 0.0);  // zero within 20 steps of 1 ms
+  EXPECT_GT(renderer->releases, 0);
+  device.valid = true;
+  loop.Step(k++ * 1e-3);
+  // Back in through the rate bound, no jump to the full force.
+  EXPECT_LE(device.last[1].z(), config.safety.max_force_rate_N_per_s * 1e-3 + 1e-12);
+  EXPECT_LT(device.last[1].z(), 3.5);
+  for (int j = 0; j < 100; ++j, ++k) loop.Step(k * 1e-3);
+  EXPECT_NEAR(device.last[1].z(), 3.5, 1e-12);
+}
+
+// Data older than stale_after_s is a fault even when it claims to be valid.
+class StaleDevice final : public Device {
+ public:
+  DeviceCapabilities capabilities() const noexcept override { return {}; }
+  void Read(double, DeviceReading& out) noexcept override {
+    out.valid = true;
+    out.stamp_ns = common::SteadyNowNs() - age_ns;
+    for (auto& p : out.p_WE) p = Eigen::Vector3d(0.01, 0.02, 0.03);
+  }
+  void Command(const std::array<Eigen::Vector3d, kFingers>&) noexcept override {}
+  const char* name() const noexcept override { return "stale"; }
+  std::uint64_t age_ns = 0;
+};
+
+TEST(HapticLoop, StaleDeviceDataIsAFault) {
+  StaleDevice device;
+  HapticLoop loop(device, HapticLoopConfig{1000.0, false});
+  loop.Step(0.0);
+  EXPECT_EQ(loop.faults(), 0u);
+  device.age_ns = 200'000'000;  // 0.2 s old, limit 0.05 s
+  loop.Step(0.001);
+  EXPECT_EQ(loop.faults(), 1u);
+}
+
+// The bridge swaps renderers while the loop runs; the old one is freed only after the
+// haptic thread adopted the new one, and the step still allocates nothing.
+TEST(HapticLoop, RendererSwapIsAdoptedAndTheOldOneFreedWithoutAllocationInTheStep) {
+  FakeDevice device;
+  HapticLoop loop(device, HapticLoopConfig{1000.0, false});
+  auto first = std::make_shared<ConstantRenderer>(Eigen::Vector3d(0, 0, 1.0));
+  std::weak_ptr<ConstantRenderer> first_alive = first;
+  loop.SetRenderer(std::move(first));
+  loop.Step(0.0);
+  if (auto alive = first_alive.lock()) {
+    EXPECT_EQ(alive->renders, 1);
+  } else {
+    ADD_FAILURE() << "the renderer in use was freed";
+  }
+  loop.SetRenderer(std::make_shared<ConstantRenderer>(Eigen::Vector3d(0, 0, 2.0)));
+  loop.CollectRetired();
+  EXPECT_FALSE(first_alive.expired());  // the haptic thread has not let go yet
+  const long before = g_allocations.load();
+  for (int k = 1; k < 2000; ++k) loop.Step(k * 1e-3);
+  EXPECT_EQ(g_allocations.load() - before, 0);
+  loop.CollectRetired();
+  EXPECT_TRUE(first_alive.expired());
+  EXPECT_NEAR(device.last[0].z(), 2.0, 1e-12);
 }
 
 }  // namespace

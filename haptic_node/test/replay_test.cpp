@@ -5,6 +5,7 @@
 #include <iomanip>
 #include <sstream>
 
+#include "handshare/haptic/haptic_loop.hpp"
 #include "handshare/haptic/sim_hand.hpp"
 
 namespace handshare::haptic {

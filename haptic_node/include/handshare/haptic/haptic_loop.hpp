@@ -1,35 +1,35 @@
 #pragma once
 /// The haptic loop: its own thread at a fixed rate (1 kHz default, up to 4 kHz and more),
-/// absolute deadlines, overrun counting and re-sync. Each Step(): read device -> (contact
-/// rendering, later layers) -> clamp forces -> command device -> publish a snapshot for the
-/// bridge thread through a lock-free triple buffer. Step() never allocates, locks or does I/O.
+/// absolute deadlines, overrun counting and re-sync. Each Step(): read device -> check data
+/// -> force renderer (contacts, controls) -> force safety (clamp, rate bound, passivity,
+/// fault ramp) -> command device -> publish a snapshot for the bridge thread through a
+/// lock-free triple buffer. Step() never allocates, locks or does I/O.
+///
+/// The renderer is swapped by the bridge thread (scene change) without a lock: SetRenderer()
+/// posts it, the next Step() adopts it, and the bridge frees a replaced renderer only after
+/// the haptic thread has let go of it (CollectRetired()).
 #include <atomic>
 #include <cstdint>
 #include <memory>
 #include <thread>
+#include <vector>
 
 #include "handshare/common/periodic_loop.hpp"
 #include "handshare/common/triple_buffer.hpp"
 #include "handshare/haptic/device.hpp"
+#include "handshare/haptic/force_renderer.hpp"
+#include "handshare/haptic/force_safety.hpp"
+#include "handshare/haptic/haptic_snapshot.hpp"
 
 namespace handshare::haptic {
-
-/// Fixed-size, trivially copyable: what the haptic thread hands to the bridge thread.
-struct HapticSnapshot {
-  std::uint64_t seq = 0;
-  std::uint64_t stamp_ns = 0;
-  double t_s = 0.0;
-  double p_WH_m[3] = {};
-  double q_WH_wxyz[4] = {1, 0, 0, 0};
-  double p_WE_m[kFingers][3] = {};
-  double f_E_W_N[kFingers][3] = {};
-  double fingertip_radius_m = 0.0;
-  bool fault = false;
-};
 
 struct HapticLoopConfig {
   double rate_Hz = 1000.0;
   bool realtime_priority = true;  // try SCHED_FIFO; carry on without it if not permitted
+  /// Safety stage settings; its period and max force come from rate_Hz and the device.
+  ForceSafetyConfig safety{};
+  /// A device reading older than this is stale: a fault [s].
+  double stale_after_s = 0.05;
 };
 
 class HapticLoop {
@@ -48,6 +48,14 @@ class HapticLoop {
   /// One step at time t_s since start. Public for tests; the thread calls it. Real-time safe.
   void Step(double t_s) noexcept;
 
+  /// Bridge side: the renderer the loop uses from its next step on (nullptr: no forces).
+  /// The loop keeps it alive; not real-time.
+  void SetRenderer(std::shared_ptr<ForceRenderer> renderer);
+  /// Bridge side: frees renderers the haptic thread no longer uses. Not real-time.
+  void CollectRetired();
+  /// Safety status of the last step (haptic thread; tests).
+  const ForceSafetyOutput& safety_output() const noexcept { return safety_out_; }
+
   /// Bridge side: newest snapshot, if a new one exists.
   bool TakeSnapshot(HapticSnapshot& out) noexcept { return snapshots_.Read(out); }
   /// Bridge side: loop statistics, refreshed about 10 times a second by the haptic thread.
@@ -62,6 +70,18 @@ class HapticLoop {
   DeviceCapabilities caps_;
   DeviceReading reading_;
   std::array<Eigen::Vector3d, kFingers> f_E_W_{};
+  ForceSafety safety_;
+  ForceSafetyInput safety_in_;
+  ForceSafetyOutput safety_out_;
+  double last_t_s_ = -1.0;
+  // Renderer hand-over: pending_ is posted by the bridge, adopted by the haptic thread, which
+  // publishes what it uses in in_use_; owned_ (bridge only) keeps every posted renderer alive
+  // until it is neither pending nor in use.
+  std::atomic<ForceRenderer*> pending_{nullptr};
+  std::atomic<ForceRenderer*> in_use_{nullptr};
+  std::atomic<bool> has_pending_{false};
+  ForceRenderer* renderer_ = nullptr;
+  std::vector<std::shared_ptr<ForceRenderer>> owned_;
   std::uint64_t seq_ = 0;
   common::TripleBuffer<HapticSnapshot> snapshots_;
   // Heap-held: LoopStats is about 16 KB; three copies live in the buffer.

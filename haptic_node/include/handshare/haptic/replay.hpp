@@ -14,7 +14,7 @@
 #include <vector>
 
 #include "handshare/haptic/device.hpp"
-#include "handshare/haptic/haptic_loop.hpp"
+#include "handshare/haptic/haptic_snapshot.hpp"
 
 namespace handshare::haptic {
 

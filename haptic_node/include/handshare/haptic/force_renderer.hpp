@@ -1,0 +1,22 @@
+#pragma once
+/// What the haptic loop asks of the world each step: the force each fingertip should feel.
+/// Implemented by the node's scene (rigid and deformable contact, controls); the loop owns
+/// safety (clamp, rate bound, passivity, fault ramp) after it.
+#include <array>
+
+#include "handshare/haptic/device.hpp"
+
+namespace handshare::haptic {
+
+class ForceRenderer {
+ public:
+  virtual ~ForceRenderer() = default;
+  /// Desired fingertip forces f_E_W [N] for a valid reading at time t_s, step dt_s.
+  /// Real-time: noexcept, no allocation, no locks, no I/O.
+  virtual void Render(double t_s, double dt_s, const DeviceReading& reading,
+                      std::array<Eigen::Vector3d, kFingers>& f_E_W) noexcept = 0;
+  /// The device is faulted this step (no trustworthy fingertips): release every contact.
+  virtual void ReleaseAll() noexcept {}
+};
+
+}  // namespace handshare::haptic

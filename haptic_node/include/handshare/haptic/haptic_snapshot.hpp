@@ -1,0 +1,21 @@
+#pragma once
+/// What the haptic thread hands to the bridge thread each step (trivially copyable).
+#include <cstdint>
+
+#include "handshare/haptic/device.hpp"
+
+namespace handshare::haptic {
+
+struct HapticSnapshot {
+  std::uint64_t seq = 0;
+  std::uint64_t stamp_ns = 0;
+  double t_s = 0.0;
+  double p_WH_m[3] = {};
+  double q_WH_wxyz[4] = {1, 0, 0, 0};
+  double p_WE_m[kFingers][3] = {};
+  double f_E_W_N[kFingers][3] = {};
+  double fingertip_radius_m = 0.0;
+  bool fault = false;  // device fault or a finger's safety fault this step
+};
+
+}  // namespace handshare::haptic
