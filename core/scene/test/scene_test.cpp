@@ -2,13 +2,27 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <chrono>
 #include <fstream>
 
 namespace handshare::scene {
 namespace {
 
+const std::filesystem::path kScenes = std::filesystem::path(HANDSHARE_SOURCE_ASSETS) / "scenes";
+
+// Test files live in a temporary assets tree (scenes/ beside meshes/) so that relative mesh
+// paths and goto targets resolve like in the project's own assets folder.
+std::filesystem::path TempAssets() {
+  const auto root = std::filesystem::temp_directory_path() / "hs_scene_test_assets";
+  std::filesystem::create_directories(root / "scenes");
+  std::filesystem::create_directories(root / "meshes");
+  std::ofstream(root / "scenes" / "start_menu.json") << R"({"name": "start_menu", "messages": [{"language": "en", "text": "t"}]})";
+  return root;
+}
+
 std::filesystem::path WriteTemp(const std::string& name, const std::string& text) {
-  const auto path = std::filesystem::temp_directory_path() / ("hs_scene_test_" + name + ".json");
+  const auto path = TempAssets() / "scenes" / ("hs_scene_test_" + name + ".json");
   std::ofstream(path) << text;
   return path;
 }
@@ -25,21 +39,148 @@ std::string ErrorOf(const std::string& name, const std::string& text) {
   return "";
 }
 
-TEST(Scene, EveryProjectSceneLoads) {
+const ControlSpec* FindControl(const Scene& s, const std::string& id) {
+  const auto it = std::find_if(s.controls.begin(), s.controls.end(), [&](auto& c) { return c.id == id; });
+  return it == s.controls.end() ? nullptr : &*it;
+}
+
+const SceneObject* FindObject(const Scene& s, const std::string& id) {
+  const auto it = std::find_if(s.objects.begin(), s.objects.end(), [&](auto& o) { return o.id == id; });
+  return it == s.objects.end() ? nullptr : &*it;
+}
+
+bool HasBothLanguages(const std::vector<Message>& messages) {
+  auto has = [&](const char* lang) {
+    return std::any_of(messages.begin(), messages.end(), [&](const Message& m) { return m.language == lang; });
+  };
+  return has("en") && has("ja");
+}
+
+TEST(Scene, EveryProjectSceneLoadsWithMeshesAndBothLanguages) {
+  const auto start = std::chrono::steady_clock::now();
   for (const char* name : {"start_menu", "solar_system", "dinosaur", "microscopic"}) {
-    const Scene s = LoadSceneByName(name, std::filesystem::path(HANDSHARE_SOURCE_ASSETS) / "scenes");
+    const Scene s = LoadSceneByName(name, kScenes);
     EXPECT_EQ(s.name, name);
-    EXPECT_FALSE(s.messages.empty());
+    EXPECT_TRUE(HasBothLanguages(s.messages)) << name;
+    for (const auto& o : s.objects) {
+      if (o.shape == Shape::kMesh) {
+        ASSERT_NE(o.mesh, nullptr) << name << ": " << o.id;
+        EXPECT_TRUE(CheckMesh(*o.mesh).closed_and_outward()) << name << ": " << o.id;
+      }
+    }
+    for (const auto& c : s.controls) {
+      for (const Action* a : {&c.action}) {
+        if (!a->messages.empty()) {
+          EXPECT_TRUE(HasBothLanguages(a->messages)) << c.id;
+        }
+      }
+      for (const auto& a : c.detent_actions) {
+        if (!a.messages.empty()) {
+          EXPECT_TRUE(HasBothLanguages(a.messages)) << c.id;
+        }
+      }
+      for (const auto& a : c.page_actions) {
+        if (!a.messages.empty()) {
+          EXPECT_TRUE(HasBothLanguages(a.messages)) << c.id;
+        }
+      }
+      // Every control is also an object (its visual) for the nodes that only draw objects.
+      const SceneObject* visual = FindObject(s, c.id);
+      ASSERT_NE(visual, nullptr) << c.id;
+      EXPECT_EQ(visual->kind, ObjectKind::kControl);
+    }
+  }
+  const double ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+  RecordProperty("load_all_scenes_ms", std::to_string(ms));
+}
+
+TEST(Scene, MoonGravityBallAndLeverToMars) {
+  const Scene s = LoadSceneByName("solar_system", kScenes);
+  EXPECT_DOUBLE_EQ(s.gravity_W_m_per_s2.z(), -1.62);
+  const SceneObject* ball = FindObject(s, "ball");
+  ASSERT_NE(ball, nullptr);
+  EXPECT_EQ(ball->shape, Shape::kSphere);
+  EXPECT_DOUBLE_EQ(ball->half_extent_m.x(), 0.04);
+  EXPECT_DOUBLE_EQ(ball->mass_kg, 0.2);
+  EXPECT_GT(ball->rigid.mu_static, ball->rigid.mu_kinetic);
+  ASSERT_NE(FindObject(s, "weight"), nullptr);
+  const ControlSpec* lever = FindControl(s, "lever_planet");
+  ASSERT_NE(lever, nullptr);
+  EXPECT_EQ(lever->type, ControlType::kLever);
+  ASSERT_EQ(lever->detent_actions.size(), 2u);
+  EXPECT_TRUE(lever->detent_actions[1].set_gravity);
+  EXPECT_DOUBLE_EQ(lever->detent_actions[1].gravity_W_m_per_s2.z(), -3.71);
+  EXPECT_DOUBLE_EQ(lever->detent_actions[0].gravity_W_m_per_s2.z(), -1.62);
+  EXPECT_NE(lever->detent_actions[1].title.find("Mars"), std::string::npos);
+}
+
+TEST(Scene, EveryWorldLeadsBackToTheStartAndTheStartToEveryWorld) {
+  auto targets = [](const Scene& s) {
+    std::vector<std::string> out;
+    for (const auto& c : s.controls) {
+      if (!c.action.goto_scene.empty()) out.push_back(c.action.goto_scene);
+    }
+    return out;
+  };
+  const auto from_start = targets(LoadSceneByName("start_menu", kScenes));
+  for (const char* world : {"solar_system", "dinosaur", "microscopic"}) {
+    EXPECT_NE(std::find(from_start.begin(), from_start.end(), world), from_start.end()) << world;
+    const auto back = targets(LoadSceneByName(world, kScenes));
+    EXPECT_NE(std::find(back.begin(), back.end(), "start_menu"), back.end()) << world;
   }
 }
 
-TEST(Scene, MoonGravityAndBall) {
-  const Scene s = LoadSceneByName("solar_system", std::filesystem::path(HANDSHARE_SOURCE_ASSETS) / "scenes");
-  EXPECT_DOUBLE_EQ(s.gravity_W_m_per_s2.z(), -1.62);
-  const auto ball = std::find_if(s.objects.begin(), s.objects.end(), [](auto& o) { return o.id == "ball"; });
-  ASSERT_NE(ball, s.objects.end());
-  EXPECT_EQ(ball->shape, Shape::kSphere);
-  EXPECT_DOUBLE_EQ(ball->half_extent_m.x(), 0.04);
+TEST(Scene, DinosaurPartsDentSeveralMillimetresAtThreeNewtons) {
+  const Scene s = LoadSceneByName("dinosaur", kScenes);
+  int parts = 0;
+  for (const char* id : {"triceratops_head", "triceratops_tail", "triceratops_leg"}) {
+    const SceneObject* o = FindObject(s, id);
+    ASSERT_NE(o, nullptr) << id;
+    EXPECT_EQ(o->kind, ObjectKind::kDeformable);
+    EXPECT_NE(o->fixed.kind, FixedRule::Kind::kNone);
+    // Fingertip radius 8 mm, 3 N: "several mm" taken as 2..10 mm.
+    const double dent_m = FlatPunchDepth_m(3.0, 0.008, o->deformable.E_Pa, o->deformable.nu);
+    EXPECT_GT(dent_m, 0.002) << id;
+    EXPECT_LT(dent_m, 0.010) << id;
+    // Scaled to the hand: largest size 8..21 cm.
+    const double size_m = 2.0 * o->half_extent_m.maxCoeff();
+    EXPECT_GT(size_m, 0.08) << id;
+    EXPECT_LT(size_m, 0.21) << id;
+    ++parts;
+  }
+  EXPECT_EQ(parts, 3);
+}
+
+TEST(Scene, FlatPunchMatchesTheHandWorkedValue) {
+  // 3 N * (1 - 0.45^2) / (2 * 0.008 m * 30 kPa) = 4.984 mm (as written in dinosaur.json).
+  EXPECT_NEAR(FlatPunchDepth_m(3.0, 0.008, 30000.0, 0.45), 0.0049844, 1e-6);
+}
+
+TEST(Scene, DaphniaMovesPeriodically) {
+  const Scene s = LoadSceneByName("microscopic", kScenes);
+  for (const char* id : {"daphnia_belly", "daphnia_horn"}) {
+    const SceneObject* o = FindObject(s, id);
+    ASSERT_NE(o, nullptr) << id;
+    EXPECT_EQ(o->kind, ObjectKind::kDeformable);
+    ASSERT_TRUE(o->motion.active()) << id;
+    const double quarter = 0.25 * o->motion.period_s;
+    EXPECT_NEAR(o->motion.Offset_W(quarter).norm(), o->motion.amplitude_m, 1e-12);
+    EXPECT_NEAR(o->motion.Offset_W(o->motion.period_s).norm(), 0.0, 1e-12);
+  }
+}
+
+TEST(Scene, FixedRulesSelectTheIntendedNodes) {
+  const Scene s = LoadSceneByName("dinosaur", kScenes);
+  const SceneObject* tail = FindObject(s, "triceratops_tail");
+  ASSERT_NE(tail, nullptr);
+  ASSERT_NE(tail->mesh, nullptr);
+  std::size_t fixed = 0;
+  for (const auto& v : tail->mesh->vertices_m) fixed += tail->fixed.FixesPoint(v) ? 1 : 0;
+  // The flat base cap and the first ring, not the tail.
+  EXPECT_GT(fixed, 10u);
+  EXPECT_LT(fixed, tail->mesh->vertices_m.size() / 10);
+  EXPECT_TRUE(tail->fixed.FixesPoint(Eigen::Vector3d(0.0, 0.0, 0.0)));
+  EXPECT_FALSE(tail->fixed.FixesPoint(Eigen::Vector3d(-0.1, 0.0, 0.0)));
 }
 
 TEST(Scene, MalformedJsonNamesFileAndLine) {
@@ -47,23 +188,132 @@ TEST(Scene, MalformedJsonNamesFileAndLine) {
   EXPECT_NE(err.find("hs_scene_test_malformed.json:3"), std::string::npos) << err;
 }
 
+// Replaces the first `from` in `text` by `to`.
+std::string Replace(std::string text, const std::string& from, const std::string& to) {
+  const std::size_t at = text.find(from);
+  EXPECT_NE(at, std::string::npos) << from;
+  if (at != std::string::npos) text.replace(at, from.size(), to);
+  return text;
+}
+
+const char* kMsg = R"("messages": [{"language": "en", "text": "t"}])";
+
 TEST(Scene, BadFieldsNameTheField) {
   EXPECT_NE(ErrorOf("nomsg", R"({"name": "x"})").find("'messages': missing"), std::string::npos);
-  const std::string bad_kind = ErrorOf("kind", R"({"name": "x", "messages": [{"language": "en", "text": "t"}],
+  const std::string bad_kind = ErrorOf("kind", std::string(R"({"name": "x", )") + kMsg + R"(,
     "objects": [{"id": "a", "kind": "liquid", "shape": "sphere", "radius_m": 0.1, "position_m": [0,0,0]}]})");
   EXPECT_NE(bad_kind.find("objects[0].kind"), std::string::npos) << bad_kind;
-  const std::string bad_radius = ErrorOf("radius", R"({"name": "x", "messages": [{"language": "en", "text": "t"}],
+  const std::string bad_radius = ErrorOf("radius", std::string(R"({"name": "x", )") + kMsg + R"(,
     "objects": [{"id": "a", "kind": "rigid", "shape": "sphere", "radius_m": -1, "position_m": [0,0,0]}]})");
   EXPECT_NE(bad_radius.find("objects[0].radius_m"), std::string::npos) << bad_radius;
-  const std::string dup = ErrorOf("dup", R"({"name": "x", "messages": [{"language": "en", "text": "t"}],
+  const std::string dup = ErrorOf("dup", std::string(R"({"name": "x", )") + kMsg + R"(,
     "objects": [{"id": "a", "kind": "rigid", "shape": "sphere", "radius_m": 1, "position_m": [0,0,0]},
                 {"id": "a", "kind": "rigid", "shape": "sphere", "radius_m": 1, "position_m": [0,0,0]}]})");
   EXPECT_NE(dup.find("duplicate id"), std::string::npos) << dup;
 }
 
+// The error names file, line and field for a field deep in the file.
+TEST(Scene, ErrorsNameTheLineOfTheField) {
+  const std::string text =
+      "{\n"                                                    // 1
+      "  \"name\": \"x\",\n"                                   // 2
+      "  \"messages\": [{\"language\": \"en\", \"text\": \"t\"}],\n"  // 3
+      "  \"objects\": [\n"                                     // 4
+      "    {\"id\": \"ok\", \"kind\": \"rigid\", \"shape\": \"box\",\n"  // 5
+      "     \"half_extent_m\": [0.1, 0.1, 0.1], \"position_m\": [0, 0, 0]},\n"  // 6
+      "    {\"id\": \"soft\", \"kind\": \"deformable\", \"shape\": \"sphere\",\n"  // 7
+      "     \"radius_m\": 0.05, \"position_m\": [0, 0, 0.1],\n"  // 8
+      "     \"material\": {\n"                                  // 9
+      "        \"nu\": 0.45,\n"                                 // 10
+      "        \"E_Pa\":\n"                                     // 11
+      "           -3},\n"                                       // 12
+      "     \"fixed\": {\"below_m\": 0.0}}\n"                   // 13
+      "  ]\n"
+      "}\n";
+  const std::string err = ErrorOf("line", text);
+  EXPECT_NE(err.find("hs_scene_test_line.json:11: field 'objects[1].material.E_Pa'"), std::string::npos) << err;
+
+  // A missing field is reported at the object that lacks it.
+  const std::string missing = Replace(Replace(text, "\"fixed\": {\"below_m\": 0.0}", "\"mass_kg\": 1.0"), "-3", "3000");
+  const std::string err2 = ErrorOf("missing", missing);
+  EXPECT_NE(err2.find("hs_scene_test_missing.json:7: field 'objects[1].fixed': missing"), std::string::npos) << err2;
+
+  // A typo is not silently ignored.
+  const std::string typo = Replace(text, "\"nu\"", "\"nuu\"");
+  const std::string err3 = ErrorOf("typo", typo);
+  EXPECT_NE(err3.find(":10: field 'objects[1].material.nuu': unknown field"), std::string::npos) << err3;
+
+  // Duplicate keys (which plain JSON parsers silently merge) are errors, with their line.
+  const std::string dup = Replace(text, "\"nu\": 0.45,", "\"nu\": 0.45, \"nu\": 0.3,");
+  const std::string err4 = ErrorOf("dupkey", dup);
+  EXPECT_NE(err4.find(":10: field 'objects[1].material.nu': duplicate key"), std::string::npos) << err4;
+
+  // Values on the line after a number are attributed to the number's line, not the next one.
+  const std::string number_eol = Replace(text, "[0, 0, 0.1]", "[0, 0,\n 1000\n]");
+  const std::string err5 = ErrorOf("eol", number_eol);
+  EXPECT_NE(err5.find(":9: field 'objects[1].position_m[2]'"), std::string::npos) << err5;
+}
+
+TEST(Scene, ControlErrorsNameTheField) {
+  const std::string head = std::string(R"({"name": "x", )") + kMsg + R"(, "controls": [)";
+  const std::string bad_goto = ErrorOf("goto", head + R"({"id": "b", "type": "button", "position_m": [0,0,0],
+    "action": {"goto": "atlantis"}}]})");
+  EXPECT_NE(bad_goto.find("controls[0].action.goto': no scene 'atlantis'"), std::string::npos) << bad_goto;
+  const std::string bad_type = ErrorOf("ctype", head + R"({"id": "b", "type": "joystick", "position_m": [0,0,0]}]})");
+  EXPECT_NE(bad_type.find("controls[0].type"), std::string::npos) << bad_type;
+  const std::string wrong_param = ErrorOf("cparam", head + R"({"id": "b", "type": "button", "position_m": [0,0,0],
+    "detents": 3}]})");
+  EXPECT_NE(wrong_param.find("controls[0].detents': unknown field for a button"), std::string::npos) << wrong_param;
+  const std::string detents = ErrorOf("cdetents", head + R"({"id": "l", "type": "lever", "position_m": [0,0,0],
+    "detents": 3, "detent_actions": [{"goto": "start_menu"}]}]})");
+  EXPECT_NE(detents.find("controls[0].detent_actions': has 1 entries for 3 detents"), std::string::npos) << detents;
+  const std::string click = ErrorOf("cclick", head + R"({"id": "b", "type": "button", "position_m": [0,0,0],
+    "travel_m": 0.002, "click_at_m": 0.003}]})");
+  EXPECT_NE(click.find("controls[0].click_at_m': beyond travel_m"), std::string::npos) << click;
+  const std::string ok = ErrorOf("cok", head + R"({"id": "b", "type": "book", "position_m": [0,0,0],
+    "pages": 3, "action": {"goto": "start_menu"}}]})");
+  EXPECT_EQ(ok, "");
+}
+
+TEST(Scene, BadMeshNamesSceneFieldAndMeshPath) {
+  const auto root = TempAssets();
+  std::ofstream(root / "meshes" / "empty.obj").close();
+  std::ofstream(root / "meshes" / "garbage.ply") << "this is not a ply file\n\x01\x02\x03";
+  std::ofstream(root / "meshes" / "points.obj") << "v 0 0 0\nv 1 0 0\nv 0 1 0\n";
+  auto scene_with_mesh = [&](const std::string& mesh) {
+    return std::string(R"({"name": "x", )") + kMsg + R"(,
+    "objects": [{"id": "m", "kind": "rigid", "shape": "mesh", "mesh": ")" + mesh + R"(", "position_m": [0,0,0]}]})";
+  };
+  for (const std::string mesh : {"meshes/nonexistent.obj", "meshes/empty.obj", "meshes/garbage.ply", "meshes/points.obj"}) {
+    const std::string err = ErrorOf("mesh", scene_with_mesh(mesh));
+    EXPECT_NE(err.find("hs_scene_test_mesh.json:2: field 'objects[0].mesh'"), std::string::npos) << err;
+    EXPECT_NE(err.find((root / mesh).string()), std::string::npos) << err;
+  }
+  // Without loading meshes a missing file is still reported.
+  const auto path = WriteTemp("nomesh", scene_with_mesh("meshes/nonexistent.obj"));
+  EXPECT_THROW(LoadScene(path, LoadOptions{.load_meshes = false}), SceneError);
+  std::filesystem::remove(path);
+}
+
+TEST(Scene, DeformablesNeedAUsableFixedRule) {
+  const std::string head = std::string(R"({"name": "x", )") + kMsg + R"(, "objects": [)";
+  const std::string tail_mesh = (std::filesystem::path(HANDSHARE_SOURCE_ASSETS) / "meshes" / "triceratops_tail.obj").string();
+  const std::string nothing_fixed = ErrorOf("nofix", head + R"({"id": "t", "kind": "deformable", "shape": "mesh",
+    "mesh": ")" + tail_mesh + R"(", "position_m": [0,0,0], "material": {"E_Pa": 30000, "nu": 0.45},
+    "fixed": {"below_m": -5}}]})");
+  EXPECT_NE(nothing_fixed.find("objects[0].fixed': fixes no vertex"), std::string::npos) << nothing_fixed;
+  const std::string two_rules = ErrorOf("tworules", head + R"({"id": "t", "kind": "deformable", "shape": "sphere",
+    "radius_m": 0.05, "position_m": [0,0,0], "material": {"E_Pa": 30000, "nu": 0.45},
+    "fixed": {"below_m": 0, "nodes": [1, 2]}}]})");
+  EXPECT_NE(two_rules.find("objects[0].fixed': give exactly one"), std::string::npos) << two_rules;
+  const std::string bad_nu = ErrorOf("nu", head + R"({"id": "t", "kind": "deformable", "shape": "sphere",
+    "radius_m": 0.05, "position_m": [0,0,0], "material": {"E_Pa": 30000, "nu": 0.5}, "fixed": {"nodes": [0]}}]})");
+  EXPECT_NE(bad_nu.find("objects[0].material.nu': value 0.5 outside"), std::string::npos) << bad_nu;
+}
+
 TEST(Scene, UnknownSceneListsAvailable) {
   try {
-    LoadSceneByName("atlantis", std::filesystem::path(HANDSHARE_SOURCE_ASSETS) / "scenes");
+    LoadSceneByName("atlantis", kScenes);
     FAIL();
   } catch (const SceneError& e) {
     EXPECT_NE(std::string(e.what()).find("solar_system"), std::string::npos);
