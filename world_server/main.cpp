@@ -5,13 +5,16 @@
 int main(int argc, char** argv) {
   handshare::common::Options options(
       "world_server", "Owns a shared handshare session: publishes the scene and the message board, "
-                      "tracks members joining and leaving.");
+                      "tracks members joining and leaving, and records the session with --log.");
   handshare::common::DeclareSessionOptions(options);
-  options.Value("scene", "NAME", "scene to start with (assets/scenes/NAME.json)", "start_menu");
+  options.Value("scene", "NAME", "scene to start with (assets/scenes/NAME.json)", "start_menu")
+      .Value("log", "FILE", "record the session in this SQLite session log (a new session is appended; "
+                            "read it with session_report)", "");
   return handshare::common::RunNodeMain(argc, argv, options, [](const auto& o) {
     handshare::world::WorldServerConfig config;
     config.where = handshare::common::ReadSessionOptions(o);
     config.scene = o.GetString("scene");
+    config.log_file = o.GetString("log");
     return handshare::world::WorldServer(config).Run();
   });
 }

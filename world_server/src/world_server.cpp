@@ -1,10 +1,13 @@
 #include "handshare/world_server/world_server.hpp"
 
+#include <unistd.h>
+
 #include <cstdio>
 #include <iostream>
 #include <sstream>
 #include <thread>
 
+#include "handshare/common/clock.hpp"
 #include "handshare/common/shutdown.hpp"
 #include "handshare/dds/membership.hpp"
 #include "handshare/dds/messages.hpp"
@@ -46,10 +49,66 @@ Member FromMessage(const msg::MemberInfo& info) {
 
 }  // namespace
 
-WorldServer::WorldServer(WorldServerConfig config) : config_(std::move(config)) {}
+std::string HostName() {
+  char name[256] = {};
+  if (gethostname(name, sizeof name - 1) != 0) return "";
+  return name;
+}
+
+WorldServer::WorldServer(WorldServerConfig config)
+    : config_(std::move(config)), start_(std::chrono::steady_clock::now()) {
+  if (!config_.log_file.empty()) {
+    log_ = std::make_unique<SessionLog>(
+        config_.log_file, SessionStart{config_.where.session, config_.where.domain_id, HostName(),
+                                       static_cast<std::int64_t>(getpid()), common::UnixNowNs()});
+  }
+}
+
+WorldServer::~WorldServer() = default;
+
+void WorldServer::Print(const std::string& line) {
+  const double t = std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count();
+  std::printf("[world_server %8.3f s] %s\n", t, line.c_str());
+  std::fflush(stdout);
+}
+
+bool WorldServer::CheckLog() {
+  if (!log_ || log_failed_) return !log_failed_;
+  if (const std::string error = log_->error(); !error.empty()) {
+    log_failed_ = true;
+    Print("session log failed, the session goes on without it: " + error);
+  }
+  return !log_failed_;
+}
+
+void WorldServer::OnControlEvent(const ControlRecord& event) {
+  if (log_) log_->OnControlEvent(event);
+}
+
+void WorldServer::OnSceneChange(const std::string& scene, const std::string& title) {
+  Print("scene '" + scene + "': " + title);
+  if (log_) log_->OnSceneChange(scene, title, common::UnixNowNs());
+}
+
+void WorldServer::OnMemberEvent(const MemberEvent& event, std::size_t present) {
+  const Member& m = event.member;
+  std::ostringstream line;
+  line << "member " << ToString(event.change) << ": user=" << m.user << " kind=" << m.kind;
+  if (!m.device.empty()) line << " device=" << m.device;
+  line << " pid=" << m.pid << " present=" << present;
+  Print(line.str());
+  if (log_) log_->OnMember(event.change, m, common::UnixNowNs());
+}
+
+void WorldServer::OnOwnershipChange(const OwnershipChange& change) {
+  Print("object '" + change.object_id + "': owner '" + change.previous_owner + "' -> '" + change.owner + "' (" +
+        ToString(change.reason) + ")");
+  if (log_) log_->OnOwnership(change.object_id, change.owner, ToString(change.reason), common::UnixNowNs());
+}
 
 int WorldServer::Run() {
   using Clock = std::chrono::steady_clock;
+  start_ = Clock::now();
   const scene::Scene scene = scene::LoadSceneByName(config_.scene);
 
   dds::Participant participant(config_.where.domain_id, config_.where.session, "world_server", config_.where.qos_file);
@@ -57,16 +116,14 @@ int WorldServer::Run() {
   auto board_writer = dds::MakeWriter<msg::MessageBoard>(participant, dds::topics::kMessageBoard);
   auto member_reader = dds::MakeReader<msg::MemberInfo>(participant, dds::topics::kMemberInfo);
 
-  const auto start = Clock::now();
-  auto log = [&](const std::string& line) {
-    const double t = std::chrono::duration<double>(Clock::now() - start).count();
-    std::printf("[world_server %8.3f s] %s\n", t, line.c_str());
-    std::fflush(stdout);
-  };
+  const auto start = start_;
+  auto log = [&](const std::string& line) { Print(line); };
 
+  if (log_) log("session log " + log_->file().string() + ": session #" + std::to_string(log_->session_id()));
   scene_writer.Write(ToMessage(scene, config_.where.session, 1));
   log("session '" + config_.where.session + "' on domain " + std::to_string(config_.where.domain_id) +
       ": scene '" + scene.name + "' (" + std::to_string(scene.objects.size()) + " objects)");
+  OnSceneChange(scene.name, scene.title);
 
   // The message board shows the scene's first message in each language in turn; transient-
   // local keeps the newest for late joiners.
@@ -107,21 +164,27 @@ int WorldServer::Run() {
     while (member_reader.TakeLostWriter(lost_writer)) {
       for (auto& e : members.OnWriterLost(lost_writer)) events.push_back(e);
     }
-    for (const auto& event : events) {
-      const Member& m = event.member;
-      std::ostringstream line;
-      line << "member " << ToString(event.change) << ": user=" << m.user << " kind=" << m.kind;
-      if (!m.device.empty()) line << " device=" << m.device;
-      line << " pid=" << m.pid << " present=" << members.present().size();
-      log(line.str());
-    }
+    for (const auto& event : events) OnMemberEvent(event, members.present().size());
+    CheckLog();
     next += period;
     if (Clock::now() > next + 5 * period) next = Clock::now();
     std::this_thread::sleep_until(next);
   }
   log("shutting down: " + std::to_string(members.joined_total()) + " members joined, " +
       std::to_string(members.present().size()) + " still present");
-  return 0;
+  if (log_) {
+    // Members still present stay open in the log: the report shows them "present at end".
+    log_->End(common::UnixNowNs());
+    try {
+      log_->Flush();
+      if (!log_failed_) log("session log: session #" + std::to_string(log_->session_id()) + " written");
+    } catch (const SessionLogError& e) {
+      if (!log_failed_) log(std::string("session log failed: ") + e.what());
+      log_failed_ = true;
+    }
+    if (log_->dropped_rows() > 0) log("session log: " + std::to_string(log_->dropped_rows()) + " rows dropped");
+  }
+  return log_failed_ ? 1 : 0;
 }
 
 }  // namespace handshare::world

@@ -1,11 +1,16 @@
 #pragma once
 /// The world server: owns a session. Publishes the scene state and the message board
 /// (transient-local, so late joiners get them), tracks members joining, leaving and
-/// vanishing, and prints every change. One per session.
+/// vanishing, prints every change and, with a log file, records the session (SessionLog).
+/// One per session.
 #include <chrono>
+#include <memory>
 #include <string>
 
 #include "handshare/common/node_main.hpp"
+#include "handshare/world_server/member_registry.hpp"
+#include "handshare/world_server/ownership_arbiter.hpp"
+#include "handshare/world_server/session_log.hpp"
 
 namespace handshare::world {
 
@@ -13,16 +18,43 @@ struct WorldServerConfig {
   common::SessionOptions where;  // domain, session, duration, QoS file
   std::string scene = "start_menu";
   double tick_Hz = 60.0;
+  std::string log_file;          // "": no session log; else SQLite file, a session is appended
 };
 
 class WorldServer {
  public:
+  /// Opens the session log when one is configured (throws SessionLogError naming the file),
+  /// before any DDS entity exists.
   explicit WorldServer(WorldServerConfig config);
-  /// Runs until --duration passes or a shutdown signal arrives. Returns the exit code.
+  ~WorldServer();
+  WorldServer(const WorldServer&) = delete;
+  WorldServer& operator=(const WorldServer&) = delete;
+
+  /// Runs until --duration passes or a shutdown signal arrives. Returns the exit code: 0, or 1
+  /// when the session log failed during the run (the session itself went on).
   int Run();
 
+  /// Events of the session, printed and recorded in the log (if any). Thread-safe as far as
+  /// the log goes; cheap (the log queues, a writer thread commits). Run() calls OnSceneChange
+  /// for the scene it publishes and OnMemberEvent for every change of the member registry;
+  /// the rest is for the readers still to come (control events, ownership).
+  void OnControlEvent(const ControlRecord& event);
+  void OnSceneChange(const std::string& scene, const std::string& title);
+  void OnMemberEvent(const MemberEvent& event, std::size_t present);
+  void OnOwnershipChange(const OwnershipChange& change);
+
+  /// nullptr without a log file.
+  SessionLog* session_log() { return log_.get(); }
+
  private:
+  void Print(const std::string& line);
+  /// Reports a log failure once; true while the log is healthy.
+  bool CheckLog();
+
   WorldServerConfig config_;
+  std::unique_ptr<SessionLog> log_;
+  bool log_failed_ = false;
+  std::chrono::steady_clock::time_point start_;
 };
 
 }  // namespace handshare::world

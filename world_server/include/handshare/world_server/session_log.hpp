@@ -1,0 +1,108 @@
+#pragma once
+/// The session log: one SQLite file that records what happened in sessions (who joined, left or
+/// was lost, which world was shown when, every control event with its error, ownership changes),
+/// for the session report (session_report) and for studies like the paper's Table 4.
+///
+/// Writes never wait on the disk in the caller's thread: the On* calls queue a row (a mutex and a
+/// push), and a writer thread commits the queued rows in one transaction every flush period
+/// (WAL journal, synchronous=NORMAL). Re-opening an existing log appends a new session to it.
+/// Times are wall-clock ns since the Unix epoch (common::UnixNowNs()), comparable across hosts.
+#include <chrono>
+#include <cstdint>
+#include <filesystem>
+#include <memory>
+#include <optional>
+#include <stdexcept>
+#include <string>
+#include <string_view>
+
+#include "handshare/world_server/member_registry.hpp"
+
+namespace handshare::world {
+
+/// A log file that cannot be opened, created, read or written; what() names the file and
+/// what failed ("file is not a database", "unable to open database file", ...).
+class SessionLogError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+/// Kinds of control events, as in the IDL's ControlEventKind. A hit is kPressed, kMoved or
+/// kPageTurned (one event per hit: a lever reports one kMoved per push); kReleased is neither a
+/// hit nor a miss; kMissed is a try that did not hit the control.
+enum class ControlKind { kPressed, kReleased, kMoved, kPageTurned, kMissed };
+const char* ToString(ControlKind kind);
+std::optional<ControlKind> ControlKindFromString(std::string_view text);
+bool IsHit(ControlKind kind);
+
+struct ControlRecord {
+  std::uint64_t unix_ns = 0;
+  std::string user;
+  std::string control_id;
+  ControlKind kind = ControlKind::kPressed;
+  double value = 0.0;                 // lever angle [rad], page number, ...
+  std::optional<double> error_m;      // distance of the touch from the control's target [m]
+};
+
+/// Who and where a session is: written once when the log opens.
+struct SessionStart {
+  std::string name;                   // the DDS session (partition)
+  int domain_id = 0;
+  std::string host;
+  std::int64_t pid = 0;
+  std::uint64_t unix_ns = 0;
+};
+
+struct SessionLogConfig {
+  std::chrono::milliseconds flush_period{200};  // the writer commits at least this often
+  std::chrono::milliseconds busy_timeout{2000}; // waits this long for a reader's lock
+  std::size_t max_queued_rows = 100000;         // beyond this, rows are dropped and counted
+};
+
+class SessionLog {
+ public:
+  /// Schema version (PRAGMA user_version); the file also carries kApplicationId.
+  static constexpr int kSchemaVersion = 1;
+  static constexpr std::int32_t kApplicationId = 0x48534C47;  // "HSLG"
+
+  /// Opens `file` (created with the schema if absent or empty), checks it is a handshare log
+  /// of a known schema version, switches it to WAL and inserts a new session row.
+  /// Throws SessionLogError naming the file and the step that failed.
+  SessionLog(const std::filesystem::path& file, const SessionStart& start,
+             SessionLogConfig config = {});
+  /// Ends the session (End(now) unless already ended) and commits what is queued.
+  /// Never throws: an error at this point is kept in error().
+  ~SessionLog();
+  SessionLog(const SessionLog&) = delete;
+  SessionLog& operator=(const SessionLog&) = delete;
+
+  /// Queue a row; thread-safe, never blocks on the disk. After a write error they do nothing
+  /// (the error is kept in error() and thrown by Flush()).
+  void OnMember(MemberChange change, const Member& member, std::uint64_t unix_ns);
+  void OnSceneChange(const std::string& scene, const std::string& title, std::uint64_t unix_ns);
+  void OnControlEvent(const ControlRecord& event);
+  /// owner "" : the object became free.
+  void OnOwnership(const std::string& object_id, const std::string& owner, const std::string& reason,
+                   std::uint64_t unix_ns);
+  /// Marks the session as ended at unix_ns (once; later calls are ignored).
+  void End(std::uint64_t unix_ns);
+
+  /// Waits until everything queued so far is committed; throws SessionLogError if a write
+  /// failed. Not for the world tick: for tests and shutdown.
+  void Flush();
+
+  std::int64_t session_id() const { return session_id_; }
+  const std::filesystem::path& file() const { return file_; }
+  /// The first write error, "" while healthy.
+  std::string error() const;
+  /// Rows dropped because the queue was full (the disk could not keep up).
+  std::uint64_t dropped_rows() const;
+
+ private:
+  struct Impl;
+  std::filesystem::path file_;
+  std::int64_t session_id_ = 0;
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace handshare::world

@@ -1,0 +1,99 @@
+#pragma once
+/// The session report: what a session log says about one session. Per control, hits, misses and
+/// the mean and standard deviation of the errors (after the paper's Table 4), time spent in each
+/// world, and who was there. The statistics are pure functions of rows; ReadReport reads them
+/// from a log file (read-only) and throws SessionLogError for a missing or foreign file.
+#include <cstdint>
+#include <filesystem>
+#include <iosfwd>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "handshare/world_server/session_log.hpp"
+
+namespace handshare::world {
+
+/// Sample mean and standard deviation (n - 1 in the denominator, as SPSS reports and as the
+/// paper's Table 4 is consistent with). sd is 0 for n < 2; mean is 0 for n = 0.
+struct Summary {
+  std::size_t n = 0;
+  double mean = 0.0;
+  double sd = 0.0;
+};
+Summary Summarize(const std::vector<double>& values);
+
+struct ControlStats {
+  std::string control_id;
+  std::size_t hits = 0;       // pressed, moved, page_turned
+  std::size_t misses = 0;     // missed
+  std::size_t released = 0;
+  Summary error_m;            // error_m of every event that has one (hits and misses)
+  /// Misses per user, over the users who tried this control (hit or miss): the paper's
+  /// Table 4 (count = users, mean and sd of their misses).
+  Summary misses_per_user;
+};
+/// One row per control id, sorted by id.
+std::vector<ControlStats> ComputeControlStats(const std::vector<ControlRecord>& events);
+
+struct SceneChange {
+  std::uint64_t unix_ns = 0;
+  std::string scene, title;
+};
+struct WorldTime {
+  std::string scene, title;   // title of the last visit
+  std::size_t visits = 0;
+  double seconds = 0.0;
+};
+/// Time in each world: a world lasts from its scene change to the next one, the last to
+/// end_unix_ns. Changes after end_unix_ns count nothing. Sorted by first visit.
+std::vector<WorldTime> ComputeWorldTimes(std::vector<SceneChange> changes, std::uint64_t end_unix_ns);
+
+struct MemberEventRow {
+  std::uint64_t unix_ns = 0;
+  MemberChange change = MemberChange::kJoined;
+  Member member;
+};
+struct MemberStay {
+  Member member;
+  std::uint64_t joined_unix_ns = 0;
+  std::optional<std::uint64_t> gone_unix_ns;  // empty: still present when the log ends
+  std::string how;                             // "left", "lost", "present at end"
+};
+/// Pairs each join with the member's next leave or loss (a member may join again later).
+std::vector<MemberStay> ComputeStays(std::vector<MemberEventRow> events);
+
+struct SessionSummary {
+  std::int64_t id = 0;
+  std::string name, host;
+  int domain_id = 0;
+  std::int64_t pid = 0;
+  std::uint64_t started_unix_ns = 0, last_seen_unix_ns = 0;
+  std::optional<std::uint64_t> ended_unix_ns;  // empty: the server did not end it (killed)
+  std::uint64_t dropped_rows = 0;
+  std::uint64_t end_unix_ns() const { return ended_unix_ns.value_or(last_seen_unix_ns); }
+};
+
+struct SessionReport {
+  std::filesystem::path file;
+  std::size_t sessions_in_file = 0;
+  SessionSummary session;
+  std::vector<MemberStay> members;
+  std::vector<WorldTime> worlds;
+  std::vector<ControlStats> controls;
+  std::size_t control_events = 0;
+  std::size_t ownership_changes = 0;
+};
+
+/// Every session in the file, oldest first.
+std::vector<SessionSummary> ListSessions(const std::filesystem::path& file);
+/// The report of session `session_id`, or of the newest session. Throws SessionLogError
+/// (missing file, not a log, unknown session, empty log).
+SessionReport ReadReport(const std::filesystem::path& file, std::optional<std::int64_t> session_id = {});
+
+/// Human-readable tables.
+void PrintReport(std::ostream& out, const SessionReport& report);
+/// Long-format CSV, one value per line: session,section,item,field,value.
+void PrintReportCsv(std::ostream& out, const SessionReport& report);
+
+}  // namespace handshare::world

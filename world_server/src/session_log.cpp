@@ -1,0 +1,304 @@
+#include "handshare/world_server/session_log.hpp"
+
+#include <condition_variable>
+#include <cstdio>
+#include <mutex>
+#include <thread>
+#include <variant>
+#include <vector>
+
+#include "handshare/common/clock.hpp"
+#include "session_schema.hpp"
+#include "sqlite_db.hpp"
+
+namespace handshare::world {
+
+const char* ToString(ControlKind kind) {
+  switch (kind) {
+    case ControlKind::kPressed: return "pressed";
+    case ControlKind::kReleased: return "released";
+    case ControlKind::kMoved: return "moved";
+    case ControlKind::kPageTurned: return "page_turned";
+    case ControlKind::kMissed: return "missed";
+  }
+  return "?";
+}
+
+std::optional<ControlKind> ControlKindFromString(std::string_view text) {
+  for (ControlKind k : {ControlKind::kPressed, ControlKind::kReleased, ControlKind::kMoved,
+                        ControlKind::kPageTurned, ControlKind::kMissed}) {
+    if (text == ToString(k)) return k;
+  }
+  return std::nullopt;
+}
+
+bool IsHit(ControlKind kind) {
+  return kind == ControlKind::kPressed || kind == ControlKind::kMoved || kind == ControlKind::kPageTurned;
+}
+
+namespace {
+
+struct MemberRow {
+  std::uint64_t unix_ns;
+  MemberChange change;
+  Member member;
+};
+struct SceneRow {
+  std::uint64_t unix_ns;
+  std::string scene, title;
+};
+struct OwnershipRow {
+  std::uint64_t unix_ns;
+  std::string object_id, owner, reason;
+};
+struct EndRow {
+  std::uint64_t unix_ns;
+};
+using Row = std::variant<MemberRow, SceneRow, ControlRecord, OwnershipRow, EndRow>;
+
+std::int64_t Ns(std::uint64_t unix_ns) { return static_cast<std::int64_t>(unix_ns); }
+
+std::string Hex(std::int64_t v) {
+  char text[32];
+  std::snprintf(text, sizeof text, "0x%08llx", static_cast<unsigned long long>(v) & 0xffffffffULL);
+  return text;
+}
+
+// Opens the file and makes sure it is a handshare log of a schema this build writes,
+// creating the schema in an empty file. A foreign database is left untouched.
+void OpenSchema(sqlite::Db& db) {
+  db.Check(sqlite3_busy_timeout(db.get(), 2000), "setting the busy timeout");
+  if (sqlite3_db_readonly(db.get(), "main") == 1) {
+    throw SessionLogError(db.file_name() + ": the session log is read-only (no write permission)");
+  }
+  const std::int64_t version = db.QueryInt("PRAGMA user_version", "reading the schema version");
+  const std::int64_t app = db.QueryInt("PRAGMA application_id", "reading the application id");
+  const std::int64_t tables = db.QueryInt("SELECT count(*) FROM sqlite_master", "reading the table list");
+  if (app == 0 && version == 0 && tables == 0) {
+    // WAL first (it cannot change inside a transaction), then the schema in one transaction
+    // that IF NOT EXISTS makes safe against another process creating it at the same moment.
+    const std::string mode = db.QueryText("PRAGMA journal_mode=WAL", "switching to WAL journal mode");
+    if (mode != "wal") throw SessionLogError(db.file_name() + ": cannot use WAL journal mode (got '" + mode + "')");
+    db.Exec("BEGIN IMMEDIATE", "starting the schema transaction");
+    try {
+      db.Exec(schema::kCreateV1, "creating the schema");
+      db.Exec(schema::kStampV1, "writing the schema version");
+      db.Exec("COMMIT", "committing the schema");
+    } catch (...) {
+      sqlite3_exec(db.get(), "ROLLBACK", nullptr, nullptr, nullptr);  // the first error is the one to report
+      throw;
+    }
+    return;
+  }
+  if (app != SessionLog::kApplicationId) {
+    throw SessionLogError(db.file_name() + ": not a handshare session log (a SQLite database with application_id " +
+                          Hex(app) + " and " + std::to_string(tables) + " schema entries)");
+  }
+  if (version > SessionLog::kSchemaVersion) {
+    throw SessionLogError(db.file_name() + ": session log schema version " + std::to_string(version) +
+                          " is newer than this build's (" + std::to_string(SessionLog::kSchemaVersion) + ")");
+  }
+  if (version < 1) throw SessionLogError(db.file_name() + ": session log without a schema version");
+  const std::string mode = db.QueryText("PRAGMA journal_mode=WAL", "switching to WAL journal mode");
+  if (mode != "wal") throw SessionLogError(db.file_name() + ": cannot use WAL journal mode (got '" + mode + "')");
+}
+
+}  // namespace
+
+struct SessionLog::Impl {
+  Impl(const std::filesystem::path& file, const SessionLogConfig& c) : db(file, SQLITE_OPEN_READWRITE | SQLITE_OPEN_CREATE), config(c) {}
+
+  sqlite::Db db;
+  SessionLogConfig config;
+  std::int64_t session_id = 0;
+
+  std::mutex mutex;
+  std::condition_variable wake;       // the writer: rows to flush, or stop
+  std::condition_variable committed;  // Flush(): the writer caught up
+  std::vector<Row> queue;
+  std::uint64_t enqueued = 0, done = 0, flush_target = 0;
+  std::uint64_t dropped = 0;
+  bool ended = false, stop = false;
+  std::string error;
+  std::thread writer;
+
+  void Push(Row row) {
+    std::lock_guard lock(mutex);
+    if (!error.empty() || stop) return;
+    if (queue.size() >= config.max_queued_rows) {
+      ++dropped;
+      return;
+    }
+    if (std::holds_alternative<EndRow>(row)) {
+      if (ended) return;
+      ended = true;
+    }
+    queue.push_back(std::move(row));
+    ++enqueued;
+  }
+
+  // Prepared in the constructor, in the caller's thread, so a broken file fails there; the
+  // writer thread owns the connection from then on.
+  std::optional<sqlite::Statement> member, scene, control, owner, end, seen;
+
+  void Prepare() {
+    member.emplace(db, schema::kInsertMember, "inserting a member event");
+    scene.emplace(db, schema::kInsertScene, "inserting a scene change");
+    control.emplace(db, schema::kInsertControl, "inserting a control event");
+    owner.emplace(db, schema::kInsertOwnership, "inserting an ownership change");
+    end.emplace(db, schema::kUpdateEnd, "writing the session end");
+    seen.emplace(db, schema::kUpdateSeen, "writing the session's last-seen time");
+  }
+
+  void WriterLoop() {
+    std::vector<Row> batch;
+    auto last_seen = std::chrono::steady_clock::now();
+    std::unique_lock lock(mutex);
+    for (;;) {
+      wake.wait_for(lock, config.flush_period, [&] { return stop || flush_target > done; });
+      batch.clear();
+      batch.swap(queue);
+      const std::uint64_t target = enqueued;
+      const bool stopping = stop;
+      const std::uint64_t dropped_now = dropped;
+      const bool healthy = error.empty();
+      lock.unlock();
+      // A heartbeat once a second even when idle, so a killed server's log still says until
+      // when the session ran.
+      const auto now = std::chrono::steady_clock::now();
+      const bool heartbeat = now - last_seen >= std::chrono::seconds(1);
+      std::string failure;
+      if (healthy && (!batch.empty() || heartbeat || stopping)) {
+        try {
+          Commit(batch, dropped_now);
+          last_seen = now;
+        } catch (const SessionLogError& e) {
+          failure = e.what();
+        }
+      }
+      lock.lock();
+      if (!failure.empty() && error.empty()) error = failure;
+      done = target;
+      committed.notify_all();
+      if (stopping && queue.empty()) return;
+    }
+  }
+
+  void Commit(const std::vector<Row>& batch, std::uint64_t dropped_now) {
+    db.Exec("BEGIN IMMEDIATE", "starting a write transaction");
+    try {
+      for (const Row& row : batch) {
+        if (const auto* m = std::get_if<MemberRow>(&row)) {
+          member->Bind(1, session_id).Bind(2, Ns(m->unix_ns)).Bind(3, std::string_view(ToString(m->change)))
+              .Bind(4, m->member.member_id).Bind(5, m->member.user).Bind(6, m->member.kind)
+              .Bind(7, m->member.device).Bind(8, m->member.pid);
+          member->Step();
+          member->Reset();
+        } else if (const auto* s = std::get_if<SceneRow>(&row)) {
+          scene->Bind(1, session_id).Bind(2, Ns(s->unix_ns)).Bind(3, s->scene).Bind(4, s->title);
+          scene->Step();
+          scene->Reset();
+        } else if (const auto* c = std::get_if<ControlRecord>(&row)) {
+          control->Bind(1, session_id).Bind(2, Ns(c->unix_ns)).Bind(3, c->user).Bind(4, c->control_id)
+              .Bind(5, std::string_view(ToString(c->kind))).Bind(6, c->value).Bind(7, c->error_m);
+          control->Step();
+          control->Reset();
+        } else if (const auto* o = std::get_if<OwnershipRow>(&row)) {
+          owner->Bind(1, session_id).Bind(2, Ns(o->unix_ns)).Bind(3, o->object_id).Bind(4, o->owner)
+              .Bind(5, o->reason);
+          owner->Step();
+          owner->Reset();
+        } else if (const auto* e = std::get_if<EndRow>(&row)) {
+          end->Bind(1, Ns(e->unix_ns)).Bind(2, session_id);
+          end->Step();
+          end->Reset();
+        }
+      }
+      seen->Bind(1, Ns(common::UnixNowNs())).Bind(2, static_cast<std::int64_t>(dropped_now)).Bind(3, session_id);
+      seen->Step();
+      seen->Reset();
+      db.Exec("COMMIT", "committing a write transaction");
+    } catch (...) {
+      sqlite3_exec(db.get(), "ROLLBACK", nullptr, nullptr, nullptr);  // the first error is the one to report
+      throw;
+    }
+  }
+};
+
+SessionLog::SessionLog(const std::filesystem::path& file, const SessionStart& start, SessionLogConfig config)
+    : file_(file), impl_(std::make_unique<Impl>(file, config)) {
+  sqlite::Db& db = impl_->db;
+  OpenSchema(db);
+  db.Check(sqlite3_busy_timeout(db.get(), static_cast<int>(config.busy_timeout.count())), "setting the busy timeout");
+  db.Exec("PRAGMA synchronous=NORMAL", "setting synchronous=NORMAL");
+  db.Exec("PRAGMA foreign_keys=ON", "enabling foreign keys");
+  {
+    sqlite::Statement insert(db, schema::kInsertSession, "inserting the session");
+    insert.Bind(1, start.name).Bind(2, static_cast<std::int64_t>(start.domain_id)).Bind(3, start.host)
+        .Bind(4, start.pid).Bind(5, static_cast<std::int64_t>(kSchemaVersion)).Bind(6, Ns(start.unix_ns))
+        .Bind(7, Ns(start.unix_ns));
+    insert.Step();
+  }
+  session_id_ = sqlite3_last_insert_rowid(db.get());
+  impl_->session_id = session_id_;
+  impl_->Prepare();
+  impl_->writer = std::thread([impl = impl_.get()] {
+    try {
+      impl->WriterLoop();
+    } catch (const SessionLogError& e) {
+      std::lock_guard lock(impl->mutex);
+      if (impl->error.empty()) impl->error = e.what();
+      impl->stop = true;
+      impl->done = impl->enqueued;
+      impl->committed.notify_all();
+    }
+  });
+}
+
+SessionLog::~SessionLog() {
+  End(common::UnixNowNs());
+  {
+    std::lock_guard lock(impl_->mutex);
+    impl_->stop = true;
+  }
+  impl_->wake.notify_all();
+  impl_->writer.join();
+}
+
+void SessionLog::OnMember(MemberChange change, const Member& member, std::uint64_t unix_ns) {
+  impl_->Push(MemberRow{unix_ns, change, member});
+  // Rows are committed on the writer's period; waking it per row would only add context switches.
+}
+
+void SessionLog::OnSceneChange(const std::string& scene, const std::string& title, std::uint64_t unix_ns) {
+  impl_->Push(SceneRow{unix_ns, scene, title});
+}
+
+void SessionLog::OnControlEvent(const ControlRecord& event) { impl_->Push(event); }
+
+void SessionLog::OnOwnership(const std::string& object_id, const std::string& owner, const std::string& reason,
+                             std::uint64_t unix_ns) {
+  impl_->Push(OwnershipRow{unix_ns, object_id, owner, reason});
+}
+
+void SessionLog::End(std::uint64_t unix_ns) { impl_->Push(EndRow{unix_ns}); }
+
+void SessionLog::Flush() {
+  std::unique_lock lock(impl_->mutex);
+  impl_->flush_target = impl_->enqueued;
+  impl_->wake.notify_all();
+  impl_->committed.wait(lock, [&] { return impl_->done >= impl_->flush_target || !impl_->error.empty(); });
+  if (!impl_->error.empty()) throw SessionLogError(impl_->error);
+}
+
+std::string SessionLog::error() const {
+  std::lock_guard lock(impl_->mutex);
+  return impl_->error;
+}
+
+std::uint64_t SessionLog::dropped_rows() const {
+  std::lock_guard lock(impl_->mutex);
+  return impl_->dropped;
+}
+
+}  // namespace handshare::world

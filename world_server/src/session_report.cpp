@@ -1,0 +1,371 @@
+#include "handshare/world_server/session_report.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdarg>
+#include <cstdio>
+#include <ctime>
+#include <map>
+#include <ostream>
+#include <system_error>
+
+#include "sqlite_db.hpp"
+
+namespace handshare::world {
+
+Summary Summarize(const std::vector<double>& values) {
+  Summary s;
+  s.n = values.size();
+  if (s.n == 0) return s;
+  double sum = 0.0;
+  for (double v : values) sum += v;
+  s.mean = sum / static_cast<double>(s.n);
+  if (s.n < 2) return s;
+  // Two passes: the sum of squared deviations does not cancel like sum(x^2) - n mean^2.
+  double squares = 0.0;
+  for (double v : values) squares += (v - s.mean) * (v - s.mean);
+  s.sd = std::sqrt(squares / static_cast<double>(s.n - 1));
+  return s;
+}
+
+std::vector<ControlStats> ComputeControlStats(const std::vector<ControlRecord>& events) {
+  struct Acc {
+    ControlStats stats;
+    std::vector<double> errors;
+    std::map<std::string, std::size_t> misses_by_user;  // every user who tried, 0 if never missed
+  };
+  std::map<std::string, Acc> by_control;
+  for (const auto& e : events) {
+    Acc& a = by_control[e.control_id];
+    a.stats.control_id = e.control_id;
+    if (IsHit(e.kind)) {
+      ++a.stats.hits;
+      a.misses_by_user.try_emplace(e.user, 0);
+    } else if (e.kind == ControlKind::kMissed) {
+      ++a.stats.misses;
+      ++a.misses_by_user[e.user];
+    } else {
+      ++a.stats.released;
+    }
+    if (e.error_m && std::isfinite(*e.error_m)) a.errors.push_back(*e.error_m);
+  }
+  std::vector<ControlStats> out;
+  for (auto& [id, a] : by_control) {
+    a.stats.error_m = Summarize(a.errors);
+    std::vector<double> misses;
+    for (const auto& [user, n] : a.misses_by_user) misses.push_back(static_cast<double>(n));
+    a.stats.misses_per_user = Summarize(misses);
+    out.push_back(a.stats);
+  }
+  return out;
+}
+
+std::vector<WorldTime> ComputeWorldTimes(std::vector<SceneChange> changes, std::uint64_t end_unix_ns) {
+  std::stable_sort(changes.begin(), changes.end(),
+                   [](const SceneChange& a, const SceneChange& b) { return a.unix_ns < b.unix_ns; });
+  std::vector<WorldTime> out;
+  const std::string* previous = nullptr;
+  for (std::size_t i = 0; i < changes.size(); ++i) {
+    const SceneChange& c = changes[i];
+    if (c.unix_ns >= end_unix_ns) break;
+    const std::uint64_t stop = i + 1 < changes.size() ? std::min(changes[i + 1].unix_ns, end_unix_ns) : end_unix_ns;
+    auto it = std::find_if(out.begin(), out.end(), [&](const WorldTime& w) { return w.scene == c.scene; });
+    if (it == out.end()) it = out.insert(out.end(), WorldTime{c.scene, c.title, 0, 0.0});
+    it->title = c.title;
+    // Publishing the same world again (a reload) is not a new visit.
+    if (!previous || *previous != c.scene) ++it->visits;
+    it->seconds += static_cast<double>(stop - c.unix_ns) * 1e-9;
+    previous = &c.scene;
+  }
+  return out;
+}
+
+std::vector<MemberStay> ComputeStays(std::vector<MemberEventRow> events) {
+  std::stable_sort(events.begin(), events.end(),
+                   [](const MemberEventRow& a, const MemberEventRow& b) { return a.unix_ns < b.unix_ns; });
+  std::vector<MemberStay> stays;
+  std::map<std::string, std::size_t> open;  // member_id -> index of its open stay
+  for (const auto& e : events) {
+    const auto it = open.find(e.member.member_id);
+    if (e.change == MemberChange::kJoined) {
+      if (it != open.end()) continue;  // a second join while present: the registry reports once
+      open[e.member.member_id] = stays.size();
+      stays.push_back(MemberStay{e.member, e.unix_ns, std::nullopt, "present at end"});
+    } else if (it != open.end()) {
+      MemberStay& s = stays[it->second];
+      s.gone_unix_ns = e.unix_ns;
+      s.how = ToString(e.change);
+      open.erase(it);
+    }
+  }
+  return stays;
+}
+
+namespace {
+
+std::uint64_t U64(std::int64_t v) { return v < 0 ? 0 : static_cast<std::uint64_t>(v); }
+
+std::string Format(const char* format, ...) __attribute__((format(printf, 1, 2)));
+std::string Format(const char* format, ...) {
+  char text[512];
+  va_list args;
+  va_start(args, format);
+  std::vsnprintf(text, sizeof text, format, args);
+  va_end(args);
+  return text;
+}
+
+std::string UtcTime(std::uint64_t unix_ns) {
+  const std::time_t seconds = static_cast<std::time_t>(unix_ns / 1000000000ULL);
+  std::tm tm{};
+  gmtime_r(&seconds, &tm);
+  char text[64];
+  std::strftime(text, sizeof text, "%Y-%m-%d %H:%M:%S", &tm);
+  return Format("%s.%03u UTC", text, static_cast<unsigned>((unix_ns / 1000000ULL) % 1000ULL));
+}
+
+double Seconds(std::uint64_t from, std::uint64_t to) {
+  return to >= from ? static_cast<double>(to - from) * 1e-9 : -static_cast<double>(from - to) * 1e-9;
+}
+
+// Opens a log for reading: a missing file, a directory, an empty file or another kind of
+// database is a SessionLogError that says which.
+std::unique_ptr<sqlite::Db> OpenForReading(const std::filesystem::path& file) {
+  std::error_code ec;
+  const auto status = std::filesystem::status(file, ec);
+  if (!std::filesystem::exists(status)) throw SessionLogError(file.string() + ": no such file");
+  if (std::filesystem::is_directory(status)) throw SessionLogError(file.string() + ": is a directory, not a session log");
+  if (std::filesystem::file_size(file, ec) == 0 && !ec) {
+    throw SessionLogError(file.string() + ": empty file, not a session log");
+  }
+  auto db = std::make_unique<sqlite::Db>(file, SQLITE_OPEN_READONLY);
+  db->Check(sqlite3_busy_timeout(db->get(), 2000), "setting the busy timeout");
+  const std::int64_t app = db->QueryInt("PRAGMA application_id", "reading the application id");
+  const std::int64_t version = db->QueryInt("PRAGMA user_version", "reading the schema version");
+  if (app != SessionLog::kApplicationId) {
+    throw SessionLogError(file.string() + ": not a handshare session log (application_id " + std::to_string(app) + ")");
+  }
+  if (version < 1 || version > SessionLog::kSchemaVersion) {
+    throw SessionLogError(file.string() + ": session log schema version " + std::to_string(version) +
+                          " is not one this build reads (1.." + std::to_string(SessionLog::kSchemaVersion) + ")");
+  }
+  return db;
+}
+
+std::vector<SessionSummary> ReadSessions(sqlite::Db& db) {
+  sqlite::Statement s(db,
+                      "SELECT id, name, domain_id, host, pid, started_unix_ns, last_seen_unix_ns, ended_unix_ns, "
+                      "dropped_rows FROM sessions ORDER BY id",
+                      "reading the sessions");
+  std::vector<SessionSummary> out;
+  while (s.Step()) {
+    SessionSummary x;
+    x.id = s.Int(0);
+    x.name = s.Text(1);
+    x.domain_id = static_cast<int>(s.Int(2));
+    x.host = s.Text(3);
+    x.pid = s.Int(4);
+    x.started_unix_ns = U64(s.Int(5));
+    x.last_seen_unix_ns = U64(s.Int(6));
+    if (!s.IsNull(7)) x.ended_unix_ns = U64(s.Int(7));
+    x.dropped_rows = U64(s.Int(8));
+    out.push_back(x);
+  }
+  return out;
+}
+
+MemberChange ChangeFromString(const sqlite::Db& db, const std::string& text) {
+  for (MemberChange c : {MemberChange::kJoined, MemberChange::kLeft, MemberChange::kLost}) {
+    if (text == ToString(c)) return c;
+  }
+  throw SessionLogError(db.file_name() + ": unknown member change '" + text + "'");
+}
+
+std::string CsvField(const std::string& text) {
+  if (text.find_first_of(",\"\n\r") == std::string::npos) return text;
+  std::string out = "\"";
+  for (char c : text) {
+    if (c == '"') out += '"';
+    out += c;
+  }
+  return out + "\"";
+}
+
+}  // namespace
+
+std::vector<SessionSummary> ListSessions(const std::filesystem::path& file) {
+  auto db = OpenForReading(file);
+  return ReadSessions(*db);
+}
+
+SessionReport ReadReport(const std::filesystem::path& file, std::optional<std::int64_t> session_id) {
+  auto db = OpenForReading(file);
+  // One read transaction: a consistent snapshot while a server may still be writing.
+  db->Exec("BEGIN", "starting a read transaction");
+  SessionReport report;
+  report.file = file;
+  const auto sessions = ReadSessions(*db);
+  report.sessions_in_file = sessions.size();
+  if (sessions.empty()) throw SessionLogError(file.string() + ": the log holds no sessions");
+  if (session_id) {
+    const auto it = std::find_if(sessions.begin(), sessions.end(),
+                                 [&](const SessionSummary& s) { return s.id == *session_id; });
+    if (it == sessions.end()) {
+      throw SessionLogError(file.string() + ": no session " + std::to_string(*session_id) + " (sessions " +
+                            std::to_string(sessions.front().id) + ".." + std::to_string(sessions.back().id) + ")");
+    }
+    report.session = *it;
+  } else {
+    report.session = sessions.back();
+  }
+  const std::int64_t id = report.session.id;
+
+  std::vector<MemberEventRow> members;
+  {
+    sqlite::Statement s(*db,
+                        "SELECT unix_ns, change, member_id, user, kind, device, pid FROM member_events "
+                        "WHERE session_id = ?1 ORDER BY unix_ns, id",
+                        "reading the member events");
+    s.Bind(1, id);
+    while (s.Step()) {
+      members.push_back(MemberEventRow{U64(s.Int(0)), ChangeFromString(*db, s.Text(1)),
+                                       Member{s.Text(2), s.Text(3), s.Text(4), s.Text(5), s.Int(6)}});
+    }
+  }
+  report.members = ComputeStays(std::move(members));
+
+  std::vector<SceneChange> scenes;
+  {
+    sqlite::Statement s(*db, "SELECT unix_ns, scene, title FROM scene_changes WHERE session_id = ?1 ORDER BY unix_ns, id",
+                        "reading the scene changes");
+    s.Bind(1, id);
+    while (s.Step()) scenes.push_back(SceneChange{U64(s.Int(0)), s.Text(1), s.Text(2)});
+  }
+  report.worlds = ComputeWorldTimes(std::move(scenes), report.session.end_unix_ns());
+
+  std::vector<ControlRecord> controls;
+  {
+    sqlite::Statement s(*db,
+                        "SELECT unix_ns, user, control_id, kind, value, error_m FROM control_events "
+                        "WHERE session_id = ?1 ORDER BY unix_ns, id",
+                        "reading the control events");
+    s.Bind(1, id);
+    while (s.Step()) {
+      const std::string kind = s.Text(3);
+      const auto k = ControlKindFromString(kind);
+      if (!k) throw SessionLogError(file.string() + ": unknown control event kind '" + kind + "'");
+      ControlRecord r{U64(s.Int(0)), s.Text(1), s.Text(2), *k, s.Double(4), std::nullopt};
+      if (!s.IsNull(5)) r.error_m = s.Double(5);
+      controls.push_back(std::move(r));
+    }
+  }
+  report.control_events = controls.size();
+  report.controls = ComputeControlStats(controls);
+  {
+    sqlite::Statement s(*db, "SELECT count(*) FROM ownership_changes WHERE session_id = ?1",
+                        "counting the ownership changes");
+    s.Bind(1, id);
+    if (s.Step()) report.ownership_changes = U64(s.Int(0));
+  }
+  db->Exec("COMMIT", "ending the read transaction");
+  return report;
+}
+
+void PrintReport(std::ostream& out, const SessionReport& r) {
+  const SessionSummary& s = r.session;
+  out << "session log " << r.file.string() << ": " << r.sessions_in_file << " session(s), showing #" << s.id << "\n";
+  out << "session #" << s.id << " '" << s.name << "' on DDS domain " << s.domain_id << ", world_server pid " << s.pid
+      << " on " << (s.host.empty() ? "?" : s.host) << "\n";
+  out << "  started " << UtcTime(s.started_unix_ns) << "\n";
+  if (s.ended_unix_ns) {
+    out << "  ended   " << UtcTime(*s.ended_unix_ns)
+        << Format("  (%.3f s)\n", Seconds(s.started_unix_ns, *s.ended_unix_ns));
+  } else {
+    out << "  not ended cleanly (server killed?); last seen " << UtcTime(s.last_seen_unix_ns)
+        << Format("  (%.3f s)\n", Seconds(s.started_unix_ns, s.last_seen_unix_ns));
+  }
+  if (s.dropped_rows > 0) out << "  WARNING: " << s.dropped_rows << " rows were dropped (disk too slow)\n";
+
+  out << "\nmembers: " << r.members.size() << " stay(s)\n";
+  if (!r.members.empty()) {
+    out << Format("  %-16s %-12s %-8s %10s %10s  %s\n", "user", "kind", "device", "joined [s]", "gone [s]", "how");
+    for (const auto& m : r.members) {
+      const std::string gone = m.gone_unix_ns ? Format("%10.3f", Seconds(s.started_unix_ns, *m.gone_unix_ns)) : "         -";
+      out << Format("  %-16s %-12s %-8s %10.3f %s  %s\n", m.member.user.c_str(), m.member.kind.c_str(),
+                    m.member.device.empty() ? "-" : m.member.device.c_str(),
+                    Seconds(s.started_unix_ns, m.joined_unix_ns), gone.c_str(), m.how.c_str());
+    }
+  }
+
+  double total = 0.0;
+  for (const auto& w : r.worlds) total += w.seconds;
+  out << "\ntime in each world\n";
+  if (r.worlds.empty()) out << "  (no scene changes logged)\n";
+  else out << Format("  %-20s %6s %10s %7s  %s\n", "world", "visits", "time [s]", "share", "title");
+  for (const auto& w : r.worlds) {
+    out << Format("  %-20s %6zu %10.3f %6.1f%%  %s\n", w.scene.c_str(), w.visits, w.seconds,
+                  total > 0 ? 100.0 * w.seconds / total : 0.0, w.title.c_str());
+  }
+
+  out << "\ncontrols: " << r.control_events << " event(s); error = distance from the control's target, over the "
+      << "events that carry one; misses/user as in the paper's Table 4 (count = users who tried)\n";
+  if (r.controls.empty()) {
+    out << "  (no control events logged)\n";
+  } else {
+    out << Format("  %-16s %6s %7s %8s %10s %10s %6s %9s %7s\n", "control", "hits", "misses", "errors",
+                  "mean [mm]", "sd [mm]", "users", "miss mean", "miss sd");
+    for (const auto& c : r.controls) {
+      out << Format("  %-16s %6zu %7zu %8zu %10.2f %10.2f %6zu %9.2f %7.2f\n", c.control_id.c_str(), c.hits,
+                    c.misses, c.error_m.n, c.error_m.mean * 1e3, c.error_m.sd * 1e3, c.misses_per_user.n,
+                    c.misses_per_user.mean, c.misses_per_user.sd);
+    }
+  }
+  out << "\nownership changes: " << r.ownership_changes << "\n";
+}
+
+void PrintReportCsv(std::ostream& out, const SessionReport& r) {
+  const SessionSummary& s = r.session;
+  const std::string sid = std::to_string(s.id);
+  auto row = [&](const char* section, const std::string& item, const char* field, const std::string& value) {
+    out << sid << ',' << section << ',' << CsvField(item) << ',' << field << ',' << CsvField(value) << '\n';
+  };
+  out << "session,section,item,field,value\n";
+  row("session", sid, "name", s.name);
+  row("session", sid, "domain_id", std::to_string(s.domain_id));
+  row("session", sid, "host", s.host);
+  row("session", sid, "pid", std::to_string(s.pid));
+  row("session", sid, "started_unix_ns", std::to_string(s.started_unix_ns));
+  row("session", sid, "ended_unix_ns", s.ended_unix_ns ? std::to_string(*s.ended_unix_ns) : "");
+  row("session", sid, "last_seen_unix_ns", std::to_string(s.last_seen_unix_ns));
+  row("session", sid, "duration_s", Format("%.3f", Seconds(s.started_unix_ns, s.end_unix_ns())));
+  row("session", sid, "dropped_rows", std::to_string(s.dropped_rows));
+  std::map<std::string, int> stay_number;
+  for (const auto& m : r.members) {
+    const std::string item = m.member.member_id + "#" + std::to_string(++stay_number[m.member.member_id]);
+    row("member", item, "user", m.member.user);
+    row("member", item, "kind", m.member.kind);
+    row("member", item, "device", m.member.device);
+    row("member", item, "joined_s", Format("%.3f", Seconds(s.started_unix_ns, m.joined_unix_ns)));
+    row("member", item, "gone_s", m.gone_unix_ns ? Format("%.3f", Seconds(s.started_unix_ns, *m.gone_unix_ns)) : "");
+    row("member", item, "how", m.how);
+  }
+  for (const auto& w : r.worlds) {
+    row("world", w.scene, "title", w.title);
+    row("world", w.scene, "visits", std::to_string(w.visits));
+    row("world", w.scene, "seconds", Format("%.3f", w.seconds));
+  }
+  for (const auto& c : r.controls) {
+    row("control", c.control_id, "hits", std::to_string(c.hits));
+    row("control", c.control_id, "misses", std::to_string(c.misses));
+    row("control", c.control_id, "released", std::to_string(c.released));
+    row("control", c.control_id, "error_n", std::to_string(c.error_m.n));
+    row("control", c.control_id, "error_mean_m", Format("%.6g", c.error_m.mean));
+    row("control", c.control_id, "error_sd_m", Format("%.6g", c.error_m.sd));
+    row("control", c.control_id, "users", std::to_string(c.misses_per_user.n));
+    row("control", c.control_id, "misses_per_user_mean", Format("%.6g", c.misses_per_user.mean));
+    row("control", c.control_id, "misses_per_user_sd", Format("%.6g", c.misses_per_user.sd));
+  }
+  row("ownership", sid, "changes", std::to_string(r.ownership_changes));
+}
+
+}  // namespace handshare::world

@@ -1,0 +1,82 @@
+#pragma once
+// The session log's schema, version 1 (PRAGMA user_version = 1, application_id "HSLG").
+// Times are wall-clock ns since the Unix epoch. A change of schema gets a new version number
+// and a migration in OpenSchema; a reader refuses versions newer than it knows.
+namespace handshare::world::schema {
+
+inline constexpr const char* kCreateV1 = R"sql(
+CREATE TABLE IF NOT EXISTS sessions(
+  id                INTEGER PRIMARY KEY,
+  name              TEXT    NOT NULL,            -- the DDS session (partition)
+  domain_id         INTEGER NOT NULL,
+  host              TEXT    NOT NULL,
+  pid               INTEGER NOT NULL,
+  schema_version    INTEGER NOT NULL,
+  started_unix_ns   INTEGER NOT NULL,
+  last_seen_unix_ns INTEGER NOT NULL,            -- heartbeat: the writer's last commit
+  ended_unix_ns     INTEGER,                     -- NULL: not ended cleanly (server killed)
+  dropped_rows      INTEGER NOT NULL DEFAULT 0   -- rows lost because the disk fell behind
+);
+CREATE TABLE IF NOT EXISTS member_events(
+  id         INTEGER PRIMARY KEY,
+  session_id INTEGER NOT NULL REFERENCES sessions(id),
+  unix_ns    INTEGER NOT NULL,
+  change     TEXT    NOT NULL CHECK (change IN ('joined', 'left', 'lost')),
+  member_id  TEXT    NOT NULL,
+  user       TEXT    NOT NULL,
+  kind       TEXT    NOT NULL,                   -- haptic, graphics, audio_guide, world_server
+  device     TEXT    NOT NULL,                   -- sim, hiro, replay, '' for non-haptic nodes
+  pid        INTEGER NOT NULL
+);
+CREATE TABLE IF NOT EXISTS scene_changes(
+  id         INTEGER PRIMARY KEY,
+  session_id INTEGER NOT NULL REFERENCES sessions(id),
+  unix_ns    INTEGER NOT NULL,
+  scene      TEXT    NOT NULL,                   -- world name, e.g. solar_system
+  title      TEXT    NOT NULL
+);
+CREATE TABLE IF NOT EXISTS control_events(
+  id         INTEGER PRIMARY KEY,
+  session_id INTEGER NOT NULL REFERENCES sessions(id),
+  unix_ns    INTEGER NOT NULL,
+  user       TEXT    NOT NULL,
+  control_id TEXT    NOT NULL,
+  kind       TEXT    NOT NULL CHECK (kind IN ('pressed', 'released', 'moved', 'page_turned', 'missed')),
+  value      REAL    NOT NULL,                   -- lever angle [rad], page number, ...
+  error_m    REAL                                -- NULL: not measured
+);
+CREATE TABLE IF NOT EXISTS ownership_changes(
+  id         INTEGER PRIMARY KEY,
+  session_id INTEGER NOT NULL REFERENCES sessions(id),
+  unix_ns    INTEGER NOT NULL,
+  object_id  TEXT    NOT NULL,
+  owner      TEXT    NOT NULL,                   -- '' : free (the world server simulates it)
+  reason     TEXT    NOT NULL
+);
+CREATE INDEX IF NOT EXISTS member_events_by_session ON member_events(session_id, unix_ns);
+CREATE INDEX IF NOT EXISTS scene_changes_by_session ON scene_changes(session_id, unix_ns);
+CREATE INDEX IF NOT EXISTS control_events_by_session ON control_events(session_id, control_id);
+CREATE INDEX IF NOT EXISTS ownership_changes_by_session ON ownership_changes(session_id, unix_ns);
+)sql";
+
+// 0x48534C47 = "HSLG"; PRAGMAs take no parameters, so the numbers are spelled out.
+inline constexpr const char* kStampV1 = "PRAGMA application_id = 1213418567; PRAGMA user_version = 1;";
+
+inline constexpr const char* kInsertSession =
+    "INSERT INTO sessions(name, domain_id, host, pid, schema_version, started_unix_ns, last_seen_unix_ns) "
+    "VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7)";
+inline constexpr const char* kInsertMember =
+    "INSERT INTO member_events(session_id, unix_ns, change, member_id, user, kind, device, pid) "
+    "VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8)";
+inline constexpr const char* kInsertScene =
+    "INSERT INTO scene_changes(session_id, unix_ns, scene, title) VALUES (?1, ?2, ?3, ?4)";
+inline constexpr const char* kInsertControl =
+    "INSERT INTO control_events(session_id, unix_ns, user, control_id, kind, value, error_m) "
+    "VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7)";
+inline constexpr const char* kInsertOwnership =
+    "INSERT INTO ownership_changes(session_id, unix_ns, object_id, owner, reason) VALUES (?1, ?2, ?3, ?4, ?5)";
+inline constexpr const char* kUpdateEnd = "UPDATE sessions SET ended_unix_ns = ?1 WHERE id = ?2";
+inline constexpr const char* kUpdateSeen =
+    "UPDATE sessions SET last_seen_unix_ns = ?1, dropped_rows = ?2 WHERE id = ?3";
+
+}  // namespace handshare::world::schema

@@ -1,0 +1,286 @@
+#include "handshare/world_server/session_report.hpp"
+
+#include <gtest/gtest.h>
+#include <sqlite3.h>
+
+#include <cmath>
+#include <fstream>
+#include <functional>
+#include <sstream>
+
+#include "temp_dir.hpp"
+
+namespace handshare::world {
+namespace {
+
+using testing::TempDir;
+
+constexpr std::uint64_t kT0 = 1'700'000'000'000'000'000ULL;
+constexpr std::uint64_t kSecond = 1'000'000'000ULL;
+
+std::string ErrorOf(const std::function<void()>& f) {
+  try {
+    f();
+  } catch (const SessionLogError& e) {
+    return e.what();
+  }
+  return "<no SessionLogError>";
+}
+
+TEST(Summarize, SampleMeanAndStandardDeviation) {
+  EXPECT_EQ(Summarize({}).n, 0u);
+  const Summary one = Summarize({2.5});
+  EXPECT_EQ(one.n, 1u);
+  EXPECT_DOUBLE_EQ(one.mean, 2.5);
+  EXPECT_DOUBLE_EQ(one.sd, 0.0);
+  // 1, 2, 3, 4: mean 2.5, squared deviations 2.25 + 0.25 + 0.25 + 2.25 = 5, sd = sqrt(5 / 3).
+  const Summary four = Summarize({1.0, 2.0, 3.0, 4.0});
+  EXPECT_DOUBLE_EQ(four.mean, 2.5);
+  EXPECT_NEAR(four.sd, std::sqrt(5.0 / 3.0), 1e-15);
+  // A large offset does not cancel the spread (two-pass): 1e9 + {1, 2, 3, 4}.
+  const Summary offset = Summarize({1e9 + 1, 1e9 + 2, 1e9 + 3, 1e9 + 4});
+  EXPECT_NEAR(offset.sd, std::sqrt(5.0 / 3.0), 1e-6);
+}
+
+// The paper's Table 4 gives, per control, the number of subjects (5) and the mean and standard
+// deviation of their misses: arrow 1.40 / 1.52, book 0.60 / 0.89, button 0.40 / 0.89, lever
+// 3.60 / 1.14. The paper lists no per-subject numbers; these miss counts are one set that gives
+// exactly those summaries (checked by hand: e.g. lever 2,3,4,4,5 -> mean 3.6, sd sqrt(5.2/4)).
+TEST(ComputeControlStats, ReproducesThePapersTable4FromPerUserMisses) {
+  const std::map<std::string, std::vector<int>> misses = {
+      {"arrow", {0, 0, 1, 3, 3}}, {"book", {0, 0, 0, 1, 2}}, {"button", {0, 0, 0, 0, 2}}, {"lever", {2, 3, 4, 4, 5}}};
+  std::vector<ControlRecord> events;
+  std::uint64_t t = kT0;
+  for (const auto& [control, per_user] : misses) {
+    for (std::size_t u = 0; u < per_user.size(); ++u) {
+      const std::string user = "subject" + std::to_string(u + 1);
+      for (int m = 0; m < per_user[u]; ++m) events.push_back({t++, user, control, ControlKind::kMissed, 0.0, 0.02});
+      // "they had to hit each control more than 10 times"
+      for (int h = 0; h < 11; ++h) {
+        events.push_back({t++, user, control, ControlKind::kPressed, 1.0, 0.002});
+        events.push_back({t++, user, control, ControlKind::kReleased, 0.0, std::nullopt});
+      }
+    }
+  }
+  const auto stats = ComputeControlStats(events);
+  ASSERT_EQ(stats.size(), 4u);
+  struct Row {
+    const char* id;
+    double mean, sd;
+    std::size_t misses;
+  };
+  const Row table4[] = {{"arrow", 1.40, 1.52, 7}, {"book", 0.60, 0.89, 3}, {"button", 0.40, 0.89, 2}, {"lever", 3.60, 1.14, 18}};
+  for (std::size_t i = 0; i < 4; ++i) {
+    SCOPED_TRACE(table4[i].id);
+    EXPECT_EQ(stats[i].control_id, table4[i].id);
+    EXPECT_EQ(stats[i].misses_per_user.n, 5u);
+    EXPECT_NEAR(stats[i].misses_per_user.mean, table4[i].mean, 0.005);  // the table rounds to 2 decimals
+    EXPECT_NEAR(stats[i].misses_per_user.sd, table4[i].sd, 0.005);
+    EXPECT_EQ(stats[i].hits, 55u);
+    EXPECT_EQ(stats[i].released, 55u);
+    EXPECT_EQ(stats[i].misses, table4[i].misses);
+    EXPECT_EQ(stats[i].error_m.n, 55u + table4[i].misses);  // released carries no error
+  }
+}
+
+TEST(ComputeControlStats, ErrorsOfHitsAndMissesAndUsersWhoNeverMissed) {
+  const std::vector<ControlRecord> events = {
+      {kT0, "alice", "lever", ControlKind::kMoved, 0.3, 0.001},
+      {kT0, "alice", "lever", ControlKind::kMoved, 0.3, 0.002},
+      {kT0, "bob", "lever", ControlKind::kMissed, 0.0, 0.003},
+      {kT0, "bob", "lever", ControlKind::kPageTurned, 0.0, 0.004},
+      {kT0, "bob", "lever", ControlKind::kPressed, 0.0, std::nullopt},  // no error measured
+      {kT0, "carol", "book", ControlKind::kPageTurned, 3.0, std::nullopt},
+  };
+  const auto stats = ComputeControlStats(events);
+  ASSERT_EQ(stats.size(), 2u);
+  const ControlStats& book = stats[0];
+  EXPECT_EQ(book.control_id, "book");
+  EXPECT_EQ(book.hits, 1u);
+  EXPECT_EQ(book.error_m.n, 0u);
+  const ControlStats& lever = stats[1];
+  EXPECT_EQ(lever.hits, 4u);
+  EXPECT_EQ(lever.misses, 1u);
+  EXPECT_EQ(lever.error_m.n, 4u);
+  EXPECT_NEAR(lever.error_m.mean, 0.0025, 1e-15);
+  EXPECT_NEAR(lever.error_m.sd, 0.001 * std::sqrt(5.0 / 3.0), 1e-15);
+  EXPECT_EQ(lever.misses_per_user.n, 2u);  // alice (0 misses) counts
+  EXPECT_DOUBLE_EQ(lever.misses_per_user.mean, 0.5);
+}
+
+TEST(ComputeWorldTimes, EachWorldLastsUntilTheNextChangeOrTheEnd) {
+  const std::vector<SceneChange> changes = {
+      {kT0 + 25 * kSecond, "start_menu", "Start menu"},
+      {kT0, "start_menu", "Start menu"},  // out of order on purpose
+      {kT0 + 10 * kSecond, "solar_system", "Solar system"},
+      {kT0 + 20 * kSecond, "solar_system", "Solar system (reloaded)"},  // a reload, not a visit
+      {kT0 + 40 * kSecond, "dinosaur", "after the end: ignored"},
+  };
+  const auto worlds = ComputeWorldTimes(changes, kT0 + 30 * kSecond);
+  ASSERT_EQ(worlds.size(), 2u);
+  EXPECT_EQ(worlds[0].scene, "start_menu");
+  EXPECT_EQ(worlds[0].visits, 2u);
+  EXPECT_NEAR(worlds[0].seconds, 10.0 + 5.0, 1e-9);
+  EXPECT_EQ(worlds[1].scene, "solar_system");
+  EXPECT_EQ(worlds[1].visits, 1u);
+  EXPECT_NEAR(worlds[1].seconds, 15.0, 1e-9);
+  EXPECT_EQ(worlds[1].title, "Solar system (reloaded)");
+  EXPECT_TRUE(ComputeWorldTimes({}, kT0).empty());
+}
+
+TEST(ComputeStays, PairsJoinsWithLeavesAndLosses) {
+  const Member alice{"s/alice", "alice", "haptic", "sim", 1};
+  const Member bob{"s/bob", "bob", "haptic", "hiro", 2};
+  const Member screen{"s/screen", "screen", "graphics", "", 3};
+  const auto stays = ComputeStays({
+      {kT0 + 1, MemberChange::kJoined, alice},
+      {kT0 + 2, MemberChange::kJoined, bob},
+      {kT0 + 3, MemberChange::kLeft, alice},
+      {kT0 + 4, MemberChange::kJoined, alice},  // rejoins
+      {kT0 + 5, MemberChange::kLost, bob},
+      {kT0 + 6, MemberChange::kJoined, screen},
+      {kT0 + 7, MemberChange::kLeft, screen},
+      {kT0 + 8, MemberChange::kLeft, screen},  // a second leave changes nothing
+  });
+  ASSERT_EQ(stays.size(), 4u);
+  EXPECT_EQ(stays[0].member.user, "alice");
+  EXPECT_EQ(stays[0].how, "left");
+  EXPECT_EQ(stays[0].gone_unix_ns, kT0 + 3);
+  EXPECT_EQ(stays[1].member.user, "bob");
+  EXPECT_EQ(stays[1].how, "lost");
+  EXPECT_EQ(stays[2].member.user, "alice");
+  EXPECT_EQ(stays[2].how, "present at end");
+  EXPECT_FALSE(stays[2].gone_unix_ns);
+  EXPECT_EQ(stays[3].gone_unix_ns, kT0 + 7);
+}
+
+// Writes two sessions with SessionLog and reads them back through ReadReport.
+class ReportFromFile : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    {
+      SessionLog log(file_, SessionStart{"first", 121, "host1", 10, kT0});
+      log.OnSceneChange("start_menu", "Start menu", kT0);
+      log.End(kT0 + 5 * kSecond);
+    }
+    SessionLog log(file_, SessionStart{"second", 122, "host2", 20, kT0 + 100 * kSecond});
+    const Member alice{"second/alice", "alice", "haptic", "sim", 21};
+    log.OnSceneChange("start_menu", "Start menu", kT0 + 100 * kSecond);
+    log.OnMember(MemberChange::kJoined, alice, kT0 + 101 * kSecond);
+    log.OnSceneChange("solar_system", "Solar system", kT0 + 110 * kSecond);
+    log.OnControlEvent({kT0 + 111 * kSecond, "alice", "lever", ControlKind::kMissed, 0.0, 0.010});
+    log.OnControlEvent({kT0 + 112 * kSecond, "alice", "lever", ControlKind::kMoved, 0.4, 0.002});
+    log.OnControlEvent({kT0 + 113 * kSecond, "alice", "button", ControlKind::kPressed, 1.0, 0.001});
+    log.OnOwnership("ball", "alice", "granted", kT0 + 114 * kSecond);
+    log.OnMember(MemberChange::kLeft, alice, kT0 + 115 * kSecond);
+    log.End(kT0 + 120 * kSecond);
+  }
+  TempDir dir_;
+  std::filesystem::path file_ = dir_ / "log.sqlite";
+};
+
+TEST_F(ReportFromFile, TheNewestSessionByDefault) {
+  const SessionReport r = ReadReport(file_);
+  EXPECT_EQ(r.sessions_in_file, 2u);
+  EXPECT_EQ(r.session.id, 2);
+  EXPECT_EQ(r.session.name, "second");
+  EXPECT_EQ(r.session.domain_id, 122);
+  ASSERT_TRUE(r.session.ended_unix_ns);
+  EXPECT_EQ(*r.session.ended_unix_ns, kT0 + 120 * kSecond);
+  ASSERT_EQ(r.worlds.size(), 2u);
+  EXPECT_NEAR(r.worlds[0].seconds, 10.0, 1e-9);
+  EXPECT_NEAR(r.worlds[1].seconds, 10.0, 1e-9);
+  ASSERT_EQ(r.members.size(), 1u);
+  EXPECT_EQ(r.members[0].how, "left");
+  ASSERT_EQ(r.controls.size(), 2u);
+  EXPECT_EQ(r.controls[1].control_id, "lever");
+  EXPECT_EQ(r.controls[1].hits, 1u);
+  EXPECT_EQ(r.controls[1].misses, 1u);
+  EXPECT_NEAR(r.controls[1].error_m.mean, 0.006, 1e-12);
+  EXPECT_EQ(r.control_events, 3u);
+  EXPECT_EQ(r.ownership_changes, 1u);
+
+  std::ostringstream text;
+  PrintReport(text, r);
+  const std::string t = text.str();
+  EXPECT_NE(t.find("session #2 'second' on DDS domain 122"), std::string::npos) << t;
+  EXPECT_NE(t.find("(20.000 s)"), std::string::npos) << t;
+  EXPECT_NE(t.find("solar_system"), std::string::npos) << t;
+  EXPECT_NE(t.find("  lever                 1       1        2       6.00       5.66      1      1.00    0.00"),
+            std::string::npos)
+      << t;
+  std::ostringstream csv;
+  PrintReportCsv(csv, r);
+  const std::string c = csv.str();
+  EXPECT_EQ(c.rfind("session,section,item,field,value\n", 0), 0u) << c;
+  EXPECT_NE(c.find("2,control,lever,misses,1\n"), std::string::npos) << c;
+  EXPECT_NE(c.find("2,world,solar_system,seconds,10.000\n"), std::string::npos) << c;
+  EXPECT_NE(c.find("2,member,second/alice#1,how,left\n"), std::string::npos) << c;
+  EXPECT_NE(c.find("2,session,2,duration_s,20.000\n"), std::string::npos) << c;
+}
+
+TEST_F(ReportFromFile, AnEarlierSessionByIdAndAnUnknownOne) {
+  const SessionReport r = ReadReport(file_, 1);
+  EXPECT_EQ(r.session.name, "first");
+  ASSERT_EQ(r.worlds.size(), 1u);
+  EXPECT_NEAR(r.worlds[0].seconds, 5.0, 1e-9);
+  EXPECT_TRUE(r.controls.empty());
+  const std::string error = ErrorOf([&] { ReadReport(file_, 3); });
+  EXPECT_NE(error.find("no session 3 (sessions 1..2)"), std::string::npos) << error;
+  EXPECT_EQ(ListSessions(file_).size(), 2u);
+}
+
+TEST_F(ReportFromFile, ASessionThatWasNotEndedRunsUntilItsLastHeartbeat) {
+  {
+    sqlite3* db = nullptr;
+    ASSERT_EQ(sqlite3_open(file_.c_str(), &db), SQLITE_OK);
+    const std::string sql = "UPDATE sessions SET ended_unix_ns = NULL, last_seen_unix_ns = " +
+                            std::to_string(kT0 + 130 * kSecond) + " WHERE id = 2";
+    EXPECT_EQ(sqlite3_exec(db, sql.c_str(), nullptr, nullptr, nullptr), SQLITE_OK);
+    sqlite3_close(db);
+  }
+  const SessionReport r = ReadReport(file_);
+  EXPECT_FALSE(r.session.ended_unix_ns);
+  EXPECT_NEAR(r.worlds[1].seconds, 20.0, 1e-9);
+  std::ostringstream text;
+  PrintReport(text, r);
+  EXPECT_NE(text.str().find("not ended cleanly"), std::string::npos) << text.str();
+}
+
+TEST(ReadReport, MissingEmptyForeignAndCorruptFilesSayWhat) {
+  TempDir dir;
+  EXPECT_NE(ErrorOf([&] { ReadReport(dir / "absent.sqlite"); }).find("absent.sqlite: no such file"),
+            std::string::npos);
+  EXPECT_NE(ErrorOf([&] { ReadReport(dir.path()); }).find("is a directory"), std::string::npos);
+
+  const auto empty = dir / "empty.sqlite";
+  std::ofstream(empty).close();
+  EXPECT_NE(ErrorOf([&] { ReadReport(empty); }).find("empty file"), std::string::npos);
+
+  const auto text = dir / "text.sqlite";
+  std::ofstream(text) << "hello, not a database at all, but long enough to look like a header ...........";
+  std::string error = ErrorOf([&] { ReadReport(text); });
+  EXPECT_NE(error.find(text.string()), std::string::npos) << error;
+  EXPECT_NE(error.find("not a database"), std::string::npos) << error;
+
+  // A real log whose pages after the header are overwritten: the header still says "handshare
+  // log", the tables do not read.
+  const auto broken = dir / "broken.sqlite";
+  {
+    SessionLog log(broken, SessionStart{"x", 120, "h", 1, kT0});
+    log.OnSceneChange("start_menu", "", kT0);
+  }
+  ASSERT_GT(std::filesystem::file_size(broken), 4096u);
+  {
+    std::fstream f(broken, std::ios::in | std::ios::out | std::ios::binary);
+    f.seekp(100);
+    const std::string garbage(8000, '\x5a');
+    f.write(garbage.data(), static_cast<std::streamsize>(garbage.size()));
+  }
+  error = ErrorOf([&] { ReadReport(broken); });
+  EXPECT_NE(error.find(broken.string()), std::string::npos) << error;
+  EXPECT_NE(error.find("malformed"), std::string::npos) << error;
+}
+
+}  // namespace
+}  // namespace handshare::world
