@@ -25,6 +25,12 @@ struct DeviceCapabilities {
   int fingers = kFingers;
   double max_fingertip_force_N = 3.5;  // HIRO II: about 3.5 N at the fingertip
   double fingertip_radius_m = 0.008;
+  /// Bound on how fast a fingertip force may change [N/s] (the safety stage's rate bound).
+  double max_force_rate_N_per_s = 2000.0;
+  /// Native control rate of the device [Hz] (HIRO II: 1 kHz).
+  double control_rate_Hz = 1000.0;
+  int hand_joints = 0;  // actuated joints in the hand (HIRO II: 15); 0 for scripted hands
+  int arm_joints = 0;   // actuated joints in the arm (HIRO II: 6)
 };
 
 class Device {

@@ -1,0 +1,105 @@
+#pragma once
+/// HIRO II behind haptic::Device: reads joint angles and force sensors through HiroHardware,
+/// reports the hand base and fingertips, and turns commanded fingertip forces into joint
+/// torques ("redundant force control": fingers and arm together):
+///   fingers  tau_f = J_f^T f_ctl + g_f(q) - D_f qd + limit springs,
+///            f_ctl = f_cmd + Kp (f_cmd - f_meas) + Ki integral(f_cmd - f_meas)   (PI on the
+///            force sensors, anti-windup clamp);
+///   arm      tau_a = J_H^T [m; f] + sum_i J_Ei^T f_cmd_i + g_a(q) - D_a qd + limit springs,
+///            [m; f] a Cartesian spring-damper that moves the hand base so each finger drifts
+///            back to its optimum pose opposite the user's fingertip (mean fingertip offset
+///            from the optimum-pose fingertips), and keeps the hand level;
+///   both     saturated at the joint torque limits, the force part scaled down as a whole so
+///            its direction is kept (gravity and limit terms first).
+/// Read() and Command() are noexcept and allocation-free.
+#include <filesystem>
+#include <memory>
+
+#include "handshare/haptic/device.hpp"
+#include "handshare/hiro/hiro_hardware.hpp"
+#include "handshare/hiro/hiro_model.hpp"
+
+namespace handshare::hiro {
+
+struct HiroControlGains {
+  double force_kp = 0.5;                    // proportional gain on the force error [-]
+  double force_ki_per_s = 30.0;             // integral gain [1/s]
+  double force_integral_limit_N_s = 0.05;   // anti-windup bound on the integral term
+  double finger_damping_N_m_s_per_rad = 0.002;
+  double hand_stiffness_N_per_m = 300.0;    // hand base towards the fingers' optimum
+  double hand_damping_N_s_per_m = 40.0;
+  double hand_rot_stiffness_N_m_per_rad = 20.0;
+  double hand_rot_damping_N_m_s_per_rad = 2.0;
+  double arm_damping_N_m_s_per_rad = 0.5;
+  double limit_margin_rad = 0.05;           // soft joint-limit spring starts this far inside
+  double limit_stiffness_finger_N_m_per_rad = 2.0;
+  double limit_stiffness_arm_N_m_per_rad = 200.0;
+  double velocity_filter_Hz = 100.0;        // low-pass on encoder-difference velocities
+};
+
+/// Per-finger controller state, exposed for tests and telemetry.
+struct HiroFingerStatus {
+  Eigen::Vector3d f_measured_E_W = Eigen::Vector3d::Zero();  // device on user, from sensor [N]
+  Eigen::Vector3d f_command_E_W = Eigen::Vector3d::Zero();
+  FingerVector tau_N_m = FingerVector::Zero();               // sent to the motors
+  double force_scale = 1.0;  // 1: force part fully delivered; < 1: saturated
+};
+
+class HiroDevice final : public haptic::Device {
+ public:
+  /// Takes the model and the hardware it drives. Allocates; setup only.
+  HiroDevice(const HiroModel& model, std::unique_ptr<HiroHardware> hardware, HiroControlGains gains = {});
+
+  haptic::DeviceCapabilities capabilities() const noexcept override;
+  /// Syncs the hardware at t_s (the simulated plant integrates up to t_s here), reads
+  /// encoders and sensors, computes kinematics. out.valid is false if the hardware cannot be
+  /// read, a value is not finite, or a joint reads far outside its range. Real-time safe.
+  void Read(double t_s, haptic::DeviceReading& out) noexcept override;
+  /// Runs the force and arm controllers on the last Read() and writes motor torques. After
+  /// an invalid Read() only the last good gravity torques are sent. Real-time safe.
+  void Command(const std::array<Eigen::Vector3d, haptic::kFingers>& f_E_W) noexcept override;
+  const char* name() const noexcept override { return "hiro"; }
+
+  const HiroModel& model() const noexcept { return model_; }
+  HiroHardware& hardware() noexcept { return *hardware_; }
+  const std::array<HiroFingerStatus, kFingerCount>& finger_status() const noexcept { return status_; }
+  const ArmVector& tau_arm_N_m() const noexcept { return tau_arm_; }
+  const Eigen::Vector3d& p_WB() const noexcept { return p_WB_; }
+  void set_p_WB(const Eigen::Vector3d& p_WB) noexcept { p_WB_ = p_WB; }
+
+ private:
+  HiroModel model_;
+  std::unique_ptr<HiroHardware> hardware_;
+  HiroControlGains gains_;
+  Eigen::Vector3d p_WB_ = Eigen::Vector3d::Zero();
+
+  // From the last Read().
+  bool valid_ = false;
+  bool have_prev_ = false;
+  double t_prev_s_ = 0.0, dt_s_ = 0.0;
+  ArmJointArray enc_arm_{};
+  HandJointArray enc_hand_{};
+  ArmVector q_arm_ = ArmVector::Zero(), qd_arm_ = ArmVector::Zero();
+  std::array<FingerVector, kFingerCount> q_finger_{}, qd_finger_{};
+  ArmKinematics arm_;
+  std::array<FingerKinematics, kFingerCount> fingers_{};
+  std::array<Eigen::Vector3d, kFingerCount> p_WE_{};
+  std::array<SensorWrench, kFingerCount> wrench_{};
+
+  // Controller state.
+  std::array<Eigen::Vector3d, kFingerCount> force_integral_{};
+  ArmVector tau_arm_ = ArmVector::Zero(), tau_gravity_arm_ = ArmVector::Zero();
+  std::array<FingerVector, kFingerCount> tau_gravity_finger_{};
+  std::array<HiroFingerStatus, kFingerCount> status_{};
+};
+
+/// The HIRO II driver on the simulated plant: loads the config, builds SimulatedHiro and the
+/// device, with the arm base placed as the options say. Throws ConfigError.
+std::unique_ptr<HiroDevice> MakeSimulatedHiroDevice(const std::filesystem::path& config,
+                                                    const HiroSimOptions& sim,
+                                                    const HiroControlGains& gains = {});
+
+/// Same, as a haptic::Device for the node (`haptic_node --device hiro`).
+std::unique_ptr<haptic::Device> MakeHiroDevice(const std::filesystem::path& config, const HiroSimOptions& sim);
+
+}  // namespace handshare::hiro

@@ -1,0 +1,127 @@
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "allocation_counter.hpp"
+#include "handshare/hiro/hiro_device.hpp"
+
+namespace handshare::hiro {
+namespace {
+
+HiroSimOptions Options(const std::string& script) {
+  HiroSimOptions o;
+  o.script = haptic::HandScript::Parse(script, "test script");
+  return o;
+}
+
+TEST(HiroLimits, SaturationKeepsTheTaskDirection) {
+  const Eigen::Vector3d max(0.81, 0.43, 0.2);
+  const Eigen::Vector3d fixed(0.05, -0.1, 0.02);
+  const Eigen::Vector3d task(0.6, 0.9, -0.3);  // joint 2 would need -0.1 + 0.9 = 0.8 > 0.43
+  Eigen::Vector3d out;
+  const double s = SaturateTorque<3>(fixed, task, max, out);
+  EXPECT_NEAR(s, (0.43 + 0.1) / 0.9, 1e-12);  // joint 2 is the binding one
+  EXPECT_NEAR(out[1], 0.43, 1e-12);
+  EXPECT_TRUE((out - fixed).normalized().isApprox(task.normalized(), 1e-12));
+  for (int i = 0; i < 3; ++i) EXPECT_LE(std::abs(out[i]), max[i] + 1e-15);
+  // Inside the limits: untouched.
+  EXPECT_DOUBLE_EQ(SaturateTorque<3>(fixed, 0.1 * task, max, out), 1.0);
+  EXPECT_TRUE(out.isApprox(fixed + 0.1 * task));
+  // Fixed part alone beyond a limit: clipped per joint, still within limits.
+  EXPECT_DOUBLE_EQ(SaturateTorque<3>(Eigen::Vector3d(2.0, 0, 0), task, max, out), 0.0);
+  EXPECT_DOUBLE_EQ(out[0], 0.81);
+}
+
+TEST(HiroLimits, FingerIkStaysInTheJointRanges) {
+  const HiroModel m = HiroModel::Load(HANDSHARE_HIRO_CONFIG);
+  for (const FingerSpec& f : m.finger) {
+    FingerVector q = f.q_optimum_rad;
+    // Far out of reach: the solver must end at the boundary of the range, not beyond.
+    const double err = SolveFingerIk(f, f.p_HF + Eigen::Vector3d(0.3, -0.2, -0.3), q);
+    EXPECT_GT(err, 0.1);
+    for (int j = 0; j < kFingerJoints; ++j) {
+      EXPECT_GE(q[j], f.joint[j].min_rad);
+      EXPECT_LE(q[j], f.joint[j].max_rad);
+    }
+    // Reachable: solved to 1e-9 m.
+    q = f.q_optimum_rad;
+    const Eigen::Vector3d target = FingerFk(f, FingerVector(0.1, 0.5, 0.7)).p_HE;
+    EXPECT_LT(SolveFingerIk(f, target, q), 1e-9);
+  }
+}
+
+// Closed loop on the simulated plant with the largest forces the device takes, turning in
+// every direction, while the user's hand wanders off further than the fingers reach: every
+// torque the driver writes is within the motor limits, saturation happens (the force part is
+// scaled), and no joint leaves its range.
+TEST(HiroLimits, ClosedLoopTorquesAndJointsStayWithinLimits) {
+  const char* script = "start 0 0 0\nhold 0.5\nmove 0.3 0.10 0.05 0.08 grip 1\nmove 0.3 -0.12 0.1 -0.1 grip 0\nhold 1\n";
+  auto device = MakeSimulatedHiroDevice(HANDSHARE_HIRO_CONFIG, Options(script));
+  auto& plant = static_cast<SimulatedHiro&>(device->hardware());
+  const HiroModel& m = device->model();
+  haptic::DeviceReading reading;
+  std::array<Eigen::Vector3d, haptic::kFingers> f{};
+  int saturated_steps = 0;
+  for (int n = 1; n <= 3000; ++n) {
+    const double t = n * 1e-3;
+    device->Read(t, reading);
+    ASSERT_TRUE(reading.valid) << "t=" << t;
+    for (int i = 0; i < haptic::kFingers; ++i) {
+      const double a = 7.0 * t + i;
+      f[i] = 3.5 * Eigen::Vector3d(std::cos(a), std::sin(a) * std::cos(3 * t), std::sin(a) * std::sin(3 * t));
+    }
+    device->Command(f);
+    for (int i = 0; i < kFingerCount; ++i) {
+      const auto& st = device->finger_status()[i];
+      if (st.force_scale < 1.0) ++saturated_steps;
+      for (int j = 0; j < kFingerJoints; ++j) {
+        ASSERT_LE(std::abs(st.tau_N_m[j]), m.finger[i].joint[j].max_torque_N_m + 1e-12);
+        const double q = plant.q_finger_rad()[i][j];
+        ASSERT_GE(q, m.finger[i].joint[j].min_rad);
+        ASSERT_LE(q, m.finger[i].joint[j].max_rad);
+      }
+    }
+    for (int j = 0; j < kArmJoints; ++j) {
+      ASSERT_LE(std::abs(device->tau_arm_N_m()[j]), m.arm.joint[j].max_torque_N_m + 1e-12);
+      ASSERT_GE(plant.q_arm_rad()[j], m.arm.joint[j].min_rad);
+      ASSERT_LE(plant.q_arm_rad()[j], m.arm.joint[j].max_rad);
+    }
+  }
+  EXPECT_GT(saturated_steps, 0) << "the case should drive some finger into torque saturation";
+}
+
+TEST(HiroDevice, ReportsCapabilitiesAndAValidReading) {
+  auto device = MakeSimulatedHiroDevice(HANDSHARE_HIRO_CONFIG, Options("start 0.1 0.2 0.3\n"));
+  const auto caps = device->capabilities();
+  EXPECT_STREQ(device->name(), "hiro");
+  EXPECT_EQ(caps.fingers, 5);
+  EXPECT_DOUBLE_EQ(caps.max_fingertip_force_N, 3.5);
+  EXPECT_EQ(caps.hand_joints, 15);
+  EXPECT_EQ(caps.arm_joints, 6);
+  haptic::DeviceReading r;
+  device->Read(0.001, r);
+  EXPECT_TRUE(r.valid);
+  // The device's fingertips start on the user's scripted fingertips (solved at setup); the
+  // thumb may be off where its range does not reach, the others are within 1 mm.
+  const auto tips = haptic::SimFingertips(haptic::HandPose{Eigen::Vector3d(0.1, 0.2, 0.3)});
+  for (int i = 1; i < kFingerCount; ++i) EXPECT_LT((r.p_WE[i] - tips[i]).norm(), 1e-3) << "finger " << i;
+  EXPECT_NEAR(r.q_WH_wxyz.norm(), 1.0, 1e-12);
+}
+
+TEST(HiroDevice, ReadAndCommandDoNotAllocate) {
+  auto device = MakeSimulatedHiroDevice(HANDSHARE_HIRO_CONFIG, Options("start 0 0 0\nmove 1 0.05 0 0 grip 0.5\n"));
+  haptic::DeviceReading r;
+  std::array<Eigen::Vector3d, haptic::kFingers> f{};
+  device->Read(0.001, r);
+  device->Command(f);
+  const long before = test::AllocationCount();
+  for (int n = 2; n < 2000; ++n) {
+    device->Read(n * 1e-3, r);
+    for (auto& fi : f) fi = Eigen::Vector3d(0, 0, 1.0 + std::sin(n * 0.01));
+    device->Command(f);
+  }
+  EXPECT_EQ(test::AllocationCount() - before, 0);
+}
+
+}  // namespace
+}  // namespace handshare::hiro
