@@ -437,6 +437,19 @@ TEST(ControlSet, BuiltFromTheSceneWithActions) {
   EXPECT_TRUE(to_mars);
 }
 
+TEST(ControlSet, EveryProjectSceneBuildsItsControls) {
+  for (const char* name : {"start_menu", "solar_system", "dinosaur", "microscopic"}) {
+    const scene::Scene s = scene::LoadSceneByName(name, std::filesystem::path(HANDSHARE_SOURCE_ASSETS) / "scenes");
+    ControlSet set = MakeControls(s);
+    ASSERT_EQ(set.size(), s.controls.size()) << name;
+    EXPECT_GE(set.size(), 2u) << name;  // every world has a way on and a way back
+    for (std::size_t i = 0; i < set.size(); ++i) {
+      EXPECT_EQ(set[i].id(), s.controls[i].id);
+      EXPECT_EQ(set[i].type(), s.controls[i].type);
+    }
+  }
+}
+
 TEST(ControlSet, StepDoesNotAllocate) {
   const scene::Scene s = scene::LoadSceneByName("start_menu", std::filesystem::path(HANDSHARE_SOURCE_ASSETS) / "scenes");
   ControlSet set = MakeControls(s);

@@ -386,7 +386,7 @@ SceneObject ParseObject(const Context& c, const json& j, const std::string& path
     o.half_extent_m = c.Vector<3>(c.Require(j, "half_extent_m", path), path + "half_extent_m", 1e-4, 10.0);
   } else if (shape == "mesh") {
     o.shape = Shape::kMesh;
-    o.mesh_uri = c.String(j, "mesh", path);
+    o.mesh_uri = c.String(j, "mesh", path, 127);  // idl: string<128> mesh_uri
     o.mesh_scale = Scale(c, j, path);
     o.mesh_path = ResolveMesh(file, o.mesh_uri);
     o.mesh = MeshOf(c, path + "mesh", o.mesh_path, o.mesh_scale, options.load_meshes);
@@ -523,10 +523,10 @@ ControlSpec ParseControl(const Context& c, const json& j, const std::string& pat
   s.approach_margin_m = c.Number(j, "approach_margin_m", path, 0.0, 0.5, s.approach_margin_m);
   s.max_force_N = c.Number(j, "max_force_N", path, 0.0, 20.0, s.max_force_N);
   if (j.contains("mesh")) {
-    s.mesh_uri = c.String(j, "mesh", path);
+    s.mesh_uri = c.String(j, "mesh", path, 127);
     s.mesh_scale = Scale(c, j, path);
     s.mesh_path = ResolveMesh(file, s.mesh_uri);
-    MeshOf(c, path + "mesh", s.mesh_path, s.mesh_scale, options.load_meshes);
+    s.mesh = MeshOf(c, path + "mesh", s.mesh_path, s.mesh_scale, options.load_meshes);
   }
   const std::filesystem::path scene_dir = file.parent_path();
   if (s.type == ControlType::kButton || s.type == ControlType::kArrow) {
@@ -580,7 +580,7 @@ ControlSpec ParseControl(const Context& c, const json& j, const std::string& pat
 }
 
 // The visual of a control, so that nodes that only draw objects show it.
-SceneObject ControlVisual(const ControlSpec& s, const LoadOptions& options) {
+SceneObject ControlVisual(const ControlSpec& s) {
   SceneObject o;
   o.id = s.id;
   o.kind = ObjectKind::kControl;
@@ -594,7 +594,7 @@ SceneObject ControlVisual(const ControlSpec& s, const LoadOptions& options) {
     o.mesh_uri = s.mesh_uri;
     o.mesh_path = s.mesh_path;
     o.mesh_scale = s.mesh_scale;
-    if (options.load_meshes) o.mesh = std::make_shared<const Mesh>(LoadMesh(s.mesh_path, s.mesh_scale));
+    o.mesh = s.mesh;
   } else {
     // A box centred on the control's body: below the top face of buttons, arrows and books,
     // above the hinge of a lever.
@@ -658,9 +658,14 @@ Scene LoadScene(const std::filesystem::path& file, const LoadOptions& options) {
       const std::string path = "controls[" + std::to_string(i) + "].";
       ControlSpec spec = ParseControl(c, controls[i], path, file, options);
       if (!ids.insert(spec.id).second) c.Fail(path + "id", "duplicate id '" + spec.id + "'");
-      s.objects.push_back(ControlVisual(spec, options));
+      s.objects.push_back(ControlVisual(spec));
       s.controls.push_back(std::move(spec));
     }
+  }
+  // The scene-state message (idl: sequence<SceneObject, 64>) carries objects and control
+  // visuals together.
+  if (s.objects.size() > 64) {
+    c.Fail("controls", std::to_string(s.objects.size()) + " objects and controls together; at most 64");
   }
   const json& messages = c.Require(root, "messages", "");
   if (!messages.is_array() || messages.empty()) c.Fail("messages", "expected a non-empty array");

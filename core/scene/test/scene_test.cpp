@@ -275,6 +275,23 @@ TEST(Scene, ControlErrorsNameTheField) {
   EXPECT_EQ(ok, "");
 }
 
+TEST(Scene, ObjectsAndControlsFitTheSceneStateMessage) {
+  // 60 objects + 5 controls > 64 entries of the scene-state message.
+  std::string text = std::string(R"({"name": "x", )") + kMsg + R"(, "objects": [)";
+  for (int i = 0; i < 60; ++i) {
+    text += (i ? "," : "") + std::string(R"({"id": "o)") + std::to_string(i) +
+            R"(", "kind": "rigid", "shape": "sphere", "radius_m": 0.01, "position_m": [0,0,0]})";
+  }
+  text += R"(], "controls": [)";
+  for (int i = 0; i < 5; ++i) {
+    text += (i ? "," : "") + std::string(R"({"id": "b)") + std::to_string(i) +
+            R"(", "type": "button", "position_m": [0,0,0]})";
+  }
+  text += "]}";
+  const std::string err = ErrorOf("many", text);
+  EXPECT_NE(err.find("field 'controls': 65 objects and controls together; at most 64"), std::string::npos) << err;
+}
+
 TEST(Scene, BadMeshNamesSceneFieldAndMeshPath) {
   const auto root = TempAssets();
   std::ofstream(root / "meshes" / "empty.obj").close();

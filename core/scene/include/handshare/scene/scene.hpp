@@ -171,6 +171,7 @@ struct ControlSpec {
   std::string mesh_uri;  ///< optional visual
   std::filesystem::path mesh_path;
   Eigen::Vector3d mesh_scale = Eigen::Vector3d::Ones();
+  std::shared_ptr<const Mesh> mesh;  ///< the loaded visual, in C
   double approach_margin_m = 0.03;  ///< approach zone around the control (miss detection)
   double max_force_N = 3.5;         ///< per fingertip
 
