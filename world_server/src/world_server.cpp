@@ -56,13 +56,7 @@ std::string HostName() {
 }
 
 WorldServer::WorldServer(WorldServerConfig config)
-    : config_(std::move(config)), start_(std::chrono::steady_clock::now()) {
-  if (!config_.log_file.empty()) {
-    log_ = std::make_unique<SessionLog>(
-        config_.log_file, SessionStart{config_.where.session, config_.where.domain_id, HostName(),
-                                       static_cast<std::int64_t>(getpid()), common::UnixNowNs()});
-  }
-}
+    : config_(std::move(config)), start_(std::chrono::steady_clock::now()) {}
 
 WorldServer::~WorldServer() = default;
 
@@ -110,6 +104,13 @@ int WorldServer::Run() {
   using Clock = std::chrono::steady_clock;
   start_ = Clock::now();
   const scene::Scene scene = scene::LoadSceneByName(config_.scene);
+  // The log opens once the scene is known to load (a bad scene name leaves no empty session
+  // behind) and before any DDS entity exists (a bad log file keeps us out of the session).
+  if (!config_.log_file.empty() && !log_) {
+    log_ = std::make_unique<SessionLog>(
+        config_.log_file, SessionStart{config_.where.session, config_.where.domain_id, HostName(),
+                                       static_cast<std::int64_t>(getpid()), common::UnixNowNs()});
+  }
 
   dds::Participant participant(config_.where.domain_id, config_.where.session, "world_server", config_.where.qos_file);
   auto scene_writer = dds::MakeWriter<msg::SceneState>(participant, dds::topics::kSceneState);

@@ -124,4 +124,25 @@ execute_process(
   RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err TIMEOUT 60)
 expect_rc("${rc}" 1 "world_server --log on a corrupt file")
 expect_in("${err}" "not a database")
+
+# 5. A killed server (execute_process's timeout kills it) leaves a readable log whose session
+#    has no end: the report runs it until the writer's last heartbeat (once a second).
+set(killed_log "${WORK}/killed.sqlite")
+execute_process(
+  COMMAND "${WORLD_SERVER}" --domain ${DOMAIN} --session killed --duration 60 --log "${killed_log}"
+  RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err TIMEOUT 3)
+if(rc EQUAL 0)
+  message(FATAL_ERROR "world_server was not killed: rc ${rc}\n${out}")
+endif()
+find_program(FASTDDS fastdds)
+if(FASTDDS)  # the killed participant's shared-memory segments (only unused ones are removed)
+  execute_process(COMMAND "${FASTDDS}" shm clean OUTPUT_QUIET ERROR_QUIET)
+endif()
+execute_process(COMMAND "${SESSION_REPORT}" "${killed_log}" --csv RESULT_VARIABLE rc OUTPUT_VARIABLE csv ERROR_VARIABLE err)
+expect_rc("${rc}" 0 "session_report on a killed server's log")
+expect_in("${csv}" "1,session,1,ended_unix_ns,\n")
+string(REGEX MATCH "1,session,1,duration_s,([0-9.]+)" m "${csv}")
+if(NOT m OR CMAKE_MATCH_1 LESS 1.0 OR CMAKE_MATCH_1 GREATER 3.5)
+  message(FATAL_ERROR "killed session: duration '${CMAKE_MATCH_1}' s, expected 1 to 3.5 s (last heartbeat)\n${csv}")
+endif()
 message(STATUS "session log round trip: all checks passed")

@@ -23,27 +23,28 @@ struct WorldServerConfig {
 
 class WorldServer {
  public:
-  /// Opens the session log when one is configured (throws SessionLogError naming the file),
-  /// before any DDS entity exists.
   explicit WorldServer(WorldServerConfig config);
   ~WorldServer();
   WorldServer(const WorldServer&) = delete;
   WorldServer& operator=(const WorldServer&) = delete;
 
-  /// Runs until --duration passes or a shutdown signal arrives. Returns the exit code: 0, or 1
-  /// when the session log failed during the run (the session itself went on).
+  /// Loads the scene, opens the session log when one is configured (throws SessionLogError
+  /// naming the file, before any DDS entity exists), and runs until --duration passes or a
+  /// shutdown signal arrives. Returns the exit code: 0, or 1 when the session log failed during
+  /// the run (the session itself went on).
   int Run();
 
-  /// Events of the session, printed and recorded in the log (if any). Thread-safe as far as
-  /// the log goes; cheap (the log queues, a writer thread commits). Run() calls OnSceneChange
-  /// for the scene it publishes and OnMemberEvent for every change of the member registry;
-  /// the rest is for the readers still to come (control events, ownership).
+  /// Events of the session, printed and recorded in the log (once Run() opened it). Cheap: the
+  /// log queues the row and a writer thread commits it. Call them from Run()'s thread (the
+  /// log itself is thread-safe, the printing is not). Run() calls OnSceneChange for the scene
+  /// it publishes and OnMemberEvent for every change of the member registry; the others are
+  /// for the readers still to come (control events, ownership).
   void OnControlEvent(const ControlRecord& event);
   void OnSceneChange(const std::string& scene, const std::string& title);
   void OnMemberEvent(const MemberEvent& event, std::size_t present);
   void OnOwnershipChange(const OwnershipChange& change);
 
-  /// nullptr without a log file.
+  /// nullptr without a log file, or before Run() opened it.
   SessionLog* session_log() { return log_.get(); }
 
  private:
