@@ -1,0 +1,29 @@
+#pragma once
+/// @file
+/// Exact point/sphere queries against one triangle, used by the god-object proxy. All functions
+/// are real-time safe (noexcept, no allocation). Positions in any one frame [m].
+
+#include <Eigen/Core>
+#include <Eigen/Geometry>
+
+namespace handshare::contact {
+
+/// Closest point of triangle (a, b, c) to p (Ericson, Real-Time Collision Detection, 5.1.5).
+Eigen::Vector3d ClosestPointOnTriangle(const Eigen::Vector3d& p, const Eigen::Vector3d& a,
+                                       const Eigen::Vector3d& b,
+                                       const Eigen::Vector3d& c) noexcept;
+
+/// First time of impact s in [0, 1] of a sphere of radius R_m whose centre moves from x to
+/// x + d against the triangle (a, b, c) (both sides; face, edges and vertices), or a value > 1
+/// if it does not touch it on the way. Features the sphere already overlaps at s = 0 and
+/// features it moves along or away from (approach below kMinApproach_m over the whole motion)
+/// are ignored: the caller keeps those as constraints.
+double SweepSphereTriangle(const Eigen::Vector3d& x, const Eigen::Vector3d& d, double R_m,
+                           const Eigen::Vector3d& a, const Eigen::Vector3d& b,
+                           const Eigen::Vector3d& c) noexcept;
+
+/// Approach (over one sweep) below which a feature is treated as tangent, not hit [m]: far below
+/// any motion a hand makes in one haptic step, far above round-off at these scales.
+inline constexpr double kMinApproach_m = 1e-13;
+
+}  // namespace handshare::contact

@@ -1,0 +1,232 @@
+#pragma once
+/// @file
+/// Haptic rendering of one hand (5 fingertips) against a scene of static rigid objects, dynamic
+/// rigid bodies (grasping, under the scene's gravity) and FEM deformables shared with remote
+/// hands. Layer 2 of the architecture: no middleware, no rendering.
+///
+/// Setup (allocates, may throw): construct with a WorldConfig, Add*() objects, SetSupport(),
+/// then Init() sizes every per-step buffer for config.max_hands x kFingers fingertips.
+/// Real time: Step() is noexcept and never allocates; it reads the local fingertip centres and
+/// the remote hands' contacts and writes one FingerResult per local finger.
+///
+/// Per step, for each local finger and object (object frame O; the proxy lives in O, so it
+/// moves with a dynamic body):
+///   collision + proxy (proxy.hpp) -> contact point, normal n, penetration vector e = p_E - p_P
+///   rigid:      f_E = -k e - b (v_E . n) n, proxy friction (stick / slip), normal part >= 0
+///   deformable: patch of surface nodes under the fingertip (fem::ContactPatchFinder::Sphere),
+///               all fingers of all hands on the object in one fem::ContactSolver::Solve,
+///               f_E = -(sum of the patch's node forces on the object)
+/// then the sum over objects is clamped to max_force_N, and every dynamic body receives minus
+/// exactly what its fingertips feel (equal and opposite), plus gravity and support, and is
+/// integrated (semi-implicit Euler).
+
+#include <array>
+#include <cstdint>
+#include <memory>
+#include <span>
+#include <vector>
+
+#include <Eigen/Core>
+#include <Eigen/Geometry>
+
+#include "handshare/contact/mesh_collider.hpp"
+#include "handshare/contact/proxy.hpp"
+#include "handshare/contact/tri_mesh.hpp"
+#include "handshare/fem/compliance.hpp"
+#include "handshare/fem/contact_patch.hpp"
+#include "handshare/fem/contact_solver.hpp"
+#include "handshare/fem/mesh.hpp"
+
+namespace handshare::contact {
+
+/// Fingers per hand (thumb, index, middle, ring, little), as handshare::haptic::kFingers.
+inline constexpr int kFingers = 5;
+
+/// Gravity magnitudes of the scenes [m/s^2] (use as Eigen::Vector3d(0, 0, -kMoonGravity...)).
+inline constexpr double kEarthGravity_m_per_s2 = 9.81;
+inline constexpr double kMoonGravity_m_per_s2 = 1.62;
+inline constexpr double kMarsGravity_m_per_s2 = 3.71;
+
+using ObjectId = std::int32_t;
+
+/// Contact material of a rigid object (per object).
+struct RigidMaterial {
+  double stiffness_N_per_m = 1000.0;  ///< k: force per metre of penetration.
+  double damping_N_s_per_m = 2.0;     ///< b: along the normal, on the penetration rate.
+  double mu_static = 0.6;             ///< Coulomb, proxy sticks while |f_t| <= mu_s f_n.
+  double mu_kinetic = 0.5;            ///< Coulomb, sliding proxy keeps |f_t| = mu_k f_n.
+};
+
+/// Shape of a rigid object in its frame O (spheres and boxes centred at O). Spheres and boxes
+/// are meshed once at setup (icosphere, 12-triangle box) so one proxy algorithm serves all.
+struct Shape {
+  enum class Kind : std::uint8_t { kSphere, kBox, kMesh };
+  Kind kind = Kind::kSphere;
+  double radius_m = 0.03;
+  Eigen::Vector3d size_m = Eigen::Vector3d::Constant(0.1);  ///< box full edge lengths.
+  std::shared_ptr<const TriMesh> mesh;                      ///< kMesh, in O.
+  int sphere_subdivisions = 4;                              ///< 20 * 4^s triangles.
+
+  static Shape Sphere(double radius_m, int subdivisions = 4);
+  static Shape Box(const Eigen::Vector3d& size_m);
+  static Shape Mesh(std::shared_ptr<const TriMesh> mesh);
+};
+
+/// Mass properties of a dynamic body; its frame B is at the centre of mass.
+struct BodyProperties {
+  double mass_kg = 0.1;
+  /// Inertia about the centre of mass in B [kg m^2]; zero: uniform solid of the shape (sphere,
+  /// box; a mesh uses its bounding box).
+  Eigen::Matrix3d inertia_B_kg_m2 = Eigen::Matrix3d::Zero();
+  Eigen::Vector3d v_WB_m_per_s = Eigen::Vector3d::Zero();
+  Eigen::Vector3d w_WB_rad_per_s = Eigen::Vector3d::Zero();
+  double linear_damping_N_s_per_m = 0.0;    ///< air-like drag -c v (settling), 0 = none.
+  double angular_damping_N_m_s = 0.0;       ///< -c w.
+};
+
+/// A ground or table: the half-space n . p < offset is solid; it pushes dynamic bodies out
+/// (spring-damper per support point, regularized Coulomb friction).
+struct SupportPlane {
+  Eigen::Vector3d n_W = Eigen::Vector3d::UnitZ();
+  double offset_m = 0.0;
+  double stiffness_N_per_m = 5000.0;
+  double damping_N_s_per_m = 10.0;
+  double mu = 0.5;
+  double slip_velocity_m_per_s = 1e-3;  ///< friction ramps in below this sliding speed.
+};
+
+/// A deformable object: linear FEM with a precomputed compliance (handshare::fem).
+struct DeformableDesc {
+  std::shared_ptr<const fem::TetMesh> mesh;         ///< reference configuration, frame O.
+  std::shared_ptr<const fem::Compliance> compliance;
+  Eigen::Isometry3d X_WO = Eigen::Isometry3d::Identity();
+  std::int32_t max_patch_nodes = 16;  ///< per fingertip (closest kept); the solve is O(m^3).
+  double regularization_m_per_N = 0.0;  ///< fem::ContactSolverOptions (0 = exact).
+};
+
+struct WorldConfig {
+  /// Hands that may touch one deformable together (this one + remote); sizes the solvers.
+  std::int32_t max_hands = 2;
+  double fingertip_radius_m = 0.008;  ///< DeviceCapabilities::fingertip_radius_m.
+  double max_force_N = 3.5;           ///< per finger clamp (DeviceCapabilities).
+  Eigen::Vector3d gravity_W_m_per_s2 = Eigen::Vector3d(0, 0, -kEarthGravity_m_per_s2);
+  ProxyParams proxy{};                ///< radius_m is set from fingertip_radius_m.
+  std::int32_t max_candidates = 512;  ///< triangles per collision query.
+};
+
+/// One remote fingertip on a shared object, as carried by a peer's ContactSet. Plain data.
+struct RemoteContact {
+  std::int32_t hand = 0;     ///< remote hand index (informative).
+  std::int32_t finger = 0;
+  ObjectId object = -1;
+  Eigen::Vector3d p_WC_m = Eigen::Vector3d::Zero();  ///< contact point on the undeformed surface.
+  Eigen::Vector3d u_W_m = Eigen::Vector3d::Zero();   ///< imposed displacement (-depth * normal).
+  Eigen::Vector3d f_E_W_N = Eigen::Vector3d::Zero(); ///< force on the remote fingertip (dynamic
+                                                     ///< bodies: the body gets minus this).
+};
+
+/// What one local finger feels and touches this step. Plain data, trivially copyable.
+struct FingerResult {
+  Eigen::Vector3d f_E_W_N = Eigen::Vector3d::Zero();  ///< force on the fingertip, clamped.
+  Eigen::Vector3d p_WP_m = Eigen::Vector3d::Zero();   ///< proxy (IHIP) centre; fingertip if free.
+  Eigen::Vector3d e_PE_W_m = Eigen::Vector3d::Zero(); ///< penetration vector, proxy -> fingertip.
+  Eigen::Vector3d p_WC_m = Eigen::Vector3d::Zero();   ///< contact point on the surface.
+  Eigen::Vector3d n_W = Eigen::Vector3d::Zero();      ///< outward unit normal there.
+  Eigen::Vector3d u_W_m = Eigen::Vector3d::Zero();    ///< deformable: imposed displacement.
+  double depth_m = 0.0;                 ///< penetration along n.
+  ObjectId object = -1;                 ///< main object (largest force), -1 if none.
+  std::int32_t main_node = -1;          ///< deformable: patch node nearest the contact point.
+  std::int32_t patch_nodes = 0;         ///< deformable: nodes in the patch.
+  std::int32_t objects_touched = 0;
+  bool valid = false;                   ///< input finite (else zero force).
+  bool in_contact = false;
+  bool sticking = false;                ///< inside the static friction cone.
+  bool clamped = false;                 ///< force norm limited to max_force_N.
+  bool truncated = false;               ///< a buffer overflowed (candidates or patch nodes).
+};
+
+/// Summary of one Step().
+struct StepReport {
+  bool ok = true;                 ///< false: bad dt or input size: every force is zero.
+  std::int32_t invalid_fingers = 0;
+  std::int32_t solver_faults = 0; ///< deformable solves that failed (their forces zeroed).
+  std::int32_t remote_rejected = 0;
+};
+
+class HapticWorld {
+ public:
+  explicit HapticWorld(const WorldConfig& config = {});
+  ~HapticWorld();
+  HapticWorld(const HapticWorld&) = delete;
+  HapticWorld& operator=(const HapticWorld&) = delete;
+
+  // ---- Setup (allocates; throws std::invalid_argument or fem::FemError on bad input) ----
+  /// A fixed rigid object at pose X_WO.
+  ObjectId AddStatic(const Shape& shape, const RigidMaterial& material, const Eigen::Isometry3d& X_WO);
+  /// A dynamic rigid body with its centre of mass at X_WB.
+  ObjectId AddDynamic(const Shape& shape, const RigidMaterial& material, const BodyProperties& body,
+                      const Eigen::Isometry3d& X_WB);
+  /// A deformable; the proxy runs on its undeformed surface.
+  ObjectId AddDeformable(const DeformableDesc& desc);
+  /// Ground/table for the dynamic bodies (none by default).
+  void SetSupport(const SupportPlane& plane);
+  void SetGravity(const Eigen::Vector3d& g_W_m_per_s2);
+  /// Sizes every per-step buffer. Objects cannot be added afterwards.
+  void Init();
+
+  // ---- Real time (noexcept, no allocation) ----
+  /// One haptic step.
+  /// @param dt_s    step [s] (> 0): damping velocities and body integration.
+  /// @param p_WE_m  the local hand's kFingers fingertip centres in W [m]; non-finite entries
+  ///                give that finger zero force and flag it invalid (its proxies are kept).
+  /// @param remote  other hands' contacts on shared objects (deformables: one solve with them;
+  ///                dynamic bodies: their reported forces push the body).
+  StepReport Step(double dt_s, std::span<const Eigen::Vector3d> p_WE_m,
+                  std::span<const RemoteContact> remote = {}) noexcept;
+
+  std::span<const FingerResult> fingers() const noexcept { return {results_.data(), results_.size()}; }
+  /// Deformable: the held nodes' loads of the last solve (forces on the object, frame O), for
+  /// the deformation the world server publishes. Empty for other objects.
+  std::span<const fem::NodeLoad> held_loads(ObjectId id) const noexcept;
+  /// Deformable: its solver (last solve's per-input forces and states), or nullptr.
+  const fem::ContactSolver* contact_solver(ObjectId id) const noexcept;
+  /// Pose of an object (dynamic bodies: current).
+  Eigen::Isometry3d pose(ObjectId id) const noexcept;
+  Eigen::Vector3d body_velocity_W(ObjectId id) const noexcept;
+  /// Moves an object (static: teleport; dynamic: also zeroes its velocity). Its proxies move
+  /// with it. Real-time safe.
+  void SetPose(ObjectId id, const Eigen::Isometry3d& X_WO) noexcept;
+  /// Sum of the last step's reactions of the local fingertips on the object [N] (minus what
+  /// the fingertips feel).
+  Eigen::Vector3d finger_reaction_W(ObjectId id) const noexcept;
+  std::int32_t num_objects() const noexcept { return static_cast<std::int32_t>(objects_.size()); }
+  const WorldConfig& config() const noexcept { return config_; }
+
+ private:
+  struct Object;
+  void CheckSetup(const char* what) const;
+  void StepDeformable(Object& o, std::span<const RemoteContact> remote, StepReport& report) noexcept;
+  void StepBody(Object& o, double dt_s) noexcept;
+
+  WorldConfig config_;
+  bool initialized_ = false;
+  std::vector<std::unique_ptr<Object>> objects_;
+  bool has_support_ = false;
+  SupportPlane support_{};
+  ProxySolver proxy_solver_;
+  // Per (finger, object): proxy state, previous goal (for the fingertip velocity), and this
+  // step's contact and force (before the clamp).
+  struct FingerObject {
+    ProxyState proxy;
+    Eigen::Vector3d prev_goal_O_m = Eigen::Vector3d::Zero();
+    bool prev_valid = false;
+    ProxyContact contact;
+    Eigen::Vector3d f_W_N = Eigen::Vector3d::Zero();
+    std::int32_t patch_begin = 0, patch_count = 0;
+  };
+  std::vector<FingerObject> fo_;  // [finger * num_objects + object]
+  std::array<FingerResult, kFingers> results_{};
+  std::array<double, kFingers> scale_{};
+};
+
+}  // namespace handshare::contact

@@ -1,0 +1,61 @@
+#pragma once
+/// @file
+/// Broad and mid phase of fingertip collision: an FCL bounding-volume hierarchy (OBBRSS) over a
+/// rigid triangle mesh, built once at setup, answering "which triangles does this ball touch?".
+/// The real-time query walks FCL's BVH nodes itself (ball against each node's OBB, exact
+/// ball-triangle distance at the leaves) with a fixed-size stack: fcl::collide() of a shape
+/// against a mesh allocates on every call in FCL 0.7 (computeBV -> Sphere::getBoundVertices
+/// returns a std::vector, RSS fitting allocates), so it is kept only as a setup-time
+/// cross-check (QueryBallFcl, with its request built once). The exact proxy geometry is done
+/// on the returned triangles (proxy.hpp). FCL types stay inside the .cpp (pimpl).
+
+#include <cstdint>
+#include <memory>
+#include <span>
+
+#include <Eigen/Core>
+
+#include "handshare/contact/tri_mesh.hpp"
+
+namespace handshare::contact {
+
+/// Result of one ball query.
+struct BallQueryResult {
+  std::int32_t count = 0;   ///< triangle ids written.
+  bool truncated = false;   ///< more triangles touched the ball than fit.
+};
+
+class MeshCollider {
+ public:
+  /// Builds the BVH (setup; allocates). @param max_candidates  most triangles one query returns.
+  /// @throws std::invalid_argument for an invalid mesh (TriMesh::Validate) or max_candidates < 1.
+  MeshCollider(std::shared_ptr<const TriMesh> mesh, std::int32_t max_candidates);
+  ~MeshCollider();
+  MeshCollider(MeshCollider&&) noexcept;
+  MeshCollider& operator=(MeshCollider&&) noexcept;
+
+  /// Ids of the triangles within distance r of c_O (mesh frame O), in BVH order.
+  /// Real-time: noexcept, no allocation.
+  BallQueryResult QueryBall(const Eigen::Vector3d& c_O_m, double r_m,
+                            std::span<std::int32_t> triangle_ids) const noexcept;
+  /// The same through fcl::collide (FCL's sphere-triangle test). Allocates inside FCL: tests
+  /// and setup only.
+  BallQueryResult QueryBallFcl(const Eigen::Vector3d& c_O_m, double r_m,
+                               std::span<std::int32_t> triangle_ids);
+
+  const TriMesh& mesh() const noexcept { return *mesh_; }
+  std::int32_t max_candidates() const noexcept { return max_candidates_; }
+  /// Bounding sphere of the mesh in O (centre of the vertices' box, radius to the farthest).
+  const Eigen::Vector3d& bound_center_O_m() const noexcept { return bound_c_; }
+  double bound_radius_m() const noexcept { return bound_r_; }
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+  std::shared_ptr<const TriMesh> mesh_;
+  std::int32_t max_candidates_ = 0;
+  Eigen::Vector3d bound_c_ = Eigen::Vector3d::Zero();
+  double bound_r_ = 0.0;
+};
+
+}  // namespace handshare::contact

@@ -1,0 +1,107 @@
+#pragma once
+/// @file
+/// The ideal haptic interface point (IHIP) of one fingertip on one triangle mesh: a sphere
+/// god-object proxy (Ruspini, Kolarov and Khatib 1997, "The haptic display of complex graphical
+/// environments"; Zilles and Salisbury 1995 for the point version). The proxy is a sphere of the
+/// fingertip's radius that never overlaps the mesh. Each step it moves from where it was toward
+/// the fingertip centre as far as the surface lets it:
+///   1. constraints: every triangle within R + skin (+1 nm) of the proxy gives a half-space
+///      n . t >= n . c + R + skin, n = (x - c)/|x - c|, c its closest point;
+///   2. target t = projection of the goal onto the intersection of those half-spaces (a QP with
+///      at most 3 active planes, solved exactly by enumerating active sets);
+///   3. sweep the sphere from x toward t against the nearby triangles (face, edge and vertex
+///      times of impact, exact); stop at the first hit; repeat from 1 (a few iterations).
+/// The swept test and the previous position are what keep it from popping through a thin plate
+/// or around an edge when the fingertip moves fast. Friction (Coulomb, static and kinetic) acts
+/// on the proxy (two states, as in Salisbury et al. 1995): a stuck proxy stays while the force
+/// is inside the static cone; once it slips it slides, keeping the force on the kinetic cone's
+/// boundary, until the force falls inside the kinetic cone (the fingertip slows or stops). Real-time: noexcept, no allocation after construction.
+
+#include <array>
+#include <cstdint>
+#include <span>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "handshare/contact/mesh_collider.hpp"
+
+namespace handshare::contact {
+
+/// Geometry of the proxy (all in the mesh frame O).
+struct ProxyParams {
+  double radius_m = 0.008;       ///< fingertip (and proxy) radius R.
+  double skin_m = 1e-6;          ///< gap kept between proxy sphere and surface (1 um: at 1e4 N/m
+                                 ///< a 10 mN error, below what HIRO II resolves).
+  double max_step_m = 2e-3;      ///< most the proxy moves per step while near a surface (2 m/s at
+                                 ///< 1 kHz, four times HIRO II's fastest fingertip).
+  std::int32_t max_iterations = 6;  ///< constrain-project-sweep rounds per move.
+};
+
+/// Coulomb friction on the proxy (mu_kinetic <= mu_static; 0 = frictionless).
+struct FrictionParams {
+  double mu_static = 0.0;
+  double mu_kinetic = 0.0;
+};
+
+/// Per finger and object: where the proxy is. Plain data.
+struct ProxyState {
+  Eigen::Vector3d x_O_m = Eigen::Vector3d::Zero();  ///< proxy centre in O.
+  bool initialized = false;                         ///< false: next step starts at the goal.
+  bool in_contact = false;                          ///< touched the surface last step.
+  bool sliding = false;  ///< slipped last step: stays slipping while outside the kinetic cone.
+};
+
+/// What a proxy step found (in O).
+struct ProxyContact {
+  bool touching = false;       ///< a surface is within R + skin and the fingertip presses on it.
+  bool sticking = false;       ///< inside the static friction cone (proxy held still).
+  bool truncated = false;      ///< the candidate buffer overflowed (some triangles unseen).
+  Eigen::Vector3d x_O_m = Eigen::Vector3d::Zero();  ///< new proxy centre.
+  Eigen::Vector3d p_O_m = Eigen::Vector3d::Zero();  ///< contact point: closest surface point.
+  Eigen::Vector3d n_O = Eigen::Vector3d::Zero();    ///< unit outward normal at p (from p to x).
+  std::int32_t triangle = -1;                       ///< triangle that holds p.
+  double depth_m = 0.0;        ///< fingertip sphere below the surface: n . (x - goal) - skin.
+  std::int32_t iterations = 0;
+};
+
+/// Scratch and algorithm; one per haptic thread (shared by all fingers and meshes).
+class ProxySolver {
+ public:
+  /// @param max_candidates  triangles one ball query may return (buffers sized here).
+  explicit ProxySolver(std::int32_t max_candidates = 512);
+
+  /// One haptic step of the proxy on `collider` toward the fingertip centre goal_O (O frame).
+  /// Updates state; returns the contact. Non-finite goal: state unchanged, touching = false.
+  ProxyContact Step(MeshCollider& collider, const ProxyParams& params,
+                    const FrictionParams& friction, const Eigen::Vector3d& goal_O_m,
+                    ProxyState& state) noexcept;
+
+  /// The frictionless constrained motion from x0 toward goal (the core of Step; public for
+  /// tests). Returns the final proxy centre.
+  Eigen::Vector3d Move(MeshCollider& collider, const ProxyParams& params,
+                       const Eigen::Vector3d& x0_O_m, const Eigen::Vector3d& goal_O_m,
+                       bool* truncated = nullptr, std::int32_t* iterations = nullptr) noexcept;
+
+ private:
+  static constexpr int kMaxConstraints = 8;
+  struct Constraint {
+    Eigen::Vector3d n;   // unit, outward
+    Eigen::Vector3d c;   // closest surface point
+    double b = 0.0;      // n . t >= b
+    double dist = 0.0;
+    std::int32_t tri = -1;
+  };
+  // Candidate triangles around the motion; returns false if none.
+  bool Gather(MeshCollider& collider, const Eigen::Vector3d& center, double radius) noexcept;
+  int CollectConstraints(const MeshCollider& collider, const ProxyParams& params,
+                         const Eigen::Vector3d& x) noexcept;
+  Eigen::Vector3d Project(const Eigen::Vector3d& goal, const Eigen::Vector3d& x, int m) const noexcept;
+
+  std::vector<std::int32_t> candidates_;
+  std::int32_t num_candidates_ = 0;
+  bool truncated_ = false;
+  std::array<Constraint, kMaxConstraints> cons_{};
+};
+
+}  // namespace handshare::contact

@@ -1,0 +1,515 @@
+#include "handshare/contact/haptic_world.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+#include <string>
+
+#include "handshare/fem/error.hpp"
+
+namespace handshare::contact {
+
+Shape Shape::Sphere(double radius_m, int subdivisions) {
+  Shape s;
+  s.kind = Kind::kSphere;
+  s.radius_m = radius_m;
+  s.sphere_subdivisions = subdivisions;
+  return s;
+}
+Shape Shape::Box(const Eigen::Vector3d& size_m) {
+  Shape s;
+  s.kind = Kind::kBox;
+  s.size_m = size_m;
+  return s;
+}
+Shape Shape::Mesh(std::shared_ptr<const TriMesh> mesh) {
+  Shape s;
+  s.kind = Kind::kMesh;
+  s.mesh = std::move(mesh);
+  return s;
+}
+
+enum class ObjectKind : std::uint8_t { kStatic, kDynamic, kDeformable };
+
+struct HapticWorld::Object {
+  ObjectKind kind = ObjectKind::kStatic;
+  std::unique_ptr<MeshCollider> collider;
+  RigidMaterial material;
+  Eigen::Isometry3d X_WO = Eigen::Isometry3d::Identity();
+  Eigen::Vector3d reaction_W_N = Eigen::Vector3d::Zero();  // local fingertips on it, last step
+  // Dynamic body.
+  double mass_kg = 0.0;
+  Eigen::Matrix3d I_B = Eigen::Matrix3d::Identity();
+  Eigen::Matrix3d I_B_inv = Eigen::Matrix3d::Identity();
+  Eigen::Vector3d v_W = Eigen::Vector3d::Zero(), w_W = Eigen::Vector3d::Zero();
+  double lin_damp = 0.0, ang_damp = 0.0;
+  Eigen::Vector3d force_W = Eigen::Vector3d::Zero(), torque_W = Eigen::Vector3d::Zero();
+  bool round = false;  // sphere: support acts on the analytic lowest point
+  double radius_m = 0.0;
+  std::vector<Eigen::Vector3d> support_points_B;
+  // Deformable.
+  std::shared_ptr<const fem::TetMesh> tet;
+  std::shared_ptr<const fem::Compliance> compliance;
+  std::unique_ptr<fem::ContactPatchFinder> patches;
+  std::unique_ptr<fem::ContactSolver> solver;
+  std::vector<fem::ContactInput> inputs;
+  std::int32_t num_inputs = 0;
+  std::int32_t max_patch = 0;
+};
+
+namespace {
+
+std::shared_ptr<const TriMesh> MeshOf(const Shape& s) {
+  switch (s.kind) {
+    case Shape::Kind::kSphere:
+      return std::make_shared<const TriMesh>(MakeIcosphere(s.radius_m, s.sphere_subdivisions));
+    case Shape::Kind::kBox:
+      return std::make_shared<const TriMesh>(MakeBoxMesh(s.size_m));
+    case Shape::Kind::kMesh:
+      if (!s.mesh) throw std::invalid_argument("Shape::Mesh: null mesh");
+      return s.mesh;
+  }
+  throw std::invalid_argument("Shape: unknown kind");
+}
+
+bool FiniteIsometry(const Eigen::Isometry3d& X) {
+  return X.matrix().allFinite() &&
+         (X.linear() * X.linear().transpose() - Eigen::Matrix3d::Identity()).norm() < 1e-6;
+}
+
+void CheckMaterial(const RigidMaterial& m) {
+  if (!(m.stiffness_N_per_m > 0.0) || !std::isfinite(m.stiffness_N_per_m) ||
+      !(m.damping_N_s_per_m >= 0.0) || !std::isfinite(m.damping_N_s_per_m) ||
+      !(m.mu_static >= 0.0) || !(m.mu_kinetic >= 0.0) || !(m.mu_kinetic <= m.mu_static) ||
+      !std::isfinite(m.mu_static)) {
+    throw std::invalid_argument(
+        "RigidMaterial: need stiffness_N_per_m > 0, damping_N_s_per_m >= 0, "
+        "0 <= mu_kinetic <= mu_static, all finite");
+  }
+}
+
+}  // namespace
+
+HapticWorld::HapticWorld(const WorldConfig& config)
+    : config_(config), proxy_solver_(config.max_candidates) {
+  if (config_.max_hands < 1 || config_.max_hands > 16) {
+    throw std::invalid_argument("WorldConfig.max_hands must be in 1..16");
+  }
+  if (!(config_.fingertip_radius_m > 0.0) || !(config_.max_force_N > 0.0) ||
+      !config_.gravity_W_m_per_s2.allFinite() || config_.max_candidates < 1) {
+    throw std::invalid_argument(
+        "WorldConfig: fingertip_radius_m and max_force_N must be > 0, gravity finite, "
+        "max_candidates >= 1");
+  }
+  config_.proxy.radius_m = config_.fingertip_radius_m;
+}
+
+HapticWorld::~HapticWorld() = default;
+
+void HapticWorld::CheckSetup(const char* what) const {
+  if (initialized_) throw std::logic_error(std::string("HapticWorld::") + what + " after Init()");
+}
+
+ObjectId HapticWorld::AddStatic(const Shape& shape, const RigidMaterial& material,
+                                const Eigen::Isometry3d& X_WO) {
+  CheckSetup("AddStatic");
+  CheckMaterial(material);
+  if (!FiniteIsometry(X_WO)) throw std::invalid_argument("AddStatic: X_WO is not a finite rigid pose");
+  auto o = std::make_unique<Object>();
+  o->kind = ObjectKind::kStatic;
+  o->collider = std::make_unique<MeshCollider>(MeshOf(shape), config_.max_candidates);
+  o->material = material;
+  o->X_WO = X_WO;
+  objects_.push_back(std::move(o));
+  return static_cast<ObjectId>(objects_.size() - 1);
+}
+
+ObjectId HapticWorld::AddDynamic(const Shape& shape, const RigidMaterial& material,
+                                 const BodyProperties& body, const Eigen::Isometry3d& X_WB) {
+  CheckSetup("AddDynamic");
+  CheckMaterial(material);
+  if (!FiniteIsometry(X_WB)) throw std::invalid_argument("AddDynamic: X_WB is not a finite rigid pose");
+  if (!(body.mass_kg > 0.0) || !std::isfinite(body.mass_kg) || !body.inertia_B_kg_m2.allFinite() ||
+      !body.v_WB_m_per_s.allFinite() || !body.w_WB_rad_per_s.allFinite() ||
+      !(body.linear_damping_N_s_per_m >= 0.0) || !(body.angular_damping_N_m_s >= 0.0)) {
+    throw std::invalid_argument("AddDynamic: mass must be > 0, inertia and velocities finite, damping >= 0");
+  }
+  auto o = std::make_unique<Object>();
+  o->kind = ObjectKind::kDynamic;
+  auto mesh = MeshOf(shape);
+  o->collider = std::make_unique<MeshCollider>(mesh, config_.max_candidates);
+  o->material = material;
+  o->X_WO = X_WB;
+  o->mass_kg = body.mass_kg;
+  o->v_W = body.v_WB_m_per_s;
+  o->w_W = body.w_WB_rad_per_s;
+  o->lin_damp = body.linear_damping_N_s_per_m;
+  o->ang_damp = body.angular_damping_N_m_s;
+  Eigen::Matrix3d I = body.inertia_B_kg_m2;
+  if (I.isZero(0.0)) {
+    const double m = body.mass_kg;
+    if (shape.kind == Shape::Kind::kSphere) {
+      I = Eigen::Matrix3d::Identity() * (0.4 * m * shape.radius_m * shape.radius_m);
+    } else {
+      Eigen::Vector3d s = shape.size_m;
+      if (shape.kind == Shape::Kind::kMesh) {
+        Eigen::Vector3d lo = mesh->p_O_m[0], hi = lo;
+        for (const auto& p : mesh->p_O_m) {
+          lo = lo.cwiseMin(p);
+          hi = hi.cwiseMax(p);
+        }
+        s = hi - lo;
+      }
+      I = (m / 12.0) * Eigen::Vector3d(s.y() * s.y() + s.z() * s.z(), s.x() * s.x() + s.z() * s.z(),
+                                       s.x() * s.x() + s.y() * s.y()).asDiagonal();
+    }
+  }
+  Eigen::LLT<Eigen::Matrix3d> llt(I);
+  if (llt.info() != Eigen::Success) throw std::invalid_argument("AddDynamic: inertia is not positive definite");
+  o->I_B = I;
+  o->I_B_inv = I.inverse();
+  if (shape.kind == Shape::Kind::kSphere) {
+    o->round = true;
+    o->radius_m = shape.radius_m;
+  } else {
+    o->support_points_B = mesh->p_O_m;  // box: its 8 corners; mesh: every vertex
+  }
+  objects_.push_back(std::move(o));
+  return static_cast<ObjectId>(objects_.size() - 1);
+}
+
+ObjectId HapticWorld::AddDeformable(const DeformableDesc& d) {
+  CheckSetup("AddDeformable");
+  if (!d.mesh || !d.compliance) throw std::invalid_argument("AddDeformable: null mesh or compliance");
+  if (!FiniteIsometry(d.X_WO)) throw std::invalid_argument("AddDeformable: X_WO is not a finite rigid pose");
+  if (d.max_patch_nodes < 1) throw std::invalid_argument("AddDeformable: max_patch_nodes must be >= 1");
+  auto o = std::make_unique<Object>();
+  o->kind = ObjectKind::kDeformable;
+  o->tet = d.mesh;
+  o->compliance = d.compliance;
+  o->X_WO = d.X_WO;
+  const fem::Surface surface = fem::ExtractSurface(*d.mesh);
+  auto tri = std::make_shared<TriMesh>();
+  tri->p_O_m = d.mesh->positions_m();
+  tri->triangles.assign(surface.triangles.begin(), surface.triangles.end());
+  o->collider = std::make_unique<MeshCollider>(std::move(tri), config_.max_candidates);
+  o->patches = std::make_unique<fem::ContactPatchFinder>(*d.mesh, surface, *d.compliance);
+  o->max_patch = d.max_patch_nodes;
+  const std::int32_t max_contacts = config_.max_hands * kFingers * d.max_patch_nodes;
+  fem::ContactSolverOptions so;
+  so.max_contacts = max_contacts;
+  so.push_only = true;
+  so.regularization_m_per_N = d.regularization_m_per_N;
+  o->solver = std::make_unique<fem::ContactSolver>(d.compliance, so);
+  o->inputs.assign(static_cast<std::size_t>(max_contacts), fem::ContactInput{});
+  objects_.push_back(std::move(o));
+  return static_cast<ObjectId>(objects_.size() - 1);
+}
+
+void HapticWorld::SetSupport(const SupportPlane& plane) {
+  CheckSetup("SetSupport");
+  if (!plane.n_W.allFinite() || !(plane.n_W.norm() > 0.0) || !std::isfinite(plane.offset_m) ||
+      !(plane.stiffness_N_per_m > 0.0) || !(plane.damping_N_s_per_m >= 0.0) || !(plane.mu >= 0.0) ||
+      !(plane.slip_velocity_m_per_s > 0.0)) {
+    throw std::invalid_argument("SetSupport: need a finite nonzero normal, stiffness > 0, damping, mu >= 0");
+  }
+  support_ = plane;
+  support_.n_W.normalize();
+  has_support_ = true;
+}
+
+void HapticWorld::SetGravity(const Eigen::Vector3d& g) {
+  CheckSetup("SetGravity");
+  if (!g.allFinite()) throw std::invalid_argument("SetGravity: not finite");
+  config_.gravity_W_m_per_s2 = g;
+}
+
+void HapticWorld::Init() {
+  CheckSetup("Init");
+  fo_.assign(static_cast<std::size_t>(kFingers) * objects_.size(), FingerObject{});
+  for (auto& r : results_) r = FingerResult{};
+  initialized_ = true;
+}
+
+std::span<const fem::NodeLoad> HapticWorld::held_loads(ObjectId id) const noexcept {
+  if (id < 0 || id >= num_objects() || !objects_[static_cast<std::size_t>(id)]->solver) return {};
+  return objects_[static_cast<std::size_t>(id)]->solver->loads();
+}
+
+const fem::ContactSolver* HapticWorld::contact_solver(ObjectId id) const noexcept {
+  if (id < 0 || id >= num_objects()) return nullptr;
+  return objects_[static_cast<std::size_t>(id)]->solver.get();
+}
+
+Eigen::Isometry3d HapticWorld::pose(ObjectId id) const noexcept {
+  if (id < 0 || id >= num_objects()) return Eigen::Isometry3d::Identity();
+  return objects_[static_cast<std::size_t>(id)]->X_WO;
+}
+
+Eigen::Vector3d HapticWorld::body_velocity_W(ObjectId id) const noexcept {
+  if (id < 0 || id >= num_objects()) return Eigen::Vector3d::Zero();
+  return objects_[static_cast<std::size_t>(id)]->v_W;
+}
+
+Eigen::Vector3d HapticWorld::finger_reaction_W(ObjectId id) const noexcept {
+  if (id < 0 || id >= num_objects()) return Eigen::Vector3d::Zero();
+  return objects_[static_cast<std::size_t>(id)]->reaction_W_N;
+}
+
+void HapticWorld::SetPose(ObjectId id, const Eigen::Isometry3d& X) noexcept {
+  if (id < 0 || id >= num_objects() || !X.matrix().allFinite()) return;
+  Object& o = *objects_[static_cast<std::size_t>(id)];
+  o.X_WO = X;
+  o.v_W.setZero();
+  o.w_W.setZero();
+}
+
+StepReport HapticWorld::Step(double dt_s, std::span<const Eigen::Vector3d> p_WE,
+                             std::span<const RemoteContact> remote) noexcept {
+  StepReport report;
+  const auto num_obj = static_cast<std::size_t>(objects_.size());
+  for (auto& r : results_) r = FingerResult{};
+  if (!initialized_ || !(dt_s > 0.0) || !std::isfinite(dt_s) || p_WE.size() != static_cast<std::size_t>(kFingers)) {
+    report.ok = false;
+    report.invalid_fingers = kFingers;
+    return report;
+  }
+  for (auto& o : objects_) o->reaction_W_N.setZero();
+
+  // Stage 1: proxies of every valid finger on every object; rigid contact forces.
+  for (int i = 0; i < kFingers; ++i) {
+    FingerResult& res = results_[static_cast<std::size_t>(i)];
+    const Eigen::Vector3d& p = p_WE[static_cast<std::size_t>(i)];
+    res.valid = p.allFinite() && p.cwiseAbs().maxCoeff() < 1e3;
+    res.p_WP_m = res.valid ? p : Eigen::Vector3d::Zero();
+    if (!res.valid) ++report.invalid_fingers;
+    for (std::size_t k = 0; k < num_obj; ++k) {
+      Object& o = *objects_[k];
+      FingerObject& fo = fo_[static_cast<std::size_t>(i) * num_obj + k];
+      fo.contact = ProxyContact{};
+      fo.f_W_N.setZero();
+      fo.patch_count = 0;
+      if (!res.valid) {
+        fo.prev_valid = false;  // proxies are kept: the next valid sample continues from them
+        continue;
+      }
+      const Eigen::Vector3d g_O = o.X_WO.inverse() * p;
+      const bool deformable = o.kind == ObjectKind::kDeformable;
+      FrictionParams fr;
+      if (!deformable) fr = {o.material.mu_static, o.material.mu_kinetic};
+      fo.contact = proxy_solver_.Step(*o.collider, config_.proxy, fr, g_O, fo.proxy);
+      const Eigen::Vector3d v_O = fo.prev_valid ? Eigen::Vector3d((g_O - fo.prev_goal_O_m) / dt_s)
+                                                : Eigen::Vector3d::Zero();
+      fo.prev_goal_O_m = g_O;
+      fo.prev_valid = true;
+      if (!fo.contact.touching || deformable) continue;
+      // Rigid: spring from fingertip to proxy, damping on the normal approach speed; the
+      // surface only pushes (a negative normal part would be glue: no force then).
+      const Eigen::Vector3d& n = fo.contact.n_O;
+      // The proxy rests skin_m off the surface: measure the spring from the surface itself.
+      Eigen::Vector3d f_O =
+          o.material.stiffness_N_per_m * (fo.contact.x_O_m - g_O - config_.proxy.skin_m * n);
+      f_O -= o.material.damping_N_s_per_m * v_O.dot(n) * n;
+      if (f_O.dot(n) <= 0.0) f_O.setZero();
+      fo.f_W_N = o.X_WO.linear() * f_O;
+    }
+  }
+
+  // Stage 2: deformables, every finger of every hand on the object in one solve.
+  for (auto& op : objects_) {
+    if (op->kind == ObjectKind::kDeformable) StepDeformable(*op, remote, report);
+  }
+
+  // Stage 3: per finger: sum, clamp, the main contact for the result.
+  for (int i = 0; i < kFingers; ++i) {
+    FingerResult& res = results_[static_cast<std::size_t>(i)];
+    scale_[static_cast<std::size_t>(i)] = 0.0;
+    if (!res.valid) continue;
+    Eigen::Vector3d f = Eigen::Vector3d::Zero();
+    double best = -1.0;
+    for (std::size_t k = 0; k < num_obj; ++k) {
+      const FingerObject& fo = fo_[static_cast<std::size_t>(i) * num_obj + k];
+      res.truncated = res.truncated || fo.contact.truncated;
+      if (!fo.contact.touching) continue;
+      ++res.objects_touched;
+      f += fo.f_W_N;
+      const double mag = fo.f_W_N.norm();
+      if (mag <= best) continue;
+      best = mag;
+      const Object& o = *objects_[k];
+      res.object = static_cast<ObjectId>(k);
+      res.p_WP_m = o.X_WO * fo.contact.x_O_m;
+      res.e_PE_W_m = p_WE[static_cast<std::size_t>(i)] - res.p_WP_m;
+      res.p_WC_m = o.X_WO * fo.contact.p_O_m;
+      res.n_W = o.X_WO.linear() * fo.contact.n_O;
+      res.depth_m = fo.contact.depth_m;
+      res.sticking = fo.contact.sticking;
+      res.in_contact = true;
+      res.main_node = -1;
+      res.patch_nodes = 0;
+      res.u_W_m.setZero();
+      if (o.kind == ObjectKind::kDeformable) {
+        res.u_W_m = -fo.contact.depth_m * res.n_W;
+        res.patch_nodes = fo.patch_count;
+        double best_d = std::numeric_limits<double>::infinity();
+        const auto& P = o.tet->positions_m();
+        for (std::int32_t q = 0; q < fo.patch_count; ++q) {
+          const std::int32_t node = o.inputs[static_cast<std::size_t>(fo.patch_begin + q)].node;
+          const double dq = (P[static_cast<std::size_t>(node)] - fo.contact.p_O_m).squaredNorm();
+          if (dq < best_d) {
+            best_d = dq;
+            res.main_node = node;
+          }
+        }
+      }
+    }
+    const double norm = f.norm();
+    double s = 1.0;
+    if (norm > config_.max_force_N) {
+      s = config_.max_force_N / norm;
+      res.clamped = true;
+    }
+    scale_[static_cast<std::size_t>(i)] = s;
+    res.f_E_W_N = s * f;
+  }
+
+  // Stage 4: dynamic bodies get minus what the fingertips feel (after the clamp), remote hands'
+  // reported forces, gravity and support; then they move.
+  for (std::size_t k = 0; k < num_obj; ++k) {
+    Object& o = *objects_[k];
+    for (int i = 0; i < kFingers; ++i) {
+      const FingerObject& fo = fo_[static_cast<std::size_t>(i) * num_obj + k];
+      if (!fo.contact.touching) continue;
+      const Eigen::Vector3d r = -scale_[static_cast<std::size_t>(i)] * fo.f_W_N;
+      o.reaction_W_N += r;
+      if (o.kind == ObjectKind::kDynamic) {
+        o.force_W += r;
+        o.torque_W += (o.X_WO * fo.contact.p_O_m - o.X_WO.translation()).cross(r);
+      }
+    }
+  }
+  for (const RemoteContact& rc : remote) {
+    if (rc.object < 0 || rc.object >= num_objects()) {
+      ++report.remote_rejected;
+      continue;
+    }
+    Object& o = *objects_[static_cast<std::size_t>(rc.object)];
+    if (o.kind != ObjectKind::kDynamic) continue;
+    if (!rc.f_E_W_N.allFinite() || !rc.p_WC_m.allFinite()) {
+      ++report.remote_rejected;
+      continue;
+    }
+    o.force_W -= rc.f_E_W_N;
+    o.torque_W += (rc.p_WC_m - o.X_WO.translation()).cross(-rc.f_E_W_N);
+  }
+  for (auto& op : objects_) {
+    if (op->kind == ObjectKind::kDynamic) StepBody(*op, dt_s);
+  }
+  return report;
+}
+
+void HapticWorld::StepDeformable(Object& o, std::span<const RemoteContact> remote,
+                                 StepReport& report) noexcept {
+  const auto num_obj = static_cast<std::size_t>(objects_.size());
+  std::size_t k = 0;
+  while (objects_[k].get() != &o) ++k;
+  const double R = config_.fingertip_radius_m;
+  const auto cap = static_cast<std::int32_t>(o.inputs.size());
+  std::int32_t m = 0;
+  auto add_patch = [&](const Eigen::Vector3d& p_O, const Eigen::Vector3d& n_O, double depth,
+                       std::int32_t& count, bool& truncated) {
+    count = 0;
+    const std::int32_t room = std::min(o.max_patch, cap - m);
+    if (room <= 0 || !(depth > 0.0)) return;
+    const fem::PatchResult pr =
+        o.patches->Sphere(p_O, n_O, R, depth, fem::ContactMode::kNormalOnly,
+                          std::span<fem::ContactInput>(o.inputs.data() + m, static_cast<std::size_t>(room)));
+    count = pr.count;
+    truncated = pr.truncated;
+    m += pr.count;
+  };
+  // Local fingers: the patch under each proxy, pressed to the proxy's depth.
+  for (int i = 0; i < kFingers; ++i) {
+    FingerObject& fo = fo_[static_cast<std::size_t>(i) * num_obj + k];
+    fo.patch_begin = m;
+    fo.patch_count = 0;
+    if (!fo.contact.touching) continue;
+    bool trunc = false;
+    add_patch(fo.contact.p_O_m, fo.contact.n_O, fo.contact.depth_m, fo.patch_count, trunc);
+    fo.contact.truncated = fo.contact.truncated || trunc;
+  }
+  // Remote fingers: the same patch rebuilt from their contact point and imposed displacement.
+  const Eigen::Isometry3d X_OW = o.X_WO.inverse();
+  for (const RemoteContact& rc : remote) {
+    if (rc.object < 0 || rc.object >= num_objects() || objects_[static_cast<std::size_t>(rc.object)].get() != &o) continue;
+    const double depth = rc.u_W_m.norm();
+    if (!rc.p_WC_m.allFinite() || !rc.u_W_m.allFinite() || !(depth > 0.0)) {
+      ++report.remote_rejected;
+      continue;
+    }
+    std::int32_t count = 0;
+    bool trunc = false;
+    add_patch(X_OW * rc.p_WC_m, -(X_OW.linear() * rc.u_W_m) / depth, depth, count, trunc);
+  }
+  o.num_inputs = m;
+  const fem::StepStatus st = o.solver->Solve(std::span<const fem::ContactInput>(o.inputs.data(), static_cast<std::size_t>(m)));
+  const bool failed = st == fem::StepStatus::kInvalidInput || st == fem::StepStatus::kNumericalFailure;
+  if (failed) ++report.solver_faults;
+  const auto forces = o.solver->forces_N();
+  for (int i = 0; i < kFingers; ++i) {
+    FingerObject& fo = fo_[static_cast<std::size_t>(i) * num_obj + k];
+    if (!fo.contact.touching || failed) continue;
+    Eigen::Vector3d f_obj = Eigen::Vector3d::Zero();
+    for (std::int32_t q = 0; q < fo.patch_count; ++q) f_obj += forces[static_cast<std::size_t>(fo.patch_begin + q)];
+    fo.f_W_N = -(o.X_WO.linear() * f_obj);  // the fingertip feels minus the force on the object
+  }
+}
+
+void HapticWorld::StepBody(Object& o, double dt) noexcept {
+  Eigen::Vector3d F = o.force_W + o.mass_kg * config_.gravity_W_m_per_s2 - o.lin_damp * o.v_W;
+  Eigen::Vector3d T = o.torque_W - o.ang_damp * o.w_W;
+  const Eigen::Vector3d c = o.X_WO.translation();
+  if (has_support_) {
+    const SupportPlane& s = support_;
+    auto push = [&](const Eigen::Vector3d& p) {
+      const double pen = s.offset_m - s.n_W.dot(p);
+      if (!(pen > 0.0)) return;
+      const Eigen::Vector3d v = o.v_W + o.w_W.cross(p - c);
+      const double vn = v.dot(s.n_W);
+      const double fn = std::max(0.0, s.stiffness_N_per_m * pen - s.damping_N_s_per_m * vn);
+      const Eigen::Vector3d vt = v - vn * s.n_W;
+      const double vt_norm = vt.norm();
+      // Regularized Coulomb: full mu f_n above the slip speed, proportional below it.
+      const Eigen::Vector3d ft = -s.mu * fn * vt / std::max(vt_norm, s.slip_velocity_m_per_s);
+      const Eigen::Vector3d f = fn * s.n_W + ft;
+      F += f;
+      T += (p - c).cross(f);
+    };
+    if (o.round) {
+      push(c - o.radius_m * s.n_W);
+    } else {
+      for (const auto& pb : o.support_points_B) push(o.X_WO * pb);
+    }
+  }
+  // Semi-implicit (symplectic) Euler: velocities first, then poses with the new velocities.
+  const Eigen::Matrix3d Rm = o.X_WO.linear();
+  const Eigen::Matrix3d I_W = Rm * o.I_B * Rm.transpose();
+  const Eigen::Matrix3d I_W_inv = Rm * o.I_B_inv * Rm.transpose();
+  o.v_W += dt * F / o.mass_kg;
+  o.w_W += dt * (I_W_inv * (T - o.w_W.cross(I_W * o.w_W)));
+  if (!o.v_W.allFinite() || !o.w_W.allFinite()) {
+    o.v_W.setZero();
+    o.w_W.setZero();
+  }
+  o.X_WO.translation() += dt * o.v_W;
+  const double angle = o.w_W.norm() * dt;
+  if (angle > 0.0) {
+    Eigen::Quaterniond q(Eigen::AngleAxisd(angle, o.w_W.normalized()) * Eigen::Quaterniond(Rm));
+    q.normalize();
+    o.X_WO.linear() = q.toRotationMatrix();
+  }
+  o.force_W.setZero();
+  o.torque_W.setZero();
+}
+
+}  // namespace handshare::contact

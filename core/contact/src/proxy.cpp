@@ -1,0 +1,267 @@
+#include "handshare/contact/proxy.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+#include <Eigen/Dense>
+
+#include "handshare/contact/geometry.hpp"
+
+namespace handshare::contact {
+
+namespace {
+// Feasibility slack of the projection [m]: round-off of dot products of millimetre vectors.
+constexpr double kFeasTol_m = 1e-12;
+// Touch band above R + skin [m]: features this close are resting contacts (linearized as
+// planes); farther ones are left to the exact sweep. Tangent planes of edges and vertices cut
+// slightly into the free space, so a wide band would stop sliding proxies short; 1 nm is far
+// above round-off (1e-17 m) and far below anything felt.
+constexpr double kTouchBand_m = 1e-9;
+// Two constraint normals closer than this (1 - cos) are one plane (the tighter one is kept).
+constexpr double kSameNormal = 1e-9;
+}  // namespace
+
+ProxySolver::ProxySolver(std::int32_t max_candidates)
+    : candidates_(static_cast<std::size_t>(std::max<std::int32_t>(max_candidates, 1))) {}
+
+bool ProxySolver::Gather(MeshCollider& collider, const Eigen::Vector3d& center,
+                         double radius) noexcept {
+  const std::int32_t cap = std::min<std::int32_t>(static_cast<std::int32_t>(candidates_.size()),
+                                                  collider.max_candidates());
+  const BallQueryResult r =
+      collider.QueryBall(center, radius, std::span<std::int32_t>(candidates_.data(), static_cast<std::size_t>(cap)));
+  num_candidates_ = r.count;
+  truncated_ = truncated_ || r.truncated;
+  return r.count > 0;
+}
+
+int ProxySolver::CollectConstraints(const MeshCollider& collider, const ProxyParams& params,
+                                    const Eigen::Vector3d& x) noexcept {
+  const TriMesh& mesh = collider.mesh();
+  const double R = params.radius_m;
+  const double touch = R + params.skin_m + kTouchBand_m;
+  int m = 0;
+  for (std::int32_t i = 0; i < num_candidates_; ++i) {
+    const std::int32_t t = candidates_[static_cast<std::size_t>(i)];
+    const auto& tr = mesh.triangles[static_cast<std::size_t>(t)];
+    const Eigen::Vector3d c = ClosestPointOnTriangle(x, mesh.p_O_m[tr[0]], mesh.p_O_m[tr[1]], mesh.p_O_m[tr[2]]);
+    const double dist = (x - c).norm();
+    // Overlapped features (dist < R: the proxy started inside them) are ignored until it leaves.
+    if (!(dist < touch) || dist < R) continue;
+    const Eigen::Vector3d n = (x - c) / dist;
+    const double b = n.dot(c) + R + params.skin_m;
+    int j = 0;
+    while (j < m && cons_[static_cast<std::size_t>(j)].n.dot(n) < 1.0 - kSameNormal) ++j;
+    if (j < m) {  // same plane: keep the tighter one
+      Constraint& k = cons_[static_cast<std::size_t>(j)];
+      if (b > k.b) {
+        k = Constraint{n, c, b, dist, t};
+      } else if (dist < k.dist) {
+        k.c = c;
+        k.dist = dist;
+        k.tri = t;
+      }
+      continue;
+    }
+    if (m == kMaxConstraints) {  // keep the closest ones
+      int worst = 0;
+      for (int q = 1; q < m; ++q) {
+        if (cons_[static_cast<std::size_t>(q)].dist > cons_[static_cast<std::size_t>(worst)].dist) worst = q;
+      }
+      if (dist < cons_[static_cast<std::size_t>(worst)].dist) cons_[static_cast<std::size_t>(worst)] = Constraint{n, c, b, dist, t};
+      continue;
+    }
+    cons_[static_cast<std::size_t>(m++)] = Constraint{n, c, b, dist, t};
+  }
+  return m;
+}
+
+Eigen::Vector3d ProxySolver::Project(const Eigen::Vector3d& goal, const Eigen::Vector3d& x,
+                                     int m) const noexcept {
+  // Minimize |t - goal|^2 subject to n_i . t >= b_i. At the optimum at most 3 independent planes
+  // are active and t is the projection of goal onto their intersection; among all such
+  // projections that are feasible, the nearest to goal is the optimum (it is the projection onto
+  // a convex set). m <= 8: at most 1 + 8 + 28 + 56 candidates, usually m <= 2.
+  auto feasible = [&](const Eigen::Vector3d& t) {
+    for (int i = 0; i < m; ++i) {
+      const Constraint& k = cons_[static_cast<std::size_t>(i)];
+      if (k.n.dot(t) < k.b - kFeasTol_m) return false;
+    }
+    return true;
+  };
+  if (feasible(goal)) return goal;
+  double best = std::numeric_limits<double>::infinity();
+  Eigen::Vector3d best_t = x;
+  auto consider = [&](const Eigen::Vector3d& t) {
+    if (!t.allFinite() || !feasible(t)) return;
+    const double d2 = (t - goal).squaredNorm();
+    if (d2 < best) {
+      best = d2;
+      best_t = t;
+    }
+  };
+  for (int i = 0; i < m; ++i) {
+    const Constraint& a = cons_[static_cast<std::size_t>(i)];
+    consider(goal + (a.b - a.n.dot(goal)) * a.n);
+  }
+  for (int i = 0; i < m; ++i) {
+    for (int j = i + 1; j < m; ++j) {
+      const Constraint& a = cons_[static_cast<std::size_t>(i)];
+      const Constraint& b = cons_[static_cast<std::size_t>(j)];
+      const double c = a.n.dot(b.n);
+      const double det = 1.0 - c * c;
+      if (det < 1e-10) continue;
+      const double ra = a.b - a.n.dot(goal), rb = b.b - b.n.dot(goal);
+      const double la = (ra - c * rb) / det, lb = (rb - c * ra) / det;
+      consider(goal + la * a.n + lb * b.n);
+    }
+  }
+  for (int i = 0; i < m; ++i) {
+    for (int j = i + 1; j < m; ++j) {
+      for (int k = j + 1; k < m; ++k) {
+        Eigen::Matrix3d N;
+        N.row(0) = cons_[static_cast<std::size_t>(i)].n.transpose();
+        N.row(1) = cons_[static_cast<std::size_t>(j)].n.transpose();
+        N.row(2) = cons_[static_cast<std::size_t>(k)].n.transpose();
+        const double det = N.determinant();
+        if (std::abs(det) < 1e-8) continue;
+        const Eigen::Vector3d rhs(cons_[static_cast<std::size_t>(i)].b, cons_[static_cast<std::size_t>(j)].b,
+                                  cons_[static_cast<std::size_t>(k)].b);
+        consider(N.inverse() * rhs);  // the vertex of three planes (goal drops out)
+      }
+    }
+  }
+  return best_t;
+}
+
+Eigen::Vector3d ProxySolver::Move(MeshCollider& collider, const ProxyParams& params,
+                                  const Eigen::Vector3d& x0, const Eigen::Vector3d& goal,
+                                  bool* truncated, std::int32_t* iterations) noexcept {
+  truncated_ = false;
+  const double Rs = params.radius_m + params.skin_m;
+  const double margin = 4.0 * params.skin_m;
+  Eigen::Vector3d x = x0;
+  // Constraints at the start: the triangles within R + skin of the proxy.
+  Gather(collider, x, Rs + margin);
+  int m = CollectConstraints(collider, params, x);
+  std::int32_t it = 0;
+  for (; it < params.max_iterations; ++it) {
+    Eigen::Vector3d t = Project(goal, x, m);
+    Eigen::Vector3d d = t - x;
+    const double len = d.norm();
+    if (!(len > 1e-12)) break;
+    if (len > params.max_step_m) d *= params.max_step_m / len;
+    // Sweep against every triangle near the segment (the ball around it covers all points
+    // within R + skin of it); no triangle: free motion.
+    double s = 2.0;
+    if (Gather(collider, x + 0.5 * d, 0.5 * d.norm() + Rs + margin)) {
+      const TriMesh& mesh = collider.mesh();
+      for (std::int32_t i = 0; i < num_candidates_; ++i) {
+        const auto& tr = mesh.triangles[static_cast<std::size_t>(candidates_[static_cast<std::size_t>(i)])];
+        s = std::min(s, SweepSphereTriangle(x, d, Rs, mesh.p_O_m[tr[0]], mesh.p_O_m[tr[1]], mesh.p_O_m[tr[2]]));
+      }
+    }
+    x += std::min(s, 1.0) * d;
+    m = CollectConstraints(collider, params, x);
+  }
+  if (truncated) *truncated = truncated_;
+  if (iterations) *iterations = it;
+  return x;
+}
+
+ProxyContact ProxySolver::Step(MeshCollider& collider, const ProxyParams& params,
+                               const FrictionParams& friction, const Eigen::Vector3d& goal,
+                               ProxyState& state) noexcept {
+  ProxyContact out;
+  out.x_O_m = state.x_O_m;
+  if (!goal.allFinite()) return out;
+  if (!state.initialized || !state.x_O_m.allFinite()) {
+    state.x_O_m = goal;
+    state.initialized = true;
+    state.in_contact = false;
+  }
+  const Eigen::Vector3d x0 = state.x_O_m;
+  // Far from the mesh's bounding sphere at both ends: free.
+  const double reach = collider.bound_radius_m() + params.radius_m + params.max_step_m;
+  if ((x0 - collider.bound_center_O_m()).norm() > reach &&
+      (goal - collider.bound_center_O_m()).norm() > reach) {
+    state.x_O_m = goal;
+    state.in_contact = false;
+    out.x_O_m = goal;
+    return out;
+  }
+  bool trunc = false;
+  std::int32_t iters = 0;
+  const Eigen::Vector3d x_f = Move(collider, params, x0, goal, &trunc, &iters);
+  Eigen::Vector3d x = x_f;
+  bool slipped = false;
+  const Eigen::Vector3d e = x_f - goal;  // frictionless reaction direction (normal cone)
+  const double e_norm = e.norm();
+  if (state.in_contact && friction.mu_static > 0.0 && e_norm > 0.0) {
+    // Coulomb on the proxy: would the force with the proxy held at x0 lie in the static cone?
+    const Eigen::Vector3d n = e / e_norm;
+    const Eigen::Vector3d f0 = x0 - goal;
+    const Eigen::Vector3d ft = f0 - f0.dot(n) * n;
+    const double fn = f0.dot(n) - params.skin_m;  // spring length from the surface
+    const double ft_norm = ft.norm();
+    const double mu = state.sliding ? friction.mu_kinetic : friction.mu_static;
+    if (fn > 0.0 && ft_norm <= mu * fn * (1.0 + 1e-9)) {
+      x = x0;
+      out.sticking = true;
+    } else if (fn > 0.0 && ft_norm > 0.0) {
+      slipped = true;
+      // Slip: back from the frictionless point toward x0 until the tangential force is
+      // mu_kinetic times the normal one (the kinetic cone's boundary), as a constrained move.
+      const double alpha = std::min(1.0, friction.mu_kinetic * fn / ft_norm);
+      if (alpha > 0.0) {
+        std::int32_t it2 = 0;
+        bool tr2 = false;
+        x = Move(collider, params, x_f, x_f + alpha * (x0 - x_f), &tr2, &it2);
+        trunc = trunc || tr2;
+        iters += it2;
+      }
+    }
+  }
+  // Contact geometry at the final proxy (its neighbourhood is in the last gather, re-query to
+  // be exact when the proxy stuck at x0).
+  Gather(collider, x, params.radius_m + params.skin_m + 4.0 * params.skin_m);
+  const int m = CollectConstraints(collider, params, x);
+  out.truncated = trunc || truncated_;
+  out.iterations = iters;
+  out.x_O_m = x;
+  state.x_O_m = x;
+  if (m > 0) {
+    int best = 0;
+    for (int i = 1; i < m; ++i) {
+      if (cons_[static_cast<std::size_t>(i)].dist < cons_[static_cast<std::size_t>(best)].dist) best = i;
+    }
+    const Constraint& k = cons_[static_cast<std::size_t>(best)];
+    out.p_O_m = k.c;
+    out.n_O = k.n;
+    out.triangle = k.tri;
+    // Normal: the touching feature nearest to the proxy (the others in the band are tilted
+    // neighbours); among features touching equally (a concave corner) the one pressed hardest.
+    double depth = -std::numeric_limits<double>::infinity();
+    for (int i = 0; i < m; ++i) {
+      const Constraint& q = cons_[static_cast<std::size_t>(i)];
+      if (q.dist > k.dist + 1e-9) continue;
+      const double di = q.n.dot(x - goal);
+      if (di > depth) {
+        depth = di;
+        out.p_O_m = q.c;
+        out.n_O = q.n;
+        out.triangle = q.tri;
+      }
+    }
+    // Depth of the fingertip sphere below the surface (the proxy rests skin_m above it).
+    out.depth_m = std::max(0.0, depth - params.skin_m);
+    out.touching = depth > params.skin_m;
+  }
+  if (!out.touching) out.sticking = false;
+  state.in_contact = out.touching;
+  state.sliding = out.touching && slipped;
+  return out;
+}
+
+}  // namespace handshare::contact

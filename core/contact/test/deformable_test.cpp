@@ -1,0 +1,174 @@
+// Deformable contact through handshare::fem: the force on a fingertip pressing a FEM block equals
+// a direct ContactPatchFinder + ContactSolver solve, and two hands on one object (one local, one
+// remote, each in its own HapticWorld) get the forces of one solve with all their contacts.
+#include <gtest/gtest.h>
+
+#include <memory>
+#include <vector>
+
+#include "handshare/contact/haptic_world.hpp"
+#include "handshare/fem/compliance.hpp"
+#include "handshare/fem/contact_patch.hpp"
+#include "handshare/fem/contact_solver.hpp"
+#include "handshare/fem/mesh.hpp"
+#include "test_util.hpp"
+
+namespace handshare::contact {
+namespace {
+
+constexpr double kR = 0.008;
+
+// A 6 x 6 x 3 cm block, 4 mm cells, bottom fixed, E = 20 kPa (soft tissue-like), frame O at a
+// shifted, rotated pose so frames are exercised.
+struct Block {
+  std::shared_ptr<fem::TetMesh> mesh;
+  std::shared_ptr<const fem::Compliance> C;
+  fem::Surface surface;
+  Eigen::Isometry3d X_WO = Eigen::Isometry3d::Identity();
+  double top = 0.03;
+};
+
+const Block& TheBlock() {
+  static const Block b = [] {
+    Block s;
+    s.mesh = std::make_shared<fem::TetMesh>(fem::MakeBoxMesh({0.06, 0.06, 0.03}, {15, 15, 6}));
+    const auto fixed = fem::NodesOnPlane(*s.mesh, 2, 0.0);
+    s.C = std::make_shared<const fem::Compliance>(
+        fem::Compliance::Precompute(*s.mesh, fem::Material{2e4, 0.3}, fixed));
+    s.surface = fem::ExtractSurface(*s.mesh);
+    s.X_WO = Eigen::Translation3d(0.1, -0.05, 0.2) * Eigen::AngleAxisd(0.3, Eigen::Vector3d::UnitZ());
+    return s;
+  }();
+  return b;
+}
+
+// The contact the world should find for a fingertip pressed straight down (O's -z) at (x, y).
+struct Press {
+  double x, y, depth;
+};
+
+Eigen::Vector3d TipAbove(const Block& b, const Press& p, double height) {
+  return b.X_WO * Eigen::Vector3d(p.x, p.y, b.top + kR + height);
+}
+
+// Oracle: ContactPatchFinder::Sphere + one push-only ContactSolver::Solve with every press.
+// Returns the force on each fingertip in W.
+std::vector<Eigen::Vector3d> Direct(const Block& b, const std::vector<Press>& presses, int max_patch) {
+  fem::ContactPatchFinder finder(*b.mesh, b.surface, *b.C);
+  fem::ContactSolverOptions so;
+  so.max_contacts = 256;
+  so.push_only = true;
+  fem::ContactSolver solver(b.C, so);
+  std::vector<fem::ContactInput> in(256);
+  std::vector<std::pair<int, int>> range;
+  int m = 0;
+  for (const Press& p : presses) {
+    const auto r = finder.Sphere({p.x, p.y, b.top}, Eigen::Vector3d::UnitZ(), kR, p.depth,
+                                 fem::ContactMode::kNormalOnly, std::span(in).subspan(m, max_patch));
+    range.emplace_back(m, r.count);
+    m += r.count;
+  }
+  EXPECT_EQ(solver.Solve(std::span(in.data(), m)), fem::StepStatus::kOk);
+  std::vector<Eigen::Vector3d> f;
+  for (auto [b0, n] : range) {
+    Eigen::Vector3d s = Eigen::Vector3d::Zero();
+    for (int i = 0; i < n; ++i) s += solver.forces_N()[static_cast<std::size_t>(b0 + i)];
+    f.push_back(-(b.X_WO.linear() * s));
+  }
+  return f;
+}
+
+std::unique_ptr<HapticWorld> MakeWorld(const Block& b, int max_patch, ObjectId* id) {
+  auto w = std::make_unique<HapticWorld>(WorldConfig{.max_hands = 2, .max_force_N = 100.0});
+  DeformableDesc d;
+  d.mesh = b.mesh;
+  d.compliance = b.C;
+  d.X_WO = b.X_WO;
+  d.max_patch_nodes = max_patch;
+  *id = w->AddDeformable(d);
+  w->Init();
+  return w;
+}
+
+// Lowers the given fingers from 2 mm above to their depths in 40 steps.
+void Lower(HapticWorld& w, const Block& b, const std::vector<Press>& presses,
+           std::span<const RemoteContact> remote = {}) {
+  for (int k = 0; k <= 40; ++k) {
+    std::array<Eigen::Vector3d, kFingers> tips;
+    for (int i = 0; i < kFingers; ++i) tips[static_cast<std::size_t>(i)] = Eigen::Vector3d(5.0, 5.0, 5.0 + i);
+    for (std::size_t i = 0; i < presses.size(); ++i) {
+      const double h = 0.002 - (0.002 + presses[i].depth) * k / 40.0;
+      tips[i] = TipAbove(b, presses[i], h);
+    }
+    w.Step(1e-3, tips, remote);
+  }
+}
+
+TEST(Deformable, FingertipForceMatchesADirectContactSolve) {
+  const Block& b = TheBlock();
+  ObjectId id = -1;
+  auto w = MakeWorld(b, 32, &id);
+  const std::vector<Press> presses = {{0.03, 0.03, 0.002}};
+  Lower(*w, b, presses);
+  const FingerResult& r = w->fingers()[0];
+  ASSERT_TRUE(r.in_contact);
+  EXPECT_EQ(r.object, id);
+  EXPECT_NEAR(r.depth_m, 0.002, 1e-12);
+  EXPECT_GT(r.patch_nodes, 3);
+  const auto f = Direct(b, presses, 32);
+  // Same patch and same solve: equal to round-off (1e-12 relative).
+  EXPECT_LT((r.f_E_W_N - f[0]).norm(), 1e-12 * f[0].norm()) << r.f_E_W_N.transpose() << " vs " << f[0].transpose();
+  // Pushes the fingertip out of the block (O's +z), a fraction of a newton for 2 mm into 20 kPa.
+  const Eigen::Vector3d z_W = b.X_WO.linear() * Eigen::Vector3d::UnitZ();
+  EXPECT_GT(r.f_E_W_N.dot(z_W), 0.9 * r.f_E_W_N.norm());
+  // ContactSet fields: main node is a patch node next to the contact point; u = -depth n.
+  ASSERT_GE(r.main_node, 0);
+  EXPECT_LT((b.X_WO * b.mesh->positions_m()[static_cast<std::size_t>(r.main_node)] - r.p_WC_m).norm(), 0.004);
+  EXPECT_LT((r.u_W_m + 0.002 * z_W).norm(), 1e-12);
+  // Held loads: forces on the object, summing to minus the fingertip force (in O).
+  Eigen::Vector3d sum = Eigen::Vector3d::Zero();
+  for (const fem::NodeLoad& l : w->held_loads(id)) sum += l.f_N;
+  EXPECT_LT((b.X_WO.linear() * sum + r.f_E_W_N).norm(), 1e-12);
+}
+
+TEST(Deformable, TwoHandsOnOneObjectAreSolvedTogether) {
+  const Block& b = TheBlock();
+  ObjectId id_a = -1, id_b = -1;
+  auto a = MakeWorld(b, 16, &id_a);  // hand A: local here, remote there
+  auto h = MakeWorld(b, 16, &id_b);  // hand B
+  const std::vector<Press> pa = {{0.02, 0.02, 0.002}, {0.035, 0.02, 0.0015}};
+  const std::vector<Press> pb = {{0.03, 0.042, 0.0025}, {0.045, 0.035, 0.001}, {0.015, 0.04, 0.002}};
+  // Both hands press; each world gets the other's last contacts (as the ContactSet carries).
+  auto contacts_of = [](const HapticWorld& w, int hand) {
+    std::vector<RemoteContact> out;
+    for (int i = 0; i < kFingers; ++i) {
+      const FingerResult& r = w.fingers()[static_cast<std::size_t>(i)];
+      if (r.in_contact) out.push_back({hand, i, r.object, r.p_WC_m, r.u_W_m, r.f_E_W_N});
+    }
+    return out;
+  };
+  Lower(*h, b, pb);
+  const auto from_b = contacts_of(*h, 1);
+  ASSERT_EQ(from_b.size(), 3u);
+  Lower(*a, b, pa, from_b);
+  const auto from_a = contacts_of(*a, 0);
+  ASSERT_EQ(from_a.size(), 2u);
+  Lower(*h, b, pb, from_a);
+  std::vector<Press> all = pa;
+  all.insert(all.end(), pb.begin(), pb.end());
+  const auto f = Direct(b, all, 16);
+  for (int i = 0; i < 2; ++i) {
+    EXPECT_LT((a->fingers()[static_cast<std::size_t>(i)].f_E_W_N - f[static_cast<std::size_t>(i)]).norm(), 1e-12 * f[static_cast<std::size_t>(i)].norm() + 1e-15);
+  }
+  for (int i = 0; i < 3; ++i) {
+    EXPECT_LT((h->fingers()[static_cast<std::size_t>(i)].f_E_W_N - f[static_cast<std::size_t>(2 + i)]).norm(), 1e-12 * f[static_cast<std::size_t>(2 + i)].norm() + 1e-15);
+  }
+  // Solving each hand alone would differ (the block couples the hands), so the test can fail.
+  const auto alone = Direct(b, pa, 16);
+  EXPECT_GT((alone[0] - f[0]).norm(), 1e-4 * f[0].norm());
+  // Both worlds hold the same node loads.
+  ASSERT_EQ(a->held_loads(id_a).size(), h->held_loads(id_b).size());
+}
+
+}  // namespace
+}  // namespace handshare::contact
