@@ -41,13 +41,13 @@ std::vector<ControlStats> ComputeControlStats(const std::vector<ControlRecord>& 
     if (IsHit(e.kind)) {
       ++a.stats.hits;
       a.misses_by_user.try_emplace(e.user, 0);
+      if (e.error_m && std::isfinite(*e.error_m)) a.errors.push_back(*e.error_m);
     } else if (e.kind == ControlKind::kMissed) {
       ++a.stats.misses;
       ++a.misses_by_user[e.user];
     } else {
       ++a.stats.released;
     }
-    if (e.error_m && std::isfinite(*e.error_m)) a.errors.push_back(*e.error_m);
   }
   std::vector<ControlStats> out;
   for (auto& [id, a] : by_control) {
@@ -307,12 +307,12 @@ void PrintReport(std::ostream& out, const SessionReport& r) {
                   total > 0 ? 100.0 * w.seconds / total : 0.0, w.title.c_str());
   }
 
-  out << "\ncontrols: " << r.control_events << " event(s); error = distance from the control's target, over the "
-      << "events that carry one; misses/user as in the paper's Table 4 (count = users who tried)\n";
+  out << "\ncontrols: " << r.control_events << " event(s); error = distance of a hit from the control's target "
+      << "(hits that carry one); misses per user as in the paper's Table 4 (users = those who tried)\n";
   if (r.controls.empty()) {
     out << "  (no control events logged)\n";
   } else {
-    out << Format("  %-16s %6s %7s %8s %10s %10s %6s %9s %7s\n", "control", "hits", "misses", "errors",
+    out << Format("  %-16s %6s %7s %8s %10s %10s %6s %9s %7s\n", "control", "hits", "misses", "hit errs",
                   "mean [mm]", "sd [mm]", "users", "miss mean", "miss sd");
     for (const auto& c : r.controls) {
       out << Format("  %-16s %6zu %7zu %8zu %10.2f %10.2f %6zu %9.2f %7.2f\n", c.control_id.c_str(), c.hits,

@@ -79,11 +79,12 @@ TEST(ComputeControlStats, ReproducesThePapersTable4FromPerUserMisses) {
     EXPECT_EQ(stats[i].hits, 55u);
     EXPECT_EQ(stats[i].released, 55u);
     EXPECT_EQ(stats[i].misses, table4[i].misses);
-    EXPECT_EQ(stats[i].error_m.n, 55u + table4[i].misses);  // released carries no error
+    EXPECT_EQ(stats[i].error_m.n, 55u);  // hits only: misses and releases are not hit errors
+    EXPECT_NEAR(stats[i].error_m.mean, 0.002, 1e-15);
   }
 }
 
-TEST(ComputeControlStats, ErrorsOfHitsAndMissesAndUsersWhoNeverMissed) {
+TEST(ComputeControlStats, ErrorsOfHitsAndUsersWhoNeverMissed) {
   const std::vector<ControlRecord> events = {
       {kT0, "alice", "lever", ControlKind::kMoved, 0.3, 0.001},
       {kT0, "alice", "lever", ControlKind::kMoved, 0.3, 0.002},
@@ -101,9 +102,11 @@ TEST(ComputeControlStats, ErrorsOfHitsAndMissesAndUsersWhoNeverMissed) {
   const ControlStats& lever = stats[1];
   EXPECT_EQ(lever.hits, 4u);
   EXPECT_EQ(lever.misses, 1u);
-  EXPECT_EQ(lever.error_m.n, 4u);
-  EXPECT_NEAR(lever.error_m.mean, 0.0025, 1e-15);
-  EXPECT_NEAR(lever.error_m.sd, 0.001 * std::sqrt(5.0 / 3.0), 1e-15);
+  // Hits 1, 2 and 4 mm (the miss at 3 mm is not a hit error): mean 7/3 mm, squared deviations
+  // (16 + 1 + 25) / 9 mm^2 over n - 1 = 2: sd = sqrt(7/3) mm.
+  EXPECT_EQ(lever.error_m.n, 3u);
+  EXPECT_NEAR(lever.error_m.mean, 0.007 / 3.0, 1e-15);
+  EXPECT_NEAR(lever.error_m.sd, 0.001 * std::sqrt(7.0 / 3.0), 1e-15);
   EXPECT_EQ(lever.misses_per_user.n, 2u);  // alice (0 misses) counts
   EXPECT_DOUBLE_EQ(lever.misses_per_user.mean, 0.5);
 }
@@ -196,7 +199,8 @@ TEST_F(ReportFromFile, TheNewestSessionByDefault) {
   EXPECT_EQ(r.controls[1].control_id, "lever");
   EXPECT_EQ(r.controls[1].hits, 1u);
   EXPECT_EQ(r.controls[1].misses, 1u);
-  EXPECT_NEAR(r.controls[1].error_m.mean, 0.006, 1e-12);
+  EXPECT_EQ(r.controls[1].error_m.n, 1u);  // the hit; the miss's 10 mm is not a hit error
+  EXPECT_NEAR(r.controls[1].error_m.mean, 0.002, 1e-12);
   EXPECT_EQ(r.control_events, 3u);
   EXPECT_EQ(r.ownership_changes, 1u);
 
@@ -206,7 +210,7 @@ TEST_F(ReportFromFile, TheNewestSessionByDefault) {
   EXPECT_NE(t.find("session #2 'second' on DDS domain 122"), std::string::npos) << t;
   EXPECT_NE(t.find("(20.000 s)"), std::string::npos) << t;
   EXPECT_NE(t.find("solar_system"), std::string::npos) << t;
-  EXPECT_NE(t.find("  lever                 1       1        2       6.00       5.66      1      1.00    0.00"),
+  EXPECT_NE(t.find("  lever                 1       1        1       2.00       0.00      1      1.00    0.00"),
             std::string::npos)
       << t;
   std::ostringstream csv;

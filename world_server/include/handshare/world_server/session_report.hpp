@@ -28,7 +28,9 @@ struct ControlStats {
   std::size_t hits = 0;       // pressed, moved, page_turned
   std::size_t misses = 0;     // missed
   std::size_t released = 0;
-  Summary error_m;            // error_m of every event that has one (hits and misses)
+  /// error_m of the hits that carry one: how far from the target the hits landed. A miss's
+  /// distance is a different quantity; it stays in the log, not in this summary.
+  Summary error_m;
   /// Misses per user, over the users who tried this control (hit or miss): the paper's
   /// Table 4 (count = users, mean and sd of their misses).
   Summary misses_per_user;
