@@ -47,13 +47,13 @@ Member FromMessage(const msg::MemberInfo& info) {
                 dds::ToString(info.kind()), info.device().to_string(), info.pid()};
 }
 
-}  // namespace
-
 std::string HostName() {
   char name[256] = {};
   if (gethostname(name, sizeof name - 1) != 0) return "";
   return name;
 }
+
+}  // namespace
 
 WorldServer::WorldServer(WorldServerConfig config)
     : config_(std::move(config)), start_(std::chrono::steady_clock::now()) {}
