@@ -35,7 +35,9 @@ struct ProxyParams {
                                  ///< a 10 mN error, below what HIRO II resolves).
   double max_step_m = 2e-3;      ///< most the proxy moves per step while near a surface (2 m/s at
                                  ///< 1 kHz, four times HIRO II's fastest fingertip).
-  std::int32_t max_iterations = 6;  ///< constrain-project-sweep rounds per move.
+  std::int32_t max_iterations = 4;  ///< constrain-project-sweep rounds per move (a proxy that
+                                    ///< has not converged goes on next step; every round is a
+                                    ///< swept, feasible move, so fewer rounds never tunnel).
 };
 
 /// Coulomb friction on the proxy (mu_kinetic <= mu_static; 0 = frictionless).

@@ -1,0 +1,293 @@
+// haptic_bench: time of one HapticWorld::Step (5 fingers: collision, proxy, contact solve,
+// forces) while the fingers move along trajectories that touch the object.
+//
+//   haptic_bench --csv [--cache-dir DIR] [--steps N] [--only NAME]  scenario,p50_us,p99_us rows
+//   haptic_bench [google benchmark flags]                            the same as Google Benchmarks
+//
+// Scenarios:
+//   rigid_mesh_20k         static bumpy sphere, 20,480 triangles, radius 5 cm, friction on
+//   dynamic_ball_grasp     a 5,120-triangle ball held by five fingers under Moon gravity
+//   deformable_2k          cube 0.1 m, 21^3 nodes (1,961 compliance nodes), bottom fixed
+//   deformable_10k         plate 0.2 x 0.2 x 0.01 m, 71 x 71 x 3 nodes (10,149 compliance nodes),
+//                          clamped along one edge; float32 compliance (1.85 GB)
+//   deformable_10k_patch6  the same with at most 6 patch nodes per fingertip
+//   deformable_10k_2hands  the same plus a remote hand's 5 contacts in the same solve
+// Fingertips: radius 8 mm; each follows its own circle over the object and presses 0..3 mm in and
+// out (a few percent of the steps are free), at up to about 0.1 m/s.
+#include <benchmark/benchmark.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <filesystem>
+#include <functional>
+#include <map>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "handshare/contact/haptic_world.hpp"
+#include "handshare/fem/compliance.hpp"
+#include "handshare/fem/mesh.hpp"
+
+namespace {
+
+using namespace handshare;
+using namespace handshare::contact;
+namespace fs = std::filesystem;
+using Clock = std::chrono::steady_clock;
+
+fs::path g_cache_dir = HANDSHARE_HAPTIC_BENCH_CACHE;
+
+double Since(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
+
+std::shared_ptr<const fem::Compliance> LoadCompliance(const std::string& name, const fem::TetMesh& mesh,
+                                                      const std::vector<std::int32_t>& fixed,
+                                                      fem::Precision precision) {
+  fs::create_directories(g_cache_dir);
+  const fs::path file = g_cache_dir / (name + (precision == fem::Precision::kFloat32 ? ".f32" : ".f64") + ".compliance");
+  fem::ComplianceOptions opt;
+  opt.precision = precision;
+  std::string note;
+  fem::PrecomputeStats st;
+  const auto t0 = Clock::now();
+  auto progress = [&](std::int64_t d, std::int64_t t) {
+    if (d == t || d % 1024 == 0) std::fprintf(stderr, "\r  %s: %lld/%lld nodes, %.0f s ", name.c_str(), static_cast<long long>(d), static_cast<long long>(t), Since(t0));
+  };
+  auto C = std::make_shared<const fem::Compliance>(
+      fem::Compliance::LoadOrPrecompute(file, mesh, fem::Material{1e4, 0.3}, fixed, opt, progress, &note, &st));
+  std::fprintf(stderr, "\n# %s: %d compliance nodes, %s (%.1f s%s)\n", name.c_str(), C->num_nodes(), note.c_str(),
+               Since(t0), st.total_s > 0 ? ", precomputed" : ", from cache");
+  return C;
+}
+
+struct Scenario {
+  std::string name;
+  std::unique_ptr<HapticWorld> world;
+  // Fingertip trajectory: circle centre, radius, surface point/normal model.
+  std::function<std::array<Eigen::Vector3d, kFingers>(int)> tips;
+  std::vector<RemoteContact> remote;
+  std::function<void(int)> before_step = [](int) {};
+};
+
+// Fingertip i at step k on a flat top face z = top over [x0, x0 + L] x [y0, y0 + L].
+std::array<Eigen::Vector3d, kFingers> FlatTips(int k, double x0, double y0, double L, double top) {
+  std::array<Eigen::Vector3d, kFingers> p;
+  const double t = k * 1e-3;
+  for (int i = 0; i < kFingers; ++i) {
+    const double ang = 0.8 * t + 2.0 * M_PI * i / kFingers;
+    const double rad = 0.18 * L + 0.03 * L * i;
+    const double depth = 0.0015 + 0.0017 * std::sin(3.0 * t + i);  // -0.2 .. 3.2 mm
+    p[static_cast<std::size_t>(i)] = Eigen::Vector3d(x0 + 0.5 * L + rad * std::cos(ang), y0 + 0.5 * L + rad * std::sin(ang),
+                                                     top + 0.008 - depth);
+  }
+  return p;
+}
+
+std::unique_ptr<Scenario> MakeRigid() {
+  auto s = std::make_unique<Scenario>();
+  s->name = "rigid_mesh_20k";
+  s->world = std::make_unique<HapticWorld>();
+  auto mesh = std::make_shared<TriMesh>(MakeBumpySphere(0.05, 0.003, 5));
+  s->world->AddStatic(Shape::Mesh(mesh), RigidMaterial{1000.0, 2.0, 0.6, 0.5}, Eigen::Isometry3d::Identity());
+  s->world->Init();
+  s->tips = [](int k) {
+    std::array<Eigen::Vector3d, kFingers> p;
+    const double t = k * 1e-3;
+    for (int i = 0; i < kFingers; ++i) {
+      // A point sliding over the sphere (about 0.1 m/s), pressing 0..3 mm beyond the bumps.
+      const double th = 0.9 + 0.25 * i + 0.3 * std::sin(0.7 * t + i);
+      const double ph = 2.0 * t + 1.2 * i;
+      const Eigen::Vector3d u(std::sin(th) * std::cos(ph), std::sin(th) * std::sin(ph), std::cos(th));
+      const double depth = 0.0015 + 0.0017 * std::sin(3.0 * t + i);
+      p[static_cast<std::size_t>(i)] = u * (0.05 + 0.008 - depth);
+    }
+    return p;
+  };
+  return s;
+}
+
+std::unique_ptr<Scenario> MakeBall() {
+  auto s = std::make_unique<Scenario>();
+  s->name = "dynamic_ball_grasp";
+  WorldConfig cfg;
+  cfg.gravity_W_m_per_s2 = Eigen::Vector3d(0, 0, -kMoonGravity_m_per_s2);
+  s->world = std::make_unique<HapticWorld>(cfg);
+  BodyProperties body;
+  body.mass_kg = 0.2;
+  body.linear_damping_N_s_per_m = 2.0;
+  body.angular_damping_N_m_s = 0.002;
+  const ObjectId ball = s->world->AddDynamic(Shape::Sphere(0.03, 4), RigidMaterial{1000.0, 2.0, 1.0, 0.8}, body,
+                                             Eigen::Isometry3d::Identity());
+  s->world->Init();
+  // The scene holds the ball while the hand closes (0.2 s), then lets go.
+  HapticWorld* w = s->world.get();
+  s->before_step = [w, ball](int k) {
+    if (k <= 200) w->SetPose(ball, Eigen::Isometry3d::Identity());
+  };
+  s->tips = [](int k) {
+    const std::array<Eigen::Vector3d, kFingers> dir = {Eigen::Vector3d(-1, 0, 0), Eigen::Vector3d(1, 0.3, 0.3),
+                                                       Eigen::Vector3d(1, -0.3, 0.3), Eigen::Vector3d(1, 0.3, -0.3),
+                                                       Eigen::Vector3d(1, -0.3, -0.3)};
+    const std::array<double, kFingers> depth = {0.00184, 0.0005, 0.0005, 0.0005, 0.0005};
+    std::array<Eigen::Vector3d, kFingers> p;
+    const double close = std::min(1.0, k / 200.0);
+    const Eigen::Vector3d hand(0.0, 0.0, 0.01 * std::sin(1e-3 * k));  // the hand lifts and lowers
+    for (int i = 0; i < kFingers; ++i) {
+      const double h = 0.005 - (0.005 + depth[static_cast<std::size_t>(i)]) * close;
+      p[static_cast<std::size_t>(i)] = hand + dir[static_cast<std::size_t>(i)].normalized() * (0.03 + 0.008 + h);
+    }
+    return p;
+  };
+  return s;
+}
+
+std::unique_ptr<Scenario> MakeDeformable(const std::string& name, bool plate, int max_patch, bool two_hands) {
+  auto s = std::make_unique<Scenario>();
+  s->name = name;
+  WorldConfig cfg;
+  cfg.max_hands = 2;
+  s->world = std::make_unique<HapticWorld>(cfg);
+  std::shared_ptr<fem::TetMesh> mesh;
+  std::vector<std::int32_t> fixed;
+  double L = 0.1, top = 0.1;
+  if (plate) {
+    mesh = std::make_shared<fem::TetMesh>(fem::MakeBoxMesh({0.2, 0.2, 0.01}, {70, 70, 2}));
+    fixed = fem::NodesOnPlane(*mesh, 0, 0.0);
+    L = 0.2;
+    top = 0.01;
+  } else {
+    mesh = std::make_shared<fem::TetMesh>(fem::MakeBoxMesh({0.1, 0.1, 0.1}, {20, 20, 20}));
+    fixed = fem::NodesOnPlane(*mesh, 2, 0.0);
+  }
+  static std::shared_ptr<const fem::Compliance> plate_c, cube_c;
+  auto& C = plate ? plate_c : cube_c;
+  if (!C) {
+    C = LoadCompliance(plate ? "plate71x71x3" : "cube21", *mesh, fixed,
+                       plate ? fem::Precision::kFloat32 : fem::Precision::kFloat64);
+  }
+  DeformableDesc d;
+  d.mesh = mesh;
+  d.compliance = C;
+  d.max_patch_nodes = max_patch;
+  s->world->AddDeformable(d);
+  s->world->Init();
+  s->tips = [L, top](int k) { return FlatTips(k, 0.0, 0.0, L, top); };
+  if (two_hands) {
+    // A remote hand's five fingertips pressing 1.5 mm at fixed points, as its ContactSet says.
+    for (int i = 0; i < kFingers; ++i) {
+      s->remote.push_back(RemoteContact{1, i, 0, Eigen::Vector3d(0.15 * L + 0.17 * L * i, 0.9 * L, top),
+                                        Eigen::Vector3d(0, 0, -0.0015), Eigen::Vector3d(0, 0, 0.2)});
+    }
+  }
+  return s;
+}
+
+std::unique_ptr<Scenario> Make(const std::string& name) {
+  if (name == "rigid_mesh_20k") return MakeRigid();
+  if (name == "dynamic_ball_grasp") return MakeBall();
+  if (name == "deformable_2k") return MakeDeformable(name, false, 16, false);
+  if (name == "deformable_10k") return MakeDeformable(name, true, 16, false);
+  if (name == "deformable_10k_patch6") return MakeDeformable(name, true, 6, false);
+  if (name == "deformable_10k_2hands") return MakeDeformable(name, true, 16, true);
+  return nullptr;
+}
+
+const char* kNames[] = {"rigid_mesh_20k", "dynamic_ball_grasp", "deformable_2k", "deformable_10k",
+                        "deformable_10k_patch6", "deformable_10k_2hands"};
+
+struct Stats {
+  double p50_us, p99_us, max_us, contact_fraction, mean_patch;
+};
+
+Stats Run(Scenario& s, int steps) {
+  std::vector<double> us;
+  us.reserve(static_cast<std::size_t>(steps));
+  long contacts = 0, patch = 0;
+  for (int k = 0; k < 500; ++k) {  // warm-up (and the ball grasp closes)
+    s.before_step(k);
+    s.world->Step(1e-3, s.tips(k), s.remote);
+  }
+  for (int k = 500; k < 500 + steps; ++k) {
+    const auto tips = s.tips(k);
+    s.before_step(k);
+    const auto t0 = Clock::now();
+    s.world->Step(1e-3, tips, s.remote);
+    const auto t1 = Clock::now();
+    benchmark::DoNotOptimize(s.world->fingers().data());
+    us.push_back(std::chrono::duration<double, std::micro>(t1 - t0).count());
+    for (const FingerResult& r : s.world->fingers()) {
+      contacts += r.in_contact ? 1 : 0;
+      patch += r.patch_nodes;
+    }
+  }
+  std::sort(us.begin(), us.end());
+  auto q = [&](double f) { return us[static_cast<std::size_t>(f * static_cast<double>(us.size() - 1))]; };
+  return {q(0.5), q(0.99), us.back(), static_cast<double>(contacts) / (kFingers * steps),
+          contacts ? static_cast<double>(patch) / static_cast<double>(contacts) : 0.0};
+}
+
+void BM_HapticStep(benchmark::State& state, const char* name) {
+  static std::map<std::string, std::unique_ptr<Scenario>> cache;
+  auto& s = cache[name];
+  if (!s) s = Make(name);
+  static std::map<std::string, int> step;
+  int& k = step[name];
+  for (auto _ : state) {
+    s->before_step(k);
+    s->world->Step(1e-3, s->tips(k++), s->remote);
+    benchmark::DoNotOptimize(s->world->fingers().data());
+  }
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  bool csv = false;
+  int steps = 20000;
+  std::string only;
+  std::vector<char*> rest = {argv[0]};
+  for (int i = 1; i < argc; ++i) {
+    const std::string a = argv[i];
+    if (a == "--csv") {
+      csv = true;
+    } else if (a == "--cache-dir" && i + 1 < argc) {
+      g_cache_dir = argv[++i];
+    } else if (a == "--steps" && i + 1 < argc) {
+      steps = std::max(100, std::atoi(argv[++i]));
+    } else if (a == "--only" && i + 1 < argc) {
+      only = argv[++i];
+    } else {
+      rest.push_back(argv[i]);
+    }
+  }
+  try {
+    if (csv) {
+      std::printf("scenario,p50_us,p99_us\n");
+      for (const char* name : kNames) {
+        if (!only.empty() && only != name) continue;
+        auto s = Make(name);
+        const Stats st = Run(*s, steps);
+        std::printf("%s,%.2f,%.2f\n", name, st.p50_us, st.p99_us);
+        std::fflush(stdout);
+        std::fprintf(stderr, "# %s: max %.1f us, fingers in contact %.0f%% of finger-steps, mean patch %.1f nodes, %d steps\n",
+                     name, st.max_us, 100.0 * st.contact_fraction, st.mean_patch, steps);
+      }
+      return 0;
+    }
+    for (const char* name : kNames) {
+      benchmark::RegisterBenchmark((std::string("HapticStep/") + name).c_str(), BM_HapticStep, name)
+          ->Unit(benchmark::kMicrosecond);
+    }
+    int n = static_cast<int>(rest.size());
+    benchmark::Initialize(&n, rest.data());
+    benchmark::RunSpecifiedBenchmarks();
+    benchmark::Shutdown();
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "haptic_bench: %s\n", e.what());
+    return 1;
+  }
+  return 0;
+}
