@@ -1,0 +1,42 @@
+#pragma once
+/// Offline preparation of a scene's deformable object: its surface mesh (already loaded by the
+/// scene loader, frame O) is tetrahedralized by the external tetgen program, its fixed rule
+/// becomes fixed nodes, and the compliance of its free surface nodes is loaded from the cache
+/// or precomputed (CHOLMOD) and saved. Not real-time: run on a loader thread or ahead of time.
+#include <cstdint>
+#include <filesystem>
+#include <functional>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "handshare/fem/compliance.hpp"
+#include "handshare/fem/mesh.hpp"
+#include "handshare/scene/scene.hpp"
+
+namespace handshare::world {
+
+struct PreparedDeformable {
+  std::string object_id;
+  std::shared_ptr<const fem::TetMesh> mesh;        ///< frame O
+  std::shared_ptr<const fem::Surface> surface;
+  std::shared_ptr<const fem::Compliance> compliance;
+  std::vector<std::int32_t> fixed_nodes;
+  std::filesystem::path cache_file;
+  std::string cache_note;  ///< why the cache was (not) used
+  double prepare_s = 0.0;
+};
+
+/// Where compliance caches live: $HANDSHARE_CACHE if set, else $XDG_CACHE_HOME/handshare,
+/// else ~/.cache/handshare, else /tmp/handshare-cache.
+std::filesystem::path DefaultCacheDir();
+
+/// Prepares one deformable scene object (kind kDeformable, shape kMesh or box/sphere).
+/// Compliance is stored in float32 (half the memory; the FEM tests bound its error at 1e-5).
+/// @throws scene::SceneError naming the scene file, line and object for a mesh tetgen cannot
+///         use or a fixed rule that fixes no node or every node; fem errors pass through.
+PreparedDeformable PrepareDeformable(const scene::Scene& scene, const scene::SceneObject& object,
+                                     const std::filesystem::path& cache_dir,
+                                     const fem::ProgressFn& progress = {});
+
+}  // namespace handshare::world

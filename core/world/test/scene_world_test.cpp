@@ -1,0 +1,97 @@
+#include "handshare/world/scene_world.hpp"
+
+#include <gtest/gtest.h>
+
+#include <fstream>
+
+namespace handshare::world {
+namespace {
+
+std::filesystem::path TempDir(const std::string& name) {
+  const auto dir = std::filesystem::temp_directory_path() / ("handshare_world_test_" + name);
+  std::filesystem::remove_all(dir);
+  std::filesystem::create_directories(dir / "scenes");
+  return dir;
+}
+
+scene::Scene WriteAndLoad(const std::filesystem::path& dir, const std::string& name, const std::string& objects) {
+  const auto file = dir / "scenes" / (name + ".json");
+  std::ofstream(file) << R"({"name": ")" << name << R"(", "gravity_m_per_s2": [0, 0, -1.62], "objects": [)"
+                      << objects << R"(], "messages": [{"language": "en", "text": "t", "next_action": "a"}]})";
+  return scene::LoadScene(file);
+}
+
+const char* kGroundAndBall =
+    R"({"id": "ground", "kind": "rigid", "shape": "box", "position_m": [0, 0, -0.02], "half_extent_m": [0.3, 0.3, 0.02]},
+       {"id": "ball", "kind": "rigid", "shape": "sphere", "position_m": [0, 0, 0.06], "radius_m": 0.04, "mass_kg": 0.2})";
+
+// The ball falls onto the ground's top face under the scene's (Moon) gravity and rests there.
+TEST(SceneWorld, DynamicBallRestsOnTheGroundUnderTheSceneGravity) {
+  const auto dir = TempDir("ball");
+  const scene::Scene s = WriteAndLoad(dir, "moon", kGroundAndBall);
+  SceneWorldOptions options;
+  options.cache_dir = dir / "cache";
+  SceneWorld sw = BuildSceneWorld(s, options);
+  ASSERT_EQ(sw.dynamic_bodies.size(), 1u);
+  const auto ball = sw.Find("ball");
+  ASSERT_GE(ball, 0);
+  EXPECT_EQ(sw.ids[ball], "ball");
+  EXPECT_EQ(sw.Find("nothing"), -1);
+  std::array<Eigen::Vector3d, 5> far;
+  for (auto& p : far) p = Eigen::Vector3d(5, 5, 5);  // fingertips nowhere near
+  for (int k = 0; k < 4000; ++k) sw.world->Step(1e-3, far);
+  // Resting on the support: the centre a radius above the top face, within the support's
+  // penalty sag m g / k = 0.2 * 1.62 / 5000 = 65 um (and a little more while settling).
+  EXPECT_NEAR(sw.world->pose(ball).translation().z(), 0.04, 2e-4);
+  EXPECT_LT(sw.world->body_velocity_W(ball).norm(), 1e-3);
+}
+
+TEST(SceneWorld, DeformableBoxIsPreparedOnceThenLoadedFromTheCache) {
+  const auto dir = TempDir("box");
+  const std::string block =
+      R"({"id": "block", "kind": "deformable", "shape": "box", "position_m": [0, 0, 0.02],
+          "half_extent_m": [0.02, 0.02, 0.01], "material": {"E_Pa": 20000, "nu": 0.4},
+          "fixed": {"below_m": -0.0099}})";
+  const scene::Scene s = WriteAndLoad(dir, "soft", block);
+  const auto& o = s.objects.front();
+  const PreparedDeformable first = PrepareDeformable(s, o, dir / "cache");
+  EXPECT_GT(first.compliance->num_nodes(), 50);
+  EXPECT_FALSE(first.fixed_nodes.empty());
+  for (std::int32_t n : first.fixed_nodes) EXPECT_NEAR(first.mesh->positions_m()[n].z(), -0.01, 1e-12);
+  const PreparedDeformable second = PrepareDeformable(s, o, dir / "cache");
+  EXPECT_EQ(second.compliance->input_hash(), first.compliance->input_hash());
+  EXPECT_NE(second.cache_note, first.cache_note);  // precomputed, then loaded
+  SceneWorldOptions options;
+  options.cache_dir = dir / "cache";
+  SceneWorld sw = BuildSceneWorld(s, options);
+  ASSERT_EQ(sw.deformables.size(), 1u);
+  // A fingertip pressed 2 mm into the top face feels an upward force.
+  std::array<Eigen::Vector3d, 5> tips;
+  for (auto& p : tips) p = Eigen::Vector3d(5, 5, 5);
+  for (int k = 0; k <= 100; ++k) {
+    tips[1] = Eigen::Vector3d(0, 0, 0.03 + 0.008 - 0.002 * k / 100.0);
+    sw.world->Step(1e-3, tips);
+  }
+  EXPECT_GT(sw.world->fingers()[1].f_E_W_N.z(), 0.01);
+  EXPECT_EQ(sw.world->fingers()[1].object, sw.Find("block"));
+}
+
+TEST(SceneWorld, ADeformableWithoutFixedNodesIsAnErrorNamingFileAndObject) {
+  const auto dir = TempDir("free");
+  const std::string block =
+      R"({"id": "floater", "kind": "deformable", "shape": "box", "position_m": [0, 0, 0.02],
+          "half_extent_m": [0.02, 0.02, 0.01], "material": {"E_Pa": 20000, "nu": 0.4},
+          "fixed": {"below_m": -1.0}})";
+  const scene::Scene s = WriteAndLoad(dir, "free", block);
+  try {
+    PrepareDeformable(s, s.objects.front(), dir / "cache");
+    FAIL() << "no error";
+  } catch (const scene::SceneError& e) {
+    EXPECT_NE(std::string(e.what()).find("free.json"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("floater"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("holds no node"), std::string::npos) << e.what();
+  }
+}
+
+}  // namespace
+}  // namespace handshare::world
