@@ -7,8 +7,10 @@ int main(int argc, char** argv) {
       "haptic_node", "Joins a handshare session with a haptic device and runs the haptic loop.");
   handshare::common::DeclareSessionOptions(options);
   options.Value("user", "U", "user name, unique in the session", std::nullopt, true)
-      .Value("device", "KIND", "device driver: sim, replay", "sim")
-      .Value("script", "FILE", "sim: hand script (see haptic_node/scripts/)", "")
+      .Value("device", "KIND", "device driver: sim, hiro (simulated HIRO II plant), replay", "sim")
+      .Value("hiro-config", "FILE", "hiro: device geometry", HANDSHARE_HIRO_CONFIG)
+      .Value("cache", "DIR", "compliance cache of the deformable objects (default: ~/.cache/handshare)", "")
+      .Value("script", "FILE", "sim, hiro: the (simulated) user's hand script (see haptic_node/scripts/)", "")
       .Value("replay", "FILE", "replay: device-state log to play back (a --trace file)", "")
       .Flag("replay-loop", "replay: start over at the end of the log")
       .Value("rate", "HZ", "haptic loop rate", "1000")
@@ -19,10 +21,12 @@ int main(int argc, char** argv) {
     c.where = handshare::common::ReadSessionOptions(o);
     c.user = o.GetString("user");
     c.device = o.GetString("device");
-    if (c.device != "sim" && c.device != "replay") {
+    if (c.device != "sim" && c.device != "replay" && c.device != "hiro") {
       throw handshare::common::OptionError("option --device: '" + c.device +
-                                           "' is not available (this build has: sim, replay)");
+                                           "' is not available (this build has: sim, hiro, replay)");
     }
+    c.hiro_config = o.GetString("hiro-config");
+    c.cache_dir = o.GetString("cache");
     c.script = o.GetString("script");
     c.replay_file = o.GetString("replay");
     c.replay_loop = o.FlagSet("replay-loop");

@@ -3,6 +3,7 @@
 #include <cstdio>
 #include <fstream>
 #include <functional>
+#include <map>
 #include <iomanip>
 #include <memory>
 #include <stdexcept>
@@ -11,8 +12,11 @@
 #include "handshare/common/shutdown.hpp"
 #include "handshare/dds/membership.hpp"
 #include "handshare/dds/messages.hpp"
+#include "handshare/common/clock.hpp"
 #include "handshare/haptic/haptic_loop.hpp"
 #include "handshare/haptic/replay.hpp"
+#include "handshare/haptic/scene_renderer.hpp"
+#include "handshare/hiro/hiro_device.hpp"
 #include "handshare/haptic/sim_hand.hpp"
 
 namespace handshare::haptic {
@@ -28,8 +32,13 @@ std::unique_ptr<Device> MakeDevice(const HapticNodeConfig& c) {
                                          : HandScript::Load(c.script);
     return std::make_unique<SimDevice>(std::move(script));
   }
+  if (c.device == "hiro") {
+    hiro::HiroSimOptions sim;
+    if (!c.script.empty()) sim.script = HandScript::Load(c.script);
+    return hiro::MakeHiroDevice(c.hiro_config, sim);
+  }
   if (c.device == "replay") return std::make_unique<ReplayDevice>(ReplayLog::Load(c.replay_file), c.replay_loop);
-  throw std::invalid_argument("device '" + c.device + "' is not available (this build has: sim, replay)");
+  throw std::invalid_argument("device '" + c.device + "' is not available (this build has: sim, hiro, replay)");
 }
 
 void Fill(msg::DeviceState& out, const HapticSnapshot& s) {
@@ -60,6 +69,37 @@ void FillStats(msg::LoopStatistics& out, const common::LoopStats& s, std::uint64
   out.faults(faults);
 }
 
+
+msg::ControlEventKind ToMessage(controls::EventKind k) {
+  switch (k) {
+    case controls::EventKind::kPressed: return msg::CONTROL_PRESSED;
+    case controls::EventKind::kReleased: return msg::CONTROL_RELEASED;
+    case controls::EventKind::kMoved: return msg::CONTROL_MOVED;
+    case controls::EventKind::kPageTurned: return msg::CONTROL_PAGE_TURNED;
+    case controls::EventKind::kMissed: return msg::CONTROL_MISSED;
+    case controls::EventKind::kOpened: return msg::CONTROL_OPENED;
+  }
+  return msg::CONTROL_MISSED;
+}
+
+// The dynamic body this hand grasps: two or more fingers on it pushing from sides more than
+// 100 degrees apart (a pinch or a grasp, not a single poke or a hand resting on top).
+std::int32_t GraspedBody(const ContactReport& r) {
+  for (int b = 0; b < r.num_bodies; ++b) {
+    const std::int32_t body = r.bodies[b].object;
+    for (int i = 0; i < kFingers; ++i) {
+      if (!r.fingers[i].active || r.fingers[i].object != body) continue;
+      const Eigen::Vector3d ni(r.fingers[i].n_W[0], r.fingers[i].n_W[1], r.fingers[i].n_W[2]);
+      for (int j = i + 1; j < kFingers; ++j) {
+        if (!r.fingers[j].active || r.fingers[j].object != body) continue;
+        const Eigen::Vector3d nj(r.fingers[j].n_W[0], r.fingers[j].n_W[1], r.fingers[j].n_W[2]);
+        if (ni.dot(nj) < std::cos(100.0 * 3.14159265358979 / 180.0)) return body;
+      }
+    }
+  }
+  return -1;
+}
+
 }  // namespace
 
 HapticNode::HapticNode(HapticNodeConfig config) : config_(std::move(config)) {}
@@ -67,6 +107,11 @@ HapticNode::HapticNode(HapticNodeConfig config) : config_(std::move(config)) {}
 int HapticNode::Run() {
   using Clock = std::chrono::steady_clock;
   auto device = MakeDevice(config_);  // script errors surface before joining the session
+  const std::string tag = "[haptic_node " + config_.user + "] ";
+  auto say = [&](const std::string& line) {
+    std::printf("%s%s\n", tag.c_str(), line.c_str());
+    std::fflush(stdout);
+  };
 
   std::ofstream trace;
   if (!config_.trace_file.empty()) {
@@ -81,13 +126,17 @@ int HapticNode::Run() {
   dds::MemberAnnouncement member(participant, config_.user, msg::NODE_HAPTIC, device->name());
   auto state_writer = dds::MakeWriter<msg::DeviceState>(participant, dds::topics::kDeviceState);
   auto stats_writer = dds::MakeWriter<msg::LoopStatistics>(participant, dds::topics::kLoopStatistics);
+  auto contact_writer = dds::MakeWriter<msg::ContactSet>(participant, dds::topics::kContactSet);
+  auto event_writer = dds::MakeWriter<msg::ControlEvent>(participant, dds::topics::kControlEvent);
+  auto scene_reader = dds::MakeReader<msg::SceneState>(participant, dds::topics::kSceneState);
+  auto contact_reader = dds::MakeReader<msg::ContactSet>(participant, dds::topics::kContactSet);
 
-  HapticLoop loop(*device, HapticLoopConfig{config_.rate_Hz, true});
+  HapticLoopConfig loop_config{config_.rate_Hz, true};
+  HapticLoop loop(*device, loop_config);
   const bool realtime = loop.Start();
-  std::printf("[haptic_node %s] joined session '%s' on domain %d: device %s, loop %.0f Hz%s\n",
-              config_.user.c_str(), config_.where.session.c_str(), config_.where.domain_id, device->name(),
-              config_.rate_Hz, realtime ? " (SCHED_FIFO)" : " (normal priority: no permission for SCHED_FIFO)");
-  std::fflush(stdout);
+  say("joined session '" + config_.where.session + "' on domain " + std::to_string(config_.where.domain_id) +
+      ": device " + device->name() + ", loop " + std::to_string(static_cast<int>(config_.rate_Hz)) + " Hz" +
+      (realtime ? " (SCHED_FIFO)" : " (normal priority: no permission for SCHED_FIFO)"));
 
   msg::DeviceState state;
   state.user(config_.user);
@@ -95,6 +144,19 @@ int HapticNode::Run() {
   msg::LoopStatistics stats_msg;
   stats_msg.node("haptic_node/" + config_.user);
   stats_msg.session(config_.where.session);
+  msg::ContactSet contacts;
+  contacts.user(config_.user);
+  contacts.session(config_.where.session);
+
+  world::SceneWorldOptions models;
+  models.cache_dir = config_.cache_dir.empty() ? world::DefaultCacheDir() : std::filesystem::path(config_.cache_dir);
+  models.fingertip_radius_m = device->capabilities().fingertip_radius_m;
+  models.max_force_N = device->capabilities().max_fingertip_force_N;
+  std::shared_ptr<SceneRenderer> renderer;
+  std::uint32_t scene_revision = 0;
+  ContactReport report;
+  bool have_report = false, last_sent_active = false;
+  std::map<std::string, msg::ContactSet> peers;  // newest contact set of every other user
 
   const auto start = Clock::now();
   const auto period = std::chrono::duration_cast<Clock::duration>(
@@ -103,9 +165,108 @@ int HapticNode::Run() {
   auto next_stats = start + std::chrono::seconds(1);
   HapticSnapshot snapshot;
   common::LoopStats stats;
-  std::uint64_t published = 0;
+  std::uint64_t published = 0, events_sent = 0;
+  msg::SceneState scene_msg;
+  msg::ContactSet peer;
+  dds::SampleMeta meta;
   while (!common::ShutdownRequested()) {
     if (config_.where.duration.count() > 0 && Clock::now() - start >= config_.where.duration) break;
+
+    // The scene: a new revision (another world, or the same world with new gravity) gets new
+    // models; dynamic bodies keep their poses when the world stays the same.
+    while (scene_reader.TakeNext(scene_msg, meta)) {
+      if (!meta.valid_data || scene_msg.revision() == scene_revision) continue;
+      scene_revision = scene_msg.revision();
+      try {
+        scene::Scene scene = scene::LoadSceneByName(scene_msg.scene().to_string());
+        const auto& g = scene_msg.gravity_W_m_per_s2();
+        scene.gravity_W_m_per_s2 = Eigen::Vector3d(g[0], g[1], g[2]);
+        const auto t0 = Clock::now();
+        auto next_renderer = std::make_shared<SceneRenderer>(scene, models);
+        if (renderer && have_report && renderer->scene().name == scene.name) {
+          for (int b = 0; b < report.num_bodies; ++b) {
+            const auto& body = report.bodies[b];
+            Eigen::Isometry3d X = Eigen::Isometry3d::Identity();
+            X.linear() = Eigen::Quaterniond(body.q_WO_wxyz[0], body.q_WO_wxyz[1], body.q_WO_wxyz[2],
+                                            body.q_WO_wxyz[3]).normalized().toRotationMatrix();
+            X.translation() = Eigen::Vector3d(body.p_WO_m[0], body.p_WO_m[1], body.p_WO_m[2]);
+            next_renderer->PlaceBody(renderer->IdOf(body.object), X);
+            char line[160];
+            std::snprintf(line, sizeof line, "  %s stays at (%.3f, %.3f, %.3f) m", renderer->IdOf(body.object).c_str(),
+                          X.translation().x(), X.translation().y(), X.translation().z());
+            say(line);
+          }
+        }
+        renderer = next_renderer;
+        have_report = false;
+        loop.SetRenderer(renderer);
+        char line[160];
+        std::snprintf(line, sizeof line, "scene '%s' revision %u: %d objects, %zu controls, gravity %.2f m/s^2 (%.2f s)",
+                      scene.name.c_str(), scene_revision, renderer->models().world->num_objects(),
+                      scene.controls.size(), scene.gravity_W_m_per_s2.z(),
+                      std::chrono::duration<double>(Clock::now() - t0).count());
+        say(line);
+      } catch (const std::exception& e) {
+        // A scene this node cannot build: keep the old one (or none): no forces from it.
+        say(std::string("cannot build scene '") + scene_msg.scene().to_string() + "': " + e.what());
+      }
+    }
+    loop.CollectRetired();
+
+    if (renderer) {
+      // Control events: to the world server, reliably.
+      controls::ControlEvent event;
+      while (renderer->TakeEvent(event)) {
+        msg::ControlEvent m;
+        m.session(config_.where.session);
+        m.user(config_.user);
+        m.control_id(std::string(event.id()));
+        m.kind(ToMessage(event.kind));
+        m.value(event.value);
+        m.index(event.index);
+        m.error_m(event.error_m);
+        m.stamp_ns(common::SteadyNowNs());
+        event_writer.Write(m);
+        ++events_sent;
+        char line[160];
+        std::snprintf(line, sizeof line, "control %s: %s (value %.3f, error %.1f mm)", std::string(event.id()).c_str(),
+                      controls::ToString(event.kind), event.value, 1e3 * event.error_m);
+        say(line);
+      }
+      if (renderer->TakeReport(report)) have_report = true;
+
+      // The other users' contacts on this world's objects, for the shared deformables.
+      while (contact_reader.TakeNext(peer, meta)) {
+        if (!meta.valid_data) continue;
+        if (peer.user().to_string() == config_.user) continue;
+        peers[peer.user().to_string()] = peer;
+      }
+      RemoteContacts remote;
+      int hand = 0;
+      for (const auto& [user, set] : peers) {
+        ++hand;
+        for (int i = 0; i < kFingers; ++i) {
+          const auto& f = set.fingers()[i];
+          if (!f.active() || remote.count >= kMaxRemoteContacts) continue;
+          const auto object = renderer->models().Find(f.object_id().to_string());
+          if (object < 0) continue;
+          bool deformable = false;
+          for (const auto& d : renderer->models().deformables) deformable |= d.object_id == f.object_id().to_string();
+          if (!deformable) continue;
+          auto& item = remote.items[remote.count++];
+          item.hand = hand;
+          item.finger = i;
+          item.object = object;
+          for (int k = 0; k < 3; ++k) {
+            item.p_WC_m[k] = f.p_W_m()[k];
+            item.u_W_m[k] = f.u_imposed_W_m()[k];
+            item.f_E_W_N[k] = -f.f_W_N()[k];
+          }
+        }
+      }
+      renderer->SetRemote(remote);
+    }
+
     if (loop.TakeSnapshot(snapshot)) {
       Fill(state, snapshot);
       // Skip what nobody needs: no viewer matched, nothing sent (the trace still records).
@@ -114,6 +275,44 @@ int HapticNode::Run() {
         ++published;
       }
       if (trace) WriteTraceRow(trace, snapshot);
+    }
+    // Contact set: while touching, and once more when the last contact ends.
+    if (renderer && have_report) {
+      bool active = false;
+      for (int i = 0; i < kFingers; ++i) {
+        const auto& f = report.fingers[i];
+        auto& m = contacts.fingers()[i];
+        m.active(f.active);
+        active |= f.active;
+        m.object_id(f.active ? renderer->IdOf(f.object) : std::string());
+        m.surface_node(f.node);
+        for (int k = 0; k < 3; ++k) {
+          m.p_W_m()[k] = f.p_WC_m[k];
+          m.n_W()[k] = f.n_W[k];
+          m.p_WE_m()[k] = f.p_WE_m[k];
+          m.u_imposed_W_m()[k] = f.u_W_m[k];
+          m.f_W_N()[k] = f.f_W_N[k];
+        }
+        m.radius_m(models.fingertip_radius_m);
+        m.depth_m(f.depth_m);
+      }
+      const std::int32_t grasped = GraspedBody(report);
+      contacts.grasped_object_id(grasped >= 0 ? renderer->IdOf(grasped) : std::string());
+      contacts.simulating(grasped >= 0);
+      for (int b = 0; b < report.num_bodies; ++b) {
+        if (report.bodies[b].object != grasped) continue;
+        for (int k = 0; k < 3; ++k) {
+          contacts.p_WO_m()[k] = report.bodies[b].p_WO_m[k];
+          contacts.v_WO_m_per_s()[k] = report.bodies[b].v_WO_m_per_s[k];
+        }
+        for (int k = 0; k < 4; ++k) contacts.q_WO_wxyz()[k] = report.bodies[b].q_WO_wxyz[k];
+      }
+      if ((active || last_sent_active) && contact_writer.matched_readers() > 0) {
+        contacts.stamp_ns(common::SteadyNowNs());
+        contacts.seq(contacts.seq() + 1);
+        contact_writer.Write(contacts);
+      }
+      last_sent_active = active;
     }
     if (Clock::now() >= next_stats) {
       next_stats += std::chrono::seconds(1);
@@ -129,14 +328,14 @@ int HapticNode::Run() {
   loop.Stop();
   loop.TakeStats(stats);
   std::printf("[haptic_node %s] loop statistics: rate %.1f Hz, steps %llu, jitter p50 %.0f us "
-              "p99 %.0f us max %.0f us, step p99 %.1f us, overruns %llu, resyncs %llu, faults %llu, "
-              "device states published %llu\n",
+              "p99 %.0f us max %.0f us, step p50 %.1f us p99 %.1f us, overruns %llu, resyncs %llu, "
+              "faults %llu, device states published %llu, control events %llu\n",
               config_.user.c_str(), stats.rate_Hz, static_cast<unsigned long long>(stats.steps),
               stats.jitter.Quantile(0.5), stats.jitter.Quantile(0.99), stats.jitter.max_us(),
-              stats.step.Quantile(0.99), static_cast<unsigned long long>(stats.overruns),
+              stats.step.Quantile(0.5), stats.step.Quantile(0.99), static_cast<unsigned long long>(stats.overruns),
               static_cast<unsigned long long>(stats.resyncs),
               static_cast<unsigned long long>(loop.faults()),
-              static_cast<unsigned long long>(published));
+              static_cast<unsigned long long>(published), static_cast<unsigned long long>(events_sent));
   std::fflush(stdout);
   return 0;
 }

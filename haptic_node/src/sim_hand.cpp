@@ -217,14 +217,22 @@ HandScript HandScript::Parse(const std::string& text, const std::string& origin)
       // thumb on the user's side, 15 deg below the equator (their pushes hold the object up).
       const double contact_m = radius + kSimFingertipRadius_m - squeeze;
       const double elevation = -15.0 * std::numbers::pi / 180.0;
-      std::array<Eigen::Vector3d, kFingers> p_WE;
+      // Like a person: shape the hand above the object, come down beside it, then close in
+      // (40, 30, 30% of the time), so no fingertip path cuts through the object.
+      const double open_m = contact_m + 0.02;
+      std::array<Eigen::Vector3d, kFingers> hover, beside, p_WE;
       for (int i = 0; i < kFingers; ++i) {
         const double azimuth = -0.5 * std::numbers::pi + 2.0 * std::numbers::pi * i / kFingers;
         const Eigen::Vector3d n(std::cos(elevation) * std::cos(azimuth),
                                 std::cos(elevation) * std::sin(azimuth), std::sin(elevation));
         p_WE[i] = p_WC + contact_m * n;
+        beside[i] = p_WC + open_m * n;
+        hover[i] = beside[i] + Eigen::Vector3d(0, 0, radius + open_m);
       }
-      add(duration, ShapedAt(p_WC + Eigen::Vector3d(0.0, -0.02, radius + 0.05), p_WE));
+      const Eigen::Vector3d p_WH = p_WC + Eigen::Vector3d(0.0, -0.02, radius + 0.05);
+      add(0.4 * duration, ShapedAt(p_WH + Eigen::Vector3d(0, 0, radius + open_m), hover));
+      add(0.3 * duration, ShapedAt(p_WH, beside));
+      add(0.3 * duration, ShapedAt(p_WH, p_WE));
     } else if (cmd == "lift" || cmd == "pull") {
       Eigen::Vector3d d = Eigen::Vector3d::Zero();
       if (cmd == "lift") {
@@ -245,7 +253,12 @@ HandScript HandScript::Parse(const std::string& text, const std::string& origin)
         const Eigen::Vector3d r = p_WE[i] - centroid;
         away[i] = p_WE[i] + (r.norm() > 1e-9 ? Eigen::Vector3d(0.03 * r.normalized()) : Eigen::Vector3d(0, 0, 0.03));
       }
-      add(duration, ShapedAt(current.p_WH, away));
+      // Open away from the object, then lift clear of it (40, 60% of the time), so the next
+      // move does not sweep through what was just let go.
+      add(0.4 * duration, ShapedAt(current.p_WH, away));
+      std::array<Eigen::Vector3d, kFingers> above = away;
+      for (auto& tip : above) tip.z() += 0.05;
+      add(0.6 * duration, ShapedAt(current.p_WH + Eigen::Vector3d(0, 0, 0.05), above));
     }
   }
   if (!started) throw ScriptError(origin + ": empty script (needs at least 'start X Y Z')");

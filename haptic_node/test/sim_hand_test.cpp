@@ -139,12 +139,13 @@ TEST(HandScriptVerbs, PinchPokeLiftPullRelease) {
     EXPECT_TRUE((lifted[i] - tips[i]).isApprox(Eigen::Vector3d(0, 0, 0.05), 1e-12)) << i;
     EXPECT_TRUE((pulled[i] - lifted[i]).isApprox(Eigen::Vector3d(0.01, -0.02, 0), 1e-12)) << i;
   }
-  const auto poked = TipsAt(s, 4.0), released = TipsAt(s, 4.5);
+  const auto poked = TipsAt(s, 4.0), released = TipsAt(s, 4.2), raised = TipsAt(s, 4.5);
   EXPECT_TRUE(poked[1].isApprox(Eigen::Vector3d(0.2, 0.1, 0.1), 1e-12));
   Eigen::Vector3d centroid = Eigen::Vector3d::Zero();
   for (const auto& p : poked) centroid += p / kFingers;
   for (int i = 0; i < kFingers; ++i) {
     EXPECT_NEAR((released[i] - centroid).norm() - (poked[i] - centroid).norm(), 0.03, 1e-12) << i;
+    EXPECT_TRUE((raised[i] - released[i]).isApprox(Eigen::Vector3d(0, 0, 0.05), 1e-12)) << i;
   }
 }
 

@@ -2,6 +2,8 @@
 
 #include <unistd.h>
 
+#include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <iostream>
 #include <sstream>
@@ -76,6 +78,11 @@ bool WorldServer::CheckLog() {
 }
 
 void WorldServer::OnControlEvent(const ControlRecord& event) {
+  char line[200];
+  std::snprintf(line, sizeof line, "control %s: %s by %s (value %.3f, error %s)", event.control_id.c_str(),
+                ToString(event.kind), event.user.c_str(), event.value,
+                event.error_m ? (std::to_string(1e3 * *event.error_m).substr(0, 5) + " mm").c_str() : "-");
+  Print(line);
   if (log_) log_->OnControlEvent(event);
 }
 
@@ -103,7 +110,7 @@ void WorldServer::OnOwnershipChange(const OwnershipChange& change) {
 int WorldServer::Run() {
   using Clock = std::chrono::steady_clock;
   start_ = Clock::now();
-  const scene::Scene scene = scene::LoadSceneByName(config_.scene);
+  scene::Scene scene = scene::LoadSceneByName(config_.scene);
   // The log opens once the scene is known to load (a bad scene name leaves no empty session
   // behind) and before any DDS entity exists (a bad log file keeps us out of the session).
   if (!config_.log_file.empty() && !log_) {
@@ -121,26 +128,92 @@ int WorldServer::Run() {
   auto log = [&](const std::string& line) { Print(line); };
 
   if (log_) log("session log " + log_->file().string() + ": session #" + std::to_string(log_->session_id()));
-  scene_writer.Write(ToMessage(scene, config_.where.session, 1));
+  std::uint32_t revision = 1;
+  scene_writer.Write(ToMessage(scene, config_.where.session, revision));
   log("session '" + config_.where.session + "' on domain " + std::to_string(config_.where.domain_id) +
       ": scene '" + scene.name + "' (" + std::to_string(scene.objects.size()) + " objects)");
   OnSceneChange(scene.name, scene.title);
 
-  // The message board shows the scene's first message in each language in turn; transient-
-  // local keeps the newest for late joiners.
+  // The message board shows one message at a time, in English (the Japanese texts are in the
+  // scene files); transient-local keeps the newest for late joiners.
   unsigned message_id = 0;
-  for (const auto& m : scene.messages) {
-    if (m.language != "en") continue;  // the board shows one language at a time
-    msg::MessageBoard board;
-    board.session(config_.where.session);
-    board.message_id(++message_id);
-    board.language(m.language);
-    board.text(m.text);
-    board.next_action(m.next_action);
-    board_writer.Write(board);
-    log("message board #" + std::to_string(message_id) + ": " + m.text);
-    break;
-  }
+  auto show = [&](const std::vector<scene::Message>& messages) {
+    for (const auto& m : messages) {
+      if (m.language != "en") continue;
+      msg::MessageBoard board;
+      board.session(config_.where.session);
+      board.message_id(++message_id);
+      board.language(m.language);
+      board.text(m.text);
+      board.next_action(m.next_action);
+      board_writer.Write(board);
+      log("message board #" + std::to_string(message_id) + ": " + m.text);
+      return;
+    }
+  };
+  show(scene.messages);
+
+  // Control events from the haptic nodes: logged, and their scene actions applied here, the
+  // one place that owns the world (navigation, gravity, the board).
+  auto control_reader = dds::MakeReader<msg::ControlEvent>(participant, dds::topics::kControlEvent);
+  auto apply = [&](const msg::ControlEvent& e) {
+    const std::string id = e.control_id().to_string();
+    const scene::ControlSpec* spec = nullptr;
+    for (const auto& c : scene.controls) {
+      if (c.id == id) spec = &c;
+    }
+    if (spec == nullptr) return;  // a control of a world already left
+    const scene::Action* action = nullptr;
+    const auto index = static_cast<std::size_t>(std::max<std::int32_t>(0, e.index()));
+    switch (e.kind()) {
+      case msg::CONTROL_PRESSED:
+        if (spec->type == scene::ControlType::kButton || spec->type == scene::ControlType::kArrow) action = &spec->action;
+        break;
+      case msg::CONTROL_OPENED:
+        action = &spec->action;
+        break;
+      case msg::CONTROL_MOVED:
+        if (e.index() >= 0 && index < spec->detent_actions.size()) action = &spec->detent_actions[index];
+        break;
+      case msg::CONTROL_PAGE_TURNED:
+        if (e.index() >= 0 && index < spec->page_actions.size()) action = &spec->page_actions[index];
+        break;
+      default:
+        break;
+    }
+    if (action == nullptr || action->empty()) return;
+    if (!action->goto_scene.empty()) {
+      try {
+        scene = scene::LoadSceneByName(action->goto_scene);
+      } catch (const std::exception& ex) {
+        log(std::string("control ") + id + ": cannot go to '" + action->goto_scene + "': " + ex.what());
+        return;
+      }
+      scene_writer.Write(ToMessage(scene, config_.where.session, ++revision));
+      log("control " + id + " by " + e.user().to_string() + ": scene '" + scene.name + "' (revision " +
+          std::to_string(revision) + ")");
+      OnSceneChange(scene.name, scene.title);
+      show(scene.messages);
+    }
+    bool changed = false;
+    if (action->set_gravity) {
+      scene.gravity_W_m_per_s2 = action->gravity_W_m_per_s2;
+      changed = true;
+    }
+    if (!action->title.empty()) {
+      scene.title = action->title;
+      changed = true;
+    }
+    if (changed) {
+      scene_writer.Write(ToMessage(scene, config_.where.session, ++revision));
+      char line[200];
+      std::snprintf(line, sizeof line, "control %s by %s: gravity %.2f m/s^2, '%s' (revision %u)", id.c_str(),
+                    e.user().to_string().c_str(), scene.gravity_W_m_per_s2.z(), scene.title.c_str(), revision);
+      log(line);
+      OnSceneChange(scene.name, scene.title);
+    }
+    if (!action->messages.empty()) show(action->messages);
+  };
 
   MemberRegistry members;
   const auto period = std::chrono::duration_cast<Clock::duration>(
@@ -166,6 +239,26 @@ int WorldServer::Run() {
       for (auto& e : members.OnWriterLost(lost_writer)) events.push_back(e);
     }
     for (const auto& event : events) OnMemberEvent(event, members.present().size());
+    msg::ControlEvent control;
+    dds::SampleMeta control_meta;
+    while (control_reader.TakeNext(control, control_meta)) {
+      if (!control_meta.valid_data) continue;
+      ControlRecord record;
+      record.unix_ns = common::UnixNowNs();
+      record.user = control.user().to_string();
+      record.control_id = control.control_id().to_string();
+      switch (control.kind()) {
+        case msg::CONTROL_RELEASED: record.kind = ControlKind::kReleased; break;
+        case msg::CONTROL_MOVED: record.kind = ControlKind::kMoved; break;
+        case msg::CONTROL_PAGE_TURNED: record.kind = ControlKind::kPageTurned; break;
+        case msg::CONTROL_MISSED: record.kind = ControlKind::kMissed; break;
+        default: record.kind = ControlKind::kPressed; break;  // pressed, and a book's opening
+      }
+      record.value = control.value();
+      if (std::isfinite(control.error_m())) record.error_m = control.error_m();
+      OnControlEvent(record);
+      apply(control);
+    }
     CheckLog();
     next += period;
     if (Clock::now() > next + 5 * period) next = Clock::now();

@@ -16,6 +16,8 @@ struct HapticNodeConfig {
   std::string script;                            // sim: hand script file ("" = default motion)
   std::string replay_file;                       // replay: device-state log (a --trace file)
   bool replay_loop = false;                      // replay: start over at the end
+  std::string hiro_config;                       // hiro: device geometry (assets/devices/hiro2.json)
+  std::string cache_dir;                         // compliance caches ("" = world::DefaultCacheDir())
   double rate_Hz = 1000.0;
   double publish_Hz = 100.0;                     // device state for viewers (60-120 Hz)
   std::string trace_file;                        // CSV of every published device state

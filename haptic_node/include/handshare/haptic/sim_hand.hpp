@@ -20,10 +20,12 @@
 ///   grasp DUR X Y Z RADIUS [SQ]   five fingertips on a sphere of RADIUS around X Y Z, thumb
 ///                                 opposite the fingers, slightly below the equator, each
 ///                                 fingertip centre SQ (default 0.002) inside its contact
-///                                 distance RADIUS + fingertip radius (squeeze)
+///                                 distance RADIUS + fingertip radius (squeeze); the hand
+///                                 shapes above the object, comes down beside it, closes in
 ///   lift DUR DZ                   the whole hand up by DZ (keeps its shape)
 ///   pull DUR DX DY DZ             the whole hand by DX DY DZ (a hooked finger on a lever)
-///   release DUR                   fingertips move 0.03 m away from their centroid
+///   release DUR                   fingertips move 0.03 m away from their centroid, then the
+///                                 hand rises 0.05 m
 /// After the last command the hand holds its final pose. Errors name the file and line.
 #include <array>
 #include <filesystem>

@@ -1,0 +1,93 @@
+#pragma once
+/// The force renderer of a haptic node: one scene's haptic models (rigid, dynamic and
+/// deformable objects through handshare::contact, controls through handshare::controls),
+/// stepped by the haptic thread. The bridge thread builds it (not real-time), hands it to the
+/// loop, feeds it the other hands' contacts and drains what it reports (contacts, control
+/// events), all through lock-free, fixed-size channels.
+#include <array>
+#include <atomic>
+#include <cstdint>
+#include <memory>
+#include <string>
+
+#include "handshare/common/spsc_queue.hpp"
+#include "handshare/common/triple_buffer.hpp"
+#include "handshare/controls/controls.hpp"
+#include "handshare/haptic/force_renderer.hpp"
+#include "handshare/world/scene_world.hpp"
+
+namespace handshare::haptic {
+
+inline constexpr int kMaxRemoteContacts = 40;  // 8 hands x 5 fingers
+inline constexpr int kMaxReportedBodies = 8;
+
+/// What the haptic thread reports each step (trivially copyable).
+struct ContactReport {
+  std::uint64_t seq = 0;
+  struct Finger {
+    bool active = false;
+    std::int32_t object = -1;       // world object index (SceneWorld::ids)
+    std::int32_t node = -1;         // deformable: main surface node
+    double p_WC_m[3] = {}, n_W[3] = {}, p_WE_m[3] = {}, u_W_m[3] = {}, f_W_N[3] = {};
+    double depth_m = 0.0;
+  } fingers[kFingers];
+  struct Body {
+    std::int32_t object = -1;
+    double p_WO_m[3] = {};
+    double q_WO_wxyz[4] = {1, 0, 0, 0};
+    double v_WO_m_per_s[3] = {};
+  } bodies[kMaxReportedBodies];
+  std::int32_t num_bodies = 0;
+};
+
+/// Other hands' contacts on this scene's objects (trivially copyable).
+struct RemoteContacts {
+  std::int32_t count = 0;
+  struct Item {
+    std::int32_t hand = 0, finger = 0, object = -1;
+    double p_WC_m[3] = {}, u_W_m[3] = {}, f_E_W_N[3] = {};
+  } items[kMaxRemoteContacts];
+};
+
+class SceneRenderer final : public ForceRenderer {
+ public:
+  /// Builds the models of `scene` (deformables from the compliance cache). Not real-time.
+  SceneRenderer(const scene::Scene& scene, const world::SceneWorldOptions& options);
+
+  void Render(double t_s, double dt_s, const DeviceReading& reading,
+              std::array<Eigen::Vector3d, kFingers>& f_E_W) noexcept override;
+  void ReleaseAll() noexcept override;
+
+  // ---- bridge side ----
+  const scene::Scene& scene() const noexcept { return scene_; }
+  const world::SceneWorld& models() const noexcept { return models_; }
+  /// World object index -> scene object id ("" if out of range).
+  const std::string& IdOf(std::int32_t object) const noexcept;
+  bool TakeReport(ContactReport& out) noexcept { return reports_.Read(out); }
+  bool TakeEvent(controls::ControlEvent& out) noexcept { return events_.Pop(out); }
+  void SetRemote(const RemoteContacts& remote) noexcept { remote_in_.Write(remote); }
+  /// Places a dynamic body before the renderer is handed to the loop (carry-over of poses
+  /// across a rebuild). Not thread-safe: call before SetRenderer.
+  void PlaceBody(const std::string& id, const Eigen::Isometry3d& X_WO);
+  std::uint64_t dropped_events() const noexcept { return dropped_events_.load(std::memory_order_relaxed); }
+
+ private:
+  scene::Scene scene_;
+  world::SceneWorld models_;
+  controls::ControlSet controls_;
+  double fingertip_radius_m_;
+  std::vector<std::pair<contact::ObjectId, std::size_t>> moving_;  // (object, scene index)
+  // Haptic-thread state, sized here.
+  std::array<Eigen::Vector3d, kFingers> f_controls_{};
+  controls::EventBuffer event_buffer_;
+  RemoteContacts remote_;
+  std::array<contact::RemoteContact, kMaxRemoteContacts> remote_contacts_{};
+  // Channels.
+  common::TripleBuffer<RemoteContacts> remote_in_;
+  common::TripleBuffer<ContactReport> reports_;
+  common::SpscQueue<controls::ControlEvent, 256> events_;
+  std::atomic<std::uint64_t> dropped_events_{0};
+  std::uint64_t seq_ = 0;
+};
+
+}  // namespace handshare::haptic

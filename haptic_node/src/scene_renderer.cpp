@@ -1,0 +1,117 @@
+#include "handshare/haptic/scene_renderer.hpp"
+
+#include <time.h>
+
+namespace handshare::haptic {
+
+namespace {
+// Wall-clock seconds: every process computes the same phase of a scene's periodic motions.
+double WallSeconds() noexcept {
+  timespec ts{};
+  clock_gettime(CLOCK_REALTIME, &ts);
+  return static_cast<double>(ts.tv_sec % 86400) + 1e-9 * static_cast<double>(ts.tv_nsec);
+}
+void Put(double (&out)[3], const Eigen::Vector3d& v) noexcept {
+  for (int k = 0; k < 3; ++k) out[k] = v[k];
+}
+}  // namespace
+
+SceneRenderer::SceneRenderer(const scene::Scene& scene, const world::SceneWorldOptions& options)
+    : scene_(scene),
+      models_(world::BuildSceneWorld(scene, options)),
+      controls_(controls::MakeControls(scene)),
+      fingertip_radius_m_(options.fingertip_radius_m) {
+  for (auto& f : f_controls_) f.setZero();
+  for (std::size_t i = 0; i < scene_.objects.size(); ++i) {
+    const auto id = models_.Find(scene_.objects[i].id);
+    if (id >= 0 && scene_.objects[i].motion.active()) moving_.emplace_back(id, i);
+  }
+}
+
+const std::string& SceneRenderer::IdOf(std::int32_t object) const noexcept {
+  static const std::string kNone;
+  return object >= 0 && object < static_cast<std::int32_t>(models_.ids.size()) ? models_.ids[object] : kNone;
+}
+
+void SceneRenderer::PlaceBody(const std::string& id, const Eigen::Isometry3d& X_WO) {
+  const auto object = models_.Find(id);
+  if (object >= 0) models_.world->SetPose(object, X_WO);
+}
+
+void SceneRenderer::ReleaseAll() noexcept {
+  ContactReport& r = reports_.WriteSlot();
+  r = ContactReport{};
+  r.seq = ++seq_;
+  reports_.Publish();
+}
+
+void SceneRenderer::Render(double /*t_s*/, double dt_s, const DeviceReading& reading,
+                           std::array<Eigen::Vector3d, kFingers>& f_E_W) noexcept {
+  auto& world = *models_.world;
+  // 1. Objects that move by themselves (the Daphnia swims), on the wall clock.
+  if (!moving_.empty()) {
+    const double t = WallSeconds();
+    for (const auto& [object, i] : moving_) {
+      Eigen::Isometry3d X = scene_.objects[i].X_WO();
+      X.translation() += scene_.objects[i].motion.Offset_W(t);
+      world.SetPose(object, X);
+    }
+  }
+  // 2. The other hands' contacts (newest set; kept until a newer one arrives).
+  remote_in_.Read(remote_);
+  const int n_remote = std::min(remote_.count, kMaxRemoteContacts);
+  for (int i = 0; i < n_remote; ++i) {
+    const auto& in = remote_.items[i];
+    auto& out = remote_contacts_[static_cast<std::size_t>(i)];
+    out.hand = in.hand;
+    out.finger = in.finger;
+    out.object = in.object;
+    out.p_WC_m = Eigen::Vector3d(in.p_WC_m[0], in.p_WC_m[1], in.p_WC_m[2]);
+    out.u_W_m = Eigen::Vector3d(in.u_W_m[0], in.u_W_m[1], in.u_W_m[2]);
+    out.f_E_W_N = Eigen::Vector3d(in.f_E_W_N[0], in.f_E_W_N[1], in.f_E_W_N[2]);
+  }
+  // 3. Contacts: rigid, dynamic and deformable objects, all hands on a deformable together.
+  world.Step(dt_s, reading.p_WE, {remote_contacts_.data(), static_cast<std::size_t>(n_remote)});
+  // 4. Controls: their own force profiles and events.
+  event_buffer_.Clear();
+  controls_.Step(dt_s, reading.p_WE, fingertip_radius_m_, f_controls_, event_buffer_);
+  for (const auto& e : event_buffer_) {
+    if (!events_.Push(e)) dropped_events_.fetch_add(1, std::memory_order_relaxed);
+  }
+  const auto fingers = world.fingers();
+  for (int i = 0; i < kFingers; ++i) f_E_W[i] = fingers[i].f_E_W_N + f_controls_[i];
+
+  // 5. Report for the bridge (contact set, grasp claims, body poses).
+  ContactReport& r = reports_.WriteSlot();
+  r.seq = ++seq_;
+  for (int i = 0; i < kFingers; ++i) {
+    const auto& in = fingers[i];
+    auto& out = r.fingers[i];
+    out.active = in.in_contact;
+    out.object = in.object;
+    out.node = in.main_node;
+    Put(out.p_WC_m, in.p_WC_m);
+    Put(out.n_W, in.n_W);
+    Put(out.p_WE_m, reading.p_WE[i]);
+    Put(out.u_W_m, in.u_W_m);
+    Put(out.f_W_N, -in.f_E_W_N);  // on the object
+    out.depth_m = in.depth_m;
+  }
+  r.num_bodies = 0;
+  for (const auto body : models_.dynamic_bodies) {
+    if (r.num_bodies >= kMaxReportedBodies) break;
+    auto& b = r.bodies[r.num_bodies++];
+    const Eigen::Isometry3d X = world.pose(body);
+    const Eigen::Quaterniond q(X.linear());
+    b.object = body;
+    Put(b.p_WO_m, X.translation());
+    b.q_WO_wxyz[0] = q.w();
+    b.q_WO_wxyz[1] = q.x();
+    b.q_WO_wxyz[2] = q.y();
+    b.q_WO_wxyz[3] = q.z();
+    Put(b.v_WO_m_per_s, world.body_velocity_W(body));
+  }
+  reports_.Publish();
+}
+
+}  // namespace handshare::haptic
