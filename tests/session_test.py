@@ -9,6 +9,7 @@ is killed and shared-memory leftovers of killed participants are cleaned, even o
 usage: session_test.py CASE --bin-dir DIR --domain D --work DIR
 """
 import argparse
+import csv
 import glob
 import json
 import math
@@ -318,7 +319,51 @@ def case_bad_input(h, domain):
     print("bad input: clear messages and non-zero exits")
 
 
-CASES = {"shared_session": case_shared_session, "killed_member": case_killed_member,
+def window_mean_fz(trace_path, t0, t1):
+    """Mean over [t0, t1) of the net vertical force on the five fingertips [N]."""
+    with open(trace_path) as f:
+        rows = list(csv.DictReader(f))
+    fz = [sum(float(r[f"fz{i}"]) for i in range(5)) for r in rows if t0 <= float(r["t_s"]) < t1]
+    check(len(fz) > 50, f"trace {trace_path} has only {len(fz)} samples in [{t0}, {t1}) s")
+    return sum(fz) / len(fz)
+
+
+def case_encyclopedia(h, domain):
+    """Start menu -> solar system (a button) -> lift the ball on the Moon -> the lever to Mars ->
+    lift it again: the held weight ratio is 3.71/1.62 within 2%, each within 1% of m g; the
+    session log holds the scene changes and the control events."""
+    session = "it-encyclopedia"
+    os.environ["HANDSHARE_CACHE"] = os.path.join(h.work, "cache")  # the nodes' model cache
+    log_db = os.path.join(h.work, "session.db")
+    trace = os.path.join(h.work, "alice.csv")
+    h.start("world_server", "world_server", "--domain", domain, "--session", session, "--duration", 34,
+            "--log", log_db)
+    h.wait_for_line("world_server", "message board #1", 10)
+    h.start("alice", "haptic_node", "--domain", domain, "--session", session, "--user", "alice",
+            "--script", os.path.join(DATA, "encyclopedia_alice.hand"), "--duration", 30, "--trace", trace)
+    check(h.wait("alice", 60) == 0, "alice's haptic node failed")
+    check(h.wait("world_server", 15) == 0, "world_server failed")
+    ws = h.log("world_server")
+    check("control button_solar_system by alice: scene 'solar_system'" in ws, "the button did not open the solar system")
+    check("gravity -3.71 m/s^2" in ws, "the lever did not switch to Mars")
+    with open(os.path.join(HERE, "..", "assets", "scenes", "solar_system.json")) as f:
+        ball = [o for o in json.load(f)["objects"] if o["id"] == "ball"][0]
+    moon = -window_mean_fz(trace, 7.5, 9.5)
+    mars = -window_mean_fz(trace, 21.8, 23.8)
+    for name, measured, g in (("Moon", moon, 1.62), ("Mars", mars, 3.71)):
+        expected = ball["mass_kg"] * g
+        check(abs(measured - expected) <= 0.01 * expected,
+              f"{name}: held weight {measured:.4f} N, expected m g = {expected:.4f} N within 1%")
+    ratio = mars / moon
+    check(abs(ratio - 3.71 / 1.62) <= 0.02 * 3.71 / 1.62, f"Mars/Moon weight ratio {ratio:.4f}, expected 2.2901 within 2%")
+    report = subprocess.run([os.path.join(h.bin_dir, "world_server", "session_report"), log_db], capture_output=True, text=True, timeout=30)
+    check(report.returncode == 0, f"session_report failed: {report.stderr}")
+    for needle in ("start_menu", "solar_system", "button_solar_system", "lever_planet", "alice"):
+        check(needle in report.stdout, f"session report lacks '{needle}':\n{report.stdout}")
+    print(f"held weight: Moon {moon:.4f} N, Mars {mars:.4f} N, ratio {ratio:.4f} (3.71/1.62 = 2.2901)")
+
+
+CASES = {"shared_session": case_shared_session, "encyclopedia": case_encyclopedia, "killed_member": case_killed_member,
          "signals": case_signals, "bad_input": case_bad_input}
 
 
