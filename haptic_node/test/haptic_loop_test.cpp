@@ -2,29 +2,13 @@
 
 #include <gtest/gtest.h>
 
-#include <atomic>
-#include <cstdlib>
 #include <limits>
-#include <new>
 #include <thread>
 #include <vector>
 
 #include "handshare/common/clock.hpp"
-
 #include "handshare/haptic/sim_hand.hpp"
-
-// Counts every heap allocation in this test binary, so a test can assert that the haptic
-// step allocates nothing.
-namespace {
-std::atomic<long> g_allocations{0};
-}
-void* operator new(std::size_t n) {
-  g_allocations.fetch_add(1, std::memory_order_relaxed);
-  if (void* p = std::malloc(n ? n : 1)) return p;
-  throw std::bad_alloc();
-}
-void operator delete(void* p) noexcept { std::free(p); }
-void operator delete(void* p, std::size_t) noexcept { std::free(p); }
+#include "handshare/testing/allocation_counter.hpp"
 
 namespace handshare::haptic {
 namespace {
@@ -49,9 +33,9 @@ TEST(HapticLoop, StepDoesNotAllocate) {
   SimDevice device(HandScript::Parse("start 0 0 0.1\nmove 1 0.1 0 0.1 grip 1\n", "t"));
   HapticLoop loop(device, HapticLoopConfig{1000.0, false});
   loop.Step(0.0);  // warm-up outside the measured window
-  const long before = g_allocations.load();
+  const long before = testing::AllocationCount();
   for (int i = 0; i < 10000; ++i) loop.Step(i * 1e-3);
-  EXPECT_EQ(g_allocations.load() - before, 0);
+  EXPECT_EQ(testing::AllocationCount() - before, 0);
 }
 
 TEST(HapticLoop, SnapshotCarriesFingertipsOfTheScriptedHand) {
@@ -195,9 +179,9 @@ TEST(HapticLoop, RendererSwapIsAdoptedAndTheOldOneFreedWithoutAllocationInTheSte
   loop.SetRenderer(std::make_shared<ConstantRenderer>(Eigen::Vector3d(0, 0, 2.0)));
   loop.CollectRetired();
   EXPECT_FALSE(first_alive.expired());  // the haptic thread has not let go yet
-  const long before = g_allocations.load();
+  const long before = testing::AllocationCount();
   for (int k = 1; k < 2000; ++k) loop.Step(k * 1e-3);
-  EXPECT_EQ(g_allocations.load() - before, 0);
+  EXPECT_EQ(testing::AllocationCount() - before, 0);
   loop.CollectRetired();
   EXPECT_TRUE(first_alive.expired());
   EXPECT_NEAR(device.last[0].z(), 2.0, 1e-12);

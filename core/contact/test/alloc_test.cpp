@@ -1,37 +1,14 @@
-// HapticWorld::Step must not allocate: global operator new is counted in this binary.
+// HapticWorld::Step must not allocate: handshare::allocation_counter counts operator new.
 #include <gtest/gtest.h>
 
-#include <atomic>
 #include <cmath>
-#include <cstdlib>
-#include <new>
 
 #include "handshare/contact/haptic_world.hpp"
 #include "handshare/fem/mesh.hpp"
+#include "handshare/testing/allocation_counter.hpp"
 #include "test_util.hpp"
 
-namespace {
-std::atomic<long> g_allocations{0};
-}
-void* operator new(std::size_t n) {
-  g_allocations.fetch_add(1, std::memory_order_relaxed);
-  if (void* p = std::malloc(n ? n : 1)) return p;
-  throw std::bad_alloc();
-}
-void* operator new[](std::size_t n) {
-  g_allocations.fetch_add(1, std::memory_order_relaxed);
-  if (void* p = std::malloc(n ? n : 1)) return p;
-  throw std::bad_alloc();
-}
-void operator delete(void* p) noexcept { std::free(p); }
-void operator delete(void* p, std::size_t) noexcept { std::free(p); }
-void operator delete[](void* p) noexcept { std::free(p); }
-void operator delete[](void* p, std::size_t) noexcept { std::free(p); }
-
 namespace handshare::contact {
-namespace test {
-long Allocations() noexcept { return g_allocations.load(); }
-}  // namespace test
 namespace {
 
 TEST(RealTime, StepDoesNotAllocate) {
@@ -68,12 +45,12 @@ TEST(RealTime, StepDoesNotAllocate) {
   };
   for (int k = 0; k < 10; ++k) w.Step(1e-3, tips_at(k), remote);  // warm-up
   int contacts = 0;
-  const long before = test::Allocations();
+  const long before = testing::AllocationCount();
   for (int k = 10; k < 4000; ++k) {
     w.Step(1e-3, tips_at(k), remote);
     for (const FingerResult& r : w.fingers()) contacts += r.in_contact ? 1 : 0;
   }
-  EXPECT_EQ(test::Allocations() - before, 0);
+  EXPECT_EQ(testing::AllocationCount() - before, 0);
   EXPECT_GT(contacts, 1000);  // the trajectory did touch things
   (void)ball;
 }

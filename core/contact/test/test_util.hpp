@@ -1,16 +1,12 @@
 #pragma once
 // Shared helpers of the contact tests.
 #include <array>
-#include <atomic>
 
 #include <Eigen/Core>
 
 #include "handshare/contact/haptic_world.hpp"
 
 namespace handshare::contact::test {
-
-/// Heap allocations so far in this binary (alloc_test.cpp replaces operator new).
-long Allocations() noexcept;
 
 /// Five fingertips at the same point (the other fingers parked far away when `park`).
 inline std::array<Eigen::Vector3d, kFingers> OneFinger(const Eigen::Vector3d& p, bool park = true) {

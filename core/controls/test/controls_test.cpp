@@ -1,28 +1,13 @@
 #include "handshare/controls/controls.hpp"
+#include "handshare/testing/allocation_counter.hpp"
 
 #include <gtest/gtest.h>
 
-#include <atomic>
 #include <cmath>
 #include <cstdlib>
 #include <limits>
-#include <new>
 #include <numbers>
 #include <random>
-
-// Counts every heap allocation in this test binary, so a test can assert that Step() allocates
-// nothing (as in haptic_node/test/haptic_loop_test.cpp).
-namespace {
-std::atomic<long> g_allocations{0};
-}
-void* operator new(std::size_t n) {
-  g_allocations.fetch_add(1, std::memory_order_relaxed);
-  if (void* p = std::malloc(n ? n : 1)) return p;
-  throw std::bad_alloc();
-}
-// noinline: GCC would otherwise inline free() into std::allocator and warn about a mismatch.
-[[gnu::noinline]] void operator delete(void* p) noexcept { std::free(p); }
-[[gnu::noinline]] void operator delete(void* p, std::size_t) noexcept { std::free(p); }
 
 namespace handshare::controls {
 namespace {
@@ -469,14 +454,14 @@ TEST(ControlSet, StepDoesNotAllocate) {
   place(0);
   set.Step(kDt, tips, kRadius, f, events);  // warm-up outside the measured window
   long events_seen = 0;
-  const long before = g_allocations.load();
+  const long before = testing::AllocationCount();
   for (int i = 1; i < 20000; ++i) {
     place(i);
     events.Clear();
     set.Step(kDt, tips, kRadius, f, events);
     events_seen += events.size();
   }
-  EXPECT_EQ(g_allocations.load() - before, 0);
+  EXPECT_EQ(testing::AllocationCount() - before, 0);
   EXPECT_GT(events_seen, 0);  // the window did exercise the event paths
 }
 

@@ -2,7 +2,7 @@
 
 #include <cmath>
 
-#include "allocation_counter.hpp"
+#include "handshare/testing/allocation_counter.hpp"
 #include "handshare/hiro/hiro_device.hpp"
 
 namespace handshare::hiro {
@@ -137,13 +137,13 @@ TEST(HiroDevice, ReadAndCommandDoNotAllocate) {
   std::array<Eigen::Vector3d, haptic::kFingers> f{};
   device->Read(0.001, r);
   device->Command(f);
-  const long before = test::AllocationCount();
+  const long before = testing::AllocationCount();
   for (int n = 2; n < 2000; ++n) {
     device->Read(n * 1e-3, r);
     for (auto& fi : f) fi = Eigen::Vector3d(0, 0, 1.0 + std::sin(n * 0.01));
     device->Command(f);
   }
-  EXPECT_EQ(test::AllocationCount() - before, 0);
+  EXPECT_EQ(testing::AllocationCount() - before, 0);
 }
 
 }  // namespace

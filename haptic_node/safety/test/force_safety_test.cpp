@@ -7,7 +7,7 @@
 #include <stdexcept>
 #include <string>
 
-#include "allocation_counter.hpp"
+#include "handshare/testing/allocation_counter.hpp"
 
 namespace handshare::haptic {
 namespace {
@@ -267,14 +267,14 @@ TEST(ForceSafety, StepDoesNotAllocate) {
   ForceSafetyOutput out;
   ForceSafetyInput in = Uniform(Eigen::Vector3d(0, 0, 1), Eigen::Vector3d(0.1, 0.2, 0.3));
   safety.Step(in, out);
-  const long before = test::AllocationCount();
+  const long before = testing::AllocationCount();
   for (int n = 0; n < 10000; ++n) {
     in.finger[0].p_WE.z() = 0.3 + 1e-4 * std::sin(n * 0.01);
     in.finger[1].f_desired_E_W.x() = (n % 500 == 0) ? kNaN : 5.0 * std::cos(n * 0.003);
     in.device_fault = (n / 1000) % 3 == 2;
     safety.Step(in, out);
   }
-  EXPECT_EQ(test::AllocationCount() - before, 0);
+  EXPECT_EQ(testing::AllocationCount() - before, 0);
 }
 
 TEST(ForceSafety, RejectsUnusableConfigurationNamingTheField) {
