@@ -9,11 +9,14 @@
 #include <thread>
 #include <vector>
 
-#include "temp_dir.hpp"
+#include "test_support.hpp"
 
 namespace handshare::world {
 namespace {
 
+using testing::ErrorOf;
+using testing::kSecond;
+using testing::kT0;
 using testing::TempDir;
 
 // An independent reader: plain sqlite3 calls, none of the library's helpers.
@@ -52,18 +55,6 @@ class RawDb {
 
 SessionStart Start(const std::string& name, std::uint64_t unix_ns = 1'700'000'000'000'000'000ULL) {
   return SessionStart{name, 120, "testhost", 4242, unix_ns};
-}
-
-constexpr std::uint64_t kT0 = 1'700'000'000'000'000'000ULL;
-constexpr std::uint64_t kSecond = 1'000'000'000ULL;
-
-std::string ErrorOf(const std::function<void()>& f) {
-  try {
-    f();
-  } catch (const SessionLogError& e) {
-    return e.what();
-  }
-  return "<no SessionLogError>";
 }
 
 TEST(SessionLog, CreatesAVersionedWalLogAndRecordsEveryKindOfRow) {

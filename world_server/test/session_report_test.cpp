@@ -8,24 +8,15 @@
 #include <functional>
 #include <sstream>
 
-#include "temp_dir.hpp"
+#include "test_support.hpp"
 
 namespace handshare::world {
 namespace {
 
+using testing::ErrorOf;
+using testing::kSecond;
+using testing::kT0;
 using testing::TempDir;
-
-constexpr std::uint64_t kT0 = 1'700'000'000'000'000'000ULL;
-constexpr std::uint64_t kSecond = 1'000'000'000ULL;
-
-std::string ErrorOf(const std::function<void()>& f) {
-  try {
-    f();
-  } catch (const SessionLogError& e) {
-    return e.what();
-  }
-  return "<no SessionLogError>";
-}
 
 TEST(Summarize, SampleMeanAndStandardDeviation) {
   EXPECT_EQ(Summarize({}).n, 0u);

@@ -1,11 +1,16 @@
 #pragma once
-// A fresh folder per test under $TMPDIR, removed (permissions restored first) at the end.
+// Helpers shared by the world server's tests: a fresh folder per test under $TMPDIR, removed
+// (permissions restored first) at the end; fixed times; the message of a SessionLogError.
 #include <stdlib.h>
 #include <sys/stat.h>
 
+#include <cstdint>
 #include <filesystem>
+#include <functional>
 #include <stdexcept>
 #include <string>
+
+#include "handshare/world_server/session_log.hpp"
 
 namespace handshare::world::testing {
 
@@ -29,5 +34,18 @@ class TempDir {
  private:
   std::filesystem::path path_;
 };
+
+inline constexpr std::uint64_t kT0 = 1'700'000'000'000'000'000ULL;  // a fixed Unix time [ns]
+inline constexpr std::uint64_t kSecond = 1'000'000'000ULL;
+
+/// what() of the SessionLogError that f throws, or "<no SessionLogError>".
+inline std::string ErrorOf(const std::function<void()>& f) {
+  try {
+    f();
+  } catch (const SessionLogError& e) {
+    return e.what();
+  }
+  return "<no SessionLogError>";
+}
 
 }  // namespace handshare::world::testing
