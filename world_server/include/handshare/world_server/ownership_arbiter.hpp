@@ -23,17 +23,9 @@
 #include <string>
 #include <vector>
 
-namespace handshare::world {
+#include "handshare/world/grasp.hpp"  // IsGrasp: what a grasp report means
 
-/// Whether one hand's contacts hold an object: at least two fingers on it with forces that
-/// push against each other (some pair at least min_angle_rad apart), each at least
-/// min_force_N. Forces f_W_N on the object, in world W.
-struct FingerForce {
-  bool active = false;
-  double f_W_N[3] = {0.0, 0.0, 0.0};
-};
-bool IsGrasp(const FingerForce* fingers, std::size_t count, double min_force_N = 0.05,
-             double min_angle_rad = 1.7453292519943295 /* 100 deg */);
+namespace handshare::world {
 
 struct OwnershipConfig {
   std::chrono::nanoseconds release_grace = std::chrono::milliseconds(100);
