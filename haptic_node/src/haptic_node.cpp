@@ -17,6 +17,7 @@
 #include "handshare/haptic/replay.hpp"
 #include "handshare/haptic/scene_renderer.hpp"
 #include "handshare/hiro/hiro_device.hpp"
+#include "handshare/world/grasp.hpp"
 #include "handshare/haptic/sim_hand.hpp"
 
 namespace handshare::haptic {
@@ -82,20 +83,17 @@ msg::ControlEventKind ToMessage(controls::EventKind k) {
   return msg::CONTROL_MISSED;
 }
 
-// The dynamic body this hand grasps: two or more fingers on it pushing from sides more than
-// 100 degrees apart (a pinch or a grasp, not a single poke or a hand resting on top).
+// The dynamic body this hand grasps, by the rule the world server arbitrates with
+// (world::IsGrasp on the forces on the body), or -1.
 std::int32_t GraspedBody(const ContactReport& r) {
   for (int b = 0; b < r.num_bodies; ++b) {
-    const std::int32_t body = r.bodies[b].object;
+    world::FingerForce on_body[kFingers];
     for (int i = 0; i < kFingers; ++i) {
-      if (!r.fingers[i].active || r.fingers[i].object != body) continue;
-      const Eigen::Vector3d ni(r.fingers[i].n_W[0], r.fingers[i].n_W[1], r.fingers[i].n_W[2]);
-      for (int j = i + 1; j < kFingers; ++j) {
-        if (!r.fingers[j].active || r.fingers[j].object != body) continue;
-        const Eigen::Vector3d nj(r.fingers[j].n_W[0], r.fingers[j].n_W[1], r.fingers[j].n_W[2]);
-        if (ni.dot(nj) < std::cos(100.0 * 3.14159265358979 / 180.0)) return body;
-      }
+      const auto& f = r.fingers[i];
+      on_body[i].active = f.active && f.object == r.bodies[b].object;
+      for (int k = 0; k < 3; ++k) on_body[i].f_W_N[k] = f.f_W_N[k];
     }
+    if (world::IsGrasp(on_body, kFingers)) return r.bodies[b].object;
   }
   return -1;
 }
@@ -106,6 +104,9 @@ HapticNode::HapticNode(HapticNodeConfig config) : config_(std::move(config)) {}
 
 int HapticNode::Run() {
   using Clock = std::chrono::steady_clock;
+  // Peers' contacts older than this are dropped (a vanished peer loses its contacts well
+  // within the 2 s the shared world allows; the safety stage's rate bound smooths the change).
+  constexpr auto kPeerContactLifespan = std::chrono::milliseconds(500);
   auto device = MakeDevice(config_);  // script errors surface before joining the session
   const std::string tag = "[haptic_node " + config_.user + "] ";
   auto say = [&](const std::string& line) {
@@ -156,7 +157,11 @@ int HapticNode::Run() {
   std::uint32_t scene_revision = 0;
   ContactReport report;
   bool have_report = false, last_sent_active = false;
-  std::map<std::string, msg::ContactSet> peers;  // newest contact set of every other user
+  struct PeerContacts {
+    msg::ContactSet contacts;
+    Clock::time_point received;
+  };
+  std::map<std::string, PeerContacts> peers;  // newest contact set of every other user
 
   const auto start = Clock::now();
   const auto period = std::chrono::duration_cast<Clock::duration>(
@@ -236,23 +241,26 @@ int HapticNode::Run() {
       if (renderer->TakeReport(report)) have_report = true;
 
       // The other users' contacts on this world's objects, for the shared deformables.
+      // A peer touching something sends its contact set at its publish rate; one silent for
+      // longer has gone (or stopped touching without a last sample): its contacts go too.
+      const auto now = Clock::now();
       while (contact_reader.TakeNext(peer, meta)) {
         if (!meta.valid_data) continue;
         if (peer.user().to_string() == config_.user) continue;
-        peers[peer.user().to_string()] = peer;
+        peers[peer.user().to_string()] = {peer, now};
       }
+      std::erase_if(peers, [&](const auto& entry) { return now - entry.second.received > kPeerContactLifespan; });
       RemoteContacts remote;
       int hand = 0;
-      for (const auto& [user, set] : peers) {
+      for (const auto& [user, received] : peers) {
+        const msg::ContactSet& set = received.contacts;
         ++hand;
         for (int i = 0; i < kFingers; ++i) {
           const auto& f = set.fingers()[i];
           if (!f.active() || remote.count >= kMaxRemoteContacts) continue;
+          // Shared solves are for deformables (the objects with a contact solver).
           const auto object = renderer->models().Find(f.object_id().to_string());
-          if (object < 0) continue;
-          bool deformable = false;
-          for (const auto& d : renderer->models().deformables) deformable |= d.object_id == f.object_id().to_string();
-          if (!deformable) continue;
+          if (object < 0 || renderer->models().world->contact_solver(object) == nullptr) continue;
           auto& item = remote.items[remote.count++];
           item.hand = hand;
           item.finger = i;
