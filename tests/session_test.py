@@ -206,7 +206,7 @@ def check_speech(wav_path):
 
 def case_shared_session(h, domain):
     """World server, two simulated haptic nodes, a headless spectator and the audio guide."""
-    session = "it-shared"
+    session = f"it-shared-{os.getpid()}"  # own partition: concurrent runs on one host stay apart
     w = h.work
     h.start("world_server", "world_server", "--domain", domain, "--session", session, "--duration", 14)
     h.start("audio_guide", "audio_guide", "--domain", domain, "--session", session,
@@ -248,7 +248,7 @@ def case_shared_session(h, domain):
 
 def case_killed_member(h, domain):
     """A member killed with SIGKILL (no goodbye) is noticed as lost within 2 s."""
-    session = "it-killed"
+    session = f"it-killed-{os.getpid()}"  # own partition: concurrent runs on one host stay apart
     h.start("world_server", "world_server", "--domain", domain, "--session", session, "--duration", 30)
     carol = h.start("carol", "haptic_node", "--domain", domain, "--session", session, "--user", "carol")
     h.wait_for_line("world_server", "member joined: user=carol", 10)
@@ -271,7 +271,7 @@ def shm_segments():
 
 def case_signals(h, domain):
     """SIGINT and SIGTERM end every node cleanly (exit 0) without leaving shared memory."""
-    session = "it-signals"
+    session = f"it-signals-{os.getpid()}"  # own partition: concurrent runs on one host stay apart
     before = shm_segments()
     h.start("world_server", "world_server", "--domain", domain, "--session", session)
     h.start("haptic", "haptic_node", "--domain", domain, "--session", session, "--user", "dave")
@@ -332,7 +332,7 @@ def case_encyclopedia(h, domain):
     """Start menu -> solar system (a button) -> lift the ball on the Moon -> the lever to Mars ->
     lift it again: the held weight ratio is 3.71/1.62 within 2%, each within 1% of m g; the
     session log holds the scene changes and the control events."""
-    session = "it-encyclopedia"
+    session = f"it-encyclopedia-{os.getpid()}"  # own partition: concurrent runs on one host stay apart
     os.environ["HANDSHARE_CACHE"] = os.path.join(h.work, "cache")  # the nodes' model cache
     log_db = os.path.join(h.work, "session.db")
     trace = os.path.join(h.work, "alice.csv")
