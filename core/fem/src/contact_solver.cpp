@@ -8,6 +8,7 @@
 #include "dense_small.hpp"
 #include "handshare/fem/error.hpp"
 #include "kernels.hpp"
+#include "merge_contacts.hpp"
 
 namespace handshare::fem {
 
@@ -111,18 +112,12 @@ StepStatus ContactSolver::Solve(std::span<const ContactInput> contacts) noexcept
       states_[i] = ContactState::kRejectedInvalid;
       continue;
     }
-    std::int32_t j = 0;
-    while (j < num_unique_ && slot_[j] != slot) ++j;
-    if (j == num_unique_) {
-      slot_[j] = slot;
-      multiplicity_[j] = 0;
-      d_m_[j].setZero();
+    const std::int32_t j =
+        detail::MergeTouch(slot, c.u_m, slot_.data(), multiplicity_.data(), d_m_.data(), num_unique_);
+    if (multiplicity_[j] == 1) {
       n_[j].setZero();
       mode_[j] = c.mode;
-      ++num_unique_;
     }
-    ++multiplicity_[j];
-    d_m_[j] += c.u_m;
     if (nn > 0.0) n_[j] += c.n_out / nn;
     if (c.mode == ContactMode::kFull3d) mode_[j] = ContactMode::kFull3d;
     unique_of_input_[i] = j;

@@ -6,6 +6,7 @@
 
 #include "dense_small.hpp"
 #include "kernels.hpp"
+#include "merge_contacts.hpp"
 #include "handshare/fem/surface_field.hpp"
 #include "handshare/fem/error.hpp"
 
@@ -121,16 +122,8 @@ StepStatus ElementaryDisplacementSolver::Solve(std::span<const ContactInput> con
       rejected = true;
       continue;
     }
-    std::int32_t j = 0;
-    while (j < num_unique_ && slot_[j] != slot) ++j;
-    if (j == num_unique_) {
-      slot_[j] = slot;
-      multiplicity_[j] = 0;
-      d_m_[j].setZero();
-      ++num_unique_;
-    }
-    ++multiplicity_[j];
-    d_m_[j] += c.u_m;
+    const std::int32_t j =
+        detail::MergeTouch(slot, c.u_m, slot_.data(), multiplicity_.data(), d_m_.data(), num_unique_);
     unique_of_input_[i] = j;
     states_[i] = ContactState::kActive;
   }
