@@ -5,16 +5,22 @@
 int main(int argc, char** argv) {
   handshare::common::Options options(
       "world_server", "Owns a shared handshare session: publishes the scene and the message board, "
-                      "tracks members joining and leaving, and records the session with --log.");
+                      "tracks members joining and leaving, arbitrates grasped objects, publishes "
+                      "deformations and rigid bodies' states, and records the session with --log.");
   handshare::common::DeclareSessionOptions(options);
   options.Value("scene", "NAME", "scene to start with (assets/scenes/NAME.json)", "start_menu")
       .Value("log", "FILE", "record the session in this SQLite session log (a new session is appended; "
-                            "read it with session_report)", "");
+                            "read it with session_report)", "")
+      .Value("cache", "DIR", "deformable models' cache (default: $HANDSHARE_CACHE, else ~/.cache/handshare)", "")
+      .Value("dump-deformation", "DIR", "write the loads and field of every published deformation to DIR "
+                                        "(for an independent FEM check)", "");
   return handshare::common::RunNodeMain(argc, argv, options, [](const auto& o) {
     handshare::world::WorldServerConfig config;
     config.where = handshare::common::ReadSessionOptions(o);
     config.scene = o.GetString("scene");
     config.log_file = o.GetString("log");
+    config.cache_dir = o.GetString("cache");
+    config.dump_dir = o.GetString("dump-deformation");
     return handshare::world::WorldServer(config).Run();
   });
 }

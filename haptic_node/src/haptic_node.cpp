@@ -1,5 +1,7 @@
 #include "handshare/haptic/haptic_node.hpp"
 
+#include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <fstream>
 #include <functional>
@@ -19,6 +21,7 @@
 #include "handshare/hiro/hiro_device.hpp"
 #include "handshare/world/grasp.hpp"
 #include "handshare/haptic/sim_hand.hpp"
+#include "handshare/session/peer_contacts.hpp"
 
 namespace handshare::haptic {
 
@@ -83,19 +86,27 @@ msg::ControlEventKind ToMessage(controls::EventKind k) {
   return msg::CONTROL_MISSED;
 }
 
-// The dynamic body this hand grasps, by the rule the world server arbitrates with
-// (world::IsGrasp on the forces on the body), or -1.
-std::int32_t GraspedBody(const ContactReport& r) {
+// The dynamic body this hand claims for simulating it: the one it grasps (world::IsGrasp on
+// the forces on the body), else the one it touches with the largest force, or -1. The world
+// server gives a claimed free body to its claimant; a body held by another stays theirs.
+std::int32_t ClaimedBody(const ContactReport& r) {
+  std::int32_t touched = -1;
+  double strongest = 0.0;
   for (int b = 0; b < r.num_bodies; ++b) {
     world::FingerForce on_body[kFingers];
     for (int i = 0; i < kFingers; ++i) {
       const auto& f = r.fingers[i];
       on_body[i].active = f.active && f.object == r.bodies[b].object;
       for (int k = 0; k < 3; ++k) on_body[i].f_W_N[k] = f.f_W_N[k];
+      const double norm = std::sqrt(f.f_W_N[0] * f.f_W_N[0] + f.f_W_N[1] * f.f_W_N[1] + f.f_W_N[2] * f.f_W_N[2]);
+      if (on_body[i].active && (touched < 0 || norm > strongest)) {
+        touched = r.bodies[b].object;
+        strongest = norm;
+      }
     }
     if (world::IsGrasp(on_body, kFingers)) return r.bodies[b].object;
   }
-  return -1;
+  return touched;
 }
 
 }  // namespace
@@ -104,9 +115,6 @@ HapticNode::HapticNode(HapticNodeConfig config) : config_(std::move(config)) {}
 
 int HapticNode::Run() {
   using Clock = std::chrono::steady_clock;
-  // Peers' contacts older than this are dropped (a vanished peer loses its contacts well
-  // within the 2 s the shared world allows; the safety stage's rate bound smooths the change).
-  constexpr auto kPeerContactLifespan = std::chrono::milliseconds(500);
   auto device = MakeDevice(config_);  // script errors surface before joining the session
   const std::string tag = "[haptic_node " + config_.user + "] ";
   auto say = [&](const std::string& line) {
@@ -131,6 +139,7 @@ int HapticNode::Run() {
   auto event_writer = dds::MakeWriter<msg::ControlEvent>(participant, dds::topics::kControlEvent);
   auto scene_reader = dds::MakeReader<msg::SceneState>(participant, dds::topics::kSceneState);
   auto contact_reader = dds::MakeReader<msg::ContactSet>(participant, dds::topics::kContactSet);
+  auto object_reader = dds::MakeReader<msg::ObjectState>(participant, dds::topics::kObjectState);
 
   HapticLoopConfig loop_config{config_.rate_Hz, true};
   HapticLoop loop(*device, loop_config);
@@ -157,11 +166,10 @@ int HapticNode::Run() {
   std::uint32_t scene_revision = 0;
   ContactReport report;
   bool have_report = false, last_sent_active = false;
-  struct PeerContacts {
-    msg::ContactSet contacts;
-    Clock::time_point received;
-  };
-  std::map<std::string, PeerContacts> peers;  // newest contact set of every other user
+  // The other users' newest contact sets (a vanished peer's fade out within 0.5 s).
+  session::PeerContacts peers;
+  // Published states of rigid bodies (object id -> newest): followed unless this user owns it.
+  std::map<std::string, msg::ObjectState> body_states;
 
   const auto start = Clock::now();
   const auto period = std::chrono::duration_cast<Clock::duration>(
@@ -202,6 +210,8 @@ int HapticNode::Run() {
             say(line);
           }
         }
+        if (!renderer || renderer->scene().name != scene.name) body_states.clear();
+        peers.Clear();
         renderer = next_renderer;
         have_report = false;
         loop.SetRenderer(renderer);
@@ -242,37 +252,50 @@ int HapticNode::Run() {
 
       // The other users' contacts on this world's objects, for the shared deformables.
       // A peer touching something sends its contact set at its publish rate; one silent for
-      // longer has gone (or stopped touching without a last sample): its contacts go too.
+      // longer has gone (or stopped touching without a last sample): its contacts fade out.
       const auto now = Clock::now();
       while (contact_reader.TakeNext(peer, meta)) {
-        if (!meta.valid_data) continue;
-        if (peer.user().to_string() == config_.user) continue;
-        peers[peer.user().to_string()] = {peer, now};
+        if (meta.valid_data) peers.Receive(peer, now, config_.user);
       }
-      std::erase_if(peers, [&](const auto& entry) { return now - entry.second.received > kPeerContactLifespan; });
+      peers.Expire(now);
       RemoteContacts remote;
-      int hand = 0;
-      for (const auto& [user, received] : peers) {
-        const msg::ContactSet& set = received.contacts;
-        ++hand;
-        for (int i = 0; i < kFingers; ++i) {
-          const auto& f = set.fingers()[i];
-          if (!f.active() || remote.count >= kMaxRemoteContacts) continue;
-          // Shared solves are for deformables (the objects with a contact solver).
-          const auto object = renderer->models().Find(f.object_id().to_string());
-          if (object < 0 || renderer->models().world->contact_solver(object) == nullptr) continue;
-          auto& item = remote.items[remote.count++];
-          item.hand = hand;
-          item.finger = i;
-          item.object = object;
-          for (int k = 0; k < 3; ++k) {
-            item.p_WC_m[k] = f.p_W_m()[k];
-            item.u_W_m[k] = f.u_imposed_W_m()[k];
-            item.f_E_W_N[k] = -f.f_W_N()[k];
-          }
+      peers.ForEach(renderer->models(), now, [&](const session::PeerContact& c, const msg::ContactSet&) {
+        // Shared solves are for deformables (the objects with a contact solver); rigid bodies
+        // move by their owner's published pose instead.
+        if (remote.count >= kMaxRemoteContacts || renderer->models().world->contact_solver(c.object) == nullptr) return;
+        auto& item = remote.items[remote.count++];
+        item.hand = c.hand;
+        item.finger = c.finger;
+        item.object = c.object;
+        for (int k = 0; k < 3; ++k) {
+          item.p_WC_m[k] = c.p_WC_m[k];
+          item.u_W_m[k] = c.u_W_m[k];
+          item.f_E_W_N[k] = c.f_E_W_N[k];
         }
-      }
+      });
       renderer->SetRemote(remote);
+
+      // Rigid bodies: the owner simulates a grasped body, the world server a free one; this
+      // hand follows every body it does not own itself.
+      msg::ObjectState body;
+      while (object_reader.TakeNext(body, meta)) {
+        if (!meta.valid_data || body.session().to_string() != config_.where.session) continue;
+        body_states[body.object_id().to_string()] = body;
+      }
+      FollowedBodies followed;
+      for (const auto& [id, st] : body_states) {
+        if (st.owner().to_string() == config_.user || followed.count >= kMaxReportedBodies) continue;
+        const auto object = renderer->models().Find(id);
+        if (object < 0 || std::find(renderer->models().dynamic_bodies.begin(), renderer->models().dynamic_bodies.end(),
+                                    object) == renderer->models().dynamic_bodies.end()) {
+          continue;
+        }
+        auto& item = followed.items[followed.count++];
+        item.object = object;
+        for (int k = 0; k < 3; ++k) item.p_WO_m[k] = st.p_WO_m()[k];
+        for (int k = 0; k < 4; ++k) item.q_WO_wxyz[k] = st.q_WO_wxyz()[k];
+      }
+      renderer->SetFollowed(followed);
     }
 
     if (loop.TakeSnapshot(snapshot)) {
@@ -304,17 +327,27 @@ int HapticNode::Run() {
         m.radius_m(models.fingertip_radius_m);
         m.depth_m(f.depth_m);
       }
-      const std::int32_t grasped = GraspedBody(report);
+      const std::int32_t grasped = ClaimedBody(report);
       contacts.grasped_object_id(grasped >= 0 ? renderer->IdOf(grasped) : std::string());
-      contacts.simulating(grasped >= 0);
+      // The body this node simulates for the session: the one the world server gave it.
+      std::int32_t owned = -1;
+      for (const auto& [id, st] : body_states) {
+        if (st.owner().to_string() == config_.user) owned = renderer->models().Find(id);
+      }
+      contacts.simulating(false);
+      contacts.simulated_object_id("");
       for (int b = 0; b < report.num_bodies; ++b) {
-        if (report.bodies[b].object != grasped) continue;
+        if (owned < 0 || report.bodies[b].object != owned) continue;
+        contacts.simulating(true);
+        contacts.simulated_object_id(renderer->IdOf(owned));
         for (int k = 0; k < 3; ++k) {
           contacts.p_WO_m()[k] = report.bodies[b].p_WO_m[k];
           contacts.v_WO_m_per_s()[k] = report.bodies[b].v_WO_m_per_s[k];
         }
         for (int k = 0; k < 4; ++k) contacts.q_WO_wxyz()[k] = report.bodies[b].q_WO_wxyz[k];
       }
+      // An owner keeps reporting its body's pose after letting go, until the server frees it.
+      active |= contacts.simulating() || grasped >= 0;
       if ((active || last_sent_active) && contact_writer.matched_readers() > 0) {
         contacts.stamp_ns(common::SteadyNowNs());
         contacts.seq(contacts.seq() + 1);

@@ -1,16 +1,8 @@
 #include "handshare/haptic/scene_renderer.hpp"
 
-#include <time.h>
-
 namespace handshare::haptic {
 
 namespace {
-// Wall-clock seconds: every process computes the same phase of a scene's periodic motions.
-double WallSeconds() noexcept {
-  timespec ts{};
-  clock_gettime(CLOCK_REALTIME, &ts);
-  return static_cast<double>(ts.tv_sec % 86400) + 1e-9 * static_cast<double>(ts.tv_nsec);
-}
 void Put(double (&out)[3], const Eigen::Vector3d& v) noexcept {
   for (int k = 0; k < 3; ++k) out[k] = v[k];
 }
@@ -50,12 +42,25 @@ void SceneRenderer::Render(double /*t_s*/, double dt_s, const DeviceReading& rea
   auto& world = *models_.world;
   // 1. Objects that move by themselves (the Daphnia swims), on the wall clock.
   if (!moving_.empty()) {
-    const double t = WallSeconds();
+    const double t = scene::MotionTime_s();
     for (const auto& [object, i] : moving_) {
       Eigen::Isometry3d X = scene_.objects[i].X_WO();
       X.translation() += scene_.objects[i].motion.Offset_W(t);
       world.SetPose(object, X);
     }
+  }
+  // 1b. Bodies simulated elsewhere (another user owns them, or the world server): follow.
+  followed_in_.Read(followed_);
+  for (int i = 0; i < std::min(followed_.count, kMaxReportedBodies); ++i) {
+    const auto& b = followed_.items[i];
+    if (b.object < 0 || b.object >= world.num_objects()) continue;
+    Eigen::Isometry3d X = Eigen::Isometry3d::Identity();
+    const Eigen::Quaterniond q(b.q_WO_wxyz[0], b.q_WO_wxyz[1], b.q_WO_wxyz[2], b.q_WO_wxyz[3]);
+    if (!(q.norm() > 0.5) || !q.coeffs().allFinite()) continue;
+    X.linear() = q.normalized().toRotationMatrix();
+    X.translation() = Eigen::Vector3d(b.p_WO_m[0], b.p_WO_m[1], b.p_WO_m[2]);
+    if (!X.translation().allFinite()) continue;
+    world.SetPose(b.object, X);
   }
   // 2. The other hands' contacts (newest set; kept until a newer one arrives).
   remote_in_.Read(remote_);

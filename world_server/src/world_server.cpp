@@ -15,6 +15,7 @@
 #include "handshare/dds/messages.hpp"
 #include "handshare/scene/scene.hpp"
 #include "handshare/world_server/member_registry.hpp"
+#include "handshare/world_server/shared_world.hpp"
 
 namespace handshare::world {
 
@@ -123,6 +124,9 @@ int WorldServer::Run() {
   auto scene_writer = dds::MakeWriter<msg::SceneState>(participant, dds::topics::kSceneState);
   auto board_writer = dds::MakeWriter<msg::MessageBoard>(participant, dds::topics::kMessageBoard);
   auto member_reader = dds::MakeReader<msg::MemberInfo>(participant, dds::topics::kMemberInfo);
+  auto contact_reader = dds::MakeReader<msg::ContactSet>(participant, dds::topics::kContactSet);
+  auto object_writer = dds::MakeWriter<msg::ObjectState>(participant, dds::topics::kObjectState);
+  auto deformation_writer = dds::MakeWriter<msg::Deformation>(participant, dds::topics::kDeformation);
 
   const auto start = start_;
   auto log = [&](const std::string& line) { Print(line); };
@@ -133,6 +137,13 @@ int WorldServer::Run() {
   log("session '" + config_.where.session + "' on domain " + std::to_string(config_.where.domain_id) +
       ": scene '" + scene.name + "' (" + std::to_string(scene.objects.size()) + " objects)");
   OnSceneChange(scene.name, scene.title);
+
+  // The shared world: ownership, free bodies, deformations (models built on a loader thread).
+  SharedWorldOptions shared_options;
+  if (!config_.cache_dir.empty()) shared_options.models.cache_dir = config_.cache_dir;
+  shared_options.dump_dir = config_.dump_dir;
+  SharedWorld shared(config_.where.session, shared_options);
+  shared.SetScene(scene);
 
   // The message board shows one message at a time, in English (the Japanese texts are in the
   // scene files); transient-local keeps the newest for late joiners.
@@ -190,6 +201,7 @@ int WorldServer::Run() {
         return;
       }
       scene_writer.Write(ToMessage(scene, config_.where.session, ++revision));
+      shared.SetScene(scene);
       log("control " + id + " by " + e.user().to_string() + ": scene '" + scene.name + "' (revision " +
           std::to_string(revision) + ")");
       OnSceneChange(scene.name, scene.title);
@@ -206,6 +218,7 @@ int WorldServer::Run() {
     }
     if (changed) {
       scene_writer.Write(ToMessage(scene, config_.where.session, ++revision));
+      if (action->set_gravity) shared.SetScene(scene);
       char line[200];
       std::snprintf(line, sizeof line, "control %s by %s: gravity %.2f m/s^2, '%s' (revision %u)", id.c_str(),
                     e.user().to_string().c_str(), scene.gravity_W_m_per_s2.z(), scene.title.c_str(), revision);
@@ -219,6 +232,8 @@ int WorldServer::Run() {
   const auto period = std::chrono::duration_cast<Clock::duration>(
       std::chrono::duration<double>(1.0 / config_.tick_Hz));
   auto next = Clock::now();
+  Clock::time_point last_tick{};
+  std::uint64_t deformations_sent = 0;
   msg::MemberInfo info;
   dds::SampleMeta meta;
   while (!common::ShutdownRequested()) {
@@ -238,7 +253,14 @@ int WorldServer::Run() {
     while (member_reader.TakeLostWriter(lost_writer)) {
       for (auto& e : members.OnWriterLost(lost_writer)) events.push_back(e);
     }
-    for (const auto& event : events) OnMemberEvent(event, members.present().size());
+    for (const auto& event : events) {
+      OnMemberEvent(event, members.present().size());
+      if (event.change != MemberChange::kJoined) {
+        shared.OnUserGone(event.member.user, Clock::now());
+      } else if (event.member.kind == dds::ToString(msg::NODE_GRAPHICS)) {
+        shared.RequestKeyframes();  // a new spectator gets the whole deformed surfaces
+      }
+    }
     msg::ControlEvent control;
     dds::SampleMeta control_meta;
     while (control_reader.TakeNext(control, control_meta)) {
@@ -259,13 +281,40 @@ int WorldServer::Run() {
       OnControlEvent(record);
       apply(control);
     }
+    // The users' contacts, then one step of the shared world, and what it publishes.
+    msg::ContactSet contact_set;
+    dds::SampleMeta contact_meta;
+    while (contact_reader.TakeNext(contact_set, contact_meta)) {
+      if (contact_meta.valid_data) shared.OnContactSet(contact_set, Clock::now());
+    }
+    const auto now = Clock::now();
+    const double dt = last_tick == Clock::time_point{} ? 1.0 / config_.tick_Hz
+                                                       : std::chrono::duration<double>(now - last_tick).count();
+    last_tick = now;
+    TickOutput out = shared.Tick(now, std::min(dt, 0.1));
+    for (const auto& note : out.notes) log(note);
+    for (const auto& change : out.ownership) OnOwnershipChange(change);
+    for (const auto& state : out.states) object_writer.Write(state);
+    for (const auto& [object_id, sample] : out.deformations) {
+      msg::Deformation d;
+      d.object_id(object_id);
+      d.session(config_.where.session);
+      d.revision(sample.revision);
+      d.keyframe(sample.keyframe);
+      d.surface_node_count(sample.surface_node_count);
+      d.node_ids().assign(sample.node_ids.begin(), sample.node_ids.end());
+      d.u_W_m().assign(sample.u_W_m.begin(), sample.u_W_m.end());
+      deformation_writer.Write(d);
+      ++deformations_sent;
+    }
     CheckLog();
     next += period;
     if (Clock::now() > next + 5 * period) next = Clock::now();
     std::this_thread::sleep_until(next);
   }
   log("shutting down: " + std::to_string(members.joined_total()) + " members joined, " +
-      std::to_string(members.present().size()) + " still present");
+      std::to_string(members.present().size()) + " still present, " + std::to_string(deformations_sent) +
+      " deformation samples sent");
   if (log_) {
     // Members still present stay open in the log: the report shows them "present at end".
     log_->End(common::UnixNowNs());

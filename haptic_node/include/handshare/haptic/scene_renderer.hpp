@@ -49,6 +49,17 @@ struct RemoteContacts {
   } items[kMaxRemoteContacts];
 };
 
+/// Dynamic bodies another process simulates (owned by another user, or free and simulated by
+/// the world server): this hand follows their published poses (trivially copyable).
+struct FollowedBodies {
+  std::int32_t count = 0;
+  struct Item {
+    std::int32_t object = -1;
+    double p_WO_m[3] = {};
+    double q_WO_wxyz[4] = {1, 0, 0, 0};
+  } items[kMaxReportedBodies];
+};
+
 class SceneRenderer final : public ForceRenderer {
  public:
   /// Builds the models of `scene` (deformables from the compliance cache). Not real-time.
@@ -66,6 +77,8 @@ class SceneRenderer final : public ForceRenderer {
   bool TakeReport(ContactReport& out) noexcept { return reports_.Read(out); }
   bool TakeEvent(controls::ControlEvent& out) noexcept { return events_.Pop(out); }
   void SetRemote(const RemoteContacts& remote) noexcept { remote_in_.Write(remote); }
+  /// The bodies to follow from the next step on (an empty set: this hand simulates them all).
+  void SetFollowed(const FollowedBodies& followed) noexcept { followed_in_.Write(followed); }
   /// Places a dynamic body before the renderer is handed to the loop (carry-over of poses
   /// across a rebuild). Not thread-safe: call before SetRenderer.
   void PlaceBody(const std::string& id, const Eigen::Isometry3d& X_WO);
@@ -81,9 +94,11 @@ class SceneRenderer final : public ForceRenderer {
   std::array<Eigen::Vector3d, kFingers> f_controls_{};
   controls::EventBuffer event_buffer_;
   RemoteContacts remote_;
+  FollowedBodies followed_;
   std::array<contact::RemoteContact, kMaxRemoteContacts> remote_contacts_{};
   // Channels.
   common::TripleBuffer<RemoteContacts> remote_in_;
+  common::TripleBuffer<FollowedBodies> followed_in_;
   common::TripleBuffer<ContactReport> reports_;
   common::SpscQueue<controls::ControlEvent, 256> events_;
   std::atomic<std::uint64_t> dropped_events_{0};

@@ -19,6 +19,8 @@ struct WorldServerConfig {
   std::string scene = "start_menu";
   double tick_Hz = 60.0;
   std::string log_file;          // "": no session log; else SQLite file, a session is appended
+  std::string cache_dir;         // deformable models' cache ("": world::DefaultCacheDir())
+  std::string dump_dir;          // "": none; else every published deformation's loads (SharedWorld)
 };
 
 class WorldServer {

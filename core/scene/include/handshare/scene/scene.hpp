@@ -109,6 +109,10 @@ struct Motion {
   Eigen::Vector3d Offset_W(double t_s) const noexcept;
 };
 
+/// The time periodic motions run on: wall-clock seconds of the day (CLOCK_REALTIME), so every
+/// process of a session (haptic nodes, world server) computes the same phase.
+double MotionTime_s() noexcept;
+
 struct SceneObject {
   std::string id;
   ObjectKind kind = ObjectKind::kRigid;

@@ -1,0 +1,93 @@
+#pragma once
+/// The other hands' contacts, as every process that shares a world reads them: the newest
+/// ContactSet of each user, turned into contacts on this process's models of the scene
+/// (world::SceneWorld), so a haptic node and the world server put the same peers' fingertips
+/// into the same FEM solves. Not real-time (the bridge thread or the server's tick).
+///
+/// A vanished peer does not stop pressing at once: its last contact set fades out. From
+/// fade_after on, its imposed displacements and forces are scaled down linearly to zero at
+/// lifespan, then the set is dropped, so the others feel a ramp, not a step (issue: "a member
+/// that vanishes loses its contacts within 2 s, smoothly, without a force jump for the others").
+/// A peer that lifts its hand sends one last set with no active finger: that ends at once (its
+/// own fingertips already came off smoothly).
+#include <chrono>
+#include <cstdint>
+#include <map>
+#include <string>
+
+#include "handshare/dds/messages.hpp"
+#include "handshare/world/scene_world.hpp"
+
+namespace handshare::session {
+
+struct PeerContactsConfig {
+  std::chrono::nanoseconds fade_after = std::chrono::milliseconds(200);
+  std::chrono::nanoseconds lifespan = std::chrono::milliseconds(500);
+};
+
+/// One peer fingertip on an object of the local models. Plain data.
+struct PeerContact {
+  std::int32_t hand = 0;        // 1, 2, ... in user-name order
+  std::int32_t finger = 0;
+  std::int32_t object = -1;     // world object index of the local SceneWorld
+  double p_WC_m[3] = {};        // contact point on the undeformed surface
+  double u_W_m[3] = {};         // imposed displacement (deformables), faded
+  double f_E_W_N[3] = {};       // force on the peer's fingertip, faded
+  double weight = 1.0;          // the fade factor applied (1: fresh)
+};
+
+class PeerContacts {
+ public:
+  using Clock = std::chrono::steady_clock;
+  explicit PeerContacts(PeerContactsConfig config = {});
+
+  /// A contact set arrived at `now`. Sets of `self` (this process's own user) are ignored.
+  void Receive(const msg::ContactSet& set, Clock::time_point now, const std::string& self = "");
+  /// Drops sets older than the lifespan.
+  void Expire(Clock::time_point now);
+  /// Forgets everything (a new scene: object indices change).
+  void Clear() { sets_.clear(); }
+
+  /// Calls fn(const PeerContact&, const msg::ContactSet&) for every active finger of every
+  /// peer on an object of `models` (unknown objects are skipped), faded by age at `now`.
+  template <typename Fn>
+  void ForEach(const world::SceneWorld& models, Clock::time_point now, Fn&& fn) const {
+    std::int32_t hand = 0;
+    for (const auto& [user, entry] : sets_) {
+      ++hand;
+      const double w = Weight(now - entry.received);
+      if (w <= 0.0) continue;
+      for (int i = 0; i < static_cast<int>(entry.set.fingers().size()); ++i) {
+        const auto& f = entry.set.fingers()[i];
+        if (!f.active()) continue;
+        PeerContact c;
+        c.object = models.Find(f.object_id().to_string());
+        if (c.object < 0) continue;
+        c.hand = hand;
+        c.finger = i;
+        c.weight = w;
+        for (int k = 0; k < 3; ++k) {
+          c.p_WC_m[k] = f.p_W_m()[k];
+          c.u_W_m[k] = w * f.u_imposed_W_m()[k];
+          c.f_E_W_N[k] = -w * f.f_W_N()[k];
+        }
+        fn(c, entry.set);
+      }
+    }
+  }
+
+  /// The newest set of every peer (user -> set), for ownership claims and poses.
+  struct Entry {
+    msg::ContactSet set;
+    Clock::time_point received;
+  };
+  const std::map<std::string, Entry>& sets() const { return sets_; }
+  /// 1 while fresh, falling linearly to 0 between fade_after and lifespan.
+  double Weight(Clock::duration age) const;
+
+ private:
+  PeerContactsConfig config_;
+  std::map<std::string, Entry> sets_;
+};
+
+}  // namespace handshare::session

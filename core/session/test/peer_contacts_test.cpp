@@ -1,0 +1,103 @@
+#include "handshare/session/peer_contacts.hpp"
+
+#include <gtest/gtest.h>
+
+#include <vector>
+
+namespace handshare::session {
+namespace {
+
+using namespace std::chrono_literals;
+using Clock = PeerContacts::Clock;
+
+msg::ContactSet Set(const std::string& user, const std::string& object, double u_z, double f_z) {
+  msg::ContactSet s;
+  s.user(user);
+  s.fingers()[1].active(true);
+  s.fingers()[1].object_id(object);
+  s.fingers()[1].p_W_m({0.01, 0.02, 0.03});
+  s.fingers()[1].u_imposed_W_m({0.0, 0.0, u_z});
+  s.fingers()[1].f_W_N({0.0, 0.0, f_z});
+  s.fingers()[3].active(false);
+  s.fingers()[3].object_id(object);
+  return s;
+}
+
+struct Seen {
+  std::int32_t object, finger, hand;
+  double u_z, f_z, weight;
+};
+
+std::vector<Seen> Collect(const PeerContacts& peers, const world::SceneWorld& models, Clock::time_point now) {
+  std::vector<Seen> out;
+  peers.ForEach(models, now, [&](const PeerContact& c, const msg::ContactSet&) {
+    out.push_back({c.object, c.finger, c.hand, c.u_W_m[2], c.f_E_W_N[2], c.weight});
+  });
+  return out;
+}
+
+class PeerContactsTest : public ::testing::Test {
+ protected:
+  static void SetUpTestSuite() { models_ = new world::SceneWorld(world::BuildSceneWorld(scene::LoadSceneByName("solar_system"))); }
+  static void TearDownTestSuite() { delete models_; }
+  static world::SceneWorld* models_;
+};
+world::SceneWorld* PeerContactsTest::models_ = nullptr;
+
+TEST_F(PeerContactsTest, ActiveFingersOnKnownObjectsOnly) {
+  PeerContacts peers;
+  const auto t0 = Clock::now();
+  peers.Receive(Set("bob", "ball", -0.002, -1.5), t0, "alice");
+  peers.Receive(Set("alice", "ball", -0.001, -1.0), t0, "alice");     // our own: ignored
+  peers.Receive(Set("carol", "no_such_object", -0.001, -1.0), t0, "alice");
+  const auto seen = Collect(peers, *models_, t0);
+  ASSERT_EQ(seen.size(), 1u);
+  EXPECT_EQ(seen[0].object, models_->Find("ball"));
+  EXPECT_EQ(seen[0].finger, 1);
+  EXPECT_DOUBLE_EQ(seen[0].u_z, -0.002);
+  EXPECT_DOUBLE_EQ(seen[0].f_z, 1.5);  // the peer's fingertip feels minus the force on the object
+  EXPECT_DOUBLE_EQ(seen[0].weight, 1.0);
+}
+
+TEST_F(PeerContactsTest, AVanishedPeerFadesOutLinearlyThenGoes) {
+  PeerContacts peers({200ms, 500ms});
+  const auto t0 = Clock::now();
+  peers.Receive(Set("bob", "ball", -0.004, -2.0), t0);
+  EXPECT_DOUBLE_EQ(Collect(peers, *models_, t0 + 200ms).at(0).weight, 1.0);
+  const auto half = Collect(peers, *models_, t0 + 350ms);
+  ASSERT_EQ(half.size(), 1u);
+  EXPECT_NEAR(half[0].weight, 0.5, 1e-9);
+  EXPECT_NEAR(half[0].u_z, -0.002, 1e-12);
+  EXPECT_NEAR(half[0].f_z, 1.0, 1e-9);
+  // The largest change between two 10 ms ticks is 10/300 of the contact: no step.
+  double prev = 1.0;
+  for (auto t = 200ms; t <= 500ms; t += 10ms) {
+    const auto now = Collect(peers, *models_, t0 + t);
+    const double w = now.empty() ? 0.0 : now[0].weight;
+    EXPECT_LE(prev - w, 10.0 / 300.0 + 1e-9) << "at " << t.count() << " ms";
+    prev = w;
+  }
+  EXPECT_TRUE(Collect(peers, *models_, t0 + 500ms).empty());
+  peers.Expire(t0 + 499ms);
+  EXPECT_EQ(peers.sets().size(), 1u);
+  peers.Expire(t0 + 500ms);
+  EXPECT_TRUE(peers.sets().empty());
+}
+
+TEST_F(PeerContactsTest, ANewerSetReplacesTheOldAndRefreshes) {
+  PeerContacts peers;
+  const auto t0 = Clock::now();
+  peers.Receive(Set("bob", "ball", -0.004, -2.0), t0);
+  auto lifted = Set("bob", "ball", 0.0, 0.0);
+  lifted.fingers()[1].active(false);
+  peers.Receive(lifted, t0 + 300ms);
+  EXPECT_TRUE(Collect(peers, *models_, t0 + 300ms).empty());  // lifting ends at once
+  EXPECT_EQ(peers.sets().size(), 1u);
+}
+
+TEST(PeerContactsConfig, RejectsAnEmptyFade) {
+  EXPECT_THROW(PeerContacts({500ms, 500ms}), std::invalid_argument);
+}
+
+}  // namespace
+}  // namespace handshare::session

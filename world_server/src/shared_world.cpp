@@ -1,0 +1,348 @@
+#include "handshare/world_server/shared_world.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <fstream>
+#include <limits>
+#include <set>
+#include <sstream>
+
+#include "handshare/common/clock.hpp"
+
+namespace handshare::world {
+
+namespace {
+
+msg::ObjectState State(const std::string& session, const std::string& id, const std::string& owner,
+                       const Eigen::Isometry3d& X, const Eigen::Vector3d& v) {
+  msg::ObjectState s;
+  s.object_id(id);
+  s.session(session);
+  s.owner(owner);
+  s.stamp_ns(common::SteadyNowNs());
+  const Eigen::Quaterniond q(X.linear());
+  for (int k = 0; k < 3; ++k) {
+    s.p_WO_m()[k] = X.translation()[k];
+    s.v_WO_m_per_s()[k] = v[k];
+  }
+  s.q_WO_wxyz({q.w(), q.x(), q.y(), q.z()});
+  return s;
+}
+
+bool Finite(const msg::ContactSet& s) {
+  for (int k = 0; k < 3; ++k) {
+    if (!std::isfinite(s.p_WO_m()[k])) return false;
+  }
+  for (int k = 0; k < 4; ++k) {
+    if (!std::isfinite(s.q_WO_wxyz()[k])) return false;
+  }
+  return true;
+}
+
+Eigen::Isometry3d Pose(const msg::ContactSet& s) {
+  Eigen::Isometry3d X = Eigen::Isometry3d::Identity();
+  const auto& q = s.q_WO_wxyz();
+  X.linear() = Eigen::Quaterniond(q[0], q[1], q[2], q[3]).normalized().toRotationMatrix();
+  X.translation() = Eigen::Vector3d(s.p_WO_m()[0], s.p_WO_m()[1], s.p_WO_m()[2]);
+  return X;
+}
+
+}  // namespace
+
+SharedWorld::SharedWorld(std::string session, SharedWorldOptions options)
+    : session_(std::move(session)), options_(std::move(options)), peers_(options_.peers), arbiter_(options_.ownership) {}
+
+SharedWorld::~SharedWorld() {
+  if (loading_.valid()) loading_.wait();
+}
+
+void SharedWorld::SetScene(const scene::Scene& scene) {
+  const bool same_world = scene.name == scene_.name;
+  scene_ = scene;
+  if (!same_world) {
+    // Another world: nothing of the old one carries over.
+    models_.reset();
+    deformables_.clear();
+    moving_.clear();
+    last_published_.clear();
+    arbiter_.Clear();
+    claims_.clear();
+    peers_.Clear();
+  }
+  if (loading_.valid()) loading_.wait();  // a build in flight finishes first (never two at once)
+  loading_scene_ = scene.name;
+  loading_since_ = Clock::now();
+  auto options = options_.models;
+  loading_ = std::async(std::launch::async, [scene, options] { return BuildSceneWorld(scene, options); });
+}
+
+void SharedWorld::OnContactSet(const msg::ContactSet& set, Clock::time_point now) {
+  const std::string user = set.user().to_string();
+  if (user.empty() || set.session().to_string() != session_) return;
+  peers_.Receive(set, now);
+  const std::string claim = set.grasped_object_id().to_string();
+  std::string& previous = claims_[user];
+  if (!previous.empty() && previous != claim) arbiter_.Report(user, previous, false, now);
+  if (!claim.empty()) arbiter_.Report(user, claim, true, now);
+  previous = claim;
+}
+
+void SharedWorld::OnUserGone(const std::string& user, Clock::time_point now) {
+  arbiter_.OnUserGone(user, now);
+  claims_.erase(user);
+}
+
+void SharedWorld::RequestKeyframes() {
+  keyframes_requested_ = true;
+  for (auto& d : deformables_) d.delta->RequestKeyframe();
+}
+
+void SharedWorld::Adopt(SceneWorld models, TickOutput& out) {
+  const bool carry = models_ != nullptr;  // same world, new revision: bodies stay where they are
+  if (carry) {
+    for (const auto body : models_->dynamic_bodies) {
+      const auto id = models.Find(models_->ids[static_cast<std::size_t>(body)]);
+      if (id >= 0) models.world->SetPose(id, models_->world->pose(body));
+    }
+  }
+  models_ = std::make_unique<SceneWorld>(std::move(models));
+  deformables_.clear();
+  moving_.clear();
+  last_published_.clear();
+  remote_.assign(static_cast<std::size_t>(64), contact::RemoteContact{});
+  for (std::size_t i = 0; i < scene_.objects.size(); ++i) {
+    const auto& o = scene_.objects[i];
+    const auto object = models_->Find(o.id);
+    if (object >= 0 && o.motion.active()) moving_.emplace_back(object, i);
+  }
+  for (const auto& prepared : models_->deformables) {
+    Deformable d;
+    d.id = prepared.object_id;
+    d.object = models_->Find(d.id);
+    d.prepared = &prepared;
+    const scene::SceneObject* o = nullptr;
+    for (const auto& so : scene_.objects) {
+      if (so.id == d.id) o = &so;
+    }
+    if (o == nullptr || d.object < 0 || !prepared.compliance) continue;
+    d.E_Pa = o->deformable.E_Pa;
+    d.nu = o->deformable.nu;
+    // Published node ids: the scene mesh's vertices, which the tetrahedral mesh keeps first.
+    const auto& p = prepared.mesh->positions_m();
+    std::int32_t vertices = prepared.mesh->num_nodes();
+    if (o->mesh) {
+      vertices = static_cast<std::int32_t>(o->mesh->vertices_m.size());
+      bool kept = vertices <= prepared.mesh->num_nodes();
+      for (std::int32_t v = 0; kept && v < vertices; ++v) {
+        kept = (p[static_cast<std::size_t>(v)] - o->mesh->vertices_m[static_cast<std::size_t>(v)]).norm() <= 1e-9;
+      }
+      if (!kept) {
+        out.notes.push_back("deformable '" + d.id + "': its tetrahedral mesh does not keep the scene mesh's vertices "
+                            "first; its deformation is not published");
+        continue;
+      }
+    }
+    const auto& compliance = *prepared.compliance;
+    d.vertex_count = vertices;
+    d.vertex_of_slot.assign(static_cast<std::size_t>(compliance.num_nodes()), -1);
+    for (std::int32_t s = 0; s < compliance.num_nodes(); ++s) {
+      const std::int32_t node = compliance.nodes()[static_cast<std::size_t>(s)];
+      if (node < vertices) d.vertex_of_slot[static_cast<std::size_t>(s)] = node;
+    }
+    d.u_slots.assign(static_cast<std::size_t>(compliance.num_nodes()), Eigen::Vector3d::Zero());
+    d.u_W.assign(3 * static_cast<std::size_t>(vertices), 0.0);
+    d.delta = std::make_unique<DeformationDelta>(static_cast<std::size_t>(vertices), options_.delta);
+    deformables_.push_back(std::move(d));
+    if (!options_.dump_dir.empty()) {
+      // The tetrahedral mesh, for an independent solve (Abaqus subset; ids = index + 1).
+      std::filesystem::create_directories(options_.dump_dir);
+      std::ofstream inp(options_.dump_dir / (prepared.object_id + ".inp"));
+      inp.precision(17);
+      inp << "*NODE\n";
+      for (std::size_t n = 0; n < p.size(); ++n) {
+        inp << n + 1 << ", " << p[n].x() << ", " << p[n].y() << ", " << p[n].z() << "\n";
+      }
+      inp << "*ELEMENT, TYPE=C3D4\n";
+      std::size_t e = 0;
+      for (const auto& t : prepared.mesh->tets()) {
+        inp << ++e << ", " << t[0] + 1 << ", " << t[1] + 1 << ", " << t[2] + 1 << ", " << t[3] + 1 << "\n";
+      }
+    }
+  }
+  std::ostringstream note;
+  note << "models of '" << scene_.name << "' ready in "
+       << std::chrono::duration<double>(Clock::now() - loading_since_).count() << " s: "
+       << models_->dynamic_bodies.size() << " dynamic bodies, " << deformables_.size() << " published deformables";
+  out.notes.push_back(note.str());
+}
+
+TickOutput SharedWorld::Tick(Clock::time_point now, double dt_s) {
+  TickOutput out;
+  if (loading_.valid() && loading_.wait_for(std::chrono::seconds(0)) == std::future_status::ready) {
+    try {
+      Adopt(loading_.get(), out);
+    } catch (const std::exception& e) {
+      out.notes.push_back("cannot build the models of '" + loading_scene_ + "': " + e.what());
+    }
+  }
+  peers_.Expire(now);
+  out.ownership = arbiter_.Update(now);
+  if (!models_) return out;
+  auto& world = *models_->world;
+
+  // Who simulates what: owned bodies follow their owner's newest reported pose.
+  std::map<contact::ObjectId, std::pair<std::string, const msg::ContactSet*>> owned;
+  for (const auto body : models_->dynamic_bodies) {
+    const std::string& id = models_->ids[static_cast<std::size_t>(body)];
+    const std::string owner = arbiter_.owner(id);
+    if (owner.empty()) continue;
+    const auto it = peers_.sets().find(owner);
+    const msg::ContactSet* set = nullptr;
+    if (it != peers_.sets().end() && it->second.set.simulating() &&
+        it->second.set.simulated_object_id().to_string() == id && Finite(it->second.set)) {
+      set = &it->second.set;
+    }
+    owned[body] = {owner, set};
+  }
+  // The users' fingertips on deformables: one solve with everybody. (Rigid bodies need none:
+  // whoever touches a body claims it and simulates it; a free body only falls and rests.)
+  std::size_t n_all = 0;
+  peers_.ForEach(*models_, now, [&](const session::PeerContact& c, const msg::ContactSet&) {
+    if (n_all >= remote_.size() || world.contact_solver(c.object) == nullptr) return;
+    auto& r = remote_[n_all++];
+    r.hand = c.hand;
+    r.finger = c.finger;
+    r.object = c.object;
+    r.p_WC_m = Eigen::Vector3d(c.p_WC_m[0], c.p_WC_m[1], c.p_WC_m[2]);
+    r.u_W_m = Eigen::Vector3d(c.u_W_m[0], c.u_W_m[1], c.u_W_m[2]);
+    r.f_E_W_N = Eigen::Vector3d(c.f_E_W_N[0], c.f_E_W_N[1], c.f_E_W_N[2]);
+  });
+
+  const double motion_t = scene::MotionTime_s();
+  for (const auto& [object, i] : moving_) {
+    Eigen::Isometry3d X = scene_.objects[i].X_WO();
+    X.translation() += scene_.objects[i].motion.Offset_W(motion_t);
+    world.SetPose(object, X);
+  }
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  const std::array<Eigen::Vector3d, contact::kFingers> no_hand{
+      Eigen::Vector3d::Constant(nan), Eigen::Vector3d::Constant(nan), Eigen::Vector3d::Constant(nan),
+      Eigen::Vector3d::Constant(nan), Eigen::Vector3d::Constant(nan)};
+  const int substeps = std::clamp(static_cast<int>(std::lround(dt_s / options_.physics_dt_s)), 1, 100);
+  const double h = dt_s / substeps;
+  for (int s = 0; s < substeps; ++s) {
+    for (const auto& [body, who] : owned) {
+      if (who.second != nullptr) world.SetPose(body, Pose(*who.second));
+    }
+    const std::size_t n = s + 1 < substeps ? 0 : n_all;  // deformables: once per tick
+    world.Step(h, no_hand, std::span<const contact::RemoteContact>(remote_.data(), n));
+  }
+
+  // Rigid bodies to publish: owned ones at their owner's pose, free ones while they move.
+  for (const auto body : models_->dynamic_bodies) {
+    const std::string& id = models_->ids[static_cast<std::size_t>(body)];
+    if (const auto it = owned.find(body); it != owned.end()) {
+      if (it->second.second == nullptr) {
+        // Granted, and the owner has not taken it over yet: tell it where the body is.
+        out.states.push_back(State(session_, id, it->second.first, world.pose(body), Eigen::Vector3d::Zero()));
+      } else {
+        const auto& set = *it->second.second;
+        out.states.push_back(State(session_, id, it->second.first, Pose(set),
+                                   Eigen::Vector3d(set.v_WO_m_per_s()[0], set.v_WO_m_per_s()[1], set.v_WO_m_per_s()[2])));
+      }
+      last_published_.erase(body);  // once free, its first pose is published
+      continue;
+    }
+    const Eigen::Isometry3d X = world.pose(body);
+    const auto last = last_published_.find(body);
+    if (last != last_published_.end() && (last->second - X.translation()).norm() <= options_.rest_tolerance_m &&
+        !keyframes_requested_) {
+      continue;
+    }
+    last_published_[body] = X.translation();
+    out.states.push_back(State(session_, id, "", X, world.body_velocity_W(body)));
+  }
+  for (const auto& [object, i] : moving_) {
+    out.states.push_back(State(session_, scene_.objects[i].id, "", world.pose(object), Eigen::Vector3d::Zero()));
+  }
+
+  // Deformations: the surface field of every touched deformable (and once more after).
+  for (auto& d : deformables_) {
+    const fem::ContactSolver* solver = world.contact_solver(d.object);
+    if (solver == nullptr) continue;
+    const bool touched = solver->num_unique() > 0;
+    if (touched || d.touched_before || keyframes_requested_) {
+      if (touched) {
+        solver->SurfaceDisplacements(d.u_slots);
+      } else {
+        std::fill(d.u_slots.begin(), d.u_slots.end(), Eigen::Vector3d::Zero());
+      }
+      const Eigen::Matrix3d R = world.pose(d.object).linear();
+      for (std::size_t s = 0; s < d.u_slots.size(); ++s) {
+        const std::int32_t v = d.vertex_of_slot[s];
+        if (v < 0) continue;
+        const Eigen::Vector3d u = R * d.u_slots[s];
+        for (int k = 0; k < 3; ++k) d.u_W[3 * static_cast<std::size_t>(v) + static_cast<std::size_t>(k)] = u[k];
+      }
+      const auto samples = d.delta->Update(d.u_W, now);
+      for (const auto& sample : samples) out.deformations.emplace_back(d.id, sample);
+      if (!samples.empty() && !options_.dump_dir.empty()) Dump(d, samples.front().revision);
+    }
+    d.touched_before = touched;
+  }
+  keyframes_requested_ = false;
+  return out;
+}
+
+void SharedWorld::Dump(const Deformable& d, std::uint32_t revision) const {
+  const fem::ContactSolver* solver = models_->world->contact_solver(d.object);
+  const Eigen::Matrix3d R = models_->world->pose(d.object).linear();
+  std::set<std::string> users;
+  const auto now = Clock::now();
+  peers_.ForEach(*models_, now, [&](const session::PeerContact& c, const msg::ContactSet& set) {
+    if (c.object == d.object) users.insert(set.user().to_string());
+  });
+  std::ostringstream j;
+  j.precision(17);
+  j << "{\"object\": \"" << d.id << "\", \"scene\": \"" << scene_.name << "\", \"revision\": " << revision
+    << ", \"E_Pa\": " << d.E_Pa << ", \"nu\": " << d.nu << ", \"mesh\": \"" << d.id << ".inp\",\n \"users\": [";
+  bool first = true;
+  for (const auto& u : users) {
+    j << (first ? "" : ", ") << "\"" << u << "\"";
+    first = false;
+  }
+  j << "],\n \"R_WO\": [";
+  for (int r = 0; r < 3; ++r) j << (r ? ", " : "") << "[" << R(r, 0) << ", " << R(r, 1) << ", " << R(r, 2) << "]";
+  j << "],\n \"fixed_nodes\": [";
+  first = true;
+  for (const auto n : d.prepared->fixed_nodes) {
+    j << (first ? "" : ", ") << n + 1;
+    first = false;
+  }
+  j << "],\n \"imposed\": [],\n \"forces\": [";
+  first = true;
+  for (const auto& load : solver->loads()) {
+    const auto node = d.prepared->compliance->nodes()[static_cast<std::size_t>(load.slot)];
+    j << (first ? "" : ",\n  ") << "{\"node\": " << node + 1 << ", \"f_N\": [" << load.f_N.x() << ", " << load.f_N.y()
+      << ", " << load.f_N.z() << "]}";
+    first = false;
+  }
+  j << "],\n \"threshold_m\": " << options_.delta.threshold_m << ",\n \"sent_u_W_m\": {";
+  first = true;
+  const auto sent = d.delta->sent();
+  for (std::size_t v = 0; v < sent.size() / 3; ++v) {
+    if (sent[3 * v] == 0.0 && sent[3 * v + 1] == 0.0 && sent[3 * v + 2] == 0.0) continue;
+    j << (first ? "" : ", ") << "\"" << v << "\": [" << sent[3 * v] << ", " << sent[3 * v + 1] << ", " << sent[3 * v + 2] << "]";
+    first = false;
+  }
+  j << "}}\n";
+  const auto file = options_.dump_dir / (d.id + ".json");
+  const auto tmp = options_.dump_dir / (d.id + ".json.tmp");
+  {
+    std::ofstream f(tmp);
+    f << j.str();
+  }
+  std::filesystem::rename(tmp, file);
+}
+
+}  // namespace handshare::world
