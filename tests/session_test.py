@@ -15,6 +15,7 @@ import json
 import math
 import os
 import signal
+import sqlite3
 import subprocess
 import sys
 import tempfile
@@ -328,24 +329,120 @@ def window_mean_fz(trace_path, t0, t1):
     return sum(fz) / len(fz)
 
 
+def read_inp_nodes(path):
+    """Node id -> (x, y, z) of an Abaqus *NODE block."""
+    nodes, reading = {}, False
+    with open(path) as f:
+        for line in f:
+            if line.startswith("*"):
+                reading = line.strip().upper() == "*NODE"
+                continue
+            if reading and line.strip():
+                parts = [p.strip() for p in line.split(",")]
+                nodes[int(parts[0])] = tuple(float(v) for v in parts[1:4])
+    return nodes
+
+
+def check_shared_deformation(h, held, received_file, alice_xy, bob_xy, X_WO_p):
+    """The deformation the world server published while both users pressed the tail (held: its
+    dump of that moment) against an independent static FEM solve of the same load case, and
+    against what the spectator received over DDS."""
+    check(sorted(held["users"]) == ["alice", "bob"], f"the tail's solve did not hold both users' fingertips: {held['users']}")
+    work = os.path.dirname(received_file)
+    mesh = os.path.join(h.work, "deformation", held["mesh"])
+    nodes = read_inp_nodes(mesh)
+    # Both users' patches are in the load case: loaded nodes under each fingertip.
+    for who, (x, y) in (("alice", alice_xy), ("bob", bob_xy)):
+        near = [l for l in held["loads"]
+                if math.hypot(nodes[l["node"]][0] + X_WO_p[0] - x, nodes[l["node"]][1] + X_WO_p[1] - y) < 0.015]
+        check(near, f"no loaded node of the tail within 15 mm of {who}'s fingertip")
+    loadcase = os.path.join(work, "tail_loadcase.json")
+    with open(loadcase, "w") as f:
+        json.dump({"E_Pa": held["E_Pa"], "nu": held["nu"], "fixed_nodes": held["fixed_nodes"],
+                   "imposed": held["imposed"]}, f)
+    solved = subprocess.run([os.path.join(h.bin_dir, "core", "fem", "fem_solve"), mesh, loadcase],
+                            capture_output=True, text=True, timeout=300)
+    check(solved.returncode == 0, f"fem_solve failed: {solved.stderr}")
+    oracle = json.loads(solved.stdout)
+    R = held["R_WO"]
+    def to_W(u):
+        return [sum(R[r][c] * u[c] for c in range(3)) for r in range(3)]
+    # Reactions of the independent solve at the held nodes = the loads the server solved for.
+    f_scale = max(math.sqrt(sum(c * c for c in l["f_N"])) for l in held["loads"])
+    for l in held["loads"]:
+        r = oracle["reactions"][str(l["node"])]
+        err = math.sqrt(sum((a - b) ** 2 for a, b in zip(r, l["f_N"])))
+        check(err <= 1e-3 * f_scale, f"node {l['node']}: reaction {r} vs the server's load {l['f_N']}")
+    # Every vertex of the tail: published (what receivers hold) against the oracle.
+    vertices = max(n for n in nodes if n <= len(nodes))  # tetrahedral nodes start with the vertices
+    sent = held["sent_u_W_m"]
+    u_max = max(math.sqrt(sum(c * c for c in u)) for u in sent.values())
+    check(u_max >= 1e-3, f"the tail's dent is {1e3 * u_max:.2f} mm: not visible")
+    tol = held["threshold_m"] + 1e-4 * u_max  # re-send threshold + float32 storage and wire
+    with open(received_file) as f:
+        received = json.load(f).get("triceratops_tail")
+    check(received is not None, f"the spectator received no deformation of the tail ({received_file})")
+    worst_sent = worst_received = 0.0
+    for v in range(int(received["vertex_count"])):
+        u_oracle = to_W(oracle["displacements"][str(v + 1)])
+        u_sent = sent.get(str(v), [0.0, 0.0, 0.0])
+        u_received = received["u_W_m"].get(str(v), [0.0, 0.0, 0.0])
+        worst_sent = max(worst_sent, math.sqrt(sum((a - b) ** 2 for a, b in zip(u_sent, u_oracle))))
+        worst_received = max(worst_received, math.sqrt(sum((a - b) ** 2 for a, b in zip(u_received, u_oracle))))
+    check(worst_sent <= tol, f"published tail deformation differs from the FEM solve by {worst_sent:.3g} m (> {tol:.3g})")
+    check(worst_received <= tol,
+          f"the spectator's tail deformation differs from the FEM solve by {worst_received:.3g} m (> {tol:.3g})")
+    print(f"tail pressed by alice and bob: dent {1e3 * u_max:.2f} mm, {len(held['loads'])} loaded nodes; "
+          f"published vs FEM solve {worst_sent:.2e} m, received vs FEM solve {worst_received:.2e} m "
+          f"over {received['vertex_count']} vertices (revision {held['revision']} / {received['revision']})")
+
+
 def case_encyclopedia(h, domain):
-    """Start menu -> solar system (a button) -> lift the ball on the Moon -> the lever to Mars ->
-    lift it again: the held weight ratio is 3.71/1.62 within 2%, each within 1% of m g; the
-    session log holds the scene changes and the control events."""
+    """The encyclopedia tour with two users: start menu -> solar system (a button) -> lift the
+    ball on the Moon -> the lever to Mars -> lift it again (the held weight ratio is 3.71/1.62
+    within 2%, each within 1% of m g) -> the arrow to the dinosaur world -> both users press the
+    tail at once (the published deformation equals an independent FEM solve of both users'
+    contacts, and the spectator receives it) -> the microscopic world -> back to the start menu;
+    the session log then holds every step."""
     session = f"it-encyclopedia-{os.getpid()}"  # own partition: concurrent runs on one host stay apart
-    os.environ["HANDSHARE_CACHE"] = os.path.join(h.work, "cache")  # the nodes' model cache
+    cache = os.path.join(h.work, "cache")
+    os.environ["HANDSHARE_CACHE"] = cache  # the nodes' model cache
+    # The deformable worlds' models, prepared before the session (as the README advises).
+    prep = subprocess.run([os.path.join(h.bin_dir, "core", "world", "world_prepare"), "--cache", cache,
+                           "--scenes", "dinosaur,microscopic"], capture_output=True, text=True, timeout=600)
+    check(prep.returncode == 0, f"world_prepare failed: {prep.stdout}{prep.stderr}")
     log_db = os.path.join(h.work, "session.db")
     trace = os.path.join(h.work, "alice.csv")
-    h.start("world_server", "world_server", "--domain", domain, "--session", session, "--duration", 34,
-            "--log", log_db)
+    dump = os.path.join(h.work, "deformation")
+    received_file = os.path.join(h.work, "received_deformation.json")
+    h.start("world_server", "world_server", "--domain", domain, "--session", session, "--duration", 55,
+            "--log", log_db, "--dump-deformation", dump, "--deformation-threshold", "1e-6")
     h.wait_for_line("world_server", "message board #1", 10)
+    h.start("spectator", "graphics_node", "--domain", domain, "--session", session, "--headless",
+            "--frames", 100000, "--fps", 2, "--out", os.path.join(h.work, "frames"),
+            "--deformation-out", received_file)
+    t0 = time.monotonic()
     h.start("alice", "haptic_node", "--domain", domain, "--session", session, "--user", "alice",
-            "--script", os.path.join(DATA, "encyclopedia_alice.hand"), "--duration", 30, "--trace", trace)
+            "--script", os.path.join(DATA, "encyclopedia_alice.hand"), "--duration", 48, "--trace", trace)
+    h.start("bob", "haptic_node", "--domain", domain, "--session", session, "--user", "bob",
+            "--script", os.path.join(DATA, "encyclopedia_bob.hand"), "--duration", 48)
+    # Both press the tail and hold still over 34.5-36.5 s: take the server's account and stop
+    # the spectator (it writes what it received) in the middle of it.
+    time.sleep(max(0.0, t0 + 35.5 - time.monotonic()))
+    held_file = os.path.join(dump, "triceratops_tail.json")
+    check(os.path.exists(held_file), "the world server published no deformation of the tail")
+    with open(held_file) as f:
+        held = json.load(f)
+    h.procs["spectator"][0].send_signal(signal.SIGTERM)
+    check(h.wait("spectator", 20) == 0, "the spectator did not end cleanly")
     check(h.wait("alice", 60) == 0, "alice's haptic node failed")
+    check(h.wait("bob", 30) == 0, "bob's haptic node failed")
     check(h.wait("world_server", 15) == 0, "world_server failed")
     ws = h.log("world_server")
-    check("control button_solar_system by alice: scene 'solar_system'" in ws, "the button did not open the solar system")
-    check("gravity -3.71 m/s^2" in ws, "the lever did not switch to Mars")
+    for needle in ("control button_solar_system by alice: scene 'solar_system'", "gravity -3.71 m/s^2",
+                   "control arrow_next by alice: scene 'dinosaur'", "control arrow_next by alice: scene 'microscopic'",
+                   "control arrow_start by alice: scene 'start_menu'", "object 'ball': owner '' -> 'alice' (granted)"):
+        check(needle in ws, f"world server log lacks: {needle}")
     with open(os.path.join(HERE, "..", "assets", "scenes", "solar_system.json")) as f:
         ball = [o for o in json.load(f)["objects"] if o["id"] == "ball"][0]
     moon = -window_mean_fz(trace, 7.5, 9.5)
@@ -356,11 +453,21 @@ def case_encyclopedia(h, domain):
               f"{name}: held weight {measured:.4f} N, expected m g = {expected:.4f} N within 1%")
     ratio = mars / moon
     check(abs(ratio - 3.71 / 1.62) <= 0.02 * 3.71 / 1.62, f"Mars/Moon weight ratio {ratio:.4f}, expected 2.2901 within 2%")
+    print(f"held weight: Moon {moon:.4f} N, Mars {mars:.4f} N, ratio {ratio:.4f} (3.71/1.62 = 2.2901)")
+    with open(os.path.join(HERE, "..", "assets", "scenes", "dinosaur.json")) as f:
+        tail = [o for o in json.load(f)["objects"] if o["id"] == "triceratops_tail"][0]
+    check_shared_deformation(h, held, received_file, (0.225, 0.08), (0.27, 0.08), tail["position_m"])
     report = subprocess.run([os.path.join(h.bin_dir, "world_server", "session_report"), log_db], capture_output=True, text=True, timeout=30)
     check(report.returncode == 0, f"session_report failed: {report.stderr}")
-    for needle in ("start_menu", "solar_system", "button_solar_system", "lever_planet", "alice"):
+    for needle in ("start_menu", "solar_system", "dinosaur", "microscopic", "button_solar_system", "lever_planet",
+                   "arrow_next", "arrow_start", "alice", "bob"):
         check(needle in report.stdout, f"session report lacks '{needle}':\n{report.stdout}")
-    print(f"held weight: Moon {moon:.4f} N, Mars {mars:.4f} N, ratio {ratio:.4f} (3.71/1.62 = 2.2901)")
+    # The log's order of worlds is the tour's.
+    db = sqlite3.connect(log_db)
+    scenes = [r[0] for r in db.execute("SELECT scene FROM scene_changes ORDER BY id")]
+    db.close()
+    tour = ["start_menu", "solar_system", "solar_system", "dinosaur", "microscopic", "start_menu"]
+    check(scenes == tour, f"the session log's worlds {scenes}, expected {tour}")
 
 
 CASES = {"shared_session": case_shared_session, "encyclopedia": case_encyclopedia, "killed_member": case_killed_member,

@@ -13,7 +13,8 @@ int main(int argc, char** argv) {
                             "read it with session_report)", "")
       .Value("cache", "DIR", "deformable models' cache (default: $HANDSHARE_CACHE, else ~/.cache/handshare)", "")
       .Value("dump-deformation", "DIR", "write the loads and field of every published deformation to DIR "
-                                        "(for an independent FEM check)", "");
+                                        "(for an independent FEM check)", "")
+      .Value("deformation-threshold", "M", "re-send a deformed surface node when it moved more than M metres", "1e-4");
   return handshare::common::RunNodeMain(argc, argv, options, [](const auto& o) {
     handshare::world::WorldServerConfig config;
     config.where = handshare::common::ReadSessionOptions(o);
@@ -21,6 +22,7 @@ int main(int argc, char** argv) {
     config.log_file = o.GetString("log");
     config.cache_dir = o.GetString("cache");
     config.dump_dir = o.GetString("dump-deformation");
+    config.deformation_threshold_m = o.GetDouble("deformation-threshold", 1e-9, 0.01);
     return handshare::world::WorldServer(config).Run();
   });
 }

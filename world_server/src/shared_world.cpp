@@ -319,7 +319,17 @@ void SharedWorld::Dump(const Deformable& d, std::uint32_t revision) const {
     j << (first ? "" : ", ") << n + 1;
     first = false;
   }
-  j << "],\n \"imposed\": [],\n \"forces\": [";
+  // The load case for an independent static solve: each held node's displacement (in O) imposed.
+  // Nothing else is loaded, so the solution is the same field; the reactions there are the loads.
+  j << "],\n \"imposed\": [";
+  first = true;
+  for (const auto& load : solver->loads()) {
+    const auto node = d.prepared->compliance->nodes()[static_cast<std::size_t>(load.slot)];
+    const Eigen::Vector3d& u = d.u_slots[static_cast<std::size_t>(load.slot)];
+    j << (first ? "" : ",\n  ") << "{\"node\": " << node + 1 << ", \"u_m\": [" << u.x() << ", " << u.y() << ", " << u.z() << "]}";
+    first = false;
+  }
+  j << "],\n \"loads\": [";
   first = true;
   for (const auto& load : solver->loads()) {
     const auto node = d.prepared->compliance->nodes()[static_cast<std::size_t>(load.slot)];

@@ -142,6 +142,7 @@ int WorldServer::Run() {
   SharedWorldOptions shared_options;
   if (!config_.cache_dir.empty()) shared_options.models.cache_dir = config_.cache_dir;
   shared_options.dump_dir = config_.dump_dir;
+  shared_options.delta.threshold_m = config_.deformation_threshold_m;
   SharedWorld shared(config_.where.session, shared_options);
   shared.SetScene(scene);
 

@@ -21,6 +21,7 @@ struct WorldServerConfig {
   std::string log_file;          // "": no session log; else SQLite file, a session is appended
   std::string cache_dir;         // deformable models' cache ("": world::DefaultCacheDir())
   std::string dump_dir;          // "": none; else every published deformation's loads (SharedWorld)
+  double deformation_threshold_m = 1e-4;  // re-send a surface node when it moved more than this
 };
 
 class WorldServer {
