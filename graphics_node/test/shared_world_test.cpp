@@ -1,7 +1,6 @@
 #include "handshare/graphics/shared_world.hpp"
 
 #include <gtest/gtest.h>
-#include <unistd.h>
 
 #include <cmath>
 #include <fstream>
@@ -14,6 +13,7 @@
 #include "handshare/render/offscreen_renderer.hpp"
 #include "handshare/scene/scene.hpp"
 #include "test_oracle.hpp"
+#include "world_messages.hpp"
 
 namespace handshare::graphics {
 namespace {
@@ -24,25 +24,6 @@ using render::test::PixelPoint;
 const std::filesystem::path kAssets = HANDSHARE_SOURCE_ASSETS;
 constexpr const char* kTailUri = "meshes/triceratops_tail.obj";
 
-/// A folder of its own under the system's temporary folder, removed at the end.
-class TempDir {
- public:
-  TempDir() {
-    path_ = std::filesystem::temp_directory_path() /
-            ("graphics_node_test_" + std::to_string(getpid()) + "_" + std::to_string(next_++));
-    std::filesystem::create_directories(path_);
-  }
-  ~TempDir() {
-    std::error_code ec;
-    std::filesystem::remove_all(path_, ec);
-  }
-  const std::filesystem::path& path() const { return path_; }
-
- private:
-  static inline int next_ = 0;
-  std::filesystem::path path_;
-};
-
 /// The pose the tests put objects in: turned about a tilted axis, so that a frame mix-up
 /// (O for W, or a transposed rotation) moves what is drawn.
 Eigen::Isometry3d TestPose() {
@@ -52,57 +33,6 @@ Eigen::Isometry3d TestPose() {
                    .toRotationMatrix();
   X.translation() = Eigen::Vector3d(0.05, 0.02, 0.1);
   return X;
-}
-
-msg::SceneObject Object(const std::string& id, const std::string& shape, const std::string& uri,
-                        const Eigen::Isometry3d& X_WO, const render::Rgb& rgb,
-                        const Eigen::Vector3d& half_extent_m = Eigen::Vector3d::Constant(0.02)) {
-  msg::SceneObject o;
-  o.object_id(id);
-  o.kind(msg::OBJECT_DEFORMABLE);
-  o.shape(shape);
-  o.mesh_uri(uri);
-  const Eigen::Vector3d p = X_WO.translation();
-  const Eigen::Quaterniond q(X_WO.linear());
-  o.p_WO_m({p.x(), p.y(), p.z()});
-  o.q_WO_wxyz({q.w(), q.x(), q.y(), q.z()});
-  o.half_extent_m({half_extent_m.x(), half_extent_m.y(), half_extent_m.z()});
-  o.mass_kg(0.1);
-  o.rgb({rgb.r, rgb.g, rgb.b});
-  return o;
-}
-
-msg::SceneState Scene(const std::string& name, std::uint32_t revision,
-                      const std::vector<msg::SceneObject>& objects) {
-  msg::SceneState s;
-  s.session("test");
-  s.scene(name);
-  s.revision(revision);
-  s.gravity_W_m_per_s2({0.0, 0.0, -9.81});
-  for (const auto& o : objects) s.objects().push_back(o);
-  return s;
-}
-
-msg::Deformation Deformation(const std::string& id, std::uint32_t revision, bool keyframe,
-                             const std::vector<std::uint32_t>& ids, const std::vector<float>& u) {
-  msg::Deformation d;
-  d.object_id(id);
-  d.session("test");
-  d.revision(revision);
-  d.keyframe(keyframe);
-  d.surface_node_count(0);
-  d.node_ids(ids);
-  d.u_W_m(u);
-  return d;
-}
-
-msg::ObjectState State(const std::string& id, const Eigen::Vector3d& p, const Eigen::Vector4d& q_wxyz) {
-  msg::ObjectState s;
-  s.object_id(id);
-  s.session("test");
-  s.p_WO_m({p.x(), p.y(), p.z()});
-  s.q_WO_wxyz({q_wxyz[0], q_wxyz[1], q_wxyz[2], q_wxyz[3]});
-  return s;
 }
 
 /// The test's own copy of the mesh, read independently of the cache.
