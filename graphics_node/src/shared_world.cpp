@@ -99,7 +99,11 @@ void SharedWorld::OnDeformation(const msg::Deformation& sample) {
     ++stats_.deformation_without_mesh;
     return;
   }
-  it->second.field->Apply(sample.revision(), sample.keyframe(), sample.node_ids(), sample.u_W_m());
+  DeformationField& field = *it->second.field;
+  if (sample.surface_node_count() != 0 && sample.surface_node_count() != field.vertex_count()) {
+    ++stats_.deformation_count_mismatch;
+  }
+  field.Apply(sample.revision(), sample.keyframe(), sample.node_ids(), sample.u_W_m());
 }
 
 void SharedWorld::OnObjectState(const msg::ObjectState& state) {

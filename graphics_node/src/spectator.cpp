@@ -116,7 +116,7 @@ void PrintWorldSummary(const std::string& name, const SharedWorld& world) {
   const SharedWorldStats& s = world.stats();
   const DeformationStats d = world.deformation_stats();
   std::printf("[graphics_node %s] deformation: %llu samples (%llu applied, %llu keyframes, %llu ids out of "
-              "range, %llu non-finite, %llu malformed, %llu for unknown objects, %llu without mesh); "
+              "range, %llu non-finite, %llu malformed, %llu for unknown objects, %llu without mesh, %llu with another node count); "
               "object states: %llu applied, %llu unknown, %llu non-finite; mesh errors: %llu\n",
               name.c_str(), static_cast<unsigned long long>(s.deformation_samples),
               static_cast<unsigned long long>(d.samples), static_cast<unsigned long long>(d.keyframes),
@@ -124,6 +124,7 @@ void PrintWorldSummary(const std::string& name, const SharedWorld& world) {
               static_cast<unsigned long long>(d.malformed),
               static_cast<unsigned long long>(s.deformation_unknown_object),
               static_cast<unsigned long long>(s.deformation_without_mesh),
+              static_cast<unsigned long long>(s.deformation_count_mismatch),
               static_cast<unsigned long long>(s.object_states),
               static_cast<unsigned long long>(s.object_states_unknown),
               static_cast<unsigned long long>(s.object_states_nonfinite),

@@ -143,7 +143,10 @@ TEST(SharedWorld, DeformationsFollowTheReceiverRuleAndResetWithTheScene) {
   EXPECT_EQ(field->vertex_count(), Tail().vertices_m.size());
   EXPECT_EQ(world.deformation("ground"), nullptr) << "a box has no vertices to displace";
 
-  world.OnDeformation(Deformation("tail", 1, true, {3, 961, 962, 5000}, std::vector<float>(12, 0.001F)));
+  msg::Deformation first = Deformation("tail", 1, true, {3, 961, 962, 5000}, std::vector<float>(12, 0.001F));
+  first.surface_node_count(962);
+  world.OnDeformation(first);
+  EXPECT_EQ(world.stats().deformation_count_mismatch, 0U);
   EXPECT_TRUE(field->displaced());
   EXPECT_EQ(field->stats().ids_out_of_range, 2U) << "962 vertices: ids 962 and 5000 are beyond";
   EXPECT_EQ(field->u_W_m()[961], Eigen::Vector3d::Constant(double(0.001F)));
@@ -153,6 +156,11 @@ TEST(SharedWorld, DeformationsFollowTheReceiverRuleAndResetWithTheScene) {
   world.OnDeformation(Deformation("ground", 1, true, {0}, {1, 1, 1}));
   EXPECT_EQ(world.stats().deformation_unknown_object, 1U);
   EXPECT_EQ(world.stats().deformation_without_mesh, 1U);
+  // A publisher that numbers another mesh is counted (and still applied).
+  msg::Deformation other = Deformation("tail", 1, false, {3}, {0.001F, 0.001F, 0.001F});
+  other.surface_node_count(1000);
+  world.OnDeformation(other);
+  EXPECT_EQ(world.stats().deformation_count_mismatch, 1U);
 
   // Another revision of the same scene (gravity changed, say): the field stays.
   world.OnSceneState(dinosaur(2));

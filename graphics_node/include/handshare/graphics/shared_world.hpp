@@ -37,6 +37,9 @@ struct SharedWorldStats {
   std::uint64_t deformation_samples = 0;        ///< Deformation samples received
   std::uint64_t deformation_unknown_object = 0; ///< ... of objects not in the scene, ignored
   std::uint64_t deformation_without_mesh = 0;   ///< ... of objects with no loaded mesh, ignored
+  /// ... applied although their surface_node_count (when non-zero) is not the mesh's vertex
+  /// count: publisher and spectator may number different meshes.
+  std::uint64_t deformation_count_mismatch = 0;
   std::uint64_t object_states = 0;              ///< ObjectState samples applied
   std::uint64_t object_states_unknown = 0;      ///< ... of objects not in the scene, ignored
   std::uint64_t object_states_nonfinite = 0;    ///< ... with a non-finite or zero pose, ignored
