@@ -17,7 +17,12 @@ int main(int argc, char** argv) {
       .Value("height", "PX", "image or window height", "480")
       .Value("fps", "HZ", "frames per second", "30")
       .Value("stereo", "MODE", "mono, side-by-side or anaglyph", "mono")
-      .Flag("fullscreen", "window: full screen on the primary monitor (large screen)");
+      .Flag("fullscreen", "window: full screen on the primary monitor (large screen)")
+      .Value("assets", "DIR", "folder that the scene's mesh paths are relative to",
+             handshare::graphics::DefaultAssetsDir().string())
+      .Value("deformation-out", "FILE",
+             "at exit, write the deformations received as JSON: {object_id: {revision, "
+             "vertex_count, u_W_m: {vertex: [x, y, z]}}} (non-zero vertices only)", "");
   return handshare::common::RunNodeMain(argc, argv, options, [](const auto& o) {
     handshare::graphics::SpectatorConfig c;
     c.where = handshare::common::ReadSessionOptions(o);
@@ -27,6 +32,8 @@ int main(int argc, char** argv) {
     c.height_px = static_cast<int>(o.GetInt("height", 16, 8192));
     c.fps = o.GetDouble("fps", 0.1, 240.0);
     c.fullscreen = o.FlagSet("fullscreen");
+    c.assets_dir = o.GetString("assets");
+    c.deformation_out = o.GetString("deformation-out");
     const std::string stereo = o.GetString("stereo");
     if (stereo == "mono") c.stereo = handshare::graphics::StereoOutput::kMono;
     else if (stereo == "side-by-side") c.stereo = handshare::graphics::StereoOutput::kSideBySide;

@@ -5,6 +5,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <iostream>
 #include <iomanip>
 #include <map>
 #include <optional>
@@ -14,9 +15,11 @@
 #include "handshare/common/shutdown.hpp"
 #include "handshare/dds/membership.hpp"
 #include "handshare/dds/messages.hpp"
+#include "handshare/graphics/shared_world.hpp"
 #include "handshare/render/image.hpp"
 #include "handshare/render/offscreen_renderer.hpp"
 #include "handshare/render/window_renderer.hpp"
+#include "handshare/scene/scene.hpp"
 
 namespace handshare::graphics {
 
@@ -35,16 +38,31 @@ struct UserHand {
 /// Everything the view needs, updated from DDS on the render thread.
 class WorldView {
  public:
-  explicit WorldView(dds::Participant& p)
+  WorldView(dds::Participant& p, const std::filesystem::path& assets_dir, const std::string& name)
       : scene_reader_(dds::MakeReader<msg::SceneState>(p, dds::topics::kSceneState)),
         device_reader_(dds::MakeReader<msg::DeviceState>(p, dds::topics::kDeviceState)),
-        board_reader_(dds::MakeReader<msg::MessageBoard>(p, dds::topics::kMessageBoard)) {}
+        board_reader_(dds::MakeReader<msg::MessageBoard>(p, dds::topics::kMessageBoard)),
+        deformation_reader_(dds::MakeReader<msg::Deformation>(p, dds::topics::kDeformation)),
+        object_reader_(dds::MakeReader<msg::ObjectState>(p, dds::topics::kObjectState)),
+        world_(assets_dir, std::cerr, "[graphics_node " + name + "] ") {}
 
   void Update() {
     dds::SampleMeta meta;
     msg::SceneState scene;
     while (scene_reader_.TakeNext(scene, meta)) {
-      if (meta.valid_data) scene_ = scene;
+      if (meta.valid_data) world_.OnSceneState(scene);
+    }
+    // Deformations and object states name objects of a scene: take them only once a scene is
+    // known (a late joiner may get their transient-local history before the scene state's),
+    // and after this round's scene state, so they apply to the scene they were sent for.
+    if (world_.has_scene()) {
+      while (deformation_reader_.TakeNext(deformation_, meta)) {
+        if (meta.valid_data) world_.OnDeformation(deformation_);
+      }
+      msg::ObjectState object;
+      while (object_reader_.TakeNext(object, meta)) {
+        if (meta.valid_data) world_.OnObjectState(object);
+      }
     }
     msg::DeviceState state;
     while (device_reader_.TakeNext(state, meta)) {
@@ -59,30 +77,14 @@ class WorldView {
     }
   }
 
-  bool has_scene() const { return scene_.has_value(); }
+  bool has_scene() const { return world_.has_scene(); }
   const std::map<std::string, UserHand>& hands() const { return hands_; }
+  const SharedWorld& world() const { return world_; }
 
   render::SceneView Build() const {
     render::SceneView view;
     view.caption = caption_;
-    if (scene_) {
-      for (const auto& o : scene_->objects()) {
-        const auto& p = o.p_WO_m();
-        const auto& q = o.q_WO_wxyz();
-        const render::Rgb rgb{o.rgb()[0], o.rgb()[1], o.rgb()[2]};
-        if (o.shape() == "sphere") {
-          view.spheres.push_back(render::Sphere{Eigen::Vector3d(p[0], p[1], p[2]), o.half_extent_m()[0], rgb});
-        } else {
-          // Boxes, and meshes until their assets are loaded here: their bounding box.
-          render::Box box;
-          box.p_W = Eigen::Vector3d(p[0], p[1], p[2]);
-          box.half_extents_m = Eigen::Vector3d(o.half_extent_m()[0], o.half_extent_m()[1], o.half_extent_m()[2]);
-          box.q_WB = Eigen::Quaterniond(q[0], q[1], q[2], q[3]).normalized();
-          box.rgb = rgb;
-          view.boxes.push_back(box);
-        }
-      }
-    }
+    world_.AddObjects(view);
     for (const auto& [user, hand] : hands_) {
       if (hand.state.fault()) continue;  // a faulted device has no trustworthy pose
       for (int i = 0; i < 5; ++i) {
@@ -101,10 +103,34 @@ class WorldView {
   dds::Reader<msg::SceneState> scene_reader_;
   dds::Reader<msg::DeviceState> device_reader_;
   dds::Reader<msg::MessageBoard> board_reader_;
-  std::optional<msg::SceneState> scene_;
+  dds::Reader<msg::Deformation> deformation_reader_;
+  dds::Reader<msg::ObjectState> object_reader_;
+  msg::Deformation deformation_;  // reused: a sample holds up to 16k values
+  SharedWorld world_;
   std::map<std::string, UserHand> hands_;
   std::string caption_;
 };
+
+// One line on what the shared world received, for the node's log.
+void PrintWorldSummary(const std::string& name, const SharedWorld& world) {
+  const SharedWorldStats& s = world.stats();
+  const DeformationStats d = world.deformation_stats();
+  std::printf("[graphics_node %s] deformation: %llu samples (%llu applied, %llu keyframes, %llu ids out of "
+              "range, %llu non-finite, %llu malformed, %llu for unknown objects, %llu without mesh, %llu with another node count); "
+              "object states: %llu applied, %llu unknown, %llu non-finite; mesh errors: %llu\n",
+              name.c_str(), static_cast<unsigned long long>(s.deformation_samples),
+              static_cast<unsigned long long>(d.samples), static_cast<unsigned long long>(d.keyframes),
+              static_cast<unsigned long long>(d.ids_out_of_range), static_cast<unsigned long long>(d.nonfinite),
+              static_cast<unsigned long long>(d.malformed),
+              static_cast<unsigned long long>(s.deformation_unknown_object),
+              static_cast<unsigned long long>(s.deformation_without_mesh),
+              static_cast<unsigned long long>(s.deformation_count_mismatch),
+              static_cast<unsigned long long>(s.object_states),
+              static_cast<unsigned long long>(s.object_states_unknown),
+              static_cast<unsigned long long>(s.object_states_nonfinite),
+              static_cast<unsigned long long>(s.mesh_errors));
+  std::fflush(stdout);
+}
 
 render::Camera DefaultCamera(int width, int height) {
   render::Camera c;
@@ -143,12 +169,26 @@ void WriteCameraJson(const std::filesystem::path& file, const render::Camera& c,
 
 }  // namespace
 
+std::filesystem::path DefaultAssetsDir() { return scene::DefaultSceneDir().parent_path(); }
+
 Spectator::Spectator(SpectatorConfig config) : config_(std::move(config)) {}
 
 int Spectator::Run() {
   const std::string name = config_.name.empty() ? "graphics-" + std::to_string(getpid()) : config_.name;
   const render::Camera camera = DefaultCamera(config_.width_px, config_.height_px);
   render::ValidateCamera(camera);
+
+  // Bad paths fail here, before any DDS entity or frame exists.
+  const std::filesystem::path assets_dir = config_.assets_dir.empty() ? DefaultAssetsDir() : config_.assets_dir;
+  if (!std::filesystem::is_directory(assets_dir)) {
+    throw std::runtime_error("assets folder " + assets_dir.string() + " does not exist (option --assets)");
+  }
+  if (!config_.deformation_out.empty()) {
+    const std::filesystem::path folder = std::filesystem::absolute(config_.deformation_out).parent_path();
+    if (!std::filesystem::is_directory(folder)) {
+      throw std::runtime_error("folder " + folder.string() + " of --deformation-out does not exist");
+    }
+  }
 
   std::filesystem::path out_dir;
   std::ofstream index;
@@ -164,7 +204,13 @@ int Spectator::Run() {
 
   dds::Participant participant(config_.where.domain_id, config_.where.session, name, config_.where.qos_file);
   dds::MemberAnnouncement member(participant, name, msg::NODE_GRAPHICS);
-  WorldView world(participant);
+  WorldView world(participant, assets_dir, name);
+  // When the frames are written or the window closes: what the spectator received, for a
+  // comparison with an oracle.
+  const auto finish = [&] {
+    PrintWorldSummary(name, world.world());
+    if (!config_.deformation_out.empty()) world.world().WriteDeformationJson(config_.deformation_out);
+  };
 
   const auto start = Clock::now();
   const auto period = std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(1.0 / config_.fps));
@@ -199,6 +245,7 @@ int Spectator::Run() {
     }
     std::printf("[graphics_node %s] wrote %d frames to %s\n", name.c_str(), written, out_dir.c_str());
     std::fflush(stdout);
+    finish();
     return 0;
   }
 
@@ -217,6 +264,7 @@ int Spectator::Run() {
     next += period;
     std::this_thread::sleep_until(next);
   }
+  finish();
   return 0;
 }
 

@@ -1,0 +1,111 @@
+#pragma once
+/// The shared world as a spectator sees it: the scene state's objects, drawn with their real
+/// meshes, in the latest pose their ObjectState gives, deformed by the Deformation topic.
+/// Fed with received samples (the DDS readers live in the spectator); no OpenGL. Not real-time:
+/// the graphics thread, one thread at a time.
+///
+/// Drawn vertex v of a mesh object O:  p_WV = X_WO * p_OV + u_W[v], with
+///   p_OV   the vertex of the mesh file (mesh_uri relative to the assets folder, read once with
+///          scene::LoadMesh; vertex order = the Deformation node ids),
+///   X_WO   the object's latest finite ObjectState pose, else the scene state's pose,
+///   u_W[v] the displacement the Deformation samples gave (DeformationField).
+/// Normals: area-weighted vertex normals of the mesh, recomputed while it is displaced.
+/// A mesh that cannot be loaded is reported once per scene on the error stream (object, file,
+/// reason) and drawn as the object's box (half_extent_m around its origin).
+#include <cstdint>
+#include <filesystem>
+#include <map>
+#include <memory>
+#include <optional>
+#include <ostream>
+#include <set>
+#include <string>
+#include <vector>
+
+#include <Eigen/Geometry>
+
+#include "handshare/dds/messages.hpp"
+#include "handshare/graphics/deformation_field.hpp"
+#include "handshare/graphics/mesh_cache.hpp"
+#include "handshare/render/scene_view.hpp"
+
+namespace handshare::graphics {
+
+struct SharedWorldStats {
+  std::uint64_t scene_changes = 0;              ///< scene states of another scene (fields reset)
+  std::uint64_t mesh_errors = 0;                ///< objects drawn as boxes for a bad mesh
+  std::uint64_t deformation_samples = 0;        ///< Deformation samples received
+  std::uint64_t deformation_unknown_object = 0; ///< ... of objects not in the scene, ignored
+  std::uint64_t deformation_without_mesh = 0;   ///< ... of objects with no loaded mesh, ignored
+  /// ... applied although their surface_node_count (when non-zero) is not the mesh's vertex
+  /// count: publisher and spectator may number different meshes.
+  std::uint64_t deformation_count_mismatch = 0;
+  std::uint64_t object_states = 0;              ///< ObjectState samples applied
+  std::uint64_t object_states_unknown = 0;      ///< ... of objects not in the scene, ignored
+  std::uint64_t object_states_nonfinite = 0;    ///< ... with a non-finite or zero pose, ignored
+};
+
+class SharedWorld {
+ public:
+  /// assets_dir: the folder mesh uris are relative to. errors: where mesh errors are written
+  /// (kept by reference; std::cerr in the node). prefix: starts each error line.
+  SharedWorld(std::filesystem::path assets_dir, std::ostream& errors, std::string prefix = "");
+
+  /// A new scene state. Another scene (name) resets every deformation field and object pose;
+  /// a new revision of the same scene keeps them for the objects that remain.
+  void OnSceneState(const msg::SceneState& state);
+  /// A Deformation sample (DeformationField's receiver rule). Ignored, and counted, for objects
+  /// not in the current scene or whose mesh is not loaded.
+  void OnDeformation(const msg::Deformation& sample);
+  /// An ObjectState sample: its pose replaces the scene state's pose of that object. Ignored,
+  /// and counted, for objects not in the current scene and for non-finite poses or a zero
+  /// quaternion (the last good pose stays).
+  void OnObjectState(const msg::ObjectState& state);
+
+  bool has_scene() const { return has_scene_; }
+  const std::string& scene() const { return scene_; }
+  /// Appends every object of the scene to view (spheres, boxes, meshes).
+  void AddObjects(render::SceneView& view) const;
+
+  /// The field of object_id; null if it is not a mesh object of the current scene with a
+  /// loaded mesh.
+  const DeformationField* deformation(const std::string& object_id) const;
+  /// Pose the object is drawn in; empty if it is not in the current scene.
+  std::optional<Eigen::Isometry3d> X_WO(const std::string& object_id) const;
+  const SharedWorldStats& stats() const { return stats_; }
+  /// Deformation statistics summed over the current fields.
+  DeformationStats deformation_stats() const;
+  MeshCache& meshes() { return meshes_; }
+
+  /// Writes what the fields hold as JSON:
+  ///   {"<object_id>": {"revision": R, "vertex_count": V,
+  ///                    "u_W_m": {"<vertex>": [ux, uy, uz], ...}}, ...}
+  /// with one entry per object of the current scene that received at least one Deformation
+  /// sample, and only the vertices with a non-zero displacement (in W [m], the received floats).
+  /// Written to a temporary file and renamed, so a reader never sees half a file. Throws
+  /// std::runtime_error naming the file when it cannot be written.
+  void WriteDeformationJson(const std::filesystem::path& file) const;
+
+ private:
+  struct Object {
+    msg::SceneObject spec;
+    Eigen::Isometry3d X_WO_scene = Eigen::Isometry3d::Identity();  // from the scene state
+    std::optional<Eigen::Isometry3d> X_WO_state;                  // latest ObjectState
+    std::shared_ptr<const render::TriangleMesh> mesh;              // null: not a mesh, or failed
+    std::unique_ptr<DeformationField> field;                       // with mesh
+    const Eigen::Isometry3d& X_WO() const { return X_WO_state ? *X_WO_state : X_WO_scene; }
+  };
+
+  std::ostream& errors_;
+  std::string prefix_;
+  MeshCache meshes_;
+  bool has_scene_ = false;
+  std::string scene_;
+  std::map<std::string, Object> objects_;
+  std::vector<std::string> order_;  // objects in scene-state order (drawing order)
+  std::set<std::string> reported_;  // mesh errors already written for this scene
+  DeformationStats retired_;        // statistics of the fields of earlier scenes
+  SharedWorldStats stats_;
+};
+
+}  // namespace handshare::graphics

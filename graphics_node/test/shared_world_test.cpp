@@ -1,0 +1,529 @@
+#include "handshare/graphics/shared_world.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <fstream>
+#include <limits>
+#include <set>
+#include <sstream>
+
+#include <nlohmann/json.hpp>
+
+#include "handshare/render/offscreen_renderer.hpp"
+#include "handshare/scene/scene.hpp"
+#include "test_oracle.hpp"
+#include "world_messages.hpp"
+
+namespace handshare::graphics {
+namespace {
+
+using render::test::OracleProject;
+using render::test::PixelPoint;
+
+const std::filesystem::path kAssets = HANDSHARE_SOURCE_ASSETS;
+constexpr const char* kTailUri = "meshes/triceratops_tail.obj";
+
+/// The pose the tests put objects in: turned about a tilted axis, so that a frame mix-up
+/// (O for W, or a transposed rotation) moves what is drawn.
+Eigen::Isometry3d TestPose() {
+  Eigen::Isometry3d X = Eigen::Isometry3d::Identity();
+  X.linear() = (Eigen::AngleAxisd(0.6, Eigen::Vector3d::UnitZ()) *
+                Eigen::AngleAxisd(0.3, Eigen::Vector3d::UnitX()))
+                   .toRotationMatrix();
+  X.translation() = Eigen::Vector3d(0.05, 0.02, 0.1);
+  return X;
+}
+
+/// The test's own copy of the mesh, read independently of the cache.
+scene::Mesh Tail() { return scene::LoadMesh(kAssets / kTailUri); }
+
+// ---------------------------------------------------------------------------------------------
+// What the world holds and hands to the renderer.
+
+TEST(SharedWorld, MeshObjectIsTheFilesMeshAtItsPose) {
+  std::ostringstream errors;
+  SharedWorld world(kAssets, errors);
+  const Eigen::Isometry3d X_WO = TestPose();
+  world.OnSceneState(Scene("dinosaur", 1, {Object("tail", "mesh", kTailUri, X_WO, {0.5F, 0.45F, 0.3F})}));
+  render::SceneView view;
+  world.AddObjects(view);
+  ASSERT_EQ(view.meshes.size(), 1U);
+  EXPECT_TRUE(view.boxes.empty());
+  EXPECT_EQ(errors.str(), "");
+
+  const scene::Mesh tail = Tail();
+  const render::TriangleMesh& drawn = view.meshes[0];
+  ASSERT_EQ(drawn.p_MV.size(), tail.vertices_m.size());
+  ASSERT_EQ(drawn.triangles.size(), tail.triangles.size());
+  for (std::size_t v = 0; v < tail.vertices_m.size(); ++v) {
+    const Eigen::Vector3d expected = X_WO * tail.vertices_m[v];
+    ASSERT_LT((drawn.X_WM * drawn.p_MV[v] - expected).norm(), 1e-12) << "vertex " << v;
+  }
+  for (std::size_t t = 0; t < tail.triangles.size(); ++t) {
+    for (int k = 0; k < 3; ++k) ASSERT_EQ(drawn.triangles[t][k], static_cast<std::uint32_t>(tail.triangles[t][k]));
+  }
+  EXPECT_FLOAT_EQ(drawn.rgb.g, 0.45F);
+}
+
+TEST(SharedWorld, EachMeshFileIsLoadedOnce) {
+  std::ostringstream errors;
+  SharedWorld world(kAssets, errors);
+  const Eigen::Isometry3d X = TestPose();
+  world.OnSceneState(Scene("a", 1, {Object("left", "mesh", kTailUri, X, {}), Object("right", "mesh", kTailUri, X, {})}));
+  world.OnSceneState(Scene("b", 1, {Object("again", "mesh", kTailUri, X, {})}));
+  EXPECT_EQ(world.meshes().loads(), 1U);
+  render::SceneView view;
+  world.AddObjects(view);
+  EXPECT_EQ(view.meshes.size(), 1U);
+}
+
+TEST(SharedWorld, DrawnVertexIsPoseTimesVertexPlusWorldDisplacement) {
+  std::ostringstream errors;
+  SharedWorld world(kAssets, errors);
+  const Eigen::Isometry3d X_WO = TestPose();
+  world.OnSceneState(Scene("dinosaur", 1, {Object("tail", "mesh", kTailUri, X_WO, {})}));
+  const std::vector<std::uint32_t> ids = {0, 17, 500};
+  const std::vector<float> u = {0.001F, 0.0F, 0.0F, 0.0F, -0.002F, 0.0F, 0.0F, 0.0F, 0.003F};
+  world.OnDeformation(Deformation("tail", 1, true, ids, u));
+  render::SceneView view;
+  world.AddObjects(view);
+  ASSERT_EQ(view.meshes.size(), 1U);
+  const scene::Mesh tail = Tail();
+  const render::TriangleMesh& drawn = view.meshes[0];
+  for (std::size_t v = 0; v < tail.vertices_m.size(); ++v) {
+    Eigen::Vector3d u_W = Eigen::Vector3d::Zero();
+    for (std::size_t i = 0; i < ids.size(); ++i) {
+      if (ids[i] == v) u_W = Eigen::Vector3d(u[3 * i], u[3 * i + 1], u[3 * i + 2]);
+    }
+    const Eigen::Vector3d expected = X_WO * tail.vertices_m[v] + u_W;
+    ASSERT_LT((drawn.X_WM * drawn.p_MV[v] - expected).norm(), 1e-12) << "vertex " << v;
+  }
+  // Normals were recomputed for the displaced mesh. (A vertex's own area-weighted normal does
+  // not change when it alone moves: the area vector of its closed 1-ring depends only on the
+  // ring. Its neighbours' normals do.)
+  render::SceneView rest;
+  world.OnDeformation(Deformation("tail", 2, true, {}, {}));
+  world.AddObjects(rest);
+  std::int32_t neighbour = -1;
+  for (const auto& t : tail.triangles) {
+    if (t[0] == 500) neighbour = t[1];
+  }
+  ASSERT_GE(neighbour, 0);
+  EXPECT_GT((drawn.n_MV[neighbour] - rest.meshes[0].n_MV[neighbour]).norm(), 1e-3);
+  // A vertex in no triangle with a displaced vertex keeps its normal, bit for bit.
+  std::set<std::uint32_t> near(ids.begin(), ids.end());
+  for (const auto& t : tail.triangles) {
+    for (const auto id : ids) {
+      if (t[0] == static_cast<std::int32_t>(id) || t[1] == static_cast<std::int32_t>(id) || t[2] == static_cast<std::int32_t>(id)) {
+        for (const auto v : t) near.insert(static_cast<std::uint32_t>(v));
+      }
+    }
+  }
+  int compared = 0;
+  for (std::uint32_t v = 0; v < tail.vertices_m.size(); ++v) {
+    if (near.count(v) != 0) continue;
+    ASSERT_EQ(drawn.n_MV[v], rest.meshes[0].n_MV[v]) << "vertex " << v;
+    ++compared;
+  }
+  EXPECT_GT(compared, 900);
+}
+
+TEST(SharedWorld, DeformationsFollowTheReceiverRuleAndResetWithTheScene) {
+  std::ostringstream errors;
+  SharedWorld world(kAssets, errors);
+  const Eigen::Isometry3d X = TestPose();
+  const auto dinosaur = [&](std::uint32_t revision) {
+    return Scene("dinosaur", revision, {Object("tail", "mesh", kTailUri, X, {}),
+                                        Object("ground", "box", "", Eigen::Isometry3d::Identity(), {})});
+  };
+  world.OnSceneState(dinosaur(1));
+  const DeformationField* field = world.deformation("tail");
+  ASSERT_NE(field, nullptr);
+  EXPECT_EQ(field->vertex_count(), Tail().vertices_m.size());
+  EXPECT_EQ(world.deformation("ground"), nullptr) << "a box has no vertices to displace";
+
+  msg::Deformation first = Deformation("tail", 1, true, {3, 961, 962, 5000}, std::vector<float>(12, 0.001F));
+  first.surface_node_count(962);
+  world.OnDeformation(first);
+  EXPECT_EQ(world.stats().deformation_count_mismatch, 0U);
+  EXPECT_TRUE(field->displaced());
+  EXPECT_EQ(field->stats().ids_out_of_range, 2U) << "962 vertices: ids 962 and 5000 are beyond";
+  EXPECT_EQ(field->u_W_m()[961], Eigen::Vector3d::Constant(double(0.001F)));
+
+  // Samples for objects that are not in the scene, or have no mesh, are counted and dropped.
+  world.OnDeformation(Deformation("daphnia_belly", 1, true, {0}, {1, 1, 1}));
+  world.OnDeformation(Deformation("ground", 1, true, {0}, {1, 1, 1}));
+  EXPECT_EQ(world.stats().deformation_unknown_object, 1U);
+  EXPECT_EQ(world.stats().deformation_without_mesh, 1U);
+  // A publisher that numbers another mesh is counted (and still applied).
+  msg::Deformation other = Deformation("tail", 1, false, {3}, {0.001F, 0.001F, 0.001F});
+  other.surface_node_count(1000);
+  world.OnDeformation(other);
+  EXPECT_EQ(world.stats().deformation_count_mismatch, 1U);
+
+  // Another revision of the same scene (gravity changed, say): the field stays.
+  world.OnSceneState(dinosaur(2));
+  field = world.deformation("tail");
+  ASSERT_NE(field, nullptr);
+  EXPECT_TRUE(field->displaced());
+  EXPECT_EQ(field->revision(), 1U);
+
+  // Another scene and back: the field starts again from zero, no revision seen, so the
+  // restarted publisher's revision 1 keyframe is a keyframe again.
+  world.OnSceneState(Scene("microscopic", 3, {}));
+  EXPECT_EQ(world.deformation("tail"), nullptr);
+  world.OnSceneState(dinosaur(4));
+  field = world.deformation("tail");
+  ASSERT_NE(field, nullptr);
+  EXPECT_FALSE(field->displaced());
+  EXPECT_FALSE(field->revision().has_value());
+  EXPECT_EQ(world.stats().scene_changes, 2U);
+  // The statistics of the fields of earlier scenes are kept.
+  EXPECT_EQ(world.deformation_stats().ids_out_of_range, 2U);
+}
+
+TEST(SharedWorld, ObjectStatesMoveObjectsOfTheSceneOnly) {
+  std::ostringstream errors;
+  SharedWorld world(kAssets, errors);
+  const Eigen::Isometry3d X_scene = TestPose();
+  world.OnSceneState(Scene("microscopic", 1, {Object("daphnia", "mesh", kTailUri, X_scene, {}),
+                                              Object("ball", "sphere", "", X_scene, {}, Eigen::Vector3d(0.03, 0, 0))}));
+  ASSERT_TRUE(world.X_WO("daphnia").has_value());
+  EXPECT_TRUE(world.X_WO("daphnia")->isApprox(X_scene, 1e-12));
+
+  // The state's pose replaces the scene's; the quaternion is normalized.
+  world.OnObjectState(State("daphnia", {0.1, 0.2, 0.3}, {2.0, 0.0, 0.0, 0.0}));
+  world.OnObjectState(State("ball", {-0.1, 0.0, 0.05}, {1.0, 0.0, 0.0, 0.0}));
+  Eigen::Isometry3d expected = Eigen::Isometry3d::Identity();
+  expected.translation() = Eigen::Vector3d(0.1, 0.2, 0.3);
+  EXPECT_TRUE(world.X_WO("daphnia")->isApprox(expected, 1e-12));
+  render::SceneView view;
+  world.AddObjects(view);
+  ASSERT_EQ(view.meshes.size(), 1U);
+  ASSERT_EQ(view.spheres.size(), 1U);
+  EXPECT_TRUE(view.meshes[0].X_WM.isApprox(expected, 1e-12));
+  EXPECT_TRUE(view.spheres[0].p_W.isApprox(Eigen::Vector3d(-0.1, 0.0, 0.05), 1e-12));
+
+  // Non-finite positions, quaternions and a zero quaternion are rejected; the last good pose stays.
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  world.OnObjectState(State("daphnia", {nan, 0.0, 0.0}, {1.0, 0.0, 0.0, 0.0}));
+  world.OnObjectState(State("daphnia", {0.0, 0.0, 0.0}, {1.0, std::numeric_limits<double>::infinity(), 0.0, 0.0}));
+  world.OnObjectState(State("daphnia", {0.0, 0.0, 0.0}, {0.0, 0.0, 0.0, 0.0}));
+  EXPECT_EQ(world.stats().object_states_nonfinite, 3U);
+  EXPECT_TRUE(world.X_WO("daphnia")->isApprox(expected, 1e-12));
+
+  // An object of no current scene is ignored.
+  world.OnObjectState(State("moon", {0.0, 0.0, 0.0}, {1.0, 0.0, 0.0, 0.0}));
+  EXPECT_EQ(world.stats().object_states_unknown, 1U);
+  EXPECT_FALSE(world.X_WO("moon").has_value());
+
+  // A new revision of the scene keeps the pose; another scene forgets it.
+  world.OnSceneState(Scene("microscopic", 2, {Object("daphnia", "mesh", kTailUri, X_scene, {})}));
+  EXPECT_TRUE(world.X_WO("daphnia")->isApprox(expected, 1e-12));
+  world.OnSceneState(Scene("dinosaur", 3, {Object("daphnia", "mesh", kTailUri, X_scene, {})}));
+  EXPECT_TRUE(world.X_WO("daphnia")->isApprox(X_scene, 1e-12));
+}
+
+TEST(SharedWorld, DeformationJsonHoldsTheNonZeroDisplacements) {
+  TempDir dir;
+  std::ostringstream errors;
+  SharedWorld world(kAssets, errors);
+  world.OnSceneState(Scene("dinosaur", 1, {Object("tail", "mesh", kTailUri, TestPose(), {}),
+                                           Object("leg", "mesh", kTailUri, TestPose(), {})}));
+  world.OnDeformation(Deformation("tail", 7, true, {4, 9, 11}, {0.25F, -0.5F, 0.125F, 0, 0, 0, 0, 0, -0.001F}));
+  const auto file = dir.path() / "deformation.json";
+  world.WriteDeformationJson(file);
+  std::ifstream in(file);
+  const nlohmann::json j = nlohmann::json::parse(in);
+  ASSERT_TRUE(j.contains("tail"));
+  EXPECT_FALSE(j.contains("leg")) << "no sample received for it";
+  EXPECT_EQ(j["tail"]["revision"], 7);
+  EXPECT_EQ(j["tail"]["vertex_count"], 962);
+  const auto& u = j["tail"]["u_W_m"];
+  ASSERT_EQ(u.size(), 2U) << "vertex 9 is at zero";
+  EXPECT_EQ(u["4"][0].get<double>(), 0.25);
+  EXPECT_EQ(u["4"][1].get<double>(), -0.5);
+  EXPECT_EQ(u["4"][2].get<double>(), 0.125);
+  EXPECT_EQ(u["11"][2].get<float>(), -0.001F) << "the received float, exactly";
+  EXPECT_FALSE(std::filesystem::exists(dir.path() / "deformation.json.tmp"));
+
+  EXPECT_THROW(world.WriteDeformationJson(dir.path() / "no_such_folder" / "d.json"), std::runtime_error);
+}
+
+TEST(SharedWorld, MissingOrBadMeshIsReportedOnceAndDrawnAsItsBox) {
+  TempDir dir;
+  const auto junk = dir.path() / "junk.obj";
+  std::ofstream(junk) << "this is not a mesh\n";
+  std::ostringstream errors;
+  SharedWorld world(kAssets, errors, "[spectator] ");
+  const Eigen::Isometry3d X = TestPose();
+  const auto state = Scene("dinosaur", 1, {Object("ghost", "mesh", "meshes/no_such_mesh.obj", X, {0, 1, 0}, {0.03, 0.02, 0.01}),
+                                           Object("junk", "mesh", junk.string(), X, {0, 0, 1}),
+                                           Object("empty", "mesh", "", X, {1, 0, 0})});
+  world.OnSceneState(state);
+  world.OnSceneState(state);  // the same scene again: no second report
+  const std::string text = errors.str();
+  EXPECT_NE(text.find("[spectator] object 'ghost' of scene 'dinosaur': cannot load mesh 'meshes/no_such_mesh.obj' (file " +
+                      (kAssets / "meshes/no_such_mesh.obj").string() + "): "),
+            std::string::npos)
+      << text;
+  EXPECT_NE(text.find("no such file"), std::string::npos) << text;
+  EXPECT_NE(text.find("object 'junk'"), std::string::npos) << text;
+  EXPECT_NE(text.find("object 'empty'"), std::string::npos) << text;
+  EXPECT_NE(text.find("empty mesh_uri"), std::string::npos) << text;
+  EXPECT_EQ(world.stats().mesh_errors, 3U);
+
+  render::SceneView view;
+  world.AddObjects(view);
+  EXPECT_TRUE(view.meshes.empty());
+  ASSERT_EQ(view.boxes.size(), 3U);
+  EXPECT_TRUE(view.boxes[0].p_W.isApprox(X.translation(), 1e-12));
+  EXPECT_TRUE(view.boxes[0].q_WB.toRotationMatrix().isApprox(X.linear(), 1e-12));
+  EXPECT_TRUE(view.boxes[0].half_extents_m.isApprox(Eigen::Vector3d(0.03, 0.02, 0.01), 1e-12));
+  // Deformations of such an object are dropped, not applied to anything.
+  world.OnDeformation(Deformation("ghost", 1, true, {0}, {1, 1, 1}));
+  EXPECT_EQ(world.stats().deformation_without_mesh, 1U);
+}
+
+// ---------------------------------------------------------------------------------------------
+// Pixels: the real mesh drawn offscreen against an independent projection.
+
+constexpr render::Rgb kGreen{0.1F, 0.9F, 0.2F};
+
+render::Camera TailCamera(const Eigen::Isometry3d& X_WO) {
+  render::Camera camera;
+  camera.target_W = X_WO * Eigen::Vector3d(-0.09, 0.0, 0.0);  // the middle of the tail
+  camera.eye_W = camera.target_W + Eigen::Vector3d(0.12, -0.32, 0.2);
+  camera.up_W = {0.0, 0.0, 1.0};
+  camera.fov_y_rad = 0.7;
+  camera.width_px = 400;
+  camera.height_px = 300;
+  camera.near_m = 0.05;
+  camera.far_m = 5.0;
+  return camera;
+}
+
+render::SceneView Bare() {
+  render::SceneView view;
+  view.grid.visible = false;
+  view.background_rgb = {0.0F, 0.0F, 0.0F};
+  return view;
+}
+
+bool Covered(const std::uint8_t* px) { return px[0] > 8 || px[1] > 8 || px[2] > 8; }
+
+/// Which pixel centres the triangles cover, by the test's own rasterizer (edge functions on
+/// OracleProject's image coordinates; no depth, either winding).
+std::vector<bool> OracleCoverage(const render::Camera& camera, const std::vector<Eigen::Vector3d>& p_W,
+                                 const std::vector<std::array<std::int32_t, 3>>& triangles,
+                                 const std::vector<bool>* only = nullptr) {
+  std::vector<bool> mask(static_cast<std::size_t>(camera.width_px * camera.height_px), false);
+  for (std::size_t t = 0; t < triangles.size(); ++t) {
+    if (only != nullptr && !(*only)[t]) continue;
+    PixelPoint q[3];
+    for (int k = 0; k < 3; ++k) q[k] = OracleProject(camera, p_W[triangles[t][k]]);
+    const double area = (q[1].col - q[0].col) * (q[2].row - q[0].row) - (q[1].row - q[0].row) * (q[2].col - q[0].col);
+    if (area == 0.0) continue;
+    const int c0 = std::max(0, static_cast<int>(std::floor(std::min({q[0].col, q[1].col, q[2].col}))));
+    const int c1 = std::min(camera.width_px - 1, static_cast<int>(std::ceil(std::max({q[0].col, q[1].col, q[2].col}))));
+    const int r0 = std::max(0, static_cast<int>(std::floor(std::min({q[0].row, q[1].row, q[2].row}))));
+    const int r1 = std::min(camera.height_px - 1, static_cast<int>(std::ceil(std::max({q[0].row, q[1].row, q[2].row}))));
+    for (int row = r0; row <= r1; ++row) {
+      for (int col = c0; col <= c1; ++col) {
+        const double x = col + 0.5;
+        const double y = row + 0.5;
+        bool inside = true;
+        for (int k = 0; k < 3; ++k) {
+          const PixelPoint& a = q[k];
+          const PixelPoint& b = q[(k + 1) % 3];
+          const double e = (b.col - a.col) * (y - a.row) - (b.row - a.row) * (x - a.col);
+          if (e * area < 0.0) inside = false;
+        }
+        if (inside) mask[static_cast<std::size_t>(row * camera.width_px + col)] = true;
+      }
+    }
+  }
+  return mask;
+}
+
+/// mask grown by `radius` pixels (square neighbourhood).
+std::vector<bool> Dilate(const std::vector<bool>& mask, int width, int height, int radius) {
+  std::vector<bool> out(mask.size(), false);
+  for (int row = 0; row < height; ++row) {
+    for (int col = 0; col < width; ++col) {
+      if (!mask[static_cast<std::size_t>(row * width + col)]) continue;
+      for (int dr = -radius; dr <= radius; ++dr) {
+        for (int dc = -radius; dc <= radius; ++dc) {
+          const int r = row + dr;
+          const int c = col + dc;
+          if (r >= 0 && r < height && c >= 0 && c < width) out[static_cast<std::size_t>(r * width + c)] = true;
+        }
+      }
+    }
+  }
+  return out;
+}
+
+TEST(SharedWorldOffscreen, TailMeshCoversExactlyItsIndependentlyProjectedTriangles) {
+  std::ostringstream errors;
+  SharedWorld world(kAssets, errors);
+  const Eigen::Isometry3d X_WO = TestPose();
+  world.OnSceneState(Scene("dinosaur", 1, {Object("tail", "mesh", kTailUri, X_WO, kGreen)}));
+  render::SceneView view = Bare();
+  world.AddObjects(view);
+  const render::Camera camera = TailCamera(X_WO);
+  render::OffscreenRenderer renderer;
+  const render::ImageRgb8 image = renderer.Render(view, camera);
+
+  const scene::Mesh tail = Tail();
+  std::vector<Eigen::Vector3d> p_W;
+  for (const auto& v : tail.vertices_m) p_W.push_back(X_WO * v);
+  const std::vector<bool> oracle = OracleCoverage(camera, p_W, tail.triangles);
+  // Rasterization differs from the oracle only where a pixel centre lies within about a pixel
+  // of a projected edge: a mismatch counts only where the oracle's 3x3 neighbourhood is uniform.
+  const std::vector<bool> grown = Dilate(oracle, camera.width_px, camera.height_px, 1);
+  std::vector<bool> inverted(oracle.size());
+  for (std::size_t i = 0; i < oracle.size(); ++i) inverted[i] = !oracle[i];
+  const std::vector<bool> grown_out = Dilate(inverted, camera.width_px, camera.height_px, 1);
+  int covered = 0;
+  int interior = 0;
+  int wrong = 0;
+  int not_green = 0;
+  for (int row = 0; row < camera.height_px; ++row) {
+    for (int col = 0; col < camera.width_px; ++col) {
+      const std::size_t i = static_cast<std::size_t>(row * camera.width_px + col);
+      const std::uint8_t* px = image.At(col, row);
+      const bool drawn = Covered(px);
+      covered += drawn ? 1 : 0;
+      const bool surely_in = oracle[i] && !grown_out[i];
+      const bool surely_out = !grown[i];
+      if ((surely_in && !drawn) || (surely_out && drawn)) {
+        if (++wrong <= 5) ADD_FAILURE() << "pixel (" << col << ", " << row << ") drawn " << drawn << ", oracle " << oracle[i];
+      }
+      if (surely_in) {
+        ++interior;
+        // The object's colour, shaded: green dominates.
+        if (!(px[1] > px[0] && px[1] > px[2] && px[1] > 40)) ++not_green;
+      }
+    }
+  }
+  EXPECT_EQ(wrong, 0);
+  EXPECT_EQ(not_green, 0);
+  EXPECT_GT(interior, 3000) << "the tail should fill a good part of the image";
+  EXPECT_GT(covered, interior);
+}
+
+TEST(SharedWorldOffscreen, DentChangesThePixelsOfTheDisplacedPatchAndNothingElse) {
+  std::ostringstream errors;
+  SharedWorld world(kAssets, errors);
+  const Eigen::Isometry3d X_WO = TestPose();
+  world.OnSceneState(Scene("dinosaur", 1, {Object("tail", "mesh", kTailUri, X_WO, kGreen)}));
+  const render::Camera camera = TailCamera(X_WO);
+  render::OffscreenRenderer renderer;
+  render::SceneView rest_view = Bare();
+  world.AddObjects(rest_view);
+  const render::ImageRgb8 rest = renderer.Render(rest_view, camera);
+
+  // The dent's centre: the vertex nearest the eye (it faces the camera, so it is visible).
+  const scene::Mesh tail = Tail();
+  std::vector<Eigen::Vector3d> p_W;
+  for (const auto& v : tail.vertices_m) p_W.push_back(X_WO * v);
+  std::size_t centre = 0;
+  for (std::size_t v = 0; v < p_W.size(); ++v) {
+    if ((p_W[v] - camera.eye_W).norm() < (p_W[centre] - camera.eye_W).norm()) centre = v;
+  }
+  // A known field: a paraboloid dent of 4 mm depth and 10 mm radius, pushed away from the eye.
+  const Eigen::Vector3d into_W = (p_W[centre] - camera.eye_W).normalized();
+  constexpr double kDepth_m = 0.004;
+  constexpr double kRadius_m = 0.010;
+  std::vector<std::uint32_t> ids;
+  std::vector<float> u;
+  std::vector<bool> displaced(p_W.size(), false);
+  std::vector<Eigen::Vector3d> dented = p_W;
+  for (std::size_t v = 0; v < p_W.size(); ++v) {
+    const double r = (p_W[v] - p_W[centre]).norm();
+    if (r >= kRadius_m) continue;
+    const Eigen::Vector3f u_W = (kDepth_m * (1.0 - r * r / (kRadius_m * kRadius_m)) * into_W).cast<float>();
+    ids.push_back(static_cast<std::uint32_t>(v));
+    u.insert(u.end(), {u_W.x(), u_W.y(), u_W.z()});
+    displaced[v] = true;
+    dented[v] += u_W.cast<double>();
+  }
+  ASSERT_GT(ids.size(), 3U) << "the dent should move several vertices";
+  world.OnDeformation(Deformation("tail", 1, true, ids, u));
+  render::SceneView dent_view = Bare();
+  world.AddObjects(dent_view);
+  const render::ImageRgb8 dent = renderer.Render(dent_view, camera);
+
+  // Where a change may show: triangles with a vertex that moved or whose normal changed (a
+  // vertex of a triangle touching a moved vertex), before and after the dent, plus 2 px.
+  std::vector<bool> normal_changed = displaced;
+  for (const auto& t : tail.triangles) {
+    if (displaced[t[0]] || displaced[t[1]] || displaced[t[2]]) {
+      for (const auto v : t) normal_changed[v] = true;
+    }
+  }
+  std::vector<bool> affected(tail.triangles.size(), false);
+  for (std::size_t t = 0; t < tail.triangles.size(); ++t) {
+    for (const auto v : tail.triangles[t]) affected[t] = affected[t] || normal_changed[v];
+  }
+  std::vector<bool> region = OracleCoverage(camera, p_W, tail.triangles, &affected);
+  const std::vector<bool> after = OracleCoverage(camera, dented, tail.triangles, &affected);
+  for (std::size_t i = 0; i < region.size(); ++i) region[i] = region[i] || after[i];
+  region = Dilate(region, camera.width_px, camera.height_px, 2);
+
+  const PixelPoint c = OracleProject(camera, dented[centre]);
+  int changed_inside = 0;
+  int changed_outside = 0;
+  int changed_near_centre = 0;
+  for (int row = 0; row < camera.height_px; ++row) {
+    for (int col = 0; col < camera.width_px; ++col) {
+      const std::uint8_t* a = rest.At(col, row);
+      const std::uint8_t* b = dent.At(col, row);
+      const bool changed = a[0] != b[0] || a[1] != b[1] || a[2] != b[2];
+      if (!changed) continue;
+      if (region[static_cast<std::size_t>(row * camera.width_px + col)]) {
+        ++changed_inside;
+      } else if (++changed_outside <= 5) {
+        ADD_FAILURE() << "pixel (" << col << ", " << row << ") changed outside the dent";
+      }
+      if (std::hypot(col + 0.5 - c.col, row + 0.5 - c.row) < 6.0) ++changed_near_centre;
+    }
+  }
+  EXPECT_EQ(changed_outside, 0);
+  EXPECT_GT(changed_inside, 30) << "a 4 mm dent should reshade the patch";
+  EXPECT_GT(changed_near_centre, 10) << "the shading changes around the projected dent centre";
+
+  // Back to rest by an empty keyframe: the image is the undeformed one again, exactly.
+  world.OnDeformation(Deformation("tail", 2, true, {}, {}));
+  render::SceneView again = Bare();
+  world.AddObjects(again);
+  EXPECT_EQ(renderer.Render(again, camera).rgb, rest.rgb);
+}
+
+TEST(SharedWorldOffscreen, MissingMeshIsDrawnAsItsBox) {
+  std::ostringstream errors;
+  SharedWorld world(kAssets, errors);
+  const Eigen::Isometry3d X_WO = TestPose();
+  world.OnSceneState(Scene("dinosaur", 1, {Object("ghost", "mesh", "meshes/no_such_mesh.obj", X_WO, kGreen,
+                                                  {0.03, 0.03, 0.03})}));
+  EXPECT_NE(errors.str().find("object 'ghost'"), std::string::npos);
+  render::SceneView view = Bare();
+  world.AddObjects(view);
+  render::Camera camera = TailCamera(X_WO);
+  camera.target_W = X_WO.translation();
+  render::OffscreenRenderer renderer;
+  const render::ImageRgb8 image = renderer.Render(view, camera);
+  // The box's centre and points well inside its faces are green; a point 2 half sizes away is not.
+  const PixelPoint centre = OracleProject(camera, X_WO.translation());
+  const std::uint8_t* px = image.At(static_cast<int>(centre.col), static_cast<int>(centre.row));
+  EXPECT_GT(px[1], 60);
+  EXPECT_GT(px[1], px[0]);
+  const Eigen::Vector3d right_W = (camera.target_W - camera.eye_W).cross(camera.up_W).normalized();
+  const PixelPoint beside = OracleProject(camera, X_WO.translation() + 0.1 * right_W);
+  EXPECT_FALSE(Covered(image.At(static_cast<int>(beside.col), static_cast<int>(beside.row))));
+}
+
+}  // namespace
+}  // namespace handshare::graphics
