@@ -14,6 +14,9 @@ SceneRenderer::SceneRenderer(const scene::Scene& scene, const world::SceneWorldO
       controls_(controls::MakeControls(scene)),
       fingertip_radius_m_(options.fingertip_radius_m) {
   for (auto& f : f_controls_) f.setZero();
+  // A hand on a control when this world appears (it pressed the arrow that brought it here, at
+  // the same place) must leave before it can actuate it.
+  controls_.SetGuardFirstVisits(true);
   for (std::size_t i = 0; i < scene_.objects.size(); ++i) {
     const auto id = models_.Find(scene_.objects[i].id);
     if (id >= 0 && scene_.objects[i].motion.active()) moving_.emplace_back(id, i);

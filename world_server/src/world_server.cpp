@@ -194,6 +194,9 @@ int WorldServer::Run() {
         break;
     }
     if (action == nullptr || action->empty()) return;
+    // A copy: going to another world replaces the scene that holds the control and its action.
+    const scene::Action taken = *action;
+    action = &taken;
     if (!action->goto_scene.empty()) {
       try {
         scene = scene::LoadSceneByName(action->goto_scene);

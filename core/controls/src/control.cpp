@@ -64,6 +64,14 @@ void Control::Step(double dt_s, std::span<const Eigen::Vector3d> p_WE, double fi
 
 void Control::Emit(EventBuffer& events, EventKind kind, int tip, double value, double error_m,
                    int index) noexcept {
+  // A hand that was on the control when it appeared (its visit began at the first step) does
+  // not actuate it until it has left: the arrow of the next world, at the place of the arrow
+  // just pressed, must not be pressed by the same push.
+  const int hand = tip >= 0 ? tip / kFingersPerHand : -1;
+  if (guard_first_visits_ && hand >= 0 && hand < kMaxHands) {
+    const Visit& v = visits_[static_cast<std::size_t>(hand)];
+    if (first_step_ || (v.inside && !v.counts)) return;  // (the visit begins after the first model step)
+  }
   ControlEvent e;
   const std::size_t len = std::min(spec_.id.size(), e.control_id.size() - 1);
   std::memcpy(e.control_id.data(), spec_.id.data(), len);
@@ -154,6 +162,10 @@ void ControlSet::Step(double dt_s, std::span<const Eigen::Vector3d> p_WE, double
     const double norm = f.norm();
     if (norm > max_force_N_) f *= max_force_N_ / norm;
   }
+}
+
+void ControlSet::SetGuardFirstVisits(bool on) noexcept {
+  for (auto& c : controls_) c->SetGuardFirstVisits(on);
 }
 
 Control* ControlSet::Find(std::string_view id) noexcept {

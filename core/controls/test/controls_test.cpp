@@ -155,6 +155,41 @@ TEST(Arrow, ShortStiffPushGoes) {
   EXPECT_NEAR(rec.f[1].z(), 3.5, 1e-9);
 }
 
+// A hand that was already on the control when its world appeared (it pressed the arrow at the
+// same place in the world before) does not actuate it: arrows of consecutive worlds at one
+// place would otherwise cascade through the worlds. Once the hand has left, it can.
+TEST(Arrow, AHandAlreadyThereWhenTheWorldAppearsDoesNotActuateItUntilItLeaves) {
+  PushControl arrow(Spec(scene::ControlType::kArrow));
+  arrow.SetGuardFirstVisits(true);
+  Recorder rec;
+  double deepest_force = 0.0;
+  auto push = [&] {
+    for (int i = 0; i <= 200; ++i) rec.Step(arrow, OneFinger(Eigen::Vector3d(0.0, 0.0, kRadius - 1e-5 * i)));
+    deepest_force = rec.f[1].norm();
+    for (int i = 200; i >= 0; --i) rec.Step(arrow, OneFinger(Eigen::Vector3d(0.0, 0.0, kRadius - 1e-5 * i)));
+  };
+  push();  // from the first step on: inherited
+  EXPECT_EQ(rec.Count(EventKind::kPressed), 0);
+  EXPECT_EQ(rec.Count(EventKind::kReleased), 0);
+  EXPECT_NEAR(deepest_force, 3.5, 1e-9);  // it still pushes back (into the stop, clamped)
+  rec.Step(arrow, OneFinger(kFar));  // the hand leaves (no miss: it never came)
+  EXPECT_EQ(rec.Count(EventKind::kMissed), 0);
+  push();
+  EXPECT_EQ(rec.Count(EventKind::kPressed), 1);
+  EXPECT_EQ(rec.Count(EventKind::kReleased), 1);
+  // Already 3 mm deep when the world appears, then rising: still nothing.
+  PushControl deep(Spec(scene::ControlType::kArrow));
+  deep.SetGuardFirstVisits(true);
+  Recorder rec3;
+  for (int i = 300; i >= 0; --i) rec3.Step(deep, OneFinger(Eigen::Vector3d(0.0, 0.0, kRadius - 1e-5 * i)));
+  EXPECT_EQ(rec3.Count(EventKind::kPressed), 0);
+  // Off (the default), the same first push actuates it.
+  PushControl unguarded(Spec(scene::ControlType::kArrow));
+  Recorder rec2;
+  for (int i = 0; i <= 200; ++i) rec2.Step(unguarded, OneFinger(Eigen::Vector3d(0.0, 0.0, kRadius - 1e-5 * i)));
+  EXPECT_EQ(rec2.Count(EventKind::kPressed), 1);
+}
+
 // ---------------------------------------------------------------------------------------------
 
 // Fingertip at height z on the plane x = 0 of the lever, at lateral y.

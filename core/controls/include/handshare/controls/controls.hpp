@@ -127,6 +127,10 @@ class Control {
   long missed_count() const noexcept { return missed_count_; }
   /// The scene action an event of this control triggers, or nullptr.
   const scene::Action* ActionFor(const ControlEvent& e) const noexcept;
+  /// On: a hand already at the control at its first step (it was there when the world
+  /// appeared) does not actuate it until it has left; the arrow of the next world, at the place
+  /// of the arrow just pressed, is then not pressed by the same push. Off by default.
+  void SetGuardFirstVisits(bool on) noexcept { guard_first_visits_ = on; }
 
  protected:
   /// Fingertips in C, valid ones only flagged in `present`.
@@ -153,6 +157,7 @@ class Control {
   scene::ControlSpec spec_;
 
  private:
+  bool guard_first_visits_ = false;
   void TrackApproach(const Fingers& fingers, EventBuffer& events) noexcept;
 
   struct Visit {
@@ -276,6 +281,8 @@ class ControlSet {
   Control* Find(std::string_view id) noexcept;
   /// The scene action an event triggers (looked up by its control id), or nullptr.
   const scene::Action* ActionFor(const ControlEvent& e) const noexcept;
+  /// Control::SetGuardFirstVisits for every control of the set.
+  void SetGuardFirstVisits(bool on) noexcept;
 
  private:
   std::vector<std::unique_ptr<Control>> controls_;
