@@ -5,6 +5,7 @@
 #include <limits>
 #include <string>
 
+#include "contact_dense.hpp"
 #include "dense_small.hpp"
 #include "handshare/fem/error.hpp"
 #include "kernels.hpp"
@@ -46,10 +47,20 @@ ContactSolver::ContactSolver(std::shared_ptr<const Compliance> compliance,
   f_N_.assign(M, Eigen::Vector3d::Zero());
   u_c_m_.assign(M, Eigen::Vector3d::Zero());
   Ccc_.assign(9 * M * M, 0.0);
+  Ccc_prev_.assign(9 * M * M, 0.0);
+  prev_index_.assign(M, -1);
   A_.assign(9 * M * M, 0.0);
   rhs_.assign(3 * M, 0.0);
   row_of_.assign(M, -1);
   loads_.assign(M, NodeLoad{});
+  S_.assign(M * M, 0.0);
+  L_.assign(M * M, 0.0);
+  lambda_N_.assign(M, 0.0);
+  dn_m_.assign(M, 0.0);
+  act_.assign(M, -1);
+  violates_.assign(M, 0);
+  prev_slot_.assign(M, -1);
+  prev_active_.assign(M, 0);
 }
 
 void ContactSolver::ZeroOutputs() noexcept {
@@ -136,13 +147,16 @@ StepStatus ContactSolver::Solve(std::span<const ContactInput> contacts) noexcept
   }
   if (invalid) {
     ZeroOutputs();
+    num_prev_ = 0;
     return StepStatus::kInvalidInput;
   }
-  if (num_unique_ == 0) return rejected ? StepStatus::kSomeRejected : StepStatus::kOk;
+  if (num_unique_ == 0) {
+    num_prev_ = 0;
+    return rejected ? StepStatus::kSomeRejected : StepStatus::kOk;
+  }
 
-  // Stage 2: gather C_cc (3u x 3u, full symmetric) from the packed upper-triangle blocks.
-  const int ld = 3 * M;
-  detail::GatherBlocks(C, slot_.data(), num_unique_, Ccc_.data(), ld);
+  // Stage 2: C_cc (3u x 3u, full symmetric) from the compliance blocks.
+  GatherContactBlocks();
 
   // Stage 3: solve. With push-only, iterate on the set of held contacts:
   //  a) sticking contacts that pull slip (keep their normal constraint only; friction needs
@@ -153,11 +167,22 @@ StepStatus ContactSolver::Solve(std::span<const ContactInput> contacts) noexcept
   //     Murty's least-index rule, which terminates. A pulling contact is released; a released
   //     node the surface pushes into the tip is re-engaged (frictionless).
   StepStatus status = StepStatus::kOk;
+  bool all_normal = options_.push_only;
+  for (std::int32_t j = 0; j < num_unique_; ++j) all_normal = all_normal && mode_[j] == ContactMode::kNormalOnly;
+  if (all_normal) {
+    // Every fingertip patch of the haptic world: the scalar problem, warm started.
+    if (!SolveNormalPushOnly(status)) {
+      ZeroOutputs();
+      num_prev_ = 0;
+      return StepStatus::kNumericalFailure;
+    }
+  }
   std::int32_t best_violations = num_unique_ + 1;
   int grace = 3;
-  while (true) {
+  while (!all_normal) {
     if (!SolveActiveSet()) {
       ZeroOutputs();
+      num_prev_ = 0;
       return StepStatus::kNumericalFailure;
     }
     if (!options_.push_only) break;
@@ -236,8 +261,167 @@ StepStatus ContactSolver::Solve(std::span<const ContactInput> contacts) noexcept
   for (std::int32_t j = 0; j < num_unique_; ++j) {
     if (active_[j]) loads_[num_loads_++] = NodeLoad{slot_[j], f_N_[j]};
   }
+  RememberActiveSet();
   if (status != StepStatus::kOk) return status;
   return rejected ? StepStatus::kSomeRejected : StepStatus::kOk;
+}
+
+void ContactSolver::GatherContactBlocks() noexcept {
+  const std::int32_t u = num_unique_;
+  const int ld = 3 * options_.max_contacts;
+  // Which nodes the previous Solve() touched too (its blocks are still in Ccc_).
+  std::int32_t known = 0;
+  for (std::int32_t j = 0; j < u; ++j) {
+    prev_index_[j] = -1;
+    for (std::int32_t k = 0; k < num_prev_; ++k) {
+      if (prev_slot_[k] == slot_[j]) {
+        prev_index_[j] = k;
+        ++known;
+        break;
+      }
+    }
+  }
+  // The blocks of a large compliance sit far apart in memory (one cache miss or more each), so
+  // the gather is the costliest part of the force path. Fingertips move a fraction of a node
+  // spacing per haptic step: keep the blocks between nodes touched in both steps (a copy in
+  // cache) and read only the pairs with a new node. Few known nodes: the plain gather.
+  if (2 * known < u) {
+    detail::GatherBlocks(*compliance_, slot_.data(), u, Ccc_.data(), ld);
+    return;
+  }
+  std::swap(Ccc_, Ccc_prev_);
+  const Compliance& C = *compliance_;
+  for (std::int32_t j = 0; j < u; ++j) {
+    const std::int32_t pj = prev_index_[j];
+    for (std::int32_t i = 0; i <= j; ++i) {
+      const std::int32_t pi = prev_index_[i];
+      double* oij = Ccc_.data() + static_cast<std::ptrdiff_t>(3 * j) * ld + 3 * i;
+      double* oji = Ccc_.data() + static_cast<std::ptrdiff_t>(3 * i) * ld + 3 * j;
+      if (pi >= 0 && pj >= 0) {
+        const double* src = Ccc_prev_.data() + static_cast<std::ptrdiff_t>(3 * pj) * ld + 3 * pi;
+        for (int c = 0; c < 3; ++c)
+          for (int r = 0; r < 3; ++r) oij[c * ld + r] = src[c * ld + r];
+      } else {
+        const Eigen::Matrix3d B = C.Block(slot_[i], slot_[j]);
+        for (int c = 0; c < 3; ++c)
+          for (int r = 0; r < 3; ++r) oij[c * ld + r] = B(r, c);
+      }
+      if (i == j) continue;
+      for (int c = 0; c < 3; ++c)
+        for (int r = 0; r < 3; ++r) oji[r * ld + c] = oij[c * ld + r];
+    }
+  }
+}
+
+void ContactSolver::WarmStartActiveSet() noexcept {
+  // Nodes touched in the previous Solve() start as they ended there (the fingertips move little
+  // in one haptic step, so the held set is mostly right and one factorization usually settles
+  // it); new nodes start held. The LCP has a unique solution (S is positive definite), so the
+  // start changes only the work, not the answer.
+  for (std::int32_t j = 0; j < num_unique_; ++j) {
+    const std::int32_t k = prev_index_[j];
+    active_[j] = k >= 0 ? prev_active_[k] : 1;
+  }
+}
+
+void ContactSolver::RememberActiveSet() noexcept {
+  for (std::int32_t j = 0; j < num_unique_; ++j) {
+    prev_slot_[j] = slot_[j];
+    prev_active_[j] = active_[j];
+  }
+  num_prev_ = num_unique_;
+}
+
+bool ContactSolver::SolveNormalPushOnly(StepStatus& status) noexcept {
+  const std::int32_t u = num_unique_;
+  const std::int32_t M = options_.max_contacts;
+  const int ld = 3 * M;
+  // S = N^T C_cc N (u x u): every contact holds only its normal, so the 3u x 3u problem is a
+  // u x u one (9x less to factor, 3x less per displacement check).
+  double d_scale = 0.0;
+  for (std::int32_t j = 0; j < u; ++j) {
+    for (std::int32_t i = 0; i <= j; ++i) {
+      Eigen::Map<const Eigen::Matrix3d, 0, Eigen::OuterStride<>> Cij(
+          Ccc_.data() + static_cast<std::ptrdiff_t>(3 * j) * ld + 3 * i, 3, 3, Eigen::OuterStride<>(ld));
+      const double v = n_[i].dot(Cij * n_[j]);
+      S_[static_cast<std::size_t>(j) * M + i] = v;
+      S_[static_cast<std::size_t>(i) * M + j] = v;
+    }
+    dn_m_[j] = n_[j].dot(d_m_[j]);
+    d_scale = std::max(d_scale, d_m_[j].norm());
+  }
+  if (d_scale == 0.0) d_scale = 1.0;
+  WarmStartActiveSet();
+  // The same pivoting as the general path (block principal pivoting with Murty's rule as the
+  // fallback), on the normal forces lambda (f = lambda n: push is lambda < 0).
+  constexpr double kTol = 1e-9;
+  std::int32_t best_violations = u + 1;
+  int grace = 3;
+  while (true) {
+    std::int32_t r = 0;
+    for (std::int32_t j = 0; j < u; ++j) {
+      lambda_N_[j] = 0.0;
+      if (active_[j]) act_[r++] = j;
+    }
+    if (r > 0) {
+      for (std::int32_t b = 0; b < r; ++b) {
+        const double* Sb = S_.data() + static_cast<std::size_t>(act_[b]) * M;
+        double* Lb = L_.data() + static_cast<std::size_t>(b) * r;
+        for (std::int32_t a = b; a < r; ++a) Lb[a] = Sb[act_[a]];
+        Lb[b] += eps_m_per_N_;
+        rhs_[b] = dn_m_[act_[b]];
+      }
+      if (!detail::CholeskyCompact(L_.data(), r)) return false;
+      detail::CholeskyCompactSolve(L_.data(), r, rhs_.data());
+      for (std::int32_t b = 0; b < r; ++b) {
+        if (!std::isfinite(rhs_[b])) return false;
+        lambda_N_[act_[b]] = rhs_[b];
+      }
+    }
+    double f_scale = 0.0;
+    for (std::int32_t b = 0; b < r; ++b) f_scale = std::max(f_scale, std::abs(rhs_[b]));
+    if (f_scale == 0.0) f_scale = 1.0;
+    // A held node violates if it pulls; a released one if the surface would push into the tip.
+    std::int32_t violations = 0;
+    for (std::int32_t j = 0; j < u; ++j) {
+      bool v;
+      if (active_[j]) {
+        v = lambda_N_[j] / f_scale > kTol;
+      } else {
+        const double* Sj = S_.data() + static_cast<std::size_t>(j) * M;
+        double un = 0.0;
+        for (std::int32_t b = 0; b < r; ++b) un += Sj[act_[b]] * rhs_[b];
+        v = (un - dn_m_[j]) / d_scale > kTol;
+      }
+      violates_[j] = v ? 1 : 0;
+      violations += v ? 1 : 0;
+    }
+    if (violations == 0) break;
+    if (iterations_ >= options_.max_active_set_iterations) {
+      status = StepStatus::kNotConverged;
+      break;
+    }
+    ++iterations_;
+    bool block = false;
+    if (violations < best_violations) {
+      best_violations = violations;
+      grace = 3;
+      block = true;
+    } else if (grace > 0) {
+      --grace;
+      block = true;
+    }
+    for (std::int32_t j = 0; j < u; ++j) {
+      if (!violates_[j]) continue;
+      active_[j] = active_[j] ? 0 : 1;
+      if (!block) break;  // least index
+    }
+  }
+  for (std::int32_t j = 0; j < u; ++j) {
+    slipping_[j] = 0;  // frictionless from the start: held, not slipping
+    f_N_[j] = active_[j] ? Eigen::Vector3d(lambda_N_[j] * n_[j]) : Eigen::Vector3d::Zero();
+  }
+  return true;
 }
 
 bool ContactSolver::SolveActiveSet() noexcept {
