@@ -221,7 +221,7 @@ HiroModel HiroModel::Parse(const std::string& json_text, const std::string& orig
   fo.servo_damping_ratio = r.Number(af + "servo_damping_ratio", 0.1, 10.0);
   for (int i = 0; i < kArmJoints; ++i) {
     if (a.joint[i].max_rad - a.joint[i].min_rad <= 2.0 * fo.limit_margin_rad) {
-      r.Fail(af + "limit_margin_deg", "leaves no room in the range of arm joint " + std::to_string(i));
+      r.Fail(af + "limit_margin_deg", "leaves no room in /sourced/arm/joint_range_deg/" + std::to_string(i));
     }
   }
   return m;

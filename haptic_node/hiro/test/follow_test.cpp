@@ -379,9 +379,10 @@ HandMotion MoveAndTurn() {
   return m;
 }
 
-TEST(HiroFollow, HandBaseFollowsAMovingTurningHandToTheFittedPose) {
-  const FollowRun w = RunFollow(MoveAndTurn(), Eigen::Vector3d::Zero(), true);
-  Report("move 80/50/-40 mm, turn 20 deg", w);
+void ExpectFollows(const HandMotion& motion, const char* name) {
+  SCOPED_TRACE(name);
+  const FollowRun w = RunFollow(motion, Eigen::Vector3d::Zero(), true);
+  Report(name, w);
   EXPECT_TRUE(w.all_valid);
   // Settled within 1.5 s of the hand stopping. At the stop the arm lags by about
   // (hand speed) / rate = 60 mm / 5: 12 mm, which decays with 0.2 s time constant to 2 mm in
@@ -405,6 +406,13 @@ TEST(HiroFollow, HandBaseFollowsAMovingTurningHandToTheFittedPose) {
   EXPECT_LE(w.max_ref_speed_ratio, 1.0 + 1e-12);
   EXPECT_GE(w.min_ref_room_rad, m.follow.limit_margin_rad - 1e-9);
   EXPECT_GT(w.min_room_rad, 0.0);
+}
+
+TEST(HiroFollow, HandBaseFollowsAMovingTurningHandToTheFittedPose) {
+  ExpectFollows(MoveAndTurn(), "move 80/50/-40 mm, turn 20 deg about (1, 2, 3)");
+  HandMotion move_only = MoveAndTurn();
+  move_only.angle_rad = 0.0;
+  ExpectFollows(move_only, "move 80/50/-40 mm");
 }
 
 TEST(HiroFollow, ControlStepDoesNotAllocateWhileFollowing) {
