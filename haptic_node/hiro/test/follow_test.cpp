@@ -354,7 +354,7 @@ void Report(const char* name, const FollowRun& w) {
   const Eigen::Vector3d d_tgt = w.target_end.translation() - w.target_start.translation();
   std::printf(
       "%s:\n  hand base moved %.1f/%.1f/%.1f mm, turned %.2f deg; target moved %.1f/%.1f/%.1f mm, turned %.2f deg\n"
-      "  end error %.3f mm, %.3f deg; settled (2 mm, 1 deg) %.3f s after the hand stopped\n"
+      "  end error %.3f mm, %.3f deg (%.3f mm to the fit of the plant's user fingertips); settled (2 mm, 1 deg) %.3f s after the hand stopped\n"
       "  max hand speed %.3f m/s, %.3f rad/s; max ref joint speed %.2f of limit; room to range ends: ref %.3f rad,"
       " joints %.3f rad\n"
       "  end: fit rms %.2f mm (largest residual %.2f mm), fingertips off optimum <= %.2f mm, finger joints off"
@@ -363,7 +363,7 @@ void Report(const char* name, const FollowRun& w) {
       AngleBetween(w.X_BH_end.linear(), w.X_BH_start.linear()) / kDeg, d_tgt.x() * 1e3, d_tgt.y() * 1e3,
       d_tgt.z() * 1e3, AngleBetween(w.target_end.linear(), w.target_start.linear()) / kDeg,
       (w.X_BH_end.translation() - w.target_end.translation()).norm() * 1e3,
-      AngleBetween(w.X_BH_end.linear(), w.target_end.linear()) / kDeg, w.settle_time_s, w.max_hand_speed_m_per_s,
+      AngleBetween(w.X_BH_end.linear(), w.target_end.linear()) / kDeg, w.end_error_true_m * 1e3, w.settle_time_s, w.max_hand_speed_m_per_s,
       w.max_hand_rate_rad_per_s, w.max_ref_speed_ratio, w.min_ref_room_rad, w.min_room_rad, w.fit_rms_end_m * 1e3,
       w.target_max_residual_m * 1e3, w.max_tip_dev_m * 1e3, w.max_finger_dev_rad / kDeg, w.max_force_err_moving_N,
       w.max_force_err_after_N);
