@@ -47,8 +47,13 @@ ContactSolver::ContactSolver(std::shared_ptr<const Compliance> compliance,
   f_N_.assign(M, Eigen::Vector3d::Zero());
   u_c_m_.assign(M, Eigen::Vector3d::Zero());
   Ccc_.assign(9 * M * M, 0.0);
-  Ccc_prev_.assign(9 * M * M, 0.0);
   prev_index_.assign(M, -1);
+  prev_pos_.assign(M, -1);
+  prev_kept_.assign(M, 0);
+  pos_.assign(M, -1);
+  is_new_.assign(M, 0);
+  free_pos_.assign(M, 0);
+  table_.assign(9 * M * (M + 1) / 2, 0.0);
   A_.assign(9 * M * M, 0.0);
   rhs_.assign(3 * M, 0.0);
   row_of_.assign(M, -1);
@@ -148,17 +153,19 @@ StepStatus ContactSolver::Solve(std::span<const ContactInput> contacts) noexcept
   if (invalid) {
     ZeroOutputs();
     num_prev_ = 0;
+    table_valid_ = false;
     return StepStatus::kInvalidInput;
   }
   if (num_unique_ == 0) {
     num_prev_ = 0;
+    table_valid_ = false;
     return rejected ? StepStatus::kSomeRejected : StepStatus::kOk;
   }
 
-  // Stage 2: C_cc (3u x 3u, full symmetric) from the compliance blocks.
-  GatherContactBlocks();
-
-  // Stage 3: solve. With push-only, iterate on the set of held contacts:
+  // Stages 2 and 3: gather the contacts' compliance and solve. Push-only with every contact
+  // frictionless (the haptic world's fingertip patches) is the scalar problem of
+  // SolveNormalPushOnly. Otherwise C_cc (3u x 3u) and, with push-only, iterate on the set of
+  // held contacts:
   //  a) sticking contacts that pull slip (keep their normal constraint only; friction needs
   //     pressure). Sticking -> slipping never reverts, so this happens at most m times;
   //  b) the rest is a linear complementarity problem with a P-matrix (frictionless contacts):
@@ -169,11 +176,15 @@ StepStatus ContactSolver::Solve(std::span<const ContactInput> contacts) noexcept
   StepStatus status = StepStatus::kOk;
   bool all_normal = options_.push_only;
   for (std::int32_t j = 0; j < num_unique_; ++j) all_normal = all_normal && mode_[j] == ContactMode::kNormalOnly;
-  if (all_normal) {
+  if (!all_normal) {
+    table_valid_ = false;
+    detail::GatherBlocks(C, slot_.data(), num_unique_, Ccc_.data(), 3 * M);
+  } else {
     // Every fingertip patch of the haptic world: the scalar problem, warm started.
     if (!SolveNormalPushOnly(status)) {
       ZeroOutputs();
       num_prev_ = 0;
+      table_valid_ = false;
       return StepStatus::kNumericalFailure;
     }
   }
@@ -183,6 +194,7 @@ StepStatus ContactSolver::Solve(std::span<const ContactInput> contacts) noexcept
     if (!SolveActiveSet()) {
       ZeroOutputs();
       num_prev_ = 0;
+      table_valid_ = false;
       return StepStatus::kNumericalFailure;
     }
     if (!options_.push_only) break;
@@ -266,49 +278,63 @@ StepStatus ContactSolver::Solve(std::span<const ContactInput> contacts) noexcept
   return rejected ? StepStatus::kSomeRejected : StepStatus::kOk;
 }
 
-void ContactSolver::GatherContactBlocks() noexcept {
+void ContactSolver::GatherNormalCompliance() noexcept {
   const std::int32_t u = num_unique_;
-  const int ld = 3 * options_.max_contacts;
-  // Which nodes the previous Solve() touched too (its blocks are still in Ccc_).
-  std::int32_t known = 0;
+  const std::int32_t M = options_.max_contacts;
+  // Which nodes the previous Solve() touched too (also the warm start's map).
   for (std::int32_t j = 0; j < u; ++j) {
     prev_index_[j] = -1;
     for (std::int32_t k = 0; k < num_prev_; ++k) {
       if (prev_slot_[k] == slot_[j]) {
         prev_index_[j] = k;
-        ++known;
         break;
       }
     }
   }
-  // The blocks of a large compliance sit far apart in memory (one cache miss or more each), so
-  // the gather is the costliest part of the force path. Fingertips move a fraction of a node
-  // spacing per haptic step: keep the blocks between nodes touched in both steps (a copy in
-  // cache) and read only the pairs with a new node. Few known nodes: the plain gather.
-  if (2 * known < u) {
-    detail::GatherBlocks(*compliance_, slot_.data(), u, Ccc_.data(), ld);
-    return;
+  // The blocks of a large compliance lie far apart in memory (a cache miss or more each), so
+  // reading them is the costliest part of the force path; fingertips move a fraction of a node
+  // spacing per haptic step. So the blocks stay in a table between steps: a node keeps its
+  // table position while it is touched in consecutive steps, and only the pairs with a node
+  // new this step are read from the compliance. A node not touched this step gives its position
+  // up, so two nodes that are both old have been touched together since the later one came,
+  // and their block is in the table.
+  if (!table_valid_) {
+    for (std::int32_t p = 0; p < M; ++p) free_pos_[p] = M - 1 - p;
+    num_free_ = M;
+    for (std::int32_t k = 0; k < num_prev_; ++k) prev_pos_[k] = -1;
+    table_valid_ = true;
   }
-  std::swap(Ccc_, Ccc_prev_);
+  for (std::int32_t k = 0; k < num_prev_; ++k) prev_kept_[k] = 0;
+  for (std::int32_t j = 0; j < u; ++j) {
+    const std::int32_t k = prev_index_[j];
+    if (k >= 0 && prev_pos_[k] >= 0) {
+      pos_[j] = prev_pos_[k];
+      prev_kept_[k] = 1;
+      is_new_[j] = 0;
+    } else {
+      pos_[j] = -1;
+      is_new_[j] = 1;
+    }
+  }
+  for (std::int32_t k = 0; k < num_prev_; ++k) {
+    if (prev_pos_[k] >= 0 && !prev_kept_[k]) free_pos_[num_free_++] = prev_pos_[k];
+  }
+  for (std::int32_t j = 0; j < u; ++j) {
+    if (is_new_[j]) pos_[j] = free_pos_[--num_free_];  // u <= M positions: never runs out
+  }
+  // S_ij = n_i^T C_ij n_j; the table keeps C_ab for table positions a <= b (packed).
   const Compliance& C = *compliance_;
   for (std::int32_t j = 0; j < u; ++j) {
-    const std::int32_t pj = prev_index_[j];
     for (std::int32_t i = 0; i <= j; ++i) {
-      const std::int32_t pi = prev_index_[i];
-      double* oij = Ccc_.data() + static_cast<std::ptrdiff_t>(3 * j) * ld + 3 * i;
-      double* oji = Ccc_.data() + static_cast<std::ptrdiff_t>(3 * i) * ld + 3 * j;
-      if (pi >= 0 && pj >= 0) {
-        const double* src = Ccc_prev_.data() + static_cast<std::ptrdiff_t>(3 * pj) * ld + 3 * pi;
-        for (int c = 0; c < 3; ++c)
-          for (int r = 0; r < 3; ++r) oij[c * ld + r] = src[c * ld + r];
-      } else {
-        const Eigen::Matrix3d B = C.Block(slot_[i], slot_[j]);
-        for (int c = 0; c < 3; ++c)
-          for (int r = 0; r < 3; ++r) oij[c * ld + r] = B(r, c);
-      }
-      if (i == j) continue;
-      for (int c = 0; c < 3; ++c)
-        for (int r = 0; r < 3; ++r) oji[r * ld + c] = oij[c * ld + r];
+      const bool ij = pos_[i] <= pos_[j];
+      const std::int32_t a = ij ? i : j, b = ij ? j : i;  // pos_[a] <= pos_[b]
+      const std::int64_t pb = pos_[b];
+      double* blk = table_.data() + 9 * (pb * (pb + 1) / 2 + pos_[a]);
+      Eigen::Map<Eigen::Matrix3d> B(blk);
+      if (is_new_[i] || is_new_[j]) B = C.Block(slot_[a], slot_[b]);
+      const double v = n_[a].dot(B * n_[b]);
+      S_[static_cast<std::size_t>(j) * M + i] = v;
+      S_[static_cast<std::size_t>(i) * M + j] = v;
     }
   }
 }
@@ -328,6 +354,7 @@ void ContactSolver::RememberActiveSet() noexcept {
   for (std::int32_t j = 0; j < num_unique_; ++j) {
     prev_slot_[j] = slot_[j];
     prev_active_[j] = active_[j];
+    prev_pos_[j] = table_valid_ ? pos_[j] : -1;
   }
   num_prev_ = num_unique_;
 }
@@ -335,18 +362,11 @@ void ContactSolver::RememberActiveSet() noexcept {
 bool ContactSolver::SolveNormalPushOnly(StepStatus& status) noexcept {
   const std::int32_t u = num_unique_;
   const std::int32_t M = options_.max_contacts;
-  const int ld = 3 * M;
   // S = N^T C_cc N (u x u): every contact holds only its normal, so the 3u x 3u problem is a
   // u x u one (9x less to factor, 3x less per displacement check).
+  GatherNormalCompliance();
   double d_scale = 0.0;
   for (std::int32_t j = 0; j < u; ++j) {
-    for (std::int32_t i = 0; i <= j; ++i) {
-      Eigen::Map<const Eigen::Matrix3d, 0, Eigen::OuterStride<>> Cij(
-          Ccc_.data() + static_cast<std::ptrdiff_t>(3 * j) * ld + 3 * i, 3, 3, Eigen::OuterStride<>(ld));
-      const double v = n_[i].dot(Cij * n_[j]);
-      S_[static_cast<std::size_t>(j) * M + i] = v;
-      S_[static_cast<std::size_t>(i) * M + j] = v;
-    }
     dn_m_[j] = n_[j].dot(d_m_[j]);
     d_scale = std::max(d_scale, d_m_[j].norm());
   }

@@ -135,8 +135,8 @@ class ContactSolver {
   // started from the previous Solve()'s active set. Returns false on a numerical failure.
   bool SolveNormalPushOnly(StepStatus& status) noexcept;
   void WarmStartActiveSet() noexcept;
-  // Fills Ccc_ for slot_[0..num_unique_), reusing the previous Solve()'s blocks.
-  void GatherContactBlocks() noexcept;
+  // Fills S_ for slot_[0..num_unique_), reading only blocks the table lacks.
+  void GatherNormalCompliance() noexcept;
   void RememberActiveSet() noexcept;
   void ZeroOutputs() noexcept;
 
@@ -181,7 +181,16 @@ class ContactSolver {
   std::vector<std::int32_t> prev_slot_;
   std::vector<std::uint8_t> prev_active_;
   std::vector<std::int32_t> prev_index_;  // per distinct node: its index in the previous Solve()
-  std::vector<double> Ccc_prev_;          // the previous Solve()'s C_cc (swapped with Ccc_)
+  // Block table of the scalar path: C_ab of table positions a <= b (packed, 3x3 column-major
+  // each); the position of each distinct node, of the previous Solve()'s nodes, free positions.
+  std::vector<double> table_;
+  std::vector<std::int32_t> pos_;
+  std::vector<std::uint8_t> is_new_;
+  std::vector<std::int32_t> prev_pos_;
+  std::vector<std::uint8_t> prev_kept_;
+  std::vector<std::int32_t> free_pos_;
+  std::int32_t num_free_ = 0;
+  bool table_valid_ = false;
   std::int32_t num_prev_ = 0;
   mutable SurfaceField field_;
 };
