@@ -5,10 +5,9 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
-#include <iostream>
 #include <iomanip>
+#include <iostream>
 #include <map>
-#include <optional>
 #include <sstream>
 #include <thread>
 
@@ -115,20 +114,15 @@ class WorldView {
 void PrintWorldSummary(const std::string& name, const SharedWorld& world) {
   const SharedWorldStats& s = world.stats();
   const DeformationStats d = world.deformation_stats();
-  std::printf("[graphics_node %s] deformation: %llu samples (%llu applied, %llu keyframes, %llu ids out of "
-              "range, %llu non-finite, %llu malformed, %llu for unknown objects, %llu without mesh, %llu with another node count); "
-              "object states: %llu applied, %llu unknown, %llu non-finite; mesh errors: %llu\n",
-              name.c_str(), static_cast<unsigned long long>(s.deformation_samples),
-              static_cast<unsigned long long>(d.samples), static_cast<unsigned long long>(d.keyframes),
-              static_cast<unsigned long long>(d.ids_out_of_range), static_cast<unsigned long long>(d.nonfinite),
-              static_cast<unsigned long long>(d.malformed),
-              static_cast<unsigned long long>(s.deformation_unknown_object),
-              static_cast<unsigned long long>(s.deformation_without_mesh),
-              static_cast<unsigned long long>(s.deformation_count_mismatch),
-              static_cast<unsigned long long>(s.object_states),
-              static_cast<unsigned long long>(s.object_states_unknown),
-              static_cast<unsigned long long>(s.object_states_nonfinite),
-              static_cast<unsigned long long>(s.mesh_errors));
+  const auto n = [](std::uint64_t v) { return static_cast<unsigned long long>(v); };
+  std::printf("[graphics_node %s] deformation: %llu samples (%llu applied, %llu keyframes, %llu ids "
+              "out of range, %llu non-finite, %llu malformed, %llu for unknown objects, %llu without "
+              "mesh, %llu with another node count); object states: %llu applied, %llu unknown, %llu "
+              "non-finite; mesh errors: %llu\n",
+              name.c_str(), n(s.deformation_samples), n(d.samples), n(d.keyframes),
+              n(d.ids_out_of_range), n(d.nonfinite), n(d.malformed), n(s.deformation_unknown_object),
+              n(s.deformation_without_mesh), n(s.deformation_count_mismatch), n(s.object_states),
+              n(s.object_states_unknown), n(s.object_states_nonfinite), n(s.mesh_errors));
   std::fflush(stdout);
 }
 

@@ -11,6 +11,7 @@
 
 #include "handshare/fem/error.hpp"
 #include "handshare/fem/sparse_cholesky.hpp"
+#include "compressed_blocks.hpp"
 #include "hash.hpp"
 #include "reduce.hpp"
 
@@ -311,6 +312,10 @@ Compliance Compliance::Precompute(const TetMesh& mesh, const Material& material,
 }
 
 Compliance Compliance::ConvertedTo(Precision precision) const {
+  if (compressed_) throw InputError("", 0, "precision", "a compressed compliance is float32 only");
+  if (precision != Precision::kFloat32 && precision != Precision::kFloat64) {
+    throw InputError("", 0, "precision", "a compliance is stored in float32 or float64");
+  }
   Compliance c;
   c.precision_ = precision;
   c.material_ = material_;
@@ -330,7 +335,39 @@ Compliance Compliance::ConvertedTo(Precision precision) const {
   return c;
 }
 
+Compliance Compliance::Compressed(const TetMesh& mesh, const CompressionOptions& options,
+                                  CompressionStats* stats) const {
+  if (compressed_) throw InputError("", 0, "compliance", "already compressed");
+  if (mesh.num_nodes() != num_mesh_nodes()) {
+    throw InputError(mesh.source(), 0, "mesh", "not the mesh this compliance was computed for");
+  }
+  std::vector<Eigen::Vector3d> p;
+  p.reserve(nodes_.size());
+  for (std::int32_t v : nodes_) p.push_back(mesh.positions_m()[v]);
+  Compliance c;
+  c.precision_ = Precision::kFloat32;
+  c.material_ = material_;
+  c.nodes_ = nodes_;
+  c.fixed_ = fixed_;
+  c.slot_of_ = slot_of_;
+  c.fixed_flag_ = fixed_flag_;
+  detail::Hasher64 h;
+  h.Pod(hash_);
+  h.Pod(options.tolerance);
+  h.Pod(options.leaf_nodes);
+  c.hash_ = h.digest();
+  c.compressed_ = std::make_shared<const detail::CompressedBlocks>(
+      detail::CompressedBlocks::Build(p, *this, options, stats));
+  return c;
+}
+
+std::size_t Compliance::storage_bytes() const noexcept {
+  return f32_.size() * sizeof(float) + f64_.size() * sizeof(double) +
+         (compressed_ ? compressed_->storage_bytes() : 0);
+}
+
 Eigen::Matrix3d Compliance::Block(std::int32_t n, std::int32_t k) const noexcept {
+  if (compressed_) return compressed_->Block(n, k);
   const bool transpose = n > k;
   if (transpose) std::swap(n, k);
   const std::int64_t off = 9 * PackedIndex(n, k);
@@ -345,6 +382,10 @@ Eigen::Matrix3d Compliance::Block(std::int32_t n, std::int32_t k) const noexcept
 }
 
 void Compliance::Save(const fs::path& file) const {
+  if (compressed_) {
+    throw CacheError("compliance cache " + file.string() +
+                     ": a compressed compliance is not cached; save the packed one and compress after Load");
+  }
   FileHeader h{};
   std::memcpy(h.magic, kMagic, sizeof kMagic);
   h.version = kVersion;

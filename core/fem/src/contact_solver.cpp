@@ -5,6 +5,7 @@
 #include <limits>
 #include <string>
 
+#include "contact_dense.hpp"
 #include "dense_small.hpp"
 #include "handshare/fem/error.hpp"
 #include "kernels.hpp"
@@ -46,10 +47,25 @@ ContactSolver::ContactSolver(std::shared_ptr<const Compliance> compliance,
   f_N_.assign(M, Eigen::Vector3d::Zero());
   u_c_m_.assign(M, Eigen::Vector3d::Zero());
   Ccc_.assign(9 * M * M, 0.0);
+  prev_index_.assign(M, -1);
+  prev_pos_.assign(M, -1);
+  prev_kept_.assign(M, 0);
+  pos_.assign(M, -1);
+  is_new_.assign(M, 0);
+  free_pos_.assign(M, 0);
+  table_.assign(9 * M * (M + 1) / 2, 0.0);
   A_.assign(9 * M * M, 0.0);
   rhs_.assign(3 * M, 0.0);
   row_of_.assign(M, -1);
   loads_.assign(M, NodeLoad{});
+  S_.assign(M * M, 0.0);
+  L_.assign(M * M, 0.0);
+  lambda_N_.assign(M, 0.0);
+  dn_m_.assign(M, 0.0);
+  act_.assign(M, -1);
+  violates_.assign(M, 0);
+  prev_slot_.assign(M, -1);
+  prev_active_.assign(M, 0);
 }
 
 void ContactSolver::ZeroOutputs() noexcept {
@@ -136,15 +152,20 @@ StepStatus ContactSolver::Solve(std::span<const ContactInput> contacts) noexcept
   }
   if (invalid) {
     ZeroOutputs();
+    num_prev_ = 0;
+    table_valid_ = false;
     return StepStatus::kInvalidInput;
   }
-  if (num_unique_ == 0) return rejected ? StepStatus::kSomeRejected : StepStatus::kOk;
+  if (num_unique_ == 0) {
+    num_prev_ = 0;
+    table_valid_ = false;
+    return rejected ? StepStatus::kSomeRejected : StepStatus::kOk;
+  }
 
-  // Stage 2: gather C_cc (3u x 3u, full symmetric) from the packed upper-triangle blocks.
-  const int ld = 3 * M;
-  detail::GatherBlocks(C, slot_.data(), num_unique_, Ccc_.data(), ld);
-
-  // Stage 3: solve. With push-only, iterate on the set of held contacts:
+  // Stages 2 and 3: gather the contacts' compliance and solve. Push-only with every contact
+  // frictionless (the haptic world's fingertip patches) is the scalar problem of
+  // SolveNormalPushOnly. Otherwise C_cc (3u x 3u) and, with push-only, iterate on the set of
+  // held contacts:
   //  a) sticking contacts that pull slip (keep their normal constraint only; friction needs
   //     pressure). Sticking -> slipping never reverts, so this happens at most m times;
   //  b) the rest is a linear complementarity problem with a P-matrix (frictionless contacts):
@@ -153,11 +174,27 @@ StepStatus ContactSolver::Solve(std::span<const ContactInput> contacts) noexcept
   //     Murty's least-index rule, which terminates. A pulling contact is released; a released
   //     node the surface pushes into the tip is re-engaged (frictionless).
   StepStatus status = StepStatus::kOk;
+  bool all_normal = options_.push_only;
+  for (std::int32_t j = 0; j < num_unique_; ++j) all_normal = all_normal && mode_[j] == ContactMode::kNormalOnly;
+  if (!all_normal) {
+    table_valid_ = false;
+    detail::GatherBlocks(C, slot_.data(), num_unique_, Ccc_.data(), 3 * M);
+  } else {
+    // Every fingertip patch of the haptic world: the scalar problem, warm started.
+    if (!SolveNormalPushOnly(status)) {
+      ZeroOutputs();
+      num_prev_ = 0;
+      table_valid_ = false;
+      return StepStatus::kNumericalFailure;
+    }
+  }
   std::int32_t best_violations = num_unique_ + 1;
   int grace = 3;
-  while (true) {
+  while (!all_normal) {
     if (!SolveActiveSet()) {
       ZeroOutputs();
+      num_prev_ = 0;
+      table_valid_ = false;
       return StepStatus::kNumericalFailure;
     }
     if (!options_.push_only) break;
@@ -236,8 +273,175 @@ StepStatus ContactSolver::Solve(std::span<const ContactInput> contacts) noexcept
   for (std::int32_t j = 0; j < num_unique_; ++j) {
     if (active_[j]) loads_[num_loads_++] = NodeLoad{slot_[j], f_N_[j]};
   }
+  RememberActiveSet();
   if (status != StepStatus::kOk) return status;
   return rejected ? StepStatus::kSomeRejected : StepStatus::kOk;
+}
+
+void ContactSolver::GatherNormalCompliance() noexcept {
+  const std::int32_t u = num_unique_;
+  const std::int32_t M = options_.max_contacts;
+  // Which nodes the previous Solve() touched too (also the warm start's map).
+  for (std::int32_t j = 0; j < u; ++j) {
+    prev_index_[j] = -1;
+    for (std::int32_t k = 0; k < num_prev_; ++k) {
+      if (prev_slot_[k] == slot_[j]) {
+        prev_index_[j] = k;
+        break;
+      }
+    }
+  }
+  // The blocks of a large compliance lie far apart in memory (a cache miss or more each), so
+  // reading them is the costliest part of the force path; fingertips move a fraction of a node
+  // spacing per haptic step. So the blocks stay in a table between steps: a node keeps its
+  // table position while it is touched in consecutive steps, and only the pairs with a node
+  // new this step are read from the compliance. A node not touched this step gives its position
+  // up, so two nodes that are both old have been touched together since the later one came,
+  // and their block is in the table.
+  if (!table_valid_) {
+    for (std::int32_t p = 0; p < M; ++p) free_pos_[p] = M - 1 - p;
+    num_free_ = M;
+    for (std::int32_t k = 0; k < num_prev_; ++k) prev_pos_[k] = -1;
+    table_valid_ = true;
+  }
+  for (std::int32_t k = 0; k < num_prev_; ++k) prev_kept_[k] = 0;
+  for (std::int32_t j = 0; j < u; ++j) {
+    const std::int32_t k = prev_index_[j];
+    if (k >= 0 && prev_pos_[k] >= 0) {
+      pos_[j] = prev_pos_[k];
+      prev_kept_[k] = 1;
+      is_new_[j] = 0;
+    } else {
+      pos_[j] = -1;
+      is_new_[j] = 1;
+    }
+  }
+  for (std::int32_t k = 0; k < num_prev_; ++k) {
+    if (prev_pos_[k] >= 0 && !prev_kept_[k]) free_pos_[num_free_++] = prev_pos_[k];
+  }
+  for (std::int32_t j = 0; j < u; ++j) {
+    if (is_new_[j]) pos_[j] = free_pos_[--num_free_];  // u <= M positions: never runs out
+  }
+  // S_ij = n_i^T C_ij n_j; the table keeps C_ab for table positions a <= b (packed).
+  const Compliance& C = *compliance_;
+  for (std::int32_t j = 0; j < u; ++j) {
+    for (std::int32_t i = 0; i <= j; ++i) {
+      const bool ij = pos_[i] <= pos_[j];
+      const std::int32_t a = ij ? i : j, b = ij ? j : i;  // pos_[a] <= pos_[b]
+      const std::int64_t pb = pos_[b];
+      double* blk = table_.data() + 9 * (pb * (pb + 1) / 2 + pos_[a]);
+      Eigen::Map<Eigen::Matrix3d> B(blk);
+      if (is_new_[i] || is_new_[j]) B = C.Block(slot_[a], slot_[b]);
+      const double v = n_[a].dot(B * n_[b]);
+      S_[static_cast<std::size_t>(j) * M + i] = v;
+      S_[static_cast<std::size_t>(i) * M + j] = v;
+    }
+  }
+}
+
+void ContactSolver::WarmStartActiveSet() noexcept {
+  // Nodes touched in the previous Solve() start as they ended there (the fingertips move little
+  // in one haptic step, so the held set is mostly right and one factorization usually settles
+  // it); new nodes start held. The LCP has a unique solution (S is positive definite), so the
+  // start changes only the work, not the answer.
+  for (std::int32_t j = 0; j < num_unique_; ++j) {
+    const std::int32_t k = prev_index_[j];
+    active_[j] = k >= 0 ? prev_active_[k] : 1;
+  }
+}
+
+void ContactSolver::RememberActiveSet() noexcept {
+  for (std::int32_t j = 0; j < num_unique_; ++j) {
+    prev_slot_[j] = slot_[j];
+    prev_active_[j] = active_[j];
+    prev_pos_[j] = table_valid_ ? pos_[j] : -1;
+  }
+  num_prev_ = num_unique_;
+}
+
+bool ContactSolver::SolveNormalPushOnly(StepStatus& status) noexcept {
+  const std::int32_t u = num_unique_;
+  const std::int32_t M = options_.max_contacts;
+  // S = N^T C_cc N (u x u): every contact holds only its normal, so the 3u x 3u problem is a
+  // u x u one (9x less to factor, 3x less per displacement check).
+  GatherNormalCompliance();
+  double d_scale = 0.0;
+  for (std::int32_t j = 0; j < u; ++j) {
+    dn_m_[j] = n_[j].dot(d_m_[j]);
+    d_scale = std::max(d_scale, d_m_[j].norm());
+  }
+  if (d_scale == 0.0) d_scale = 1.0;
+  WarmStartActiveSet();
+  // The same pivoting as the general path (block principal pivoting with Murty's rule as the
+  // fallback), on the normal forces lambda (f = lambda n: push is lambda < 0).
+  constexpr double kTol = 1e-9;
+  std::int32_t best_violations = u + 1;
+  int grace = 3;
+  while (true) {
+    std::int32_t r = 0;
+    for (std::int32_t j = 0; j < u; ++j) {
+      lambda_N_[j] = 0.0;
+      if (active_[j]) act_[r++] = j;
+    }
+    if (r > 0) {
+      for (std::int32_t b = 0; b < r; ++b) {
+        const double* Sb = S_.data() + static_cast<std::size_t>(act_[b]) * M;
+        double* Lb = L_.data() + static_cast<std::size_t>(b) * r;
+        for (std::int32_t a = b; a < r; ++a) Lb[a] = Sb[act_[a]];
+        Lb[b] += eps_m_per_N_;
+        rhs_[b] = dn_m_[act_[b]];
+      }
+      if (!detail::CholeskyCompact(L_.data(), r)) return false;
+      detail::CholeskyCompactSolve(L_.data(), r, rhs_.data());
+      for (std::int32_t b = 0; b < r; ++b) {
+        if (!std::isfinite(rhs_[b])) return false;
+        lambda_N_[act_[b]] = rhs_[b];
+      }
+    }
+    double f_scale = 0.0;
+    for (std::int32_t b = 0; b < r; ++b) f_scale = std::max(f_scale, std::abs(rhs_[b]));
+    if (f_scale == 0.0) f_scale = 1.0;
+    // A held node violates if it pulls; a released one if the surface would push into the tip.
+    std::int32_t violations = 0;
+    for (std::int32_t j = 0; j < u; ++j) {
+      bool v;
+      if (active_[j]) {
+        v = lambda_N_[j] / f_scale > kTol;
+      } else {
+        const double* Sj = S_.data() + static_cast<std::size_t>(j) * M;
+        double un = 0.0;
+        for (std::int32_t b = 0; b < r; ++b) un += Sj[act_[b]] * rhs_[b];
+        v = (un - dn_m_[j]) / d_scale > kTol;
+      }
+      violates_[j] = v ? 1 : 0;
+      violations += v ? 1 : 0;
+    }
+    if (violations == 0) break;
+    if (iterations_ >= options_.max_active_set_iterations) {
+      status = StepStatus::kNotConverged;
+      break;
+    }
+    ++iterations_;
+    bool block = false;
+    if (violations < best_violations) {
+      best_violations = violations;
+      grace = 3;
+      block = true;
+    } else if (grace > 0) {
+      --grace;
+      block = true;
+    }
+    for (std::int32_t j = 0; j < u; ++j) {
+      if (!violates_[j]) continue;
+      active_[j] = active_[j] ? 0 : 1;
+      if (!block) break;  // least index
+    }
+  }
+  for (std::int32_t j = 0; j < u; ++j) {
+    slipping_[j] = 0;  // frictionless from the start: held, not slipping
+    f_N_[j] = active_[j] ? Eigen::Vector3d(lambda_N_[j] * n_[j]) : Eigen::Vector3d::Zero();
+  }
+  return true;
 }
 
 bool ContactSolver::SolveActiveSet() noexcept {

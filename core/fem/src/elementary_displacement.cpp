@@ -5,51 +5,40 @@
 #include <Eigen/LU>
 
 #include "dense_small.hpp"
-#include "kernels.hpp"
-#include "merge_contacts.hpp"
-#include "handshare/fem/surface_field.hpp"
 #include "handshare/fem/error.hpp"
+#include "merge_contacts.hpp"
+#include "planar_columns.hpp"
 
 namespace handshare::fem {
-namespace {
-
-template <class S>
-void FillTd(const Compliance& C, const std::vector<double>& tf, std::vector<S>& td) {
-  const std::int32_t N = C.num_nodes();
-  td.resize(static_cast<std::size_t>(N) * N * 9);
-  for (std::int32_t k = 0; k < N; ++k) {
-    const Eigen::Map<const Eigen::Matrix3d> Ckk_inv(tf.data() + 9 * static_cast<std::size_t>(k));
-    S* col = td.data() + static_cast<std::size_t>(k) * N * 9;
-    for (std::int32_t n = 0; n < N; ++n) {
-      // T^d_nk = C_nk C_kk^-1 (paper eq. 6: displacement of n per unit displacement of k).
-      const Eigen::Matrix3d T = (n == k) ? Eigen::Matrix3d::Identity().eval()
-                                         : (C.Block(n, k) * Ckk_inv).eval();
-      Eigen::Map<Eigen::Matrix<S, 3, 3>>(col + 9 * static_cast<std::size_t>(n)) = T.cast<S>();
-    }
-  }
-}
-
-}  // namespace
-
 ElementaryDisplacementTensors ElementaryDisplacementTensors::FromCompliance(
     const Compliance& C, Precision precision) {
   ElementaryDisplacementTensors t;
   t.n_ = C.num_nodes();
   t.precision_ = precision;
+  detail::PlanarType type = detail::PlanarType::kFloat64;
+  switch (precision) {
+    case Precision::kFloat64: type = detail::PlanarType::kFloat64; break;
+    case Precision::kFloat32: type = detail::PlanarType::kFloat32; break;
+    case Precision::kFloat16: type = detail::PlanarType::kFloat16; break;
+    default: throw InputError("", 0, "precision", "must be float16, float32 or float64");
+  }
   t.tf_.resize(9 * static_cast<std::size_t>(t.n_));
   for (std::int32_t k = 0; k < t.n_; ++k) {
     // T^f_k = C_kk^-1: the force at k per unit elementary displacement of k (paper eq. 8).
-    Eigen::FullPivLU<Eigen::Matrix3d> lu(C.Block(k, k));
+    const Eigen::Matrix3d Ckk = C.Block(k, k);
+    Eigen::FullPivLU<Eigen::Matrix3d> lu(Ckk);
     if (!lu.isInvertible()) {
       throw FemError("elementary displacement: C_kk of slot " + std::to_string(k) + " is singular");
     }
     Eigen::Map<Eigen::Matrix3d>(t.tf_.data() + 9 * static_cast<std::size_t>(k)) = lu.inverse();
   }
-  if (precision == Precision::kFloat32) {
-    FillTd(C, t.tf_, t.td32_);
-  } else {
-    FillTd(C, t.tf_, t.td64_);
-  }
+  // T^d_nk = C_nk C_kk^-1 (paper eq. 6: displacement of n per unit displacement of k); T^d_kk = I.
+  auto td = std::make_shared<detail::PlanarColumns>();
+  td->Build(t.n_, t.n_, type, [&](std::int32_t n, std::int32_t k) -> Eigen::Matrix3d {
+    if (n == k) return Eigen::Matrix3d::Identity();
+    return C.Block(n, k) * Eigen::Map<const Eigen::Matrix3d>(t.tf_.data() + 9 * static_cast<std::size_t>(k));
+  });
+  t.td_ = std::move(td);
   t.slot_of_.resize(static_cast<std::size_t>(C.num_mesh_nodes()));
   t.fixed_flag_.resize(static_cast<std::size_t>(C.num_mesh_nodes()));
   for (std::int32_t v = 0; v < C.num_mesh_nodes(); ++v) {
@@ -60,11 +49,11 @@ ElementaryDisplacementTensors ElementaryDisplacementTensors::FromCompliance(
 }
 
 Eigen::Matrix3d ElementaryDisplacementTensors::Td(std::int32_t n, std::int32_t k) const noexcept {
-  const std::size_t off = (static_cast<std::size_t>(k) * n_ + n) * 9;
-  if (precision_ == Precision::kFloat32) {
-    return Eigen::Map<const Eigen::Matrix3f>(td32_.data() + off).cast<double>();
-  }
-  return Eigen::Map<const Eigen::Matrix3d>(td64_.data() + off);
+  return td_->Get(n, k);
+}
+
+std::size_t ElementaryDisplacementTensors::storage_bytes() const noexcept {
+  return (td_ ? td_->storage_bytes() : 0) + tf_.size() * sizeof(double);
 }
 
 Eigen::Matrix3d ElementaryDisplacementTensors::Tf(std::int32_t k) const noexcept {
@@ -89,11 +78,6 @@ ElementaryDisplacementSolver::ElementaryDisplacementSolver(
   A_.assign(9 * M * M, 0.0);
   rhs_.assign(3 * M, 0.0);
   piv_.assign(3 * M, 0);
-  cols32_.assign(M, nullptr);
-  cols64_.assign(M, nullptr);
-  if (t_->precision() == Precision::kFloat32 && CpuHasAvx512()) {
-    scratch_.assign(9 * static_cast<std::size_t>(t_->num_nodes()) + 32, 0.0f);
-  }
 }
 
 StepStatus ElementaryDisplacementSolver::Solve(std::span<const ContactInput> contacts) noexcept {
@@ -167,14 +151,9 @@ bool ElementaryDisplacementSolver::SurfaceDisplacements(
   const std::int32_t N = t_->num_nodes();
   if (u_m.size() != static_cast<std::size_t>(N)) return false;
   // u_n = sum_j T^d_{n k_j} e_j (eq. 7): T^d is stored by touched node, so each term streams.
-  if (t_->precision() == Precision::kFloat32) {
-    for (std::int32_t j = 0; j < num_unique_; ++j) cols32_[j] = t_->td_f32(slot_[j]);
-    detail::SumContiguousColumns(cols32_.data(), e_m_.data(), num_unique_, N, u_m.data(),
-                                 scratch_.empty() ? nullptr : detail::Align64(scratch_), !scratch_.empty());
-  } else {
-    for (std::int32_t j = 0; j < num_unique_; ++j) cols64_[j] = t_->td_f64(slot_[j]);
-    detail::SumContiguousColumns(cols64_.data(), e_m_.data(), num_unique_, N, u_m.data());
-  }
+  t_->td().SumColumns(std::span<const std::int32_t>(slot_.data(), static_cast<std::size_t>(num_unique_)),
+                      std::span<const Eigen::Vector3d>(e_m_.data(), static_cast<std::size_t>(num_unique_)),
+                      u_m.data(), detail::BestIsa());
   return true;
 }
 

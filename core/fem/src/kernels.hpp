@@ -38,6 +38,19 @@ void GatherBlocksT(const S* data, const std::int32_t* slots, std::int32_t u, dou
 
 inline void GatherBlocks(const Compliance& C, const std::int32_t* slots, std::int32_t u,
                          double* out, int ld) noexcept {
+  if (C.storage() == ComplianceStorage::kCompressed) {
+    // Block by block: dense for nodes of one cluster, U V^T rows for far pairs.
+    for (std::int32_t j = 0; j < u; ++j)
+      for (std::int32_t i = 0; i <= j; ++i) {
+        const Eigen::Matrix3d B = C.Block(slots[i], slots[j]);
+        for (int c = 0; c < 3; ++c)
+          for (int r = 0; r < 3; ++r) {
+            out[static_cast<std::ptrdiff_t>(3 * j + c) * ld + 3 * i + r] = B(r, c);
+            out[static_cast<std::ptrdiff_t>(3 * i + r) * ld + 3 * j + c] = B(r, c);
+          }
+      }
+    return;
+  }
   if (C.precision() == Precision::kFloat32) {
     GatherBlocksT(C.data_f32(), slots, u, out, ld);
   } else {
@@ -47,13 +60,5 @@ inline void GatherBlocks(const Compliance& C, const std::int32_t* slots, std::in
 
 // The first 64-byte aligned float of v (scratch vectors carry 16 floats of slack for it).
 float* Align64(std::vector<float>& v) noexcept;
-
-// out[n] = sum_j T_j[n] e_j, where cols[j] points at N contiguous column-major 3x3 blocks (the
-// paper's T^d columns). The float version uses AVX-512 when simd and scratch (9 N + 16 floats,
-// 64-byte aligned).
-void SumContiguousColumns(const float* const* cols, const Eigen::Vector3d* e, std::int32_t m,
-                          std::int32_t N, Eigen::Vector3d* out, float* scratch, bool simd) noexcept;
-void SumContiguousColumns(const double* const* cols, const Eigen::Vector3d* e, std::int32_t m,
-                          std::int32_t N, Eigen::Vector3d* out) noexcept;
 
 }  // namespace handshare::fem::detail

@@ -11,7 +11,9 @@
 #include <utility>
 
 #include "handshare/fem/error.hpp"
+#include "compressed_blocks.hpp"
 #include "kernels.hpp"
+#include "planar_columns.hpp"
 
 namespace handshare::fem {
 
@@ -49,22 +51,6 @@ void ApplyPackedGeneric(const S* data, std::int32_t N, std::span<const NodeLoad>
       o[1] += b[3] * f0 + b[4] * f1 + b[5] * f2;
       o[2] += b[6] * f0 + b[7] * f1 + b[8] * f2;
       b += 9 * static_cast<std::int64_t>(n + 1);
-    }
-  }
-}
-
-template <class S>
-void SumColumnsGeneric(const S* const* cols, const Eigen::Vector3d* e, std::int32_t m,
-                       std::int32_t N, Eigen::Vector3d* out) noexcept {
-  for (std::int32_t n = 0; n < N; ++n) out[n].setZero();
-  for (std::int32_t j = 0; j < m; ++j) {
-    const S* blk = cols[j];
-    const double e0 = e[j][0], e1 = e[j][1], e2 = e[j][2];
-    for (std::int32_t n = 0; n < N; ++n, blk += 9) {
-      double* o = out[n].data();
-      o[0] += blk[0] * e0 + blk[3] * e1 + blk[6] * e2;
-      o[1] += blk[1] * e0 + blk[4] * e1 + blk[7] * e2;
-      o[2] += blk[2] * e0 + blk[5] * e1 + blk[8] * e2;
     }
   }
 }
@@ -160,23 +146,6 @@ HS_AVX512 void ApplyPackedAvx512(const float* data, std::int32_t N, std::span<co
   }
 }
 
-HS_AVX512 void SumColumnsAvx512(const float* const* cols, const Eigen::Vector3d* e, std::int32_t m,
-                                std::int32_t N, Eigen::Vector3d* out, float* E) noexcept {
-  std::memset(E, 0, sizeof(float) * 9 * static_cast<std::size_t>(N));
-  for (std::int32_t j = 0; j < m; ++j) {
-    ExpandedFma(E, cols[j], 9ll * N, static_cast<float>(e[j][0]), static_cast<float>(e[j][1]),
-                static_cast<float>(e[j][2]));
-  }
-  const __mmask16 m9 = 0x1FF;
-  const __m512i sh3 = _mm512_setr_epi32(3, 4, 5, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0);
-  const __m512i sh6 = _mm512_setr_epi32(6, 7, 8, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0);
-  for (std::int32_t n = 0; n < N; ++n) {
-    const __m512 z = _mm512_maskz_loadu_ps(m9, E + 9 * static_cast<std::size_t>(n));
-    const __m512 s = _mm512_add_ps(z, _mm512_add_ps(_mm512_permutexvar_ps(sh3, z), _mm512_permutexvar_ps(sh6, z)));
-    _mm256_mask_storeu_pd(out[n].data(), 0x7, _mm256_cvtps_pd(_mm512_castps512_ps128(s)));
-  }
-}
-
 #pragma GCC diagnostic pop
 
 }  // namespace
@@ -188,34 +157,60 @@ float* Align64(std::vector<float>& v) noexcept {
   return reinterpret_cast<float*>((p + 63) & ~static_cast<std::uintptr_t>(63));
 }
 
-void SumContiguousColumns(const float* const* cols, const Eigen::Vector3d* e, std::int32_t m,
-                          std::int32_t N, Eigen::Vector3d* out, float* scratch, bool simd) noexcept {
-  if (simd && scratch != nullptr) {
-    SumColumnsAvx512(cols, e, m, N, out, scratch);
-  } else {
-    SumColumnsGeneric(cols, e, m, N, out);
-  }
-}
-
-void SumContiguousColumns(const double* const* cols, const Eigen::Vector3d* e, std::int32_t m,
-                          std::int32_t N, Eigen::Vector3d* out) noexcept {
-  SumColumnsGeneric(cols, e, m, N, out);
-}
-
 }  // namespace detail
 
 SurfaceField::SurfaceField(std::shared_ptr<const Compliance> compliance, bool allow_simd)
-    : compliance_(std::move(compliance)) {
+    : SurfaceField(std::move(compliance), SurfaceFieldOptions{.allow_simd = allow_simd}) {}
+
+SurfaceField::SurfaceField(std::shared_ptr<const Compliance> compliance, const SurfaceFieldOptions& options)
+    : compliance_(std::move(compliance)), options_(options) {
   if (!compliance_) throw InputError("", 0, "compliance", "null");
-  simd_ = allow_simd && compliance_->precision() == Precision::kFloat32 && CpuHasAvx512();
-  if (simd_) expanded_.assign(9 * static_cast<std::size_t>(compliance_->num_nodes()) + 32, 0.0f);
+  const Compliance& C = *compliance_;
+  const detail::Isa best = options.allow_simd ? detail::BestIsa() : detail::Isa::kPortable;
+  if (options.layout == SurfaceFieldLayout::kColumns) {
+    detail::PlanarType type = detail::PlanarType::kFloat32;
+    switch (options.precision) {
+      case Precision::kFloat64: type = detail::PlanarType::kFloat64; break;
+      case Precision::kFloat32: type = detail::PlanarType::kFloat32; break;
+      case Precision::kFloat16: type = detail::PlanarType::kFloat16; break;
+      default: throw InputError("", 0, "precision", "must be float16, float32 or float64");
+    }
+    columns_ = std::make_unique<detail::PlanarColumns>();
+    columns_->Build(C.num_nodes(), C.num_nodes(), type,
+                    [&](std::int32_t n, std::int32_t k) { return C.Block(n, k); });
+    isa_ = static_cast<std::uint8_t>(type == detail::PlanarType::kFloat64 ? detail::Isa::kPortable : best);
+  } else if (C.storage() == ComplianceStorage::kCompressed) {
+    isa_ = static_cast<std::uint8_t>(best);
+    expanded_.assign(C.compressed()->scratch_floats(), 0.0f);
+  } else {
+    // Packed: the AVX-512 kernel for float32, else portable.
+    const bool simd = best == detail::Isa::kAvx512 && C.precision() == Precision::kFloat32;
+    isa_ = static_cast<std::uint8_t>(simd ? detail::Isa::kAvx512 : detail::Isa::kPortable);
+    if (simd) expanded_.assign(9 * static_cast<std::size_t>(C.num_nodes()) + 32, 0.0f);
+  }
+  simd_ = static_cast<detail::Isa>(isa_) != detail::Isa::kPortable;
+}
+
+SurfaceField::~SurfaceField() = default;
+SurfaceField::SurfaceField(SurfaceField&&) noexcept = default;
+SurfaceField& SurfaceField::operator=(SurfaceField&&) noexcept = default;
+
+const char* SurfaceField::kernel_name() const noexcept { return detail::IsaName(static_cast<detail::Isa>(isa_)); }
+
+std::size_t SurfaceField::storage_bytes() const noexcept {
+  return expanded_.size() * sizeof(float) + (columns_ ? columns_->storage_bytes() : 0);
 }
 
 bool SurfaceField::Evaluate(std::span<const NodeLoad> loads, std::span<Eigen::Vector3d> u_m) noexcept {
   const Compliance& C = *compliance_;
   const std::int32_t N = C.num_nodes();
   if (u_m.size() != static_cast<std::size_t>(N)) return false;
-  if (simd_) {
+  const auto isa = static_cast<detail::Isa>(isa_);
+  if (columns_) {
+    columns_->SumColumns(loads, u_m.data(), isa);
+  } else if (C.storage() == ComplianceStorage::kCompressed) {
+    C.compressed()->Apply(loads, u_m.data(), detail::Align64(expanded_), isa);
+  } else if (simd_) {
     ApplyPackedAvx512(C.data_f32(), N, loads, u_m.data(), detail::Align64(expanded_));
   } else if (C.precision() == Precision::kFloat32) {
     ApplyPackedGeneric(C.data_f32(), N, loads, u_m.data());

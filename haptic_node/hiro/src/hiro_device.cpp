@@ -25,7 +25,7 @@ Eigen::Vector3d ClampNorm(const Eigen::Vector3d& v, double limit) noexcept {
 }  // namespace
 
 HiroDevice::HiroDevice(const HiroModel& model, std::unique_ptr<HiroHardware> hardware, HiroControlGains gains)
-    : model_(model), hardware_(std::move(hardware)), gains_(gains) {
+    : model_(model), hardware_(std::move(hardware)), gains_(gains), follower_(model_) {
   if (!hardware_) throw ConfigError("HiroDevice: no hardware");
   for (auto& i : force_integral_) i.setZero();
   for (auto& t : tau_gravity_finger_) t.setZero();
@@ -116,6 +116,7 @@ void HiroDevice::Command(const std::array<Eigen::Vector3d, haptic::kFingers>& f_
       for (int j = 0; j < kFingerJoints; ++j) tau_hand[3 * f + j] = tau_gravity_finger_[f][j];
     }
     for (int j = 0; j < kArmJoints; ++j) tau_arm[j] = tau_gravity_arm_[j];
+    follower_.Reset();  // on recovery the arm's reference starts again where the arm is
     hardware_->WriteMotorTorques(tau_arm, tau_hand);
     return;
   }
@@ -124,7 +125,7 @@ void HiroDevice::Command(const std::array<Eigen::Vector3d, haptic::kFingers>& f_
 
   // Fingers: PI force control on the sensors, J^T to joints, gravity and limits first.
   ArmVector tau_reaction = ArmVector::Zero();
-  Eigen::Vector3d offset_W = Eigen::Vector3d::Zero();
+  std::array<Eigen::Vector3d, kFingerCount> p_HE, f_error_W;
   for (int f = 0; f < kFingerCount; ++f) {
     const FingerSpec& spec = model_.finger[f];
     HiroFingerStatus& st = status_[f];
@@ -150,28 +151,15 @@ void HiroDevice::Command(const std::array<Eigen::Vector3d, haptic::kFingers>& f_
     // The arm carries the reaction of the commanded force at this fingertip.
     const Eigen::Vector3d p_BE = arm_.X_BH * fingers_[f].p_HE;
     tau_reaction.noalias() += ArmPointJacobianAt(arm_, p_BE).transpose() * f_cmd;
-    // How far this fingertip is from where the optimum pose would put it.
-    const Eigen::Vector3d p_HE_opt = FingerFk(spec, spec.q_optimum_rad).p_HE;
-    offset_W += R_BH * (fingers_[f].p_HE - p_HE_opt) / kFingerCount;
+    p_HE[f] = fingers_[f].p_HE;
+    f_error_W[f] = -e;
   }
 
-  // Arm: a spring-damper on the hand base towards the pose that puts the fingers back at
-  // their optimum (the mean fingertip offset), hand kept level.
-  const ArmJacobian J_H = ArmHandJacobian(arm_);
-  const Eigen::Matrix<double, 6, 1> twist = J_H * qd_arm_;
-  const Eigen::Vector3d f_hand = ClampNorm(
-      gains_.hand_stiffness_N_per_m * offset_W - gains_.hand_damping_N_s_per_m * twist.tail<3>(),
-      model_.arm.max_hand_force_N);
-  // Rotation that takes the hand back to level, as a rotation vector in W (= B axes).
-  const Eigen::AngleAxisd err(Eigen::Matrix3d(R_BH.transpose()));
-  const Eigen::Vector3d m_hand = ClampNorm(
-      gains_.hand_rot_stiffness_N_m_per_rad * (err.angle() * err.axis()) -
-          gains_.hand_rot_damping_N_m_s_per_rad * twist.head<3>(),
-      model_.arm.max_hand_moment_N_m);
-  Eigen::Matrix<double, 6, 1> wrench;
-  wrench << m_hand, f_hand;
-  const ArmVector tau_task = J_H.transpose() * wrench + tau_reaction;
-  ArmVector tau_fixed = tau_gravity_arm_ - gains_.arm_damping_N_m_s_per_rad * qd_arm_;
+  // Arm: the servo that carries the hand to where every finger is near its optimum pose
+  // (hiro_follow.hpp), plus the reaction of the fingertip forces; gravity and limits first.
+  const ArmVector& tau_servo = follower_.Step(q_arm_, qd_arm_, arm_, p_HE, f_error_W, dt_s_, gains_.arm_following);
+  const ArmVector tau_task = tau_servo + tau_reaction;
+  ArmVector tau_fixed = tau_gravity_arm_;
   ArmVector tau_max;
   for (int j = 0; j < kArmJoints; ++j) {
     tau_fixed[j] += LimitTorque(model_.arm.joint[j], q_arm_[j], g, gains_.limit_stiffness_arm_N_m_per_rad);

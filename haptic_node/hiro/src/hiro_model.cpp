@@ -124,6 +124,8 @@ HiroModel HiroModel::Parse(const std::string& json_text, const std::string& orig
   a.wrist_to_hand_m = r.Number("/assumed/arm/wrist_to_hand_m", 0.0, 1.0);
   a.max_hand_force_N = r.Number("/sourced/arm/max_hand_force_N", 0.1, 1000.0);
   a.max_hand_moment_N_m = r.Number("/sourced/arm/max_hand_moment_N_m", 0.01, 100.0);
+  a.max_hand_speed_m_per_s = r.Number("/sourced/arm/max_hand_speed_m_per_s", 0.001, 10.0);
+  a.max_hand_rate_rad_per_s = r.Number("/sourced/arm/max_hand_rate_rad_per_s", 0.001, 100.0);
   if (r.Size("/sourced/arm/joint_range_deg") != kArmJoints) {
     r.Fail("/sourced/arm/joint_range_deg", "expected 6 ranges");
   }
@@ -195,6 +197,32 @@ HiroModel HiroModel::Parse(const std::string& json_text, const std::string& orig
       }
     }
     fs.q_optimum_rad = q_opt;
+  }
+
+  // Arm following (assumed).
+  ArmFollowSpec& fo = m.follow;
+  const std::string af = "/assumed/arm_following/";
+  double weight_sum = 0.0;
+  for (int f = 0; f < kFingerCount; ++f) {
+    fo.finger_weight[f] = r.Number(af + "finger_weight/" + std::to_string(f), 0.0, 100.0);
+    weight_sum += fo.finger_weight[f];
+  }
+  if (!(weight_sum > 0.0)) r.Fail(af + "finger_weight", "at least one weight must be positive");
+  fo.user_finger_stiffness_N_per_m = r.Number(af + "user_finger_stiffness_N_per_m", 1.0, 1e6);
+  fo.max_user_offset_m = r.Number(af + "max_user_offset_m", 0.0, 0.2);
+  fo.rate_per_s = r.Number(af + "rate_per_s", 0.01, 100.0);
+  fo.max_accel_m_per_s2 = r.Number(af + "max_accel_m_per_s2", 0.01, 100.0);
+  fo.max_angular_accel_rad_per_s2 = r.Number(af + "max_angular_accel_rad_per_s2", 0.01, 1000.0);
+  fo.dls_damping_m = r.Number(af + "dls_damping_m", 0.0, 1.0);
+  fo.dls_length_m = r.Number(af + "dls_length_m", 0.001, 10.0);
+  fo.limit_margin_rad = r.Number(af + "limit_margin_deg", 0.0, 45.0) * kDeg;
+  fo.limit_rate_per_s = r.Number(af + "limit_rate_per_s", 0.1, 0.5 * m.control_rate_Hz);
+  fo.servo_bandwidth_Hz = r.Number(af + "servo_bandwidth_Hz", 0.1, 0.1 * m.control_rate_Hz);
+  fo.servo_damping_ratio = r.Number(af + "servo_damping_ratio", 0.1, 10.0);
+  for (int i = 0; i < kArmJoints; ++i) {
+    if (a.joint[i].max_rad - a.joint[i].min_rad <= 2.0 * fo.limit_margin_rad) {
+      r.Fail(af + "limit_margin_deg", "leaves no room in /sourced/arm/joint_range_deg/" + std::to_string(i));
+    }
   }
   return m;
 }

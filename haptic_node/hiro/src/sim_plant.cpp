@@ -60,6 +60,11 @@ SimulatedHiro::SimulatedHiro(const HiroModel& model, HiroSimOptions options)
         u.coupling_stiffness_N_per_m > 0.0 && u.coupling_damping_N_s_per_m >= 0.0)) {
     throw ConfigError("HiroSimOptions.user: mass must be > 0, stiffnesses and dampings >= 0");
   }
+  const UserHandTurn& turn = options_.turn;
+  if (!(std::isfinite(turn.t0_s) && std::isfinite(turn.duration_s) && turn.duration_s >= 0.0 &&
+        std::isfinite(turn.angle_rad) && turn.axis_W.allFinite() && turn.axis_W.norm() > 1e-9)) {
+    throw ConfigError("HiroSimOptions.turn: times and angle must be finite, duration >= 0, axis not zero");
+  }
   h_s_ = options_.period_s / options_.substeps;
 
   // Device at home, fingers at their optimum pose, base at the origin: where are the tips?
@@ -82,9 +87,7 @@ SimulatedHiro::SimulatedHiro(const HiroModel& model, HiroSimOptions options)
     }
     script_ = haptic::HandScript::Default(options_.p_WB + mean_dev - mean_open);
   }
-  std::array<Eigen::Vector3d, kFingerCount> p_WU0;
-  const auto tips = haptic::SimFingertips(script_.PoseAt(0.0));
-  for (int f = 0; f < kFingerCount; ++f) p_WU0[f] = tips[f] + options_.p_offset_W;
+  const std::array<Eigen::Vector3d, kFingerCount> p_WU0 = UserTargets(0.0);
   p_WB_ = options_.p_WB;
   if (options_.place_base_at_script_start) {
     p_WB_.setZero();
@@ -110,6 +113,24 @@ double SimulatedHiro::ScriptTime(double t_s) const noexcept {
   return options_.loop_script && d > 0.0 ? std::fmod(t_s, d) : t_s;
 }
 
+std::array<Eigen::Vector3d, kFingerCount> SimulatedHiro::UserTargets(double t_s) const noexcept {
+  const auto tips = haptic::SimFingertips(script_.PoseAt(ScriptTime(t_s)));
+  std::array<Eigen::Vector3d, kFingerCount> out;
+  // Minimum-jerk fraction of the turn done by t_s: 10 s^3 - 15 s^4 + 6 s^5.
+  const UserHandTurn& turn = options_.turn;
+  double s = t_s >= turn.t0_s + turn.duration_s ? 1.0 : 0.0;
+  if (turn.duration_s > 0.0 && t_s > turn.t0_s && t_s < turn.t0_s + turn.duration_s) {
+    const double u = (t_s - turn.t0_s) / turn.duration_s;
+    s = u * u * u * (10.0 - 15.0 * u + 6.0 * u * u);
+  }
+  const Eigen::Matrix3d R =
+      Eigen::AngleAxisd(s * turn.angle_rad, turn.axis_W.normalized()).toRotationMatrix();
+  Eigen::Vector3d c = Eigen::Vector3d::Zero();
+  for (const auto& p : tips) c += p / kFingerCount;
+  for (int f = 0; f < kFingerCount; ++f) out[f] = c + R * (tips[f] - c) + options_.p_offset_W;
+  return out;
+}
+
 void SimulatedHiro::RefreshKinematics() noexcept {
   const ArmKinematics arm = ArmFk(model_.arm, q_arm_);
   std::array<FingerKinematics, kFingerCount> fingers;
@@ -131,7 +152,7 @@ void SimulatedHiro::RefreshKinematics() noexcept {
 
 void SimulatedHiro::Substep(double h) noexcept {
   const UserFingerParams& u = options_.user;
-  const auto tips = haptic::SimFingertips(script_.PoseAt(ScriptTime(t_s_ + h)));
+  const auto targets = UserTargets(t_s_ + h);
   ArmVector tau_ext_arm = ArmVector::Zero();
   const ArmVector dq_arm = q_arm_ - q_arm0_;
   for (int f = 0; f < kFingerCount; ++f) {
@@ -150,7 +171,7 @@ void SimulatedHiro::Substep(double h) noexcept {
                                             tau_gravity_finger_[f][j] + tau_ext[j], h, q_finger_[f][j], qd_finger_[f][j]);
     }
     // The user's fingertip: pulled to the script by the hand, pushed by the device.
-    const Eigen::Vector3d target = tips[f] + options_.p_offset_W;
+    const Eigen::Vector3d& target = targets[f];
     const Eigen::Vector3d v_target = (target - p_target_prev_[f]) / h;
     p_target_prev_[f] = target;
     const Eigen::Vector3d a_U = (u.stiffness_N_per_m * (target - p_WU_[f]) +

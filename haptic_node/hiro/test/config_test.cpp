@@ -87,6 +87,10 @@ TEST(HiroConfig, ErrorsNameFileAndField) {
       {"/assumed/arm/joint_axis_B/3", nlohmann::json::array({0, 0.5, 0}), "unit vector"},
       {"/assumed/arm/home_deg/2", 80, "outside the joint range"},
       {"/assumed/hand/palm_mass_kg", 0.5, "must add up"},
+      {"/assumed/arm_following/rate_per_s", nullptr, "missing"},
+      {"/assumed/arm_following/finger_weight", nlohmann::json::array({0, 0, 0, 0, 0}), "at least one weight"},
+      {"/sourced/arm/joint_range_deg/3", nlohmann::json::array({16, 24}), "leaves no room"},
+      {"/sourced/arm/max_hand_speed_m_per_s", 0.0, "outside"},
       {"/format", "something-else", "handshare-hiro-v1"},
   };
   for (const Case& c : cases) {

@@ -9,6 +9,7 @@
 #include <cstdint>
 #include <filesystem>
 #include <functional>
+#include <memory>
 #include <span>
 #include <string>
 #include <vector>
@@ -20,8 +21,10 @@
 
 namespace handshare::fem {
 
-/// Storage precision of the compliance blocks (the value is the scalar size in bytes).
-enum class Precision : std::uint32_t { kFloat32 = 4, kFloat64 = 8 };
+/// Storage precision (the value is the scalar size in bytes). kFloat16 (IEEE half, with a float
+/// scale per 16-node chunk) only for the surface-field tables (SurfaceField kColumns, T^d), never
+/// for the compliance itself.
+enum class Precision : std::uint32_t { kFloat16 = 2, kFloat32 = 4, kFloat64 = 8 };
 
 /// How the blocks are computed (same numbers to round-off, different cost).
 enum class PrecomputeMethod : std::uint32_t {
@@ -59,6 +62,36 @@ struct PrecomputeStats {
   double assemble_s = 0, analyze_s = 0, factor_s = 0, solve_s = 0, total_s = 0;
 };
 
+/// How the blocks are stored.
+enum class ComplianceStorage : std::uint32_t {
+  /// Every block C_nk, n <= k, packed by columns (exact to the storage precision).
+  kPacked,
+  /// Block low-rank (see Compliance::Compressed): spatial clusters of nodes, tiles of cluster
+  /// pairs; diagonal tiles dense, off-diagonal tiles U V^T within a relative tolerance where that
+  /// is smaller, else dense. float32.
+  kCompressed,
+};
+
+/// Options of Compliance::Compressed.
+struct CompressionOptions {
+  /// Each off-diagonal tile A is replaced by U V^T only if ||A - U V^T||_F <= tolerance ||A||_F
+  /// (checked on the explicit residual), so ||C - C~||_F <= tolerance ||C||_F overall.
+  double tolerance = 1e-4;
+  /// Most nodes per cluster (k-d tree leaf): tiles are up to 3 leaf_nodes square.
+  int leaf_nodes = 32;
+};
+
+/// What a compression produced.
+struct CompressionStats {
+  std::int64_t tiles = 0, low_rank_tiles = 0;
+  double mean_rank = 0;  ///< over the low-rank tiles
+  double seconds = 0;
+};
+
+namespace detail {
+class CompressedBlocks;
+}  // namespace detail
+
 /// Progress callback: (compliance nodes done, total). Called from the precomputing thread.
 using ProgressFn = std::function<void(std::int64_t done, std::int64_t total)>;
 
@@ -82,7 +115,7 @@ class Compliance {
                                  const ComplianceOptions& options);
 
   /// Writes the cache file (header, node lists, blocks; checksums), atomically (temp + rename).
-  /// @throws CacheError if it cannot be written.
+  /// @throws CacheError if it cannot be written or the compliance is compressed.
   void Save(const std::filesystem::path& file) const;
   /// Reads and verifies a cache file.
   /// @param expected_hash  InputHash of the current mesh and material; 0 skips that check.
@@ -102,7 +135,23 @@ class Compliance {
 
   /// A copy stored in another precision (e.g. a float64 cache used as float32). The input hash
   /// is recomputed from the stored one, so caches of both precisions can live side by side.
+  /// @throws InputError for a compressed compliance or kFloat16.
   Compliance ConvertedTo(Precision precision) const;
+
+  /// A compressed copy (storage kCompressed, float32), built offline from this packed one:
+  /// memory O(N^2 r / leaf) instead of 9 N^2 / 2 scalars. Diagonal tiles (every node with its
+  /// cluster, so C_kk and the coupling of nearby touched nodes) stay dense and exact to float32;
+  /// far couplings carry at most the tolerance. Everything real-time (ContactSolver,
+  /// SurfaceField, Block) works on it unchanged. Not saved by Save() (rebuilt from the cache).
+  /// @param mesh  the mesh it was computed for (node positions for the clustering).
+  /// @throws InputError for bad options, another mesh, or an already compressed compliance.
+  Compliance Compressed(const TetMesh& mesh, const CompressionOptions& options = {},
+                        CompressionStats* stats = nullptr) const;
+  ComplianceStorage storage() const noexcept {
+    return compressed_ ? ComplianceStorage::kCompressed : ComplianceStorage::kPacked;
+  }
+  /// The compressed blocks (internal), or nullptr when packed.
+  const detail::CompressedBlocks* compressed() const noexcept { return compressed_.get(); }
 
   // ---- Accessors (real-time safe) ----
 
@@ -134,13 +183,12 @@ class Compliance {
   static std::int64_t PackedIndex(std::int32_t n, std::int32_t k) noexcept {
     return static_cast<std::int64_t>(k) * (k + 1) / 2 + n;
   }
-  /// Raw packed storage (valid for the matching precision, else nullptr).
+  /// Raw packed storage (valid for the matching precision and kPacked, else nullptr).
   const float* data_f32() const noexcept { return f32_.empty() ? nullptr : f32_.data(); }
   const double* data_f64() const noexcept { return f64_.empty() ? nullptr : f64_.data(); }
-  /// Bytes of block storage: 9 N (N + 1) / 2 scalars.
-  std::size_t storage_bytes() const noexcept {
-    return f32_.size() * sizeof(float) + f64_.size() * sizeof(double);
-  }
+  /// Bytes of block storage: 9 N (N + 1) / 2 scalars when packed; tiles, factors and the
+  /// cluster tables when compressed.
+  std::size_t storage_bytes() const noexcept;
 
  private:
   void BuildLookup(std::int32_t num_mesh_nodes);
@@ -154,6 +202,7 @@ class Compliance {
   std::vector<std::uint8_t> fixed_flag_;
   std::vector<float> f32_;
   std::vector<double> f64_;
+  std::shared_ptr<const detail::CompressedBlocks> compressed_;
 };
 
 /// Resolves ComplianceOptions::nodes (empty -> free surface nodes) and checks them.

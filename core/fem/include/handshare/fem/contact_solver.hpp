@@ -131,6 +131,13 @@ class ContactSolver {
  private:
   bool SolveActiveSet() noexcept;
   void ComputeContactDisplacements() noexcept;
+  // Push-only with every contact frictionless: the scalar problem on S = N^T C_cc N, warm
+  // started from the previous Solve()'s active set. Returns false on a numerical failure.
+  bool SolveNormalPushOnly(StepStatus& status) noexcept;
+  void WarmStartActiveSet() noexcept;
+  // Fills S_ for slot_[0..num_unique_), reading only blocks the table lacks.
+  void GatherNormalCompliance() noexcept;
+  void RememberActiveSet() noexcept;
   void ZeroOutputs() noexcept;
 
   std::shared_ptr<const Compliance> compliance_;
@@ -162,6 +169,29 @@ class ContactSolver {
   std::vector<std::int32_t> row_of_;
   std::vector<NodeLoad> loads_;
   std::int32_t num_loads_ = 0;
+  // Scalar (frictionless) path: S (M x M, ld M), its factor on the active rows (compact, ld r),
+  // normal forces lambda (f = lambda n), normal gaps, active indices.
+  std::vector<double> S_;
+  std::vector<double> L_;
+  std::vector<double> lambda_N_;
+  std::vector<double> dn_m_;
+  std::vector<std::int32_t> act_;
+  std::vector<std::uint8_t> violates_;
+  // The previous Solve()'s distinct nodes and which were held (warm start).
+  std::vector<std::int32_t> prev_slot_;
+  std::vector<std::uint8_t> prev_active_;
+  std::vector<std::int32_t> prev_index_;  // per distinct node: its index in the previous Solve()
+  // Block table of the scalar path: C_ab of table positions a <= b (packed, 3x3 column-major
+  // each); the position of each distinct node, of the previous Solve()'s nodes, free positions.
+  std::vector<double> table_;
+  std::vector<std::int32_t> pos_;
+  std::vector<std::uint8_t> is_new_;
+  std::vector<std::int32_t> prev_pos_;
+  std::vector<std::uint8_t> prev_kept_;
+  std::vector<std::int32_t> free_pos_;
+  std::int32_t num_free_ = 0;
+  bool table_valid_ = false;
+  std::int32_t num_prev_ = 0;
   mutable SurfaceField field_;
 };
 

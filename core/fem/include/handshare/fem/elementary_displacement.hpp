@@ -8,7 +8,12 @@
 /// For touched nodes k_1..k_m with imposed d*: solve A e = d*, A_ij = T^d_{k_i k_j}
 /// (the "corrected displacements" e = d~ of eq. 7), then u_n = sum_j T^d_{n k_j} e_j (eq. 7)
 /// and f_j = T^f_{k_j} e_j (eq. 8). Same numbers as ContactSolver (A = C_cc D^-1, D = diag C_kk).
-/// T^d is not symmetric, so it is stored in full (9 N^2 scalars), twice the compliance.
+/// T^d is not symmetric, so it is stored in full (9 N^2 scalars), twice the compliance, by
+/// touched node k in a planar layout (16 nodes' entry (r, c) side by side) so that the surface
+/// sum is vertical SIMD over contiguous memory; float64, float32 or float16 (one scale per 16
+/// nodes of a column: entries within ~5e-4 of the chunk's largest; the forces then carry that
+/// error too, since A_ij is read from T^d. For exact forces with a float16 surface field use
+/// ContactSolver + SurfaceField with SurfaceFieldLayout::kColumns instead).
 
 #include <cstdint>
 #include <memory>
@@ -22,11 +27,16 @@
 
 namespace handshare::fem {
 
+namespace detail {
+class PlanarColumns;
+}  // namespace detail
+
 /// The T^d and T^f tensors of all compliance nodes. Built offline from a Compliance.
 class ElementaryDisplacementTensors {
  public:
   /// Builds T^d (N x N blocks, stored by touched node k: contiguous over n) and T^f.
-  /// @throws FemError if a diagonal block C_kk is not invertible.
+  /// precision: kFloat64, kFloat32 or kFloat16 of T^d (T^f is kept in float64).
+  /// @throws FemError if a diagonal block C_kk is not invertible; InputError for a bad precision.
   static ElementaryDisplacementTensors FromCompliance(const Compliance& compliance,
                                                       Precision precision);
 
@@ -36,17 +46,10 @@ class ElementaryDisplacementTensors {
   Eigen::Matrix3d Td(std::int32_t n, std::int32_t k) const noexcept;
   /// T^f_k (slot).
   Eigen::Matrix3d Tf(std::int32_t k) const noexcept;
-  std::size_t storage_bytes() const noexcept {
-    return td32_.size() * sizeof(float) + td64_.size() * sizeof(double) +
-           tf_.size() * sizeof(double);
-  }
-  /// Raw T^d column of touched node k: N blocks of 9 scalars (column-major), or nullptr.
-  const float* td_f32(std::int32_t k) const noexcept {
-    return td32_.empty() ? nullptr : td32_.data() + static_cast<std::size_t>(k) * n_ * 9;
-  }
-  const double* td_f64(std::int32_t k) const noexcept {
-    return td64_.empty() ? nullptr : td64_.data() + static_cast<std::size_t>(k) * n_ * 9;
-  }
+  /// Bytes of T^d (planar, padded to 16 nodes per column) plus T^f.
+  std::size_t storage_bytes() const noexcept;
+  /// The planar T^d columns (internal layout, used by the solver's kernels).
+  const detail::PlanarColumns& td() const noexcept { return *td_; }
 
   /// Slot bookkeeping copied from the compliance.
   std::int32_t SlotOf(std::int32_t mesh_node) const noexcept {
@@ -62,8 +65,7 @@ class ElementaryDisplacementTensors {
  private:
   std::int32_t n_ = 0;
   Precision precision_ = Precision::kFloat64;
-  std::vector<float> td32_;
-  std::vector<double> td64_;
+  std::shared_ptr<const detail::PlanarColumns> td_;
   std::vector<double> tf_;
   std::vector<std::int32_t> slot_of_;
   std::vector<std::uint8_t> fixed_flag_;
@@ -104,9 +106,6 @@ class ElementaryDisplacementSolver {
   std::vector<double> A_;
   std::vector<double> rhs_;
   std::vector<std::int32_t> piv_;
-  mutable std::vector<float> scratch_;  // expanded partial products (float32 SIMD path)
-  mutable std::vector<const float*> cols32_;
-  mutable std::vector<const double*> cols64_;
 };
 
 }  // namespace handshare::fem

@@ -5,10 +5,11 @@
 ///   fingers  tau_f = J_f^T f_ctl + g_f(q) - D_f qd + limit springs,
 ///            f_ctl = f_cmd + Kp (f_cmd - f_meas) + Ki integral(f_cmd - f_meas)   (PI on the
 ///            force sensors, anti-windup clamp);
-///   arm      tau_a = J_H^T [m; f] + sum_i J_Ei^T f_cmd_i + g_a(q) - D_a qd + limit springs,
-///            [m; f] a Cartesian spring-damper that moves the hand base so each finger drifts
-///            back to its optimum pose opposite the user's fingertip (mean fingertip offset
-///            from the optimum-pose fingertips), and keeps the hand level;
+///   arm      tau_a = Kp (q_ref - q) + Kd (qd_ref - qd) + sum_i J_Ei^T f_cmd_i + g_a(q)
+///            + limit springs: a joint servo on a reference that moves the hand base towards
+///            the least-squares rigid fit of the fingers' optimum-pose fingertips to the
+///            current fingertips (position and orientation; ArmFollower, hiro_follow.hpp),
+///            plus the reaction of every commanded fingertip force;
 ///   both     saturated at the joint torque limits, the force part scaled down as a whole so
 ///            its direction is kept (gravity and limit terms first).
 /// Read() and Command() are noexcept and allocation-free.
@@ -16,6 +17,7 @@
 #include <memory>
 
 #include "handshare/haptic/device.hpp"
+#include "handshare/hiro/hiro_follow.hpp"
 #include "handshare/hiro/hiro_hardware.hpp"
 #include "handshare/hiro/hiro_model.hpp"
 
@@ -28,11 +30,8 @@ struct HiroControlGains {
   double force_ki_per_s = 5.0;              // integral gain [1/s]
   double force_integral_limit_N_s = 0.05;   // anti-windup bound on the integral term
   double finger_damping_N_m_s_per_rad = 0.02;
-  double hand_stiffness_N_per_m = 1000.0;   // hand base towards the fingers' optimum
-  double hand_damping_N_s_per_m = 40.0;
-  double hand_rot_stiffness_N_m_per_rad = 20.0;
-  double hand_rot_damping_N_m_s_per_rad = 2.0;
-  double arm_damping_N_m_s_per_rad = 0.5;
+  /// Arm follows the user's hand (ArmFollower); false: the arm holds where it started.
+  bool arm_following = true;
   double limit_margin_rad = 0.05;           // soft joint-limit spring starts this far inside
   double limit_stiffness_finger_N_m_per_rad = 2.0;
   double limit_stiffness_arm_N_m_per_rad = 200.0;
@@ -66,6 +65,8 @@ class HiroDevice final : public haptic::Device {
   HiroHardware& hardware() noexcept { return *hardware_; }
   const std::array<HiroFingerStatus, kFingerCount>& finger_status() const noexcept { return status_; }
   const ArmVector& tau_arm_N_m() const noexcept { return tau_arm_; }
+  /// The arm-following controller (its last target, error and reference).
+  const ArmFollower& follower() const noexcept { return follower_; }
   const Eigen::Vector3d& p_WB() const noexcept { return p_WB_; }
   void set_p_WB(const Eigen::Vector3d& p_WB) noexcept { p_WB_ = p_WB; }
 
@@ -89,6 +90,7 @@ class HiroDevice final : public haptic::Device {
   std::array<SensorWrench, kFingerCount> wrench_{};
 
   // Controller state.
+  ArmFollower follower_;
   std::array<Eigen::Vector3d, kFingerCount> force_integral_{};
   ArmVector tau_arm_ = ArmVector::Zero(), tau_gravity_arm_ = ArmVector::Zero();
   std::array<FingerVector, kFingerCount> tau_gravity_finger_{};

@@ -52,6 +52,17 @@ struct UserFingerParams {
   double coupling_damping_N_s_per_m = 2.0;
 };
 
+/// A turn of the user's whole hand on top of the script (scripts move the hand without
+/// turning it): the scripted fingertips turn by angle_rad about axis_W through their centroid,
+/// on a minimum-jerk profile (Flash and Hogan 1985) over [t0_s, t0_s + duration_s], and stay
+/// turned after. The default turns nothing.
+struct UserHandTurn {
+  double t0_s = 0.0;
+  double duration_s = 0.0;
+  Eigen::Vector3d axis_W = Eigen::Vector3d::UnitZ();  // need not be unit length; not zero
+  double angle_rad = 0.0;
+};
+
 struct HiroSimOptions {
   /// The simulated user's hand; if empty, HandScript::Default around the device's reach.
   std::optional<haptic::HandScript> script;
@@ -60,6 +71,8 @@ struct HiroSimOptions {
   bool loop_script = false;
   /// Offset added to every scripted fingertip (e.g. to push into a wall) [m].
   Eigen::Vector3d p_offset_W = Eigen::Vector3d::Zero();
+  /// Turn of the whole hand (applied before the offset).
+  UserHandTurn turn;
   std::uint64_t seed = 1;
   double period_s = 1e-3;  // control period; the plant steps period_s / substeps
   int substeps = 5;
@@ -112,6 +125,8 @@ class SimulatedHiro final : public HiroHardware {
   void RefreshKinematics() noexcept;
   void Substep(double h) noexcept;
   double ScriptTime(double t_s) const noexcept;
+  /// The user's scripted fingertips at t_s: script, turn, offset.
+  std::array<Eigen::Vector3d, kFingerCount> UserTargets(double t_s) const noexcept;
 
   HiroModel model_;
   HiroSimOptions options_;

@@ -60,6 +60,25 @@ struct ArmSpec {
   double upper_arm_mass_kg = 0.0, forearm_mass_kg = 0.0, wrist_mass_kg = 0.0;
   ArmVector q_home_rad = ArmVector::Zero();
   double max_hand_force_N = 0.0, max_hand_moment_N_m = 0.0;
+  double max_hand_speed_m_per_s = 0.0, max_hand_rate_rad_per_s = 0.0;  // hand base, sourced
+};
+
+/// How the arm follows the user's hand (assumed; see hiro_follow.hpp for the method).
+struct ArmFollowSpec {
+  /// Weight of each finger in the rigid fit of the optimum fingertips to the current ones.
+  std::array<double, kFingerCount> finger_weight{1.0, 1.0, 1.0, 1.0, 1.0};
+  /// The user's fingertip is taken (f_meas - f_cmd) / this beyond the device's [N/m].
+  double user_finger_stiffness_N_per_m = 300.0;
+  double max_user_offset_m = 0.03;      // cap on that correction
+  double rate_per_s = 5.0;              // hand-base twist = rate x pose error [1/s]
+  double max_accel_m_per_s2 = 2.0;      // change of the commanded hand-base velocity
+  double max_angular_accel_rad_per_s2 = 8.0;
+  double dls_damping_m = 0.01;          // damped least squares, rotation rows scaled by dls_length_m
+  double dls_length_m = 0.1;
+  double limit_margin_rad = 0.087;      // the reference stays this far inside each joint range
+  double limit_rate_per_s = 10.0;       // approach rate to that margin [1/s]
+  double servo_bandwidth_Hz = 8.0;      // joint servo on the reference, per joint I w^2, 2 zeta I w
+  double servo_damping_ratio = 1.0;
 };
 
 struct FingerSpec {
@@ -73,6 +92,7 @@ struct FingerSpec {
 
 struct HiroModel {
   ArmSpec arm;
+  ArmFollowSpec follow;
   std::array<FingerSpec, kFingerCount> finger{};
   double palm_mass_kg = 0.0;
   Eigen::Vector3d palm_com_H = Eigen::Vector3d::Zero();
