@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
-# The demo: installs what is missing, builds, and runs a shared session on loopback DDS:
-# a world server, two simulated haptic users, a headless spectator writing PNG frames, and the
-# audio guide writing one WAV per message-board text. Output goes to ./out/demo (or $1).
+# The demo: installs what is missing, builds, and runs a shared session on loopback DDS: the
+# encyclopedia tour of a world server, two simulated haptic users, a headless spectator writing
+# PNG frames, and the audio guide writing one WAV per message-board text; then prints the
+# session report. Output goes to ./out/demo (or $1).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 ./deploy/install_deps.sh
@@ -21,24 +22,31 @@ cleanup() {
 }
 trap cleanup EXIT
 
-echo "demo: session '$session' on DDS domain $domain; logs, frames and speech in $out"
+echo "demo: session '$session' on DDS domain $domain; logs, frames, speech and session log in $out"
+# The deformable worlds' FEM models, computed once and cached (seconds when already cached).
+"$bin/core/world/world_prepare" > "$out/world_prepare.log" 2>&1
+# The encyclopedia tour with two users: start menu -> solar system (lift the ball on the Moon,
+# the lever to Mars, lift it again) -> dinosaur (both press the triceratops' tail) ->
+# microscopic -> back to the start menu. A spectator draws it; the guide speaks the board.
 "$bin/world_server/world_server" --domain "$domain" --session "$session" --scene start_menu \
-  --duration 14 > "$out/world_server.log" 2>&1 & pids+=($!)
+  --duration 52 --log "$out/session.db" > "$out/world_server.log" 2>&1 & pids+=($!)
 "$bin/audio_guide/audio_guide" --domain "$domain" --session "$session" --out "$out/speech" \
-  --duration 12 > "$out/audio_guide.log" 2>&1 & pids+=($!)
+  --duration 50 > "$out/audio_guide.log" 2>&1 & pids+=($!)
+"$bin/graphics_node/graphics_node" --domain "$domain" --session "$session" --headless \
+  --frames 96 --fps 2 --out "$out/frames" > "$out/graphics_node.log" 2>&1 & pids+=($!)
+sleep 1
 for user in alice bob; do
   "$bin/haptic_node/haptic_node" --domain "$domain" --session "$session" --user "$user" \
-    --device sim --script "haptic_node/scripts/demo_$user.hand" --duration 10 \
+    --device sim --script "haptic_node/scripts/tour_$user.hand" --duration 48 \
     --trace "$out/$user.csv" > "$out/$user.log" 2>&1 & pids+=($!)
 done
-sleep 2
-"$bin/graphics_node/graphics_node" --domain "$domain" --session "$session" --headless \
-  --frames 60 --fps 10 --out "$out/frames" > "$out/graphics_node.log" 2>&1 & pids+=($!)
 
 status=0
 for p in "${pids[@]}"; do wait "$p" || status=1; done
 pids=()
 cat "$out/world_server.log" "$out/alice.log" "$out/bob.log" "$out/graphics_node.log" "$out/audio_guide.log"
+echo
+"$bin/world_server/session_report" "$out/session.db" || status=1
 if [ "$status" -ne 0 ]; then
   echo "demo: a node failed (see the logs in $out)" >&2
   exit 1

@@ -25,6 +25,7 @@ from array import array
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 DATA = os.path.join(HERE, "data")
+SCRIPTS = os.path.join(HERE, "..", "haptic_node", "scripts")
 FINGER_RGB = [(1, 0, 0), (0, 1, 0), (0, 0, 1), (1, 1, 0), (0, 1, 1)]  # thumb first
 
 
@@ -423,9 +424,9 @@ def case_encyclopedia(h, domain):
             "--deformation-out", received_file)
     t0 = time.monotonic()
     h.start("alice", "haptic_node", "--domain", domain, "--session", session, "--user", "alice",
-            "--script", os.path.join(DATA, "encyclopedia_alice.hand"), "--duration", 48, "--trace", trace)
+            "--script", os.path.join(SCRIPTS, "tour_alice.hand"), "--duration", 48, "--trace", trace)
     h.start("bob", "haptic_node", "--domain", domain, "--session", session, "--user", "bob",
-            "--script", os.path.join(DATA, "encyclopedia_bob.hand"), "--duration", 48)
+            "--script", os.path.join(SCRIPTS, "tour_bob.hand"), "--duration", 48)
     # Both press the tail and hold still over 34.5-36.5 s: take the server's account and stop
     # the spectator (it writes what it received) in the middle of it.
     time.sleep(max(0.0, t0 + 35.5 - time.monotonic()))
