@@ -471,7 +471,91 @@ def case_encyclopedia(h, domain):
     check(scenes == tour, f"the session log's worlds {scenes}, expected {tour}")
 
 
+def trace_fz(trace_path):
+    """(t_s, net vertical force on the five fingertips [N]) per row of a haptic trace."""
+    with open(trace_path) as f:
+        return [(float(r["t_s"]), sum(float(r[f"fz{i}"]) for i in range(5))) for r in csv.DictReader(f)]
+
+
+def case_vanished_member(h, domain):
+    """A member killed with SIGKILL loses its contacts and its objects within 2 s, smoothly: in the
+    dinosaur world alice and bob press the tail, alice is killed, and the force on bob's fingertip
+    moves to its new value without a step (alice's contacts fade out); on the Moon alice holds the
+    ball and is killed: the world server frees the ball within 2 s."""
+    cache = os.path.join(h.work, "cache")
+    os.environ["HANDSHARE_CACHE"] = cache
+    prep = subprocess.run([os.path.join(h.bin_dir, "core", "world", "world_prepare"), "--cache", cache,
+                           "--scenes", "dinosaur"], capture_output=True, text=True, timeout=600)
+    check(prep.returncode == 0, f"world_prepare failed: {prep.stdout}{prep.stderr}")
+    # 1. Contacts on a shared deformable.
+    session = f"it-vanish-{os.getpid()}"
+    dump = os.path.join(h.work, "deformation")
+    bob_trace = os.path.join(h.work, "bob.csv")
+    h.start("world_server", "world_server", "--domain", domain, "--session", session, "--scene", "dinosaur",
+            "--duration", 16, "--dump-deformation", dump, "--deformation-threshold", "1e-6")
+    h.wait_for_line("world_server", "models of 'dinosaur' ready", 60)
+    h.start("bob", "haptic_node", "--domain", domain, "--session", session, "--user", "bob",
+            "--script", os.path.join(DATA, "vanish_bob.hand"), "--duration", 13, "--trace", bob_trace)
+    t0 = time.monotonic()
+    h.start("alice", "haptic_node", "--domain", domain, "--session", session, "--user", "alice",
+            "--script", os.path.join(DATA, "vanish_alice.hand"), "--duration", 30)
+    time.sleep(max(0.0, t0 + 8.0 - time.monotonic()))
+    with open(os.path.join(dump, "triceratops_tail.json")) as f:
+        before = json.load(f)
+    nodes = read_inp_nodes(os.path.join(dump, before["mesh"]))
+    with open(os.path.join(HERE, "..", "assets", "scenes", "dinosaur.json")) as f:
+        p_tail = [o for o in json.load(f)["objects"] if o["id"] == "triceratops_tail"][0]["position_m"]
+    def loaded_near(held, x, y):
+        return [l for l in held["loads"]
+                if math.hypot(nodes[l["node"]][0] + p_tail[0] - x, nodes[l["node"]][1] + p_tail[1] - y) < 0.015]
+    check(loaded_near(before, 0.225, 0.08) and loaded_near(before, 0.27, 0.08),
+          f"both should press the tail before the kill: loads {before['loads']}")
+    h.procs["alice"][0].kill()
+    h.procs["alice"][0].wait()
+    t_kill = time.monotonic() - t0
+    # 2 s later (bob still presses): the tail's solve holds bob's fingertip only.
+    time.sleep(max(0.0, t0 + t_kill + 2.0 - time.monotonic()))
+    with open(os.path.join(dump, "triceratops_tail.json")) as f:
+        after = json.load(f)
+    check(not loaded_near(after, 0.225, 0.08) and loaded_near(after, 0.27, 0.08),
+          f"2 s after alice vanished the tail should be loaded by bob alone: loads {after['loads']}")
+    check(h.wait("bob", 30) == 0, "bob's haptic node failed")
+    check(h.wait("world_server", 15) == 0, "world_server failed")
+    check("member lost: user=alice" in h.log("world_server"), "the server did not notice alice vanish")
+    fz = trace_fz(bob_trace)
+    def mean(t_a, t_b):
+        v = [f for t, f in fz if t_a <= t < t_b]
+        check(len(v) > 50, f"bob's trace has {len(v)} samples in [{t_a}, {t_b}) s")
+        return sum(v) / len(v)
+    f_before, f_after = mean(t_kill - 2.5, t_kill - 0.5), mean(t_kill + 2.0, t_kill + 3.5)
+    change = abs(f_after - f_before)
+    check(change >= 0.01, f"alice's press did not matter to bob's fingertip ({f_before:.4f} -> {f_after:.4f} N)")
+    window = [f for t, f in fz if t_kill - 0.5 <= t < t_kill + 2.0]
+    largest_step = max(abs(b - a) for a, b in zip(window, window[1:]))
+    check(largest_step <= 0.3 * change,  # without the fade: the whole change in one step
+          f"bob's force jumped by {largest_step:.4f} N in one step when alice vanished (whole change {change:.4f} N)")
+    print(f"alice vanished: bob's force {f_before:.4f} -> {f_after:.4f} N, largest 1 ms step {largest_step:.5f} N")
+    # 2. A grasped object.
+    session2 = f"it-vanish-owner-{os.getpid()}"
+    h.start("world_server2", "world_server", "--domain", domain, "--session", session2, "--scene", "solar_system",
+            "--duration", 14)
+    h.wait_for_line("world_server2", "models of 'solar_system' ready", 30)
+    h.start("owner", "haptic_node", "--domain", domain, "--session", session2, "--user", "alice",
+            "--script", os.path.join(DATA, "vanish_owner.hand"), "--duration", 30)
+    t0 = time.monotonic()
+    h.wait_for_line("world_server2", "object 'ball': owner '' -> 'alice' (granted)", 10)
+    time.sleep(max(0.0, t0 + 7.0 - time.monotonic()))
+    h.procs["owner"][0].kill()
+    h.procs["owner"][0].wait()
+    t_kill = time.monotonic()
+    t_free = h.wait_for_line("world_server2", "object 'ball': owner 'alice' -> ''", 5)
+    check(t_free - t_kill <= 2.0, f"the ball was freed {t_free - t_kill:.2f} s after its owner vanished (> 2 s)")
+    check(h.wait("world_server2", 15) == 0, "world_server failed")
+    print(f"owner vanished: the ball was free after {t_free - t_kill:.2f} s")
+
+
 CASES = {"shared_session": case_shared_session, "encyclopedia": case_encyclopedia, "killed_member": case_killed_member,
+         "vanished_member": case_vanished_member,
          "signals": case_signals, "bad_input": case_bad_input}
 
 
