@@ -5,7 +5,9 @@
 //   fem_bench                 Google Benchmark timings of the real-time paths (600 surface
 //                             nodes; 10,000 too when its cache exists)
 //   fem_bench --csv [--cache-dir DIR] [--max-nodes N]
-//                             rows method,surface_nodes,contacts,step_us,rel_error on stdout,
+//                             rows method,surface_nodes,contacts,step_us,rel_error,p99_us,
+//                             storage_bytes on stdout (step_us is the median; storage_bytes is what
+//                             the method keeps besides the mesh: compliance, copies, tables),
 //                             progress and precompute timings on stderr
 //
 // Models: E = 10 kPa, nu = 0.3 (soft tissue). Cubes of n^3 nodes (edge 0.1 m, bottom fixed) give
@@ -46,6 +48,7 @@
 #include "handshare/fem/elementary_displacement.hpp"
 #include "handshare/fem/sparse_cholesky.hpp"
 #include "handshare/fem/static_solver.hpp"
+#include "handshare/fem/surface_field.hpp"
 
 namespace {
 
@@ -192,11 +195,13 @@ Timing Time(const std::function<void(int)>& step, double min_seconds, long min_s
   return t;
 }
 
-void Row(const std::string& method, int nodes, int contacts, const Timing& t, double err) {
-  std::printf("%s,%d,%d,%.4g,%.3e\n", method.c_str(), nodes, contacts, t.median_us, err);
+void Row(const std::string& method, int nodes, int contacts, const Timing& t, double err, double bytes = 0) {
+  std::printf("%s,%d,%d,%.4g,%.3e,%.4g,%.4g\n", method.c_str(), nodes, contacts, t.median_us, err, t.p99_us, bytes);
   std::fflush(stdout);
-  std::fprintf(stderr, "  %-40s N=%-6d m=%-3d median %10.3f us  p99 %10.3f us  (%ld steps)  rel_error %.2e\n",
-               method.c_str(), nodes, contacts, t.median_us, t.p99_us, t.steps, err);
+  std::fprintf(stderr,
+               "  %-44s N=%-6d m=%-3d median %10.3f us  p99 %10.3f us  (%ld steps)  rel_error %.2e  %.3g bytes (%.2f N^2)\n",
+               method.c_str(), nodes, contacts, t.median_us, t.p99_us, t.steps, err, bytes,
+               bytes / (static_cast<double>(nodes) * nodes));
 }
 
 // ------------------------------------------------------------------ comparison methods
@@ -417,14 +422,15 @@ void BenchModel(Model& m, const fs::path& cache_dir, const Limits& lim) {
       solver.SurfaceDisplacements(field);
       err_u = std::max(err_u, surface_error([&](std::int32_t k) { return field[k]; }, s));
     }
+    const double bytes = static_cast<double>(c->storage_bytes());
     Row("compliance_force_only" + suffix, N, kContacts,
-        Time([&](int i) { solver.Solve(sets[i]); }, 0.3, 2000), err_f);
+        Time([&](int i) { solver.Solve(sets[i]); }, 0.3, 2000), err_f, bytes);
     Row("compliance_full_update" + suffix, N, kContacts,
         Time([&](int i) { solver.Solve(sets[i]); solver.SurfaceDisplacements(field); }, 0.3, 200),
-        std::max(err_f, err_u));
+        std::max(err_f, err_u), bytes);
     Row("compliance_full_update" + suffix + "_coherent", N, kContacts,
         Time([&](int) { solver.Solve(sets[0]); solver.SurfaceDisplacements(field); }, 0.3, 200),
-        std::max(err_f, err_u));
+        std::max(err_f, err_u), bytes);
     if (prec == Precision::kFloat64) {
       // Regularization eps = rel x mean diagonal of C_kk: error against the exact forces.
       double diag = 0.0;
@@ -440,14 +446,60 @@ void BenchModel(Model& m, const fs::path& cache_dir, const Limits& lim) {
         }
         char name[64];
         std::snprintf(name, sizeof name, "compliance_force_only_reg_%g", rel);
-        Row(name, N, kContacts, Time([&](int i) { reg.Solve(sets[i]); }, 0.2, 1000), e);
+        Row(name, N, kContacts, Time([&](int i) { reg.Solve(sets[i]); }, 0.2, 1000), e, bytes);
       }
     }
   }
 
+  // Exact forces (ContactSolver on the float64 compliance) and the surface field from a planar
+  // copy of all N columns (both halves: every column streams), float32 and float16.
+  for (Precision prec : {Precision::kFloat32, Precision::kFloat16}) {
+    const std::string name = std::string("compliance_full_update_columns_") + (prec == Precision::kFloat32 ? "float32" : "float16");
+    const auto t0 = Clock::now();
+    SurfaceField cols(m.c64, {.layout = SurfaceFieldLayout::kColumns, .precision = prec});
+    std::fprintf(stderr, "  %s: copy built in %.1f s, kernel %s\n", name.c_str(), Since(t0), cols.kernel_name());
+    ContactSolver solver(m.c64, {.max_contacts = kContacts});
+    double err = 0.0;
+    for (int s = 0; s < kRef; ++s) {
+      solver.Solve(sets[s]);
+      std::vector<Eigen::Vector3d> f(solver.forces_N().begin(), solver.forces_N().end());
+      cols.Evaluate(solver.loads(), field);
+      err = std::max({err, RelError(f, ref[s].forces_N), surface_error([&](std::int32_t k) { return field[k]; }, s)});
+    }
+    const double bytes = static_cast<double>(cols.storage_bytes());  // plus the compliance for the forces
+    Row(name, N, kContacts, Time([&](int i) { solver.Solve(sets[i]); cols.Evaluate(solver.loads(), field); }, 0.3, 200), err, bytes);
+    Row(name + "_coherent", N, kContacts,
+        Time([&](int) { solver.Solve(sets[0]); cols.Evaluate(solver.loads(), field); }, 0.3, 200), err, bytes);
+  }
+
+  // Block low-rank compressed compliance (the only storage the step then needs): forces and
+  // field from it, at two tolerances.
+  for (double tol : {1e-3, 1e-5}) {
+    CompressionStats st;
+    auto cc = std::make_shared<const Compliance>(m.c64->Compressed(m.mesh, {.tolerance = tol, .leaf_nodes = 32}, &st));
+    std::fprintf(stderr, "  compressed tol %g: %lld tiles, %lld low-rank (mean rank %.1f), %.1f s, %.3g bytes = %.2f N^2\n",
+                 tol, static_cast<long long>(st.tiles), static_cast<long long>(st.low_rank_tiles), st.mean_rank, st.seconds,
+                 static_cast<double>(cc->storage_bytes()), static_cast<double>(cc->storage_bytes()) / (double(N) * N));
+    ContactSolver solver(cc, {.max_contacts = kContacts});
+    double err_f = 0.0, err = 0.0;
+    for (int s = 0; s < kRef; ++s) {
+      solver.Solve(sets[s]);
+      std::vector<Eigen::Vector3d> f(solver.forces_N().begin(), solver.forces_N().end());
+      err_f = std::max(err_f, RelError(f, ref[s].forces_N));
+      solver.SurfaceDisplacements(field);
+      err = std::max({err, err_f, surface_error([&](std::int32_t k) { return field[k]; }, s)});
+    }
+    char name[80];
+    const double bytes = static_cast<double>(cc->storage_bytes());
+    std::snprintf(name, sizeof name, "compressed_force_only_tol_%g", tol);
+    Row(name, N, kContacts, Time([&](int i) { solver.Solve(sets[i]); }, 0.3, 2000), err_f, bytes);
+    std::snprintf(name, sizeof name, "compressed_full_update_tol_%g", tol);
+    Row(name, N, kContacts, Time([&](int i) { solver.Solve(sets[i]); solver.SurfaceDisplacements(field); }, 0.3, 200), err, bytes);
+  }
+
   // The paper's form: T^d, T^f tensors (9 N^2 scalars). float32 is the configuration a haptic
   // node would run (SIMD kernel); float64 as well where it fits comfortably (N <= 5,000).
-  for (Precision prec : {Precision::kFloat32, Precision::kFloat64}) {
+  for (Precision prec : {Precision::kFloat32, Precision::kFloat16, Precision::kFloat64}) {
     if (prec == Precision::kFloat64 && N > 5000) continue;
     const auto t0 = Clock::now();
     auto T = std::make_shared<ElementaryDisplacementTensors>(ElementaryDisplacementTensors::FromCompliance(*m.c64, prec));
@@ -460,12 +512,15 @@ void BenchModel(Model& m, const fs::path& cache_dir, const Limits& lim) {
       paper.SurfaceDisplacements(field);
       err = std::max({err, RelError(f, ref[s].forces_N), surface_error([&](std::int32_t k) { return field[k]; }, s)});
     }
-    const std::string name = prec == Precision::kFloat32 ? "elementary_displacement" : "elementary_displacement_float64";
-    Row(name, N, kContacts, Time([&](int i) { paper.Solve(sets[i]); paper.SurfaceDisplacements(field); }, 0.3, 200), err);
-    if (prec == Precision::kFloat32) {
+    const std::string name = prec == Precision::kFloat32   ? "elementary_displacement"
+                             : prec == Precision::kFloat16 ? "elementary_displacement_float16"
+                                                           : "elementary_displacement_float64";
+    const double bytes = static_cast<double>(T->storage_bytes());
+    Row(name, N, kContacts, Time([&](int i) { paper.Solve(sets[i]); paper.SurfaceDisplacements(field); }, 0.3, 200), err, bytes);
+    if (prec != Precision::kFloat64) {
       // Coherent contacts (the same set every step, as while a finger rests on the object).
       Row(name + "_coherent", N, kContacts,
-          Time([&](int) { paper.Solve(sets[0]); paper.SurfaceDisplacements(field); }, 0.3, 200), err);
+          Time([&](int) { paper.Solve(sets[0]); paper.SurfaceDisplacements(field); }, 0.3, 200), err, bytes);
     }
   }
 
@@ -601,7 +656,7 @@ int RunCsv(int argc, char** argv) {
     if (a == "--max-nodes" && i + 1 < argc) max_nodes = std::atoi(argv[++i]);
   }
   const auto t0 = Clock::now();
-  std::printf("method,surface_nodes,contacts,step_us,rel_error\n");
+  std::printf("method,surface_nodes,contacts,step_us,rel_error,p99_us,storage_bytes\n");
   Limits lim;
   std::fprintf(stderr, "# cut-offs: gauss_elimination up to %lld DOF, sherman_morrison_woodbury up to %lld free DOF\n",
                static_cast<long long>(lim.gauss_max_dofs), static_cast<long long>(lim.smw_max_dofs));

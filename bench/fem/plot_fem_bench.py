@@ -23,14 +23,19 @@ def load(path):
     rows = defaultdict(dict)  # method -> {surface_nodes: (contacts, step_us, rel_error)}
     with open(path) as f:
         for r in csv.DictReader(f):
+            p99 = r.get("p99_us")
             rows[r["method"]][int(r["surface_nodes"])] = (
-                int(r["contacts"]), float(r["step_us"]), float(r["rel_error"]))
+                int(r["contacts"]), float(r["step_us"]), float(r["rel_error"]),
+                float(p99) if p99 else None, float(r.get("storage_bytes") or 0))
     return rows
 
 
 FIG10 = [
     ("elementary_displacement", "elementary displacement (paper form, T^d f32, full surface)", "o-"),
-    ("compliance_full_update_float32", "compliance form, full surface (f32)", "s-"),
+    ("compliance_full_update_columns_float16", "exact forces + surface from f16 column copy", "P-"),
+    ("compliance_full_update_columns_float32", "exact forces + surface from f32 column copy", "p-"),
+    ("compliance_full_update_float32", "compliance form, full surface (f32 packed symmetric)", "s-"),
+    ("compressed_full_update_tol_0.001", "compressed compliance (tol 1e-3), full surface", "h-"),
     ("compliance_force_only", "compliance form, forces only", "^-"),
     ("sherman_morrison_woodbury", "Sherman-Morrison-Woodbury (dense K^-1)", "d-"),
     ("gauss_elimination", "Gauss elimination (dense LU of full K)", "x-"),
@@ -73,6 +78,20 @@ def error_vs_time(rows, out):
         pts = sorted(rows.get(method, {}).items())
         ax.scatter([v[1] for _, v in pts], [max(v[2], 1e-17) for _, v in pts], marker=marker,
                    label=label, facecolors="none" if hollow else color, edgecolors=color, s=40)
+    # Faster / smaller storages of the surface field and the compressed compliance.
+    for method, label, marker, color in [
+        ("elementary_displacement", "paper form T^d float32, full surface", "o", "C2"),
+        ("elementary_displacement_float16", "paper form T^d float16, full surface", "v", "C2"),
+        ("compliance_full_update_columns_float32", "exact forces + f32 column copy", "p", "C4"),
+        ("compliance_full_update_columns_float16", "exact forces + f16 column copy", "P", "C4"),
+        ("compressed_full_update_tol_0.001", "compressed tol 1e-3, full surface", "h", "C5"),
+        ("compressed_full_update_tol_1e-05", "compressed tol 1e-5, full surface", "H", "C5"),
+        ("compressed_force_only_tol_0.001", "compressed tol 1e-3, forces", "<", "C6"),
+        ("compressed_force_only_tol_1e-05", "compressed tol 1e-5, forces", ">", "C6"),
+    ]:
+        pts = sorted(rows.get(method, {}).items())
+        ax.scatter([v[1] for _, v in pts], [max(v[2], 1e-17) for _, v in pts], marker=marker, label=label,
+                   color=color, s=40)
     # Regularization (eps relative to the mean diagonal compliance), at every model size.
     for rel, marker in [("0.001", "1"), ("0.01", "2"), ("0.1", "3")]:
         pts = sorted(rows.get("compliance_force_only_reg_" + rel, {}).items())
@@ -98,8 +117,12 @@ def error_vs_time(rows, out):
 
 def tables(rows):
     sizes = sorted({n for m in FIG10 for n in rows.get(m[0], {})})
-    methods = [m for m, *_ in FIG10] + ["compliance_full_update", "compliance_full_update_float32_coherent",
-                                        "elementary_displacement_coherent", "elementary_displacement_float64"]
+    methods = [m for m, *_ in FIG10] + [
+        "compliance_full_update", "compliance_full_update_float32_coherent",
+        "compliance_full_update_columns_float32_coherent", "compliance_full_update_columns_float16_coherent",
+        "elementary_displacement_coherent", "elementary_displacement_float16",
+        "elementary_displacement_float16_coherent", "elementary_displacement_float64",
+        "compressed_force_only_tol_0.001", "compressed_force_only_tol_1e-05", "compressed_full_update_tol_1e-05"]
     print("| method | " + " | ".join(str(n) for n in sizes) + " |")
     print("|---|" + "---|" * len(sizes))
     for m in methods:
@@ -113,6 +136,16 @@ def tables(rows):
     print("|---|---|")
     for m in sorted(rows):
         print(f"| {m} | {max(v[2] for v in rows[m].values()):.2e} |")
+    print()
+    print("p99 [us] and storage [bytes / N^2]:")
+    print("| method | " + " | ".join(str(n) for n in sizes) + " |")
+    print("|---|" + "---|" * len(sizes))
+    for m in methods:
+        cells = []
+        for n in sizes:
+            v = rows.get(m, {}).get(n)
+            cells.append("-" if v is None or v[3] is None else f"{v[3]:.3g} / {v[4] / (n * n):.3g}")
+        print(f"| {m} | " + " | ".join(cells) + " |")
 
 
 def main():

@@ -14,6 +14,7 @@
 #include "handshare/fem/contact_patch.hpp"
 #include "handshare/fem/contact_solver.hpp"
 #include "handshare/fem/elementary_displacement.hpp"
+#include "handshare/fem/surface_field.hpp"
 #include "test_util.hpp"
 
 namespace {
@@ -99,6 +100,13 @@ TEST(NoAllocation, SolversAndPatchQueries) {
   ContactSolver plain(c64, {.max_contacts = 16});
   ContactSolver push(c32, {.max_contacts = 16, .coupling_stiffness_N_per_m = 200.0, .push_only = true});
   ElementaryDisplacementSolver paper(T, 16);
+  auto T16 = std::make_shared<ElementaryDisplacementTensors>(
+      ElementaryDisplacementTensors::FromCompliance(*c64, Precision::kFloat16));
+  ElementaryDisplacementSolver paper16(T16, 16);
+  auto cc = std::make_shared<const Compliance>(c64->Compressed(b.mesh, {.tolerance = 1e-3, .leaf_nodes = 8}));
+  ContactSolver compressed(cc, {.max_contacts = 16, .push_only = true});
+  SurfaceField columns16(c64, {.layout = SurfaceFieldLayout::kColumns, .precision = Precision::kFloat16});
+  SurfaceField columns32(c64, {.layout = SurfaceFieldLayout::kColumns, .precision = Precision::kFloat32});
   std::vector<Eigen::Vector3d> field(c64->num_nodes());
   std::vector<std::int32_t> visible(c64->nodes().begin(), c64->nodes().begin() + 20);
   std::vector<Eigen::Vector3d> visible_u(visible.size());
@@ -123,6 +131,12 @@ TEST(NoAllocation, SolversAndPatchQueries) {
       push.SurfaceDisplacements(field);
       paper.Solve(in);
       paper.SurfaceDisplacements(field);
+      paper16.Solve(in);
+      paper16.SurfaceDisplacements(field);
+      compressed.Solve(in);
+      compressed.SurfaceDisplacements(field);
+      columns16.Evaluate(plain.loads(), field);
+      columns32.Evaluate(plain.loads(), field);
       plain.Solve(nan_in);
       const PatchResult r = finder.Sphere(b.mesh.positions_m()[top[17]], Eigen::Vector3d::UnitZ(), 0.01, 1e-3,
                                           ContactMode::kNormalOnly, patch);
@@ -135,6 +149,7 @@ TEST(NoAllocation, SolversAndPatchQueries) {
   EXPECT_EQ(n, 0) << "heap allocations in the real-time path";
   // The calls did real work (the test is not vacuous).
   EXPECT_GT(plain.num_unique(), 0);
+  EXPECT_GT(compressed.num_unique(), 0);
   EXPECT_GT(field[0].norm() + field[5].norm(), 0.0);
 }
 

@@ -1,0 +1,261 @@
+// The faster and smaller surface-field storages against the direct sparse solve (the exact
+// static FEM answer): the block low-rank compressed compliance (forces and surface field through
+// the unchanged ContactSolver), the planar column copy in float32 and float16, the paper's T^d
+// in float16, every kernel instruction set against the portable one, and the bad inputs.
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstring>
+#include <memory>
+#include <random>
+
+#include "../src/planar_columns.hpp"
+#include "handshare/fem/compliance.hpp"
+#include "handshare/fem/contact_solver.hpp"
+#include "handshare/fem/elementary_displacement.hpp"
+#include "handshare/fem/error.hpp"
+#include "handshare/fem/surface_field.hpp"
+#include "test_util.hpp"
+
+namespace handshare::fem {
+namespace {
+
+constexpr Material kMat{1e4, 0.3};
+
+// A wide thin block (bottom fixed): 750 free surface nodes, far apart enough for clusters of
+// 16 nodes to have well-separated (compressible) partners.
+struct Model {
+  test::Block block;
+  std::shared_ptr<const Compliance> c64;
+};
+
+const Model& WideModel() {
+  static const Model m = [] {
+    Model r{test::MakeFixedBottomBox({0.12, 0.12, 0.015}, {16, 16, 2}), nullptr};
+    r.c64 = std::make_shared<Compliance>(Compliance::Precompute(r.block.mesh, kMat, r.block.fixed, {}));
+    return r;
+  }();
+  return m;
+}
+
+std::vector<ContactInput> RandomContacts(const Compliance& c, int m, std::mt19937& rng) {
+  std::uniform_int_distribution<std::int32_t> slot(0, c.num_nodes() - 1);
+  std::uniform_real_distribution<double> u(-1e-3, 1e-3);
+  std::vector<ContactInput> out;
+  while (static_cast<int>(out.size()) < m) {
+    const std::int32_t node = c.nodes()[slot(rng)];
+    bool dup = false;
+    for (const auto& x : out) dup = dup || x.node == node;
+    if (!dup) out.push_back({node, {u(rng), u(rng), u(rng)}});
+  }
+  return out;
+}
+
+struct Errors {
+  double force = 0.0, field = 0.0;
+};
+
+// ContactSolver on `c` (forces) and `field` (surface) against the direct solve.
+Errors Compare(const Model& m, std::shared_ptr<const Compliance> c, SurfaceField& field,
+               const std::vector<ContactInput>& in) {
+  ContactSolver solver(std::move(c), {.max_contacts = 16});
+  EXPECT_EQ(solver.Solve(in), StepStatus::kOk);
+  const test::DirectContact d = test::SolveDirect(m.block.mesh, kMat, m.block.fixed, in);
+  std::vector<Eigen::Vector3d> f(solver.forces_N().begin(), solver.forces_N().end());
+  std::vector<Eigen::Vector3d> u(static_cast<std::size_t>(m.c64->num_nodes())), u_ref;
+  EXPECT_TRUE(field.Evaluate(solver.loads(), u));
+  for (std::int32_t v : m.c64->nodes()) u_ref.push_back(d.solution.u_m[v]);
+  return {test::RelError(f, d.forces_N), test::RelError(u, u_ref)};
+}
+
+// Compressed at tolerance tol: ||C - C~||_F <= tol ||C||_F tile by tile (checked on the explicit
+// residual), and float32 entries (6e-8). Forces solve C_cc f = d* (cond(C_cc) of a few for
+// distinct random nodes) and the field sums 5 columns, so both errors stay within a small
+// multiple of tol + 1e-7: bound 100 tol + 1e-5. Measured about 1e-7 (tol 1e-6) and 1e-4 (tol 1e-3).
+TEST(CompressedCompliance, MatchesDirectSparseSolve) {
+  const Model& m = WideModel();
+  double previous_bytes = 0.0;
+  for (double tol : {1e-6, 1e-3}) {
+    CompressionStats st;
+    auto c = std::make_shared<const Compliance>(m.c64->Compressed(m.block.mesh, {.tolerance = tol, .leaf_nodes = 16}, &st));
+    EXPECT_EQ(c->storage(), ComplianceStorage::kCompressed);
+    EXPECT_EQ(c->precision(), Precision::kFloat32);
+    EXPECT_EQ(c->data_f32(), nullptr);
+    EXPECT_GT(st.low_rank_tiles, 0) << "nothing was compressed: the test would not test it";
+    const double packed_f32 = 4.0 * 9.0 * m.c64->num_nodes() * (m.c64->num_nodes() + 1) / 2;
+    EXPECT_LT(static_cast<double>(c->storage_bytes()), packed_f32);
+    if (previous_bytes > 0.0) EXPECT_LT(static_cast<double>(c->storage_bytes()), previous_bytes);
+    previous_bytes = static_cast<double>(c->storage_bytes());
+    RecordProperty("bytes_per_N2_tol_" + test::Sci(tol),
+                   test::Sci(static_cast<double>(c->storage_bytes()) / (m.c64->num_nodes() * double(m.c64->num_nodes()))));
+    SurfaceField field(c);
+    EXPECT_EQ(field.uses_simd(), detail::BestIsa() != detail::Isa::kPortable);
+    std::mt19937 rng(5);
+    double worst = 0.0;
+    for (int trial = 0; trial < 6; ++trial) {
+      const Errors e = Compare(m, c, field, RandomContacts(*c, 1 + trial, rng));
+      worst = std::max({worst, e.force, e.field});
+    }
+    RecordProperty("worst_rel_error_tol_" + test::Sci(tol), test::Sci(worst));
+    EXPECT_LT(worst, 100 * tol + 1e-5) << "tolerance " << tol;
+  }
+}
+
+// Every block against the exact one: nodes in one cluster (diagonal tiles, so C_kk of every
+// node) are dense float32 copies; in total ||C - C~||_F <= tol ||C||_F (+ float32 rounding).
+TEST(CompressedCompliance, BlocksAreExactNearAndWithinToleranceFar) {
+  const Model& m = WideModel();
+  const double tol = 1e-4;
+  const Compliance c = m.c64->Compressed(m.block.mesh, {.tolerance = tol, .leaf_nodes = 16});
+  const std::int32_t N = c.num_nodes();
+  double err2 = 0.0, norm2 = 0.0;
+  for (std::int32_t k = 0; k < N; ++k) {
+    const Eigen::Matrix3d exact = m.c64->Block(k, k);
+    EXPECT_LT((c.Block(k, k) - exact).norm(), 1e-7 * exact.norm()) << "diagonal block " << k;
+    for (std::int32_t n = 0; n < N; ++n) {
+      const Eigen::Matrix3d e = m.c64->Block(n, k);
+      const Eigen::Matrix3d a = c.Block(n, k);
+      EXPECT_EQ(a, c.Block(k, n).transpose());  // symmetric by construction
+      err2 += (a - e).squaredNorm();
+      norm2 += e.squaredNorm();
+    }
+  }
+  EXPECT_LT(std::sqrt(err2 / norm2), tol * 1.01 + 1e-7);
+  EXPECT_GT(std::sqrt(err2 / norm2), 0.0);
+}
+
+// The column copy: float32 (rounding only, 6e-8 per entry; bound 1e-5 as for float32 storage)
+// and float16 (11-bit mantissa relative to the largest entry of each 16-node chunk: 2.4e-4 per
+// entry, measured ~2e-4 on the field; bound 2e-3). Forces come from ContactSolver on the exact
+// compliance, so they stay exact whatever the field storage.
+TEST(SurfaceFieldColumns, Float32AndFloat16MatchDirectSparseSolve) {
+  const Model& m = WideModel();
+  SurfaceField f32(m.c64, {.layout = SurfaceFieldLayout::kColumns, .precision = Precision::kFloat32});
+  SurfaceField f16(m.c64, {.layout = SurfaceFieldLayout::kColumns, .precision = Precision::kFloat16});
+  EXPECT_LT(f16.storage_bytes(), f32.storage_bytes() * 0.6);
+  std::mt19937 rng(9);
+  double worst32 = 0.0, worst16 = 0.0, force = 0.0;
+  for (int trial = 0; trial < 6; ++trial) {
+    const auto in = RandomContacts(*m.c64, 1 + trial, rng);
+    const Errors a = Compare(m, m.c64, f32, in), b = Compare(m, m.c64, f16, in);
+    worst32 = std::max({worst32, a.field});
+    worst16 = std::max({worst16, b.field});
+    force = std::max({force, a.force, b.force});
+  }
+  RecordProperty("float16_field_rel_error", test::Sci(worst16));
+  EXPECT_LT(force, 1e-9);
+  EXPECT_LT(worst32, 1e-5);
+  EXPECT_LT(worst16, 2e-3);
+  EXPECT_GT(worst16, worst32);  // float16 really is the coarser one
+}
+
+// Each instruction set's kernel against the portable one, for the column copy (float32,
+// float16), the compressed storage and the paper's T^d: same sums, float accumulation in a
+// different order (bound 1e-6). More loads than one kernel group (32) and an invalid slot.
+TEST(SurfaceFieldKernels, EveryInstructionSetAgreesWithPortable) {
+  const Model& m = WideModel();
+  auto cc = std::make_shared<const Compliance>(m.c64->Compressed(m.block.mesh, {.tolerance = 1e-5, .leaf_nodes = 16}));
+  std::mt19937 rng(3);
+  std::uniform_int_distribution<std::int32_t> slot(0, m.c64->num_nodes() - 1);
+  std::uniform_real_distribution<double> f(-1.0, 1.0);
+  std::vector<NodeLoad> loads;
+  for (int i = 0; i < 40; ++i) loads.push_back({slot(rng), {f(rng), f(rng), f(rng)}});
+  loads.push_back({m.c64->num_nodes() + 3, {1, 1, 1}});
+  loads.push_back({-1, {1, 1, 1}});
+  const auto N = static_cast<std::size_t>(m.c64->num_nodes());
+  for (int kind = 0; kind < 3; ++kind) {
+    SurfaceFieldOptions o{.layout = kind == 2 ? SurfaceFieldLayout::kCompliance : SurfaceFieldLayout::kColumns,
+                          .precision = kind == 1 ? Precision::kFloat16 : Precision::kFloat32};
+    auto c = kind == 2 ? cc : m.c64;
+    SurfaceField simd(c, o);
+    o.allow_simd = false;
+    SurfaceField portable(c, o);
+    EXPECT_STREQ(portable.kernel_name(), "portable");
+    std::vector<Eigen::Vector3d> a(N), b(N);
+    ASSERT_TRUE(simd.Evaluate(loads, a));
+    ASSERT_TRUE(portable.Evaluate(loads, b));
+    EXPECT_LT(test::RelError(a, b), 1e-6) << "kind " << kind << " kernel " << simd.kernel_name();
+    EXPECT_GT(b[0].norm() + b[N - 1].norm(), 0.0);
+    std::vector<Eigen::Vector3d> wrong(N - 1);
+    EXPECT_FALSE(simd.Evaluate(loads, wrong));
+  }
+  // The intrinsics paths that this CPU has, called directly.
+  detail::PlanarColumns cols;
+  cols.Build(static_cast<std::int32_t>(N), static_cast<std::int32_t>(N), detail::PlanarType::kFloat16,
+             [&](std::int32_t n, std::int32_t k) { return m.c64->Block(n, k); });
+  std::vector<Eigen::Vector3d> ref(N), got(N);
+  cols.SumColumns(loads, ref.data(), detail::Isa::kPortable);
+  for (detail::Isa isa : {detail::Isa::kAvx2, detail::Isa::kAvx512}) {
+    if (static_cast<int>(isa) > static_cast<int>(detail::BestIsa())) continue;
+    cols.SumColumns(loads, got.data(), isa);
+    EXPECT_LT(test::RelError(got, ref), 1e-6) << detail::IsaName(isa);
+  }
+}
+
+// The paper's form with float16 T^d: the correction matrix A is read from T^d too, so forces
+// and field both carry the half-precision error (bound 5e-3, measured ~5e-4); float32 T^d
+// stays at float32 accuracy (1e-5).
+TEST(ElementaryDisplacement, Float16TablesAgainstFloat64) {
+  const Model& m = WideModel();
+  auto t64 = std::make_shared<ElementaryDisplacementTensors>(
+      ElementaryDisplacementTensors::FromCompliance(*m.c64, Precision::kFloat64));
+  auto t16 = std::make_shared<ElementaryDisplacementTensors>(
+      ElementaryDisplacementTensors::FromCompliance(*m.c64, Precision::kFloat16));
+  EXPECT_LT(t16->storage_bytes(), t64->storage_bytes() / 3);
+  ElementaryDisplacementSolver s64(t64, 8), s16(t16, 8);
+  std::mt19937 rng(4);
+  std::vector<Eigen::Vector3d> u64(static_cast<std::size_t>(m.c64->num_nodes())), u16(u64.size());
+  for (int trial = 0; trial < 5; ++trial) {
+    const auto in = RandomContacts(*m.c64, 1 + trial, rng);
+    ASSERT_EQ(s64.Solve(in), StepStatus::kOk);
+    ASSERT_EQ(s16.Solve(in), StepStatus::kOk);
+    std::vector<Eigen::Vector3d> f64(s64.forces_N().begin(), s64.forces_N().end()),
+        f16(s16.forces_N().begin(), s16.forces_N().end());
+    ASSERT_TRUE(s64.SurfaceDisplacements(u64));
+    ASSERT_TRUE(s16.SurfaceDisplacements(u16));
+    EXPECT_LT(test::RelError(f16, f64), 5e-3);
+    EXPECT_LT(test::RelError(u16, u64), 5e-3);
+    EXPECT_GT(test::RelError(u16, u64), 0.0);
+  }
+}
+
+TEST(Float16, ConversionRoundsToNearestAndRoundTrips) {
+  EXPECT_EQ(detail::FloatToHalf(1.0f), 0x3C00);
+  EXPECT_EQ(detail::FloatToHalf(-2.0f), 0xC000);
+  EXPECT_EQ(detail::FloatToHalf(65504.0f), 0x7BFF);
+  EXPECT_EQ(detail::FloatToHalf(65520.0f), 0x7C00);  // rounds to infinity
+  EXPECT_EQ(detail::FloatToHalf(std::ldexp(1.0f, -24)), 0x0001);
+  EXPECT_EQ(detail::FloatToHalf(0.1f), 0x2E66);
+  EXPECT_EQ(detail::FloatToHalf(1.0f + std::ldexp(1.0f, -11)), 0x3C00);  // tie: to even
+  EXPECT_EQ(detail::FloatToHalf(1.0f + 3 * std::ldexp(1.0f, -11)), 0x3C02);
+  int checked = 0;
+  for (std::uint32_t h = 0; h < 0x10000; ++h) {
+    if ((h & 0x7C00) == 0x7C00 && (h & 0x3FF) != 0) continue;  // NaN
+    ASSERT_EQ(detail::FloatToHalf(detail::HalfToFloat(static_cast<std::uint16_t>(h))), h) << std::hex << h;
+    ++checked;
+  }
+  EXPECT_EQ(checked, 0x10000 - 2 * 1023);
+}
+
+TEST(CompressedCompliance, BadInputsAreRejected) {
+  const Model& m = WideModel();
+  EXPECT_THROW((void)m.c64->Compressed(m.block.mesh, {.tolerance = 0.0}), InputError);
+  EXPECT_THROW((void)m.c64->Compressed(m.block.mesh, {.tolerance = 1.5}), InputError);
+  EXPECT_THROW((void)m.c64->Compressed(m.block.mesh, {.tolerance = 1e-4, .leaf_nodes = 2}), InputError);
+  const TetMesh other = MakeBoxMesh({0.1, 0.1, 0.1}, {2, 2, 2});
+  EXPECT_THROW((void)m.c64->Compressed(other, {}), InputError);
+  const Compliance c = m.c64->Compressed(m.block.mesh, {.tolerance = 1e-3, .leaf_nodes = 16});
+  EXPECT_THROW((void)c.Compressed(m.block.mesh, {}), InputError);
+  EXPECT_THROW((void)c.ConvertedTo(Precision::kFloat64), InputError);
+  EXPECT_THROW((void)m.c64->ConvertedTo(Precision::kFloat16), InputError);
+  EXPECT_NE(c.input_hash(), m.c64->input_hash());
+  test::TempDir dir;
+  EXPECT_THROW(c.Save(dir.path() / "x.compliance"), CacheError);
+  EXPECT_THROW(SurfaceField(m.c64, {.layout = SurfaceFieldLayout::kColumns, .precision = static_cast<Precision>(3)}),
+               InputError);
+  EXPECT_THROW((void)ElementaryDisplacementTensors::FromCompliance(*m.c64, static_cast<Precision>(3)), InputError);
+}
+
+}  // namespace
+}  // namespace handshare::fem
