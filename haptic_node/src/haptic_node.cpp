@@ -263,15 +263,7 @@ int HapticNode::Run() {
         // Shared solves are for deformables (the objects with a contact solver); rigid bodies
         // move by their owner's published pose instead.
         if (remote.count >= kMaxRemoteContacts || renderer->models().world->contact_solver(c.object) == nullptr) return;
-        auto& item = remote.items[remote.count++];
-        item.hand = c.hand;
-        item.finger = c.finger;
-        item.object = c.object;
-        for (int k = 0; k < 3; ++k) {
-          item.p_WC_m[k] = c.p_WC_m[k];
-          item.u_W_m[k] = c.u_W_m[k];
-          item.f_E_W_N[k] = c.f_E_W_N[k];
-        }
+        remote.items[remote.count++] = c;
       });
       renderer->SetRemote(remote);
 

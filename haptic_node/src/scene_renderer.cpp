@@ -69,14 +69,7 @@ void SceneRenderer::Render(double /*t_s*/, double dt_s, const DeviceReading& rea
   remote_in_.Read(remote_);
   const int n_remote = std::min(remote_.count, kMaxRemoteContacts);
   for (int i = 0; i < n_remote; ++i) {
-    const auto& in = remote_.items[i];
-    auto& out = remote_contacts_[static_cast<std::size_t>(i)];
-    out.hand = in.hand;
-    out.finger = in.finger;
-    out.object = in.object;
-    out.p_WC_m = Eigen::Vector3d(in.p_WC_m[0], in.p_WC_m[1], in.p_WC_m[2]);
-    out.u_W_m = Eigen::Vector3d(in.u_W_m[0], in.u_W_m[1], in.u_W_m[2]);
-    out.f_E_W_N = Eigen::Vector3d(in.f_E_W_N[0], in.f_E_W_N[1], in.f_E_W_N[2]);
+    remote_contacts_[static_cast<std::size_t>(i)] = session::ToRemoteContact(remote_.items[i]);
   }
   // 3. Contacts: rigid, dynamic and deformable objects, all hands on a deformable together.
   world.Step(dt_s, reading.p_WE, {remote_contacts_.data(), static_cast<std::size_t>(n_remote)});

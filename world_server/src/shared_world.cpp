@@ -209,13 +209,7 @@ TickOutput SharedWorld::Tick(Clock::time_point now, double dt_s) {
   std::size_t n_all = 0;
   peers_.ForEach(*models_, now, [&](const session::PeerContact& c, const msg::ContactSet&) {
     if (n_all >= remote_.size() || world.contact_solver(c.object) == nullptr) return;
-    auto& r = remote_[n_all++];
-    r.hand = c.hand;
-    r.finger = c.finger;
-    r.object = c.object;
-    r.p_WC_m = Eigen::Vector3d(c.p_WC_m[0], c.p_WC_m[1], c.p_WC_m[2]);
-    r.u_W_m = Eigen::Vector3d(c.u_W_m[0], c.u_W_m[1], c.u_W_m[2]);
-    r.f_E_W_N = Eigen::Vector3d(c.f_E_W_N[0], c.f_E_W_N[1], c.f_E_W_N[2]);
+    remote_[n_all++] = session::ToRemoteContact(c);
   });
 
   const double motion_t = scene::MotionTime_s();

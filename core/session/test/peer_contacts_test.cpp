@@ -101,3 +101,26 @@ TEST(PeerContactsConfig, RejectsAnEmptyFade) {
 
 }  // namespace
 }  // namespace handshare::session
+
+namespace handshare::session {
+namespace {
+TEST(ToRemoteContact, CarriesEveryField) {
+  PeerContact c;
+  c.hand = 2;
+  c.finger = 4;
+  c.object = 7;
+  for (int k = 0; k < 3; ++k) {
+    c.p_WC_m[k] = 0.1 * (k + 1);
+    c.u_W_m[k] = -0.001 * (k + 1);
+    c.f_E_W_N[k] = 1.5 * (k + 1);
+  }
+  const contact::RemoteContact r = ToRemoteContact(c);
+  EXPECT_EQ(r.hand, 2);
+  EXPECT_EQ(r.finger, 4);
+  EXPECT_EQ(r.object, 7);
+  EXPECT_EQ(r.p_WC_m, Eigen::Vector3d(0.1, 0.2, 0.30000000000000004));
+  EXPECT_EQ(r.u_W_m, Eigen::Vector3d(-0.001, -0.002, -0.003));
+  EXPECT_EQ(r.f_E_W_N, Eigen::Vector3d(1.5, 3.0, 4.5));
+}
+}  // namespace
+}  // namespace handshare::session

@@ -14,6 +14,7 @@
 #include "handshare/common/triple_buffer.hpp"
 #include "handshare/controls/controls.hpp"
 #include "handshare/haptic/force_renderer.hpp"
+#include "handshare/session/peer_contacts.hpp"
 #include "handshare/world/scene_world.hpp"
 
 namespace handshare::haptic {
@@ -43,10 +44,7 @@ struct ContactReport {
 /// Other hands' contacts on this scene's objects (trivially copyable).
 struct RemoteContacts {
   std::int32_t count = 0;
-  struct Item {
-    std::int32_t hand = 0, finger = 0, object = -1;
-    double p_WC_m[3] = {}, u_W_m[3] = {}, f_E_W_N[3] = {};
-  } items[kMaxRemoteContacts];
+  session::PeerContact items[kMaxRemoteContacts];
 };
 
 /// Dynamic bodies another process simulates (owned by another user, or free and simulated by

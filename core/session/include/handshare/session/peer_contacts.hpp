@@ -36,6 +36,9 @@ struct PeerContact {
   double weight = 1.0;          // the fade factor applied (1: fresh)
 };
 
+/// The contact as the haptic world takes it.
+contact::RemoteContact ToRemoteContact(const PeerContact& c) noexcept;
+
 class PeerContacts {
  public:
   using Clock = std::chrono::steady_clock;
