@@ -85,7 +85,9 @@ TEST(CompressedCompliance, MatchesDirectSparseSolve) {
     EXPECT_GT(st.low_rank_tiles, 0) << "nothing was compressed: the test would not test it";
     const double packed_f32 = 4.0 * 9.0 * m.c64->num_nodes() * (m.c64->num_nodes() + 1) / 2;
     EXPECT_LT(static_cast<double>(c->storage_bytes()), packed_f32);
-    if (previous_bytes > 0.0) EXPECT_LT(static_cast<double>(c->storage_bytes()), previous_bytes);
+    if (previous_bytes > 0.0) {
+      EXPECT_LT(static_cast<double>(c->storage_bytes()), previous_bytes);
+    }
     previous_bytes = static_cast<double>(c->storage_bytes());
     RecordProperty("bytes_per_N2_tol_" + test::Sci(tol),
                    test::Sci(static_cast<double>(c->storage_bytes()) / (m.c64->num_nodes() * double(m.c64->num_nodes()))));
