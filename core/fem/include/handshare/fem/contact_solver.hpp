@@ -91,6 +91,10 @@ class ContactSolver {
   /// Solves for the given touched nodes. Nodes touched more than once are merged (mean imposed
   /// displacement; the node's force is split evenly between the inputs). Fixed and unknown nodes
   /// are rejected, not thrown. Real-time: noexcept, no allocation, O(m^3).
+  /// Push-only with every contact frictionless (fingertip patches) is solved as the m x m
+  /// problem on n_i^T C_ij n_j, started from the previous call's held set and with the blocks
+  /// of nodes touched in consecutive calls kept from it: faster, same answer (the problem has
+  /// one solution), so the result does not depend on the call history.
   StepStatus Solve(std::span<const ContactInput> contacts) noexcept;
 
   /// Force on the object at each input contact [N] (push: along -n_out), same order as the
