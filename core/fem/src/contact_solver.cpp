@@ -13,6 +13,35 @@
 
 namespace handshare::fem {
 
+namespace {
+
+// The active-set pivoting rule of both solve paths: flip every violating contact at once (block
+// principal pivoting) while the number of violations keeps falling, with 3 tries of grace, else
+// one contact, the least index (Murty's rule, which cannot cycle).
+class BlockPivoting {
+ public:
+  explicit BlockPivoting(std::int32_t contacts) noexcept : best_violations_(contacts + 1) {}
+  /// True: flip every violating contact this iteration; false: only the first.
+  bool Block(std::int32_t violations) noexcept {
+    if (violations < best_violations_) {
+      best_violations_ = violations;
+      grace_ = 3;
+      return true;
+    }
+    if (grace_ > 0) {
+      --grace_;
+      return true;
+    }
+    return false;
+  }
+
+ private:
+  std::int32_t best_violations_;
+  int grace_ = 3;
+};
+
+}  // namespace
+
 ContactSolver::ContactSolver(std::shared_ptr<const Compliance> compliance,
                              const ContactSolverOptions& options)
     : compliance_(compliance), options_(options), field_(compliance) {
@@ -188,8 +217,7 @@ StepStatus ContactSolver::Solve(std::span<const ContactInput> contacts) noexcept
       return StepStatus::kNumericalFailure;
     }
   }
-  std::int32_t best_violations = num_unique_ + 1;
-  int grace = 3;
+  BlockPivoting pivoting(num_unique_);
   while (!all_normal) {
     if (!SolveActiveSet()) {
       ZeroOutputs();
@@ -234,15 +262,7 @@ StepStatus ContactSolver::Solve(std::span<const ContactInput> contacts) noexcept
       }
       continue;
     }
-    bool block = false;
-    if (violations < best_violations) {
-      best_violations = violations;
-      grace = 3;
-      block = true;
-    } else if (grace > 0) {
-      --grace;
-      block = true;
-    }
+    const bool block = pivoting.Block(violations);
     for (std::int32_t j = 0; j < num_unique_; ++j) {
       if (!violates(j)) continue;
       if (active_[j]) {
@@ -375,8 +395,7 @@ bool ContactSolver::SolveNormalPushOnly(StepStatus& status) noexcept {
   // The same pivoting as the general path (block principal pivoting with Murty's rule as the
   // fallback), on the normal forces lambda (f = lambda n: push is lambda < 0).
   constexpr double kTol = 1e-9;
-  std::int32_t best_violations = u + 1;
-  int grace = 3;
+  BlockPivoting pivoting(u);
   while (true) {
     std::int32_t r = 0;
     for (std::int32_t j = 0; j < u; ++j) {
@@ -422,15 +441,7 @@ bool ContactSolver::SolveNormalPushOnly(StepStatus& status) noexcept {
       break;
     }
     ++iterations_;
-    bool block = false;
-    if (violations < best_violations) {
-      best_violations = violations;
-      grace = 3;
-      block = true;
-    } else if (grace > 0) {
-      --grace;
-      block = true;
-    }
+    const bool block = pivoting.Block(violations);
     for (std::int32_t j = 0; j < u; ++j) {
       if (!violates_[j]) continue;
       active_[j] = active_[j] ? 0 : 1;
