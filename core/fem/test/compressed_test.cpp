@@ -39,19 +39,6 @@ const Model& WideModel() {
   return m;
 }
 
-std::vector<ContactInput> RandomContacts(const Compliance& c, int m, std::mt19937& rng) {
-  std::uniform_int_distribution<std::int32_t> slot(0, c.num_nodes() - 1);
-  std::uniform_real_distribution<double> u(-1e-3, 1e-3);
-  std::vector<ContactInput> out;
-  while (static_cast<int>(out.size()) < m) {
-    const std::int32_t node = c.nodes()[slot(rng)];
-    bool dup = false;
-    for (const auto& x : out) dup = dup || x.node == node;
-    if (!dup) out.push_back({node, {u(rng), u(rng), u(rng)}});
-  }
-  return out;
-}
-
 struct Errors {
   double force = 0.0, field = 0.0;
 };
@@ -96,7 +83,7 @@ TEST(CompressedCompliance, MatchesDirectSparseSolve) {
     std::mt19937 rng(5);
     double worst = 0.0;
     for (int trial = 0; trial < 6; ++trial) {
-      const Errors e = Compare(m, c, field, RandomContacts(*c, 1 + trial, rng));
+      const Errors e = Compare(m, c, field, test::RandomContacts(*c, 1 + trial, rng));
       worst = std::max({worst, e.force, e.field});
     }
     RecordProperty("worst_rel_error_tol_" + test::Sci(tol), test::Sci(worst));
@@ -139,7 +126,7 @@ TEST(SurfaceFieldColumns, Float32AndFloat16MatchDirectSparseSolve) {
   std::mt19937 rng(9);
   double worst32 = 0.0, worst16 = 0.0, force = 0.0;
   for (int trial = 0; trial < 6; ++trial) {
-    const auto in = RandomContacts(*m.c64, 1 + trial, rng);
+    const auto in = test::RandomContacts(*m.c64, 1 + trial, rng);
     const Errors a = Compare(m, m.c64, f32, in), b = Compare(m, m.c64, f16, in);
     worst32 = std::max({worst32, a.field});
     worst16 = std::max({worst16, b.field});
@@ -209,7 +196,7 @@ TEST(ElementaryDisplacement, Float16TablesAgainstFloat64) {
   std::mt19937 rng(4);
   std::vector<Eigen::Vector3d> u64(static_cast<std::size_t>(m.c64->num_nodes())), u16(u64.size());
   for (int trial = 0; trial < 5; ++trial) {
-    const auto in = RandomContacts(*m.c64, 1 + trial, rng);
+    const auto in = test::RandomContacts(*m.c64, 1 + trial, rng);
     ASSERT_EQ(s64.Solve(in), StepStatus::kOk);
     ASSERT_EQ(s16.Solve(in), StepStatus::kOk);
     std::vector<Eigen::Vector3d> f64(s64.forces_N().begin(), s64.forces_N().end()),

@@ -40,24 +40,6 @@ const Model& BoxModel() {
   return m;
 }
 
-// m distinct random compliance nodes with random displacements of up to 1 mm.
-std::vector<ContactInput> RandomContacts(const Compliance& c, int m, std::mt19937& rng) {
-  std::uniform_int_distribution<std::int32_t> slot(0, c.num_nodes() - 1);
-  std::uniform_real_distribution<double> u(-1e-3, 1e-3);
-  std::vector<ContactInput> out;
-  while (static_cast<int>(out.size()) < m) {
-    const std::int32_t node = c.nodes()[slot(rng)];
-    bool dup = false;
-    for (const auto& x : out) dup = dup || x.node == node;
-    if (dup) continue;
-    ContactInput ci;
-    ci.node = node;
-    ci.u_m = {u(rng), u(rng), u(rng)};
-    out.push_back(ci);
-  }
-  return out;
-}
-
 struct Errors {
   double force = 0.0, displacement = 0.0;
 };
@@ -82,7 +64,7 @@ TEST(ContactSolver, Float64MatchesDirectSparseSolve) {
   std::mt19937 rng(1);
   double worst_f = 0.0, worst_u = 0.0;
   for (int trial = 0; trial < 12; ++trial) {
-    const Errors e = CompareWithDirect(m, *m.c64, RandomContacts(*m.c64, 1 + trial % 8, rng));
+    const Errors e = CompareWithDirect(m, *m.c64, test::RandomContacts(*m.c64, 1 + trial % 8, rng));
     worst_f = std::max(worst_f, e.force);
     worst_u = std::max(worst_u, e.displacement);
   }
@@ -97,7 +79,7 @@ TEST(ContactSolver, Float32MatchesDirectSparseSolve) {
   const Model& m = BoxModel();
   std::mt19937 rng(2);
   for (int trial = 0; trial < 8; ++trial) {
-    const Errors e = CompareWithDirect(m, *m.c32, RandomContacts(*m.c32, 1 + trial % 6, rng));
+    const Errors e = CompareWithDirect(m, *m.c32, test::RandomContacts(*m.c32, 1 + trial % 6, rng));
     EXPECT_LT(e.force, 1e-5);
     EXPECT_LT(e.displacement, 1e-5);
   }
@@ -113,7 +95,7 @@ TEST(ElementaryDisplacement, PaperFormAgreesWithSymmetricForm) {
   ContactSolver sym(m.c64, {.max_contacts = 10});
   std::mt19937 rng(3);
   for (int trial = 0; trial < 10; ++trial) {
-    const auto contacts = RandomContacts(*m.c64, 1 + trial % 5, rng);
+    const auto contacts = test::RandomContacts(*m.c64, 1 + trial % 5, rng);
     ASSERT_EQ(paper.Solve(contacts), StepStatus::kOk);
     ASSERT_EQ(sym.Solve(contacts), StepStatus::kOk);
     std::vector<Eigen::Vector3d> fp(paper.forces_N().begin(), paper.forces_N().end());
@@ -132,7 +114,7 @@ TEST(ElementaryDisplacement, PaperFormAgreesWithSymmetricForm) {
   auto T32 = std::make_shared<ElementaryDisplacementTensors>(
       ElementaryDisplacementTensors::FromCompliance(*m.c64, Precision::kFloat32));
   ElementaryDisplacementSolver paper32(T32, 10);
-  const auto contacts = RandomContacts(*m.c64, 5, rng);
+  const auto contacts = test::RandomContacts(*m.c64, 5, rng);
   ASSERT_EQ(paper32.Solve(contacts), StepStatus::kOk);
   ASSERT_EQ(sym.Solve(contacts), StepStatus::kOk);
   std::vector<Eigen::Vector3d> fp(paper32.forces_N().begin(), paper32.forces_N().end());
@@ -410,7 +392,7 @@ TEST(ContactSolver, NearIncompressibleMatchesDirect) {
   ContactSolver solver(c, {.max_contacts = 6});
   std::mt19937 rng(8);
   for (int trial = 0; trial < 5; ++trial) {
-    const auto in = RandomContacts(*c, 2 + trial, rng);
+    const auto in = test::RandomContacts(*c, 2 + trial, rng);
     ASSERT_EQ(solver.Solve(in), StepStatus::kOk);
     const test::DirectContact d = test::SolveDirect(b.mesh, soft, b.fixed, in);
     std::vector<Eigen::Vector3d> f(solver.forces_N().begin(), solver.forces_N().end());
@@ -435,7 +417,7 @@ TEST(ContactSolver, SliverElementsMatchDirect) {
   ContactSolver solver(c, {.max_contacts = 6});
   std::mt19937 rng(9);
   for (int trial = 0; trial < 5; ++trial) {
-    const auto in = RandomContacts(*c, 1 + trial, rng);
+    const auto in = test::RandomContacts(*c, 1 + trial, rng);
     ASSERT_EQ(solver.Solve(in), StepStatus::kOk);
     const test::DirectContact d = test::SolveDirect(b.mesh, kMat, b.fixed, in);
     std::vector<Eigen::Vector3d> f(solver.forces_N().begin(), solver.forces_N().end());
@@ -519,7 +501,7 @@ TEST(SurfaceField, SimdAndPortableKernelsAgree) {
   EXPECT_FALSE(simd.Evaluate(loads, wrong));
   // The solver's loads() reproduce its own surface field through a separate SurfaceField.
   ContactSolver solver(m.c32, {.max_contacts = 8});
-  ASSERT_EQ(solver.Solve(RandomContacts(*m.c32, 6, rng)), StepStatus::kOk);
+  ASSERT_EQ(solver.Solve(test::RandomContacts(*m.c32, 6, rng)), StepStatus::kOk);
   ASSERT_EQ(solver.loads().size(), 6u);
   ASSERT_TRUE(solver.SurfaceDisplacements(a));
   ASSERT_TRUE(portable.Evaluate(solver.loads(), b));

@@ -121,4 +121,22 @@ inline DirectContact SolveDirect(const TetMesh& mesh, const Material& mat,
   return d;
 }
 
+// m distinct random compliance nodes with random displacements of up to 1 mm.
+inline std::vector<ContactInput> RandomContacts(const Compliance& c, int m, std::mt19937& rng) {
+  std::uniform_int_distribution<std::int32_t> slot(0, c.num_nodes() - 1);
+  std::uniform_real_distribution<double> u(-1e-3, 1e-3);
+  std::vector<ContactInput> out;
+  while (static_cast<int>(out.size()) < m) {
+    const std::int32_t node = c.nodes()[slot(rng)];
+    bool dup = false;
+    for (const auto& x : out) dup = dup || x.node == node;
+    if (dup) continue;
+    ContactInput ci;
+    ci.node = node;
+    ci.u_m = {u(rng), u(rng), u(rng)};
+    out.push_back(ci);
+  }
+  return out;
+}
+
 }  // namespace handshare::fem::test
