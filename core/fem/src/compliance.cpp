@@ -311,18 +311,23 @@ Compliance Compliance::Precompute(const TetMesh& mesh, const Material& material,
   return c;
 }
 
-Compliance Compliance::ConvertedTo(Precision precision) const {
-  if (compressed_) throw InputError("", 0, "precision", "a compressed compliance is float32 only");
-  if (precision != Precision::kFloat32 && precision != Precision::kFloat64) {
-    throw InputError("", 0, "precision", "a compliance is stored in float32 or float64");
-  }
+Compliance Compliance::SameNodes() const {
   Compliance c;
-  c.precision_ = precision;
   c.material_ = material_;
   c.nodes_ = nodes_;
   c.fixed_ = fixed_;
   c.slot_of_ = slot_of_;
   c.fixed_flag_ = fixed_flag_;
+  return c;
+}
+
+Compliance Compliance::ConvertedTo(Precision precision) const {
+  if (compressed_) throw InputError("", 0, "precision", "a compressed compliance is float32 only");
+  if (precision != Precision::kFloat32 && precision != Precision::kFloat64) {
+    throw InputError("", 0, "precision", "a compliance is stored in float32 or float64");
+  }
+  Compliance c = SameNodes();
+  c.precision_ = precision;
   detail::Hasher64 h;
   h.Pod(hash_);
   h.Pod(static_cast<std::uint32_t>(precision));
@@ -344,13 +349,8 @@ Compliance Compliance::Compressed(const TetMesh& mesh, const CompressionOptions&
   std::vector<Eigen::Vector3d> p;
   p.reserve(nodes_.size());
   for (std::int32_t v : nodes_) p.push_back(mesh.positions_m()[v]);
-  Compliance c;
+  Compliance c = SameNodes();
   c.precision_ = Precision::kFloat32;
-  c.material_ = material_;
-  c.nodes_ = nodes_;
-  c.fixed_ = fixed_;
-  c.slot_of_ = slot_of_;
-  c.fixed_flag_ = fixed_flag_;
   detail::Hasher64 h;
   h.Pod(hash_);
   h.Pod(options.tolerance);

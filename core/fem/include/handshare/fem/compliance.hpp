@@ -191,6 +191,8 @@ class Compliance {
   std::size_t storage_bytes() const noexcept;
 
  private:
+  /// A compliance of the same nodes, material and fixed set, with no blocks yet.
+  Compliance SameNodes() const;
   void BuildLookup(std::int32_t num_mesh_nodes);
 
   Precision precision_ = Precision::kFloat64;
