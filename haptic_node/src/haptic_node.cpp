@@ -170,6 +170,7 @@ int HapticNode::Run() {
   session::PeerContacts peers;
   // Published states of rigid bodies (object id -> newest): followed unless this user owns it.
   std::map<std::string, msg::ObjectState> body_states;
+  std::map<std::string, std::uint64_t> body_received_ns;  // when each state arrived (this clock)
 
   const auto start = Clock::now();
   const auto period = std::chrono::duration_cast<Clock::duration>(
@@ -210,7 +211,10 @@ int HapticNode::Run() {
             say(line);
           }
         }
-        if (!renderer || renderer->scene().name != scene.name) body_states.clear();
+        if (!renderer || renderer->scene().name != scene.name) {
+          body_states.clear();
+          body_received_ns.clear();
+        }
         peers.Clear();
         renderer = next_renderer;
         have_report = false;
@@ -273,6 +277,7 @@ int HapticNode::Run() {
       while (object_reader.TakeNext(body, meta)) {
         if (!meta.valid_data || body.session().to_string() != config_.where.session) continue;
         body_states[body.object_id().to_string()] = body;
+        body_received_ns[body.object_id().to_string()] = common::SteadyNowNs();
       }
       FollowedBodies followed;
       for (const auto& [id, st] : body_states) {
@@ -286,6 +291,8 @@ int HapticNode::Run() {
         item.object = object;
         for (int k = 0; k < 3; ++k) item.p_WO_m[k] = st.p_WO_m()[k];
         for (int k = 0; k < 4; ++k) item.q_WO_wxyz[k] = st.q_WO_wxyz()[k];
+        for (int k = 0; k < 3; ++k) item.v_WO_m_per_s[k] = st.v_WO_m_per_s()[k];
+        item.received_ns = body_received_ns[id];
       }
       renderer->SetFollowed(followed);
     }

@@ -1,5 +1,7 @@
 #include "handshare/haptic/scene_renderer.hpp"
 
+#include "handshare/common/clock.hpp"
+
 namespace handshare::haptic {
 
 namespace {
@@ -54,16 +56,24 @@ void SceneRenderer::Render(double /*t_s*/, double dt_s, const DeviceReading& rea
   }
   // 1b. Bodies simulated elsewhere (another user owns them, or the world server): follow.
   followed_in_.Read(followed_);
-  for (int i = 0; i < std::min(followed_.count, kMaxReportedBodies); ++i) {
-    const auto& b = followed_.items[i];
-    if (b.object < 0 || b.object >= world.num_objects()) continue;
-    Eigen::Isometry3d X = Eigen::Isometry3d::Identity();
-    const Eigen::Quaterniond q(b.q_WO_wxyz[0], b.q_WO_wxyz[1], b.q_WO_wxyz[2], b.q_WO_wxyz[3]);
-    if (!(q.norm() > 0.5) || !q.coeffs().allFinite()) continue;
-    X.linear() = q.normalized().toRotationMatrix();
-    X.translation() = Eigen::Vector3d(b.p_WO_m[0], b.p_WO_m[1], b.p_WO_m[2]);
-    if (!X.translation().allFinite()) continue;
-    world.SetPose(b.object, X);
+  if (followed_.count > 0) {
+    const std::uint64_t now_ns = common::SteadyNowNs();
+    for (int i = 0; i < std::min(followed_.count, kMaxReportedBodies); ++i) {
+      const auto& b = followed_.items[i];
+      if (b.object < 0 || b.object >= world.num_objects()) continue;
+      Eigen::Isometry3d X = Eigen::Isometry3d::Identity();
+      const Eigen::Quaterniond q(b.q_WO_wxyz[0], b.q_WO_wxyz[1], b.q_WO_wxyz[2], b.q_WO_wxyz[3]);
+      if (!(q.norm() > 0.5) || !q.coeffs().allFinite()) continue;
+      X.linear() = q.normalized().toRotationMatrix();
+      X.translation() = Eigen::Vector3d(b.p_WO_m[0], b.p_WO_m[1], b.p_WO_m[2]);
+      if (!X.translation().allFinite()) continue;
+      Eigen::Vector3d v(b.v_WO_m_per_s[0], b.v_WO_m_per_s[1], b.v_WO_m_per_s[2]);
+      if (!v.allFinite()) v.setZero();
+      const double age_s = now_ns > b.received_ns ? 1e-9 * static_cast<double>(now_ns - b.received_ns) : 0.0;
+      X.translation() += std::min(age_s, FollowedBodies::kMaxDeadReckoning_s) * v;
+      world.SetPose(b.object, X);
+      world.SetVelocity(b.object, v, Eigen::Vector3d::Zero());
+    }
   }
   // 2. The other hands' contacts (newest set; kept until a newer one arrives).
   remote_in_.Read(remote_);

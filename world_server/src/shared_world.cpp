@@ -39,6 +39,14 @@ bool Finite(const msg::ContactSet& s) {
   return true;
 }
 
+// The owner's body velocity; zero when not finite or faster than any hand moves (a corrupt
+// sample must not fling the body out of the world).
+Eigen::Vector3d Velocity(const msg::ContactSet& s) {
+  constexpr double kMaxSpeed_m_per_s = 20.0;
+  const Eigen::Vector3d v(s.v_WO_m_per_s()[0], s.v_WO_m_per_s()[1], s.v_WO_m_per_s()[2]);
+  return v.allFinite() && v.norm() <= kMaxSpeed_m_per_s ? v : Eigen::Vector3d::Zero();
+}
+
 Eigen::Isometry3d Pose(const msg::ContactSet& s) {
   Eigen::Isometry3d X = Eigen::Isometry3d::Identity();
   const auto& q = s.q_WO_wxyz();
@@ -226,7 +234,11 @@ TickOutput SharedWorld::Tick(Clock::time_point now, double dt_s) {
   const double h = dt_s / substeps;
   for (int s = 0; s < substeps; ++s) {
     for (const auto& [body, who] : owned) {
-      if (who.second != nullptr) world.SetPose(body, Pose(*who.second));
+      if (who.second == nullptr) continue;
+      // At the owner's pose, with its velocity: when the owner lets go, the body flies on
+      // from there instead of stopping in mid-air.
+      world.SetPose(body, Pose(*who.second));
+      world.SetVelocity(body, Velocity(*who.second), Eigen::Vector3d::Zero());
     }
     const std::size_t n = s + 1 < substeps ? 0 : n_all;  // deformables: once per tick
     world.Step(h, no_hand, std::span<const contact::RemoteContact>(remote_.data(), n));
@@ -238,11 +250,10 @@ TickOutput SharedWorld::Tick(Clock::time_point now, double dt_s) {
     if (const auto it = owned.find(body); it != owned.end()) {
       if (it->second.second == nullptr) {
         // Granted, and the owner has not taken it over yet: tell it where the body is.
-        out.states.push_back(State(session_, id, it->second.first, world.pose(body), Eigen::Vector3d::Zero()));
+        out.states.push_back(State(session_, id, it->second.first, world.pose(body), world.body_velocity_W(body)));
       } else {
         const auto& set = *it->second.second;
-        out.states.push_back(State(session_, id, it->second.first, Pose(set),
-                                   Eigen::Vector3d(set.v_WO_m_per_s()[0], set.v_WO_m_per_s()[1], set.v_WO_m_per_s()[2])));
+        out.states.push_back(State(session_, id, it->second.first, Pose(set), Velocity(set)));
       }
       last_published_.erase(body);  // once free, its first pose is published
       continue;

@@ -264,6 +264,14 @@ void HapticWorld::SetPose(ObjectId id, const Eigen::Isometry3d& X) noexcept {
   o.w_W.setZero();
 }
 
+void HapticWorld::SetVelocity(ObjectId id, const Eigen::Vector3d& v_W, const Eigen::Vector3d& w_W) noexcept {
+  if (id < 0 || id >= num_objects() || !v_W.allFinite() || !w_W.allFinite()) return;
+  Object& o = *objects_[static_cast<std::size_t>(id)];
+  if (o.kind != ObjectKind::kDynamic) return;
+  o.v_W = v_W;
+  o.w_W = w_W;
+}
+
 StepReport HapticWorld::Step(double dt_s, std::span<const Eigen::Vector3d> p_WE,
                              std::span<const RemoteContact> remote) noexcept {
   StepReport report;

@@ -48,13 +48,20 @@ struct RemoteContacts {
 };
 
 /// Dynamic bodies another process simulates (owned by another user, or free and simulated by
-/// the world server): this hand follows their published poses (trivially copyable).
+/// the world server): this hand follows their published poses (trivially copyable). Between
+/// samples (published at display rate) each haptic step moves the body on at its published
+/// velocity from where it was at the sample's arrival (dead reckoning, at most
+/// kMaxDeadReckoning_s ahead), so a moving body glides instead of jumping every ~16 ms, and
+/// the body carries that velocity (contact damping, and a hand-over keeps its motion).
 struct FollowedBodies {
+  static constexpr double kMaxDeadReckoning_s = 0.1;
   std::int32_t count = 0;
   struct Item {
     std::int32_t object = -1;
     double p_WO_m[3] = {};
     double q_WO_wxyz[4] = {1, 0, 0, 0};
+    double v_WO_m_per_s[3] = {};
+    std::uint64_t received_ns = 0;  ///< common::SteadyNowNs() when the sample arrived
   } items[kMaxReportedBodies];
 };
 

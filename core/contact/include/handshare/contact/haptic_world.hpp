@@ -196,6 +196,10 @@ class HapticWorld {
   /// Moves an object (static: teleport; dynamic: also zeroes its velocity). Its proxies move
   /// with it. Real-time safe.
   void SetPose(ObjectId id, const Eigen::Isometry3d& X_WO) noexcept;
+  /// Sets a dynamic body's linear and angular velocity (call after SetPose, which zeroes them):
+  /// a body handed over from another simulation keeps its motion. Ignored for other objects
+  /// and for non-finite values. Real-time safe.
+  void SetVelocity(ObjectId id, const Eigen::Vector3d& v_W_m_per_s, const Eigen::Vector3d& w_W_rad_per_s) noexcept;
   /// Sum of the last step's reactions of the local fingertips on the object [N] (minus what
   /// the fingertips feel).
   Eigen::Vector3d finger_reaction_W(ObjectId id) const noexcept;

@@ -1,0 +1,107 @@
+// SharedWorld hand-over of a rigid body: the owner reports the ball's pose and velocity while
+// it holds it; when it lets go and the server frees the ball, the server simulates the ball on
+// from there with that velocity (it used to restart from rest, stopping in mid-air).
+#include "handshare/world_server/shared_world.hpp"
+
+#include <gtest/gtest.h>
+
+#include <fstream>
+#include <thread>
+
+#include "test_support.hpp"
+
+namespace handshare::world {
+namespace {
+
+using Clock = SharedWorld::Clock;
+constexpr double kMoon = 1.62;
+
+msg::ContactSet OwnerSet(const std::string& grasped, const Eigen::Vector3d& p, const Eigen::Vector3d& v) {
+  msg::ContactSet s;
+  s.session("s");
+  s.user("alice");
+  s.grasped_object_id(grasped);
+  s.simulating(true);  // an owner keeps reporting its body until the server frees it
+  s.simulated_object_id("ball");
+  for (int k = 0; k < 3; ++k) {
+    s.p_WO_m()[k] = p[k];
+    s.v_WO_m_per_s()[k] = v[k];
+  }
+  s.q_WO_wxyz({1.0, 0.0, 0.0, 0.0});
+  return s;
+}
+
+const msg::ObjectState* BallState(const TickOutput& out) {
+  for (const auto& st : out.states) {
+    if (st.object_id().to_string() == "ball") return &st;
+  }
+  return nullptr;
+}
+
+TEST(SharedWorld, ALetGoBallFliesOnWithTheOwnersVelocity) {
+  testing::TempDir dir;
+  std::filesystem::create_directories(dir.path() / "scenes");
+  const auto file = dir.path() / "scenes" / "moon.json";
+  std::ofstream(file) << R"({"name": "moon", "gravity_m_per_s2": [0, 0, -1.62], "objects": [
+      {"id": "ground", "kind": "rigid", "shape": "box", "position_m": [0, 0, -0.02], "half_extent_m": [0.3, 0.3, 0.02]},
+      {"id": "ball", "kind": "rigid", "shape": "sphere", "position_m": [0, 0, 0.04], "radius_m": 0.04, "mass_kg": 0.2}],
+      "messages": [{"language": "en", "text": "t", "next_action": "a"}]})";
+  SharedWorldOptions options;
+  options.models.cache_dir = dir.path() / "cache";
+  SharedWorld world("s", options);
+  world.SetScene(scene::LoadScene(file));
+  Clock::time_point now = Clock::now();
+  const auto dt = std::chrono::milliseconds(10);
+  for (int i = 0; i < 2000 && !world.ready(); ++i) {
+    std::this_thread::sleep_for(dt);
+    now += dt;
+    world.Tick(now, 0.01);
+  }
+  ASSERT_TRUE(world.ready());
+
+  // alice holds the ball and carries it up and sideways: 0.4 m/s in x, 0.6 m/s up.
+  const Eigen::Vector3d v(0.4, 0.0, 0.6);
+  Eigen::Vector3d p(0.0, 0.0, 0.15);
+  for (int i = 0; i < 10; ++i) {
+    now += dt;
+    p += 0.01 * v;
+    world.OnContactSet(OwnerSet("ball", p, v), now);
+    world.Tick(now, 0.01);
+  }
+  ASSERT_EQ(world.owner("ball"), "alice");
+  // She lets go (no grasp claim) and keeps reporting the body it simulates until the server
+  // frees it (release grace 100 ms); her ball moves on ballistically meanwhile.
+  Eigen::Vector3d vb = v;
+  int ticks_to_free = 0;
+  while (!world.owner("ball").empty()) {
+    ASSERT_LT(++ticks_to_free, 50);
+    now += dt;
+    p += 0.01 * vb;
+    vb.z() -= kMoon * 0.01;
+    world.OnContactSet(OwnerSet("", p, vb), now);
+    world.Tick(now, 0.01);
+  }
+  // Free: the server simulates it. Over the next 0.1 s it goes on at (0.4, 0, ~0.6 - g t).
+  const Eigen::Vector3d p_free = p;
+  Eigen::Vector3d last_p = p_free, last_v = Eigen::Vector3d::Zero();
+  for (int i = 0; i < 10; ++i) {
+    now += dt;
+    const TickOutput out = world.Tick(now, 0.01);
+    const msg::ObjectState* st = BallState(out);
+    ASSERT_NE(st, nullptr) << "a flying free ball is published every tick";
+    EXPECT_EQ(st->owner().to_string(), "");
+    last_p = Eigen::Vector3d(st->p_WO_m()[0], st->p_WO_m()[1], st->p_WO_m()[2]);
+    last_v = Eigen::Vector3d(st->v_WO_m_per_s()[0], st->v_WO_m_per_s()[1], st->v_WO_m_per_s()[2]);
+  }
+  // 0.1 s of free flight on the Moon from (p_free, vb): ballistic, less the scene bodies' light
+  // air damping (about 2% of the speed in 0.1 s). Restarting from rest instead would give
+  // v_x = 0 and a ball falling from p_free.
+  const Eigen::Vector3d expected = p_free + 0.1 * vb - Eigen::Vector3d(0, 0, 0.5 * kMoon * 0.01);
+  EXPECT_LT((last_p - expected).norm(), 1e-3) << last_p.transpose() << " vs " << expected.transpose();
+  EXPECT_GT(last_p.z(), p_free.z() + 0.02);  // still rising: it did not stop in mid-air
+  EXPECT_NEAR(last_v.x(), 0.4, 0.4 * 0.03);
+  EXPECT_NEAR(last_v.z(), vb.z() - kMoon * 0.1, 0.02);
+}
+
+}  // namespace
+}  // namespace handshare::world
