@@ -477,9 +477,15 @@ void BenchModel(Model& m, const fs::path& cache_dir, const Limits& lim) {
   for (double tol : {1e-3, 1e-5}) {
     CompressionStats st;
     auto cc = std::make_shared<const Compliance>(m.c64->Compressed(m.mesh, {.tolerance = tol, .leaf_nodes = 32}, &st));
-    std::fprintf(stderr, "  compressed tol %g: %lld tiles, %lld low-rank (mean rank %.1f), %.1f s, %.3g bytes = %.2f N^2\n",
-                 tol, static_cast<long long>(st.tiles), static_cast<long long>(st.low_rank_tiles), st.mean_rank, st.seconds,
-                 static_cast<double>(cc->storage_bytes()), static_cast<double>(cc->storage_bytes()) / (double(N) * N));
+    std::fprintf(stderr,
+                 "  compressed tol %g eta %g: %lld tiles (%lld low-rank views), %lld low-rank blocks (mean rank %.1f, max %d, "
+                 "largest %lld entries, %lld tried), %.1f s, %.3g bytes = %.2f N^2 (dense %.2f, factors %.2f, tables %.3f N^2)\n",
+                 tol, CompressionOptions{}.eta, static_cast<long long>(st.tiles), static_cast<long long>(st.low_rank_tiles),
+                 static_cast<long long>(st.low_rank_blocks), st.mean_rank, st.max_rank,
+                 static_cast<long long>(st.largest_block_entries), static_cast<long long>(st.blocks_tried), st.seconds,
+                 static_cast<double>(cc->storage_bytes()), static_cast<double>(cc->storage_bytes()) / (double(N) * N),
+                 static_cast<double>(st.dense_bytes) / (double(N) * N), static_cast<double>(st.factor_bytes) / (double(N) * N),
+                 static_cast<double>(st.table_bytes) / (double(N) * N));
     ContactSolver solver(cc, {.max_contacts = kContacts});
     double err_f = 0.0, err = 0.0;
     for (int s = 0; s < kRef; ++s) {

@@ -355,6 +355,9 @@ Compliance Compliance::Compressed(const TetMesh& mesh, const CompressionOptions&
   h.Pod(hash_);
   h.Pod(options.tolerance);
   h.Pod(options.leaf_nodes);
+  h.Pod(options.hierarchical);
+  h.Pod(options.eta);
+  h.Pod(options.max_block_entries);
   c.hash_ = h.digest();
   c.compressed_ = std::make_shared<const detail::CompressedBlocks>(
       detail::CompressedBlocks::Build(p, *this, options, stats));

@@ -2,10 +2,14 @@
 
 #include <immintrin.h>
 
+#include <Eigen/QR>
+#include <Eigen/SVD>
+
 #include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstring>
+#include <limits>
 #include <numeric>
 
 #include "handshare/fem/error.hpp"
@@ -13,51 +17,71 @@
 namespace handshare::fem::detail {
 namespace {
 
-// k-d tree: split the longest box axis at the median until a cluster has at most `leaf` nodes;
-// the leaves, in tree order, are the clusters (neighbouring leaves are neighbouring in space).
-void KdSplit(std::span<const Eigen::Vector3d> p, std::int32_t* first, std::int32_t* last, int leaf,
-             std::vector<std::int32_t>& leaf_sizes) {
-  const auto n = static_cast<int>(last - first);
+// k-d cluster tree: split the longest box axis at the median until a cluster has at most `leaf`
+// nodes. Every cluster (inner or leaf) is recorded with its bounding box and its ranges of
+// positions and of leaves; the leaves, in tree order, are the tiles' clusters (neighbouring
+// leaves are neighbouring in space), and every cluster is a contiguous run of them.
+struct Cluster {
+  std::int32_t begin = 0, end = 0;            // positions [begin, end)
+  std::int32_t leaf_begin = 0, leaf_end = 0;  // leaves [leaf_begin, leaf_end)
+  std::int32_t child[2] = {-1, -1};           // -1: a leaf
+  Eigen::Vector3d lo, hi;                     // bounding box
+  bool leaf() const { return child[0] < 0; }
+  std::int32_t size() const { return end - begin; }
+};
+
+std::int32_t KdSplit(std::span<const Eigen::Vector3d> p, std::int32_t* order, std::int32_t first, std::int32_t last,
+                     int leaf, std::vector<Cluster>& clusters, std::vector<std::int32_t>& leaf_sizes) {
+  const auto id = static_cast<std::int32_t>(clusters.size());
+  clusters.emplace_back();
+  Cluster c;
+  c.begin = first;
+  c.end = last;
+  c.lo = c.hi = p[order[first]];
+  for (std::int32_t s = first; s != last; ++s) {
+    c.lo = c.lo.cwiseMin(p[order[s]]);
+    c.hi = c.hi.cwiseMax(p[order[s]]);
+  }
+  c.leaf_begin = static_cast<std::int32_t>(leaf_sizes.size());
+  const std::int32_t n = last - first;
   if (n <= leaf) {
     leaf_sizes.push_back(n);
-    return;
+  } else {
+    int axis = 0;
+    (c.hi - c.lo).maxCoeff(&axis);
+    const std::int32_t mid = first + n / 2;
+    std::nth_element(order + first, order + mid, order + last, [&](std::int32_t a, std::int32_t b) {
+      return p[a][axis] < p[b][axis] || (p[a][axis] == p[b][axis] && a < b);
+    });
+    c.child[0] = KdSplit(p, order, first, mid, leaf, clusters, leaf_sizes);
+    c.child[1] = KdSplit(p, order, mid, last, leaf, clusters, leaf_sizes);
   }
-  Eigen::Vector3d lo = p[*first], hi = p[*first];
-  for (auto* s = first; s != last; ++s) {
-    lo = lo.cwiseMin(p[*s]);
-    hi = hi.cwiseMax(p[*s]);
-  }
-  int axis = 0;
-  (hi - lo).maxCoeff(&axis);
-  std::int32_t* mid = first + n / 2;
-  std::nth_element(first, mid, last, [&](std::int32_t a, std::int32_t b) {
-    return p[a][axis] < p[b][axis] || (p[a][axis] == p[b][axis] && a < b);
-  });
-  KdSplit(p, first, mid, leaf, leaf_sizes);
-  KdSplit(p, mid, last, leaf, leaf_sizes);
+  c.leaf_end = static_cast<std::int32_t>(leaf_sizes.size());
+  clusters[static_cast<std::size_t>(id)] = c;
+  return id;
 }
 
-// ACA with full pivoting on the explicit m x n tile R (destroyed: it ends as the residual).
+// ACA stops at this share of the block's error budget; the SVD recompression may spend the rest.
+constexpr double kAcaShare = 0.3;
+
+double Diameter(const Cluster& c) { return (c.hi - c.lo).norm(); }
+
+double BoxDistance(const Cluster& a, const Cluster& b) {
+  const Eigen::Vector3d gap = (a.lo - b.hi).cwiseMax(b.lo - a.hi).cwiseMax(0.0);
+  return gap.norm();
+}
+
+// ACA with full pivoting on the explicit m x n block R (destroyed: it ends as the residual).
 // Returns the rank, or -1 if the tolerance is not met within max_rank; U (m x r), V (n x r).
 int AcaFullPivot(Eigen::MatrixXd& R, double tol_abs, int max_rank, Eigen::MatrixXd& U, Eigen::MatrixXd& V) {
-  const Eigen::Index m = R.rows(), n = R.cols();
-  U.resize(m, max_rank);
-  V.resize(n, max_rank);
+  U.resize(R.rows(), std::max(max_rank, 1));
+  V.resize(R.cols(), std::max(max_rank, 1));
+  const double tol2 = tol_abs * tol_abs;
   for (int r = 0;; ++r) {
+    if (R.squaredNorm() <= tol2) return r;
     Eigen::Index pi = 0, pj = 0;
-    double best = -1.0, res2 = 0.0;
-    for (Eigen::Index j = 0; j < n; ++j)
-      for (Eigen::Index i = 0; i < m; ++i) {
-        const double a = std::abs(R(i, j));
-        res2 += a * a;
-        if (a > best) {
-          best = a;
-          pi = i;
-          pj = j;
-        }
-      }
-    if (std::sqrt(res2) <= tol_abs) return r;
-    if (r == max_rank || best == 0.0) return -1;
+    const double best = R.cwiseAbs().maxCoeff(&pi, &pj);
+    if (r >= max_rank || best == 0.0) return -1;
     U.col(r) = R.col(pj);
     V.col(r) = R.row(pi).transpose() / R(pi, pj);
     R.noalias() -= U.col(r) * V.col(r).transpose();
@@ -133,6 +157,217 @@ struct GemvAvx512 {
 
 }  // namespace
 
+namespace {
+
+// The offline partition and compression (see compressed_blocks.hpp).
+class HBuilder {
+ public:
+  HBuilder(const Compliance& exact, const CompressionOptions& options, const std::vector<Cluster>& clusters,
+           const std::vector<std::int32_t>& slot_of_pos, const std::vector<std::int32_t>& leaf_start,
+           std::vector<CompressedTile>& tiles, std::vector<CompressedBlockInfo>& blocks)
+      : exact_(exact), o_(options), cl_(clusters), slot_(slot_of_pos), leaf_start_(leaf_start), tiles_(tiles),
+        blocks_(blocks) {}
+
+  void Partition(std::int32_t si, std::int32_t ti) {
+    const Cluster& s = cl_[static_cast<std::size_t>(si)];
+    const Cluster& t = cl_[static_cast<std::size_t>(ti)];
+    if (si == ti) {
+      if (s.leaf()) {
+        Dense(s, t);
+      } else {
+        Partition(s.child[0], s.child[0]);
+        Partition(s.child[0], s.child[1]);
+        Partition(s.child[1], s.child[1]);
+      }
+      return;
+    }
+    const bool leaves = s.leaf() && t.leaf();
+    const std::int64_t entries = 9 * static_cast<std::int64_t>(s.size()) * t.size();
+    const bool admissible = o_.hierarchical && std::min(Diameter(s), Diameter(t)) <= o_.eta * BoxDistance(s, t);
+    if (leaves || (admissible && entries <= o_.max_block_entries)) {
+      const int rank = Compress(s, t);
+      if (rank >= 0 && leaves) {
+        Emit(s, t, U_, V_, rank);
+        return;
+      }
+      if (rank >= 0) {
+        // One U V^T for (s, t), unless its split (computed here, recursively) stores fewer floats.
+        const Eigen::MatrixXd U = U_.leftCols(rank), V = V_.leftCols(rank);
+        const Mark mark = Save();
+        Split(si, ti);
+        if (static_cast<std::int64_t>(rank) * (U.rows() + V.rows()) <=
+            static_cast<std::int64_t>(data.size()) - mark.data) {
+          Restore(mark);
+          Emit(s, t, U, V, rank);
+        }
+        return;
+      }
+    }
+    if (leaves) {
+      Dense(s, t);
+    } else {
+      Split(si, ti);
+    }
+  }
+
+  // Both clusters' children, or the one that is not a leaf.
+  void Split(std::int32_t si, std::int32_t ti) {
+    const Cluster& s = cl_[static_cast<std::size_t>(si)];
+    const Cluster& t = cl_[static_cast<std::size_t>(ti)];
+    if (s.leaf()) {
+      Partition(si, t.child[0]);
+      Partition(si, t.child[1]);
+    } else if (t.leaf()) {
+      Partition(s.child[0], ti);
+      Partition(s.child[1], ti);
+    } else {
+      for (std::int32_t a : s.child)
+        for (std::int32_t b : t.child) Partition(a, b);
+    }
+  }
+
+  std::vector<float> data;
+  std::int64_t low_rank_blocks = 0, rank_sum = 0, largest = 0, tried = 0, dense_floats = 0, factor_floats = 0;
+  int max_rank = 0;
+
+ private:
+  // What Emit and Dense have appended, to undo a split that a single block beats.
+  struct Mark {
+    std::int64_t data, blocks, low_rank_blocks, rank_sum, largest, dense_floats, factor_floats;
+    int max_rank;
+  };
+  Mark Save() const {
+    return {static_cast<std::int64_t>(data.size()), static_cast<std::int64_t>(blocks_.size()), low_rank_blocks, rank_sum,
+            largest, dense_floats, factor_floats, max_rank};
+  }
+  void Restore(const Mark& m) {
+    data.resize(static_cast<std::size_t>(m.data));
+    blocks_.resize(static_cast<std::size_t>(m.blocks));
+    low_rank_blocks = m.low_rank_blocks;
+    rank_sum = m.rank_sum;
+    largest = m.largest;
+    dense_floats = m.dense_floats;
+    factor_floats = m.factor_floats;
+    max_rank = m.max_rank;
+  }
+
+  // The exact block (s rows, t columns) into A_.
+  void Fill(const Cluster& s, const Cluster& t) {
+    A_.resize(3 * s.size(), 3 * t.size());
+    for (std::int32_t b = 0; b < t.size(); ++b)
+      for (std::int32_t a = 0; a < s.size(); ++a)
+        A_.block<3, 3>(3 * a, 3 * b) = exact_.Block(slot_[s.begin + a], slot_[t.begin + b]);
+  }
+
+  void Dense(const Cluster& s, const Cluster& t) {
+    Fill(s, t);
+    CompressedTile& tile = tiles_[static_cast<std::size_t>(TileIndexOf(s.leaf_begin, t.leaf_begin))];
+    tile.offset_u = Offset();
+    tile.ld_u = static_cast<std::int32_t>(A_.rows());
+    tile.rank = -1;
+    for (Eigen::Index j = 0; j < A_.cols(); ++j)
+      for (Eigen::Index i = 0; i < A_.rows(); ++i) data.push_back(static_cast<float>(A_(i, j)));
+    dense_floats += A_.size();
+    blocks_.push_back({s.begin, s.end, t.begin, t.end, -1});
+  }
+
+  // The rank of one U V^T for the whole block (factors in U_, V_) if the tolerance is met at a rank
+  // that saves memory against dense, else -1. ACA first
+  // runs to a fraction of the tolerance (its rank is not optimal), then the product is recompressed
+  // to the smallest rank whose explicit residual ||A - U V^T||_F meets the tolerance (QR of both
+  // factors, SVD of the r x r core; candidates from the singular values, each one checked).
+  int Compress(const Cluster& s, const Cluster& t) {
+    Fill(s, t);
+    ++tried;
+    const std::int64_t m = A_.rows(), n = A_.cols();
+    const int limit = static_cast<int>(std::min<std::int64_t>((m * n - 1) / (m + n), kMaxBlockRank));
+    const double norm = A_.norm(), budget = o_.tolerance * norm;
+    R_ = A_;
+    const int aca_limit = static_cast<int>(std::min<std::int64_t>({limit + limit / 2 + 2, m, n}));
+    const int aca = AcaFullPivot(R_, kAcaShare * budget, aca_limit, U_, V_);
+    if (aca < 0) return -1;
+    int rank = aca;
+    if (aca > 1) {
+      const Eigen::HouseholderQR<Eigen::MatrixXd> qu(U_.leftCols(aca)), qv(V_.leftCols(aca));
+      const Eigen::MatrixXd ru = qu.matrixQR().topRows(aca).triangularView<Eigen::Upper>();
+      const Eigen::MatrixXd rv = qv.matrixQR().topRows(aca).triangularView<Eigen::Upper>();
+      const Eigen::BDCSVD<Eigen::MatrixXd> svd(ru * rv.transpose(), Eigen::ComputeFullU | Eigen::ComputeFullV);
+      const Eigen::VectorXd& sv = svd.singularValues();
+      // Smallest k whose discarded singular values, added to the ACA residual, fit the budget.
+      const double r2 = R_.squaredNorm();
+      double tail2 = 0.0;
+      int k = aca;
+      while (k > 0 && r2 + tail2 + sv(k - 1) * sv(k - 1) <= budget * budget) {
+        tail2 += sv(k - 1) * sv(k - 1);
+        --k;
+      }
+      if (k < aca && k <= limit) {
+        const Eigen::MatrixXd qum = qu.householderQ() * Eigen::MatrixXd::Identity(m, aca);
+        const Eigen::MatrixXd qvm = qv.householderQ() * Eigen::MatrixXd::Identity(n, aca);
+        for (; k < aca; ++k) {
+          Eigen::MatrixXd u = qum * (svd.matrixU().leftCols(k) * sv.head(k).asDiagonal());
+          Eigen::MatrixXd v = qvm * svd.matrixV().leftCols(k);
+          R_ = A_;
+          R_.noalias() -= u * v.transpose();
+          if (R_.norm() <= budget) {
+            U_.leftCols(k) = u;
+            V_.leftCols(k) = v;
+            break;
+          }
+        }
+        rank = k;
+      }
+    }
+    return rank > limit ? -1 : rank;
+  }
+
+  // Stores U V^T (the first `rank` columns) for the block (s, t); its tiles become views.
+  void Emit(const Cluster& s, const Cluster& t, const Eigen::MatrixXd& U, const Eigen::MatrixXd& V, int rank) {
+    const std::int64_t m = U.rows(), n = V.rows();
+    const std::int32_t off_u = Offset();
+    for (int r = 0; r < rank; ++r)
+      for (Eigen::Index i = 0; i < m; ++i) data.push_back(static_cast<float>(U(i, r)));
+    const std::int32_t off_v = Offset();
+    for (int r = 0; r < rank; ++r)
+      for (Eigen::Index j = 0; j < n; ++j) data.push_back(static_cast<float>(V(j, r)));
+    for (std::int32_t J = t.leaf_begin; J < t.leaf_end; ++J)
+      for (std::int32_t I = s.leaf_begin; I < s.leaf_end; ++I) {
+        CompressedTile& tile = tiles_[static_cast<std::size_t>(TileIndexOf(I, J))];
+        tile.rank = rank;
+        tile.ld_u = static_cast<std::int32_t>(m);
+        tile.ld_v = static_cast<std::int32_t>(n);
+        tile.offset_u = off_u + 3 * (leaf_start_[I] - s.begin);
+        tile.offset_v = off_v + 3 * (leaf_start_[J] - t.begin);
+      }
+    blocks_.push_back({s.begin, s.end, t.begin, t.end, rank});
+    ++low_rank_blocks;
+    rank_sum += rank;
+    max_rank = std::max(max_rank, rank);
+    largest = std::max(largest, m * n);
+    factor_floats += static_cast<std::int64_t>(rank) * (m + n);
+  }
+
+  std::int32_t Offset() const {
+    if (data.size() >= static_cast<std::size_t>(std::numeric_limits<std::int32_t>::max()) / 2) {
+      throw InputError("", 0, "compliance", "too large for the compressed storage (2^30 floats of factors)");
+    }
+    return static_cast<std::int32_t>(data.size());
+  }
+
+  static std::int64_t TileIndexOf(std::int32_t I, std::int32_t J) { return static_cast<std::int64_t>(J) * (J + 1) / 2 + I; }
+
+  const Compliance& exact_;
+  const CompressionOptions& o_;
+  const std::vector<Cluster>& cl_;
+  const std::vector<std::int32_t>& slot_;
+  const std::vector<std::int32_t>& leaf_start_;
+  std::vector<CompressedTile>& tiles_;
+  std::vector<CompressedBlockInfo>& blocks_;
+  Eigen::MatrixXd A_, R_, U_, V_;
+};
+
+}  // namespace
+
 CompressedBlocks CompressedBlocks::Build(std::span<const Eigen::Vector3d> positions_m, const Compliance& exact,
                                          const CompressionOptions& options, CompressionStats* stats) {
   const auto t0 = std::chrono::steady_clock::now();
@@ -140,11 +375,16 @@ CompressedBlocks CompressedBlocks::Build(std::span<const Eigen::Vector3d> positi
   if (static_cast<std::int32_t>(positions_m.size()) != N) throw InputError("", 0, "positions", "one per compliance node");
   if (!(options.tolerance > 0.0 && options.tolerance < 1.0)) throw InputError("", 0, "tolerance", "must be in (0, 1)");
   if (options.leaf_nodes < 4 || options.leaf_nodes > 256) throw InputError("", 0, "leaf_nodes", "must be in 4..256");
+  if (!(options.eta > 0.0 && options.eta <= 100.0)) {
+    throw InputError("", 0, "eta", "must be in (0, 100] (admissibility min(diam s, diam t) <= eta dist(s, t))");
+  }
+  if (options.max_block_entries < 1) throw InputError("", 0, "max_block_entries", "must be positive");
   CompressedBlocks h;
   h.slot_of_pos_.resize(static_cast<std::size_t>(N));
   std::iota(h.slot_of_pos_.begin(), h.slot_of_pos_.end(), 0);
   std::vector<std::int32_t> sizes;
-  KdSplit(positions_m, h.slot_of_pos_.data(), h.slot_of_pos_.data() + N, options.leaf_nodes, sizes);
+  std::vector<Cluster> clusters;
+  if (N > 0) KdSplit(positions_m, h.slot_of_pos_.data(), 0, N, options.leaf_nodes, clusters, sizes);
   h.pos_.resize(static_cast<std::size_t>(N));
   for (std::int32_t p = 0; p < N; ++p) h.pos_[h.slot_of_pos_[p]] = p;
   h.leaf_start_.assign(1, 0);
@@ -155,44 +395,21 @@ CompressedBlocks CompressedBlocks::Build(std::span<const Eigen::Vector3d> positi
     for (std::int32_t p = h.leaf_start_[I]; p < h.leaf_start_[I + 1]; ++p) h.leaf_of_pos_[p] = I;
 
   h.tiles_.resize(static_cast<std::size_t>(TileIndex(0, L)));
-  std::int64_t low_rank = 0, rank_sum = 0;
-  Eigen::MatrixXd A, U, V;
-  std::vector<float> data;  // grows; copied into aligned storage at the end
-  for (std::int32_t J = 0; J < L; ++J) {
-    for (std::int32_t I = 0; I <= J; ++I) {
-      const std::int32_t sI = h.leaf_start_[I], sJ = h.leaf_start_[J];
-      const int m = 3 * (h.leaf_start_[I + 1] - sI), n = 3 * (h.leaf_start_[J + 1] - sJ);
-      A.resize(m, n);
-      for (int b = 0; b < n / 3; ++b)
-        for (int a = 0; a < m / 3; ++a)
-          A.block<3, 3>(3 * a, 3 * b) = exact.Block(h.slot_of_pos_[sI + a], h.slot_of_pos_[sJ + b]);
-      Tile& tile = h.tiles_[static_cast<std::size_t>(TileIndex(I, J))];
-      tile.offset = static_cast<std::int64_t>(data.size());
-      int rank = -1;
-      if (I != J) {
-        const int max_rank = (m * n - 1) / (m + n);  // low rank only where it is smaller
-        Eigen::MatrixXd R = A;
-        rank = AcaFullPivot(R, options.tolerance * A.norm(), max_rank, U, V);
-      }
-      tile.rank = rank;
-      if (rank < 0) {
-        for (int j = 0; j < n; ++j)
-          for (int i = 0; i < m; ++i) data.push_back(static_cast<float>(A(i, j)));
-      } else {
-        ++low_rank;
-        rank_sum += rank;
-        for (int t = 0; t < rank; ++t)
-          for (int i = 0; i < m; ++i) data.push_back(static_cast<float>(U(i, t)));
-        for (int t = 0; t < rank; ++t)
-          for (int j = 0; j < n; ++j) data.push_back(static_cast<float>(V(j, t)));
-      }
-    }
-  }
-  h.data_.assign(data.begin(), data.end());
+  HBuilder b(exact, options, clusters, h.slot_of_pos_, h.leaf_start_, h.tiles_, h.blocks_);
+  if (N > 0) b.Partition(0, 0);
+  h.data_.assign(b.data.begin(), b.data.end());
+  h.blocks_.shrink_to_fit();
   if (stats != nullptr) {
     stats->tiles = static_cast<std::int64_t>(h.tiles_.size());
-    stats->low_rank_tiles = low_rank;
-    stats->mean_rank = low_rank > 0 ? static_cast<double>(rank_sum) / static_cast<double>(low_rank) : 0.0;
+    stats->low_rank_tiles = std::count_if(h.tiles_.begin(), h.tiles_.end(), [](const Tile& t) { return t.rank >= 0; });
+    stats->low_rank_blocks = b.low_rank_blocks;
+    stats->mean_rank = b.low_rank_blocks > 0 ? static_cast<double>(b.rank_sum) / static_cast<double>(b.low_rank_blocks) : 0.0;
+    stats->max_rank = b.max_rank;
+    stats->largest_block_entries = b.largest;
+    stats->dense_bytes = b.dense_floats * static_cast<std::int64_t>(sizeof(float));
+    stats->factor_bytes = b.factor_floats * static_cast<std::int64_t>(sizeof(float));
+    stats->table_bytes = static_cast<std::int64_t>(h.storage_bytes() - h.data_.size() * sizeof(float));
+    stats->blocks_tried = b.tried;
     stats->seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   }
   return h;
@@ -206,20 +423,20 @@ Eigen::Matrix3d CompressedBlocks::Block(std::int32_t n, std::int32_t k) const no
     std::swap(p, q);
     std::swap(I, J);
   }
-  const int a = p - leaf_start_[I], b = q - leaf_start_[J];
-  const std::int64_t m = 3 * (leaf_start_[I + 1] - leaf_start_[I]), nn = 3 * (leaf_start_[J + 1] - leaf_start_[J]);
+  const std::int64_t a = p - leaf_start_[I], b = q - leaf_start_[J];
   const Tile& tile = tiles_[static_cast<std::size_t>(TileIndex(I, J))];
-  const float* base = data_.data() + tile.offset;
+  const float* U = data_.data() + tile.offset_u;
+  const float* V = data_.data() + tile.offset_v;
   Eigen::Matrix3d B;
   for (int c = 0; c < 3; ++c)
     for (int r = 0; r < 3; ++r) {
       if (tile.rank < 0) {
-        B(r, c) = base[(3 * b + c) * m + 3 * a + r];
+        B(r, c) = U[(3 * b + c) * tile.ld_u + 3 * a + r];
       } else {
-        const float* U = base;
-        const float* V = base + m * tile.rank;
         double s = 0.0;
-        for (int t = 0; t < tile.rank; ++t) s += static_cast<double>(U[t * m + 3 * a + r]) * V[t * nn + 3 * b + c];
+        for (std::int64_t t = 0; t < tile.rank; ++t) {
+          s += static_cast<double>(U[t * tile.ld_u + 3 * a + r]) * V[t * tile.ld_v + 3 * b + c];
+        }
         B(r, c) = s;
       }
     }
@@ -273,7 +490,7 @@ void CompressedBlocks::Apply(std::span<const NodeLoad> loads, Eigen::Vector3d* o
 }
 
 std::size_t CompressedBlocks::storage_bytes() const noexcept {
-  return data_.size() * sizeof(float) + tiles_.size() * sizeof(Tile) +
+  return data_.size() * sizeof(float) + tiles_.size() * sizeof(Tile) + blocks_.size() * sizeof(CompressedBlockInfo) +
          (slot_of_pos_.size() + pos_.size() + leaf_of_pos_.size() + leaf_start_.size()) * sizeof(std::int32_t);
 }
 

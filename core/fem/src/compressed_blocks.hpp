@@ -1,12 +1,22 @@
 #pragma once
-// Internal: the compressed compliance (block low-rank). The compliance nodes are ordered by a
-// k-d tree (spatially coherent clusters of at most leaf_nodes nodes); the matrix is cut into
-// tiles of cluster pairs (I <= J, symmetric: C_JI = C_IJ^T). Diagonal tiles are dense; every
-// off-diagonal tile is compressed to U V^T by adaptive cross approximation with full pivoting
-// on the exact tile, stopping when the residual ||A - U V^T||_F <= tolerance ||A||_F (checked
-// on the explicit residual, not estimated), and kept low-rank only where that saves memory
-// (r (m + n) < m n), else dense. Neighbouring clusters stay dense by that rule; far ones are
-// smooth (the Green's function decays) and compress.
+// Internal: the compressed compliance, a hierarchical matrix (H-matrix). The compliance nodes are
+// ordered by a k-d tree (spatially coherent clusters; leaves of at most leaf_nodes nodes). The
+// upper triangle is partitioned into blocks of cluster pairs (s, t): the diagonal recurses to the
+// leaves; an off-diagonal pair that is admissible, min(diam s, diam t) <= eta dist(s, t) on the
+// bounding boxes, and has at most max_block_entries entries (larger ones are split, not streamed)
+// is compressed as one U V^T: adaptive cross approximation with full pivoting on the explicit
+// block down to 0.3 tolerance, then recompressed (QR of the factors, SVD of the small core) to
+// the smallest rank whose explicit residual ||A - U V^T||_F <= tolerance ||A||_F (computed, not
+// estimated). It is kept where r (m + n) < m n and where it stores fewer floats than its split
+// (which is computed as well, recursively); otherwise the split stays (both clusters, or the one
+// that is not a leaf). A pair of leaves is always tried on its own (as the flat version did) and
+// else stored dense. So ||C - C~||_F <= tolerance ||C||_F overall, blocks near the diagonal exact
+// to float32, far ones smooth (the Green's function decays) and compressed.
+//
+// For O(1) lookup the kernels still see one tile per leaf pair (I <= J, C_JI = C_IJ^T): a dense
+// tile (3 m x 3 n column-major, leading dimension 3 m) or a view into a block's factors: leaf I's
+// rows of U start at offset_u with leading dimension ld_u (the block's row count), leaf J's rows
+// of V at offset_v with ld_v. Factors are stored once per block.
 // Block() and Apply() are real-time safe: noexcept, no allocation (Apply uses caller scratch).
 
 #include <cstdint>
@@ -22,10 +32,22 @@
 
 namespace handshare::fem::detail {
 
+// Offsets in floats into the factor data (int32: the build checks that the data fits).
 struct CompressedTile {
-  std::int64_t offset = 0;
-  std::int32_t rank = -1;  // -1: dense (3 m x 3 n column-major), else U (3m x r) then V (3n x r)
+  std::int32_t offset_u = 0;  // dense: the tile, column-major, leading dimension ld_u = 3 m
+  std::int32_t offset_v = 0;
+  std::int32_t ld_u = 0, ld_v = 0;
+  std::int32_t rank = -1;  // -1: dense, else U rows at offset_u (ld_u), V rows at offset_v (ld_v)
 };
+
+// One block of the partition (for inspection and tests): rows [row_begin, row_end) and columns
+// [col_begin, col_end) in cluster order (row_end <= col_begin or the same leaf), rank -1: dense.
+struct CompressedBlockInfo {
+  std::int32_t row_begin = 0, row_end = 0, col_begin = 0, col_end = 0, rank = -1;
+};
+
+// Most rank of a kept block (the Apply kernels keep one weight per rank on the stack).
+inline constexpr int kMaxBlockRank = 256;
 
 // Plain view of the structure, for the kernels.
 struct CompressedView {
@@ -50,6 +72,9 @@ class CompressedBlocks {
   void Apply(std::span<const NodeLoad> loads, Eigen::Vector3d* out, float* scratch, Isa isa) const noexcept;
   std::size_t storage_bytes() const noexcept;
   std::size_t scratch_floats() const noexcept { return 3 * pos_.size() + 64; }
+  /// The partition of the upper triangle, and the slot of each cluster-order position.
+  std::span<const CompressedBlockInfo> blocks() const noexcept { return blocks_; }
+  std::span<const std::int32_t> slot_of_pos() const noexcept { return slot_of_pos_; }
 
  private:
   using Tile = CompressedTile;
@@ -64,6 +89,7 @@ class CompressedBlocks {
   std::vector<std::int32_t> leaf_of_pos_;
   std::vector<std::int32_t> leaf_start_;   // num_leaves + 1
   std::vector<Tile> tiles_;
+  std::vector<CompressedBlockInfo> blocks_;
   AlignedVector<float> data_;
 };
 

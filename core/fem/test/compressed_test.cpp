@@ -9,7 +9,9 @@
 #include <cstring>
 #include <memory>
 #include <random>
+#include <string>
 
+#include "../src/compressed_blocks.hpp"
 #include "../src/planar_columns.hpp"
 #include "handshare/fem/compliance.hpp"
 #include "handshare/fem/contact_solver.hpp"
@@ -112,6 +114,70 @@ TEST(CompressedCompliance, BlocksAreExactNearAndWithinToleranceFar) {
   }
   EXPECT_LT(std::sqrt(err2 / norm2), tol * 1.01 + 1e-7);
   EXPECT_GT(std::sqrt(err2 / norm2), 0.0);
+}
+
+// The hierarchical partition at two admissibility parameters: the blocks cover every leaf pair
+// of the upper triangle exactly once, some low-rank blocks span several leaf tiles (otherwise it
+// would be the flat grid), and each block, compared entry by entry with the exact compliance,
+// meets ||A - A~||_F <= tol ||A||_F (its checked residual, plus float32 rounding of the factors:
+// bound 1.01 tol + 1e-6), dense ones to float32 (1e-6).
+TEST(CompressedCompliance, HierarchicalBlocksWithinToleranceOfExact) {
+  const Model& m = WideModel();
+  const double tol = 1e-4;
+  const std::int32_t N = m.c64->num_nodes();
+  for (double eta : {0.7, 3.0}) {
+    CompressionStats st;
+    const Compliance c = m.c64->Compressed(m.block.mesh, {.tolerance = tol, .leaf_nodes = 16, .eta = eta}, &st);
+    const detail::CompressedBlocks& h = *c.compressed();
+    const auto slot = h.slot_of_pos();
+    std::int64_t covered = 0, multi_tile = 0, low_rank = 0;
+    for (const detail::CompressedBlockInfo& b : h.blocks()) {
+      ASSERT_TRUE(b.row_end <= b.col_begin || (b.row_begin == b.col_begin && b.row_end == b.col_end));
+      const bool diagonal = b.row_begin == b.col_begin;
+      covered += diagonal ? std::int64_t{b.row_end - b.row_begin} * (b.row_end - b.row_begin + 1) / 2
+                          : std::int64_t{b.row_end - b.row_begin} * (b.col_end - b.col_begin);
+      double err2 = 0.0, norm2 = 0.0;
+      for (std::int32_t q = b.col_begin; q < b.col_end; ++q)
+        for (std::int32_t p = b.row_begin; p < b.row_end; ++p) {
+          const Eigen::Matrix3d e = m.c64->Block(slot[p], slot[q]);
+          err2 += (c.Block(slot[p], slot[q]) - e).squaredNorm();
+          norm2 += e.squaredNorm();
+        }
+      const double rel = std::sqrt(err2 / norm2);
+      if (b.rank < 0) {
+        EXPECT_LT(rel, 1e-6) << "dense block at " << b.row_begin << ", " << b.col_begin;
+      } else {
+        ++low_rank;
+        if (b.row_end - b.row_begin > 16 || b.col_end - b.col_begin > 16) ++multi_tile;
+        EXPECT_LT(rel, 1.01 * tol + 1e-6) << "eta " << eta << " block rows " << b.row_begin << ".." << b.row_end
+                                          << " cols " << b.col_begin << ".." << b.col_end << " rank " << b.rank;
+      }
+    }
+    EXPECT_EQ(covered, std::int64_t{N} * (N + 1) / 2) << "the blocks must tile the upper triangle once";
+    EXPECT_EQ(low_rank, st.low_rank_blocks);
+    EXPECT_GT(multi_tile, 0) << "eta " << eta << ": no block spans more than one leaf pair";
+    EXPECT_GT(st.largest_block_entries, 48 * 48);
+    RecordProperty("bytes_per_N2_eta_" + test::Sci(eta),
+                   test::Sci(static_cast<double>(c.storage_bytes()) / (double(N) * N)));
+  }
+}
+
+// On the same mid-size model (750 nodes) the hierarchical partition stores strictly less than
+// the flat grid of leaf tiles at the same tolerance (it tries every leaf pair the flat one tries,
+// and merges far ones into blocks whose factors are shared).
+TEST(CompressedCompliance, HierarchicalIsSmallerThanFlat) {
+  const Model& m = WideModel();
+  for (double tol : {1e-3, 1e-5}) {
+    CompressionStats flat_st, h_st;
+    const Compliance flat =
+        m.c64->Compressed(m.block.mesh, {.tolerance = tol, .leaf_nodes = 16, .hierarchical = false}, &flat_st);
+    const Compliance h = m.c64->Compressed(m.block.mesh, {.tolerance = tol, .leaf_nodes = 16}, &h_st);
+    EXPECT_LT(h.storage_bytes(), flat.storage_bytes()) << "tolerance " << tol;
+    EXPECT_LE(flat_st.largest_block_entries, 48 * 48) << "flat blocks are single leaf tiles";
+    EXPECT_LT(h_st.factor_bytes, flat_st.factor_bytes);
+    RecordProperty("hierarchical_over_flat_tol_" + test::Sci(tol),
+                   test::Sci(static_cast<double>(h.storage_bytes()) / static_cast<double>(flat.storage_bytes())));
+  }
 }
 
 // The column copy: float32 (rounding only, 6e-8 per entry; bound 1e-5 as for float32 storage)
@@ -232,6 +298,15 @@ TEST(CompressedCompliance, BadInputsAreRejected) {
   EXPECT_THROW((void)m.c64->Compressed(m.block.mesh, {.tolerance = 0.0}), InputError);
   EXPECT_THROW((void)m.c64->Compressed(m.block.mesh, {.tolerance = 1.5}), InputError);
   EXPECT_THROW((void)m.c64->Compressed(m.block.mesh, {.tolerance = 1e-4, .leaf_nodes = 2}), InputError);
+  for (double eta : {0.0, -1.0, 101.0, std::nan("")}) {
+    try {
+      (void)m.c64->Compressed(m.block.mesh, {.tolerance = 1e-4, .eta = eta});
+      ADD_FAILURE() << "eta " << eta << " accepted";
+    } catch (const InputError& e) {
+      EXPECT_NE(std::string(e.what()).find("eta"), std::string::npos) << e.what();
+    }
+  }
+  EXPECT_THROW((void)m.c64->Compressed(m.block.mesh, {.tolerance = 1e-4, .max_block_entries = 0}), InputError);
   const TetMesh other = MakeBoxMesh({0.1, 0.1, 0.1}, {2, 2, 2});
   EXPECT_THROW((void)m.c64->Compressed(other, {}), InputError);
   const Compliance c = m.c64->Compressed(m.block.mesh, {.tolerance = 1e-3, .leaf_nodes = 16});
