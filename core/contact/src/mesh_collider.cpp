@@ -1,6 +1,7 @@
 #include "handshare/contact/mesh_collider.hpp"
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <functional>
 #include <limits>
@@ -31,6 +32,8 @@ MeshCollider::MeshCollider(std::shared_ptr<const TriMesh> mesh, std::int32_t max
   if (!mesh_) throw std::invalid_argument("MeshCollider: null mesh");
   mesh_->Validate();
   if (max_candidates_ < 1) throw std::invalid_argument("MeshCollider: max_candidates must be >= 1");
+  static std::atomic<std::uint64_t> next_id{1};
+  id_ = next_id.fetch_add(1, std::memory_order_relaxed);
   std::vector<fcl::Vector3d> points(mesh_->p_O_m.begin(), mesh_->p_O_m.end());
   std::vector<fcl::Triangle> tris;
   tris.reserve(mesh_->triangles.size());

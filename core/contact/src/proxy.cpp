@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <limits>
 
 #include <Eigen/Dense>
@@ -27,7 +28,17 @@ constexpr double kPlaneSlack_m = 1e-10;
 }  // namespace
 
 ProxySolver::ProxySolver(std::int32_t max_candidates)
-    : candidates_(static_cast<std::size_t>(std::max<std::int32_t>(max_candidates, 1))) {}
+    : candidates_(static_cast<std::size_t>(std::max<std::int32_t>(max_candidates, 1))), ends_(kEndEntries) {}
+
+std::size_t ProxySolver::EndSlot(const Eigen::Vector3d& x) noexcept {
+  std::uint64_t h = 0;
+  for (int k = 0; k < 3; ++k) {
+    std::uint64_t b = 0;
+    std::memcpy(&b, &x[k], sizeof b);
+    h = (h ^ b) * 0x9E3779B97F4A7C15ull;
+  }
+  return static_cast<std::size_t>(h >> 58) % kEndEntries;
+}
 
 bool ProxySolver::Gather(MeshCollider& collider, const Eigen::Vector3d& center,
                          double radius) noexcept {
@@ -223,7 +234,7 @@ ProxyContact ProxySolver::Step(MeshCollider& collider, const ProxyParams& params
                                ProxyState& state) noexcept {
   ProxyContact out;
   out.x_O_m = state.x_O_m;
-  cons_valid_ = false;  // constraints are reused within one Step only
+  cons_valid_ = false;  // set again below only from this collider's own results
   if (!goal.allFinite()) return out;
   if (!state.initialized || !state.x_O_m.allFinite()) {
     state.x_O_m = goal;
@@ -242,6 +253,20 @@ ProxyContact ProxySolver::Step(MeshCollider& collider, const ProxyParams& params
   }
   bool trunc = false;
   std::int32_t iters = 0;
+  // Where the last Step of this proxy ended, the constraints are already known.
+  if (!reference_) {
+    const EndEntry& e = ends_[EndSlot(x0)];
+    if (e.collider_id == collider.id() && e.radius_m == params.radius_m && e.skin_m == params.skin_m &&
+        std::memcmp(e.x.data(), x0.data(), sizeof(double) * 3) == 0) {
+      std::copy(e.cons.begin(), e.cons.begin() + e.m, cons_.begin());
+      cons_m_ = e.m;
+      cons_x_ = x0;
+      cons_collider_ = &collider;
+      cons_radius_m_ = params.radius_m;
+      cons_skin_m_ = params.skin_m;
+      cons_valid_ = true;
+    }
+  }
   const Eigen::Vector3d x_f = MoveFrom(collider, params, x0, goal, &trunc, &iters);
   Eigen::Vector3d x = x_f;
   bool slipped = false;
@@ -280,6 +305,15 @@ ProxyContact ProxySolver::Step(MeshCollider& collider, const ProxyParams& params
   } else {
     Gather(collider, x, params.radius_m + params.skin_m + 4.0 * params.skin_m);
     m = CollectConstraints(collider, params, x);
+  }
+  if (!reference_ && ConstraintsValidAt(collider, params, x)) {  // for the next Step from x
+    EndEntry& end = ends_[EndSlot(x)];
+    end.collider_id = collider.id();
+    end.radius_m = params.radius_m;
+    end.skin_m = params.skin_m;
+    end.x = x;
+    end.m = m;
+    std::copy(cons_.begin(), cons_.begin() + m, end.cons.begin());
   }
   out.truncated = trunc || truncated_;
   out.iterations = iters;

@@ -69,6 +69,9 @@ class MeshCollider {
     return tri_plane_[static_cast<std::size_t>(t)];
   }
   std::int32_t max_candidates() const noexcept { return max_candidates_; }
+  /// Number unique to this collider among all built in the process (keys caches of results
+  /// that depend on the mesh only).
+  std::uint64_t id() const noexcept { return id_; }
   /// Bounding sphere of the mesh in O (centre of the vertices' box, radius to the farthest).
   const Eigen::Vector3d& bound_center_O_m() const noexcept { return bound_c_; }
   double bound_radius_m() const noexcept { return bound_r_; }
@@ -91,6 +94,7 @@ class MeshCollider {
   double coord_scale_m_ = 0.0;  // largest |coordinate| of the mesh (float slack of the boxes)
   std::shared_ptr<const TriMesh> mesh_;
   std::int32_t max_candidates_ = 0;
+  std::uint64_t id_ = 0;
   Eigen::Vector3d bound_c_ = Eigen::Vector3d::Zero();
   double bound_r_ = 0.0;
 };

@@ -124,6 +124,20 @@ class ProxySolver {
   Eigen::Vector3d cons_x_ = Eigen::Vector3d::Zero();
   int cons_m_ = 0;
   const MeshCollider* cons_collider_ = nullptr;
+  // Constraints where earlier Steps ended (the next Step of that proxy starts there), keyed by
+  // collider id, R, skin and the point's bits; direct-mapped by the point (pure function of the
+  // key, so any entry that matches is right whichever finger wrote it).
+  struct EndEntry {
+    std::uint64_t collider_id = 0;  // 0: empty
+    double radius_m = 0.0;
+    double skin_m = 0.0;
+    Eigen::Vector3d x = Eigen::Vector3d::Zero();
+    int m = 0;
+    std::array<Constraint, kMaxConstraints> cons{};
+  };
+  static constexpr std::size_t kEndEntries = 64;
+  std::vector<EndEntry> ends_;
+  static std::size_t EndSlot(const Eigen::Vector3d& x) noexcept;
   double cons_radius_m_ = 0.0;
   double cons_skin_m_ = 0.0;
 };
