@@ -47,16 +47,40 @@ double SweepPoint(const Eigen::Vector3d& m, const Eigen::Vector3d& d, double R) 
 
 }  // namespace
 
+SweepTriangle MakeSweepTriangle(const Eigen::Vector3d& a, const Eigen::Vector3d& b,
+                                const Eigen::Vector3d& c) noexcept {
+  SweepTriangle t;
+  t.v[0] = a;
+  t.v[1] = b;
+  t.v[2] = c;
+  Eigen::Vector3d n = (b - a).cross(c - a);
+  const double nn = n.norm();
+  t.has_face = nn > 0.0;
+  if (t.has_face) n /= nn;
+  t.n = n;
+  for (int e = 0; e < 3; ++e) {
+    t.ed[e] = t.v[(e + 1) % 3] - t.v[e];
+    t.len2[e] = t.ed[e].squaredNorm();
+  }
+  return t;
+}
+
 double SweepSphereTriangle(const Eigen::Vector3d& x, const Eigen::Vector3d& d, double R_m,
                            const Eigen::Vector3d& a, const Eigen::Vector3d& b,
                            const Eigen::Vector3d& c) noexcept {
+  return SweepSphereTriangle(x, d, R_m, MakeSweepTriangle(a, b, c));
+}
+
+double SweepSphereTriangle(const Eigen::Vector3d& x, const Eigen::Vector3d& d, double R_m,
+                           const SweepTriangle& tri) noexcept {
+  const Eigen::Vector3d& a = tri.v[0];
+  const Eigen::Vector3d& b = tri.v[1];
+  const Eigen::Vector3d& c = tri.v[2];
   double best = 2.0;
   // Face interior: the plane offset by R on the side the centre starts on.
-  Eigen::Vector3d n = (b - a).cross(c - a);
-  const double nn = n.norm();
-  if (nn > 0.0) {
-    n /= nn;
-    const Eigen::Vector3d n_tri = n;  // winding normal, for the inside test
+  if (tri.has_face) {
+    Eigen::Vector3d n = tri.n;
+    const Eigen::Vector3d& n_tri = tri.n;  // winding normal, for the inside test
     double h0 = n.dot(x - a);
     if (h0 < 0.0) {
       n = -n;
@@ -76,12 +100,10 @@ double SweepSphereTriangle(const Eigen::Vector3d& x, const Eigen::Vector3d& d, d
     }
   }
   // Edges: infinite cylinders of radius R, hit point must project inside the segment.
-  const Eigen::Vector3d* v[3] = {&a, &b, &c};
   for (int e = 0; e < 3; ++e) {
-    const Eigen::Vector3d& p0 = *v[e];
-    const Eigen::Vector3d& p1 = *v[(e + 1) % 3];
-    const Eigen::Vector3d ed = p1 - p0;
-    const double len2 = ed.squaredNorm();
+    const Eigen::Vector3d& p0 = tri.v[e];
+    const Eigen::Vector3d& ed = tri.ed[e];
+    const double len2 = tri.len2[e];
     if (!(len2 > 0.0)) continue;
     const Eigen::Vector3d m = x - p0;
     const Eigen::Vector3d m_perp = m - (m.dot(ed) / len2) * ed;
@@ -95,7 +117,7 @@ double SweepSphereTriangle(const Eigen::Vector3d& x, const Eigen::Vector3d& d, d
   }
   // Vertices: spheres of radius R.
   for (int k = 0; k < 3; ++k) {
-    const double s = SweepPoint(x - *v[k], d, R_m);
+    const double s = SweepPoint(x - tri.v[k], d, R_m);
     if (s < best) best = s;
   }
   return best;

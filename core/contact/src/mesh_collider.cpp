@@ -1,7 +1,10 @@
 #include "handshare/contact/mesh_collider.hpp"
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
+#include <functional>
+#include <limits>
 
 #include <stdexcept>
 #include <vector>
@@ -29,6 +32,8 @@ MeshCollider::MeshCollider(std::shared_ptr<const TriMesh> mesh, std::int32_t max
   if (!mesh_) throw std::invalid_argument("MeshCollider: null mesh");
   mesh_->Validate();
   if (max_candidates_ < 1) throw std::invalid_argument("MeshCollider: max_candidates must be >= 1");
+  static std::atomic<std::uint64_t> next_id{1};
+  id_ = next_id.fetch_add(1, std::memory_order_relaxed);
   std::vector<fcl::Vector3d> points(mesh_->p_O_m.begin(), mesh_->p_O_m.end());
   std::vector<fcl::Triangle> tris;
   tris.reserve(mesh_->triangles.size());
@@ -42,6 +47,7 @@ MeshCollider::MeshCollider(std::shared_ptr<const TriMesh> mesh, std::int32_t max
     throw std::runtime_error("MeshCollider: FCL failed to build the BVH");
   }
   bvh.computeLocalAABB();
+  BuildFlatTree();
   Eigen::Vector3d lo = mesh_->p_O_m[0], hi = lo;
   for (const auto& p : mesh_->p_O_m) {
     lo = lo.cwiseMin(p);
@@ -56,11 +62,132 @@ MeshCollider::MeshCollider(std::shared_ptr<const TriMesh> mesh, std::int32_t max
   impl_->request.gjk_solver_type = fcl::GST_INDEP;
 }
 
+namespace {
+// Rounds a double coordinate to the float at or below (lo) / at or above (hi) it.
+float FloatDown(double x) {
+  float f = static_cast<float>(x);
+  if (static_cast<double>(f) > x) f = std::nextafter(f, -std::numeric_limits<float>::infinity());
+  return f;
+}
+// Ball (c, r^2) against an oriented box of FCL's OBBRSS (model frame): false if disjoint.
+bool InObb(const fcl::OBBd& obb, const Eigen::Vector3d& c, double r2) {
+  const Eigen::Vector3d local = obb.axis.transpose() * (c - obb.To);
+  const Eigen::Vector3d excess = (local.cwiseAbs() - obb.extent).cwiseMax(0.0);
+  return excess.squaredNorm() <= r2;
+}
+float FloatUp(double x) {
+  float f = static_cast<float>(x);
+  if (static_cast<double>(f) < x) f = std::nextafter(f, std::numeric_limits<float>::infinity());
+  return f;
+}
+}  // namespace
+
+void MeshCollider::BuildFlatTree() {
+  const auto& bvh = impl_->bvh;
+  const TriMesh& mesh = *mesh_;
+  const std::size_t nt = mesh.triangles.size();
+  tri_.resize(nt);
+  tri_plane_.resize(nt);
+  for (std::size_t t = 0; t < nt; ++t) {
+    const auto& tr = mesh.triangles[t];
+    tri_[t] = MakeSweepTriangle(mesh.p_O_m[tr[0]], mesh.p_O_m[tr[1]], mesh.p_O_m[tr[2]]);
+    const Eigen::Vector3d& n = tri_[t].n;
+    if (tri_[t].has_face && n.allFinite()) {
+      tri_plane_[t] = Eigen::Vector4d(n.x(), n.y(), n.z(), n.dot(tri_[t].v[0]));
+    } else {
+      tri_plane_[t].setConstant(std::numeric_limits<double>::quiet_NaN());
+    }
+  }
+  coord_scale_m_ = 0.0;
+  for (const auto& p : mesh.p_O_m) coord_scale_m_ = std::max(coord_scale_m_, p.cwiseAbs().maxCoeff());
+  nodes_.clear();
+  nodes_.reserve(static_cast<std::size_t>(bvh.getNumBVs()));
+  // Depth-first (left before right) copy of FCL's tree; returns the subtree's box (double).
+  struct Box {
+    Eigen::Vector3d lo, hi;
+  };
+  std::function<Box(int)> copy = [&](int fcl_id) -> Box {
+    const auto& node = bvh.getBV(fcl_id);
+    const auto me = static_cast<std::int32_t>(nodes_.size());
+    nodes_.push_back(FlatNode{});
+    Box box;
+    if (node.isLeaf()) {
+      const auto& P = tri_[static_cast<std::size_t>(node.primitiveId())].v;
+      box.lo = P[0].cwiseMin(P[1]).cwiseMin(P[2]);
+      box.hi = P[0].cwiseMax(P[1]).cwiseMax(P[2]);
+      nodes_[static_cast<std::size_t>(me)].right = -1 - node.primitiveId();
+    } else {
+      const Box l = copy(node.leftChild());
+      nodes_[static_cast<std::size_t>(me)].right = static_cast<std::int32_t>(nodes_.size());
+      const Box r = copy(node.rightChild());
+      box.lo = l.lo.cwiseMin(r.lo);
+      box.hi = l.hi.cwiseMax(r.hi);
+    }
+    FlatNode& f = nodes_[static_cast<std::size_t>(me)];
+    for (int k = 0; k < 3; ++k) {
+      f.lo[k] = FloatDown(box.lo[k]);
+      f.hi[k] = FloatUp(box.hi[k]);
+    }
+    return box;
+  };
+  copy(0);
+}
+
 MeshCollider::~MeshCollider() = default;
 MeshCollider::MeshCollider(MeshCollider&&) noexcept = default;
 MeshCollider& MeshCollider::operator=(MeshCollider&&) noexcept = default;
 
 BallQueryResult MeshCollider::QueryBall(const Eigen::Vector3d& c, double r_m,
+                                        std::span<std::int32_t> ids) const noexcept {
+  BallQueryResult out;
+  if (!c.allFinite() || !(r_m > 0.0) || !std::isfinite(r_m)) return out;
+  const double r2 = r_m * r_m;
+  // Float box test, conservative: the slack (1e-6 of the coordinates' size) is far above the
+  // float round-off of the centre, the differences and the squares (~1e-7 relative), so a box
+  // the ball reaches is never rejected; the exact test is the leaf's.
+  const double slack = 1e-6 * (coord_scale_m_ + c.cwiseAbs().maxCoeff() + r_m);
+  const float rf2 = FloatUp((r_m + slack) * (r_m + slack));
+  const float cx = static_cast<float>(c.x()), cy = static_cast<float>(c.y()), cz = static_cast<float>(c.z());
+  const FlatNode* nodes = nodes_.data();
+  constexpr int kStack = 128;
+  std::int32_t stack[kStack];
+  int top = 0;
+  std::int32_t i = 0;
+  const auto cap = static_cast<std::int32_t>(ids.size());
+  for (;;) {
+    const FlatNode& n = nodes[i];
+    const float ex = std::max(n.lo[0] - cx, 0.0f) + std::max(cx - n.hi[0], 0.0f);
+    const float ey = std::max(n.lo[1] - cy, 0.0f) + std::max(cy - n.hi[1], 0.0f);
+    const float ez = std::max(n.lo[2] - cz, 0.0f) + std::max(cz - n.hi[2], 0.0f);
+    if (ex * ex + ey * ey + ez * ez <= rf2) {
+      if (n.right >= 0) {
+        if (top == kStack) {
+          out.truncated = true;
+        } else {
+          stack[top++] = n.right;
+          ++i;
+          continue;
+        }
+      } else {
+        const std::int32_t t = -1 - n.right;
+        const auto& P = tri_[static_cast<std::size_t>(t)].v;
+        const Eigen::Vector3d q = ClosestPointOnTriangle(c, P[0], P[1], P[2]);
+        if ((q - c).squaredNorm() <= r2) {
+          if (out.count == cap) {
+            out.truncated = true;
+            return out;
+          }
+          ids[static_cast<std::size_t>(out.count++)] = t;
+        }
+      }
+    }
+    if (top == 0) break;
+    i = stack[--top];
+  }
+  return out;
+}
+
+BallQueryResult MeshCollider::QueryBallObb(const Eigen::Vector3d& c, double r_m,
                                         std::span<std::int32_t> ids) const noexcept {
   BallQueryResult out;
   if (!c.allFinite() || !(r_m > 0.0) || !std::isfinite(r_m)) return out;
@@ -77,10 +204,7 @@ BallQueryResult MeshCollider::QueryBall(const Eigen::Vector3d& c, double r_m,
   while (top > 0) {
     const auto& node = bvh.getBV(stack[--top]);
     // Ball against the node's oriented box (OBB part of OBBRSS, model frame).
-    const auto& obb = node.bv.obb;
-    const Eigen::Vector3d local = obb.axis.transpose() * (c - obb.To);
-    const Eigen::Vector3d excess = (local.cwiseAbs() - obb.extent).cwiseMax(0.0);
-    if (excess.squaredNorm() > r2) continue;
+    if (!InObb(node.bv.obb, c, r2)) continue;
     if (node.isLeaf()) {
       const int t = node.primitiveId();
       const auto& tr = mesh.triangles[static_cast<std::size_t>(t)];

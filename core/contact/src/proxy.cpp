@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <limits>
 
 #include <Eigen/Dense>
@@ -20,32 +21,50 @@ constexpr double kFeasTol_m = 1e-12;
 constexpr double kTouchBand_m = 1e-9;
 // Two constraint normals closer than this (1 - cos) are one plane (the tighter one is kept).
 constexpr double kSameNormal = 1e-9;
+// Slack of the plane-distance shortcuts [m]: a triangle whose plane is farther than a distance
+// plus this from a point is farther than that distance from the point; 1e-10 m is seven orders
+// above the round-off of the plane distance (1e-17 m at these sizes) and far below kTouchBand_m.
+constexpr double kPlaneSlack_m = 1e-10;
 }  // namespace
 
 ProxySolver::ProxySolver(std::int32_t max_candidates)
-    : candidates_(static_cast<std::size_t>(std::max<std::int32_t>(max_candidates, 1))) {}
+    : candidates_(static_cast<std::size_t>(std::max<std::int32_t>(max_candidates, 1))), ends_(kEndEntries) {}
+
+std::size_t ProxySolver::EndSlot(const Eigen::Vector3d& x) noexcept {
+  std::uint64_t h = 0;
+  for (int k = 0; k < 3; ++k) {
+    std::uint64_t b = 0;
+    std::memcpy(&b, &x[k], sizeof b);
+    h = (h ^ b) * 0x9E3779B97F4A7C15ull;
+  }
+  return static_cast<std::size_t>(h >> 58) % kEndEntries;
+}
 
 bool ProxySolver::Gather(MeshCollider& collider, const Eigen::Vector3d& center,
                          double radius) noexcept {
   const std::int32_t cap = std::min<std::int32_t>(static_cast<std::int32_t>(candidates_.size()),
                                                   collider.max_candidates());
-  const BallQueryResult r =
-      collider.QueryBall(center, radius, std::span<std::int32_t>(candidates_.data(), static_cast<std::size_t>(cap)));
+  const std::span<std::int32_t> ids(candidates_.data(), static_cast<std::size_t>(cap));
+  const BallQueryResult r = reference_ ? collider.QueryBallObb(center, radius, ids) : collider.QueryBall(center, radius, ids);
   num_candidates_ = r.count;
+  last_gather_truncated_ = r.truncated;
   truncated_ = truncated_ || r.truncated;
   return r.count > 0;
 }
 
 int ProxySolver::CollectConstraints(const MeshCollider& collider, const ProxyParams& params,
                                     const Eigen::Vector3d& x) noexcept {
-  const TriMesh& mesh = collider.mesh();
   const double R = params.radius_m;
   const double touch = R + params.skin_m + kTouchBand_m;
   int m = 0;
   for (std::int32_t i = 0; i < num_candidates_; ++i) {
     const std::int32_t t = candidates_[static_cast<std::size_t>(i)];
-    const auto& tr = mesh.triangles[static_cast<std::size_t>(t)];
-    const Eigen::Vector3d c = ClosestPointOnTriangle(x, mesh.p_O_m[tr[0]], mesh.p_O_m[tr[1]], mesh.p_O_m[tr[2]]);
+    // The distance to a triangle is at least the distance to its plane: a plane beyond the
+    // touch band skips the exact closest point (same constraints, see kPlaneSlack_m).
+    const Eigen::Vector4d& pl = collider.triangle_plane(t);
+    if (!reference_ && std::abs(pl.x() * x.x() + pl.y() * x.y() + pl.z() * x.z() - pl.w()) > touch + kPlaneSlack_m) continue;
+    const auto& P = collider.triangle(t).v;
+    const Eigen::Vector3d c = ClosestPointOnTriangle(x, P[0], P[1], P[2]);
     const double dist = (x - c).norm();
     // Overlapped features (dist < R: the proxy started inside them) are ignored until it leaves.
     if (!(dist < touch) || dist < R) continue;
@@ -74,7 +93,22 @@ int ProxySolver::CollectConstraints(const MeshCollider& collider, const ProxyPar
     }
     cons_[static_cast<std::size_t>(m++)] = Constraint{n, c, b, dist, t};
   }
+  // The constraints are a function of (mesh, x, R, skin) alone when the candidates held every
+  // triangle within R + skin + margin of x (an untruncated gather of a ball that contains that
+  // one): remembered so that the next gather at the same point can be skipped.
+  cons_valid_ = !last_gather_truncated_;
+  cons_x_ = x;
+  cons_m_ = m;
+  cons_collider_ = &collider;
+  cons_radius_m_ = params.radius_m;
+  cons_skin_m_ = params.skin_m;
   return m;
+}
+
+bool ProxySolver::ConstraintsValidAt(const MeshCollider& collider, const ProxyParams& params,
+                                     const Eigen::Vector3d& x) const noexcept {
+  return !reference_ && cons_valid_ && cons_collider_ == &collider && cons_radius_m_ == params.radius_m &&
+         cons_skin_m_ == params.skin_m && cons_x_ == x;
 }
 
 Eigen::Vector3d ProxySolver::Project(const Eigen::Vector3d& goal, const Eigen::Vector3d& x,
@@ -138,13 +172,26 @@ Eigen::Vector3d ProxySolver::Project(const Eigen::Vector3d& goal, const Eigen::V
 Eigen::Vector3d ProxySolver::Move(MeshCollider& collider, const ProxyParams& params,
                                   const Eigen::Vector3d& x0, const Eigen::Vector3d& goal,
                                   bool* truncated, std::int32_t* iterations) noexcept {
+  cons_valid_ = false;  // a call from outside Step starts from a fresh gather
+  return MoveFrom(collider, params, x0, goal, truncated, iterations);
+}
+
+Eigen::Vector3d ProxySolver::MoveFrom(MeshCollider& collider, const ProxyParams& params,
+                                      const Eigen::Vector3d& x0, const Eigen::Vector3d& goal,
+                                      bool* truncated, std::int32_t* iterations) noexcept {
   truncated_ = false;
   const double Rs = params.radius_m + params.skin_m;
   const double margin = 4.0 * params.skin_m;
   Eigen::Vector3d x = x0;
-  // Constraints at the start: the triangles within R + skin of the proxy.
-  Gather(collider, x, Rs + margin);
-  int m = CollectConstraints(collider, params, x);
+  // Constraints at the start: the triangles within R + skin of the proxy (already at hand when
+  // the last collection was at x0 from an untruncated gather).
+  int m = 0;
+  if (ConstraintsValidAt(collider, params, x)) {
+    m = cons_m_;
+  } else {
+    Gather(collider, x, Rs + margin);
+    m = CollectConstraints(collider, params, x);
+  }
   std::int32_t it = 0;
   for (; it < params.max_iterations; ++it) {
     Eigen::Vector3d t = Project(goal, x, m);
@@ -156,10 +203,22 @@ Eigen::Vector3d ProxySolver::Move(MeshCollider& collider, const ProxyParams& par
     // within R + skin of it); no triangle: free motion.
     double s = 2.0;
     if (Gather(collider, x + 0.5 * d, 0.5 * d.norm() + Rs + margin)) {
-      const TriMesh& mesh = collider.mesh();
+      // A triangle whose plane stays farther than Rs from both ends of the segment, on one side,
+      // is farther than Rs from every point of it: no touch in [0, 1] (the exact sweep could
+      // only return a root beyond 1, and only min(s, 1) is used), so it is skipped.
+      const double lim = Rs + kPlaneSlack_m;
       for (std::int32_t i = 0; i < num_candidates_; ++i) {
-        const auto& tr = mesh.triangles[static_cast<std::size_t>(candidates_[static_cast<std::size_t>(i)])];
-        s = std::min(s, SweepSphereTriangle(x, d, Rs, mesh.p_O_m[tr[0]], mesh.p_O_m[tr[1]], mesh.p_O_m[tr[2]]));
+        const std::int32_t tri = candidates_[static_cast<std::size_t>(i)];
+        const Eigen::Vector4d& pl = collider.triangle_plane(tri);
+        const double h0 = pl.x() * x.x() + pl.y() * x.y() + pl.z() * x.z() - pl.w();
+        const double h1 = h0 + (pl.x() * d.x() + pl.y() * d.y() + pl.z() * d.z());
+        if (!reference_ && ((h0 > lim && h1 > lim) || (h0 < -lim && h1 < -lim))) continue;
+        if (reference_) {
+          const auto& P = collider.triangle(tri).v;
+          s = std::min(s, SweepSphereTriangle(x, d, Rs, P[0], P[1], P[2]));
+        } else {
+          s = std::min(s, SweepSphereTriangle(x, d, Rs, collider.triangle(tri)));
+        }
       }
     }
     x += std::min(s, 1.0) * d;
@@ -175,6 +234,7 @@ ProxyContact ProxySolver::Step(MeshCollider& collider, const ProxyParams& params
                                ProxyState& state) noexcept {
   ProxyContact out;
   out.x_O_m = state.x_O_m;
+  cons_valid_ = false;  // set again below only from this collider's own results
   if (!goal.allFinite()) return out;
   if (!state.initialized || !state.x_O_m.allFinite()) {
     state.x_O_m = goal;
@@ -193,7 +253,21 @@ ProxyContact ProxySolver::Step(MeshCollider& collider, const ProxyParams& params
   }
   bool trunc = false;
   std::int32_t iters = 0;
-  const Eigen::Vector3d x_f = Move(collider, params, x0, goal, &trunc, &iters);
+  // Where the last Step of this proxy ended, the constraints are already known.
+  if (!reference_) {
+    const EndEntry& e = ends_[EndSlot(x0)];
+    if (e.collider_id == collider.id() && e.radius_m == params.radius_m && e.skin_m == params.skin_m &&
+        std::memcmp(e.x.data(), x0.data(), sizeof(double) * 3) == 0) {
+      std::copy(e.cons.begin(), e.cons.begin() + e.m, cons_.begin());
+      cons_m_ = e.m;
+      cons_x_ = x0;
+      cons_collider_ = &collider;
+      cons_radius_m_ = params.radius_m;
+      cons_skin_m_ = params.skin_m;
+      cons_valid_ = true;
+    }
+  }
+  const Eigen::Vector3d x_f = MoveFrom(collider, params, x0, goal, &trunc, &iters);
   Eigen::Vector3d x = x_f;
   bool slipped = false;
   const Eigen::Vector3d e = x_f - goal;  // frictionless reaction direction (normal cone)
@@ -217,7 +291,7 @@ ProxyContact ProxySolver::Step(MeshCollider& collider, const ProxyParams& params
       if (alpha > 0.0) {
         std::int32_t it2 = 0;
         bool tr2 = false;
-        x = Move(collider, params, x_f, x_f + alpha * (x0 - x_f), &tr2, &it2);
+        x = MoveFrom(collider, params, x_f, x_f + alpha * (x0 - x_f), &tr2, &it2);
         trunc = trunc || tr2;
         iters += it2;
       }
@@ -225,8 +299,22 @@ ProxyContact ProxySolver::Step(MeshCollider& collider, const ProxyParams& params
   }
   // Contact geometry at the final proxy (its neighbourhood is in the last gather, re-query to
   // be exact when the proxy stuck at x0).
-  Gather(collider, x, params.radius_m + params.skin_m + 4.0 * params.skin_m);
-  const int m = CollectConstraints(collider, params, x);
+  int m = 0;
+  if (ConstraintsValidAt(collider, params, x)) {
+    m = cons_m_;  // x is where the last Move ended (not stuck at x0): same constraints
+  } else {
+    Gather(collider, x, params.radius_m + params.skin_m + 4.0 * params.skin_m);
+    m = CollectConstraints(collider, params, x);
+  }
+  if (!reference_ && ConstraintsValidAt(collider, params, x)) {  // for the next Step from x
+    EndEntry& end = ends_[EndSlot(x)];
+    end.collider_id = collider.id();
+    end.radius_m = params.radius_m;
+    end.skin_m = params.skin_m;
+    end.x = x;
+    end.m = m;
+    std::copy(cons_.begin(), cons_.begin() + m, end.cons.begin());
+  }
   out.truncated = trunc || truncated_;
   out.iterations = iters;
   out.x_O_m = x;

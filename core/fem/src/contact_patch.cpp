@@ -129,15 +129,20 @@ PatchResult ContactPatchFinder::Collect(const Eigen::Vector3d& p_W, const Eigen:
   const auto clamp = [](double v) {
     return static_cast<std::int64_t>(std::clamp(v, 0.0, static_cast<double>(kMaxCell)));
   };
+  // The cells of one (ix, iy) column have consecutive keys, and the columns come in increasing
+  // key order: one search per column, each starting where the last one ended. Visits the same
+  // nodes in the same order as one search per cell.
+  const std::int64_t iz0 = clamp(lo.z()), iz1 = clamp(hi.z());
+  auto from = keys_.begin();
   for (std::int64_t ix = clamp(lo.x()); ix <= clamp(hi.x()); ++ix)
-    for (std::int64_t iy = clamp(lo.y()); iy <= clamp(hi.y()); ++iy)
-      for (std::int64_t iz = clamp(lo.z()); iz <= clamp(hi.z()); ++iz) {
-        const std::int64_t key = Key(ix, iy, iz);
-        auto first = std::lower_bound(keys_.begin(), keys_.end(), key);
-        for (auto it = first; it != keys_.end() && *it == key; ++it) {
-          visit(slots_[static_cast<std::size_t>(it - keys_.begin())]);
-        }
+    for (std::int64_t iy = clamp(lo.y()); iy <= clamp(hi.y()); ++iy) {
+      const std::int64_t key_hi = Key(ix, iy, iz1);
+      auto it = std::lower_bound(from, keys_.end(), Key(ix, iy, iz0));
+      for (; it != keys_.end() && *it <= key_hi; ++it) {
+        visit(slots_[static_cast<std::size_t>(it - keys_.begin())]);
       }
+      from = it;
+    }
   return res;
 }
 

@@ -22,6 +22,23 @@ double SweepSphereTriangle(const Eigen::Vector3d& x, const Eigen::Vector3d& d, d
                            const Eigen::Vector3d& a, const Eigen::Vector3d& b,
                            const Eigen::Vector3d& c) noexcept;
 
+/// What SweepSphereTriangle computes from the triangle alone, computed once per mesh triangle
+/// (MeshCollider) by the same expressions, so that the sweep against it gives the same bits.
+struct SweepTriangle {
+  Eigen::Vector3d v[3];    ///< vertices a, b, c
+  Eigen::Vector3d n;       ///< unit winding normal (b - a) x (c - a) / |.|; valid if has_face
+  Eigen::Vector3d ed[3];   ///< edge e: v[(e + 1) % 3] - v[e]
+  double len2[3] = {0.0, 0.0, 0.0};  ///< |ed[e]|^2
+  bool has_face = false;   ///< |(b - a) x (c - a)| > 0
+};
+SweepTriangle MakeSweepTriangle(const Eigen::Vector3d& a, const Eigen::Vector3d& b,
+                                const Eigen::Vector3d& c) noexcept;
+
+/// SweepSphereTriangle against a prepared triangle (the six-argument form prepares it and calls
+/// this one: one code path, identical results).
+double SweepSphereTriangle(const Eigen::Vector3d& x, const Eigen::Vector3d& d, double R_m,
+                           const SweepTriangle& tri) noexcept;
+
 /// Approach (over one sweep) below which a feature is treated as tangent, not hit [m]: far below
 /// any motion a hand makes in one haptic step, far above round-off at these scales.
 inline constexpr double kMinApproach_m = 1e-13;

@@ -8,13 +8,24 @@
 /// returns a std::vector, RSS fitting allocates), so it is kept only as a setup-time
 /// cross-check (QueryBallFcl, with its request built once). The exact proxy geometry is done
 /// on the returned triangles (proxy.hpp). FCL types stay inside the .cpp (pimpl).
+///
+/// The walk itself runs over a compact copy of FCL's tree (same topology, nodes in depth-first
+/// order, 32 bytes each): a float axis-aligned box per node, rounded outward and tested with a
+/// slack far above float round-off, so it never rejects a node the ball reaches; the leaves
+/// keep the exact double ball-triangle test. The triangles returned and their order are the
+/// ones of the walk over FCL's oriented boxes (QueryBallObb, kept as the reference the tests
+/// compare against): pruning only skips subtrees without a hit, and both walks visit leaves
+/// left to right.
 
+#include <array>
 #include <cstdint>
+#include <vector>
 #include <memory>
 #include <span>
 
 #include <Eigen/Core>
 
+#include "handshare/contact/geometry.hpp"
 #include "handshare/contact/tri_mesh.hpp"
 
 namespace handshare::contact {
@@ -38,22 +49,52 @@ class MeshCollider {
   /// Real-time: noexcept, no allocation.
   BallQueryResult QueryBall(const Eigen::Vector3d& c_O_m, double r_m,
                             std::span<std::int32_t> triangle_ids) const noexcept;
+  /// The same answer by walking FCL's own nodes (ball against each node's OBB): the previous
+  /// real-time path, kept as the reference for tests. Real-time safe as well.
+  BallQueryResult QueryBallObb(const Eigen::Vector3d& c_O_m, double r_m,
+                               std::span<std::int32_t> triangle_ids) const noexcept;
+
   /// The same through fcl::collide (FCL's sphere-triangle test). Allocates inside FCL: tests
   /// and setup only.
   BallQueryResult QueryBallFcl(const Eigen::Vector3d& c_O_m, double r_m,
                                std::span<std::int32_t> triangle_ids);
 
   const TriMesh& mesh() const noexcept { return *mesh_; }
+
+  /// Triangle t prepared for the sweep (its vertices, the mesh's values, copied at setup).
+  const SweepTriangle& triangle(std::int32_t t) const noexcept { return tri_[static_cast<std::size_t>(t)]; }
+  /// Triangle t's plane: unit normal (winding order) and offset, n . p = w on the plane; NaN for
+  /// a degenerate triangle (so that every plane-distance shortcut is skipped for it).
+  const Eigen::Vector4d& triangle_plane(std::int32_t t) const noexcept {
+    return tri_plane_[static_cast<std::size_t>(t)];
+  }
   std::int32_t max_candidates() const noexcept { return max_candidates_; }
+  /// Number unique to this collider among all built in the process (keys caches of results
+  /// that depend on the mesh only).
+  std::uint64_t id() const noexcept { return id_; }
   /// Bounding sphere of the mesh in O (centre of the vertices' box, radius to the farthest).
   const Eigen::Vector3d& bound_center_O_m() const noexcept { return bound_c_; }
   double bound_radius_m() const noexcept { return bound_r_; }
 
  private:
   struct Impl;
+  void BuildFlatTree();
+  // Compact tree node: float box; internal nodes have their left child next (i + 1) and the
+  // right one at `right`; leaves have right = -1 - triangle.
+  struct FlatNode {
+    float lo[3];
+    float hi[3];
+    std::int32_t right;
+    std::int32_t pad;
+  };
   std::unique_ptr<Impl> impl_;
+  std::vector<FlatNode> nodes_;
+  std::vector<SweepTriangle> tri_;
+  std::vector<Eigen::Vector4d> tri_plane_;
+  double coord_scale_m_ = 0.0;  // largest |coordinate| of the mesh (float slack of the boxes)
   std::shared_ptr<const TriMesh> mesh_;
   std::int32_t max_candidates_ = 0;
+  std::uint64_t id_ = 0;
   Eigen::Vector3d bound_c_ = Eigen::Vector3d::Zero();
   double bound_r_ = 0.0;
 };

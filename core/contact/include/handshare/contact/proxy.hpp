@@ -79,6 +79,12 @@ class ProxySolver {
                     const FrictionParams& friction, const Eigen::Vector3d& goal_O_m,
                     ProxyState& state) noexcept;
 
+  /// Tests: true runs the previous exact path (FCL's oriented boxes in the walk, the exact
+  /// closest point and sweep for every candidate, a fresh gather at every start) that the
+  /// shortcuts (compact float tree, plane-distance skips, reuse of the constraints at the point
+  /// where the last move ended) must reproduce bit for bit.
+  void set_reference_path(bool on) noexcept { reference_ = on; }
+
   /// The frictionless constrained motion from x0 toward goal (the core of Step; public for
   /// tests). Returns the final proxy centre.
   Eigen::Vector3d Move(MeshCollider& collider, const ProxyParams& params,
@@ -99,11 +105,41 @@ class ProxySolver {
   int CollectConstraints(const MeshCollider& collider, const ProxyParams& params,
                          const Eigen::Vector3d& x) noexcept;
   Eigen::Vector3d Project(const Eigen::Vector3d& goal, const Eigen::Vector3d& x, int m) const noexcept;
+  // Move, reusing the constraints at x0 when the last collection in this Step was there.
+  Eigen::Vector3d MoveFrom(MeshCollider& collider, const ProxyParams& params,
+                           const Eigen::Vector3d& x0_O_m, const Eigen::Vector3d& goal_O_m,
+                           bool* truncated, std::int32_t* iterations) noexcept;
+  // Whether cons_ (first cons_m_) are the constraints at x for this collider and params.
+  bool ConstraintsValidAt(const MeshCollider& collider, const ProxyParams& params,
+                          const Eigen::Vector3d& x) const noexcept;
 
   std::vector<std::int32_t> candidates_;
   std::int32_t num_candidates_ = 0;
   bool truncated_ = false;
+  bool last_gather_truncated_ = false;
+  bool reference_ = false;
   std::array<Constraint, kMaxConstraints> cons_{};
+  // Where cons_ were last collected (see ConstraintsValidAt).
+  bool cons_valid_ = false;
+  Eigen::Vector3d cons_x_ = Eigen::Vector3d::Zero();
+  int cons_m_ = 0;
+  const MeshCollider* cons_collider_ = nullptr;
+  // Constraints where earlier Steps ended (the next Step of that proxy starts there), keyed by
+  // collider id, R, skin and the point's bits; direct-mapped by the point (pure function of the
+  // key, so any entry that matches is right whichever finger wrote it).
+  struct EndEntry {
+    std::uint64_t collider_id = 0;  // 0: empty
+    double radius_m = 0.0;
+    double skin_m = 0.0;
+    Eigen::Vector3d x = Eigen::Vector3d::Zero();
+    int m = 0;
+    std::array<Constraint, kMaxConstraints> cons{};
+  };
+  static constexpr std::size_t kEndEntries = 64;
+  std::vector<EndEntry> ends_;
+  static std::size_t EndSlot(const Eigen::Vector3d& x) noexcept;
+  double cons_radius_m_ = 0.0;
+  double cons_skin_m_ = 0.0;
 };
 
 }  // namespace handshare::contact

@@ -193,6 +193,11 @@ class ContactSolver {
   std::vector<std::int32_t> prev_pos_;
   std::vector<std::uint8_t> prev_kept_;
   std::vector<std::int32_t> free_pos_;
+  // S of the table's pairs (packed like table_) and the normal each position had when they were
+  // computed: a pair of old nodes whose normals are bit for bit the same reuses its S entry.
+  std::vector<double> table_S_;
+  std::vector<Eigen::Vector3d> pos_n_;
+  std::vector<std::uint8_t> same_n_;
   std::int32_t num_free_ = 0;
   bool table_valid_ = false;
   std::int32_t num_prev_ = 0;

@@ -1,0 +1,231 @@
+// The collision shortcuts (compact float tree walk, plane-distance skips, reuse of the constraints
+// where the last move ended, the sweep's per-triangle part computed once per mesh) against the
+// previous exact path on random queries: the same triangles in the same order, the same times
+// of impact, and the same proxy positions and contacts, bit for bit.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+#include <random>
+#include <vector>
+
+#include "handshare/contact/geometry.hpp"
+#include "handshare/contact/mesh_collider.hpp"
+#include "handshare/contact/proxy.hpp"
+#include "handshare/contact/tri_mesh.hpp"
+
+namespace handshare::contact {
+namespace {
+
+bool SameBits(const Eigen::Vector3d& a, const Eigen::Vector3d& b) { return std::memcmp(a.data(), b.data(), sizeof(double) * 3) == 0; }
+
+// A fine, slightly wavy plate (flat-ish faces, many coplanar neighbours) and a bumpy sphere.
+std::shared_ptr<const TriMesh> WavyPlate() {
+  TriMesh m;
+  const int n = 40;
+  const double h = 0.1 / n;
+  for (int j = 0; j <= n; ++j) {
+    for (int i = 0; i <= n; ++i) {
+      const double z = (i + j) % 7 == 0 ? 2e-4 : 0.0;  // a few raised vertices: edges and kinks
+      m.p_O_m.emplace_back(i * h - 0.05, j * h - 0.05, z);
+    }
+  }
+  // Bottom layer so the mesh is closed enough for Validate; a second sheet 1 mm below.
+  const int off = static_cast<int>(m.p_O_m.size());
+  for (int j = 0; j <= n; ++j) {
+    for (int i = 0; i <= n; ++i) m.p_O_m.emplace_back(i * h - 0.05, j * h - 0.05, -0.001);
+  }
+  auto id = [&](int i, int j) { return j * (n + 1) + i; };
+  for (int j = 0; j < n; ++j) {
+    for (int i = 0; i < n; ++i) {
+      m.triangles.push_back({id(i, j), id(i + 1, j), id(i + 1, j + 1)});
+      m.triangles.push_back({id(i, j), id(i + 1, j + 1), id(i, j + 1)});
+      m.triangles.push_back({off + id(i, j), off + id(i + 1, j + 1), off + id(i + 1, j)});
+      m.triangles.push_back({off + id(i, j), off + id(i, j + 1), off + id(i + 1, j + 1)});
+    }
+  }
+  return std::make_shared<const TriMesh>(std::move(m));
+}
+
+// SweepSphereTriangle as it was before the per-triangle part moved into SweepTriangle (kept here
+// verbatim as the reference).
+double OldSweepPoint(const Eigen::Vector3d& m, const Eigen::Vector3d& d, double R) {
+  const double c = m.squaredNorm() - R * R;
+  if (c < 0.0) return 2.0;
+  const double half_b = m.dot(d);
+  if (half_b >= -kMinApproach_m * m.norm()) return 2.0;
+  const double a = d.squaredNorm();
+  const double disc = half_b * half_b - a * c;
+  if (disc < 0.0) return 2.0;
+  return std::max(0.0, (-half_b - std::sqrt(disc)) / a);
+}
+double OldSweepSphereTriangle(const Eigen::Vector3d& x, const Eigen::Vector3d& d, double R_m, const Eigen::Vector3d& a,
+                              const Eigen::Vector3d& b, const Eigen::Vector3d& c) {
+  double best = 2.0;
+  Eigen::Vector3d n = (b - a).cross(c - a);
+  const double nn = n.norm();
+  if (nn > 0.0) {
+    n /= nn;
+    const Eigen::Vector3d n_tri = n;
+    double h0 = n.dot(x - a);
+    if (h0 < 0.0) {
+      n = -n;
+      h0 = -h0;
+    }
+    const double vn = n.dot(d);
+    if (h0 >= R_m && vn < -kMinApproach_m) {
+      const double s = (h0 - R_m) / -vn;
+      if (s <= 1.0) {
+        const Eigen::Vector3d q = x + s * d - R_m * n;
+        const double wa = (b - q).cross(c - q).dot(n_tri);
+        const double wb = (c - q).cross(a - q).dot(n_tri);
+        const double wc = (a - q).cross(b - q).dot(n_tri);
+        if (wa >= 0.0 && wb >= 0.0 && wc >= 0.0) best = s;
+      }
+    }
+  }
+  const Eigen::Vector3d* v[3] = {&a, &b, &c};
+  for (int e = 0; e < 3; ++e) {
+    const Eigen::Vector3d& p0 = *v[e];
+    const Eigen::Vector3d& p1 = *v[(e + 1) % 3];
+    const Eigen::Vector3d ed = p1 - p0;
+    const double len2 = ed.squaredNorm();
+    if (!(len2 > 0.0)) continue;
+    const Eigen::Vector3d m = x - p0;
+    const Eigen::Vector3d m_perp = m - (m.dot(ed) / len2) * ed;
+    const Eigen::Vector3d d_perp = d - (d.dot(ed) / len2) * ed;
+    if (d_perp.squaredNorm() <= 0.0) continue;
+    const double s = OldSweepPoint(m_perp, d_perp, R_m);
+    if (s < best) {
+      const double t = (m + s * d).dot(ed) / len2;
+      if (t >= 0.0 && t <= 1.0) best = s;
+    }
+  }
+  for (int k = 0; k < 3; ++k) {
+    const double s = OldSweepPoint(x - *v[k], d, R_m);
+    if (s < best) best = s;
+  }
+  return best;
+}
+
+TEST(Shortcuts, PreparedTriangleSweepEqualsTheOldSweepBitForBit) {
+  std::mt19937 rng(17);
+  std::uniform_real_distribution<double> u(-0.01, 0.01);
+  int hits = 0, grazing = 0;
+  for (int trial = 0; trial < 200000; ++trial) {
+    const Eigen::Vector3d a(u(rng), u(rng), 0.0), c(u(rng), u(rng), 0.0);
+    Eigen::Vector3d b(u(rng), u(rng), 0.2 * u(rng));
+    Eigen::Vector3d x(u(rng), u(rng), 0.003 + std::abs(u(rng)));
+    Eigen::Vector3d d(u(rng), u(rng), -std::abs(u(rng)));
+    double R = 0.004;
+    if (trial % 4 == 1) {  // resting on the z = 0 plane at exactly R, moving along it (grazing)
+      x.z() = R;
+      d.z() = 0.0;
+      ++grazing;
+    }
+    if (trial % 4 == 2) d *= 1e-3;           // short moves
+    if (trial % 50 == 3) b = a + 0.5 * (c - a);  // degenerate (collinear) triangle
+    const double old_s = OldSweepSphereTriangle(x, d, R, a, b, c);
+    const double new_s = SweepSphereTriangle(x, d, R, MakeSweepTriangle(a, b, c));
+    ASSERT_EQ(std::memcmp(&old_s, &new_s, sizeof(double)), 0) << "trial " << trial << ": " << old_s << " vs " << new_s;
+    hits += old_s <= 1.0 ? 1 : 0;
+  }
+  EXPECT_GT(hits, 20000);  // many of the random sweeps touch
+  EXPECT_GT(grazing, 40000);
+}
+
+TEST(Shortcuts, CompactTreeWalkReturnsTheObbWalksTrianglesInTheSameOrder) {
+  const std::shared_ptr<const TriMesh> meshes[] = {std::make_shared<const TriMesh>(MakeBumpySphere(0.05, 0.003, 5)),
+                                                   WavyPlate()};
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<double> u(-0.065, 0.065);
+  std::uniform_real_distribution<double> ur(0.0, 0.02);
+  long total = 0, truncations = 0;
+  for (const auto& mesh : meshes) {
+    MeshCollider collider(mesh, 4096);
+    for (int trial = 0; trial < 3000; ++trial) {
+      Eigen::Vector3d c(u(rng), u(rng), u(rng));
+      if (trial % 3 == 0) {  // near the surface, where the proxy queries are
+        const auto& tr = mesh->triangles[static_cast<std::size_t>(rng() % mesh->triangles.size())];
+        c = mesh->p_O_m[tr[0]] + Eigen::Vector3d(ur(rng), ur(rng), ur(rng)) * 0.5 - Eigen::Vector3d::Constant(0.005);
+      }
+      const double r = trial % 10 == 0 ? 1e-5 : 0.0005 + ur(rng);
+      // Several buffer sizes so that truncation happens at the same triangle too.
+      for (const std::size_t cap : {std::size_t{4096}, std::size_t{7}}) {
+        std::vector<std::int32_t> a(cap, -7), b(cap, -7);
+        const BallQueryResult ra = collider.QueryBall(c, r, a);
+        const BallQueryResult rb = collider.QueryBallObb(c, r, b);
+        ASSERT_EQ(ra.count, rb.count) << "trial " << trial;
+        ASSERT_EQ(ra.truncated, rb.truncated) << "trial " << trial;
+        ASSERT_EQ(a, b) << "trial " << trial;
+        total += ra.count;
+        truncations += ra.truncated ? 1 : 0;
+      }
+    }
+  }
+  EXPECT_GT(total, 100000);    // the queries hit many triangles
+  EXPECT_GT(truncations, 500);  // and the small buffer overflowed often
+}
+
+// Random fingertip paths (sliding, pressing, diving through, jumping) with friction, two fingers
+// on each of two meshes served by one solver in turn (as HapticWorld does): every Step's contact
+// and proxy state equal the reference path's exactly.
+TEST(Shortcuts, ProxyStepsEqualTheExactPathOnRandomPaths) {
+  const std::shared_ptr<const TriMesh> meshes[] = {std::make_shared<const TriMesh>(MakeBumpySphere(0.05, 0.003, 5)),
+                                                   WavyPlate()};
+  MeshCollider colliders[] = {MeshCollider(meshes[0], 512), MeshCollider(meshes[1], 512)};
+  ProxySolver fast(512), ref(512);
+  ref.set_reference_path(true);
+  ProxyParams params;
+  const FrictionParams friction{0.6, 0.5};
+  std::mt19937 rng(5);
+  std::normal_distribution<double> g(0.0, 1.0);
+  long touching = 0, sticking = 0, steps = 0, iterations = 0;
+  constexpr int kTips = 4;  // fingers 0, 1 on the sphere, 2, 3 on the plate
+  for (int path = 0; path < 40; ++path) {
+    ProxyState sf[kTips], sr[kTips];
+    Eigen::Vector3d goal[kTips], inward[kTips], vel[kTips];
+    for (int f = 0; f < kTips; ++f) {
+      // Start above the surface, then a random walk with a drift into it.
+      goal[f] = f < 2 ? Eigen::Vector3d(Eigen::Vector3d(g(rng), g(rng), g(rng)).normalized() * 0.06)
+                      : Eigen::Vector3d(0.03 * g(rng), 0.03 * g(rng), 0.009);
+      inward[f] = f < 2 ? Eigen::Vector3d(-goal[f].normalized()) : Eigen::Vector3d(0, 0, -1);
+      vel[f] = 1e-4 * Eigen::Vector3d(g(rng), g(rng), g(rng));
+    }
+    for (int k = 0; k < 400; ++k) {
+      for (int f = 0; f < kTips; ++f) {
+        vel[f] = 0.9 * vel[f] + 3e-5 * Eigen::Vector3d(g(rng), g(rng), g(rng)) + 2e-5 * inward[f];
+        if (k % 97 == 50) vel[f] *= 20.0;  // a fast dive (up to a few mm per step)
+        if (k % 131 == 70 + f) vel[f].setZero();  // held still: sticking
+        goal[f] += vel[f];
+        MeshCollider& collider = colliders[f / 2];
+        const ProxyContact cf = fast.Step(collider, params, friction, goal[f], sf[f]);
+        const ProxyContact cr = ref.Step(collider, params, friction, goal[f], sr[f]);
+        ASSERT_TRUE(SameBits(cf.x_O_m, cr.x_O_m)) << "finger " << f << " path " << path << " step " << k;
+        ASSERT_TRUE(SameBits(cf.p_O_m, cr.p_O_m)) << "finger " << f << " path " << path << " step " << k;
+        ASSERT_TRUE(SameBits(cf.n_O, cr.n_O)) << "finger " << f << " path " << path << " step " << k;
+        ASSERT_EQ(std::memcmp(&cf.depth_m, &cr.depth_m, sizeof(double)), 0);
+        ASSERT_EQ(cf.touching, cr.touching);
+        ASSERT_EQ(cf.sticking, cr.sticking);
+        ASSERT_EQ(cf.truncated, cr.truncated);
+        ASSERT_EQ(cf.triangle, cr.triangle);
+        ASSERT_EQ(cf.iterations, cr.iterations);
+        ASSERT_TRUE(SameBits(sf[f].x_O_m, sr[f].x_O_m));
+        ASSERT_EQ(sf[f].in_contact, sr[f].in_contact);
+        ASSERT_EQ(sf[f].sliding, sr[f].sliding);
+        ++steps;
+        touching += cf.touching ? 1 : 0;
+        sticking += cf.sticking ? 1 : 0;
+        iterations += cf.iterations;
+      }
+    }
+  }
+  // The paths exercised contact, sticking and multi-round moves.
+  EXPECT_GT(touching, steps / 4);
+  EXPECT_GT(sticking, 100);
+  EXPECT_GT(iterations, steps);
+}
+
+}  // namespace
+}  // namespace handshare::contact
