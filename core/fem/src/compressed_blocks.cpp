@@ -227,28 +227,24 @@ class HBuilder {
   }
 
   std::vector<float> data;
-  std::int64_t low_rank_blocks = 0, rank_sum = 0, largest = 0, tried = 0, dense_floats = 0, factor_floats = 0;
-  int max_rank = 0;
+  // What the emitted blocks add up to (undone with them when a single block beats a split).
+  struct Totals {
+    std::int64_t low_rank_blocks = 0, rank_sum = 0, largest = 0, dense_floats = 0, factor_floats = 0;
+    int max_rank = 0;
+  } totals;
+  std::int64_t tried = 0;  // blocks compressed (kept or not): not undone
 
  private:
   // What Emit and Dense have appended, to undo a split that a single block beats.
   struct Mark {
-    std::int64_t data, blocks, low_rank_blocks, rank_sum, largest, dense_floats, factor_floats;
-    int max_rank;
+    std::int64_t data, blocks;
+    Totals totals;
   };
-  Mark Save() const {
-    return {static_cast<std::int64_t>(data.size()), static_cast<std::int64_t>(blocks_.size()), low_rank_blocks, rank_sum,
-            largest, dense_floats, factor_floats, max_rank};
-  }
+  Mark Save() const { return {static_cast<std::int64_t>(data.size()), static_cast<std::int64_t>(blocks_.size()), totals}; }
   void Restore(const Mark& m) {
     data.resize(static_cast<std::size_t>(m.data));
     blocks_.resize(static_cast<std::size_t>(m.blocks));
-    low_rank_blocks = m.low_rank_blocks;
-    rank_sum = m.rank_sum;
-    largest = m.largest;
-    dense_floats = m.dense_floats;
-    factor_floats = m.factor_floats;
-    max_rank = m.max_rank;
+    totals = m.totals;
   }
 
   // The exact block (s rows, t columns) into A_.
@@ -261,13 +257,13 @@ class HBuilder {
 
   void Dense(const Cluster& s, const Cluster& t) {
     Fill(s, t);
-    CompressedTile& tile = tiles_[static_cast<std::size_t>(TileIndexOf(s.leaf_begin, t.leaf_begin))];
+    CompressedTile& tile = tiles_[static_cast<std::size_t>(Compliance::PackedIndex(s.leaf_begin, t.leaf_begin))];
     tile.offset_u = Offset();
     tile.ld_u = static_cast<std::int32_t>(A_.rows());
     tile.rank = -1;
     for (Eigen::Index j = 0; j < A_.cols(); ++j)
       for (Eigen::Index i = 0; i < A_.rows(); ++i) data.push_back(static_cast<float>(A_(i, j)));
-    dense_floats += A_.size();
+    totals.dense_floats += A_.size();
     blocks_.push_back({s.begin, s.end, t.begin, t.end, -1});
   }
 
@@ -332,7 +328,7 @@ class HBuilder {
       for (Eigen::Index j = 0; j < n; ++j) data.push_back(static_cast<float>(V(j, r)));
     for (std::int32_t J = t.leaf_begin; J < t.leaf_end; ++J)
       for (std::int32_t I = s.leaf_begin; I < s.leaf_end; ++I) {
-        CompressedTile& tile = tiles_[static_cast<std::size_t>(TileIndexOf(I, J))];
+        CompressedTile& tile = tiles_[static_cast<std::size_t>(Compliance::PackedIndex(I, J))];
         tile.rank = rank;
         tile.ld_u = static_cast<std::int32_t>(m);
         tile.ld_v = static_cast<std::int32_t>(n);
@@ -340,11 +336,11 @@ class HBuilder {
         tile.offset_v = off_v + 3 * (leaf_start_[J] - t.begin);
       }
     blocks_.push_back({s.begin, s.end, t.begin, t.end, rank});
-    ++low_rank_blocks;
-    rank_sum += rank;
-    max_rank = std::max(max_rank, rank);
-    largest = std::max(largest, m * n);
-    factor_floats += static_cast<std::int64_t>(rank) * (m + n);
+    ++totals.low_rank_blocks;
+    totals.rank_sum += rank;
+    totals.max_rank = std::max(totals.max_rank, rank);
+    totals.largest = std::max(totals.largest, m * n);
+    totals.factor_floats += static_cast<std::int64_t>(rank) * (m + n);
   }
 
   std::int32_t Offset() const {
@@ -353,8 +349,6 @@ class HBuilder {
     }
     return static_cast<std::int32_t>(data.size());
   }
-
-  static std::int64_t TileIndexOf(std::int32_t I, std::int32_t J) { return static_cast<std::int64_t>(J) * (J + 1) / 2 + I; }
 
   const Compliance& exact_;
   const CompressionOptions& o_;
@@ -394,7 +388,7 @@ CompressedBlocks CompressedBlocks::Build(std::span<const Eigen::Vector3d> positi
   for (std::int32_t I = 0; I < L; ++I)
     for (std::int32_t p = h.leaf_start_[I]; p < h.leaf_start_[I + 1]; ++p) h.leaf_of_pos_[p] = I;
 
-  h.tiles_.resize(static_cast<std::size_t>(TileIndex(0, L)));
+  h.tiles_.resize(static_cast<std::size_t>(Compliance::PackedIndex(0, L)));
   HBuilder b(exact, options, clusters, h.slot_of_pos_, h.leaf_start_, h.tiles_, h.blocks_);
   if (N > 0) b.Partition(0, 0);
   h.data_.assign(b.data.begin(), b.data.end());
@@ -402,12 +396,13 @@ CompressedBlocks CompressedBlocks::Build(std::span<const Eigen::Vector3d> positi
   if (stats != nullptr) {
     stats->tiles = static_cast<std::int64_t>(h.tiles_.size());
     stats->low_rank_tiles = std::count_if(h.tiles_.begin(), h.tiles_.end(), [](const Tile& t) { return t.rank >= 0; });
-    stats->low_rank_blocks = b.low_rank_blocks;
-    stats->mean_rank = b.low_rank_blocks > 0 ? static_cast<double>(b.rank_sum) / static_cast<double>(b.low_rank_blocks) : 0.0;
-    stats->max_rank = b.max_rank;
-    stats->largest_block_entries = b.largest;
-    stats->dense_bytes = b.dense_floats * static_cast<std::int64_t>(sizeof(float));
-    stats->factor_bytes = b.factor_floats * static_cast<std::int64_t>(sizeof(float));
+    const auto& t = b.totals;
+    stats->low_rank_blocks = t.low_rank_blocks;
+    stats->mean_rank = t.low_rank_blocks > 0 ? static_cast<double>(t.rank_sum) / static_cast<double>(t.low_rank_blocks) : 0.0;
+    stats->max_rank = t.max_rank;
+    stats->largest_block_entries = t.largest;
+    stats->dense_bytes = t.dense_floats * static_cast<std::int64_t>(sizeof(float));
+    stats->factor_bytes = t.factor_floats * static_cast<std::int64_t>(sizeof(float));
     stats->table_bytes = static_cast<std::int64_t>(h.storage_bytes() - h.data_.size() * sizeof(float));
     stats->blocks_tried = b.tried;
     stats->seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
@@ -424,7 +419,7 @@ Eigen::Matrix3d CompressedBlocks::Block(std::int32_t n, std::int32_t k) const no
     std::swap(I, J);
   }
   const std::int64_t a = p - leaf_start_[I], b = q - leaf_start_[J];
-  const Tile& tile = tiles_[static_cast<std::size_t>(TileIndex(I, J))];
+  const Tile& tile = tiles_[static_cast<std::size_t>(Compliance::PackedIndex(I, J))];
   const float* U = data_.data() + tile.offset_u;
   const float* V = data_.data() + tile.offset_v;
   Eigen::Matrix3d B;
@@ -445,10 +440,6 @@ Eigen::Matrix3d CompressedBlocks::Block(std::int32_t n, std::int32_t k) const no
 }
 
 namespace {
-
-inline std::int64_t TileAt(std::int32_t I, std::int32_t J) noexcept {
-  return static_cast<std::int64_t>(J) * (J + 1) / 2 + I;
-}
 
 #define HS_APPLY_NAME ApplyAvx512
 #define HS_APPLY_ATTR HS_AVX512

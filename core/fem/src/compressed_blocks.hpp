@@ -79,16 +79,13 @@ class CompressedBlocks {
  private:
   using Tile = CompressedTile;
   CompressedView View() const noexcept;
-  static std::int64_t TileIndex(std::int32_t I, std::int32_t J) noexcept {
-    return static_cast<std::int64_t>(J) * (J + 1) / 2 + I;
-  }
   std::int32_t num_leaves_() const noexcept { return static_cast<std::int32_t>(leaf_start_.size()) - 1; }
 
   std::vector<std::int32_t> slot_of_pos_;  // cluster order -> slot
   std::vector<std::int32_t> pos_;          // slot -> cluster order
   std::vector<std::int32_t> leaf_of_pos_;
   std::vector<std::int32_t> leaf_start_;   // num_leaves + 1
-  std::vector<Tile> tiles_;
+  std::vector<Tile> tiles_;                // tile (I, J), I <= J, at Compliance::PackedIndex(I, J)
   std::vector<CompressedBlockInfo> blocks_;
   AlignedVector<float> data_;
 };
