@@ -75,6 +75,19 @@ bool InObb(const fcl::OBBd& obb, const Eigen::Vector3d& c, double r2) {
   const Eigen::Vector3d excess = (local.cwiseAbs() - obb.extent).cwiseMax(0.0);
   return excess.squaredNorm() <= r2;
 }
+// The exact leaf test of both walks: triangle t joins the answer if the ball (c, r^2) reaches it.
+// Returns false when the answer is full (then marked truncated).
+bool AddIfReached(const SweepTriangle& tri, std::int32_t t, const Eigen::Vector3d& c, double r2,
+                  std::span<std::int32_t> ids, BallQueryResult& out) {
+  const Eigen::Vector3d q = ClosestPointOnTriangle(c, tri.v[0], tri.v[1], tri.v[2]);
+  if ((q - c).squaredNorm() > r2) return true;
+  if (out.count == static_cast<std::int32_t>(ids.size())) {
+    out.truncated = true;
+    return false;
+  }
+  ids[static_cast<std::size_t>(out.count++)] = t;
+  return true;
+}
 float FloatUp(double x) {
   float f = static_cast<float>(x);
   if (static_cast<double>(f) < x) f = std::nextafter(f, std::numeric_limits<float>::infinity());
@@ -153,7 +166,6 @@ BallQueryResult MeshCollider::QueryBall(const Eigen::Vector3d& c, double r_m,
   std::int32_t stack[kStack];
   int top = 0;
   std::int32_t i = 0;
-  const auto cap = static_cast<std::int32_t>(ids.size());
   for (;;) {
     const FlatNode& n = nodes[i];
     const float ex = std::max(n.lo[0] - cx, 0.0f) + std::max(cx - n.hi[0], 0.0f);
@@ -170,15 +182,7 @@ BallQueryResult MeshCollider::QueryBall(const Eigen::Vector3d& c, double r_m,
         }
       } else {
         const std::int32_t t = -1 - n.right;
-        const auto& P = tri_[static_cast<std::size_t>(t)].v;
-        const Eigen::Vector3d q = ClosestPointOnTriangle(c, P[0], P[1], P[2]);
-        if ((q - c).squaredNorm() <= r2) {
-          if (out.count == cap) {
-            out.truncated = true;
-            return out;
-          }
-          ids[static_cast<std::size_t>(out.count++)] = t;
-        }
+        if (!AddIfReached(tri_[static_cast<std::size_t>(t)], t, c, r2, ids, out)) return out;
       }
     }
     if (top == 0) break;
@@ -192,7 +196,6 @@ BallQueryResult MeshCollider::QueryBallObb(const Eigen::Vector3d& c, double r_m,
   BallQueryResult out;
   if (!c.allFinite() || !(r_m > 0.0) || !std::isfinite(r_m)) return out;
   const auto& bvh = impl_->bvh;
-  const TriMesh& mesh = *mesh_;
   const double r2 = r_m * r_m;
   // Depth-first walk with a fixed stack (FCL's top-down build keeps the depth near
   // log2(triangles) + a few; a deeper tree is reported as truncated, never overrun).
@@ -200,21 +203,13 @@ BallQueryResult MeshCollider::QueryBallObb(const Eigen::Vector3d& c, double r_m,
   int stack[kStack];
   int top = 0;
   stack[top++] = 0;
-  const auto cap = static_cast<std::int32_t>(ids.size());
   while (top > 0) {
     const auto& node = bvh.getBV(stack[--top]);
     // Ball against the node's oriented box (OBB part of OBBRSS, model frame).
     if (!InObb(node.bv.obb, c, r2)) continue;
     if (node.isLeaf()) {
       const int t = node.primitiveId();
-      const auto& tr = mesh.triangles[static_cast<std::size_t>(t)];
-      const Eigen::Vector3d q = ClosestPointOnTriangle(c, mesh.p_O_m[tr[0]], mesh.p_O_m[tr[1]], mesh.p_O_m[tr[2]]);
-      if ((q - c).squaredNorm() > r2) continue;
-      if (out.count == cap) {
-        out.truncated = true;
-        return out;
-      }
-      ids[static_cast<std::size_t>(out.count++)] = t;
+      if (!AddIfReached(tri_[static_cast<std::size_t>(t)], t, c, r2, ids, out)) return out;
       continue;
     }
     if (top + 2 > kStack) {
