@@ -25,6 +25,8 @@ constexpr double kSameNormal = 1e-9;
 // plus this from a point is farther than that distance from the point; 1e-10 m is seven orders
 // above the round-off of the plane distance (1e-17 m at these sizes) and far below kTouchBand_m.
 constexpr double kPlaneSlack_m = 1e-10;
+// Gathers reach this many skins beyond R + skin (features about to enter the touch band).
+constexpr double kGatherMarginSkins = 4.0;
 }  // namespace
 
 ProxySolver::ProxySolver(std::int32_t max_candidates)
@@ -96,19 +98,21 @@ int ProxySolver::CollectConstraints(const MeshCollider& collider, const ProxyPar
   // The constraints are a function of (mesh, x, R, skin) alone when the candidates held every
   // triangle within R + skin + margin of x (an untruncated gather of a ball that contains that
   // one): remembered so that the next gather at the same point can be skipped.
-  cons_valid_ = !last_gather_truncated_;
-  cons_x_ = x;
+  cons_site_ = last_gather_truncated_ ? Site{} : Site{collider.id(), params.radius_m, params.skin_m, x};
   cons_m_ = m;
-  cons_collider_ = &collider;
-  cons_radius_m_ = params.radius_m;
-  cons_skin_m_ = params.skin_m;
   return m;
 }
 
-bool ProxySolver::ConstraintsValidAt(const MeshCollider& collider, const ProxyParams& params,
-                                     const Eigen::Vector3d& x) const noexcept {
-  return !reference_ && cons_valid_ && cons_collider_ == &collider && cons_radius_m_ == params.radius_m &&
-         cons_skin_m_ == params.skin_m && cons_x_ == x;
+bool ProxySolver::Site::Is(const MeshCollider& collider, const ProxyParams& params,
+                           const Eigen::Vector3d& at) const noexcept {
+  return collider_id != 0 && collider_id == collider.id() && radius_m == params.radius_m && skin_m == params.skin_m &&
+         std::memcmp(x.data(), at.data(), sizeof(double) * 3) == 0;
+}
+
+int ProxySolver::ConstraintsAt(MeshCollider& collider, const ProxyParams& params, const Eigen::Vector3d& x) noexcept {
+  if (!reference_ && cons_site_.Is(collider, params, x)) return cons_m_;
+  Gather(collider, x, params.radius_m + params.skin_m + kGatherMarginSkins * params.skin_m);
+  return CollectConstraints(collider, params, x);
 }
 
 Eigen::Vector3d ProxySolver::Project(const Eigen::Vector3d& goal, const Eigen::Vector3d& x,
@@ -172,7 +176,7 @@ Eigen::Vector3d ProxySolver::Project(const Eigen::Vector3d& goal, const Eigen::V
 Eigen::Vector3d ProxySolver::Move(MeshCollider& collider, const ProxyParams& params,
                                   const Eigen::Vector3d& x0, const Eigen::Vector3d& goal,
                                   bool* truncated, std::int32_t* iterations) noexcept {
-  cons_valid_ = false;  // a call from outside Step starts from a fresh gather
+  cons_site_ = Site{};  // a call from outside Step starts from a fresh gather
   return MoveFrom(collider, params, x0, goal, truncated, iterations);
 }
 
@@ -181,17 +185,11 @@ Eigen::Vector3d ProxySolver::MoveFrom(MeshCollider& collider, const ProxyParams&
                                       bool* truncated, std::int32_t* iterations) noexcept {
   truncated_ = false;
   const double Rs = params.radius_m + params.skin_m;
-  const double margin = 4.0 * params.skin_m;
+  const double margin = kGatherMarginSkins * params.skin_m;
   Eigen::Vector3d x = x0;
   // Constraints at the start: the triangles within R + skin of the proxy (already at hand when
   // the last collection was at x0 from an untruncated gather).
-  int m = 0;
-  if (ConstraintsValidAt(collider, params, x)) {
-    m = cons_m_;
-  } else {
-    Gather(collider, x, Rs + margin);
-    m = CollectConstraints(collider, params, x);
-  }
+  int m = ConstraintsAt(collider, params, x);
   std::int32_t it = 0;
   for (; it < params.max_iterations; ++it) {
     Eigen::Vector3d t = Project(goal, x, m);
@@ -234,7 +232,7 @@ ProxyContact ProxySolver::Step(MeshCollider& collider, const ProxyParams& params
                                ProxyState& state) noexcept {
   ProxyContact out;
   out.x_O_m = state.x_O_m;
-  cons_valid_ = false;  // set again below only from this collider's own results
+  cons_site_ = Site{};  // set again below only from this collider's own results
   if (!goal.allFinite()) return out;
   if (!state.initialized || !state.x_O_m.allFinite()) {
     state.x_O_m = goal;
@@ -256,15 +254,10 @@ ProxyContact ProxySolver::Step(MeshCollider& collider, const ProxyParams& params
   // Where the last Step of this proxy ended, the constraints are already known.
   if (!reference_) {
     const EndEntry& e = ends_[EndSlot(x0)];
-    if (e.collider_id == collider.id() && e.radius_m == params.radius_m && e.skin_m == params.skin_m &&
-        std::memcmp(e.x.data(), x0.data(), sizeof(double) * 3) == 0) {
+    if (e.site.Is(collider, params, x0)) {
       std::copy(e.cons.begin(), e.cons.begin() + e.m, cons_.begin());
       cons_m_ = e.m;
-      cons_x_ = x0;
-      cons_collider_ = &collider;
-      cons_radius_m_ = params.radius_m;
-      cons_skin_m_ = params.skin_m;
-      cons_valid_ = true;
+      cons_site_ = e.site;
     }
   }
   const Eigen::Vector3d x_f = MoveFrom(collider, params, x0, goal, &trunc, &iters);
@@ -299,19 +292,12 @@ ProxyContact ProxySolver::Step(MeshCollider& collider, const ProxyParams& params
   }
   // Contact geometry at the final proxy (its neighbourhood is in the last gather, re-query to
   // be exact when the proxy stuck at x0).
-  int m = 0;
-  if (ConstraintsValidAt(collider, params, x)) {
-    m = cons_m_;  // x is where the last Move ended (not stuck at x0): same constraints
-  } else {
-    Gather(collider, x, params.radius_m + params.skin_m + 4.0 * params.skin_m);
-    m = CollectConstraints(collider, params, x);
-  }
-  if (!reference_ && ConstraintsValidAt(collider, params, x)) {  // for the next Step from x
+  // x is where the last Move ended unless the proxy stuck at x0: then the constraints at hand
+  // are reused, else collected there.
+  const int m = ConstraintsAt(collider, params, x);
+  if (!reference_ && cons_site_.Is(collider, params, x)) {  // for the next Step from x
     EndEntry& end = ends_[EndSlot(x)];
-    end.collider_id = collider.id();
-    end.radius_m = params.radius_m;
-    end.skin_m = params.skin_m;
-    end.x = x;
+    end.site = cons_site_;
     end.m = m;
     std::copy(cons_.begin(), cons_.begin() + m, end.cons.begin());
   }

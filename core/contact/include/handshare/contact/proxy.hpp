@@ -109,9 +109,9 @@ class ProxySolver {
   Eigen::Vector3d MoveFrom(MeshCollider& collider, const ProxyParams& params,
                            const Eigen::Vector3d& x0_O_m, const Eigen::Vector3d& goal_O_m,
                            bool* truncated, std::int32_t* iterations) noexcept;
-  // Whether cons_ (first cons_m_) are the constraints at x for this collider and params.
-  bool ConstraintsValidAt(const MeshCollider& collider, const ProxyParams& params,
-                          const Eigen::Vector3d& x) const noexcept;
+  // The constraints at x (cons_, m returned): the ones at hand when they were collected there
+  // for this collider and params from an untruncated gather, else a fresh gather and collection.
+  int ConstraintsAt(MeshCollider& collider, const ProxyParams& params, const Eigen::Vector3d& x) noexcept;
 
   std::vector<std::int32_t> candidates_;
   std::int32_t num_candidates_ = 0;
@@ -119,27 +119,28 @@ class ProxySolver {
   bool last_gather_truncated_ = false;
   bool reference_ = false;
   std::array<Constraint, kMaxConstraints> cons_{};
-  // Where cons_ were last collected (see ConstraintsValidAt).
-  bool cons_valid_ = false;
-  Eigen::Vector3d cons_x_ = Eigen::Vector3d::Zero();
-  int cons_m_ = 0;
-  const MeshCollider* cons_collider_ = nullptr;
-  // Constraints where earlier Steps ended (the next Step of that proxy starts there), keyed by
-  // collider id, R, skin and the point's bits; direct-mapped by the point (pure function of the
-  // key, so any entry that matches is right whichever finger wrote it).
-  struct EndEntry {
-    std::uint64_t collider_id = 0;  // 0: empty
+  // Where a set of constraints was collected: they are a function of (mesh, x, R, skin) alone
+  // when the gather was not truncated. collider_id 0: none.
+  struct Site {
+    std::uint64_t collider_id = 0;
     double radius_m = 0.0;
     double skin_m = 0.0;
     Eigen::Vector3d x = Eigen::Vector3d::Zero();
+    bool Is(const MeshCollider& collider, const ProxyParams& params, const Eigen::Vector3d& at) const noexcept;
+  };
+  Site cons_site_;  // of cons_ (its first cons_m_)
+  int cons_m_ = 0;
+  // Constraints where earlier Steps ended (the next Step of that proxy starts there),
+  // direct-mapped by the point (a pure function of the site, so any entry whose site matches is
+  // right whichever finger wrote it).
+  struct EndEntry {
+    Site site;
     int m = 0;
     std::array<Constraint, kMaxConstraints> cons{};
   };
   static constexpr std::size_t kEndEntries = 64;
   std::vector<EndEntry> ends_;
   static std::size_t EndSlot(const Eigen::Vector3d& x) noexcept;
-  double cons_radius_m_ = 0.0;
-  double cons_skin_m_ = 0.0;
 };
 
 }  // namespace handshare::contact
