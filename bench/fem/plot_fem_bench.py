@@ -123,14 +123,18 @@ def tables(rows):
         "elementary_displacement_coherent", "elementary_displacement_float16",
         "elementary_displacement_float16_coherent", "elementary_displacement_float64",
         "compressed_force_only_tol_0.001", "compressed_force_only_tol_1e-05", "compressed_full_update_tol_1e-05"]
-    print("| method | " + " | ".join(str(n) for n in sizes) + " |")
-    print("|---|" + "---|" * len(sizes))
-    for m in methods:
-        cells = []
-        for n in sizes:
-            v = rows.get(m, {}).get(n)
-            cells.append("-" if v is None else (f"{v[1]:.3g}" if v[1] < 1e4 else f"{v[1] / 1e3:.3g} ms"))
-        print(f"| {m} | " + " | ".join(cells) + " |")
+    def table(cell):
+        """One row per method, one column per size; cell(v, n) formats a row's values."""
+        print("| method | " + " | ".join(str(n) for n in sizes) + " |")
+        print("|---|" + "---|" * len(sizes))
+        for m in methods:
+            cells = []
+            for n in sizes:
+                v = rows.get(m, {}).get(n)
+                cells.append("-" if v is None else cell(v, n))
+            print(f"| {m} | " + " | ".join(cells) + " |")
+
+    table(lambda v, n: f"{v[1]:.3g}" if v[1] < 1e4 else f"{v[1] / 1e3:.3g} ms")
     print()
     print("| method | worst rel_error |")
     print("|---|---|")
@@ -138,14 +142,7 @@ def tables(rows):
         print(f"| {m} | {max(v[2] for v in rows[m].values()):.2e} |")
     print()
     print("p99 [us] and storage [bytes / N^2]:")
-    print("| method | " + " | ".join(str(n) for n in sizes) + " |")
-    print("|---|" + "---|" * len(sizes))
-    for m in methods:
-        cells = []
-        for n in sizes:
-            v = rows.get(m, {}).get(n)
-            cells.append("-" if v is None or v[3] is None else f"{v[3]:.3g} / {v[4] / (n * n):.3g}")
-        print(f"| {m} | " + " | ".join(cells) + " |")
+    table(lambda v, n: "-" if v[3] is None else f"{v[3]:.3g} / {v[4] / (n * n):.3g}")
 
 
 def main():
