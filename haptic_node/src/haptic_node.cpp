@@ -169,8 +169,11 @@ int HapticNode::Run() {
   // The other users' newest contact sets (a vanished peer's fade out within 0.5 s).
   session::PeerContacts peers;
   // Published states of rigid bodies (object id -> newest): followed unless this user owns it.
-  std::map<std::string, msg::ObjectState> body_states;
-  std::map<std::string, std::uint64_t> body_received_ns;  // when each state arrived (this clock)
+  struct ReceivedState {
+    msg::ObjectState state;
+    std::uint64_t received_ns = 0;  // when it arrived (this host's steady clock)
+  };
+  std::map<std::string, ReceivedState> body_states;
 
   const auto start = Clock::now();
   const auto period = std::chrono::duration_cast<Clock::duration>(
@@ -211,10 +214,7 @@ int HapticNode::Run() {
             say(line);
           }
         }
-        if (!renderer || renderer->scene().name != scene.name) {
-          body_states.clear();
-          body_received_ns.clear();
-        }
+        if (!renderer || renderer->scene().name != scene.name) body_states.clear();
         peers.Clear();
         renderer = next_renderer;
         have_report = false;
@@ -276,11 +276,11 @@ int HapticNode::Run() {
       msg::ObjectState body;
       while (object_reader.TakeNext(body, meta)) {
         if (!meta.valid_data || body.session().to_string() != config_.where.session) continue;
-        body_states[body.object_id().to_string()] = body;
-        body_received_ns[body.object_id().to_string()] = common::SteadyNowNs();
+        body_states[body.object_id().to_string()] = {body, common::SteadyNowNs()};
       }
       FollowedBodies followed;
-      for (const auto& [id, st] : body_states) {
+      for (const auto& [id, received] : body_states) {
+        const msg::ObjectState& st = received.state;
         if (st.owner().to_string() == config_.user || followed.count >= kMaxReportedBodies) continue;
         const auto object = renderer->models().Find(id);
         if (object < 0 || std::find(renderer->models().dynamic_bodies.begin(), renderer->models().dynamic_bodies.end(),
@@ -292,7 +292,7 @@ int HapticNode::Run() {
         for (int k = 0; k < 3; ++k) item.p_WO_m[k] = st.p_WO_m()[k];
         for (int k = 0; k < 4; ++k) item.q_WO_wxyz[k] = st.q_WO_wxyz()[k];
         for (int k = 0; k < 3; ++k) item.v_WO_m_per_s[k] = st.v_WO_m_per_s()[k];
-        item.received_ns = body_received_ns[id];
+        item.received_ns = received.received_ns;
       }
       renderer->SetFollowed(followed);
     }
@@ -330,8 +330,8 @@ int HapticNode::Run() {
       contacts.grasped_object_id(grasped >= 0 ? renderer->IdOf(grasped) : std::string());
       // The body this node simulates for the session: the one the world server gave it.
       std::int32_t owned = -1;
-      for (const auto& [id, st] : body_states) {
-        if (st.owner().to_string() == config_.user) owned = renderer->models().Find(id);
+      for (const auto& [id, received] : body_states) {
+        if (received.state.owner().to_string() == config_.user) owned = renderer->models().Find(id);
       }
       contacts.simulating(false);
       contacts.simulated_object_id("");
