@@ -11,6 +11,7 @@
 #include "handshare/fem/error.hpp"
 #include "kernels.hpp"
 #include "merge_contacts.hpp"
+#include "small_spd_solve.hpp"
 
 namespace handshare::fem {
 
@@ -99,6 +100,7 @@ ContactSolver::ContactSolver(std::shared_ptr<const Compliance> compliance,
   violates_.assign(M, 0);
   prev_slot_.assign(M, -1);
   prev_active_.assign(M, 0);
+  isa_ = static_cast<std::uint8_t>(detail::BestIsa());
 }
 
 void ContactSolver::ZeroOutputs() noexcept {
@@ -507,7 +509,18 @@ bool ContactSolver::SolveActiveSet() noexcept {
     r += mode_[j] == ContactMode::kFull3d ? 3 : 1;
   }
   if (r == 0) return true;
-  // A = G C_cc G^T + eps I (lower triangle is enough for the Cholesky, fill it all: m is small).
+  // Every contact held and sticking (r = 3 u): A = C_cc as gathered, so the small solver reads it
+  // in place. Otherwise A = G C_cc G^T (lower triangle is enough for the Cholesky, fill it all:
+  // m is small).
+  const bool all_sticking = r == 3 * num_unique_;
+  const bool small = r <= detail::kSmallSpdMax;
+  if (all_sticking && small) {
+    for (std::int32_t j = 0; j < num_unique_; ++j)
+      for (int c = 0; c < 3; ++c) rhs_[3 * j + c] = d_m_[j][c];
+    if (!detail::SmallSpdSolve(Ccc_.data(), r, ld, eps_m_per_N_, rhs_.data(), static_cast<detail::Isa>(isa_))) return false;
+    for (std::int32_t j = 0; j < num_unique_; ++j) f_N_[j] = Eigen::Vector3d(rhs_[3 * j], rhs_[3 * j + 1], rhs_[3 * j + 2]);
+    return true;
+  }
   for (std::int32_t j = 0; j < num_unique_; ++j) {
     if (!active_[j]) continue;
     const bool fj = mode_[j] == ContactMode::kFull3d;
@@ -536,11 +549,15 @@ bool ContactSolver::SolveActiveSet() noexcept {
       rhs_[row_of_[j]] = n_[j].dot(d_m_[j]);
     }
   }
-  if (eps_m_per_N_ > 0.0) {
-    for (int k = 0; k < r; ++k) A_[static_cast<std::ptrdiff_t>(k) * ld + k] += eps_m_per_N_;
+  if (small) {
+    if (!detail::SmallSpdSolve(A_.data(), r, ld, eps_m_per_N_, rhs_.data(), static_cast<detail::Isa>(isa_))) return false;
+  } else {
+    if (eps_m_per_N_ > 0.0) {
+      for (int k = 0; k < r; ++k) A_[static_cast<std::ptrdiff_t>(k) * ld + k] += eps_m_per_N_;
+    }
+    if (!detail::CholeskyInPlace(A_.data(), r, ld)) return false;
+    detail::CholeskySolveInPlace(A_.data(), r, ld, rhs_.data());
   }
-  if (!detail::CholeskyInPlace(A_.data(), r, ld)) return false;
-  detail::CholeskySolveInPlace(A_.data(), r, ld, rhs_.data());
   for (std::int32_t j = 0; j < num_unique_; ++j) {
     if (!active_[j]) continue;
     const int k = row_of_[j];

@@ -2,6 +2,7 @@
 // Internal: the memory-bound kernels on the packed compliance blocks, for both precisions.
 // Real-time safe: noexcept, no allocation.
 
+#include <algorithm>
 #include <cstdint>
 #include <span>
 #include <utility>
@@ -19,18 +20,23 @@ void GatherBlocksT(const S* data, const std::int32_t* slots, std::int32_t u, dou
                    int ld) noexcept {
   for (std::int32_t j = 0; j < u; ++j) {
     for (std::int32_t i = 0; i <= j; ++i) {
-      std::int32_t a = slots[i], b = slots[j];
-      const bool transpose = a > b;  // stored is C_{min,max}
-      if (transpose) std::swap(a, b);
-      const S* blk = data + 9 * Compliance::PackedIndex(a, b);
+      const std::int32_t a = slots[i], b = slots[j];
       double* oij = out + static_cast<std::ptrdiff_t>(3 * j) * ld + 3 * i;  // block (i, j)
       double* oji = out + static_cast<std::ptrdiff_t>(3 * i) * ld + 3 * j;  // block (j, i)
+      // Stored is C_{min,max}, column-major: C_ij(r, c) = blk[3 c + r], or blk[3 r + c] when
+      // a > b (the transpose). Two straight-line copies, so the branch is taken once a block.
+      const S* blk = data + 9 * Compliance::PackedIndex(std::min(a, b), std::max(a, b));
+      double v[9];  // C_ij column-major
+      if (a <= b) {
+        for (int e = 0; e < 9; ++e) v[e] = static_cast<double>(blk[e]);
+      } else {
+        for (int c = 0; c < 3; ++c)
+          for (int r = 0; r < 3; ++r) v[3 * c + r] = static_cast<double>(blk[3 * r + c]);
+      }
       for (int c = 0; c < 3; ++c)
         for (int r = 0; r < 3; ++r) {
-          const double v = transpose ? static_cast<double>(blk[3 * r + c])
-                                     : static_cast<double>(blk[3 * c + r]);
-          oij[c * ld + r] = v;   // C_ij(r, c)
-          oji[r * ld + c] = v;   // C_ji(c, r) = C_ij(r, c)
+          oij[c * ld + r] = v[3 * c + r];  // C_ij(r, c)
+          oji[r * ld + c] = v[3 * c + r];  // C_ji(c, r) = C_ij(r, c)
         }
     }
   }
