@@ -26,14 +26,21 @@ void GatherBlocksT(const S* data, const std::int32_t* slots, std::int32_t u, dou
       // Stored is C_{min,max}, column-major: C_ij(r, c) = blk[3 c + r], or blk[3 r + c] when
       // a > b (the transpose). Two straight-line copies, so the branch is taken once a block.
       const S* blk = data + 9 * Compliance::PackedIndex(std::min(a, b), std::max(a, b));
+      // (GCC -O2 does not unroll these 3- and 9-trip loops by itself; unrolled they are plain
+      // moves.)
       double v[9];  // C_ij column-major
       if (a <= b) {
+#pragma GCC unroll 9
         for (int e = 0; e < 9; ++e) v[e] = static_cast<double>(blk[e]);
       } else {
+#pragma GCC unroll 3
         for (int c = 0; c < 3; ++c)
+#pragma GCC unroll 3
           for (int r = 0; r < 3; ++r) v[3 * c + r] = static_cast<double>(blk[3 * r + c]);
       }
+#pragma GCC unroll 3
       for (int c = 0; c < 3; ++c)
+#pragma GCC unroll 3
         for (int r = 0; r < 3; ++r) {
           oij[c * ld + r] = v[3 * c + r];  // C_ij(r, c)
           oji[r * ld + c] = v[3 * c + r];  // C_ji(c, r) = C_ij(r, c)
