@@ -450,8 +450,12 @@ bool ContactSolver::SolveNormalPushOnly(StepStatus& status) noexcept {
         Lb[b] += eps_m_per_N_;
         rhs_[b] = dn_m_[act_[b]];
       }
-      if (!detail::CholeskyCompact(L_.data(), r)) return false;
-      detail::CholeskyCompactSolve(L_.data(), r, rhs_.data());
+      if (r <= detail::kSmallSpdMax) {  // a few nodes: the register kernel (eps is in L_ already)
+        if (!detail::SmallSpdSolve(L_.data(), r, r, 0.0, rhs_.data(), static_cast<detail::Isa>(isa_))) return false;
+      } else {
+        if (!detail::CholeskyCompact(L_.data(), r)) return false;
+        detail::CholeskyCompactSolve(L_.data(), r, rhs_.data());
+      }
       for (std::int32_t b = 0; b < r; ++b) {
         if (!std::isfinite(rhs_[b])) return false;
         lambda_N_[act_[b]] = rhs_[b];
