@@ -173,7 +173,7 @@ class HBuilder {
     const Cluster& t = cl_[static_cast<std::size_t>(ti)];
     if (si == ti) {
       if (s.leaf()) {
-        Dense(s, t);
+        Symmetric(s);
       } else {
         Partition(s.child[0], s.child[0]);
         Partition(s.child[0], s.child[1]);
@@ -181,32 +181,32 @@ class HBuilder {
       }
       return;
     }
-    const bool leaves = s.leaf() && t.leaf();
-    const std::int64_t entries = 9 * static_cast<std::int64_t>(s.size()) * t.size();
-    const bool admissible = o_.hierarchical && std::min(Diameter(s), Diameter(t)) <= o_.eta * BoxDistance(s, t);
-    if (leaves || (admissible && entries <= o_.max_block_entries)) {
-      const int rank = Compress(s, t);
-      if (rank >= 0 && leaves) {
-        Emit(s, t, U_, V_, rank);
-        return;
-      }
+    if (s.leaf() && t.leaf()) {
+      // A leaf pair on its own: low rank where that beats dense, else dense.
+      const int rank = Compress(s, t, kNoLimit);
       if (rank >= 0) {
-        // One U V^T for (s, t), unless its split (computed here, recursively) stores fewer floats.
-        const Eigen::MatrixXd U = U_.leftCols(rank), V = V_.leftCols(rank);
-        const Mark mark = Save();
-        Split(si, ti);
-        if (static_cast<std::int64_t>(rank) * (U.rows() + V.rows()) <=
-            static_cast<std::int64_t>(data.size()) - mark.data) {
-          Restore(mark);
-          Emit(s, t, U, V, rank);
-        }
-        return;
+        Emit(s, t, U_, V_, rank);
+      } else {
+        Dense(s, t);
       }
+      return;
     }
-    if (leaves) {
-      Dense(s, t);
-    } else {
+    const std::int64_t entries = 9 * static_cast<std::int64_t>(s.size()) * t.size();
+    const bool admissible =
+        o_.hierarchical && (o_.weak_admissibility || std::min(Diameter(s), Diameter(t)) <= o_.eta * BoxDistance(s, t));
+    if (!admissible || entries > o_.max_block_entries) {
       Split(si, ti);
+      return;
+    }
+    // One U V^T for (s, t) if it stores fewer floats than its split (computed first, recursively,
+    // and undone when the single block wins; its size caps the rank the compression may use).
+    const Mark mark = Save();
+    Split(si, ti);
+    const std::int64_t split_floats = static_cast<std::int64_t>(data.size()) - mark.data;
+    const int rank = Compress(s, t, split_floats / (3 * static_cast<std::int64_t>(s.size() + t.size())));
+    if (rank >= 0) {
+      Restore(mark);
+      Emit(s, t, U_, V_, rank);
     }
   }
 
@@ -260,23 +260,40 @@ class HBuilder {
     CompressedTile& tile = tiles_[static_cast<std::size_t>(Compliance::PackedIndex(s.leaf_begin, t.leaf_begin))];
     tile.offset_u = Offset();
     tile.ld_u = static_cast<std::int32_t>(A_.rows());
-    tile.rank = -1;
+    tile.rank = kDenseTile;
     for (Eigen::Index j = 0; j < A_.cols(); ++j)
       for (Eigen::Index i = 0; i < A_.rows(); ++i) data.push_back(static_cast<float>(A_(i, j)));
     totals.dense_floats += A_.size();
     blocks_.push_back({s.begin, s.end, t.begin, t.end, -1});
   }
 
+  // A diagonal leaf tile: C_ss is symmetric, so only its upper triangle is stored (by columns).
+  void Symmetric(const Cluster& s) {
+    Fill(s, s);
+    CompressedTile& tile = tiles_[static_cast<std::size_t>(Compliance::PackedIndex(s.leaf_begin, s.leaf_begin))];
+    tile.offset_u = Offset();
+    tile.ld_u = static_cast<std::int32_t>(A_.rows());
+    tile.rank = kSymmetricTile;
+    for (Eigen::Index j = 0; j < A_.cols(); ++j)
+      for (Eigen::Index i = 0; i <= j; ++i) data.push_back(static_cast<float>(A_(i, j)));
+    totals.dense_floats += A_.rows() * (A_.rows() + 1) / 2;
+    blocks_.push_back({s.begin, s.end, s.begin, s.end, -1});
+  }
+
   // The rank of one U V^T for the whole block (factors in U_, V_) if the tolerance is met at a rank
-  // that saves memory against dense, else -1. ACA first
+  // that saves memory against dense and is at most max_rank, else -1. ACA first
   // runs to a fraction of the tolerance (its rank is not optimal), then the product is recompressed
   // to the smallest rank whose explicit residual ||A - U V^T||_F meets the tolerance (QR of both
   // factors, SVD of the r x r core; candidates from the singular values, each one checked).
-  int Compress(const Cluster& s, const Cluster& t) {
+  static constexpr std::int64_t kNoLimit = std::numeric_limits<std::int32_t>::max();
+  int Compress(const Cluster& s, const Cluster& t, std::int64_t max_rank) {
+    const std::int64_t m = 3 * static_cast<std::int64_t>(s.size()), n = 3 * static_cast<std::int64_t>(t.size());
+    // ACA may overshoot the rank that the recompression ends at, so its limit follows the dense
+    // break-even rank (not max_rank: a tighter ACA limit was measured to cost memory).
+    const int limit = static_cast<int>(std::min<std::int64_t>((m * n - 1) / (m + n), kMaxBlockRank));
+    if (max_rank < 0) return -1;
     Fill(s, t);
     ++tried;
-    const std::int64_t m = A_.rows(), n = A_.cols();
-    const int limit = static_cast<int>(std::min<std::int64_t>((m * n - 1) / (m + n), kMaxBlockRank));
     const double norm = A_.norm(), budget = o_.tolerance * norm;
     R_ = A_;
     const int aca_limit = static_cast<int>(std::min<std::int64_t>({limit + limit / 2 + 2, m, n}));
@@ -314,7 +331,7 @@ class HBuilder {
         rank = k;
       }
     }
-    return rank > limit ? -1 : rank;
+    return rank > limit || rank > max_rank ? -1 : rank;
   }
 
   // Stores U V^T (the first `rank` columns) for the block (s, t); its tiles become views.
@@ -425,7 +442,9 @@ Eigen::Matrix3d CompressedBlocks::Block(std::int32_t n, std::int32_t k) const no
   Eigen::Matrix3d B;
   for (int c = 0; c < 3; ++c)
     for (int r = 0; r < 3; ++r) {
-      if (tile.rank < 0) {
+      if (tile.rank == kSymmetricTile) {
+        B(r, c) = U[SymmetricIndex(3 * a + r, 3 * b + c)];
+      } else if (tile.rank < 0) {
         B(r, c) = U[(3 * b + c) * tile.ld_u + 3 * a + r];
       } else {
         double s = 0.0;

@@ -13,7 +13,8 @@
 // else stored dense. So ||C - C~||_F <= tolerance ||C||_F overall, blocks near the diagonal exact
 // to float32, far ones smooth (the Green's function decays) and compressed.
 //
-// For O(1) lookup the kernels still see one tile per leaf pair (I <= J, C_JI = C_IJ^T): a dense
+// For O(1) lookup the kernels still see one tile per leaf pair (I <= J, C_JI = C_IJ^T): a diagonal
+// tile (I == J, symmetric: its upper triangle packed by columns, 3 m (3 m + 1) / 2 floats), a dense
 // tile (3 m x 3 n column-major, leading dimension 3 m) or a view into a block's factors: leaf I's
 // rows of U start at offset_u with leading dimension ld_u (the block's row count), leaf J's rows
 // of V at offset_v with ld_v. Factors are stored once per block.
@@ -32,12 +33,21 @@
 
 namespace handshare::fem::detail {
 
+// Tile kinds besides low rank (rank >= 0).
+inline constexpr std::int32_t kDenseTile = -1;      // 3 m x 3 n column-major, leading dimension ld_u = 3 m
+inline constexpr std::int32_t kSymmetricTile = -2;  // diagonal tile (I == J): upper triangle packed by columns
+
+// Entry (i, j) of a diagonal tile stored as its upper triangle packed by columns.
+inline std::int64_t SymmetricIndex(std::int64_t i, std::int64_t j) noexcept {
+  return i <= j ? j * (j + 1) / 2 + i : i * (i + 1) / 2 + j;
+}
+
 // Offsets in floats into the factor data (int32: the build checks that the data fits).
 struct CompressedTile {
-  std::int32_t offset_u = 0;  // dense: the tile, column-major, leading dimension ld_u = 3 m
+  std::int32_t offset_u = 0;  // dense: the tile (see kDenseTile, kSymmetricTile)
   std::int32_t offset_v = 0;
-  std::int32_t ld_u = 0, ld_v = 0;
-  std::int32_t rank = -1;  // -1: dense, else U rows at offset_u (ld_u), V rows at offset_v (ld_v)
+  std::int32_t ld_u = 0, ld_v = 0;  // symmetric: ld_u = 3 m, the tile's order
+  std::int32_t rank = kDenseTile;  // >= 0: U rows at offset_u (ld_u), V rows at offset_v (ld_v)
 };
 
 // One block of the partition (for inspection and tests): rows [row_begin, row_end) and columns

@@ -92,6 +92,10 @@ struct CompressionOptions {
   /// Largest block (entries, 3 |s| x 3 |t|) compressed explicitly; larger admissible pairs are
   /// split (bounds the build memory: 16 bytes per entry, 64 MB at the default).
   std::int64_t max_block_entries = std::int64_t{1} << 22;
+  /// Weak admissibility: also try off-diagonal cluster pairs that touch or are near (eta fails)
+  /// as one low-rank block, under the same tolerance check and keep-or-split rule (so it never
+  /// stores more than without; it costs build time).
+  bool weak_admissibility = false;
 };
 
 /// What a compression produced.

@@ -1,0 +1,98 @@
+// fem_compress_sweep: storage of the compressed compliance (Compliance::Compressed) on the cubes
+// of fem_bench (same meshes, material and fixed bottom), loaded read-only from fem_bench's cache
+// of float64 compliances; one row per cube x tolerance x leaf size x admissibility.
+//
+//   fem_compress_sweep [--cache-dir DIR] [--cubes 12,21] [--tols 1e-3,1e-5] [--leaves 32]
+//                      [--weak 0,1] [--check]
+//
+// Columns: bytes / N^2 in total and split into dense tiles, factors and tables; build seconds;
+// with --check also ||C - C~||_F / ||C||_F over all blocks and the largest relative error of a
+// diagonal block C_kk (both against the loaded exact compliance).
+
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "handshare/fem/assembly.hpp"
+#include "handshare/fem/compliance.hpp"
+
+namespace {
+
+using namespace handshare::fem;
+
+template <class T>
+std::vector<T> List(const std::string& s) {
+  std::vector<T> v;
+  std::stringstream in(s);
+  std::string item;
+  while (std::getline(in, item, ',')) v.push_back(static_cast<T>(std::stod(item)));
+  return v;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  std::filesystem::path dir = "fem_bench_cache";
+  std::vector<int> cubes{12, 21}, leaves{32}, weak{0};
+  std::vector<double> tols{1e-3, 1e-5};
+  bool check = false;
+  for (int i = 1; i < argc; ++i) {
+    const std::string a = argv[i];
+    const bool has = i + 1 < argc;
+    if (a == "--cache-dir" && has) dir = argv[++i];
+    else if (a == "--cubes" && has) cubes = List<int>(argv[++i]);
+    else if (a == "--tols" && has) tols = List<double>(argv[++i]);
+    else if (a == "--leaves" && has) leaves = List<int>(argv[++i]);
+    else if (a == "--weak" && has) weak = List<int>(argv[++i]);
+    else if (a == "--check") check = true;
+    else {
+      std::fprintf(stderr, "usage: %s [--cache-dir DIR] [--cubes 12,21] [--tols 1e-3,1e-5] [--leaves 32] "
+                   "[--weak 0,1] [--check]\n", argv[0]);
+      return 2;
+    }
+  }
+  const Material mat{1e4, 0.3};  // as fem_bench
+  std::printf("cube,N,tol,leaf,weak,bytes_per_N2,dense,factors,tables,low_rank_blocks,mean_rank,seconds,rel_error,diag_error\n");
+  for (int n : cubes) {
+    // fem_bench's MakeCube(n).
+    const TetMesh mesh = MakeBoxMesh({0.1, 0.1, 0.1}, {n - 1, n - 1, n - 1});
+    const std::vector<std::int32_t> fixed = NodesOnPlane(mesh, 2, 0.0);
+    const Compliance exact = Compliance::Load(dir / ("cube" + std::to_string(n) + ".f64.compliance"),
+                                              Compliance::InputHash(mesh, mat, fixed, {}));
+    const std::int32_t N = exact.num_nodes();
+    const double n2 = double(N) * N;
+    for (double tol : tols)
+      for (int leaf : leaves)
+        for (int w : weak) {
+          CompressionOptions o{.tolerance = tol, .leaf_nodes = leaf};
+          o.weak_admissibility = w != 0;
+          CompressionStats st;
+          const Compliance c = exact.Compressed(mesh, o, &st);
+          double rel = -1.0, diag = -1.0;
+          if (check) {
+            double e2 = 0.0, a2 = 0.0;
+            diag = 0.0;
+            for (std::int32_t k = 0; k < N; ++k) {
+              for (std::int32_t i = 0; i <= k; ++i) {
+                const Eigen::Matrix3d e = exact.Block(i, k);
+                const double d2 = (c.Block(i, k) - e).squaredNorm(), w2 = i == k ? 1.0 : 2.0;
+                e2 += w2 * d2;
+                a2 += w2 * e.squaredNorm();
+                if (i == k) diag = std::max(diag, std::sqrt(d2) / e.norm());
+              }
+            }
+            rel = std::sqrt(e2 / a2);
+          }
+          std::printf("%d,%d,%g,%d,%d,%.3f,%.3f,%.3f,%.3f,%lld,%.1f,%.2f,%.3g,%.3g\n", n, N, tol, leaf, w,
+                      double(c.storage_bytes()) / n2, double(st.dense_bytes) / n2, double(st.factor_bytes) / n2,
+                      double(st.table_bytes) / n2, static_cast<long long>(st.low_rank_blocks), st.mean_rank,
+                      st.seconds, rel, diag);
+          std::fflush(stdout);
+        }
+  }
+  return 0;
+}
