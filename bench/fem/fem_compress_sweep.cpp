@@ -3,7 +3,7 @@
 // of float64 compliances; one row per cube x tolerance x leaf size x admissibility.
 //
 //   fem_compress_sweep [--cache-dir DIR] [--cubes 12,21] [--tols 1e-3,1e-5] [--leaves 32]
-//                      [--weak 0,1] [--check]
+//                      [--weak 0,1] [--f16 0,1] [--check]
 //
 // Columns: bytes / N^2 in total and split into dense tiles, factors and tables; build seconds;
 // with --check also ||C - C~||_F / ||C||_F over all blocks and the largest relative error of a
@@ -37,7 +37,7 @@ std::vector<T> List(const std::string& s) {
 
 int main(int argc, char** argv) {
   std::filesystem::path dir = "fem_bench_cache";
-  std::vector<int> cubes{12, 21}, leaves{32}, weak{0};
+  std::vector<int> cubes{12, 21}, leaves{32}, weak{0}, halves{0};
   std::vector<double> tols{1e-3, 1e-5};
   bool check = false;
   for (int i = 1; i < argc; ++i) {
@@ -48,15 +48,16 @@ int main(int argc, char** argv) {
     else if (a == "--tols" && has) tols = List<double>(argv[++i]);
     else if (a == "--leaves" && has) leaves = List<int>(argv[++i]);
     else if (a == "--weak" && has) weak = List<int>(argv[++i]);
+    else if (a == "--f16" && has) halves = List<int>(argv[++i]);
     else if (a == "--check") check = true;
     else {
       std::fprintf(stderr, "usage: %s [--cache-dir DIR] [--cubes 12,21] [--tols 1e-3,1e-5] [--leaves 32] "
-                   "[--weak 0,1] [--check]\n", argv[0]);
+                   "[--weak 0,1] [--f16 0,1] [--check]\n", argv[0]);
       return 2;
     }
   }
   const Material mat{1e4, 0.3};  // as fem_bench
-  std::printf("cube,N,tol,leaf,weak,bytes_per_N2,dense,factors,tables,low_rank_blocks,mean_rank,seconds,rel_error,diag_error\n");
+  std::printf("cube,N,tol,leaf,weak,f16,bytes_per_N2,dense,factors,tables,low_rank_blocks,f16_blocks,mean_rank,seconds,rel_error,diag_error\n");
   for (int n : cubes) {
     // fem_bench's MakeCube(n).
     const TetMesh mesh = MakeBoxMesh({0.1, 0.1, 0.1}, {n - 1, n - 1, n - 1});
@@ -67,9 +68,11 @@ int main(int argc, char** argv) {
     const double n2 = double(N) * N;
     for (double tol : tols)
       for (int leaf : leaves)
-        for (int w : weak) {
+        for (int w : weak)
+        for (int f16 : halves) {
           CompressionOptions o{.tolerance = tol, .leaf_nodes = leaf};
           o.weak_admissibility = w != 0;
+          o.factor_precision = f16 != 0 ? Precision::kFloat16 : Precision::kFloat32;
           CompressionStats st;
           const Compliance c = exact.Compressed(mesh, o, &st);
           double rel = -1.0, diag = -1.0;
@@ -87,9 +90,9 @@ int main(int argc, char** argv) {
             }
             rel = std::sqrt(e2 / a2);
           }
-          std::printf("%d,%d,%g,%d,%d,%.3f,%.3f,%.3f,%.3f,%lld,%.1f,%.2f,%.3g,%.3g\n", n, N, tol, leaf, w,
+          std::printf("%d,%d,%g,%d,%d,%d,%.3f,%.3f,%.3f,%.3f,%lld,%lld,%.1f,%.2f,%.3g,%.3g\n", n, N, tol, leaf, w, f16,
                       double(c.storage_bytes()) / n2, double(st.dense_bytes) / n2, double(st.factor_bytes) / n2,
-                      double(st.table_bytes) / n2, static_cast<long long>(st.low_rank_blocks), st.mean_rank,
+                      double(st.table_bytes) / n2, static_cast<long long>(st.low_rank_blocks), static_cast<long long>(st.half_blocks), st.mean_rank,
                       st.seconds, rel, diag);
           std::fflush(stdout);
         }

@@ -48,6 +48,8 @@ struct CompressedTile {
   std::int32_t offset_v = 0;
   std::int32_t ld_u = 0, ld_v = 0;  // symmetric: ld_u = 3 m, the tile's order
   std::int32_t rank = kDenseTile;  // >= 0: U rows at offset_u (ld_u), V rows at offset_v (ld_v)
+  std::int32_t scales = -1;  // low rank in float16: offsets into the halves, rank float32 scales at
+                             // data[scales] (C = U diag(scales) V^T); -1: float32 factors in data
 };
 
 // One block of the partition (for inspection and tests): rows [row_begin, row_end) and columns
@@ -68,6 +70,7 @@ struct CompressedView {
   std::int32_t num_nodes, num_leaves;
   const CompressedTile* tiles;
   const float* data;
+  const std::uint16_t* half;
 };
 
 class CompressedBlocks {
@@ -97,7 +100,8 @@ class CompressedBlocks {
   std::vector<std::int32_t> leaf_start_;   // num_leaves + 1
   std::vector<Tile> tiles_;                // tile (I, J), I <= J, at Compliance::PackedIndex(I, J)
   std::vector<CompressedBlockInfo> blocks_;
-  AlignedVector<float> data_;
+  AlignedVector<float> data_;          // dense tiles, float32 factors, scales of float16 factors
+  std::vector<std::uint16_t> half_;    // float16 factors
 };
 
 }  // namespace handshare::fem::detail

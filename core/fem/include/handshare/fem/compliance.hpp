@@ -96,6 +96,12 @@ struct CompressionOptions {
   /// as one low-rank block, under the same tolerance check and keep-or-split rule (so it never
   /// stores more than without; it costs build time).
   bool weak_admissibility = false;
+  /// Storage of the low-rank factors: kFloat32, or kFloat16 (opt-in) where each block's columns
+  /// are scaled to a largest entry of 1 and stored in float16 with one float32 scale per rank.
+  /// The float16 rounding is part of the explicit residual that picks the rank, so the tolerance
+  /// holds as computed; a block whose float16 factors cannot meet it (or do not save memory)
+  /// keeps float32 factors. Dense tiles stay float32.
+  Precision factor_precision = Precision::kFloat32;
 };
 
 /// What a compression produced.
@@ -111,6 +117,7 @@ struct CompressionStats {
   std::int64_t table_bytes = 0;     ///< tile table (L (L + 1) / 2 entries) and node orderings
   std::int64_t blocks_tried = 0;    ///< explicit compressions attempted (kept or split)
   double seconds = 0;
+  std::int64_t half_blocks = 0;     ///< low-rank blocks with float16 factors
 };
 
 namespace detail {
