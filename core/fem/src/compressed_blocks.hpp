@@ -3,15 +3,17 @@
 // ordered by a k-d tree (spatially coherent clusters; leaves of at most leaf_nodes nodes). The
 // upper triangle is partitioned into blocks of cluster pairs (s, t): the diagonal recurses to the
 // leaves; an off-diagonal pair that is admissible, min(diam s, diam t) <= eta dist(s, t) on the
-// bounding boxes, and has at most max_block_entries entries (larger ones are split, not streamed)
-// is compressed as one U V^T: adaptive cross approximation with full pivoting on the explicit
-// block down to 0.3 tolerance, then recompressed (QR of the factors, SVD of the small core) to
-// the smallest rank whose explicit residual ||A - U V^T||_F <= tolerance ||A||_F (computed, not
-// estimated). It is kept where r (m + n) < m n and where it stores fewer floats than its split
-// (which is computed as well, recursively); otherwise the split stays (both clusters, or the one
-// that is not a leaf). A pair of leaves is always tried on its own (as the flat version did) and
-// else stored dense. So ||C - C~||_F <= tolerance ||C||_F overall, blocks near the diagonal exact
-// to float32, far ones smooth (the Green's function decays) and compressed.
+// bounding boxes (or any off-diagonal pair with weak_admissibility), and has at most
+// max_block_entries entries (larger ones are split, not streamed) is compressed as one U V^T:
+// adaptive cross approximation with full pivoting on the explicit block down to 0.3 tolerance,
+// then recompressed (QR of the factors, SVD of the small core) to the smallest rank whose
+// explicit residual ||A - U V^T||_F <= tolerance ||A||_F, with U and V rounded as stored (float32,
+// or float16 with a float32 scale per rank when factor_precision is kFloat16; computed, not
+// estimated). It is kept where it stores fewer floats than dense and than its split (which is
+// computed first, recursively); otherwise the split stays (both clusters, or the one that is not
+// a leaf). A pair of leaves is always tried on its own (as the flat version did) and else stored
+// dense. So ||C - C~||_F <= tolerance ||C||_F overall, blocks near the diagonal exact to float32,
+// far ones smooth (the Green's function decays) and compressed.
 //
 // For O(1) lookup the kernels still see one tile per leaf pair (I <= J, C_JI = C_IJ^T): a diagonal
 // tile (I == J, symmetric: its upper triangle packed by columns, 3 m (3 m + 1) / 2 floats), a dense
