@@ -3,11 +3,12 @@
 // of float64 compliances; one row per cube x tolerance x leaf size x admissibility.
 //
 //   fem_compress_sweep [--cache-dir DIR] [--cubes 12,21] [--tols 1e-3,1e-5] [--leaves 32]
-//                      [--weak 0,1] [--f16 0,1] [--check]
+//                      [--weak 0,1] [--f16 0,1] [--check] [--contacts]
 //
 // Columns: bytes / N^2 in total and split into dense tiles, factors and tables; build seconds;
 // with --check also ||C - C~||_F / ||C||_F over all blocks and the largest relative error of a
-// diagonal block C_kk (both against the loaded exact compliance).
+// diagonal block C_kk (both against the loaded exact compliance); with --contacts the worst
+// relative force and surface-field errors of ContactSolver over 32 sets of 5 random contacts.
 
 #include <cmath>
 #include <cstdio>
@@ -17,8 +18,12 @@
 #include <string>
 #include <vector>
 
+#include <memory>
+#include <random>
+
 #include "handshare/fem/assembly.hpp"
 #include "handshare/fem/compliance.hpp"
+#include "handshare/fem/contact_solver.hpp"
 
 namespace {
 
@@ -33,13 +38,52 @@ std::vector<T> List(const std::string& s) {
   return v;
 }
 
+double RelError(const std::vector<Eigen::Vector3d>& a, const std::vector<Eigen::Vector3d>& b) {
+  double num = 0.0, den = 0.0;
+  for (std::size_t i = 0; i < a.size(); ++i) {
+    num += (a[i] - b[i]).squaredNorm();
+    den += b[i].squaredNorm();
+  }
+  return std::sqrt(num / den);
+}
+
+// Worst relative error of forces and of the surface field over 32 sets of 5 random contacts
+// (fem_bench's kind: distinct random surface nodes, displacements up to 1 mm), ContactSolver on
+// the compressed store against ContactSolver on the exact float64 compliance (which matches the
+// direct sparse solve to 1e-15).
+std::pair<double, double> ContactErrors(const std::shared_ptr<const Compliance>& exact,
+                                        const std::shared_ptr<const Compliance>& c) {
+  std::mt19937 rng(11);
+  std::uniform_int_distribution<std::int32_t> slot(0, exact->num_nodes() - 1);
+  std::uniform_real_distribution<double> u(-1e-3, 1e-3);
+  ContactSolver a(exact, {.max_contacts = 5}), b(c, {.max_contacts = 5});
+  std::vector<Eigen::Vector3d> fa(static_cast<std::size_t>(exact->num_nodes())), fb(fa.size());
+  double force = 0.0, field = 0.0;
+  for (int set = 0; set < 32; ++set) {
+    std::vector<ContactInput> in;
+    while (in.size() < 5) {
+      const std::int32_t node = exact->nodes()[slot(rng)];
+      bool dup = false;
+      for (const auto& x : in) dup = dup || x.node == node;
+      if (!dup) in.push_back({node, {u(rng), u(rng), u(rng)}});
+    }
+    a.Solve(in);
+    b.Solve(in);
+    force = std::max(force, RelError({b.forces_N().begin(), b.forces_N().end()}, {a.forces_N().begin(), a.forces_N().end()}));
+    a.SurfaceDisplacements(fa);
+    b.SurfaceDisplacements(fb);
+    field = std::max(field, RelError(fb, fa));
+  }
+  return {force, field};
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
   std::filesystem::path dir = "fem_bench_cache";
   std::vector<int> cubes{12, 21}, leaves{32}, weak{0}, halves{0};
   std::vector<double> tols{1e-3, 1e-5};
-  bool check = false;
+  bool check = false, contacts = false;
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
     const bool has = i + 1 < argc;
@@ -50,20 +94,22 @@ int main(int argc, char** argv) {
     else if (a == "--weak" && has) weak = List<int>(argv[++i]);
     else if (a == "--f16" && has) halves = List<int>(argv[++i]);
     else if (a == "--check") check = true;
+    else if (a == "--contacts") contacts = true;
     else {
       std::fprintf(stderr, "usage: %s [--cache-dir DIR] [--cubes 12,21] [--tols 1e-3,1e-5] [--leaves 32] "
-                   "[--weak 0,1] [--f16 0,1] [--check]\n", argv[0]);
+                   "[--weak 0,1] [--f16 0,1] [--check] [--contacts]\n", argv[0]);
       return 2;
     }
   }
   const Material mat{1e4, 0.3};  // as fem_bench
-  std::printf("cube,N,tol,leaf,weak,f16,bytes_per_N2,dense,factors,tables,low_rank_blocks,f16_blocks,mean_rank,seconds,rel_error,diag_error\n");
+  std::printf("cube,N,tol,leaf,weak,f16,bytes_per_N2,dense,factors,tables,low_rank_blocks,f16_blocks,mean_rank,seconds,rel_error,diag_error,force_error,field_error\n");
   for (int n : cubes) {
     // fem_bench's MakeCube(n).
     const TetMesh mesh = MakeBoxMesh({0.1, 0.1, 0.1}, {n - 1, n - 1, n - 1});
     const std::vector<std::int32_t> fixed = NodesOnPlane(mesh, 2, 0.0);
-    const Compliance exact = Compliance::Load(dir / ("cube" + std::to_string(n) + ".f64.compliance"),
-                                              Compliance::InputHash(mesh, mat, fixed, {}));
+    const auto exact_ptr = std::make_shared<const Compliance>(Compliance::Load(dir / ("cube" + std::to_string(n) + ".f64.compliance"),
+                                              Compliance::InputHash(mesh, mat, fixed, {})));
+    const Compliance& exact = *exact_ptr;
     const std::int32_t N = exact.num_nodes();
     const double n2 = double(N) * N;
     for (double tol : tols)
@@ -74,7 +120,9 @@ int main(int argc, char** argv) {
           o.weak_admissibility = w != 0;
           o.factor_precision = f16 != 0 ? Precision::kFloat16 : Precision::kFloat32;
           CompressionStats st;
-          const Compliance c = exact.Compressed(mesh, o, &st);
+          const auto c_ptr = std::make_shared<const Compliance>(exact.Compressed(mesh, o, &st));
+          const Compliance& c = *c_ptr;
+          const auto [force, field] = contacts ? ContactErrors(exact_ptr, c_ptr) : std::pair{-1.0, -1.0};
           double rel = -1.0, diag = -1.0;
           if (check) {
             double e2 = 0.0, a2 = 0.0;
@@ -90,10 +138,10 @@ int main(int argc, char** argv) {
             }
             rel = std::sqrt(e2 / a2);
           }
-          std::printf("%d,%d,%g,%d,%d,%d,%.3f,%.3f,%.3f,%.3f,%lld,%lld,%.1f,%.2f,%.3g,%.3g\n", n, N, tol, leaf, w, f16,
+          std::printf("%d,%d,%g,%d,%d,%d,%.3f,%.3f,%.3f,%.3f,%lld,%lld,%.1f,%.2f,%.3g,%.3g,%.3g,%.3g\n", n, N, tol, leaf, w, f16,
                       double(c.storage_bytes()) / n2, double(st.dense_bytes) / n2, double(st.factor_bytes) / n2,
                       double(st.table_bytes) / n2, static_cast<long long>(st.low_rank_blocks), static_cast<long long>(st.half_blocks), st.mean_rank,
-                      st.seconds, rel, diag);
+                      st.seconds, rel, diag, force, field);
           std::fflush(stdout);
         }
   }
