@@ -3,13 +3,16 @@
 // of float64 compliances; one row per cube x tolerance x leaf size x admissibility.
 //
 //   fem_compress_sweep [--cache-dir DIR] [--cubes 12,21] [--tols 1e-3,1e-5] [--leaves 32]
-//                      [--weak 0,1] [--f16 0,1] [--check] [--contacts]
+//                      [--weak 0,1] [--f16 0,1] [--check] [--contacts] [--time]
 //
 // Columns: bytes / N^2 in total and split into dense tiles, factors and tables; build seconds;
 // with --check also ||C - C~||_F / ||C||_F over all blocks and the largest relative error of a
 // diagonal block C_kk (both against the loaded exact compliance); with --contacts the worst
-// relative force and surface-field errors of ContactSolver over 32 sets of 5 random contacts.
+// relative force and surface-field errors of ContactSolver over 32 sets of 5 random contacts;
+// with --time the median microseconds of a force-only step and of a step with the surface field.
 
+#include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -45,6 +48,37 @@ double RelError(const std::vector<Eigen::Vector3d>& a, const std::vector<Eigen::
     den += b[i].squaredNorm();
   }
   return std::sqrt(num / den);
+}
+
+// Median time (us) of ContactSolver::Solve (forces only) and of Solve + SurfaceDisplacements on
+// the compressed store, cycling through 32 sets of 5 random contacts.
+std::pair<double, double> StepTimes(const std::shared_ptr<const Compliance>& c) {
+  std::mt19937 rng(12);
+  std::uniform_int_distribution<std::int32_t> slot(0, c->num_nodes() - 1);
+  std::uniform_real_distribution<double> u(-1e-3, 1e-3);
+  std::vector<std::vector<ContactInput>> sets(32);
+  for (auto& in : sets) {
+    while (in.size() < 5) {
+      const std::int32_t node = c->nodes()[slot(rng)];
+      bool dup = false;
+      for (const auto& x : in) dup = dup || x.node == node;
+      if (!dup) in.push_back({node, {u(rng), u(rng), u(rng)}});
+    }
+  }
+  ContactSolver s(c, {.max_contacts = 5});
+  std::vector<Eigen::Vector3d> field(static_cast<std::size_t>(c->num_nodes()));
+  auto median = [&](bool with_field) {
+    std::vector<double> t;
+    for (int i = 0; i < 2000; ++i) {
+      const auto t0 = std::chrono::steady_clock::now();
+      s.Solve(sets[static_cast<std::size_t>(i % 32)]);
+      if (with_field) s.SurfaceDisplacements(field);
+      t.push_back(std::chrono::duration<double, std::micro>(std::chrono::steady_clock::now() - t0).count());
+    }
+    std::nth_element(t.begin(), t.begin() + t.size() / 2, t.end());
+    return t[t.size() / 2];
+  };
+  return {median(false), median(true)};
 }
 
 // Worst relative error of forces and of the surface field over 32 sets of 5 random contacts
@@ -83,7 +117,7 @@ int main(int argc, char** argv) {
   std::filesystem::path dir = "fem_bench_cache";
   std::vector<int> cubes{12, 21}, leaves{32}, weak{0}, halves{0};
   std::vector<double> tols{1e-3, 1e-5};
-  bool check = false, contacts = false;
+  bool check = false, contacts = false, timing = false;
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
     const bool has = i + 1 < argc;
@@ -95,14 +129,15 @@ int main(int argc, char** argv) {
     else if (a == "--f16" && has) halves = List<int>(argv[++i]);
     else if (a == "--check") check = true;
     else if (a == "--contacts") contacts = true;
+    else if (a == "--time") timing = true;
     else {
       std::fprintf(stderr, "usage: %s [--cache-dir DIR] [--cubes 12,21] [--tols 1e-3,1e-5] [--leaves 32] "
-                   "[--weak 0,1] [--f16 0,1] [--check] [--contacts]\n", argv[0]);
+                   "[--weak 0,1] [--f16 0,1] [--check] [--contacts] [--time]\n", argv[0]);
       return 2;
     }
   }
   const Material mat{1e4, 0.3};  // as fem_bench
-  std::printf("cube,N,tol,leaf,weak,f16,bytes_per_N2,dense,factors,tables,low_rank_blocks,f16_blocks,mean_rank,seconds,rel_error,diag_error,force_error,field_error\n");
+  std::printf("cube,N,tol,leaf,weak,f16,bytes_per_N2,dense,factors,tables,low_rank_blocks,f16_blocks,mean_rank,seconds,rel_error,diag_error,force_error,field_error,force_us,full_us\n");
   for (int n : cubes) {
     // fem_bench's MakeCube(n).
     const TetMesh mesh = MakeBoxMesh({0.1, 0.1, 0.1}, {n - 1, n - 1, n - 1});
@@ -123,6 +158,7 @@ int main(int argc, char** argv) {
           const auto c_ptr = std::make_shared<const Compliance>(exact.Compressed(mesh, o, &st));
           const Compliance& c = *c_ptr;
           const auto [force, field] = contacts ? ContactErrors(exact_ptr, c_ptr) : std::pair{-1.0, -1.0};
+          const auto [force_us, full_us] = timing ? StepTimes(c_ptr) : std::pair{-1.0, -1.0};
           double rel = -1.0, diag = -1.0;
           if (check) {
             double e2 = 0.0, a2 = 0.0;
@@ -138,10 +174,10 @@ int main(int argc, char** argv) {
             }
             rel = std::sqrt(e2 / a2);
           }
-          std::printf("%d,%d,%g,%d,%d,%d,%.3f,%.3f,%.3f,%.3f,%lld,%lld,%.1f,%.2f,%.3g,%.3g,%.3g,%.3g\n", n, N, tol, leaf, w, f16,
+          std::printf("%d,%d,%g,%d,%d,%d,%.3f,%.3f,%.3f,%.3f,%lld,%lld,%.1f,%.2f,%.3g,%.3g,%.3g,%.3g,%.3g,%.3g\n", n, N, tol, leaf, w, f16,
                       double(c.storage_bytes()) / n2, double(st.dense_bytes) / n2, double(st.factor_bytes) / n2,
                       double(st.table_bytes) / n2, static_cast<long long>(st.low_rank_blocks), static_cast<long long>(st.half_blocks), st.mean_rank,
-                      st.seconds, rel, diag, force, field);
+                      st.seconds, rel, diag, force, field, force_us, full_us);
           std::fflush(stdout);
         }
   }

@@ -61,6 +61,9 @@ std::int32_t KdSplit(std::span<const Eigen::Vector3d> p, std::int32_t* order, st
   return id;
 }
 
+// Zero halves after the float16 factors: the vector kernels' last loads may run this far past a column.
+constexpr std::size_t kHalfPadding = 16;
+
 // ACA stops at this share of the block's error budget; the SVD recompression may spend the rest.
 constexpr double kAcaShare = 0.3;
 
@@ -150,10 +153,19 @@ struct GemvAvx2 {
       _mm256_storeu_ps(y + i, a0);
       _mm256_storeu_ps(y + i + 8, a1);
     }
-    for (; i < len; ++i) {
-      float s = y[i];
-      for (int t = 0; t < r; ++t) s += _cvtsh_ss(A[t * ld + i]) * w[t];
-      y[i] = s;
+    // The rest 8 at a time through a copy of y; A may be read up to 7 halves past a column
+    // (the float16 data is padded at its end, the extra lanes are dropped).
+    for (; i < len; i += 8) {
+      const int rest = std::min(len - i, 8);
+      alignas(32) float tmp[8] = {};
+      for (int j = 0; j < rest; ++j) tmp[j] = y[i + j];
+      __m256 a0 = _mm256_load_ps(tmp);
+      for (int t = 0; t < r; ++t) {
+        a0 = _mm256_fmadd_ps(_mm256_cvtph_ps(_mm_loadu_si128(reinterpret_cast<const __m128i*>(A + t * ld + i))),
+                             _mm256_set1_ps(w[t]), a0);
+      }
+      _mm256_store_ps(tmp, a0);
+      for (int j = 0; j < rest; ++j) y[i + j] = tmp[j];
     }
   }
   HS_AVX2 HS_INLINE static float H(std::uint16_t h) noexcept { return _cvtsh_ss(h); }
@@ -196,18 +208,17 @@ struct GemvAvx512 {
       _mm512_storeu_ps(y + i, a0);
       _mm512_storeu_ps(y + i + 16, a1);
     }
-    for (; i + 8 <= len; i += 8) {
-      __m256 a0 = _mm256_loadu_ps(y + i);
+    // The rest 16 at a time, y masked; A may be read up to 15 halves past a column (the float16
+    // data is padded at its end, the extra lanes are dropped).
+    for (; i < len; i += 16) {
+      const int rest = len - i;
+      const __mmask16 mk = rest >= 16 ? static_cast<__mmask16>(0xFFFF) : static_cast<__mmask16>((1u << rest) - 1u);
+      __m512 a0 = _mm512_maskz_loadu_ps(mk, y + i);
       for (int t = 0; t < r; ++t) {
-        a0 = _mm256_fmadd_ps(_mm256_cvtph_ps(_mm_loadu_si128(reinterpret_cast<const __m128i*>(A + t * ld + i))),
-                             _mm256_set1_ps(w[t]), a0);
+        a0 = _mm512_fmadd_ps(_mm512_cvtph_ps(_mm256_loadu_si256(reinterpret_cast<const __m256i*>(A + t * ld + i))),
+                             _mm512_set1_ps(w[t]), a0);
       }
-      _mm256_storeu_ps(y + i, a0);
-    }
-    for (; i < len; ++i) {
-      float s = y[i];
-      for (int t = 0; t < r; ++t) s += _cvtsh_ss(A[t * ld + i]) * w[t];
-      y[i] = s;
+      _mm512_mask_storeu_ps(y + i, mk, a0);
     }
   }
   HS_AVX512 HS_INLINE static float H(std::uint16_t h) noexcept { return _cvtsh_ss(h); }
@@ -572,6 +583,7 @@ CompressedBlocks CompressedBlocks::Build(std::span<const Eigen::Vector3d> positi
   if (N > 0) b.Partition(0, 0);
   h.data_.assign(b.data.begin(), b.data.end());
   h.half_.assign(b.halves.begin(), b.halves.end());
+  if (!h.half_.empty()) h.half_.resize(h.half_.size() + kHalfPadding, 0);  // the kernels' tails read past a column
   h.blocks_.shrink_to_fit();
   if (stats != nullptr) {
     stats->tiles = static_cast<std::int64_t>(h.tiles_.size());
@@ -604,31 +616,72 @@ Eigen::Matrix3d CompressedBlocks::Block(std::int32_t n, std::int32_t k) const no
   const float* U = data_.data() + tile.offset_u;
   const float* V = data_.data() + tile.offset_v;
   Eigen::Matrix3d B;
-  for (int c = 0; c < 3; ++c)
-    for (int r = 0; r < 3; ++r) {
-      if (tile.rank == kSymmetricTile) {
-        B(r, c) = U[SymmetricIndex(3 * a + r, 3 * b + c)];
-      } else if (tile.rank < 0) {
-        B(r, c) = U[(3 * b + c) * tile.ld_u + 3 * a + r];
-      } else if (tile.scales >= 0) {
-        const std::uint16_t* Uh = half_.data() + tile.offset_u;
-        const std::uint16_t* Vh = half_.data() + tile.offset_v;
-        double s = 0.0;
-        for (std::int64_t t = 0; t < tile.rank; ++t) {
-          s += static_cast<double>(data_[static_cast<std::size_t>(tile.scales + t)]) *
-               HalfToFloat(Uh[t * tile.ld_u + 3 * a + r]) * HalfToFloat(Vh[t * tile.ld_v + 3 * b + c]);
+  if (tile.rank >= 0 && tile.scales >= 0) {
+    B = HalfBlock(tile, a, b);
+  } else {
+    for (int c = 0; c < 3; ++c)
+      for (int r = 0; r < 3; ++r) {
+        if (tile.rank == kSymmetricTile) {
+          B(r, c) = U[SymmetricIndex(3 * a + r, 3 * b + c)];
+        } else if (tile.rank < 0) {
+          B(r, c) = U[(3 * b + c) * tile.ld_u + 3 * a + r];
+        } else {
+          double s = 0.0;
+          for (std::int64_t t = 0; t < tile.rank; ++t) {
+            s += static_cast<double>(U[t * tile.ld_u + 3 * a + r]) * V[t * tile.ld_v + 3 * b + c];
+          }
+          B(r, c) = s;
         }
-        B(r, c) = s;
-      } else {
-        double s = 0.0;
-        for (std::int64_t t = 0; t < tile.rank; ++t) {
-          s += static_cast<double>(U[t * tile.ld_u + 3 * a + r]) * V[t * tile.ld_v + 3 * b + c];
-        }
-        B(r, c) = s;
       }
-    }
+  }
   if (transpose) B.transposeInPlace();
   return B;
+}
+
+namespace {
+
+// Sum over the rank of scale_t U(3a.., t) V(3b.., t)^T from float16 factors: six conversions per
+// rank (F16C where the CPU has it; Block() is on the force path, the software conversion made a
+// 5-contact step ten times slower).
+template <class Cvt>
+HS_INLINE Eigen::Matrix3d HalfOuter(const std::uint16_t* U, std::int64_t ld_u, const std::uint16_t* V,
+                                    std::int64_t ld_v, const float* scale, int rank, Cvt cvt) noexcept {
+  double acc[9] = {};
+  for (int t = 0; t < rank; ++t, U += ld_u, V += ld_v) {
+    const double s = scale[t];
+    const double u[3] = {s * cvt(U[0]), s * cvt(U[1]), s * cvt(U[2])};
+    const double v[3] = {cvt(V[0]), cvt(V[1]), cvt(V[2])};
+    for (int c = 0; c < 3; ++c)
+      for (int r = 0; r < 3; ++r) acc[3 * c + r] += u[r] * v[c];
+  }
+  Eigen::Matrix3d B;
+  for (int c = 0; c < 3; ++c)
+    for (int r = 0; r < 3; ++r) B(r, c) = acc[3 * c + r];
+  return B;
+}
+
+__attribute__((target("f16c"))) Eigen::Matrix3d HalfOuterF16c(const std::uint16_t* U, std::int64_t ld_u,
+                                                              const std::uint16_t* V, std::int64_t ld_v,
+                                                              const float* scale, int rank) noexcept {
+  return HalfOuter(U, ld_u, V, ld_v, scale, rank, [](std::uint16_t h) __attribute__((target("f16c"))) {
+    return static_cast<double>(_cvtsh_ss(h));
+  });
+}
+
+Eigen::Matrix3d HalfOuterPortable(const std::uint16_t* U, std::int64_t ld_u, const std::uint16_t* V,
+                                  std::int64_t ld_v, const float* scale, int rank) noexcept {
+  return HalfOuter(U, ld_u, V, ld_v, scale, rank,
+                   [](std::uint16_t h) { return static_cast<double>(HalfToFloat(h)); });
+}
+
+}  // namespace
+
+Eigen::Matrix3d CompressedBlocks::HalfBlock(const Tile& tile, std::int64_t a, std::int64_t b) const noexcept {
+  const std::uint16_t* U = half_.data() + tile.offset_u + 3 * a;
+  const std::uint16_t* V = half_.data() + tile.offset_v + 3 * b;
+  const float* scale = data_.data() + tile.scales;
+  return BestIsa() == Isa::kPortable ? HalfOuterPortable(U, tile.ld_u, V, tile.ld_v, scale, tile.rank)
+                                     : HalfOuterF16c(U, tile.ld_u, V, tile.ld_v, scale, tile.rank);
 }
 
 namespace {

@@ -94,6 +94,7 @@ class CompressedBlocks {
  private:
   using Tile = CompressedTile;
   CompressedView View() const noexcept;
+  Eigen::Matrix3d HalfBlock(const Tile& tile, std::int64_t a, std::int64_t b) const noexcept;
   std::int32_t num_leaves_() const noexcept { return static_cast<std::int32_t>(leaf_start_.size()) - 1; }
 
   std::vector<std::int32_t> slot_of_pos_;  // cluster order -> slot
