@@ -358,6 +358,8 @@ Compliance Compliance::Compressed(const TetMesh& mesh, const CompressionOptions&
   h.Pod(options.hierarchical);
   h.Pod(options.eta);
   h.Pod(options.max_block_entries);
+  h.Pod(options.weak_admissibility);
+  h.Pod(options.factor_precision);
   c.hash_ = h.digest();
   c.compressed_ = std::make_shared<const detail::CompressedBlocks>(
       detail::CompressedBlocks::Build(p, *this, options, stats));

@@ -61,6 +61,9 @@ std::int32_t KdSplit(std::span<const Eigen::Vector3d> p, std::int32_t* order, st
   return id;
 }
 
+// Zero halves after the float16 factors: the vector kernels' last loads may run this far past a column.
+constexpr std::size_t kHalfPadding = 16;
+
 // ACA stops at this share of the block's error budget; the SVD recompression may spend the rest.
 constexpr double kAcaShare = 0.3;
 
@@ -88,8 +91,8 @@ int AcaFullPivot(Eigen::MatrixXd& R, double tol_abs, int max_rank, Eigen::Matrix
   }
 }
 
-#define HS_AVX2 __attribute__((target("avx2,fma")))
-#define HS_AVX512 __attribute__((target("avx512f,avx512vl,fma")))
+#define HS_AVX2 __attribute__((target("avx2,fma,f16c")))
+#define HS_AVX512 __attribute__((target("avx512f,avx512vl,fma,f16c")))
 #define HS_INLINE inline __attribute__((always_inline))
 
 #pragma GCC diagnostic push
@@ -105,6 +108,16 @@ struct GemvPortable {
       for (int i = 0; i < len; ++i) y[i] += a[i] * wt;
     }
   }
+  // The same with A in float16.
+  HS_INLINE static void RunHalf(float* y, const std::uint16_t* A, std::int64_t ld, int len, int r,
+                                const float* w) noexcept {
+    for (int t = 0; t < r; ++t) {
+      const std::uint16_t* a = A + t * ld;
+      const float wt = w[t];
+      for (int i = 0; i < len; ++i) y[i] += HalfToFloat(a[i]) * wt;
+    }
+  }
+  HS_INLINE static float H(std::uint16_t h) noexcept { return HalfToFloat(h); }
 };
 
 struct GemvAvx2 {
@@ -126,6 +139,36 @@ struct GemvAvx2 {
       y[i] = s;
     }
   }
+  HS_AVX2 HS_INLINE static void RunHalf(float* y, const std::uint16_t* A, std::int64_t ld, int len, int r,
+                                        const float* w) noexcept {
+    int i = 0;
+    for (; i + 16 <= len; i += 16) {
+      __m256 a0 = _mm256_loadu_ps(y + i), a1 = _mm256_loadu_ps(y + i + 8);
+      for (int t = 0; t < r; ++t) {
+        const __m256 wt = _mm256_set1_ps(w[t]);
+        const std::uint16_t* a = A + t * ld + i;
+        a0 = _mm256_fmadd_ps(_mm256_cvtph_ps(_mm_loadu_si128(reinterpret_cast<const __m128i*>(a))), wt, a0);
+        a1 = _mm256_fmadd_ps(_mm256_cvtph_ps(_mm_loadu_si128(reinterpret_cast<const __m128i*>(a + 8))), wt, a1);
+      }
+      _mm256_storeu_ps(y + i, a0);
+      _mm256_storeu_ps(y + i + 8, a1);
+    }
+    // The rest 8 at a time through a copy of y; A may be read up to 7 halves past a column
+    // (the float16 data is padded at its end, the extra lanes are dropped).
+    for (; i < len; i += 8) {
+      const int rest = std::min(len - i, 8);
+      alignas(32) float tmp[8] = {};
+      for (int j = 0; j < rest; ++j) tmp[j] = y[i + j];
+      __m256 a0 = _mm256_load_ps(tmp);
+      for (int t = 0; t < r; ++t) {
+        a0 = _mm256_fmadd_ps(_mm256_cvtph_ps(_mm_loadu_si128(reinterpret_cast<const __m128i*>(A + t * ld + i))),
+                             _mm256_set1_ps(w[t]), a0);
+      }
+      _mm256_store_ps(tmp, a0);
+      for (int j = 0; j < rest; ++j) y[i + j] = tmp[j];
+    }
+  }
+  HS_AVX2 HS_INLINE static float H(std::uint16_t h) noexcept { return _cvtsh_ss(h); }
 };
 
 struct GemvAvx512 {
@@ -151,6 +194,34 @@ struct GemvAvx512 {
       _mm512_mask_storeu_ps(y + i, mk, a0);
     }
   }
+  HS_AVX512 HS_INLINE static void RunHalf(float* y, const std::uint16_t* A, std::int64_t ld, int len, int r,
+                                          const float* w) noexcept {
+    int i = 0;
+    for (; i + 32 <= len; i += 32) {
+      __m512 a0 = _mm512_loadu_ps(y + i), a1 = _mm512_loadu_ps(y + i + 16);
+      for (int t = 0; t < r; ++t) {
+        const __m512 wt = _mm512_set1_ps(w[t]);
+        const std::uint16_t* a = A + t * ld + i;
+        a0 = _mm512_fmadd_ps(_mm512_cvtph_ps(_mm256_loadu_si256(reinterpret_cast<const __m256i*>(a))), wt, a0);
+        a1 = _mm512_fmadd_ps(_mm512_cvtph_ps(_mm256_loadu_si256(reinterpret_cast<const __m256i*>(a + 16))), wt, a1);
+      }
+      _mm512_storeu_ps(y + i, a0);
+      _mm512_storeu_ps(y + i + 16, a1);
+    }
+    // The rest 16 at a time, y masked; A may be read up to 15 halves past a column (the float16
+    // data is padded at its end, the extra lanes are dropped).
+    for (; i < len; i += 16) {
+      const int rest = len - i;
+      const __mmask16 mk = rest >= 16 ? static_cast<__mmask16>(0xFFFF) : static_cast<__mmask16>((1u << rest) - 1u);
+      __m512 a0 = _mm512_maskz_loadu_ps(mk, y + i);
+      for (int t = 0; t < r; ++t) {
+        a0 = _mm512_fmadd_ps(_mm512_cvtph_ps(_mm256_loadu_si256(reinterpret_cast<const __m256i*>(A + t * ld + i))),
+                             _mm512_set1_ps(w[t]), a0);
+      }
+      _mm512_mask_storeu_ps(y + i, mk, a0);
+    }
+  }
+  HS_AVX512 HS_INLINE static float H(std::uint16_t h) noexcept { return _cvtsh_ss(h); }
 };
 
 #pragma GCC diagnostic pop
@@ -173,7 +244,7 @@ class HBuilder {
     const Cluster& t = cl_[static_cast<std::size_t>(ti)];
     if (si == ti) {
       if (s.leaf()) {
-        Dense(s, t);
+        Symmetric(s);
       } else {
         Partition(s.child[0], s.child[0]);
         Partition(s.child[0], s.child[1]);
@@ -181,32 +252,33 @@ class HBuilder {
       }
       return;
     }
-    const bool leaves = s.leaf() && t.leaf();
-    const std::int64_t entries = 9 * static_cast<std::int64_t>(s.size()) * t.size();
-    const bool admissible = o_.hierarchical && std::min(Diameter(s), Diameter(t)) <= o_.eta * BoxDistance(s, t);
-    if (leaves || (admissible && entries <= o_.max_block_entries)) {
-      const int rank = Compress(s, t);
-      if (rank >= 0 && leaves) {
-        Emit(s, t, U_, V_, rank);
-        return;
-      }
+    if (s.leaf() && t.leaf()) {
+      // A leaf pair on its own: low rank where that beats dense, else dense.
+      const int rank = Compress(s, t, kNoLimit);
       if (rank >= 0) {
-        // One U V^T for (s, t), unless its split (computed here, recursively) stores fewer floats.
-        const Eigen::MatrixXd U = U_.leftCols(rank), V = V_.leftCols(rank);
-        const Mark mark = Save();
-        Split(si, ti);
-        if (static_cast<std::int64_t>(rank) * (U.rows() + V.rows()) <=
-            static_cast<std::int64_t>(data.size()) - mark.data) {
-          Restore(mark);
-          Emit(s, t, U, V, rank);
-        }
-        return;
+        Emit(s, t, rank);
+      } else {
+        Dense(s, t);
       }
+      return;
     }
-    if (leaves) {
-      Dense(s, t);
-    } else {
+    const std::int64_t entries = 9 * static_cast<std::int64_t>(s.size()) * t.size();
+    const bool admissible =
+        o_.hierarchical && (o_.weak_admissibility || std::min(Diameter(s), Diameter(t)) <= o_.eta * BoxDistance(s, t));
+    if (!admissible || entries > o_.max_block_entries) {
       Split(si, ti);
+      return;
+    }
+    // One U V^T for (s, t) if it stores fewer floats than its split (computed first, recursively,
+    // and undone when the single block wins; its size caps the rank the compression may use).
+    const Mark mark = Save();
+    Split(si, ti);
+    const std::int64_t split_floats = static_cast<std::int64_t>(data.size()) - mark.data +
+                                      (static_cast<std::int64_t>(halves.size()) - mark.halves + 1) / 2;
+    const int rank = Compress(s, t, split_floats);
+    if (rank >= 0) {
+      Restore(mark);
+      Emit(s, t, rank);
     }
   }
 
@@ -226,10 +298,11 @@ class HBuilder {
     }
   }
 
-  std::vector<float> data;
+  std::vector<float> data;             // dense tiles, float32 factors, float16 factors' scales
+  std::vector<std::uint16_t> halves;   // float16 factors
   // What the emitted blocks add up to (undone with them when a single block beats a split).
   struct Totals {
-    std::int64_t low_rank_blocks = 0, rank_sum = 0, largest = 0, dense_floats = 0, factor_floats = 0;
+    std::int64_t low_rank_blocks = 0, half_blocks = 0, rank_sum = 0, largest = 0, dense_floats = 0, factor_bytes = 0;
     int max_rank = 0;
   } totals;
   std::int64_t tried = 0;  // blocks compressed (kept or not): not undone
@@ -237,12 +310,16 @@ class HBuilder {
  private:
   // What Emit and Dense have appended, to undo a split that a single block beats.
   struct Mark {
-    std::int64_t data, blocks;
+    std::int64_t data, halves, blocks;
     Totals totals;
   };
-  Mark Save() const { return {static_cast<std::int64_t>(data.size()), static_cast<std::int64_t>(blocks_.size()), totals}; }
+  Mark Save() const {
+    return {static_cast<std::int64_t>(data.size()), static_cast<std::int64_t>(halves.size()),
+            static_cast<std::int64_t>(blocks_.size()), totals};
+  }
   void Restore(const Mark& m) {
     data.resize(static_cast<std::size_t>(m.data));
+    halves.resize(static_cast<std::size_t>(m.halves));
     blocks_.resize(static_cast<std::size_t>(m.blocks));
     totals = m.totals;
   }
@@ -260,76 +337,177 @@ class HBuilder {
     CompressedTile& tile = tiles_[static_cast<std::size_t>(Compliance::PackedIndex(s.leaf_begin, t.leaf_begin))];
     tile.offset_u = Offset();
     tile.ld_u = static_cast<std::int32_t>(A_.rows());
-    tile.rank = -1;
+    tile.rank = kDenseTile;
     for (Eigen::Index j = 0; j < A_.cols(); ++j)
       for (Eigen::Index i = 0; i < A_.rows(); ++i) data.push_back(static_cast<float>(A_(i, j)));
     totals.dense_floats += A_.size();
     blocks_.push_back({s.begin, s.end, t.begin, t.end, -1});
   }
 
-  // The rank of one U V^T for the whole block (factors in U_, V_) if the tolerance is met at a rank
-  // that saves memory against dense, else -1. ACA first
-  // runs to a fraction of the tolerance (its rank is not optimal), then the product is recompressed
-  // to the smallest rank whose explicit residual ||A - U V^T||_F meets the tolerance (QR of both
-  // factors, SVD of the r x r core; candidates from the singular values, each one checked).
-  int Compress(const Cluster& s, const Cluster& t) {
+  // A diagonal leaf tile: C_ss is symmetric, so only its upper triangle is stored (by columns).
+  void Symmetric(const Cluster& s) {
+    Fill(s, s);
+    CompressedTile& tile = tiles_[static_cast<std::size_t>(Compliance::PackedIndex(s.leaf_begin, s.leaf_begin))];
+    tile.offset_u = Offset();
+    tile.ld_u = static_cast<std::int32_t>(A_.rows());
+    tile.rank = kSymmetricTile;
+    for (Eigen::Index j = 0; j < A_.cols(); ++j)
+      for (Eigen::Index i = 0; i <= j; ++i) data.push_back(static_cast<float>(A_(i, j)));
+    totals.dense_floats += A_.rows() * (A_.rows() + 1) / 2;
+    blocks_.push_back({s.begin, s.end, s.begin, s.end, -1});
+  }
+
+  // The rank of one U V^T for the whole block if the tolerance is met by a factorization that
+  // stores fewer floats than dense and at most max_floats (float16 factors count half, plus one
+  // float32 scale per rank), else -1; the stored factors are left in U_, V_ (float32) or Uh_, Vh_,
+  // Sh_ (float16, half_ = true). ACA first runs to a fraction of the tolerance (its rank is not
+  // optimal), then the product is recompressed to the smallest rank whose explicit residual
+  // ||A - U V^T||_F, with U and V rounded exactly as they will be stored, meets the tolerance (QR
+  // of both factors, SVD of the r x r core; candidates from the singular values, each one
+  // checked). With factor_precision kFloat16 the float16 candidates are tried first and float32
+  // is the fallback for the block.
+  static constexpr std::int64_t kNoLimit = std::numeric_limits<std::int64_t>::max() / 4;
+  int Compress(const Cluster& s, const Cluster& t, std::int64_t max_floats) {
+    const std::int64_t m = 3 * static_cast<std::int64_t>(s.size()), n = 3 * static_cast<std::int64_t>(t.size());
+    const std::int64_t cap = std::min(max_floats, m * n - 1);
+    auto cost = [&](std::int64_t k, bool half) { return half ? (k * (m + n) + 1) / 2 + k : k * (m + n); };
+    auto most_rank = [&](std::int64_t floats, bool half) {  // largest k with cost(k) <= floats
+      std::int64_t k = half ? 2 * floats / (m + n + 2) + 1 : floats / (m + n);
+      while (k > 0 && cost(k, half) > floats) --k;
+      return static_cast<int>(std::min<std::int64_t>(k, kMaxBlockRank));
+    };
+    const bool try_half = o_.factor_precision == Precision::kFloat16;
+    if (cap < 0) return -1;
     Fill(s, t);
     ++tried;
-    const std::int64_t m = A_.rows(), n = A_.cols();
-    const int limit = static_cast<int>(std::min<std::int64_t>((m * n - 1) / (m + n), kMaxBlockRank));
     const double norm = A_.norm(), budget = o_.tolerance * norm;
     R_ = A_;
-    const int aca_limit = static_cast<int>(std::min<std::int64_t>({limit + limit / 2 + 2, m, n}));
+    // ACA may overshoot the rank that the recompression ends at, so its limit follows the dense
+    // break-even rank (not max_floats: a tighter ACA limit was measured to cost memory).
+    const int dense_limit = most_rank(m * n - 1, try_half);
+    const int aca_limit = static_cast<int>(std::min<std::int64_t>({dense_limit + dense_limit / 2 + 2, m, n}));
     const int aca = AcaFullPivot(R_, kAcaShare * budget, aca_limit, U_, V_);
     if (aca < 0) return -1;
-    int rank = aca;
+    // Candidate factors of rank k: from the SVD of the recompression, or ACA's own at rank <= 1.
+    int k0 = aca;
+    Eigen::MatrixXd qum, qvm, su, sv_mat;
+    Eigen::VectorXd sv;
     if (aca > 1) {
       const Eigen::HouseholderQR<Eigen::MatrixXd> qu(U_.leftCols(aca)), qv(V_.leftCols(aca));
       const Eigen::MatrixXd ru = qu.matrixQR().topRows(aca).triangularView<Eigen::Upper>();
       const Eigen::MatrixXd rv = qv.matrixQR().topRows(aca).triangularView<Eigen::Upper>();
       const Eigen::BDCSVD<Eigen::MatrixXd> svd(ru * rv.transpose(), Eigen::ComputeFullU | Eigen::ComputeFullV);
-      const Eigen::VectorXd& sv = svd.singularValues();
+      sv = svd.singularValues();
       // Smallest k whose discarded singular values, added to the ACA residual, fit the budget.
       const double r2 = R_.squaredNorm();
       double tail2 = 0.0;
-      int k = aca;
-      while (k > 0 && r2 + tail2 + sv(k - 1) * sv(k - 1) <= budget * budget) {
-        tail2 += sv(k - 1) * sv(k - 1);
-        --k;
+      while (k0 > 0 && r2 + tail2 + sv(k0 - 1) * sv(k0 - 1) <= budget * budget) {
+        tail2 += sv(k0 - 1) * sv(k0 - 1);
+        --k0;
       }
-      if (k < aca && k <= limit) {
-        const Eigen::MatrixXd qum = qu.householderQ() * Eigen::MatrixXd::Identity(m, aca);
-        const Eigen::MatrixXd qvm = qv.householderQ() * Eigen::MatrixXd::Identity(n, aca);
-        for (; k < aca; ++k) {
-          Eigen::MatrixXd u = qum * (svd.matrixU().leftCols(k) * sv.head(k).asDiagonal());
-          Eigen::MatrixXd v = qvm * svd.matrixV().leftCols(k);
-          R_ = A_;
-          R_.noalias() -= u * v.transpose();
-          if (R_.norm() <= budget) {
-            U_.leftCols(k) = u;
-            V_.leftCols(k) = v;
-            break;
-          }
-        }
-        rank = k;
+      qum = qu.householderQ() * Eigen::MatrixXd::Identity(m, aca);
+      qvm = qv.householderQ() * Eigen::MatrixXd::Identity(n, aca);
+      su = svd.matrixU();
+      sv_mat = svd.matrixV();
+    }
+    // Rounds the rank-k candidate as it would be stored and checks its explicit residual; on
+    // success the stored form is left for Emit.
+    Eigen::MatrixXd u, v;
+    auto meets = [&](int k, bool half) {
+      if (aca > 1) {
+        u = qum * (su.leftCols(k) * sv.head(k).asDiagonal());
+        v = qvm * sv_mat.leftCols(k);
+      } else {
+        u = U_.leftCols(k);
+        v = V_.leftCols(k);
+      }
+      Round(u, v, half);
+      R_ = A_;
+      R_.noalias() -= u * v.transpose();
+      if (R_.norm() > budget) return false;
+      half_ = half;
+      if (!half) {
+        U_.leftCols(k) = u;
+        V_.leftCols(k) = v;
+      }
+      return true;
+    };
+    int half_rank = -1;
+    if (try_half) {
+      // First at the largest allowed rank, where truncation is smallest: if the rounding fails
+      // there, it fails at every rank (saves the search at tight tolerances).
+      const int limit = std::min(most_rank(cap, true), aca);
+      if (k0 <= limit && (k0 == limit || meets(limit, true))) {
+        for (int k = k0; k <= limit && half_rank < 0; ++k)
+          if (meets(k, true)) half_rank = k;
       }
     }
-    return rank > limit ? -1 : rank;
+    // float32 at the ranks that store less than the float16 result (if any).
+    const int limit = std::min(most_rank(half_rank >= 0 ? cost(half_rank, true) - 1 : cap, false), aca);
+    for (int k = k0; k <= limit; ++k)
+      if (meets(k, false)) return k;
+    half_ = half_rank >= 0;
+    return half_rank;
   }
 
-  // Stores U V^T (the first `rank` columns) for the block (s, t); its tiles become views.
-  void Emit(const Cluster& s, const Cluster& t, const Eigen::MatrixXd& U, const Eigen::MatrixXd& V, int rank) {
-    const std::int64_t m = U.rows(), n = V.rows();
-    const std::int32_t off_u = Offset();
-    for (int r = 0; r < rank; ++r)
-      for (Eigen::Index i = 0; i < m; ++i) data.push_back(static_cast<float>(U(i, r)));
-    const std::int32_t off_v = Offset();
-    for (int r = 0; r < rank; ++r)
-      for (Eigen::Index j = 0; j < n; ++j) data.push_back(static_cast<float>(V(j, r)));
+  // Rounds u, v (m x k, n x k) to what is stored: float32, or (half) columns scaled to a largest
+  // entry of 1 in float16 with the product of the scales in float32 (kept in Uh_, Vh_, Sh_; u
+  // returns with the scales applied).
+  void Round(Eigen::MatrixXd& u, Eigen::MatrixXd& v, bool half) {
+    if (!half) {
+      u = u.cast<float>().cast<double>();
+      v = v.cast<float>().cast<double>();
+      return;
+    }
+    const Eigen::Index k = u.cols();
+    Uh_.resize(static_cast<std::size_t>(u.size()));
+    Vh_.resize(static_cast<std::size_t>(v.size()));
+    Sh_.resize(static_cast<std::size_t>(k));
+    for (Eigen::Index c = 0; c < k; ++c) {
+      const double au = u.col(c).cwiseAbs().maxCoeff(), av = v.col(c).cwiseAbs().maxCoeff();
+      const double iu = au > 0.0 ? 1.0 / au : 0.0, iv = av > 0.0 ? 1.0 / av : 0.0;
+      const float scale = static_cast<float>(au * av);
+      Sh_[static_cast<std::size_t>(c)] = scale;
+      for (Eigen::Index i = 0; i < u.rows(); ++i) {
+        const std::uint16_t h = FloatToHalf(static_cast<float>(u(i, c) * iu));
+        Uh_[static_cast<std::size_t>(c * u.rows() + i)] = h;
+        u(i, c) = static_cast<double>(HalfToFloat(h)) * scale;
+      }
+      for (Eigen::Index j = 0; j < v.rows(); ++j) {
+        const std::uint16_t h = FloatToHalf(static_cast<float>(v(j, c) * iv));
+        Vh_[static_cast<std::size_t>(c * v.rows() + j)] = h;
+        v(j, c) = static_cast<double>(HalfToFloat(h));
+      }
+    }
+  }
+
+  // Stores the factors Compress left (rank columns) for the block (s, t); its tiles become views.
+  void Emit(const Cluster& s, const Cluster& t, int rank) {
+    const std::int64_t m = 3 * static_cast<std::int64_t>(s.size()), n = 3 * static_cast<std::int64_t>(t.size());
+    std::int32_t off_u = 0, off_v = 0, scales = -1;
+    if (half_) {
+      scales = Offset();
+      data.insert(data.end(), Sh_.begin(), Sh_.begin() + rank);
+      off_u = HalfOffset();
+      halves.insert(halves.end(), Uh_.begin(), Uh_.begin() + rank * m);
+      off_v = HalfOffset();
+      halves.insert(halves.end(), Vh_.begin(), Vh_.begin() + rank * n);
+      ++totals.half_blocks;
+      totals.factor_bytes += 2 * rank * (m + n) + 4 * rank;
+    } else {
+      off_u = Offset();
+      for (int r = 0; r < rank; ++r)
+        for (Eigen::Index i = 0; i < m; ++i) data.push_back(static_cast<float>(U_(i, r)));
+      off_v = Offset();
+      for (int r = 0; r < rank; ++r)
+        for (Eigen::Index j = 0; j < n; ++j) data.push_back(static_cast<float>(V_(j, r)));
+      totals.factor_bytes += 4 * rank * (m + n);
+    }
     for (std::int32_t J = t.leaf_begin; J < t.leaf_end; ++J)
       for (std::int32_t I = s.leaf_begin; I < s.leaf_end; ++I) {
         CompressedTile& tile = tiles_[static_cast<std::size_t>(Compliance::PackedIndex(I, J))];
         tile.rank = rank;
+        tile.scales = scales;
         tile.ld_u = static_cast<std::int32_t>(m);
         tile.ld_v = static_cast<std::int32_t>(n);
         tile.offset_u = off_u + 3 * (leaf_start_[I] - s.begin);
@@ -340,7 +518,13 @@ class HBuilder {
     totals.rank_sum += rank;
     totals.max_rank = std::max(totals.max_rank, rank);
     totals.largest = std::max(totals.largest, m * n);
-    totals.factor_floats += static_cast<std::int64_t>(rank) * (m + n);
+  }
+
+  std::int32_t HalfOffset() const {
+    if (halves.size() >= static_cast<std::size_t>(std::numeric_limits<std::int32_t>::max()) / 2) {
+      throw InputError("", 0, "compliance", "too large for the compressed storage (2^30 float16 factors)");
+    }
+    return static_cast<std::int32_t>(halves.size());
   }
 
   std::int32_t Offset() const {
@@ -358,6 +542,9 @@ class HBuilder {
   std::vector<CompressedTile>& tiles_;
   std::vector<CompressedBlockInfo>& blocks_;
   Eigen::MatrixXd A_, R_, U_, V_;
+  std::vector<std::uint16_t> Uh_, Vh_;  // the last float16 candidate (column-major, scaled)
+  std::vector<float> Sh_;
+  bool half_ = false;                   // the last accepted candidate is float16
 };
 
 }  // namespace
@@ -373,6 +560,9 @@ CompressedBlocks CompressedBlocks::Build(std::span<const Eigen::Vector3d> positi
     throw InputError("", 0, "eta", "must be in (0, 100] (admissibility min(diam s, diam t) <= eta dist(s, t))");
   }
   if (options.max_block_entries < 1) throw InputError("", 0, "max_block_entries", "must be positive");
+  if (options.factor_precision != Precision::kFloat32 && options.factor_precision != Precision::kFloat16) {
+    throw InputError("", 0, "factor_precision", "must be kFloat32 or kFloat16");
+  }
   CompressedBlocks h;
   h.slot_of_pos_.resize(static_cast<std::size_t>(N));
   std::iota(h.slot_of_pos_.begin(), h.slot_of_pos_.end(), 0);
@@ -392,6 +582,8 @@ CompressedBlocks CompressedBlocks::Build(std::span<const Eigen::Vector3d> positi
   HBuilder b(exact, options, clusters, h.slot_of_pos_, h.leaf_start_, h.tiles_, h.blocks_);
   if (N > 0) b.Partition(0, 0);
   h.data_.assign(b.data.begin(), b.data.end());
+  h.half_.assign(b.halves.begin(), b.halves.end());
+  if (!h.half_.empty()) h.half_.resize(h.half_.size() + kHalfPadding, 0);  // the kernels' tails read past a column
   h.blocks_.shrink_to_fit();
   if (stats != nullptr) {
     stats->tiles = static_cast<std::int64_t>(h.tiles_.size());
@@ -402,8 +594,9 @@ CompressedBlocks CompressedBlocks::Build(std::span<const Eigen::Vector3d> positi
     stats->max_rank = t.max_rank;
     stats->largest_block_entries = t.largest;
     stats->dense_bytes = t.dense_floats * static_cast<std::int64_t>(sizeof(float));
-    stats->factor_bytes = t.factor_floats * static_cast<std::int64_t>(sizeof(float));
-    stats->table_bytes = static_cast<std::int64_t>(h.storage_bytes() - h.data_.size() * sizeof(float));
+    stats->factor_bytes = t.factor_bytes;
+    stats->half_blocks = t.half_blocks;
+    stats->table_bytes = static_cast<std::int64_t>(h.storage_bytes()) - stats->dense_bytes - stats->factor_bytes;
     stats->blocks_tried = b.tried;
     stats->seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   }
@@ -423,20 +616,72 @@ Eigen::Matrix3d CompressedBlocks::Block(std::int32_t n, std::int32_t k) const no
   const float* U = data_.data() + tile.offset_u;
   const float* V = data_.data() + tile.offset_v;
   Eigen::Matrix3d B;
-  for (int c = 0; c < 3; ++c)
-    for (int r = 0; r < 3; ++r) {
-      if (tile.rank < 0) {
-        B(r, c) = U[(3 * b + c) * tile.ld_u + 3 * a + r];
-      } else {
-        double s = 0.0;
-        for (std::int64_t t = 0; t < tile.rank; ++t) {
-          s += static_cast<double>(U[t * tile.ld_u + 3 * a + r]) * V[t * tile.ld_v + 3 * b + c];
+  if (tile.rank >= 0 && tile.scales >= 0) {
+    B = HalfBlock(tile, a, b);
+  } else {
+    for (int c = 0; c < 3; ++c)
+      for (int r = 0; r < 3; ++r) {
+        if (tile.rank == kSymmetricTile) {
+          B(r, c) = U[SymmetricIndex(3 * a + r, 3 * b + c)];
+        } else if (tile.rank < 0) {
+          B(r, c) = U[(3 * b + c) * tile.ld_u + 3 * a + r];
+        } else {
+          double s = 0.0;
+          for (std::int64_t t = 0; t < tile.rank; ++t) {
+            s += static_cast<double>(U[t * tile.ld_u + 3 * a + r]) * V[t * tile.ld_v + 3 * b + c];
+          }
+          B(r, c) = s;
         }
-        B(r, c) = s;
       }
-    }
+  }
   if (transpose) B.transposeInPlace();
   return B;
+}
+
+namespace {
+
+// Sum over the rank of scale_t U(3a.., t) V(3b.., t)^T from float16 factors: six conversions per
+// rank (F16C where the CPU has it; Block() is on the force path, the software conversion made a
+// 5-contact step ten times slower).
+template <class Cvt>
+HS_INLINE Eigen::Matrix3d HalfOuter(const std::uint16_t* U, std::int64_t ld_u, const std::uint16_t* V,
+                                    std::int64_t ld_v, const float* scale, int rank, Cvt cvt) noexcept {
+  double acc[9] = {};
+  for (int t = 0; t < rank; ++t, U += ld_u, V += ld_v) {
+    const double s = scale[t];
+    const double u[3] = {s * cvt(U[0]), s * cvt(U[1]), s * cvt(U[2])};
+    const double v[3] = {cvt(V[0]), cvt(V[1]), cvt(V[2])};
+    for (int c = 0; c < 3; ++c)
+      for (int r = 0; r < 3; ++r) acc[3 * c + r] += u[r] * v[c];
+  }
+  Eigen::Matrix3d B;
+  for (int c = 0; c < 3; ++c)
+    for (int r = 0; r < 3; ++r) B(r, c) = acc[3 * c + r];
+  return B;
+}
+
+__attribute__((target("f16c"))) Eigen::Matrix3d HalfOuterF16c(const std::uint16_t* U, std::int64_t ld_u,
+                                                              const std::uint16_t* V, std::int64_t ld_v,
+                                                              const float* scale, int rank) noexcept {
+  return HalfOuter(U, ld_u, V, ld_v, scale, rank, [](std::uint16_t h) __attribute__((target("f16c"))) {
+    return static_cast<double>(_cvtsh_ss(h));
+  });
+}
+
+Eigen::Matrix3d HalfOuterPortable(const std::uint16_t* U, std::int64_t ld_u, const std::uint16_t* V,
+                                  std::int64_t ld_v, const float* scale, int rank) noexcept {
+  return HalfOuter(U, ld_u, V, ld_v, scale, rank,
+                   [](std::uint16_t h) { return static_cast<double>(HalfToFloat(h)); });
+}
+
+}  // namespace
+
+Eigen::Matrix3d CompressedBlocks::HalfBlock(const Tile& tile, std::int64_t a, std::int64_t b) const noexcept {
+  const std::uint16_t* U = half_.data() + tile.offset_u + 3 * a;
+  const std::uint16_t* V = half_.data() + tile.offset_v + 3 * b;
+  const float* scale = data_.data() + tile.scales;
+  return BestIsa() == Isa::kPortable ? HalfOuterPortable(U, tile.ld_u, V, tile.ld_v, scale, tile.rank)
+                                     : HalfOuterF16c(U, tile.ld_u, V, tile.ld_v, scale, tile.rank);
 }
 
 namespace {
@@ -467,7 +712,7 @@ namespace {
 
 CompressedView CompressedBlocks::View() const noexcept {
   return {pos_.data(), leaf_of_pos_.data(), leaf_start_.data(), slot_of_pos_.data(), num_nodes(),
-          num_leaves_(), tiles_.data(), data_.data()};
+          num_leaves_(), tiles_.data(), data_.data(), half_.data()};
 }
 
 void CompressedBlocks::Apply(std::span<const NodeLoad> loads, Eigen::Vector3d* out, float* scratch,
@@ -481,7 +726,7 @@ void CompressedBlocks::Apply(std::span<const NodeLoad> loads, Eigen::Vector3d* o
 }
 
 std::size_t CompressedBlocks::storage_bytes() const noexcept {
-  return data_.size() * sizeof(float) + tiles_.size() * sizeof(Tile) + blocks_.size() * sizeof(CompressedBlockInfo) +
+  return data_.size() * sizeof(float) + half_.size() * sizeof(std::uint16_t) + tiles_.size() * sizeof(Tile) + blocks_.size() * sizeof(CompressedBlockInfo) +
          (slot_of_pos_.size() + pos_.size() + leaf_of_pos_.size() + leaf_start_.size()) * sizeof(std::int32_t);
 }
 

@@ -105,6 +105,11 @@ TEST(NoAllocation, SolversAndPatchQueries) {
   ElementaryDisplacementSolver paper16(T16, 16);
   auto cc = std::make_shared<const Compliance>(c64->Compressed(b.mesh, {.tolerance = 1e-3, .leaf_nodes = 8}));
   ContactSolver compressed(cc, {.max_contacts = 16, .push_only = true});
+  CompressionOptions half_options{.tolerance = 1e-3, .leaf_nodes = 8};
+  half_options.factor_precision = Precision::kFloat16;
+  CompressionStats half_stats;
+  auto cc16 = std::make_shared<const Compliance>(c64->Compressed(b.mesh, half_options, &half_stats));
+  ContactSolver compressed16(cc16, {.max_contacts = 16, .push_only = true});
   SurfaceField columns16(c64, {.layout = SurfaceFieldLayout::kColumns, .precision = Precision::kFloat16});
   SurfaceField columns32(c64, {.layout = SurfaceFieldLayout::kColumns, .precision = Precision::kFloat32});
   std::vector<Eigen::Vector3d> field(c64->num_nodes());
@@ -135,6 +140,8 @@ TEST(NoAllocation, SolversAndPatchQueries) {
       paper16.SurfaceDisplacements(field);
       compressed.Solve(in);
       compressed.SurfaceDisplacements(field);
+      compressed16.Solve(in);
+      compressed16.SurfaceDisplacements(field);
       columns16.Evaluate(plain.loads(), field);
       columns32.Evaluate(plain.loads(), field);
       plain.Solve(nan_in);
@@ -150,6 +157,8 @@ TEST(NoAllocation, SolversAndPatchQueries) {
   // The calls did real work (the test is not vacuous).
   EXPECT_GT(plain.num_unique(), 0);
   EXPECT_GT(compressed.num_unique(), 0);
+  EXPECT_GT(compressed16.num_unique(), 0);
+  EXPECT_GT(half_stats.half_blocks, 0) << "the float16 store has no float16 factors";
   EXPECT_GT(field[0].norm() + field[5].norm(), 0.0);
 }
 

@@ -68,7 +68,8 @@ enum class ComplianceStorage : std::uint32_t {
   kPacked,
   /// Hierarchical block low-rank (see Compliance::Compressed): a k-d cluster tree, far cluster
   /// pairs as one U V^T within a relative tolerance where that is smaller, near leaf pairs dense
-  /// or low-rank. float32.
+  /// or low-rank, diagonal leaf tiles as their upper triangle. float32 (low-rank factors float16
+  /// on request, CompressionOptions::factor_precision).
   kCompressed,
 };
 
@@ -87,11 +88,22 @@ struct CompressionOptions {
   /// Admissibility parameter of the hierarchical partition, in (0, 100]. Since a block is kept
   /// only where it beats its split, a larger eta only tries more (nearer) pairs: measured storage
   /// at 584 / 1,961 / 4,441 nodes, tolerance 1e-3, eta 4 -> 16: 7.1 -> 5.6, 2.9 -> 2.6,
-  /// 1.6 -> 1.5 N^2 bytes, eta 100 within 1% of 16, at similar build times.
+  /// 1.6 -> 1.5 N^2 bytes, eta 100 within 1% of 16, at similar build times (measured with the
+  /// diagonal tiles stored full; storing their upper triangle takes 0.55 / 0.28 / 0.07 N^2 off).
   double eta = 16.0;
   /// Largest block (entries, 3 |s| x 3 |t|) compressed explicitly; larger admissible pairs are
   /// split (bounds the build memory: 16 bytes per entry, 64 MB at the default).
   std::int64_t max_block_entries = std::int64_t{1} << 22;
+  /// Weak admissibility: also try off-diagonal cluster pairs that touch or are near (eta fails)
+  /// as one low-rank block, under the same tolerance check and keep-or-split rule (so it never
+  /// stores more than without; it costs build time).
+  bool weak_admissibility = false;
+  /// Storage of the low-rank factors: kFloat32, or kFloat16 (opt-in) where each block's columns
+  /// are scaled to a largest entry of 1 and stored in float16 with one float32 scale per rank.
+  /// The float16 rounding is part of the explicit residual that picks the rank, so the tolerance
+  /// holds as computed; a block whose float16 factors cannot meet it (or do not save memory)
+  /// keeps float32 factors. Dense tiles stay float32.
+  Precision factor_precision = Precision::kFloat32;
 };
 
 /// What a compression produced.
@@ -107,6 +119,7 @@ struct CompressionStats {
   std::int64_t table_bytes = 0;     ///< tile table (L (L + 1) / 2 entries) and node orderings
   std::int64_t blocks_tried = 0;    ///< explicit compressions attempted (kept or split)
   double seconds = 0;
+  std::int64_t half_blocks = 0;     ///< low-rank blocks with float16 factors
 };
 
 namespace detail {
@@ -159,10 +172,11 @@ class Compliance {
   /// @throws InputError for a compressed compliance or kFloat16.
   Compliance ConvertedTo(Precision precision) const;
 
-  /// A compressed copy (storage kCompressed, float32), built offline from this packed one:
-  /// an H-matrix (far cluster pairs as one U V^T each; see CompressionOptions) instead of
-  /// 9 N^2 / 2 scalars. Diagonal tiles (every node with its
-  /// cluster, so C_kk and the coupling of nearby touched nodes) stay dense and exact to float32;
+  /// A compressed copy (storage kCompressed, float32; low-rank factors float16 on request),
+  /// built offline from this packed one: an H-matrix (far cluster pairs as one U V^T each; see
+  /// CompressionOptions) instead of 9 N^2 / 2 scalars. Diagonal tiles (every node with its
+  /// cluster, so C_kk and the coupling of nearby touched nodes) stay dense (their upper
+  /// triangle) and exact to float32;
   /// far couplings carry at most the tolerance. Everything real-time (ContactSolver,
   /// SurfaceField, Block) works on it unchanged. Not saved by Save() (rebuilt from the cache).
   /// @param mesh  the mesh it was computed for (node positions for the clustering).
