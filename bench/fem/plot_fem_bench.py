@@ -88,6 +88,7 @@ def error_vs_time(rows, out):
         ("compressed_full_update_tol_1e-05", "compressed tol 1e-5, full surface", "H", "C5"),
         ("compressed_force_only_tol_0.001", "compressed tol 1e-3, forces", "<", "C6"),
         ("compressed_force_only_tol_1e-05", "compressed tol 1e-5, forces", ">", "C6"),
+        ("compressed_force_only_tol_0.001_f16factors", "compressed tol 1e-3, float16 factors, forces", "^", "C7"),
     ]:
         pts = sorted(rows.get(method, {}).items())
         ax.scatter([v[1] for _, v in pts], [max(v[2], 1e-17) for _, v in pts], marker=marker, label=label,
@@ -122,7 +123,8 @@ def tables(rows):
         "compliance_full_update_columns_float32_coherent", "compliance_full_update_columns_float16_coherent",
         "elementary_displacement_coherent", "elementary_displacement_float16",
         "elementary_displacement_float16_coherent", "elementary_displacement_float64",
-        "compressed_force_only_tol_0.001", "compressed_force_only_tol_1e-05", "compressed_full_update_tol_1e-05"]
+        "compressed_force_only_tol_0.001", "compressed_force_only_tol_1e-05", "compressed_full_update_tol_1e-05",
+        "compressed_force_only_tol_0.001_f16factors", "compressed_full_update_tol_0.001_f16factors"]
     def table(cell):
         """One row per method, one column per size; cell(v, n) formats a row's values."""
         print("| method | " + " | ".join(str(n) for n in sizes) + " |")
