@@ -50,6 +50,8 @@
 #include "handshare/fem/static_solver.hpp"
 #include "handshare/fem/surface_field.hpp"
 
+#include "rel_error.hpp"
+
 namespace {
 
 using namespace handshare::fem;
@@ -158,14 +160,7 @@ Reference Direct(const Model& m, const std::vector<ContactInput>& set) {
   return r;
 }
 
-double RelError(const std::vector<Eigen::Vector3d>& a, const std::vector<Eigen::Vector3d>& b) {
-  double num = 0.0, den = 0.0;
-  for (std::size_t i = 0; i < a.size(); ++i) {
-    num += (a[i] - b[i]).squaredNorm();
-    den += b[i].squaredNorm();
-  }
-  return std::sqrt(num / den);
-}
+using bench::RelError;
 
 // ------------------------------------------------------------------ timing
 

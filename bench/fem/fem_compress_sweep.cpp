@@ -28,6 +28,8 @@
 #include "handshare/fem/compliance.hpp"
 #include "handshare/fem/contact_solver.hpp"
 
+#include "rel_error.hpp"
+
 namespace {
 
 using namespace handshare::fem;
@@ -41,14 +43,7 @@ std::vector<T> List(const std::string& s) {
   return v;
 }
 
-double RelError(const std::vector<Eigen::Vector3d>& a, const std::vector<Eigen::Vector3d>& b) {
-  double num = 0.0, den = 0.0;
-  for (std::size_t i = 0; i < a.size(); ++i) {
-    num += (a[i] - b[i]).squaredNorm();
-    den += b[i].squaredNorm();
-  }
-  return std::sqrt(num / den);
-}
+using bench::RelError;
 
 // Median time (us) of ContactSolver::Solve (forces only) and of Solve + SurfaceDisplacements on
 // the compressed store, cycling through 32 sets of 5 random contacts.
