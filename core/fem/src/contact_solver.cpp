@@ -100,7 +100,6 @@ ContactSolver::ContactSolver(std::shared_ptr<const Compliance> compliance,
   violates_.assign(M, 0);
   prev_slot_.assign(M, -1);
   prev_active_.assign(M, 0);
-  isa_ = static_cast<std::uint8_t>(detail::BestIsa());
 }
 
 void ContactSolver::ZeroOutputs() noexcept {
@@ -451,7 +450,7 @@ bool ContactSolver::SolveNormalPushOnly(StepStatus& status) noexcept {
         rhs_[b] = dn_m_[act_[b]];
       }
       if (r <= detail::kSmallSpdMax) {  // a few nodes: the register kernel (eps is in L_ already)
-        if (!detail::SmallSpdSolve(L_.data(), r, r, 0.0, rhs_.data(), static_cast<detail::Isa>(isa_))) return false;
+        if (!detail::SmallSpdSolve(L_.data(), r, r, 0.0, rhs_.data(), detail::BestIsa())) return false;
       } else {
         if (!detail::CholeskyCompact(L_.data(), r)) return false;
         detail::CholeskyCompactSolve(L_.data(), r, rhs_.data());
@@ -513,22 +512,15 @@ bool ContactSolver::SolveActiveSet() noexcept {
     r += mode_[j] == ContactMode::kFull3d ? 3 : 1;
   }
   if (r == 0) return true;
-  // Every contact held and sticking (r = 3 u): A = C_cc as gathered, so the small solver reads it
-  // in place. Otherwise A = G C_cc G^T (lower triangle is enough for the Cholesky, fill it all:
-  // m is small).
-  const bool all_sticking = r == 3 * num_unique_;
+  // A = G C_cc G^T (lower triangle is enough for the Cholesky, fill it all: m is small). With
+  // every contact held and sticking (r = 3 u) that is C_cc as gathered, which the small solver
+  // reads in place.
   const bool small = r <= detail::kSmallSpdMax;
-  if (all_sticking && small) {
-    for (std::int32_t j = 0; j < num_unique_; ++j)
-      for (int c = 0; c < 3; ++c) rhs_[3 * j + c] = d_m_[j][c];
-    if (!detail::SmallSpdSolve(Ccc_.data(), r, ld, eps_m_per_N_, rhs_.data(), static_cast<detail::Isa>(isa_))) return false;
-    for (std::int32_t j = 0; j < num_unique_; ++j) f_N_[j] = Eigen::Vector3d(rhs_[3 * j], rhs_[3 * j + 1], rhs_[3 * j + 2]);
-    return true;
-  }
+  const bool in_place = small && r == 3 * num_unique_;
   for (std::int32_t j = 0; j < num_unique_; ++j) {
     if (!active_[j]) continue;
     const bool fj = mode_[j] == ContactMode::kFull3d;
-    for (std::int32_t i = 0; i < num_unique_; ++i) {
+    for (std::int32_t i = 0; i < num_unique_ && !in_place; ++i) {
       if (!active_[i]) continue;
       const bool fi = mode_[i] == ContactMode::kFull3d;
       Eigen::Map<const Eigen::Matrix3d, 0, Eigen::OuterStride<>> Cij(
@@ -554,7 +546,8 @@ bool ContactSolver::SolveActiveSet() noexcept {
     }
   }
   if (small) {
-    if (!detail::SmallSpdSolve(A_.data(), r, ld, eps_m_per_N_, rhs_.data(), static_cast<detail::Isa>(isa_))) return false;
+    const double* A = in_place ? Ccc_.data() : A_.data();
+    if (!detail::SmallSpdSolve(A, r, ld, eps_m_per_N_, rhs_.data(), detail::BestIsa())) return false;
   } else {
     if (eps_m_per_N_ > 0.0) {
       for (int k = 0; k < r; ++k) A_[static_cast<std::ptrdiff_t>(k) * ld + k] += eps_m_per_N_;

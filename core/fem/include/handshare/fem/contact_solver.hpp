@@ -202,7 +202,6 @@ class ContactSolver {
   bool table_valid_ = false;
   std::int32_t num_prev_ = 0;
   mutable SurfaceField field_;
-  std::uint8_t isa_ = 0;  // detail::Isa of the small dense solve, picked once
 };
 
 }  // namespace handshare::fem
