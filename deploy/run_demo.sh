@@ -29,15 +29,15 @@ echo "demo: session '$session' on DDS domain $domain; logs, frames, speech and s
 # the lever to Mars, lift it again) -> dinosaur (both press the triceratops' tail) ->
 # microscopic -> back to the start menu. A spectator draws it; the guide speaks the board.
 "$bin/world_server/world_server" --domain "$domain" --session "$session" --scene start_menu \
-  --duration 52 --log "$out/session.db" > "$out/world_server.log" 2>&1 & pids+=($!)
+  --duration 54 --log "$out/session.db" > "$out/world_server.log" 2>&1 & pids+=($!)
 "$bin/audio_guide/audio_guide" --domain "$domain" --session "$session" --out "$out/speech" \
-  --duration 50 > "$out/audio_guide.log" 2>&1 & pids+=($!)
+  --duration 52 > "$out/audio_guide.log" 2>&1 & pids+=($!)
 "$bin/graphics_node/graphics_node" --domain "$domain" --session "$session" --headless \
   --frames 96 --fps 2 --out "$out/frames" > "$out/graphics_node.log" 2>&1 & pids+=($!)
 sleep 1
 for user in alice bob; do
   "$bin/haptic_node/haptic_node" --domain "$domain" --session "$session" --user "$user" \
-    --device sim --script "haptic_node/scripts/tour_$user.hand" --duration 48 \
+    --device sim --script "haptic_node/scripts/tour_$user.hand" --duration 50 \
     --trace "$out/$user.csv" > "$out/$user.log" 2>&1 & pids+=($!)
 done
 

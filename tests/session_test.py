@@ -13,6 +13,7 @@ import csv
 import glob
 import json
 import math
+import re
 import os
 import signal
 import sqlite3
@@ -424,12 +425,21 @@ def case_encyclopedia(h, domain):
             "--deformation-out", received_file)
     t0 = time.monotonic()
     h.start("alice", "haptic_node", "--domain", domain, "--session", session, "--user", "alice",
-            "--script", os.path.join(SCRIPTS, "tour_alice.hand"), "--duration", 48, "--trace", trace)
+            "--script", os.path.join(SCRIPTS, "tour_alice.hand"), "--duration", 50, "--trace", trace)
     h.start("bob", "haptic_node", "--domain", domain, "--session", session, "--user", "bob",
-            "--script", os.path.join(SCRIPTS, "tour_bob.hand"), "--duration", 48)
-    # Both press the tail and hold still over 34.5-36.5 s: take the server's account and stop
-    # the spectator (it writes what it received) in the middle of it.
-    time.sleep(max(0.0, t0 + 35.5 - time.monotonic()))
+            "--script", os.path.join(SCRIPTS, "tour_bob.hand"), "--duration", 50)
+    # The scripts await the world: their time 0 is when the start menu reached each node
+    # (logged on the haptic node's clock, which starts just after the process does).
+    script_t0 = {}
+    for user in ("alice", "bob"):
+        h.wait_for_line(user, "hand script starts at loop time", 15)
+        m = re.search(r"hand script starts at loop time ([0-9.]+) s", h.log(user))
+        check(m is not None, f"{user}'s haptic node did not say when its script started")
+        script_t0[user] = float(m.group(1))
+    print(f"scripts start at loop time {script_t0['alice']:.3f} s (alice), {script_t0['bob']:.3f} s (bob)")
+    # Both press the tail and hold still over 34.5-36.5 s of their scripts: take the server's
+    # account and stop the spectator (it writes what it received) in the middle of it.
+    time.sleep(max(0.0, t0 + 35.5 + max(script_t0.values()) - time.monotonic()))
     held_file = os.path.join(dump, "triceratops_tail.json")
     check(os.path.exists(held_file), "the world server published no deformation of the tail")
     with open(held_file) as f:
@@ -446,8 +456,9 @@ def case_encyclopedia(h, domain):
         check(needle in ws, f"world server log lacks: {needle}")
     with open(os.path.join(HERE, "..", "assets", "scenes", "solar_system.json")) as f:
         ball = [o for o in json.load(f)["objects"] if o["id"] == "ball"][0]
-    moon = -window_mean_fz(trace, 7.5, 9.5)
-    mars = -window_mean_fz(trace, 21.8, 23.8)
+    # alice's trace is on her loop's clock: the script's windows shifted by its start.
+    moon = -window_mean_fz(trace, 7.5 + script_t0["alice"], 9.5 + script_t0["alice"])
+    mars = -window_mean_fz(trace, 21.8 + script_t0["alice"], 23.8 + script_t0["alice"])
     for name, measured, g in (("Moon", moon, 1.62), ("Mars", mars, 3.71)):
         expected = ball["mass_kg"] * g
         check(abs(measured - expected) <= 0.01 * expected,

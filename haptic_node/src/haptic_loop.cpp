@@ -41,11 +41,16 @@ HapticLoop::~HapticLoop() { Stop(); }
 
 bool HapticLoop::Start() {
   running_.store(true);
+  start_ = common::PeriodicLoop::Clock::now();  // before the thread: it reads start_
   thread_ = std::thread([this] { ThreadMain(); });
   if (!config_.realtime_priority) return true;
   sched_param param{};
   param.sched_priority = sched_get_priority_max(SCHED_FIFO) / 2;
   return pthread_setschedparam(thread_.native_handle(), SCHED_FIFO, &param) == 0;
+}
+
+double HapticLoop::now_s() const noexcept {
+  return std::chrono::duration<double>(common::PeriodicLoop::Clock::now() - start_).count();
 }
 
 void HapticLoop::Stop() {
@@ -123,11 +128,10 @@ void HapticLoop::Step(double t_s) noexcept {
 void HapticLoop::ThreadMain() {
   const auto period = std::chrono::nanoseconds(static_cast<std::int64_t>(std::llround(1e9 / config_.rate_Hz)));
   common::PeriodicLoop loop(period);
-  const auto start = common::PeriodicLoop::Clock::now();
   const int stats_every = std::max(1, static_cast<int>(config_.rate_Hz / 10.0));
   while (running_.load(std::memory_order_relaxed)) {
     const auto now = loop.WaitNext();
-    Step(std::chrono::duration<double>(now - start).count());
+    Step(std::chrono::duration<double>(now - start_).count());
     loop.EndStep();
     if (loop.stats().steps % static_cast<std::uint64_t>(stats_every) == 0) stats_.Write(loop.stats());
   }

@@ -219,6 +219,12 @@ int HapticNode::Run() {
         renderer = next_renderer;
         have_report = false;
         loop.SetRenderer(renderer);
+        if (device->OnWorldReady(loop.now_s())) {
+          char started[120];
+          std::snprintf(started, sizeof started, "hand script starts at loop time %.3f s (the first world is here)",
+                        loop.now_s());
+          say(started);
+        }
         char line[160];
         std::snprintf(line, sizeof line, "scene '%s' revision %u: %d objects, %zu controls, gravity %.2f m/s^2 (%.2f s)",
                       scene.name.c_str(), scene_revision, renderer->models().world->num_objects(),

@@ -160,11 +160,17 @@ HandScript HandScript::Parse(const std::string& text, const std::string& origin)
       continue;
     }
     if (!started) p.Fail("the script must begin with 'start X Y Z'");
+    if (cmd == "await_world") {
+      if (!script.segments_.empty() || script.await_world_) p.Fail("'await_world' must come right after 'start'");
+      end_of_line();
+      script.await_world_ = true;
+      continue;
+    }
     static constexpr std::array<std::string_view, 11> kVerbs = {
         "move", "reach", "grip", "hold", "poke", "press", "pinch", "grasp", "lift", "pull", "release"};
     if (std::find(kVerbs.begin(), kVerbs.end(), cmd) == kVerbs.end()) {
       p.Fail("unknown command '" + cmd +
-             "' (start, move, reach, grip, hold, poke, press, pinch, grasp, lift, pull, release)");
+             "' (start, await_world, move, reach, grip, hold, poke, press, pinch, grasp, lift, pull, release)");
     }
     const double duration = p.Number("duration", 1e-3, kMaxDuration_s);
     if (cmd == "move") {
@@ -310,8 +316,23 @@ std::array<Eigen::Vector3d, kFingers> SimFingertips(const HandPose& pose) noexce
   return p_WE;
 }
 
+bool SimDevice::OnWorldReady(double t_s) noexcept {
+  if (!script_.awaits_world() || !std::isfinite(t_s)) return false;
+  // First call wins. compare_exchange compares bit patterns, so it matches the NaN just read.
+  double current = script_origin_s_.load();
+  while (std::isnan(current)) {
+    if (script_origin_s_.compare_exchange_weak(current, t_s)) return true;
+  }
+  return false;
+}
+
 void SimDevice::Read(double t_s, DeviceReading& out) noexcept {
-  const HandPose pose = script_.PoseAt(t_s);
+  double script_t_s = t_s;
+  if (script_.awaits_world()) {
+    const double origin = script_origin_s_.load(std::memory_order_relaxed);
+    script_t_s = std::isnan(origin) ? 0.0 : t_s - origin;  // the start pose until then
+  }
+  const HandPose pose = script_.PoseAt(script_t_s);
   out.p_WH = pose.p_WH;
   out.q_WH_wxyz = Eigen::Vector4d(1, 0, 0, 0);
   out.p_WE = SimFingertips(pose);

@@ -52,6 +52,40 @@ TEST(HandScript, ErrorsNameOriginAndLine) {
   EXPECT_NE(error_of("start 0 0 0\nhold 1 2\n").find("unexpected '2'"), std::string::npos);
 }
 
+// A script that awaits the world holds its start pose until OnWorldReady, then runs on a clock
+// that starts there; one without await_world runs from the device clock's zero and ignores it.
+TEST(HandScript, AwaitWorldStartsTheScriptWhenTheWorldIsHere) {
+  SimDevice awaiting(HandScript::Parse("start 0 0 0\nawait_world\nmove 2.0 0.2 0 0\n", "t"));
+  DeviceReading r;
+  awaiting.Read(5.0, r);  // no world yet: still at the start
+  EXPECT_NEAR(r.p_WH.x(), 0.0, 1e-15);
+  EXPECT_TRUE(awaiting.OnWorldReady(5.0));
+  EXPECT_FALSE(awaiting.OnWorldReady(6.0));  // the first call counts
+  awaiting.Read(6.0, r);                      // script time 1 s: half way
+  EXPECT_NEAR(r.p_WH.x(), 0.1, 1e-15);
+  awaiting.Read(7.0, r);
+  EXPECT_NEAR(r.p_WH.x(), 0.2, 1e-15);
+
+  SimDevice plain(HandScript::Parse("start 0 0 0\nmove 2.0 0.2 0 0\n", "t"));
+  EXPECT_FALSE(plain.OnWorldReady(0.5));
+  plain.Read(1.0, r);
+  EXPECT_NEAR(r.p_WH.x(), 0.1, 1e-15);
+
+  auto error_of = [](const std::string& text) {
+    try {
+      HandScript::Parse(text, "h");
+    } catch (const ScriptError& e) {
+      return std::string(e.what());
+    }
+    return std::string();
+  };
+  EXPECT_NE(error_of("start 0 0 0\nhold 1\nawait_world\n").find("h:3: 'await_world' must come right after 'start'"),
+            std::string::npos);
+  EXPECT_NE(error_of("start 0 0 0\nawait_world\nawait_world\n").find("h:3:"), std::string::npos);
+  EXPECT_NE(error_of("start 0 0 0\nawait_world now\n").find("unexpected 'now'"), std::string::npos);
+  EXPECT_NE(error_of("await_world\n").find("h:1: the script must begin with 'start X Y Z'"), std::string::npos);
+}
+
 TEST(SimFingertips, FiveDistinctFingertipsThatCloseTogether) {
   HandPose open{Eigen::Vector3d(0.1, 0.2, 0.3), 0.0}, closed{Eigen::Vector3d(0.1, 0.2, 0.3), 1.0};
   const auto po = SimFingertips(open), pc = SimFingertips(closed);

@@ -43,6 +43,9 @@ class Device {
   virtual void Command(const std::array<Eigen::Vector3d, kFingers>& f_E_W) noexcept = 0;
   /// Short name: "sim", "hiro", "replay".
   virtual const char* name() const noexcept = 0;
+  /// The session's first world is here (t_s on the Read clock). A scripted hand that awaits
+  /// the world starts its script then and returns true; other devices ignore it.
+  virtual bool OnWorldReady(double /*t_s*/) noexcept { return false; }
 };
 
 }  // namespace handshare::haptic

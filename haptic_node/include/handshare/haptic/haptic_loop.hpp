@@ -45,6 +45,9 @@ class HapticLoop {
   /// Stops and joins the haptic thread (idempotent).
   void Stop();
 
+  /// Time on the loop's clock (the t_s of Step) now [s]; after Start().
+  double now_s() const noexcept;
+
   /// One step at time t_s since start. Public for tests; the thread calls it. Real-time safe.
   void Step(double t_s) noexcept;
 
@@ -74,6 +77,7 @@ class HapticLoop {
   ForceSafetyInput safety_in_;
   ForceSafetyOutput safety_out_;
   double last_t_s_ = -1.0;
+  common::PeriodicLoop::Clock::time_point start_{};  // set by Start() before the thread runs
   // Renderer hand-over: pending_ is posted by the bridge, adopted by the haptic thread, which
   // publishes what it uses in in_use_; owned_ (bridge only) keeps every posted renderer alive
   // until it is neither pending nor in use.

@@ -8,6 +8,11 @@
 /// Script format, one command per line, '#' starts a comment, positions in world W [m]
 /// (x right, y away from the user, z up), durations [s]:
 ///   start X Y Z [grip G]          initial hand-base position and grip (default 0: open)
+///   await_world                   (only right after start) hold the start pose until the
+///                                 session's first world is here: the script's clock starts
+///                                 then (Device::OnWorldReady), not when the device starts, so a
+///                                 slow discovery cannot put the hand on a control before the
+///                                 control exists
 ///   move DUR X Y Z [grip G]       move the hand base (and grip); a shaped hand keeps its shape
 ///   reach DUR X Y Z               move the hand base to X Y Z with a relaxed open hand
 ///   grip DUR G                    close (G -> 1) or open (G -> 0) the hand
@@ -28,6 +33,8 @@
 ///                                 hand rises 0.05 m
 /// After the last command the hand holds its final pose. Errors name the file and line.
 #include <array>
+#include <atomic>
+#include <limits>
 #include <filesystem>
 #include <stdexcept>
 #include <string>
@@ -72,9 +79,12 @@ class HandScript {
   /// Pose at time t_s (minimum-jerk within a segment, held after the end). Real-time safe.
   HandPose PoseAt(double t_s) const noexcept;
   double duration_s() const noexcept { return segments_.empty() ? 0.0 : segments_.back().t1_s; }
+  /// True if the script begins with await_world (its time 0 is when the first world is here).
+  bool awaits_world() const noexcept { return await_world_; }
 
  private:
   HandPose start_;
+  bool await_world_ = false;
   std::vector<ScriptSegment> segments_;
 };
 
@@ -93,10 +103,15 @@ class SimDevice final : public Device {
     last_command_ = f_E_W;
   }
   const char* name() const noexcept override { return "sim"; }
+  /// Starts the clock of a script that awaits the world (script time = t_s - the t_s given
+  /// here); true if it did. Any thread; the first call counts.
+  bool OnWorldReady(double t_s) noexcept override;
   const std::array<Eigen::Vector3d, kFingers>& last_command() const noexcept { return last_command_; }
 
  private:
   HandScript script_;
+  // Device time at which the script's clock started; NaN while it awaits the world.
+  std::atomic<double> script_origin_s_{std::numeric_limits<double>::quiet_NaN()};
   std::array<Eigen::Vector3d, kFingers> last_command_{};
 };
 
