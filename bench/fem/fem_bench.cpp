@@ -447,9 +447,10 @@ void BenchModel(Model& m, const fs::path& cache_dir, const Limits& lim) {
   }
 
   // Exact forces (ContactSolver on the float64 compliance) and the surface field from a planar
-  // copy of all N columns (both halves: every column streams), float32 and float16.
-  for (Precision prec : {Precision::kFloat32, Precision::kFloat16}) {
-    const std::string name = std::string("compliance_full_update_columns_") + (prec == Precision::kFloat32 ? "float32" : "float16");
+  // copy of all N columns (both halves: every column streams), float32, float16 and int16.
+  for (Precision prec : {Precision::kFloat32, Precision::kFloat16, Precision::kInt16}) {
+    const std::string name = std::string("compliance_full_update_columns_") +
+                             (prec == Precision::kFloat32 ? "float32" : prec == Precision::kFloat16 ? "float16" : "int16");
     const auto t0 = Clock::now();
     SurfaceField cols(m.c64, {.layout = SurfaceFieldLayout::kColumns, .precision = prec});
     std::fprintf(stderr, "  %s: copy built in %.1f s, kernel %s\n", name.c_str(), Since(t0), cols.kernel_name());

@@ -32,6 +32,7 @@ def load(path):
 
 FIG10 = [
     ("elementary_displacement", "elementary displacement (paper form, T^d f32, full surface)", "o-"),
+    ("compliance_full_update_columns_int16", "exact forces + surface from int16 column copy", "*-"),
     ("compliance_full_update_columns_float16", "exact forces + surface from f16 column copy", "P-"),
     ("compliance_full_update_columns_float32", "exact forces + surface from f32 column copy", "p-"),
     ("compliance_full_update_float32", "compliance form, full surface (f32 packed symmetric)", "s-"),
@@ -84,6 +85,7 @@ def error_vs_time(rows, out):
         ("elementary_displacement_float16", "paper form T^d float16, full surface", "v", "C2"),
         ("compliance_full_update_columns_float32", "exact forces + f32 column copy", "p", "C4"),
         ("compliance_full_update_columns_float16", "exact forces + f16 column copy", "P", "C4"),
+        ("compliance_full_update_columns_int16", "exact forces + int16 column copy", "*", "C4"),
         ("compressed_full_update_tol_0.001", "compressed tol 1e-3, full surface", "h", "C5"),
         ("compressed_full_update_tol_1e-05", "compressed tol 1e-5, full surface", "H", "C5"),
         ("compressed_force_only_tol_0.001", "compressed tol 1e-3, forces", "<", "C6"),
@@ -121,6 +123,7 @@ def tables(rows):
     methods = [m for m, *_ in FIG10] + [
         "compliance_full_update", "compliance_full_update_float32_coherent",
         "compliance_full_update_columns_float32_coherent", "compliance_full_update_columns_float16_coherent",
+        "compliance_full_update_columns_int16_coherent",
         "elementary_displacement_coherent", "elementary_displacement_float16",
         "elementary_displacement_float16_coherent", "elementary_displacement_float64",
         "compressed_force_only_tol_0.001", "compressed_force_only_tol_1e-05", "compressed_full_update_tol_1e-05",

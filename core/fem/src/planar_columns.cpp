@@ -8,6 +8,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstring>
+#include <limits>
 #include <utility>
 
 namespace handshare::fem::detail {
@@ -21,6 +22,12 @@ Isa BestIsa() noexcept {
     return Isa::kPortable;
   }();
   return isa;
+}
+
+bool HasAvx512Vnni() noexcept {
+  static const bool has = BestIsa() == Isa::kAvx512 && __builtin_cpu_supports("avx512bw") &&
+                          __builtin_cpu_supports("avx512vnni");
+  return has;
 }
 
 const char* IsaName(Isa isa) noexcept {
@@ -70,10 +77,13 @@ void PlanarColumns::Build(std::int32_t rows, std::int32_t cols, PlanarType type,
   cols_ = cols;
   type_ = type;
   const std::int64_t chunks = NumChunks(rows);
-  const auto total = static_cast<std::size_t>(chunks * kChunkScalars * cols);
+  stride_ = chunks * kChunkScalars;
+  if (type == PlanarType::kInt16) stride_ = (stride_ + 31) / 32 * 32;  // 64-byte columns
+  const auto total = static_cast<std::size_t>(stride_ * cols);
   f64_.clear();
   f32_.clear();
   f16_.clear();
+  i16_.clear();
   scale_.clear();
   double chunk[kChunkScalars];
   if (type == PlanarType::kFloat64) f64_.assign(total, 0.0);
@@ -81,6 +91,10 @@ void PlanarColumns::Build(std::int32_t rows, std::int32_t cols, PlanarType type,
   if (type == PlanarType::kFloat16) {
     f16_.assign(total, 0);
     scale_.assign(static_cast<std::size_t>(chunks * cols), 0.0f);
+  }
+  if (type == PlanarType::kInt16) {
+    BuildInt16(block);
+    return;
   }
   for (std::int32_t k = 0; k < cols; ++k) {
     for (std::int64_t q = 0; q < chunks; ++q) {
@@ -92,7 +106,7 @@ void PlanarColumns::Build(std::int32_t rows, std::int32_t cols, PlanarType type,
         for (int c = 0; c < 3; ++c)
           for (int r = 0; r < 3; ++r) chunk[16 * (3 * c + r) + l] = B(r, c);
       }
-      const std::size_t at = static_cast<std::size_t>((k * chunks + q) * kChunkScalars);
+      const std::size_t at = static_cast<std::size_t>(k * stride_ + q * kChunkScalars);
       if (type == PlanarType::kFloat64) {
         std::copy(std::begin(chunk), std::end(chunk), f64_.begin() + static_cast<std::ptrdiff_t>(at));
       } else if (type == PlanarType::kFloat32) {
@@ -109,11 +123,44 @@ void PlanarColumns::Build(std::int32_t rows, std::int32_t cols, PlanarType type,
   }
 }
 
+void PlanarColumns::BuildInt16(const std::function<Eigen::Matrix3d(std::int32_t, std::int32_t)>& block) {
+  i16_.assign(static_cast<std::size_t>(stride_ * cols_), 0);
+  scale_.assign(static_cast<std::size_t>(cols_), 0.0f);
+  std::vector<Eigen::Matrix3d> column(static_cast<std::size_t>(rows_));
+  for (std::int32_t k = 0; k < cols_; ++k) {
+    double amax = 0.0;
+    for (std::int32_t n = 0; n < rows_; ++n) {
+      column[static_cast<std::size_t>(n)] = block(n, k);
+      amax = std::max(amax, column[static_cast<std::size_t>(n)].cwiseAbs().maxCoeff());
+    }
+    // The largest entry maps to 32767; the float scale is what the kernels multiply by.
+    const float s = amax > 0.0 ? static_cast<float>(amax / 32767.0) : 1.0f;
+    scale_[static_cast<std::size_t>(k)] = s;
+    std::int16_t* col = i16_.data() + k * stride_;
+    for (std::int32_t n = 0; n < rows_; ++n) {
+      const std::int64_t q = n / kChunkNodes;
+      const int l = n % kChunkNodes;
+      for (int r = 0; r < 3; ++r)
+        for (int c = 0; c < 3; ++c) {
+          const double v = std::nearbyint(column[static_cast<std::size_t>(n)](r, c) / static_cast<double>(s));
+          col[Int16Offset(q, r, c, l)] = static_cast<std::int16_t>(std::clamp(v, -32767.0, 32767.0));
+        }
+    }
+  }
+}
+
 Eigen::Matrix3d PlanarColumns::Get(std::int32_t n, std::int32_t k) const noexcept {
   const std::int64_t chunks = NumChunks(rows_);
   const std::int64_t q = n / kChunkNodes, l = n % kChunkNodes;
-  const std::size_t at = static_cast<std::size_t>((k * chunks + q) * kChunkScalars + l);
   Eigen::Matrix3d B;
+  if (type_ == PlanarType::kInt16) {
+    const std::int16_t* col = i16_.data() + k * stride_;
+    for (int r = 0; r < 3; ++r)
+      for (int c = 0; c < 3; ++c)
+        B(r, c) = static_cast<double>(col[Int16Offset(q, r, c, static_cast<int>(l))]) * scale_[static_cast<std::size_t>(k)];
+    return B;
+  }
+  const std::size_t at = static_cast<std::size_t>(k * stride_ + q * kChunkScalars + l);
   for (int c = 0; c < 3; ++c)
     for (int r = 0; r < 3; ++r) {
       const std::size_t i = at + 16 * (3 * c + r);
@@ -123,6 +170,7 @@ Eigen::Matrix3d PlanarColumns::Get(std::int32_t n, std::int32_t k) const noexcep
         case PlanarType::kFloat16:
           B(r, c) = static_cast<double>(HalfToFloat(f16_[i])) * scale_[static_cast<std::size_t>(k * chunks + q)];
           break;
+        case PlanarType::kInt16: break;  // above
       }
     }
   return B;
@@ -162,8 +210,71 @@ void SumPortable(const S* const* col, const float* const* scale, const double* x
   }
 }
 
+// int16: the loads of m <= kInt16Group columns as integer pairs for the dot products: w01 holds
+// (g_j0, g_j1), w2 holds (g_j2, 0), in 16-bit halves; out = step * sum q g. Non-finite loads
+// give step NaN (the field becomes NaN, as with the float kernels).
+struct Int16Loads {
+  alignas(64) std::int32_t w01[kInt16Group];
+  alignas(64) std::int32_t w2[kInt16Group];
+  float step = 0.0f;
+};
+
+void QuantizeLoads(const float* const* scale, const double* x, int m, Int16Loads& out) noexcept {
+  double a[3 * kInt16Group];
+  double amax = 0.0;
+  bool finite = true;
+  for (int j = 0; j < m; ++j)
+    for (int c = 0; c < 3; ++c) {
+      a[3 * j + c] = static_cast<double>(scale[j][0]) * x[3 * j + c];
+      finite = finite && std::isfinite(a[3 * j + c]);
+      amax = std::max(amax, std::abs(a[3 * j + c]));
+    }
+  // |q| <= 32767 and three products per column and lane: m columns sum below 2^31.
+  const double G = std::floor(2147483647.0 / (3.0 * 32767.0 * std::max(m, 1)));
+  const double step = finite ? amax / G : std::numeric_limits<double>::quiet_NaN();
+  out.step = static_cast<float>(step);
+  for (int j = 0; j < m; ++j) {
+    std::int32_t g[3] = {0, 0, 0};
+    if (finite && amax > 0.0) {
+      for (int c = 0; c < 3; ++c) g[c] = static_cast<std::int32_t>(std::clamp(std::nearbyint(a[3 * j + c] / step), -G, G));
+    }
+    out.w01[j] = static_cast<std::int32_t>(static_cast<std::uint32_t>(static_cast<std::uint16_t>(g[0])) |
+                                           (static_cast<std::uint32_t>(static_cast<std::uint16_t>(g[1])) << 16));
+    out.w2[j] = static_cast<std::int32_t>(static_cast<std::uint16_t>(g[2]));
+  }
+}
+
+std::int32_t Low(std::int32_t w) noexcept { return static_cast<std::int16_t>(static_cast<std::uint32_t>(w) & 0xFFFFu); }
+std::int32_t High(std::int32_t w) noexcept { return static_cast<std::int16_t>(static_cast<std::uint32_t>(w) >> 16); }
+
+// Portable int16: the same integer sums as the SIMD kernels (exact), then the same float scaling.
+void SumInt16Portable(const std::int16_t* const* col, const Int16Loads& g, int m, std::int32_t rows,
+                      Eigen::Vector3d* out, bool accumulate) noexcept {
+  const std::int64_t chunks = NumChunks(rows);
+  for (std::int64_t q = 0; q < chunks; ++q) {
+    std::int32_t acc[3][kChunkNodes] = {};
+    for (int j = 0; j < m; ++j) {
+      const std::int32_t g0 = Low(g.w01[j]), g1 = High(g.w01[j]), g2 = Low(g.w2[j]);
+      for (int r = 0; r < 3; ++r)
+        for (int l = 0; l < kChunkNodes; ++l) {
+          acc[r][l] += col[j][Int16Offset(q, r, 0, l)] * g0 + col[j][Int16Offset(q, r, 1, l)] * g1 +
+                       col[j][Int16Offset(q, r, 2, l)] * g2;
+        }
+    }
+    const std::int64_t n0 = q * kChunkNodes;
+    for (int l = 0; l < kChunkNodes && n0 + l < rows; ++l) {
+      double* o = out[n0 + l].data();
+      for (int r = 0; r < 3; ++r) {
+        const double u = static_cast<double>(static_cast<float>(acc[r][l]) * g.step);
+        o[r] = accumulate ? o[r] + u : u;
+      }
+    }
+  }
+}
+
 #define HS_AVX2 __attribute__((target("avx2,fma,f16c")))
 #define HS_AVX512 __attribute__((target("avx512f,avx512vl,fma,f16c")))
+#define HS_AVX512VNNI __attribute__((target("avx512f,avx512vl,avx512bw,avx512vnni,fma,f16c")))
 
 #pragma GCC diagnostic push
 #pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
@@ -222,6 +333,33 @@ HS_AVX2 void SumAvx2(const void* const* col, const float* const* scale, const do
   }
 }
 
+// int16 without VNNI: vpmaddwd (8 lanes of a0 b0 + a1 b1) and an add.
+HS_AVX2 void SumInt16Avx2(const std::int16_t* const* col, const Int16Loads& g, int m, std::int32_t rows,
+                          Eigen::Vector3d* out, bool accumulate) noexcept {
+  const std::int64_t chunks = NumChunks(rows);
+  const __m256 step = _mm256_set1_ps(g.step);
+  for (std::int64_t q = 0; q < chunks; ++q) {
+    __m256i acc[3][2];
+    for (auto& r : acc) r[0] = r[1] = _mm256_setzero_si256();
+    for (int j = 0; j < m; ++j) {
+      const __m256i b01 = _mm256_set1_epi32(g.w01[j]), b2 = _mm256_set1_epi32(g.w2[j]);
+      for (int r = 0; r < 3; ++r)
+        for (int h = 0; h < 2; ++h) {
+          const std::int16_t* pair = col[j] + Int16Offset(q, r, 0, 8 * h);
+          const std::int16_t* single = col[j] + Int16Offset(q, r, 2, 8 * h);
+          const __m256i p = _mm256_load_si256(reinterpret_cast<const __m256i*>(pair));
+          const __m256i s = _mm256_cvtepu16_epi32(_mm_load_si128(reinterpret_cast<const __m128i*>(single)));
+          acc[r][h] = _mm256_add_epi32(acc[r][h], _mm256_add_epi32(_mm256_madd_epi16(p, b01), _mm256_madd_epi16(s, b2)));
+        }
+    }
+    alignas(32) float t[3][16];
+    for (int r = 0; r < 3; ++r)
+      for (int h = 0; h < 2; ++h) _mm256_store_ps(t[r] + 8 * h, _mm256_mul_ps(_mm256_cvtepi32_ps(acc[r][h]), step));
+    const int count = static_cast<int>(std::min<std::int64_t>(kChunkNodes, rows - q * kChunkNodes));
+    StorePlanar(t[0], t[1], t[2], count, out + q * kChunkNodes, accumulate);
+  }
+}
+
 // Interleaves (x, y, z) lanes of 16 nodes into 48 doubles: two-source permutes pick x and y,
 // then z, for each of the three 16-float output vectors.
 struct Interleave {
@@ -239,6 +377,32 @@ struct Interleave {
     }
   }
 };
+
+// Chunk q's sums (x, y, z lanes of 16 nodes) into out, interleaved and widened to double.
+HS_AVX512 inline void StoreChunk(const Interleave& il, __m512 ux, __m512 uy, __m512 uz, std::int64_t q,
+                                 std::int32_t rows, Eigen::Vector3d* out, bool accumulate) noexcept {
+  const std::int64_t n0 = q * kChunkNodes;
+  if (n0 + kChunkNodes <= rows) {
+    double* o = out[n0].data();
+    for (int v = 0; v < 3; ++v) {
+      const __m512 t = _mm512_permutex2var_ps(_mm512_permutex2var_ps(ux, il.a[v], uy), il.b[v], uz);
+      __m512d lo = _mm512_cvtps_pd(_mm512_castps512_ps256(t));
+      __m512d hi = _mm512_cvtps_pd(_mm256_castpd_ps(_mm512_extractf64x4_pd(_mm512_castps_pd(t), 1)));
+      if (accumulate) {
+        lo = _mm512_add_pd(lo, _mm512_loadu_pd(o + 16 * v));
+        hi = _mm512_add_pd(hi, _mm512_loadu_pd(o + 16 * v + 8));
+      }
+      _mm512_storeu_pd(o + 16 * v, lo);
+      _mm512_storeu_pd(o + 16 * v + 8, hi);
+    }
+  } else {
+    alignas(64) float t[3][16];
+    _mm512_store_ps(t[0], ux);
+    _mm512_store_ps(t[1], uy);
+    _mm512_store_ps(t[2], uz);
+    StorePlanar(t[0], t[1], t[2], static_cast<int>(rows - n0), out + n0, accumulate);
+  }
+}
 
 template <bool kHalf>
 HS_AVX512 void SumAvx512(const void* const* col, const float* const* scale, const double* x, int m,
@@ -269,27 +433,33 @@ HS_AVX512 void SumAvx512(const void* const* col, const float* const* scale, cons
       uz = _mm512_fmadd_ps(HS_LOADP(8), f2, uz);
 #undef HS_LOADP
     }
-    const std::int64_t n0 = q * kChunkNodes;
-    if (n0 + kChunkNodes <= rows) {
-      double* o = out[n0].data();
-      for (int v = 0; v < 3; ++v) {
-        const __m512 t = _mm512_permutex2var_ps(_mm512_permutex2var_ps(ux, il.a[v], uy), il.b[v], uz);
-        __m512d lo = _mm512_cvtps_pd(_mm512_castps512_ps256(t));
-        __m512d hi = _mm512_cvtps_pd(_mm256_castpd_ps(_mm512_extractf64x4_pd(_mm512_castps_pd(t), 1)));
-        if (accumulate) {
-          lo = _mm512_add_pd(lo, _mm512_loadu_pd(o + 16 * v));
-          hi = _mm512_add_pd(hi, _mm512_loadu_pd(o + 16 * v + 8));
-        }
-        _mm512_storeu_pd(o + 16 * v, lo);
-        _mm512_storeu_pd(o + 16 * v + 8, hi);
-      }
-    } else {
-      alignas(64) float t[3][16];
-      _mm512_store_ps(t[0], ux);
-      _mm512_store_ps(t[1], uy);
-      _mm512_store_ps(t[2], uz);
-      StorePlanar(t[0], t[1], t[2], static_cast<int>(rows - n0), out + n0, accumulate);
+    StoreChunk(il, ux, uy, uz, q, rows, out, accumulate);
+  }
+}
+
+// int16 with AVX-512 VNNI: per column and chunk, three vpdpwssd on the pair planes and three on
+// the zero-extended single planes (each (X(r, 2), 0) against (g_2, 0)).
+HS_AVX512VNNI void SumInt16Avx512(const std::int16_t* const* col, const Int16Loads& g, int m, std::int32_t rows,
+                                  Eigen::Vector3d* out, bool accumulate) noexcept {
+  static const Interleave il;
+  const std::int64_t chunks = NumChunks(rows);
+  const __m512 step = _mm512_set1_ps(g.step);
+  for (std::int64_t q = 0; q < chunks; ++q) {
+    __m512i ax = _mm512_setzero_si512(), ay = _mm512_setzero_si512(), az = _mm512_setzero_si512();
+    const std::int64_t pairs = Int16Offset(q, 0, 0, 0), singles = Int16Offset(q, 0, 2, 0);
+    for (int j = 0; j < m; ++j) {
+      const std::int16_t* p = col[j] + pairs;
+      const std::int16_t* s = col[j] + singles;
+      const __m512i b01 = _mm512_set1_epi32(g.w01[j]), b2 = _mm512_set1_epi32(g.w2[j]);
+      ax = _mm512_dpwssd_epi32(ax, _mm512_load_si512(p), b01);
+      ay = _mm512_dpwssd_epi32(ay, _mm512_load_si512(p + 32), b01);
+      az = _mm512_dpwssd_epi32(az, _mm512_load_si512(p + 64), b01);
+      ax = _mm512_dpwssd_epi32(ax, _mm512_cvtepu16_epi32(_mm256_load_si256(reinterpret_cast<const __m256i*>(s))), b2);
+      ay = _mm512_dpwssd_epi32(ay, _mm512_cvtepu16_epi32(_mm256_load_si256(reinterpret_cast<const __m256i*>(s + 16))), b2);
+      az = _mm512_dpwssd_epi32(az, _mm512_cvtepu16_epi32(_mm256_load_si256(reinterpret_cast<const __m256i*>(s + 32))), b2);
     }
+    StoreChunk(il, _mm512_mul_ps(_mm512_cvtepi32_ps(ax), step), _mm512_mul_ps(_mm512_cvtepi32_ps(ay), step),
+               _mm512_mul_ps(_mm512_cvtepi32_ps(az), step), q, rows, out, accumulate);
   }
 }
 
@@ -325,15 +495,29 @@ void PlanarColumns::SumColumns(std::span<const NodeLoad> loads, Eigen::Vector3d*
 void PlanarColumns::Sum(std::size_t count, Getter get, const void* ctx, Eigen::Vector3d* out,
                         Isa isa) const noexcept {
   const std::int64_t chunks = NumChunks(rows_);
-  const std::int64_t stride = chunks * kChunkScalars;
   const void* col[kGroup];
   const float* scale[kGroup];
   double xs[3 * kGroup];
   bool accumulate = false;
   std::size_t i = 0;
   if (type_ == PlanarType::kFloat64) isa = Isa::kPortable;  // float64: portable (compiler-vectorized)
+  const bool int16 = type_ == PlanarType::kInt16;
+  if (int16 && isa == Isa::kAvx512 && !HasAvx512Vnni()) isa = Isa::kAvx2;
+  const int group = int16 ? kInt16Group : kGroup;
   auto flush = [&](int m) {
     if (m == 0 && accumulate) return;
+    if (int16) {
+      Int16Loads g;
+      QuantizeLoads(scale, xs, m, g);
+      const auto* c16 = reinterpret_cast<const std::int16_t* const*>(col);
+      switch (isa) {
+        case Isa::kAvx512: SumInt16Avx512(c16, g, m, rows_, out, accumulate); break;
+        case Isa::kAvx2: SumInt16Avx2(c16, g, m, rows_, out, accumulate); break;
+        case Isa::kPortable: SumInt16Portable(c16, g, m, rows_, out, accumulate); break;
+      }
+      accumulate = true;
+      return;
+    }
     switch (isa) {
       case Isa::kAvx512:
         if (type_ == PlanarType::kFloat16) {
@@ -366,7 +550,7 @@ void PlanarColumns::Sum(std::size_t count, Getter get, const void* ctx, Eigen::V
     const Eigen::Vector3d* xi = nullptr;
     const std::int32_t ki = get(ctx, i, &xi);
     if (ki < 0 || ki >= cols_) continue;
-    const std::int64_t at = ki * stride;
+    const std::int64_t at = ki * stride_;
     switch (type_) {
       case PlanarType::kFloat64: col[m] = f64_.data() + at; break;
       case PlanarType::kFloat32: col[m] = f32_.data() + at; break;
@@ -374,9 +558,13 @@ void PlanarColumns::Sum(std::size_t count, Getter get, const void* ctx, Eigen::V
         col[m] = f16_.data() + at;
         scale[m] = scale_.data() + ki * chunks;
         break;
+      case PlanarType::kInt16:
+        col[m] = i16_.data() + at;
+        scale[m] = scale_.data() + ki;
+        break;
     }
     for (int c = 0; c < 3; ++c) xs[3 * m + c] = (*xi)[c];
-    if (++m == kGroup) {
+    if (++m == group) {
       flush(m);
       m = 0;
     }

@@ -173,12 +173,17 @@ SurfaceField::SurfaceField(std::shared_ptr<const Compliance> compliance, const S
       case Precision::kFloat64: type = detail::PlanarType::kFloat64; break;
       case Precision::kFloat32: type = detail::PlanarType::kFloat32; break;
       case Precision::kFloat16: type = detail::PlanarType::kFloat16; break;
-      default: throw InputError("", 0, "precision", "must be float16, float32 or float64");
+      case Precision::kInt16: type = detail::PlanarType::kInt16; break;
+      default: throw InputError("", 0, "precision", "must be int16, float16, float32 or float64");
     }
     columns_ = std::make_unique<detail::PlanarColumns>();
     columns_->Build(C.num_nodes(), C.num_nodes(), type,
                     [&](std::int32_t n, std::int32_t k) { return C.Block(n, k); });
-    isa_ = static_cast<std::uint8_t>(type == detail::PlanarType::kFloat64 ? detail::Isa::kPortable : best);
+    detail::Isa isa = type == detail::PlanarType::kFloat64 ? detail::Isa::kPortable : best;
+    if (type == detail::PlanarType::kInt16 && isa == detail::Isa::kAvx512 && !detail::HasAvx512Vnni()) {
+      isa = detail::Isa::kAvx2;  // what PlanarColumns runs for int16 without VNNI
+    }
+    isa_ = static_cast<std::uint8_t>(isa);
   } else if (C.storage() == ComplianceStorage::kCompressed) {
     isa_ = static_cast<std::uint8_t>(best);
     expanded_.assign(C.compressed()->scratch_floats(), 0.0f);

@@ -112,6 +112,7 @@ TEST(NoAllocation, SolversAndPatchQueries) {
   ContactSolver compressed16(cc16, {.max_contacts = 16, .push_only = true});
   SurfaceField columns16(c64, {.layout = SurfaceFieldLayout::kColumns, .precision = Precision::kFloat16});
   SurfaceField columns32(c64, {.layout = SurfaceFieldLayout::kColumns, .precision = Precision::kFloat32});
+  SurfaceField columns_i16(c64, {.layout = SurfaceFieldLayout::kColumns, .precision = Precision::kInt16});
   std::vector<Eigen::Vector3d> field(c64->num_nodes());
   std::vector<std::int32_t> visible(c64->nodes().begin(), c64->nodes().begin() + 20);
   std::vector<Eigen::Vector3d> visible_u(visible.size());
@@ -144,6 +145,7 @@ TEST(NoAllocation, SolversAndPatchQueries) {
       compressed16.SurfaceDisplacements(field);
       columns16.Evaluate(plain.loads(), field);
       columns32.Evaluate(plain.loads(), field);
+      columns_i16.Evaluate(plain.loads(), field);
       plain.Solve(nan_in);
       const PatchResult r = finder.Sphere(b.mesh.positions_m()[top[17]], Eigen::Vector3d::UnitZ(), 0.01, 1e-3,
                                           ContactMode::kNormalOnly, patch);

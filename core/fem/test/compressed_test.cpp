@@ -308,29 +308,78 @@ TEST(CompressedCompliance, HierarchicalIsSmallerThanFlat) {
   }
 }
 
-// The column copy: float32 (rounding only, 6e-8 per entry; bound 1e-5 as for float32 storage)
-// and float16 (11-bit mantissa relative to the largest entry of each 16-node chunk: 2.4e-4 per
-// entry, measured ~2e-4 on the field; bound 2e-3). Forces come from ContactSolver on the exact
-// compliance, so they stay exact whatever the field storage.
-TEST(SurfaceFieldColumns, Float32AndFloat16MatchDirectSparseSolve) {
+// The column copy: float32 (rounding only, 6e-8 per entry; bound 1e-5 as for float32 storage),
+// float16 (11-bit mantissa relative to the largest entry of each 16-node chunk: 2.4e-4 per
+// entry, measured ~2e-4 on the field; bound 2e-3) and int16 (entries to 1/65534 of their
+// column's largest, loads to 1/(2 G) of the largest scaled load, G = 21845 / m: for 1..6
+// contacts 2e-5..1e-4 of the largest term, bound 2e-3 like float16). Forces come from
+// ContactSolver on the exact compliance, so they stay exact whatever the field storage.
+TEST(SurfaceFieldColumns, Float32Float16AndInt16MatchDirectSparseSolve) {
   const Model& m = WideModel();
   SurfaceField f32(m.c64, {.layout = SurfaceFieldLayout::kColumns, .precision = Precision::kFloat32});
   SurfaceField f16(m.c64, {.layout = SurfaceFieldLayout::kColumns, .precision = Precision::kFloat16});
+  SurfaceField i16(m.c64, {.layout = SurfaceFieldLayout::kColumns, .precision = Precision::kInt16});
   EXPECT_LT(f16.storage_bytes(), f32.storage_bytes() * 0.6);
+  EXPECT_LT(i16.storage_bytes(), f32.storage_bytes() * 0.6);
   std::mt19937 rng(9);
-  double worst32 = 0.0, worst16 = 0.0, force = 0.0;
+  double worst32 = 0.0, worst16 = 0.0, worst_i16 = 0.0, force = 0.0;
   for (int trial = 0; trial < 6; ++trial) {
     const auto in = test::RandomContacts(*m.c64, 1 + trial, rng);
-    const Errors a = Compare(m, m.c64, f32, in), b = Compare(m, m.c64, f16, in);
+    const Errors a = Compare(m, m.c64, f32, in), b = Compare(m, m.c64, f16, in), c = Compare(m, m.c64, i16, in);
     worst32 = std::max({worst32, a.field});
     worst16 = std::max({worst16, b.field});
-    force = std::max({force, a.force, b.force});
+    worst_i16 = std::max({worst_i16, c.field});
+    force = std::max({force, a.force, b.force, c.force});
   }
   RecordProperty("float16_field_rel_error", test::Sci(worst16));
+  RecordProperty("int16_field_rel_error", test::Sci(worst_i16));
   EXPECT_LT(force, 1e-9);
   EXPECT_LT(worst32, 1e-5);
   EXPECT_LT(worst16, 2e-3);
+  EXPECT_LT(worst_i16, 2e-3);
   EXPECT_GT(worst16, worst32);  // float16 really is the coarser one
+  EXPECT_GT(worst_i16, worst32);
+}
+
+// int16 columns hold each entry to half a step of its column's scale (largest entry / 32767),
+// and the integer sums do not overflow at the largest group (8 columns) with every entry and
+// load at its extreme: each lane is then exactly 3 * 8 * 32767 * G, G = 2730.
+TEST(SurfaceFieldColumns, Int16RoundingAndNoOverflow) {
+  const Model& m = WideModel();
+  const auto N = static_cast<std::int32_t>(m.c64->num_nodes());
+  detail::PlanarColumns cols;
+  cols.Build(N, N, detail::PlanarType::kInt16, [&](std::int32_t n, std::int32_t k) { return m.c64->Block(n, k); });
+  EXPECT_EQ(cols.column_scalars() % 32, 0) << "int16 columns must be 64-byte multiples";
+  for (std::int32_t k : {0, N / 3, N - 1}) {
+    double amax = 0.0;
+    for (std::int32_t n = 0; n < N; ++n) amax = std::max(amax, m.c64->Block(n, k).cwiseAbs().maxCoeff());
+    for (std::int32_t n = 0; n < N; ++n) {
+      const double err = (cols.Get(n, k) - m.c64->Block(n, k)).cwiseAbs().maxCoeff();
+      ASSERT_LE(err, 0.5 * amax / 32767.0 * (1.0 + 1e-6)) << "block (" << n << ", " << k << ")";
+    }
+  }
+  // Extreme entries: every block +-1 (all scales 1/32767, all q = +-32767); loads that make every
+  // product positive in lane 0 and, after the sign flips, the most negative sum in the others.
+  detail::PlanarColumns extreme;
+  extreme.Build(20, 8, detail::PlanarType::kInt16, [](std::int32_t n, std::int32_t k) {
+    return Eigen::Matrix3d::Constant((n + k) % 2 == 0 ? 1.0 : -1.0);
+  });
+  std::vector<std::int32_t> k(8);
+  std::vector<Eigen::Vector3d> x(8);
+  for (int j = 0; j < 8; ++j) {
+    k[static_cast<std::size_t>(j)] = j;
+    x[static_cast<std::size_t>(j)] = Eigen::Vector3d::Constant(j % 2 == 0 ? 1.0 : -1.0);
+  }
+  for (detail::Isa isa : {detail::Isa::kPortable, detail::Isa::kAvx2, detail::Isa::kAvx512}) {
+    if (static_cast<int>(isa) > static_cast<int>(detail::BestIsa())) continue;
+    std::vector<Eigen::Vector3d> out(20);
+    extreme.SumColumns(k, x, out.data(), isa);
+    for (std::int32_t n = 0; n < 20; ++n) {
+      // Exactly +-24 up to the float scaling (a wrapped int32 sum would flip the sign).
+      EXPECT_NEAR(out[static_cast<std::size_t>(n)].x(), n % 2 == 0 ? 24.0 : -24.0, 24.0 * 1e-6)
+          << detail::IsaName(isa) << " node " << n;
+    }
+  }
 }
 
 // Each instruction set's kernel against the portable one, for the column copy (float32,
@@ -347,9 +396,11 @@ TEST(SurfaceFieldKernels, EveryInstructionSetAgreesWithPortable) {
   loads.push_back({m.c64->num_nodes() + 3, {1, 1, 1}});
   loads.push_back({-1, {1, 1, 1}});
   const auto N = static_cast<std::size_t>(m.c64->num_nodes());
-  for (int kind = 0; kind < 3; ++kind) {
+  for (int kind = 0; kind < 4; ++kind) {
     SurfaceFieldOptions o{.layout = kind == 2 ? SurfaceFieldLayout::kCompliance : SurfaceFieldLayout::kColumns,
-                          .precision = kind == 1 ? Precision::kFloat16 : Precision::kFloat32};
+                          .precision = kind == 1   ? Precision::kFloat16
+                                       : kind == 3 ? Precision::kInt16
+                                                   : Precision::kFloat32};
     auto c = kind == 2 ? cc : m.c64;
     SurfaceField simd(c, o);
     o.allow_simd = false;
@@ -363,16 +414,19 @@ TEST(SurfaceFieldKernels, EveryInstructionSetAgreesWithPortable) {
     std::vector<Eigen::Vector3d> wrong(N - 1);
     EXPECT_FALSE(simd.Evaluate(loads, wrong));
   }
-  // The intrinsics paths that this CPU has, called directly.
-  detail::PlanarColumns cols;
-  cols.Build(static_cast<std::int32_t>(N), static_cast<std::int32_t>(N), detail::PlanarType::kFloat16,
-             [&](std::int32_t n, std::int32_t k) { return m.c64->Block(n, k); });
-  std::vector<Eigen::Vector3d> ref(N), got(N);
-  cols.SumColumns(loads, ref.data(), detail::Isa::kPortable);
-  for (detail::Isa isa : {detail::Isa::kAvx2, detail::Isa::kAvx512}) {
-    if (static_cast<int>(isa) > static_cast<int>(detail::BestIsa())) continue;
-    cols.SumColumns(loads, got.data(), isa);
-    EXPECT_LT(test::RelError(got, ref), 1e-6) << detail::IsaName(isa);
+  // The intrinsics paths that this CPU has, called directly (int16: the integer sums are exact,
+  // so only the float scaling and the double accumulation over groups may differ).
+  for (detail::PlanarType type : {detail::PlanarType::kFloat16, detail::PlanarType::kInt16}) {
+    detail::PlanarColumns cols;
+    cols.Build(static_cast<std::int32_t>(N), static_cast<std::int32_t>(N), type,
+               [&](std::int32_t n, std::int32_t k) { return m.c64->Block(n, k); });
+    std::vector<Eigen::Vector3d> ref(N), got(N);
+    cols.SumColumns(loads, ref.data(), detail::Isa::kPortable);
+    for (detail::Isa isa : {detail::Isa::kAvx2, detail::Isa::kAvx512}) {
+      if (static_cast<int>(isa) > static_cast<int>(detail::BestIsa())) continue;
+      cols.SumColumns(loads, got.data(), isa);
+      EXPECT_LT(test::RelError(got, ref), type == detail::PlanarType::kInt16 ? 1e-12 : 1e-6) << detail::IsaName(isa);
+    }
   }
 }
 

@@ -24,7 +24,9 @@ namespace handshare::fem {
 /// Storage precision (the value is the scalar size in bytes). kFloat16 (IEEE half, with a float
 /// scale per 16-node chunk) only for the surface-field tables (SurfaceField kColumns, T^d), never
 /// for the compliance itself.
-enum class Precision : std::uint32_t { kFloat16 = 2, kFloat32 = 4, kFloat64 = 8 };
+/// kInt16 (fixed point, one float scale per column, integer dot products) only for the SurfaceField
+/// kColumns table (its value 0x102: 2 bytes, not a float).
+enum class Precision : std::uint32_t { kFloat16 = 2, kFloat32 = 4, kFloat64 = 8, kInt16 = 0x102 };
 
 /// How the blocks are computed (same numbers to round-off, different cost).
 enum class PrecomputeMethod : std::uint32_t {

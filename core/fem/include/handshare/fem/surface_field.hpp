@@ -8,7 +8,9 @@
 ///  - kCompliance (default): reads the compliance as stored. Packed: m columns of C, half of each
 ///    contiguous and half strided; compressed: per cluster, dense tile columns or U (V^T f).
 ///  - kColumns: a private copy of all N columns of C (both halves: twice the symmetric memory) in
-///    a planar SIMD layout, float32 or float16 (one scale per 16 nodes): every column streams.
+///    a planar SIMD layout, float32, float16 (one scale per 16 nodes) or int16 (fixed point, one
+///    scale per column, summed with integer dot products, AVX-512 VNNI where the CPU has it):
+///    every column streams.
 /// Kernels are chosen at run time (AVX-512, AVX2 + FMA + F16C, portable); the build needs no
 /// -march flag.
 
@@ -38,7 +40,7 @@ enum class SurfaceFieldLayout : std::uint8_t { kCompliance, kColumns };
 
 struct SurfaceFieldOptions {
   SurfaceFieldLayout layout = SurfaceFieldLayout::kCompliance;
-  /// kColumns only: kFloat64, kFloat32 or kFloat16.
+  /// kColumns only: kFloat64, kFloat32, kFloat16 or kInt16.
   Precision precision = Precision::kFloat32;
   /// false forces the portable kernels (tests).
   bool allow_simd = true;
