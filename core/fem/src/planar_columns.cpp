@@ -124,27 +124,28 @@ void PlanarColumns::Build(std::int32_t rows, std::int32_t cols, PlanarType type,
 }
 
 void PlanarColumns::BuildInt16(const std::function<Eigen::Matrix3d(std::int32_t, std::int32_t)>& block) {
+  const std::int64_t chunks = NumChunks(rows_);
   i16_.assign(static_cast<std::size_t>(stride_ * cols_), 0);
-  scale_.assign(static_cast<std::size_t>(cols_), 0.0f);
-  std::vector<Eigen::Matrix3d> column(static_cast<std::size_t>(rows_));
+  scale_.assign(static_cast<std::size_t>(chunks * cols_), 0.0f);
+  Eigen::Matrix3d chunk[kChunkNodes];
   for (std::int32_t k = 0; k < cols_; ++k) {
-    double amax = 0.0;
-    for (std::int32_t n = 0; n < rows_; ++n) {
-      column[static_cast<std::size_t>(n)] = block(n, k);
-      amax = std::max(amax, column[static_cast<std::size_t>(n)].cwiseAbs().maxCoeff());
-    }
-    // The largest entry maps to 32767; the float scale is what the kernels multiply by.
-    const float s = amax > 0.0 ? static_cast<float>(amax / 32767.0) : 1.0f;
-    scale_[static_cast<std::size_t>(k)] = s;
     std::int16_t* col = i16_.data() + k * stride_;
-    for (std::int32_t n = 0; n < rows_; ++n) {
-      const std::int64_t q = n / kChunkNodes;
-      const int l = n % kChunkNodes;
-      for (int r = 0; r < 3; ++r)
-        for (int c = 0; c < 3; ++c) {
-          const double v = std::nearbyint(column[static_cast<std::size_t>(n)](r, c) / static_cast<double>(s));
-          col[Int16Offset(q, r, c, l)] = static_cast<std::int16_t>(std::clamp(v, -32767.0, 32767.0));
-        }
+    for (std::int64_t q = 0; q < chunks; ++q) {
+      double amax = 0.0;
+      const int count = static_cast<int>(std::min<std::int64_t>(kChunkNodes, rows_ - q * kChunkNodes));
+      for (int l = 0; l < count; ++l) {
+        chunk[l] = block(static_cast<std::int32_t>(q * kChunkNodes + l), k);
+        amax = std::max(amax, chunk[l].cwiseAbs().maxCoeff());
+      }
+      // The chunk's largest entry maps to 32767; the float scale is what the kernels multiply by.
+      const float s = amax > 0.0 ? static_cast<float>(amax / 32767.0) : 1.0f;
+      scale_[static_cast<std::size_t>(k * chunks + q)] = s;
+      for (int l = 0; l < count; ++l)
+        for (int r = 0; r < 3; ++r)
+          for (int c = 0; c < 3; ++c) {
+            const double v = std::nearbyint(chunk[l](r, c) / static_cast<double>(s));
+            col[Int16Offset(q, r, c, l)] = static_cast<std::int16_t>(std::clamp(v, -32767.0, 32767.0));
+          }
     }
   }
 }
@@ -157,7 +158,8 @@ Eigen::Matrix3d PlanarColumns::Get(std::int32_t n, std::int32_t k) const noexcep
     const std::int16_t* col = i16_.data() + k * stride_;
     for (int r = 0; r < 3; ++r)
       for (int c = 0; c < 3; ++c)
-        B(r, c) = static_cast<double>(col[Int16Offset(q, r, c, static_cast<int>(l))]) * scale_[static_cast<std::size_t>(k)];
+        B(r, c) = static_cast<double>(col[Int16Offset(q, r, c, static_cast<int>(l))]) *
+                  scale_[static_cast<std::size_t>(k * chunks + q)];
     return B;
   }
   const std::size_t at = static_cast<std::size_t>(k * stride_ + q * kChunkScalars + l);
@@ -210,76 +212,6 @@ void SumPortable(const S* const* col, const float* const* scale, const double* x
   }
 }
 
-// int16: the loads of m <= kInt16Group columns as integer pairs for the dot products: w01 holds
-// (g_j0, g_j1), w2 holds (g_j2, 0), in 16-bit halves; out = step * sum q g. Non-finite loads
-// give step NaN (the field becomes NaN, as with the float kernels).
-struct Int16Loads {
-  alignas(64) std::int32_t w01[kInt16Group];
-  alignas(64) std::int32_t w2[kInt16Group];
-  float step = 0.0f;
-};
-
-void QuantizeLoads(const float* const* scale, const double* x, int m, Int16Loads& out) noexcept {
-  double a[3 * kInt16Group];
-  double amax = 0.0;
-  bool finite = true;
-  for (int j = 0; j < m; ++j)
-    for (int c = 0; c < 3; ++c) {
-      a[3 * j + c] = static_cast<double>(scale[j][0]) * x[3 * j + c];
-      finite = finite && std::isfinite(a[3 * j + c]);
-      amax = std::max(amax, std::abs(a[3 * j + c]));
-    }
-  // |q| <= 32767 and three products per column and lane: m columns sum below 2^31.
-  const double G = std::floor(2147483647.0 / (3.0 * 32767.0 * std::max(m, 1)));
-  const double step = finite ? amax / G : std::numeric_limits<double>::quiet_NaN();
-  out.step = static_cast<float>(step);
-  for (int j = 0; j < m; ++j) {
-    std::int32_t g[3] = {0, 0, 0};
-    if (finite && amax > 0.0) {
-      for (int c = 0; c < 3; ++c) g[c] = static_cast<std::int32_t>(std::clamp(std::nearbyint(a[3 * j + c] / step), -G, G));
-    }
-    out.w01[j] = static_cast<std::int32_t>(static_cast<std::uint32_t>(static_cast<std::uint16_t>(g[0])) |
-                                           (static_cast<std::uint32_t>(static_cast<std::uint16_t>(g[1])) << 16));
-    out.w2[j] = static_cast<std::int32_t>(static_cast<std::uint16_t>(g[2]));
-  }
-}
-
-std::int32_t Low(std::int32_t w) noexcept { return static_cast<std::int16_t>(static_cast<std::uint32_t>(w) & 0xFFFFu); }
-std::int32_t High(std::int32_t w) noexcept { return static_cast<std::int16_t>(static_cast<std::uint32_t>(w) >> 16); }
-
-// Portable int16: the same integer sums as the SIMD kernels (exact), then the same float scaling.
-void SumInt16Portable(const std::int16_t* const* col, const Int16Loads& g, int m, std::int32_t rows,
-                      Eigen::Vector3d* out, bool accumulate) noexcept {
-  const std::int64_t chunks = NumChunks(rows);
-  for (std::int64_t q = 0; q < chunks; ++q) {
-    std::int32_t acc[3][kChunkNodes] = {};
-    for (int j = 0; j < m; ++j) {
-      const std::int32_t g0 = Low(g.w01[j]), g1 = High(g.w01[j]), g2 = Low(g.w2[j]);
-      for (int r = 0; r < 3; ++r)
-        for (int l = 0; l < kChunkNodes; ++l) {
-          acc[r][l] += col[j][Int16Offset(q, r, 0, l)] * g0 + col[j][Int16Offset(q, r, 1, l)] * g1 +
-                       col[j][Int16Offset(q, r, 2, l)] * g2;
-        }
-    }
-    const std::int64_t n0 = q * kChunkNodes;
-    for (int l = 0; l < kChunkNodes && n0 + l < rows; ++l) {
-      double* o = out[n0 + l].data();
-      for (int r = 0; r < 3; ++r) {
-        const double u = static_cast<double>(static_cast<float>(acc[r][l]) * g.step);
-        o[r] = accumulate ? o[r] + u : u;
-      }
-    }
-  }
-}
-
-#define HS_AVX2 __attribute__((target("avx2,fma,f16c")))
-#define HS_AVX512 __attribute__((target("avx512f,avx512vl,fma,f16c")))
-#define HS_AVX512VNNI __attribute__((target("avx512f,avx512vl,avx512bw,avx512vnni,fma,f16c")))
-
-#pragma GCC diagnostic push
-#pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
-#pragma GCC diagnostic ignored "-Wuninitialized"
-
 // Stores 16 nodes' planar sums (x, y, z lanes) into out[0..count).
 inline void StorePlanar(const float* ux, const float* uy, const float* uz, int count, Eigen::Vector3d* out,
                         bool accumulate) noexcept {
@@ -296,6 +228,74 @@ inline void StorePlanar(const float* ux, const float* uy, const float* uz, int c
     }
   }
 }
+
+// int16: each column's load as integer pairs for the dot products, w01 = (g_0, g_1) and
+// w2 = (g_2, 0) in 16-bit halves, g_c = round(x_c / step), step = max_c |x_c| / G with
+// G = floor((2^31 - 1) / (3 * 32767)) = 21845: one column's three products per lane cannot
+// overflow int32. A column's int32 sums are turned to float at once, times scale(chunk) * step,
+// and summed in float like the other kernels. Non-finite loads give step NaN (a NaN field, as
+// with the float kernels).
+struct Int16Loads {
+  std::int32_t w01[kGroup];
+  std::int32_t w2[kGroup];
+  float step[kGroup];
+};
+
+void QuantizeLoads(const double* x, int m, Int16Loads& out) noexcept {
+  constexpr double G = 21845.0;
+  static_assert(3.0 * 32767.0 * G <= 2147483647.0, "one column's sum must fit in int32");
+  for (int j = 0; j < m; ++j) {
+    const double* xj = x + 3 * j;
+    const double amax = std::max({std::abs(xj[0]), std::abs(xj[1]), std::abs(xj[2])});
+    const bool finite = std::isfinite(xj[0]) && std::isfinite(xj[1]) && std::isfinite(xj[2]);
+    std::int32_t g[3] = {0, 0, 0};
+    double step = 0.0;
+    if (!finite) {
+      step = std::numeric_limits<double>::quiet_NaN();
+    } else if (amax > 0.0) {
+      step = amax / G;
+      for (int c = 0; c < 3; ++c) g[c] = static_cast<std::int32_t>(std::clamp(std::nearbyint(xj[c] / step), -G, G));
+    }
+    out.step[j] = static_cast<float>(step);
+    out.w01[j] = static_cast<std::int32_t>(static_cast<std::uint32_t>(static_cast<std::uint16_t>(g[0])) |
+                                           (static_cast<std::uint32_t>(static_cast<std::uint16_t>(g[1])) << 16));
+    out.w2[j] = static_cast<std::int32_t>(static_cast<std::uint16_t>(g[2]));
+  }
+}
+
+std::int32_t Low(std::int32_t w) noexcept { return static_cast<std::int16_t>(static_cast<std::uint32_t>(w) & 0xFFFFu); }
+std::int32_t High(std::int32_t w) noexcept { return static_cast<std::int16_t>(static_cast<std::uint32_t>(w) >> 16); }
+
+// Portable int16: the same integer sums as the SIMD kernels (exact) and the same float
+// operations in the same order (a fused multiply-add per column), so the results agree.
+void SumInt16Portable(const std::int16_t* const* col, const float* const* scale, const Int16Loads& g, int m,
+                      std::int32_t rows, Eigen::Vector3d* out, bool accumulate) noexcept {
+  const std::int64_t chunks = NumChunks(rows);
+  for (std::int64_t q = 0; q < chunks; ++q) {
+    float u[3][kChunkNodes] = {};
+    for (int j = 0; j < m; ++j) {
+      const std::int32_t g0 = Low(g.w01[j]), g1 = High(g.w01[j]), g2 = Low(g.w2[j]);
+      const float f = scale[j][q] * g.step[j];
+      for (int r = 0; r < 3; ++r)
+        for (int l = 0; l < kChunkNodes; ++l) {
+          const std::int32_t acc = col[j][Int16Offset(q, r, 0, l)] * g0 + col[j][Int16Offset(q, r, 1, l)] * g1 +
+                                   col[j][Int16Offset(q, r, 2, l)] * g2;
+          u[r][l] = std::fma(static_cast<float>(acc), f, u[r][l]);
+        }
+    }
+    const int count = static_cast<int>(std::min<std::int64_t>(kChunkNodes, rows - q * kChunkNodes));
+    StorePlanar(u[0], u[1], u[2], count, out + q * kChunkNodes, accumulate);
+  }
+}
+
+#define HS_AVX2 __attribute__((target("avx2,fma,f16c")))
+#define HS_AVX512 __attribute__((target("avx512f,avx512vl,fma,f16c")))
+#define HS_AVX512VNNI __attribute__((target("avx512f,avx512vl,avx512bw,avx512vnni,fma,f16c")))
+
+#pragma GCC diagnostic push
+#pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
+#pragma GCC diagnostic ignored "-Wuninitialized"
+
 
 template <bool kHalf>
 HS_AVX2 void SumAvx2(const void* const* col, const float* const* scale, const double* x, int m, std::int32_t rows,
@@ -334,27 +334,28 @@ HS_AVX2 void SumAvx2(const void* const* col, const float* const* scale, const do
 }
 
 // int16 without VNNI: vpmaddwd (8 lanes of a0 b0 + a1 b1) and an add.
-HS_AVX2 void SumInt16Avx2(const std::int16_t* const* col, const Int16Loads& g, int m, std::int32_t rows,
-                          Eigen::Vector3d* out, bool accumulate) noexcept {
+HS_AVX2 void SumInt16Avx2(const std::int16_t* const* col, const float* const* scale, const Int16Loads& g, int m,
+                          std::int32_t rows, Eigen::Vector3d* out, bool accumulate) noexcept {
   const std::int64_t chunks = NumChunks(rows);
-  const __m256 step = _mm256_set1_ps(g.step);
   for (std::int64_t q = 0; q < chunks; ++q) {
-    __m256i acc[3][2];
-    for (auto& r : acc) r[0] = r[1] = _mm256_setzero_si256();
+    __m256 u[3][2];
+    for (auto& r : u) r[0] = r[1] = _mm256_setzero_ps();
     for (int j = 0; j < m; ++j) {
       const __m256i b01 = _mm256_set1_epi32(g.w01[j]), b2 = _mm256_set1_epi32(g.w2[j]);
+      const __m256 f = _mm256_set1_ps(scale[j][q] * g.step[j]);
       for (int r = 0; r < 3; ++r)
         for (int h = 0; h < 2; ++h) {
           const std::int16_t* pair = col[j] + Int16Offset(q, r, 0, 8 * h);
           const std::int16_t* single = col[j] + Int16Offset(q, r, 2, 8 * h);
           const __m256i p = _mm256_load_si256(reinterpret_cast<const __m256i*>(pair));
           const __m256i s = _mm256_cvtepu16_epi32(_mm_load_si128(reinterpret_cast<const __m128i*>(single)));
-          acc[r][h] = _mm256_add_epi32(acc[r][h], _mm256_add_epi32(_mm256_madd_epi16(p, b01), _mm256_madd_epi16(s, b2)));
+          const __m256i acc = _mm256_add_epi32(_mm256_madd_epi16(p, b01), _mm256_madd_epi16(s, b2));
+          u[r][h] = _mm256_fmadd_ps(_mm256_cvtepi32_ps(acc), f, u[r][h]);
         }
     }
     alignas(32) float t[3][16];
     for (int r = 0; r < 3; ++r)
-      for (int h = 0; h < 2; ++h) _mm256_store_ps(t[r] + 8 * h, _mm256_mul_ps(_mm256_cvtepi32_ps(acc[r][h]), step));
+      for (int h = 0; h < 2; ++h) _mm256_store_ps(t[r] + 8 * h, u[r][h]);
     const int count = static_cast<int>(std::min<std::int64_t>(kChunkNodes, rows - q * kChunkNodes));
     StorePlanar(t[0], t[1], t[2], count, out + q * kChunkNodes, accumulate);
   }
@@ -438,28 +439,32 @@ HS_AVX512 void SumAvx512(const void* const* col, const float* const* scale, cons
 }
 
 // int16 with AVX-512 VNNI: per column and chunk, three vpdpwssd on the pair planes and three on
-// the zero-extended single planes (each (X(r, 2), 0) against (g_2, 0)).
-HS_AVX512VNNI void SumInt16Avx512(const std::int16_t* const* col, const Int16Loads& g, int m, std::int32_t rows,
-                                  Eigen::Vector3d* out, bool accumulate) noexcept {
+// the zero-extended single planes (each (X(r, 2), 0) against (g_2, 0)), then one conversion and
+// FMA per row into the float sums.
+HS_AVX512VNNI void SumInt16Avx512(const std::int16_t* const* col, const float* const* scale, const Int16Loads& g,
+                                  int m, std::int32_t rows, Eigen::Vector3d* out, bool accumulate) noexcept {
   static const Interleave il;
   const std::int64_t chunks = NumChunks(rows);
-  const __m512 step = _mm512_set1_ps(g.step);
+  const __m512i zero = _mm512_setzero_si512();
   for (std::int64_t q = 0; q < chunks; ++q) {
-    __m512i ax = _mm512_setzero_si512(), ay = _mm512_setzero_si512(), az = _mm512_setzero_si512();
+    __m512 ux = _mm512_setzero_ps(), uy = _mm512_setzero_ps(), uz = _mm512_setzero_ps();
     const std::int64_t pairs = Int16Offset(q, 0, 0, 0), singles = Int16Offset(q, 0, 2, 0);
     for (int j = 0; j < m; ++j) {
       const std::int16_t* p = col[j] + pairs;
       const std::int16_t* s = col[j] + singles;
       const __m512i b01 = _mm512_set1_epi32(g.w01[j]), b2 = _mm512_set1_epi32(g.w2[j]);
-      ax = _mm512_dpwssd_epi32(ax, _mm512_load_si512(p), b01);
-      ay = _mm512_dpwssd_epi32(ay, _mm512_load_si512(p + 32), b01);
-      az = _mm512_dpwssd_epi32(az, _mm512_load_si512(p + 64), b01);
+      const __m512 f = _mm512_set1_ps(scale[j][q] * g.step[j]);
+      __m512i ax = _mm512_dpwssd_epi32(zero, _mm512_load_si512(p), b01);
+      __m512i ay = _mm512_dpwssd_epi32(zero, _mm512_load_si512(p + 32), b01);
+      __m512i az = _mm512_dpwssd_epi32(zero, _mm512_load_si512(p + 64), b01);
       ax = _mm512_dpwssd_epi32(ax, _mm512_cvtepu16_epi32(_mm256_load_si256(reinterpret_cast<const __m256i*>(s))), b2);
       ay = _mm512_dpwssd_epi32(ay, _mm512_cvtepu16_epi32(_mm256_load_si256(reinterpret_cast<const __m256i*>(s + 16))), b2);
       az = _mm512_dpwssd_epi32(az, _mm512_cvtepu16_epi32(_mm256_load_si256(reinterpret_cast<const __m256i*>(s + 32))), b2);
+      ux = _mm512_fmadd_ps(_mm512_cvtepi32_ps(ax), f, ux);
+      uy = _mm512_fmadd_ps(_mm512_cvtepi32_ps(ay), f, uy);
+      uz = _mm512_fmadd_ps(_mm512_cvtepi32_ps(az), f, uz);
     }
-    StoreChunk(il, _mm512_mul_ps(_mm512_cvtepi32_ps(ax), step), _mm512_mul_ps(_mm512_cvtepi32_ps(ay), step),
-               _mm512_mul_ps(_mm512_cvtepi32_ps(az), step), q, rows, out, accumulate);
+    StoreChunk(il, ux, uy, uz, q, rows, out, accumulate);
   }
 }
 
@@ -503,17 +508,16 @@ void PlanarColumns::Sum(std::size_t count, Getter get, const void* ctx, Eigen::V
   if (type_ == PlanarType::kFloat64) isa = Isa::kPortable;  // float64: portable (compiler-vectorized)
   const bool int16 = type_ == PlanarType::kInt16;
   if (int16 && isa == Isa::kAvx512 && !HasAvx512Vnni()) isa = Isa::kAvx2;
-  const int group = int16 ? kInt16Group : kGroup;
   auto flush = [&](int m) {
     if (m == 0 && accumulate) return;
     if (int16) {
       Int16Loads g;
-      QuantizeLoads(scale, xs, m, g);
+      QuantizeLoads(xs, m, g);
       const auto* c16 = reinterpret_cast<const std::int16_t* const*>(col);
       switch (isa) {
-        case Isa::kAvx512: SumInt16Avx512(c16, g, m, rows_, out, accumulate); break;
-        case Isa::kAvx2: SumInt16Avx2(c16, g, m, rows_, out, accumulate); break;
-        case Isa::kPortable: SumInt16Portable(c16, g, m, rows_, out, accumulate); break;
+        case Isa::kAvx512: SumInt16Avx512(c16, scale, g, m, rows_, out, accumulate); break;
+        case Isa::kAvx2: SumInt16Avx2(c16, scale, g, m, rows_, out, accumulate); break;
+        case Isa::kPortable: SumInt16Portable(c16, scale, g, m, rows_, out, accumulate); break;
       }
       accumulate = true;
       return;
@@ -560,11 +564,11 @@ void PlanarColumns::Sum(std::size_t count, Getter get, const void* ctx, Eigen::V
         break;
       case PlanarType::kInt16:
         col[m] = i16_.data() + at;
-        scale[m] = scale_.data() + ki;
+        scale[m] = scale_.data() + ki * chunks;
         break;
     }
     for (int c = 0; c < 3; ++c) xs[3 * m + c] = (*xi)[c];
-    if (++m == group) {
+    if (++m == kGroup) {
       flush(m);
       m = 0;
     }

@@ -9,8 +9,8 @@
 // FMAs per column and input component, with no shuffles; padding lanes are zero.
 // float16 columns carry one float scale per (column, chunk): X = half * scale, so every chunk
 // uses the full 11-bit mantissa of its largest entry.
-// int16 columns (fixed point) carry one float scale per column, X = q * scale with |q| <= 32767
-// (the column's largest entry maps to 32767), and pair the planes for integer dot products
+// int16 columns (fixed point) carry one float scale per (column, chunk), X = q * scale with
+// |q| <= 32767 (the chunk's largest entry maps to 32767), and pair the planes for integer dot products
 // (vpdpwssd: 16 lanes of a0 b0 + a1 b1 per instruction): in a chunk, the pair plane of row r
 // holds (X(r, 0), X(r, 1)) of lane l at 2 l, 2 l + 1 (3 x 32 scalars) and the single plane of row
 // r holds X(r, 2) of lane l at l (3 x 16 scalars), the same 144 scalars. Even chunks store the
@@ -30,9 +30,6 @@ namespace handshare::fem::detail {
 
 constexpr int kChunkNodes = 16;
 constexpr int kChunkScalars = 9 * kChunkNodes;
-/// int16 columns summed per integer pass (bounds the step G of the rounded loads).
-constexpr int kInt16Group = 8;
-
 /// Offset of entry (r, c) of lane l of chunk q in an int16 column (layout above).
 constexpr std::int64_t Int16Offset(std::int64_t q, int r, int c, int l) noexcept {
   const std::int64_t pairs = (q & 1) ? 48 : 0, singles = (q & 1) ? 0 : 96;
@@ -74,11 +71,11 @@ class PlanarColumns {
   }
 
   /// out[n] = sum_j X_{n, k[j]} x[j] for every row n (out.size() == rows()). Columns out of range
-  /// are skipped. Accumulates in float (double for float64 storage). int16: the loads of up to
-  /// 8 columns at a time are rounded to integers g_jc = round(scale_j x_jc / T) with one step T
-  /// per pass, |g| <= G = floor((2^31 - 1) / (3 * 32767 * m)) for m columns (4,369 for 5), so
-  /// the int32 sums cannot overflow; out = T * sum q g. Kernels: AVX-512 VNNI, AVX2, portable,
-  /// all exact in integers (the same result up to the float scaling).
+  /// are skipped. Accumulates in float (double for float64 storage). int16: each load is rounded
+  /// to integers g_c = round(x_c / step_j), step_j = max_c |x_jc| / 21845 (so one column's int32
+  /// sums cannot overflow), and a column's integer sums enter the float sums times
+  /// scale(column, chunk) * step_j. Kernels: AVX-512 VNNI, AVX2, portable (the same integer sums
+  /// and float operations: equal results).
   void SumColumns(std::span<const std::int32_t> k, std::span<const Eigen::Vector3d> x,
                   Eigen::Vector3d* out, Isa isa) const noexcept;
   /// Same with (slot, force) pairs.
