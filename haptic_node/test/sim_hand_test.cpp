@@ -7,6 +7,16 @@
 namespace handshare::haptic {
 namespace {
 
+// The message of the ScriptError that parsing `text` throws (empty if it parses).
+std::string ParseError(const std::string& text, const std::string& origin) {
+  try {
+    HandScript::Parse(text, origin);
+  } catch (const ScriptError& e) {
+    return e.what();
+  }
+  return {};
+}
+
 TEST(HandScript, MinimumJerkEndpointsMidpointAndZeroEndVelocity) {
   const HandScript s = HandScript::Parse("start 0 0 0\nmove 2.0 0.2 0 0 grip 1\n", "t");
   EXPECT_TRUE(s.PoseAt(0.0).p_WH.isApprox(Eigen::Vector3d::Zero()));
@@ -34,14 +44,7 @@ TEST(HandScript, SegmentsChainInTime) {
 }
 
 TEST(HandScript, ErrorsNameOriginAndLine) {
-  auto error_of = [](const std::string& text) {
-    try {
-      HandScript::Parse(text, "hand.txt");
-    } catch (const ScriptError& e) {
-      return std::string(e.what());
-    }
-    return std::string();
-  };
+  auto error_of = [](const std::string& text) { return ParseError(text, "hand.txt"); };
   EXPECT_NE(error_of("start 0 0 0\nmove 1 0 0\n").find("hand.txt:2: missing z"), std::string::npos);
   EXPECT_NE(error_of("start 0 0 0\n\njump 1\n").find("hand.txt:3: unknown command 'jump'"), std::string::npos);
   EXPECT_NE(error_of("move 1 0 0 0\n").find("hand.txt:1:"), std::string::npos);
@@ -71,14 +74,7 @@ TEST(HandScript, AwaitWorldStartsTheScriptWhenTheWorldIsHere) {
   plain.Read(1.0, r);
   EXPECT_NEAR(r.p_WH.x(), 0.1, 1e-15);
 
-  auto error_of = [](const std::string& text) {
-    try {
-      HandScript::Parse(text, "h");
-    } catch (const ScriptError& e) {
-      return std::string(e.what());
-    }
-    return std::string();
-  };
+  auto error_of = [](const std::string& text) { return ParseError(text, "h"); };
   EXPECT_NE(error_of("start 0 0 0\nhold 1\nawait_world\n").find("h:3: 'await_world' must come right after 'start'"),
             std::string::npos);
   EXPECT_NE(error_of("start 0 0 0\nawait_world\nawait_world\n").find("h:3:"), std::string::npos);
@@ -202,14 +198,7 @@ TEST(HandScriptVerbs, FingertipPathsAreContinuousAcrossVerbs) {
 }
 
 TEST(HandScriptVerbs, BadArgumentsNameTheLine) {
-  auto error_of = [](const std::string& text) {
-    try {
-      HandScript::Parse(text, "h");
-    } catch (const ScriptError& e) {
-      return std::string(e.what());
-    }
-    return std::string();
-  };
+  auto error_of = [](const std::string& text) { return ParseError(text, "h"); };
   EXPECT_NE(error_of("start 0 0 0\ngrasp 1 0 0 0\n").find("h:2: missing radius"), std::string::npos);
   EXPECT_NE(error_of("start 0 0 0\ngrasp 1 0 0 0 0.04 0.5\n").find("h:2: squeeze"), std::string::npos);
   EXPECT_NE(error_of("start 0 0 0\npress 1 0 0 0 -1\n").find("h:2: depth"), std::string::npos);
