@@ -88,13 +88,10 @@ void PlanarColumns::Build(std::int32_t rows, std::int32_t cols, PlanarType type,
   double chunk[kChunkScalars];
   if (type == PlanarType::kFloat64) f64_.assign(total, 0.0);
   if (type == PlanarType::kFloat32) f32_.assign(total, 0.0f);
-  if (type == PlanarType::kFloat16) {
-    f16_.assign(total, 0);
+  if (type == PlanarType::kFloat16) f16_.assign(total, 0);
+  if (type == PlanarType::kInt16) i16_.assign(total, 0);
+  if (type == PlanarType::kFloat16 || type == PlanarType::kInt16) {
     scale_.assign(static_cast<std::size_t>(chunks * cols), 0.0f);
-  }
-  if (type == PlanarType::kInt16) {
-    BuildInt16(block);
-    return;
   }
   for (std::int32_t k = 0; k < cols; ++k) {
     for (std::int64_t q = 0; q < chunks; ++q) {
@@ -109,45 +106,39 @@ void PlanarColumns::Build(std::int32_t rows, std::int32_t cols, PlanarType type,
       const std::size_t at = static_cast<std::size_t>(k * stride_ + q * kChunkScalars);
       if (type == PlanarType::kFloat64) {
         std::copy(std::begin(chunk), std::end(chunk), f64_.begin() + static_cast<std::ptrdiff_t>(at));
-      } else if (type == PlanarType::kFloat32) {
+        continue;
+      }
+      if (type == PlanarType::kFloat32) {
         for (int i = 0; i < kChunkScalars; ++i) f32_[at + i] = static_cast<float>(chunk[i]);
-      } else {
-        double amax = 0.0;
-        for (double v : chunk) amax = std::max(amax, std::abs(v));
+        continue;
+      }
+      double amax = 0.0;
+      for (double v : chunk) amax = std::max(amax, std::abs(v));
+      if (type == PlanarType::kFloat16) {
         // Scale so that the largest entry maps to 1 (full half precision down to 2^-14 of it).
         const float s = amax > 0.0 ? static_cast<float>(amax) : 1.0f;
         scale_[static_cast<std::size_t>(k * chunks + q)] = s;
         for (int i = 0; i < kChunkScalars; ++i) f16_[at + i] = FloatToHalf(static_cast<float>(chunk[i] / s));
+      } else {
+        // The largest entry maps to 32767; the float scale is what the kernels multiply by.
+        const float s = amax > 0.0 ? static_cast<float>(amax / 32767.0) : 1.0f;
+        scale_[static_cast<std::size_t>(k * chunks + q)] = s;
+        std::int16_t* col = i16_.data() + k * stride_;
+        for (int l = 0; l < kChunkNodes; ++l)
+          for (int c = 0; c < 3; ++c)
+            for (int r = 0; r < 3; ++r) {
+              const double v = std::nearbyint(chunk[16 * (3 * c + r) + l] / static_cast<double>(s));
+              col[Int16Offset(q, r, c, l)] = static_cast<std::int16_t>(std::clamp(v, -32767.0, 32767.0));
+            }
       }
     }
   }
 }
 
-void PlanarColumns::BuildInt16(const std::function<Eigen::Matrix3d(std::int32_t, std::int32_t)>& block) {
-  const std::int64_t chunks = NumChunks(rows_);
-  i16_.assign(static_cast<std::size_t>(stride_ * cols_), 0);
-  scale_.assign(static_cast<std::size_t>(chunks * cols_), 0.0f);
-  Eigen::Matrix3d chunk[kChunkNodes];
-  for (std::int32_t k = 0; k < cols_; ++k) {
-    std::int16_t* col = i16_.data() + k * stride_;
-    for (std::int64_t q = 0; q < chunks; ++q) {
-      double amax = 0.0;
-      const int count = static_cast<int>(std::min<std::int64_t>(kChunkNodes, rows_ - q * kChunkNodes));
-      for (int l = 0; l < count; ++l) {
-        chunk[l] = block(static_cast<std::int32_t>(q * kChunkNodes + l), k);
-        amax = std::max(amax, chunk[l].cwiseAbs().maxCoeff());
-      }
-      // The chunk's largest entry maps to 32767; the float scale is what the kernels multiply by.
-      const float s = amax > 0.0 ? static_cast<float>(amax / 32767.0) : 1.0f;
-      scale_[static_cast<std::size_t>(k * chunks + q)] = s;
-      for (int l = 0; l < count; ++l)
-        for (int r = 0; r < 3; ++r)
-          for (int c = 0; c < 3; ++c) {
-            const double v = std::nearbyint(chunk[l](r, c) / static_cast<double>(s));
-            col[Int16Offset(q, r, c, l)] = static_cast<std::int16_t>(std::clamp(v, -32767.0, 32767.0));
-          }
-    }
-  }
+Isa PlanarColumns::KernelIsa(Isa requested) const noexcept {
+  if (type_ == PlanarType::kFloat64) return Isa::kPortable;  // float64: portable (compiler-vectorized)
+  if (type_ == PlanarType::kInt16 && requested == Isa::kAvx512 && !HasAvx512Vnni()) return Isa::kAvx2;
+  return requested;
 }
 
 Eigen::Matrix3d PlanarColumns::Get(std::int32_t n, std::int32_t k) const noexcept {
@@ -505,9 +496,8 @@ void PlanarColumns::Sum(std::size_t count, Getter get, const void* ctx, Eigen::V
   double xs[3 * kGroup];
   bool accumulate = false;
   std::size_t i = 0;
-  if (type_ == PlanarType::kFloat64) isa = Isa::kPortable;  // float64: portable (compiler-vectorized)
+  isa = KernelIsa(isa);
   const bool int16 = type_ == PlanarType::kInt16;
-  if (int16 && isa == Isa::kAvx512 && !HasAvx512Vnni()) isa = Isa::kAvx2;
   auto flush = [&](int m) {
     if (m == 0 && accumulate) return;
     if (int16) {

@@ -64,6 +64,9 @@ class PlanarColumns {
   bool empty() const noexcept { return cols_ == 0; }
   /// Scalars from one column to the next (a chunk multiple, padded to 64 bytes for int16).
   std::int64_t column_scalars() const noexcept { return stride_; }
+  /// The kernel SumColumns runs when asked for `requested`: portable for float64, AVX2 for int16
+  /// on an AVX-512 CPU without VNNI, else `requested`.
+  Isa KernelIsa(Isa requested) const noexcept;
   /// Block (n, k) as stored (rounded to the storage type).
   Eigen::Matrix3d Get(std::int32_t n, std::int32_t k) const noexcept;
   std::size_t storage_bytes() const noexcept {
@@ -83,7 +86,6 @@ class PlanarColumns {
 
  private:
   using Getter = std::int32_t (*)(const void* ctx, std::size_t i, const Eigen::Vector3d** x);
-  void BuildInt16(const std::function<Eigen::Matrix3d(std::int32_t n, std::int32_t k)>& block);
   void Sum(std::size_t count, Getter get, const void* ctx, Eigen::Vector3d* out, Isa isa) const noexcept;
 
   std::int32_t rows_ = 0, cols_ = 0;

@@ -179,11 +179,7 @@ SurfaceField::SurfaceField(std::shared_ptr<const Compliance> compliance, const S
     columns_ = std::make_unique<detail::PlanarColumns>();
     columns_->Build(C.num_nodes(), C.num_nodes(), type,
                     [&](std::int32_t n, std::int32_t k) { return C.Block(n, k); });
-    detail::Isa isa = type == detail::PlanarType::kFloat64 ? detail::Isa::kPortable : best;
-    if (type == detail::PlanarType::kInt16 && isa == detail::Isa::kAvx512 && !detail::HasAvx512Vnni()) {
-      isa = detail::Isa::kAvx2;  // what PlanarColumns runs for int16 without VNNI
-    }
-    isa_ = static_cast<std::uint8_t>(isa);
+    isa_ = static_cast<std::uint8_t>(columns_->KernelIsa(best));
   } else if (C.storage() == ComplianceStorage::kCompressed) {
     isa_ = static_cast<std::uint8_t>(best);
     expanded_.assign(C.compressed()->scratch_floats(), 0.0f);
