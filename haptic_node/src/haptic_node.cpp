@@ -219,10 +219,10 @@ int HapticNode::Run() {
         renderer = next_renderer;
         have_report = false;
         loop.SetRenderer(renderer);
-        if (device->OnWorldReady(loop.now_s())) {
+        if (const double t_s = loop.now_s(); device->OnWorldReady(t_s)) {
           char started[120];
           std::snprintf(started, sizeof started, "hand script starts at loop time %.3f s (the first world is here)",
-                        loop.now_s());
+                        t_s);
           say(started);
         }
         char line[160];
