@@ -16,13 +16,13 @@ int main(int argc, char** argv) {
                                         "(for an independent FEM check)", "")
       .Value("deformation-threshold", "M", "re-send a deformed surface node when it moved more than M metres", "1e-4");
   return handshare::common::RunNodeMain(argc, argv, options, [](const auto& o) {
-    handshare::world::WorldServerConfig config;
+    handshare::server::WorldServerConfig config;
     config.where = handshare::common::ReadSessionOptions(o);
     config.scene = o.GetString("scene");
     config.log_file = o.GetString("log");
     config.cache_dir = o.GetString("cache");
     config.dump_dir = o.GetString("dump-deformation");
     config.deformation_threshold_m = o.GetDouble("deformation-threshold", 1e-9, 0.01);
-    return handshare::world::WorldServer(config).Run();
+    return handshare::server::WorldServer(config).Run();
   });
 }

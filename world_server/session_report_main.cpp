@@ -40,7 +40,7 @@ int main(int argc, char** argv) {
   }
   try {
     if (options.FlagSet("list")) {
-      for (const auto& s : handshare::world::ListSessions(files[0])) {
+      for (const auto& s : handshare::server::ListSessions(files[0])) {
         std::cout << s.id << " '" << s.name << "' domain " << s.domain_id << " started_unix_ns " << s.started_unix_ns
                   << (s.ended_unix_ns ? " ended" : " not ended") << "\n";
       }
@@ -48,17 +48,17 @@ int main(int argc, char** argv) {
     }
     std::optional<std::int64_t> session;
     if (options.Has("session")) session = options.GetInt("session", 1, std::numeric_limits<long>::max());
-    const auto report = handshare::world::ReadReport(files[0], session);
+    const auto report = handshare::server::ReadReport(files[0], session);
     if (options.FlagSet("csv")) {
-      handshare::world::PrintReportCsv(std::cout, report);
+      handshare::server::PrintReportCsv(std::cout, report);
     } else {
-      handshare::world::PrintReport(std::cout, report);
+      handshare::server::PrintReport(std::cout, report);
     }
     return 0;
   } catch (const handshare::common::OptionError& e) {
     std::cerr << "session_report: " << e.what() << "\n(run with --help for usage)\n";
     return 2;
-  } catch (const handshare::world::SessionLogError& e) {
+  } catch (const handshare::server::SessionLogError& e) {
     std::cerr << "session_report: " << e.what() << "\n";
     return 2;
   } catch (const std::exception& e) {

@@ -14,7 +14,7 @@
 #include "handshare/common/shutdown.hpp"
 #include "handshare/dds/membership.hpp"
 #include "handshare/dds/messages.hpp"
-#include "handshare/graphics/shared_world.hpp"
+#include "handshare/graphics/scene_replica.hpp"
 #include "handshare/render/image.hpp"
 #include "handshare/render/offscreen_renderer.hpp"
 #include "handshare/render/window_renderer.hpp"
@@ -78,7 +78,7 @@ class WorldView {
 
   bool has_scene() const { return world_.has_scene(); }
   const std::map<std::string, UserHand>& hands() const { return hands_; }
-  const SharedWorld& world() const { return world_; }
+  const SceneReplica& world() const { return world_; }
 
   render::SceneView Build() const {
     render::SceneView view;
@@ -105,14 +105,14 @@ class WorldView {
   dds::Reader<msg::Deformation> deformation_reader_;
   dds::Reader<msg::ObjectState> object_reader_;
   msg::Deformation deformation_;  // reused: a sample holds up to 16k values
-  SharedWorld world_;
+  SceneReplica world_;
   std::map<std::string, UserHand> hands_;
   std::string caption_;
 };
 
 // One line on what the shared world received, for the node's log.
-void PrintWorldSummary(const std::string& name, const SharedWorld& world) {
-  const SharedWorldStats& s = world.stats();
+void PrintWorldSummary(const std::string& name, const SceneReplica& world) {
+  const SceneReplicaStats& s = world.stats();
   const DeformationStats d = world.deformation_stats();
   const auto n = [](std::uint64_t v) { return static_cast<unsigned long long>(v); };
   std::printf("[graphics_node %s] deformation: %llu samples (%llu applied, %llu keyframes, %llu ids "

@@ -10,9 +10,11 @@ void Put(double (&out)[3], const Eigen::Vector3d& v) noexcept {
 }
 }  // namespace
 
-SceneRenderer::SceneRenderer(const scene::Scene& scene, const world::SceneWorldOptions& options)
+SceneRenderer::SceneRenderer(const scene::Scene& scene, const world::SceneModelsOptions& options,
+                             common::SessionClock clock)
     : scene_(scene),
-      models_(world::BuildSceneWorld(scene, options)),
+      clock_(clock),
+      models_(world::BuildSceneModels(scene, options)),
       controls_(controls::MakeControls(scene)),
       fingertip_radius_m_(options.fingertip_radius_m) {
   for (auto& f : f_controls_) f.setZero();
@@ -45,9 +47,9 @@ void SceneRenderer::ReleaseAll() noexcept {
 void SceneRenderer::Render(double /*t_s*/, double dt_s, const DeviceReading& reading,
                            std::array<Eigen::Vector3d, kFingers>& f_E_W) noexcept {
   auto& world = *models_.world;
-  // 1. Objects that move by themselves (the Daphnia swims), on the wall clock.
+  // 1. Objects that move by themselves (the Daphnia swims), on the session's clock.
   if (!moving_.empty()) {
-    const double t = scene::MotionTime_s();
+    const double t = clock_.Now_s();
     for (const auto& [object, i] : moving_) {
       Eigen::Isometry3d X = scene_.objects[i].X_WO();
       X.translation() += scene_.objects[i].motion.Offset_W(t);
@@ -79,7 +81,7 @@ void SceneRenderer::Render(double /*t_s*/, double dt_s, const DeviceReading& rea
   remote_in_.Read(remote_);
   const int n_remote = std::min(remote_.count, kMaxRemoteContacts);
   for (int i = 0; i < n_remote; ++i) {
-    remote_contacts_[static_cast<std::size_t>(i)] = session::ToRemoteContact(remote_.items[i]);
+    remote_contacts_[static_cast<std::size_t>(i)] = contact::ToRemoteContact(remote_.items[i]);
   }
   // 3. Contacts: rigid, dynamic and deformable objects, all hands on a deformable together.
   world.Step(dt_s, reading.p_WE, {remote_contacts_.data(), static_cast<std::size_t>(n_remote)});

@@ -23,7 +23,7 @@ TEST(SceneRenderer, FollowedBodyGlidesOnAtItsPublishedVelocityBetweenSamples) {
       {"id": "ground", "kind": "rigid", "shape": "box", "position_m": [0, 0, -0.02], "half_extent_m": [0.3, 0.3, 0.02]},
       {"id": "ball", "kind": "rigid", "shape": "sphere", "position_m": [0, 0, 0.04], "radius_m": 0.04, "mass_kg": 0.2}],
       "messages": [{"language": "en", "text": "t", "next_action": "a"}]})";
-  world::SceneWorldOptions options;
+  world::SceneModelsOptions options;
   options.cache_dir = dir / "cache";
   SceneRenderer r(scene::LoadScene(file), options);
   const auto ball = r.models().Find("ball");

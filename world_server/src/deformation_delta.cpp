@@ -5,7 +5,7 @@
 #include <stdexcept>
 #include <string>
 
-namespace handshare::world {
+namespace handshare::server {
 
 DeformationDelta::DeformationDelta(std::size_t surface_node_count, DeformationDeltaConfig config)
     : config_(config), sent_(3 * surface_node_count, 0.0) {
@@ -95,4 +95,4 @@ std::span<const DeformationSample> DeformationDelta::Update(std::span<const doub
   return {samples_.data(), used_};
 }
 
-}  // namespace handshare::world
+}  // namespace handshare::server

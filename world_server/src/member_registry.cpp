@@ -1,6 +1,6 @@
 #include "handshare/world_server/member_registry.hpp"
 
-namespace handshare::world {
+namespace handshare::server {
 
 std::optional<MemberEvent> MemberRegistry::OnInfo(const InstanceKey& key, const InstanceKey& writer,
                                                   const Member& member) {
@@ -49,4 +49,4 @@ const char* ToString(MemberChange change) {
   return "?";
 }
 
-}  // namespace handshare::world
+}  // namespace handshare::server

@@ -2,7 +2,7 @@
 
 #include <cmath>
 
-namespace handshare::world {
+namespace handshare::server {
 
 const char* ToString(OwnershipReason reason) {
   switch (reason) {
@@ -110,4 +110,4 @@ std::size_t OwnershipArbiter::owned_count() const {
   return n;
 }
 
-}  // namespace handshare::world
+}  // namespace handshare::server

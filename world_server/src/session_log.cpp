@@ -11,29 +11,33 @@
 #include "session_schema.hpp"
 #include "sqlite_db.hpp"
 
-namespace handshare::world {
+namespace handshare::server {
 
-const char* ToString(ControlKind kind) {
+const char* LogName(controls::EventKind kind) {
   switch (kind) {
-    case ControlKind::kPressed: return "pressed";
-    case ControlKind::kReleased: return "released";
-    case ControlKind::kMoved: return "moved";
-    case ControlKind::kPageTurned: return "page_turned";
-    case ControlKind::kMissed: return "missed";
+    case controls::EventKind::kPressed: return "pressed";
+    case controls::EventKind::kReleased: return "released";
+    case controls::EventKind::kMoved: return "moved";
+    case controls::EventKind::kPageTurned: return "page_turned";
+    case controls::EventKind::kMissed: return "missed";
+    case controls::EventKind::kOpened: return "opened";
   }
   return "?";
 }
 
-std::optional<ControlKind> ControlKindFromString(std::string_view text) {
-  for (ControlKind k : {ControlKind::kPressed, ControlKind::kReleased, ControlKind::kMoved,
-                        ControlKind::kPageTurned, ControlKind::kMissed}) {
-    if (text == ToString(k)) return k;
+std::optional<controls::EventKind> EventKindFromLogName(std::string_view text) {
+  using controls::EventKind;
+  for (EventKind k : {EventKind::kPressed, EventKind::kReleased, EventKind::kMoved, EventKind::kPageTurned,
+                      EventKind::kMissed, EventKind::kOpened}) {
+    if (text == LogName(k)) return k;
   }
   return std::nullopt;
 }
 
-bool IsHit(ControlKind kind) {
-  return kind == ControlKind::kPressed || kind == ControlKind::kMoved || kind == ControlKind::kPageTurned;
+bool IsHit(controls::EventKind kind) {
+  using controls::EventKind;
+  return kind == EventKind::kPressed || kind == EventKind::kMoved || kind == EventKind::kPageTurned ||
+         kind == EventKind::kOpened;
 }
 
 namespace {
@@ -200,7 +204,7 @@ struct SessionLog::Impl {
           scene->Reset();
         } else if (const auto* c = std::get_if<ControlRecord>(&row)) {
           control->Bind(1, session_id).Bind(2, Ns(c->unix_ns)).Bind(3, c->user).Bind(4, c->control_id)
-              .Bind(5, std::string_view(ToString(c->kind))).Bind(6, c->value).Bind(7, c->error_m);
+              .Bind(5, std::string_view(LogName(c->kind))).Bind(6, c->value).Bind(7, c->error_m);
           control->Step();
           control->Reset();
         } else if (const auto* o = std::get_if<OwnershipRow>(&row)) {
@@ -301,4 +305,4 @@ std::uint64_t SessionLog::dropped_rows() const {
   return impl_->dropped;
 }
 
-}  // namespace handshare::world
+}  // namespace handshare::server

@@ -11,7 +11,7 @@
 
 #include "sqlite_db.hpp"
 
-namespace handshare::world {
+namespace handshare::server {
 
 Summary Summarize(const std::vector<double>& values) {
   Summary s;
@@ -42,7 +42,7 @@ std::vector<ControlStats> ComputeControlStats(const std::vector<ControlRecord>& 
       ++a.stats.hits;
       a.misses_by_user.try_emplace(e.user, 0);
       if (e.error_m && std::isfinite(*e.error_m)) a.errors.push_back(*e.error_m);
-    } else if (e.kind == ControlKind::kMissed) {
+    } else if (e.kind == controls::EventKind::kMissed) {
       ++a.stats.misses;
       ++a.misses_by_user[e.user];
     } else {
@@ -252,7 +252,7 @@ SessionReport ReadReport(const std::filesystem::path& file, std::optional<std::i
     s.Bind(1, id);
     while (s.Step()) {
       const std::string kind = s.Text(3);
-      const auto k = ControlKindFromString(kind);
+      const auto k = EventKindFromLogName(kind);
       if (!k) throw SessionLogError(file.string() + ": unknown control event kind '" + kind + "'");
       ControlRecord r{U64(s.Int(0)), s.Text(1), s.Text(2), *k, s.Double(4), std::nullopt};
       if (!s.IsNull(5)) r.error_m = s.Double(5);
@@ -368,4 +368,4 @@ void PrintReportCsv(std::ostream& out, const SessionReport& r) {
   row("ownership", sid, "changes", std::to_string(r.ownership_changes));
 }
 
-}  // namespace handshare::world
+}  // namespace handshare::server

@@ -2,7 +2,7 @@
 // The session log's schema, version 1 (PRAGMA user_version = 1, application_id "HSLG").
 // Times are wall-clock ns since the Unix epoch. A change of schema gets a new version number
 // and a migration in OpenSchema; a reader refuses versions newer than it knows.
-namespace handshare::world::schema {
+namespace handshare::server::schema {
 
 inline constexpr const char* kCreateV1 = R"sql(
 CREATE TABLE IF NOT EXISTS sessions(
@@ -79,4 +79,4 @@ inline constexpr const char* kUpdateEnd = "UPDATE sessions SET ended_unix_ns = ?
 inline constexpr const char* kUpdateSeen =
     "UPDATE sessions SET last_seen_unix_ns = ?1, dropped_rows = ?2 WHERE id = ?3";
 
-}  // namespace handshare::world::schema
+}  // namespace handshare::server::schema

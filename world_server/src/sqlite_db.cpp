@@ -2,7 +2,7 @@
 
 #include <limits>
 
-namespace handshare::world::sqlite {
+namespace handshare::server::sqlite {
 
 Db::Db(const std::filesystem::path& file, int flags) : file_(file.string()) {
   const int rc = sqlite3_open_v2(file_.c_str(), &db_, flags | SQLITE_OPEN_NOMUTEX, nullptr);
@@ -110,4 +110,4 @@ std::string Statement::Text(int column) const {
 }
 bool Statement::IsNull(int column) const { return sqlite3_column_type(stmt_, column) == SQLITE_NULL; }
 
-}  // namespace handshare::world::sqlite
+}  // namespace handshare::server::sqlite

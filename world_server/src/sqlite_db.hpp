@@ -12,7 +12,7 @@
 
 #include "handshare/world_server/session_log.hpp"
 
-namespace handshare::world::sqlite {
+namespace handshare::server::sqlite {
 
 class Db {
  public:
@@ -72,4 +72,4 @@ class Statement {
   sqlite3_stmt* stmt_ = nullptr;
 };
 
-}  // namespace handshare::world::sqlite
+}  // namespace handshare::server::sqlite

@@ -7,7 +7,7 @@
 #include <random>
 #include <stdexcept>
 
-namespace handshare::world {
+namespace handshare::server {
 namespace {
 
 using namespace std::chrono_literals;
@@ -237,4 +237,4 @@ TEST(DeformationDelta, StorageIsSizedOnceAndReused) {
 }
 
 }  // namespace
-}  // namespace handshare::world
+}  // namespace handshare::server

@@ -2,7 +2,7 @@
 
 #include <gtest/gtest.h>
 
-namespace handshare::world {
+namespace handshare::server {
 namespace {
 
 InstanceKey Key(std::uint8_t k) {
@@ -55,4 +55,4 @@ TEST(MemberRegistry, UnknownInstanceGoneIsIgnored) {
 }
 
 }  // namespace
-}  // namespace handshare::world
+}  // namespace handshare::server

@@ -8,7 +8,7 @@
 #include <map>
 #include <random>
 
-namespace handshare::world {
+namespace handshare::server {
 namespace {
 
 using namespace std::chrono_literals;
@@ -221,4 +221,4 @@ TEST(OwnershipArbiter, RandomScenariosKeepTheRulesAndAreDeterministic) {
 }
 
 }  // namespace
-}  // namespace handshare::world
+}  // namespace handshare::server

@@ -11,7 +11,7 @@
 
 #include "test_support.hpp"
 
-namespace handshare::world {
+namespace handshare::server {
 namespace {
 
 using testing::ErrorOf;
@@ -65,8 +65,8 @@ TEST(SessionLog, CreatesAVersionedWalLogAndRecordsEveryKindOfRow) {
     EXPECT_EQ(log.session_id(), 1);
     log.OnSceneChange("start_menu", "Start menu", kT0);
     log.OnMember(MemberChange::kJoined, Member{"demo/alice", "alice", "haptic", "sim", 11}, kT0 + 1 * kSecond);
-    log.OnControlEvent(ControlRecord{kT0 + 2 * kSecond, "alice", "lever", ControlKind::kMoved, 0.5, 0.004});
-    log.OnControlEvent(ControlRecord{kT0 + 3 * kSecond, "alice", "lever", ControlKind::kMissed, 0.0, std::nullopt});
+    log.OnControlEvent(ControlRecord{kT0 + 2 * kSecond, "alice", "lever", controls::EventKind::kMoved, 0.5, 0.004});
+    log.OnControlEvent(ControlRecord{kT0 + 3 * kSecond, "alice", "lever", controls::EventKind::kMissed, 0.0, std::nullopt});
     log.OnOwnership("ball", "alice", "granted", kT0 + 4 * kSecond);
     log.OnMember(MemberChange::kLost, Member{"demo/alice", "alice", "haptic", "sim", 11}, kT0 + 5 * kSecond);
     log.Flush();
@@ -128,7 +128,7 @@ TEST(SessionLog, RowsFromManyThreadsAllArrive) {
       threads.emplace_back([&log, t] {
         for (int i = 0; i < kEach; ++i) {
           log.OnControlEvent(ControlRecord{kT0 + static_cast<std::uint64_t>(i), "user" + std::to_string(t), "button",
-                                           ControlKind::kPressed, 1.0, 0.001 * i});
+                                           controls::EventKind::kPressed, 1.0, 0.001 * i});
         }
       });
     }
@@ -242,16 +242,19 @@ TEST(SessionLog, AReadOnlyFileIsNamed) {
   EXPECT_NE(error.find("read-only"), std::string::npos) << error;
 }
 
-TEST(ControlKind, NamesRoundTrip) {
-  for (ControlKind k : {ControlKind::kPressed, ControlKind::kReleased, ControlKind::kMoved, ControlKind::kPageTurned,
-                        ControlKind::kMissed}) {
-    EXPECT_EQ(ControlKindFromString(ToString(k)), k);
+TEST(ControlEventLogNames, RoundTripEveryKindAndCountAnOpenedBookAsAHit) {
+  using controls::EventKind;
+  for (EventKind k : {EventKind::kPressed, EventKind::kReleased, EventKind::kMoved, EventKind::kPageTurned,
+                      EventKind::kMissed, EventKind::kOpened}) {
+    EXPECT_EQ(EventKindFromLogName(LogName(k)), k);
   }
-  EXPECT_FALSE(ControlKindFromString("kicked"));
-  EXPECT_TRUE(IsHit(ControlKind::kPageTurned));
-  EXPECT_FALSE(IsHit(ControlKind::kMissed));
-  EXPECT_FALSE(IsHit(ControlKind::kReleased));
+  EXPECT_STREQ(LogName(EventKind::kOpened), "opened");  // not "pressed", as it once was logged
+  EXPECT_FALSE(EventKindFromLogName("kicked"));
+  EXPECT_TRUE(IsHit(EventKind::kPageTurned));
+  EXPECT_TRUE(IsHit(EventKind::kOpened));
+  EXPECT_FALSE(IsHit(EventKind::kMissed));
+  EXPECT_FALSE(IsHit(EventKind::kReleased));
 }
 
 }  // namespace
-}  // namespace handshare::world
+}  // namespace handshare::server

@@ -10,7 +10,7 @@
 
 #include "test_support.hpp"
 
-namespace handshare::world {
+namespace handshare::server {
 namespace {
 
 using testing::ErrorOf;
@@ -45,11 +45,11 @@ TEST(ComputeControlStats, ReproducesThePapersTable4FromPerUserMisses) {
   for (const auto& [control, per_user] : misses) {
     for (std::size_t u = 0; u < per_user.size(); ++u) {
       const std::string user = "subject" + std::to_string(u + 1);
-      for (int m = 0; m < per_user[u]; ++m) events.push_back({t++, user, control, ControlKind::kMissed, 0.0, 0.02});
+      for (int m = 0; m < per_user[u]; ++m) events.push_back({t++, user, control, controls::EventKind::kMissed, 0.0, 0.02});
       // "they had to hit each control more than 10 times"
       for (int h = 0; h < 11; ++h) {
-        events.push_back({t++, user, control, ControlKind::kPressed, 1.0, 0.002});
-        events.push_back({t++, user, control, ControlKind::kReleased, 0.0, std::nullopt});
+        events.push_back({t++, user, control, controls::EventKind::kPressed, 1.0, 0.002});
+        events.push_back({t++, user, control, controls::EventKind::kReleased, 0.0, std::nullopt});
       }
     }
   }
@@ -77,12 +77,12 @@ TEST(ComputeControlStats, ReproducesThePapersTable4FromPerUserMisses) {
 
 TEST(ComputeControlStats, ErrorsOfHitsAndUsersWhoNeverMissed) {
   const std::vector<ControlRecord> events = {
-      {kT0, "alice", "lever", ControlKind::kMoved, 0.3, 0.001},
-      {kT0, "alice", "lever", ControlKind::kMoved, 0.3, 0.002},
-      {kT0, "bob", "lever", ControlKind::kMissed, 0.0, 0.003},
-      {kT0, "bob", "lever", ControlKind::kPageTurned, 0.0, 0.004},
-      {kT0, "bob", "lever", ControlKind::kPressed, 0.0, std::nullopt},  // no error measured
-      {kT0, "carol", "book", ControlKind::kPageTurned, 3.0, std::nullopt},
+      {kT0, "alice", "lever", controls::EventKind::kMoved, 0.3, 0.001},
+      {kT0, "alice", "lever", controls::EventKind::kMoved, 0.3, 0.002},
+      {kT0, "bob", "lever", controls::EventKind::kMissed, 0.0, 0.003},
+      {kT0, "bob", "lever", controls::EventKind::kPageTurned, 0.0, 0.004},
+      {kT0, "bob", "lever", controls::EventKind::kPressed, 0.0, std::nullopt},  // no error measured
+      {kT0, "carol", "book", controls::EventKind::kPageTurned, 3.0, std::nullopt},
   };
   const auto stats = ComputeControlStats(events);
   ASSERT_EQ(stats.size(), 2u);
@@ -162,9 +162,9 @@ class ReportFromFile : public ::testing::Test {
     log.OnSceneChange("start_menu", "Start menu", kT0 + 100 * kSecond);
     log.OnMember(MemberChange::kJoined, alice, kT0 + 101 * kSecond);
     log.OnSceneChange("solar_system", "Solar system", kT0 + 110 * kSecond);
-    log.OnControlEvent({kT0 + 111 * kSecond, "alice", "lever", ControlKind::kMissed, 0.0, 0.010});
-    log.OnControlEvent({kT0 + 112 * kSecond, "alice", "lever", ControlKind::kMoved, 0.4, 0.002});
-    log.OnControlEvent({kT0 + 113 * kSecond, "alice", "button", ControlKind::kPressed, 1.0, 0.001});
+    log.OnControlEvent({kT0 + 111 * kSecond, "alice", "lever", controls::EventKind::kMissed, 0.0, 0.010});
+    log.OnControlEvent({kT0 + 112 * kSecond, "alice", "lever", controls::EventKind::kMoved, 0.4, 0.002});
+    log.OnControlEvent({kT0 + 113 * kSecond, "alice", "button", controls::EventKind::kPressed, 1.0, 0.001});
     log.OnOwnership("ball", "alice", "granted", kT0 + 114 * kSecond);
     log.OnMember(MemberChange::kLeft, alice, kT0 + 115 * kSecond);
     log.End(kT0 + 120 * kSecond);
@@ -278,4 +278,4 @@ TEST(ReadReport, MissingEmptyForeignAndCorruptFilesSayWhat) {
 }
 
 }  // namespace
-}  // namespace handshare::world
+}  // namespace handshare::server

@@ -12,7 +12,7 @@
 
 #include "handshare/world_server/session_log.hpp"
 
-namespace handshare::world::testing {
+namespace handshare::server::testing {
 
 class TempDir {
  public:
@@ -48,4 +48,4 @@ inline std::string ErrorOf(const std::function<void()>& f) {
   return "<no SessionLogError>";
 }
 
-}  // namespace handshare::world::testing
+}  // namespace handshare::server::testing

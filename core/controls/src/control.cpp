@@ -67,7 +67,7 @@ void Control::Emit(EventBuffer& events, EventKind kind, int tip, double value, d
   // A hand that was on the control when it appeared (its visit began at the first step) does
   // not actuate it until it has left: the arrow of the next world, at the place of the arrow
   // just pressed, must not be pressed by the same push.
-  const int hand = tip >= 0 ? tip / kFingersPerHand : -1;
+  const int hand = tip >= 0 ? tip / kFingers : -1;
   if (guard_first_visits_ && hand >= 0 && hand < kMaxHands) {
     const Visit& v = visits_[static_cast<std::size_t>(hand)];
     if (first_step_ || (v.inside && !v.counts)) return;  // (the visit begins after the first model step)
@@ -81,8 +81,8 @@ void Control::Emit(EventBuffer& events, EventKind kind, int tip, double value, d
   e.index = index;
   e.value = value;
   e.error_m = error_m;
-  e.hand = tip >= 0 ? tip / kFingersPerHand : -1;
-  e.finger = tip >= 0 ? tip % kFingersPerHand : -1;
+  e.hand = tip >= 0 ? tip / kFingers : -1;
+  e.finger = tip >= 0 ? tip % kFingers : -1;
   events.Push(e);
   const bool actuation = kind == EventKind::kPressed || kind == EventKind::kMoved ||
                          kind == EventKind::kOpened || kind == EventKind::kPageTurned;
@@ -95,14 +95,14 @@ void Control::Emit(EventBuffer& events, EventKind kind, int tip, double value, d
 void Control::TrackApproach(const Fingers& fingers, EventBuffer& events) noexcept {
   const Eigen::AlignedBox3d box = Bounds_C();
   const Eigen::Vector3d target = Target_C();
-  const int hands = std::min(static_cast<int>(fingers.p_CE.size()) / kFingersPerHand, kMaxHands);
+  const int hands = std::min(static_cast<int>(fingers.p_CE.size()) / kFingers, kMaxHands);
   for (int h = 0; h < hands; ++h) {
     Visit& v = visits_[static_cast<std::size_t>(h)];
     double nearest_box = std::numeric_limits<double>::infinity();
     double nearest_target = std::numeric_limits<double>::infinity();
     int nearest_tip = -1;
-    for (int k = 0; k < kFingersPerHand; ++k) {
-      const int tip = h * kFingersPerHand + k;
+    for (int k = 0; k < kFingers; ++k) {
+      const int tip = h * kFingers + k;
       if (!fingers.present[static_cast<std::size_t>(tip)]) continue;
       const Eigen::Vector3d& p = fingers.p_CE[static_cast<std::size_t>(tip)];
       nearest_box = std::min(nearest_box, std::sqrt(box.squaredExteriorDistance(p)));

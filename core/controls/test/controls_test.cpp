@@ -37,15 +37,15 @@ scene::ControlSpec Spec(scene::ControlType type, const std::string& id = "c") {
 
 // One hand (5 fingertips): the index fingertip (finger 1) at p_W, the others far away.
 std::vector<Eigen::Vector3d> OneFinger(const Eigen::Vector3d& p_W) {
-  std::vector<Eigen::Vector3d> tips(kFingersPerHand, kFar);
+  std::vector<Eigen::Vector3d> tips(kFingers, kFar);
   tips[1] = p_W;
   return tips;
 }
 
 // One hand with all five fingertips spread 1.5 cm apart along x around p_W.
 void WholeHand(const Eigen::Vector3d& p_W, std::vector<Eigen::Vector3d>& tips, int hand = 0) {
-  for (int k = 0; k < kFingersPerHand; ++k) {
-    tips[static_cast<std::size_t>(hand * kFingersPerHand + k)] = p_W + Eigen::Vector3d(0.015 * (k - 2), 0.0, 0.0);
+  for (int k = 0; k < kFingers; ++k) {
+    tips[static_cast<std::size_t>(hand * kFingers + k)] = p_W + Eigen::Vector3d(0.015 * (k - 2), 0.0, 0.0);
   }
 }
 
@@ -338,7 +338,7 @@ TEST(Miss, ApproachAndWithdrawCountsOnce) {
   scene::ControlSpec spec = Spec(scene::ControlType::kButton, "button_x");
   PushControl button(spec);
   Recorder rec;
-  std::vector<Eigen::Vector3d> tips(kFingersPerHand);
+  std::vector<Eigen::Vector3d> tips(kFingers);
   // Down from 15 cm to 2 cm above the face (inside the 3 cm approach zone), and back.
   for (int i = 0; i <= 130; ++i) {
     WholeHand(Eigen::Vector3d(0.001, 0.0, 0.15 - 1e-3 * i), tips);
@@ -361,7 +361,7 @@ TEST(Miss, ApproachAndWithdrawCountsOnce) {
 TEST(Miss, HoveringAtTheBorderCountsOnceAndAPressIsNoMiss) {
   PushControl button(Spec(scene::ControlType::kButton));
   Recorder rec;
-  std::vector<Eigen::Vector3d> tips(kFingersPerHand);
+  std::vector<Eigen::Vector3d> tips(kFingers);
   // The zone's border is 3 cm above the face: wobble between 2.8 and 3.3 cm, then leave.
   for (int i = 0; i < 2000; ++i) {
     WholeHand(Eigen::Vector3d(0.0, 0.0, 0.0305 + 0.0025 * std::sin(0.05 * i)), tips);
@@ -390,7 +390,7 @@ TEST(Miss, HoveringAtTheBorderCountsOnceAndAPressIsNoMiss) {
 TEST(Miss, EachHandCountsItsOwnAndAHandPresentAtTheStartDoesNot) {
   PushControl button(Spec(scene::ControlType::kButton));
   Recorder rec;
-  std::vector<Eigen::Vector3d> tips(2 * kFingersPerHand, kFar);
+  std::vector<Eigen::Vector3d> tips(2 * kFingers, kFar);
   // Hand 0 is on the button when it appears (a scene switch under the hand): leaving is no miss.
   WholeHand(Eigen::Vector3d(0.0, 0.0, 0.02), tips, 0);
   rec.Step(button, tips);
@@ -440,7 +440,7 @@ TEST(ControlSet, BuiltFromTheSceneWithActions) {
   // degrees about z): it moves to Mars.
   const Eigen::Vector3d hinge = s.controls[0].p_WC_m;
   EventBuffer events;
-  std::vector<Eigen::Vector3d> tips(kFingersPerHand, kFar), f(kFingersPerHand);
+  std::vector<Eigen::Vector3d> tips(kFingers, kFar), f(kFingers);
   bool to_mars = false;
   for (int i = 0; i < 4000 && !to_mars; ++i) {
     tips[1] = hinge + Eigen::Vector3d(0.0, -0.016 + 2e-5 * i, 0.07);
@@ -474,7 +474,7 @@ TEST(ControlSet, StepDoesNotAllocate) {
   const scene::Scene s = scene::LoadSceneByName("start_menu", std::filesystem::path(HANDSHARE_SOURCE_ASSETS) / "scenes");
   ControlSet set = MakeControls(s);
   ASSERT_EQ(set.size(), 6u);
-  std::vector<Eigen::Vector3d> tips(3 * kFingersPerHand), f(3 * kFingersPerHand);
+  std::vector<Eigen::Vector3d> tips(3 * kFingers), f(3 * kFingers);
   EventBuffer events;
   // Three hands sweeping over the books and buttons, pressing, dragging and leaving: every
   // branch (contacts, clicks, page turns, misses) runs inside the counted window.
@@ -505,7 +505,7 @@ TEST(ControlSet, ForcesAreBoundedAndNaNFingertipsGetNone) {
   ControlSet set = MakeControls(s);
   std::mt19937 rng(7);  // fixed seed
   std::uniform_real_distribution<double> x(-0.25, 0.25), y(-0.2, 0.2), z(-0.04, 0.06);
-  std::vector<Eigen::Vector3d> tips(2 * kFingersPerHand), f(2 * kFingersPerHand);
+  std::vector<Eigen::Vector3d> tips(2 * kFingers), f(2 * kFingers);
   EventBuffer events;
   double largest = 0.0;
   for (int i = 0; i < 20000; ++i) {

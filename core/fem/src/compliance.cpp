@@ -1,5 +1,8 @@
 #include "handshare/fem/compliance.hpp"
 
+#include <unistd.h>
+
+#include <atomic>
 #include <algorithm>
 #include <chrono>
 #include <cstring>
@@ -416,8 +419,11 @@ void Compliance::Save(const fs::path& file) const {
   h.payload_checksum = sum.digest();
   h.header_checksum = HeaderChecksum(h);
 
+  // A name of this writer's own: several processes (or a superseded build beside a new one)
+  // may compute the same cache at once; each renames a complete file over it.
+  static std::atomic<std::uint64_t> writes{0};
   fs::path tmp = file;
-  tmp += ".tmp";
+  tmp += "." + std::to_string(getpid()) + "." + std::to_string(writes.fetch_add(1)) + ".tmp";
   {
     std::ofstream out(tmp, std::ios::binary | std::ios::trunc);
     if (!out) throw CacheError("cannot write compliance cache " + tmp.string() + ": " + std::strerror(errno));

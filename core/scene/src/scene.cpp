@@ -10,7 +10,6 @@
 #include <map>
 #include <numbers>
 #include <set>
-#include <time.h>
 #include <sstream>
 
 namespace handshare::scene {
@@ -700,12 +699,4 @@ Scene LoadSceneByName(const std::string& name, const std::filesystem::path& dir,
   return LoadScene(file, options);
 }
 
-}  // namespace handshare::scene
-
-namespace handshare::scene {
-double MotionTime_s() noexcept {
-  timespec ts{};
-  clock_gettime(CLOCK_REALTIME, &ts);
-  return static_cast<double>(ts.tv_sec % 86400) + 1e-9 * static_cast<double>(ts.tv_nsec);
-}
 }  // namespace handshare::scene

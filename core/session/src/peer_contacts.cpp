@@ -21,17 +21,6 @@ void PeerContacts::Expire(Clock::time_point now) {
   std::erase_if(sets_, [&](const auto& e) { return now - e.second.received >= config_.lifespan; });
 }
 
-contact::RemoteContact ToRemoteContact(const PeerContact& c) noexcept {
-  contact::RemoteContact r;
-  r.hand = c.hand;
-  r.finger = c.finger;
-  r.object = c.object;
-  r.p_WC_m = Eigen::Vector3d(c.p_WC_m[0], c.p_WC_m[1], c.p_WC_m[2]);
-  r.u_W_m = Eigen::Vector3d(c.u_W_m[0], c.u_W_m[1], c.u_W_m[2]);
-  r.f_E_W_N = Eigen::Vector3d(c.f_E_W_N[0], c.f_E_W_N[1], c.f_E_W_N[2]);
-  return r;
-}
-
 double PeerContacts::Weight(Clock::duration age) const {
   if (age <= config_.fade_after) return 1.0;
   if (age >= config_.lifespan) return 0.0;

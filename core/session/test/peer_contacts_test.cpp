@@ -28,7 +28,7 @@ struct Seen {
   double u_z, f_z, weight;
 };
 
-std::vector<Seen> Collect(const PeerContacts& peers, const world::SceneWorld& models, Clock::time_point now) {
+std::vector<Seen> Collect(const PeerContacts& peers, const world::SceneModels& models, Clock::time_point now) {
   std::vector<Seen> out;
   peers.ForEach(models, now, [&](const PeerContact& c, const msg::ContactSet&) {
     out.push_back({c.object, c.finger, c.hand, c.u_W_m[2], c.f_E_W_N[2], c.weight});
@@ -38,11 +38,11 @@ std::vector<Seen> Collect(const PeerContacts& peers, const world::SceneWorld& mo
 
 class PeerContactsTest : public ::testing::Test {
  protected:
-  static void SetUpTestSuite() { models_ = new world::SceneWorld(world::BuildSceneWorld(scene::LoadSceneByName("solar_system"))); }
+  static void SetUpTestSuite() { models_ = new world::SceneModels(world::BuildSceneModels(scene::LoadSceneByName("solar_system"))); }
   static void TearDownTestSuite() { delete models_; }
-  static world::SceneWorld* models_;
+  static world::SceneModels* models_;
 };
-world::SceneWorld* PeerContactsTest::models_ = nullptr;
+world::SceneModels* PeerContactsTest::models_ = nullptr;
 
 TEST_F(PeerContactsTest, ActiveFingersOnKnownObjectsOnly) {
   PeerContacts peers;

@@ -2,7 +2,7 @@
 /// The graphics node: a spectator's view of a session. Reads the scene state (objects drawn
 /// with their meshes), object states (poses of moving and grasped objects), deformations, every
 /// user's device state and the message board over DDS and draws them: headless into PNG files,
-/// or in a window where a display exists (large screen, mono or stereo). See SharedWorld.
+/// or in a window where a display exists (large screen, mono or stereo). See SceneReplica.
 #include <chrono>
 #include <filesystem>
 #include <string>
@@ -25,7 +25,7 @@ struct SpectatorConfig {
   bool fullscreen = false;
   std::chrono::duration<double> wait_for_scene{5.0};  // headless: wait this long for the scene
   std::filesystem::path assets_dir;  // mesh uris are relative to it; "" = DefaultAssetsDir()
-  std::filesystem::path deformation_out;  // "" = none; else at exit: SharedWorld::WriteDeformationJson
+  std::filesystem::path deformation_out;  // "" = none; else at exit: SceneReplica::WriteDeformationJson
 };
 
 /// $HANDSHARE_ASSETS if set, else the source tree's assets/ (as core/scene finds scenes).

@@ -6,9 +6,11 @@
 #include <array>
 #include <cstdint>
 
+#include "handshare/common/hand.hpp"
+
 namespace handshare::haptic {
 
-inline constexpr int kFingers = 5;  // thumb, index, middle, ring, little
+using common::kFingers;  // thumb, index, middle, ring, little (handshare/common/hand.hpp)
 
 /// What a device reports each haptic step. Positions in world W [m].
 struct DeviceReading {

@@ -10,12 +10,13 @@
 #include <memory>
 #include <string>
 
+#include "handshare/common/session_clock.hpp"
 #include "handshare/common/spsc_queue.hpp"
 #include "handshare/common/triple_buffer.hpp"
 #include "handshare/controls/controls.hpp"
 #include "handshare/haptic/force_renderer.hpp"
-#include "handshare/session/peer_contacts.hpp"
-#include "handshare/world/scene_world.hpp"
+#include "handshare/contact/peer_contact.hpp"
+#include "handshare/world/scene_models.hpp"
 
 namespace handshare::haptic {
 
@@ -27,7 +28,7 @@ struct ContactReport {
   std::uint64_t seq = 0;
   struct Finger {
     bool active = false;
-    std::int32_t object = -1;       // world object index (SceneWorld::ids)
+    std::int32_t object = -1;       // world object index (SceneModels::ids)
     std::int32_t node = -1;         // deformable: main surface node
     double p_WC_m[3] = {}, n_W[3] = {}, p_WE_m[3] = {}, u_W_m[3] = {}, f_W_N[3] = {};
     double depth_m = 0.0;
@@ -44,7 +45,7 @@ struct ContactReport {
 /// Other hands' contacts on this scene's objects (trivially copyable).
 struct RemoteContacts {
   std::int32_t count = 0;
-  session::PeerContact items[kMaxRemoteContacts];
+  contact::PeerContact items[kMaxRemoteContacts];
 };
 
 /// Dynamic bodies another process simulates (owned by another user, or free and simulated by
@@ -67,8 +68,10 @@ struct FollowedBodies {
 
 class SceneRenderer final : public ForceRenderer {
  public:
-  /// Builds the models of `scene` (deformables from the compliance cache). Not real-time.
-  SceneRenderer(const scene::Scene& scene, const world::SceneWorldOptions& options);
+  /// Builds the models of `scene` (deformables from the compliance cache). Periodic motions run
+  /// on the session's `clock` (the world server's origin). Not real-time.
+  SceneRenderer(const scene::Scene& scene, const world::SceneModelsOptions& options,
+                common::SessionClock clock = {});
 
   void Render(double t_s, double dt_s, const DeviceReading& reading,
               std::array<Eigen::Vector3d, kFingers>& f_E_W) noexcept override;
@@ -76,7 +79,7 @@ class SceneRenderer final : public ForceRenderer {
 
   // ---- bridge side ----
   const scene::Scene& scene() const noexcept { return scene_; }
-  const world::SceneWorld& models() const noexcept { return models_; }
+  const world::SceneModels& models() const noexcept { return models_; }
   /// World object index -> scene object id ("" if out of range).
   const std::string& IdOf(std::int32_t object) const noexcept;
   bool TakeReport(ContactReport& out) noexcept { return reports_.Read(out); }
@@ -91,7 +94,8 @@ class SceneRenderer final : public ForceRenderer {
 
  private:
   scene::Scene scene_;
-  world::SceneWorld models_;
+  common::SessionClock clock_;
+  world::SceneModels models_;
   controls::ControlSet controls_;
   double fingertip_radius_m_;
   std::vector<std::pair<contact::ObjectId, std::size_t>> moving_;  // (object, scene index)

@@ -19,7 +19,7 @@
 #include <span>
 #include <vector>
 
-namespace handshare::world {
+namespace handshare::server {
 
 struct DeformationDeltaConfig {
   double threshold_m = 1e-4;           // re-send a node when it moved more than this [m]
@@ -82,4 +82,4 @@ class DeformationDelta {
   std::uint64_t keyframes_sent_ = 0;
 };
 
-}  // namespace handshare::world
+}  // namespace handshare::server

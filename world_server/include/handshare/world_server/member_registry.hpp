@@ -9,7 +9,7 @@
 #include <string>
 #include <vector>
 
-namespace handshare::world {
+namespace handshare::server {
 
 using InstanceKey = std::array<std::uint8_t, 16>;
 
@@ -52,4 +52,4 @@ class MemberRegistry {
 
 const char* ToString(MemberChange change);
 
-}  // namespace handshare::world
+}  // namespace handshare::server

@@ -25,7 +25,7 @@
 
 #include "handshare/world/grasp.hpp"  // IsGrasp: what a grasp report means
 
-namespace handshare::world {
+namespace handshare::server {
 
 struct OwnershipConfig {
   std::chrono::nanoseconds release_grace = std::chrono::milliseconds(100);
@@ -89,4 +89,4 @@ class OwnershipArbiter {
   std::map<std::string, Time> gone_at_;  // users reported gone, and when
 };
 
-}  // namespace handshare::world
+}  // namespace handshare::server

@@ -16,9 +16,10 @@
 #include <string>
 #include <string_view>
 
+#include "handshare/controls/controls.hpp"
 #include "handshare/world_server/member_registry.hpp"
 
-namespace handshare::world {
+namespace handshare::server {
 
 /// A log file that cannot be opened, created, read or written; what() names the file and
 /// what failed ("file is not a database", "unable to open database file", ...).
@@ -27,19 +28,21 @@ class SessionLogError : public std::runtime_error {
   using std::runtime_error::runtime_error;
 };
 
-/// Kinds of control events, as in the IDL's ControlEventKind. A hit is kPressed, kMoved or
-/// kPageTurned (one event per hit: a lever reports one kMoved per push); kReleased is neither a
-/// hit nor a miss; kMissed is a try that did not hit the control.
-enum class ControlKind { kPressed, kReleased, kMoved, kPageTurned, kMissed };
-const char* ToString(ControlKind kind);
-std::optional<ControlKind> ControlKindFromString(std::string_view text);
-bool IsHit(ControlKind kind);
+/// Control events are logged with the one kind every layer uses (controls::EventKind, mapped
+/// from the IDL's ControlEventKind once, at the DDS boundary: handshare/session/control_events.hpp),
+/// by their log names: "pressed", "released", "moved", "page_turned", "missed", "opened".
+/// A hit is kPressed, kMoved, kPageTurned or kOpened (one event per hit: a lever reports one
+/// kMoved per push, a book one kOpened when its cover opens); kReleased is neither a hit nor a
+/// miss; kMissed is a try that did not hit the control.
+const char* LogName(controls::EventKind kind);
+std::optional<controls::EventKind> EventKindFromLogName(std::string_view text);
+bool IsHit(controls::EventKind kind);
 
 struct ControlRecord {
   std::uint64_t unix_ns = 0;
   std::string user;
   std::string control_id;
-  ControlKind kind = ControlKind::kPressed;
+  controls::EventKind kind = controls::EventKind::kPressed;
   double value = 0.0;                 // lever angle [rad], page number, ...
   std::optional<double> error_m;      // distance of the touch from the control's target [m]
 };
@@ -105,4 +108,4 @@ class SessionLog {
   std::unique_ptr<Impl> impl_;
 };
 
-}  // namespace handshare::world
+}  // namespace handshare::server

@@ -12,7 +12,7 @@
 
 #include "handshare/world_server/session_log.hpp"
 
-namespace handshare::world {
+namespace handshare::server {
 
 /// Sample mean and standard deviation (n - 1 in the denominator, as SPSS reports and as the
 /// paper's Table 4 is consistent with). sd is 0 for n < 2; mean is 0 for n = 0.
@@ -98,4 +98,4 @@ void PrintReport(std::ostream& out, const SessionReport& report);
 /// Long-format CSV, one value per line: session,section,item,field,value.
 void PrintReportCsv(std::ostream& out, const SessionReport& report);
 
-}  // namespace handshare::world
+}  // namespace handshare::server

@@ -12,7 +12,7 @@
 #include "handshare/world_server/ownership_arbiter.hpp"
 #include "handshare/world_server/session_log.hpp"
 
-namespace handshare::world {
+namespace handshare::server {
 
 struct WorldServerConfig {
   common::SessionOptions where;  // domain, session, duration, QoS file
@@ -20,7 +20,7 @@ struct WorldServerConfig {
   double tick_Hz = 60.0;
   std::string log_file;          // "": no session log; else SQLite file, a session is appended
   std::string cache_dir;         // deformable models' cache ("": world::DefaultCacheDir())
-  std::string dump_dir;          // "": none; else every published deformation's loads (SharedWorld)
+  std::string dump_dir;          // "": none; else every published deformation's loads (ObjectAuthority)
   double deformation_threshold_m = 1e-4;  // re-send a surface node when it moved more than this
 };
 
@@ -39,21 +39,24 @@ class WorldServer {
 
   /// Events of the session, printed and recorded in the log (once Run() opened it). Cheap: the
   /// log queues the row and a writer thread commits it. Call them from Run()'s thread (the
-  /// log itself is thread-safe, the printing is not). Run() calls OnSceneChange for the scene
-  /// it publishes and OnMemberEvent for every change of the member registry; the others are
-  /// for the readers still to come (control events, ownership).
+  /// log itself is thread-safe, the printing is not). The session's tick (ServerSession) calls
+  /// them for every scene it publishes, control event, member change and ownership change.
   void OnControlEvent(const ControlRecord& event);
   void OnSceneChange(const std::string& scene, const std::string& title);
   void OnMemberEvent(const MemberEvent& event, std::size_t present);
   void OnOwnershipChange(const OwnershipChange& change);
 
+  /// Prints one line of the server's log (stdout, with the time since start).
+  void Say(const std::string& line);
+
   /// nullptr without a log file, or before Run() opened it.
   SessionLog* session_log() { return log_.get(); }
 
  private:
-  void Print(const std::string& line);
   /// Reports a log failure once; true while the log is healthy.
   bool CheckLog();
+  /// Ends the session in the log and commits what is queued.
+  void CloseLog();
 
   WorldServerConfig config_;
   std::unique_ptr<SessionLog> log_;
@@ -61,4 +64,4 @@ class WorldServer {
   std::chrono::steady_clock::time_point start_;
 };
 
-}  // namespace handshare::world
+}  // namespace handshare::server

@@ -32,6 +32,7 @@
 #include "handshare/contact/mesh_collider.hpp"
 #include "handshare/contact/proxy.hpp"
 #include "handshare/contact/tri_mesh.hpp"
+#include "handshare/common/hand.hpp"
 #include "handshare/fem/compliance.hpp"
 #include "handshare/fem/contact_patch.hpp"
 #include "handshare/fem/contact_solver.hpp"
@@ -39,8 +40,8 @@
 
 namespace handshare::contact {
 
-/// Fingers per hand (thumb, index, middle, ring, little), as handshare::haptic::kFingers.
-inline constexpr int kFingers = 5;
+/// Fingers per hand (thumb, index, middle, ring, little): the one count of handshare/common/hand.hpp.
+using common::kFingers;
 
 /// Gravity magnitudes of the scenes [m/s^2] (use as Eigen::Vector3d(0, 0, -kMoonGravity...)).
 inline constexpr double kEarthGravity_m_per_s2 = 9.81;

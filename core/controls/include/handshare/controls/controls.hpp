@@ -7,8 +7,8 @@
 /// Real-time: Step() is noexcept and does not allocate, lock, log or throw; construction
 /// (MakeControls) allocates. One ControlSet per haptic node, stepped in the haptic thread.
 ///
-/// Fingertips come as one flat array, kFingersPerHand per hand (thumb first), several hands:
-/// fingertip i belongs to hand i / kFingersPerHand. A NaN position marks a fingertip that is
+/// Fingertips come as one flat array, kFingers per hand (thumb first), several hands:
+/// fingertip i belongs to hand i / kFingers. A NaN position marks a fingertip that is
 /// not tracked; it gets no force and is ignored.
 ///
 /// Frames (C: the control's frame from its scene entry, position_m + orientation_wxyz):
@@ -30,13 +30,14 @@
 #include <string_view>
 #include <vector>
 
+#include "handshare/common/hand.hpp"
 #include "handshare/scene/scene.hpp"
 
 namespace handshare::controls {
 
-inline constexpr int kFingersPerHand = 5;
+using common::kFingers;  // fingertips per hand (handshare/common/hand.hpp)
 inline constexpr int kMaxHands = 8;
-inline constexpr int kMaxFingertips = kFingersPerHand * kMaxHands;
+inline constexpr int kMaxFingertips = kFingers * kMaxHands;
 
 enum class EventKind : std::uint8_t {
   kPressed,     ///< button or arrow clicked (went past click_at_m)
@@ -67,7 +68,7 @@ struct ControlEvent {
   double value = 0.0;        ///< button/arrow: travel [m]; lever: angle [rad]; book: page;
                              ///< missed: closest distance to the target [m]
   double error_m = 0.0;      ///< see above
-  std::int32_t hand = -1;    ///< hand index (fingertip / kFingersPerHand)
+  std::int32_t hand = -1;    ///< hand index (fingertip / kFingers)
   std::int32_t finger = -1;  ///< fingertip index within the hand (0 = thumb)
   std::string_view id() const noexcept { return control_id.data(); }
 };
@@ -110,7 +111,7 @@ class Control {
 
   /// One haptic step.
   /// @param dt_s                time since the last step [s] (> 0).
-  /// @param p_WE                fingertip centres in W [m], kFingersPerHand per hand; NaN: absent.
+  /// @param p_WE                fingertip centres in W [m], kFingers per hand; NaN: absent.
   /// @param fingertip_radius_m  radius of the fingertip spheres [m].
   /// @param f_E_W               forces on the fingertips in W [N]; this control's forces are
   ///                            ADDED (same size as p_WE; each finger's share clamped to

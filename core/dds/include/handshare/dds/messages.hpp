@@ -3,10 +3,14 @@
 /// Node libraries include this; they never include Fast DDS headers themselves.
 #include <handshare/idl/handshare.h>
 
+#include "handshare/common/hand.hpp"
 #include "handshare/dds/participant.hpp"
 #include "handshare/dds/topics.hpp"
 
 namespace handshare::dds {
+
+// One finger count: the models' (handshare/common/hand.hpp) is the messages' (handshare.idl).
+static_assert(common::kFingers == msg::kFingers, "handshare.idl kFingers != common::kFingers");
 
 namespace detail {
 #define HANDSHARE_DECLARE_DDS_TYPE(T)                  \

@@ -105,13 +105,10 @@ struct Motion {
   double period_s = 0.0;  ///< 0: no motion.
   double phase_rad = 0.0;
   bool active() const noexcept { return period_s > 0.0 && amplitude_m != 0.0; }
-  /// Offset of the object origin from its rest position at time t_s [m], in W.
+  /// Offset of the object origin from its rest position at session time t_s [m], in W (t_s on
+  /// the session clock every node agrees on: common::SessionClock).
   Eigen::Vector3d Offset_W(double t_s) const noexcept;
 };
-
-/// The time periodic motions run on: wall-clock seconds of the day (CLOCK_REALTIME), so every
-/// process of a session (haptic nodes, world server) computes the same phase.
-double MotionTime_s() noexcept;
 
 struct SceneObject {
   std::string id;

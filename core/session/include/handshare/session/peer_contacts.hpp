@@ -1,7 +1,7 @@
 #pragma once
 /// The other hands' contacts, as every process that shares a world reads them: the newest
 /// ContactSet of each user, turned into contacts on this process's models of the scene
-/// (world::SceneWorld), so a haptic node and the world server put the same peers' fingertips
+/// (world::SceneModels), so a haptic node and the world server put the same peers' fingertips
 /// into the same FEM solves. Not real-time (the bridge thread or the server's tick).
 ///
 /// A vanished peer does not stop pressing at once: its last contact set fades out. From
@@ -15,8 +15,9 @@
 #include <map>
 #include <string>
 
+#include "handshare/contact/peer_contact.hpp"
 #include "handshare/dds/messages.hpp"
-#include "handshare/world/scene_world.hpp"
+#include "handshare/world/scene_models.hpp"
 
 namespace handshare::session {
 
@@ -25,19 +26,7 @@ struct PeerContactsConfig {
   std::chrono::nanoseconds lifespan = std::chrono::milliseconds(500);
 };
 
-/// One peer fingertip on an object of the local models. Plain data.
-struct PeerContact {
-  std::int32_t hand = 0;        // 1, 2, ... in user-name order
-  std::int32_t finger = 0;
-  std::int32_t object = -1;     // world object index of the local SceneWorld
-  double p_WC_m[3] = {};        // contact point on the undeformed surface
-  double u_W_m[3] = {};         // imposed displacement (deformables), faded
-  double f_E_W_N[3] = {};       // force on the peer's fingertip, faded
-  double weight = 1.0;          // the fade factor applied (1: fresh)
-};
-
-/// The contact as the haptic world takes it.
-contact::RemoteContact ToRemoteContact(const PeerContact& c) noexcept;
+using contact::PeerContact;  // handshare/contact/peer_contact.hpp: the plain, middleware-free type
 
 class PeerContacts {
  public:
@@ -54,7 +43,7 @@ class PeerContacts {
   /// Calls fn(const PeerContact&, const msg::ContactSet&) for every active finger of every
   /// peer on an object of `models` (unknown objects are skipped), faded by age at `now`.
   template <typename Fn>
-  void ForEach(const world::SceneWorld& models, Clock::time_point now, Fn&& fn) const {
+  void ForEach(const world::SceneModels& models, Clock::time_point now, Fn&& fn) const {
     std::int32_t hand = 0;
     for (const auto& [user, entry] : sets_) {
       ++hand;

@@ -1,4 +1,4 @@
-#include "handshare/world_server/shared_world.hpp"
+#include "handshare/world_server/object_authority.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -9,7 +9,7 @@
 
 #include "handshare/common/clock.hpp"
 
-namespace handshare::world {
+namespace handshare::server {
 
 namespace {
 
@@ -57,19 +57,21 @@ Eigen::Isometry3d Pose(const msg::ContactSet& s) {
 
 }  // namespace
 
-SharedWorld::SharedWorld(std::string session, SharedWorldOptions options)
-    : session_(std::move(session)), options_(std::move(options)), peers_(options_.peers), arbiter_(options_.ownership) {}
+ObjectAuthority::ObjectAuthority(std::string session, ObjectAuthorityOptions options, common::SessionClock clock)
+    : session_(std::move(session)), options_(std::move(options)), clock_(clock), peers_(options_.peers), arbiter_(options_.ownership) {}
 
-SharedWorld::~SharedWorld() {
+ObjectAuthority::~ObjectAuthority() {
   if (loading_.valid()) loading_.wait();
+  for (auto& build : superseded_) build.future.wait();
 }
 
-void SharedWorld::SetScene(const scene::Scene& scene) {
+void ObjectAuthority::SetScene(const scene::Scene& scene) {
   const bool same_world = scene.name == scene_.name;
   scene_ = scene;
   if (!same_world) {
     // Another world: nothing of the old one carries over.
     models_.reset();
+    ready_scene_.clear();
     deformables_.clear();
     moving_.clear();
     last_published_.clear();
@@ -77,14 +79,16 @@ void SharedWorld::SetScene(const scene::Scene& scene) {
     claims_.clear();
     peers_.Clear();
   }
-  if (loading_.valid()) loading_.wait();  // a build in flight finishes first (never two at once)
+  // A build in flight is superseded, not waited for: the tick goes on, and its models are
+  // dropped when it finishes (Tick reaps it).
+  if (loading_.valid()) superseded_.push_back({loading_scene_, std::move(loading_)});
   loading_scene_ = scene.name;
   loading_since_ = Clock::now();
   auto options = options_.models;
-  loading_ = std::async(std::launch::async, [scene, options] { return BuildSceneWorld(scene, options); });
+  loading_ = std::async(std::launch::async, [scene, options] { return world::BuildSceneModels(scene, options); });
 }
 
-void SharedWorld::OnContactSet(const msg::ContactSet& set, Clock::time_point now) {
+void ObjectAuthority::OnContactSet(const msg::ContactSet& set, Clock::time_point now) {
   const std::string user = set.user().to_string();
   if (user.empty() || set.session().to_string() != session_) return;
   peers_.Receive(set, now);
@@ -95,17 +99,30 @@ void SharedWorld::OnContactSet(const msg::ContactSet& set, Clock::time_point now
   previous = claim;
 }
 
-void SharedWorld::OnUserGone(const std::string& user, Clock::time_point now) {
+void ObjectAuthority::OnUserGone(const std::string& user, Clock::time_point now) {
   arbiter_.OnUserGone(user, now);
   claims_.erase(user);
 }
 
-void SharedWorld::RequestKeyframes() {
+void ObjectAuthority::RequestKeyframes() {
   keyframes_requested_ = true;
   for (auto& d : deformables_) d.delta->RequestKeyframe();
 }
 
-void SharedWorld::Adopt(SceneWorld models, TickOutput& out) {
+void ObjectAuthority::ReapSuperseded(TickOutput& out) {
+  std::erase_if(superseded_, [&](SupersededBuild& build) {
+    if (build.future.wait_for(std::chrono::seconds(0)) != std::future_status::ready) return false;
+    try {
+      build.future.get();
+      out.notes.push_back("models of '" + build.scene + "' dropped: a newer scene revision came while they were built");
+    } catch (const std::exception& e) {
+      out.notes.push_back("models of '" + build.scene + "' (superseded) failed: " + e.what());
+    }
+    return true;
+  });
+}
+
+void ObjectAuthority::Adopt(world::SceneModels models, TickOutput& out) {
   const bool carry = models_ != nullptr;  // same world, new revision: bodies stay where they are
   if (carry) {
     for (const auto body : models_->dynamic_bodies) {
@@ -113,7 +130,8 @@ void SharedWorld::Adopt(SceneWorld models, TickOutput& out) {
       if (id >= 0) models.world->SetPose(id, models_->world->pose(body));
     }
   }
-  models_ = std::make_unique<SceneWorld>(std::move(models));
+  models_ = std::make_unique<world::SceneModels>(std::move(models));
+  ready_scene_ = scene_.name;
   deformables_.clear();
   moving_.clear();
   last_published_.clear();
@@ -184,8 +202,9 @@ void SharedWorld::Adopt(SceneWorld models, TickOutput& out) {
   out.notes.push_back(note.str());
 }
 
-TickOutput SharedWorld::Tick(Clock::time_point now, double dt_s) {
+TickOutput ObjectAuthority::Tick(Clock::time_point now, double dt_s) {
   TickOutput out;
+  ReapSuperseded(out);
   if (loading_.valid() && loading_.wait_for(std::chrono::seconds(0)) == std::future_status::ready) {
     try {
       Adopt(loading_.get(), out);
@@ -215,12 +234,13 @@ TickOutput SharedWorld::Tick(Clock::time_point now, double dt_s) {
   // The users' fingertips on deformables: one solve with everybody. (Rigid bodies need none:
   // whoever touches a body claims it and simulates it; a free body only falls and rests.)
   std::size_t n_all = 0;
-  peers_.ForEach(*models_, now, [&](const session::PeerContact& c, const msg::ContactSet&) {
+  peers_.ForEach(*models_, now, [&](const contact::PeerContact& c, const msg::ContactSet&) {
     if (n_all >= remote_.size() || world.contact_solver(c.object) == nullptr) return;
-    remote_[n_all++] = session::ToRemoteContact(c);
+    remote_[n_all++] = contact::ToRemoteContact(c);
   });
 
-  const double motion_t = scene::MotionTime_s();
+  const double motion_t =
+      clock_.At_s(static_cast<std::uint64_t>(std::chrono::nanoseconds(now.time_since_epoch()).count()));
   for (const auto& [object, i] : moving_) {
     Eigen::Isometry3d X = scene_.objects[i].X_WO();
     X.translation() += scene_.objects[i].motion.Offset_W(motion_t);
@@ -299,12 +319,12 @@ TickOutput SharedWorld::Tick(Clock::time_point now, double dt_s) {
   return out;
 }
 
-void SharedWorld::Dump(const Deformable& d, std::uint32_t revision) const {
+void ObjectAuthority::Dump(const Deformable& d, std::uint32_t revision) const {
   const fem::ContactSolver* solver = models_->world->contact_solver(d.object);
   const Eigen::Matrix3d R = models_->world->pose(d.object).linear();
   std::set<std::string> users;
   const auto now = Clock::now();
-  peers_.ForEach(*models_, now, [&](const session::PeerContact& c, const msg::ContactSet& set) {
+  peers_.ForEach(*models_, now, [&](const contact::PeerContact& c, const msg::ContactSet& set) {
     if (c.object == d.object) users.insert(set.user().to_string());
   });
   std::ostringstream j;
@@ -360,4 +380,4 @@ void SharedWorld::Dump(const Deformable& d, std::uint32_t revision) const {
   std::filesystem::rename(tmp, file);
 }
 
-}  // namespace handshare::world
+}  // namespace handshare::server

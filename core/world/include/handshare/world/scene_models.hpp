@@ -14,7 +14,7 @@
 
 namespace handshare::world {
 
-struct SceneWorldOptions {
+struct SceneModelsOptions {
   std::filesystem::path cache_dir = DefaultCacheDir();
   double fingertip_radius_m = 0.008;
   double max_force_N = 3.5;
@@ -24,7 +24,7 @@ struct SceneWorldOptions {
   std::string support_object = "ground";
 };
 
-struct SceneWorld {
+struct SceneModels {
   std::unique_ptr<contact::HapticWorld> world;
   std::vector<std::string> ids;                    ///< world object index -> scene object id
   std::map<std::string, contact::ObjectId> index;  ///< scene object id -> world object index
@@ -39,6 +39,6 @@ struct SceneWorld {
 /// Builds (and Init()s) the haptic world of a scene: static rigid objects (mass 0), dynamic
 /// bodies (mass > 0) under the scene's gravity resting on the support, deformables from their
 /// prepared FEM models. Not real-time.
-SceneWorld BuildSceneWorld(const scene::Scene& scene, const SceneWorldOptions& options = {});
+SceneModels BuildSceneModels(const scene::Scene& scene, const SceneModelsOptions& options = {});
 
 }  // namespace handshare::world

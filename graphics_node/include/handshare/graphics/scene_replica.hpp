@@ -31,7 +31,7 @@
 
 namespace handshare::graphics {
 
-struct SharedWorldStats {
+struct SceneReplicaStats {
   std::uint64_t scene_changes = 0;              ///< scene states of another scene (fields reset)
   std::uint64_t mesh_errors = 0;                ///< objects drawn as boxes for a bad mesh
   std::uint64_t deformation_samples = 0;        ///< Deformation samples received
@@ -45,11 +45,11 @@ struct SharedWorldStats {
   std::uint64_t object_states_nonfinite = 0;    ///< ... with a non-finite or zero pose, ignored
 };
 
-class SharedWorld {
+class SceneReplica {
  public:
   /// assets_dir: the folder mesh uris are relative to. errors: where mesh errors are written
   /// (kept by reference; std::cerr in the node). prefix: starts each error line.
-  SharedWorld(std::filesystem::path assets_dir, std::ostream& errors, std::string prefix = "");
+  SceneReplica(std::filesystem::path assets_dir, std::ostream& errors, std::string prefix = "");
 
   /// A new scene state. Another scene (name) resets every deformation field and object pose;
   /// a new revision of the same scene keeps them for the objects that remain.
@@ -72,7 +72,7 @@ class SharedWorld {
   const DeformationField* deformation(const std::string& object_id) const;
   /// Pose the object is drawn in; empty if it is not in the current scene.
   std::optional<Eigen::Isometry3d> X_WO(const std::string& object_id) const;
-  const SharedWorldStats& stats() const { return stats_; }
+  const SceneReplicaStats& stats() const { return stats_; }
   /// Deformation statistics summed over the current fields.
   DeformationStats deformation_stats() const;
   MeshCache& meshes() { return meshes_; }
@@ -105,7 +105,7 @@ class SharedWorld {
   std::vector<std::string> order_;  // objects in scene-state order (drawing order)
   std::set<std::string> reported_;  // mesh errors already written for this scene
   DeformationStats retired_;        // statistics of the fields of earlier scenes
-  SharedWorldStats stats_;
+  SceneReplicaStats stats_;
 };
 
 }  // namespace handshare::graphics

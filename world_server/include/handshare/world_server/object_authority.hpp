@@ -1,6 +1,6 @@
 #pragma once
 /// The world server's model of the shared world: the scene's objects built the way every haptic
-/// node builds them (world::BuildSceneWorld), fed with every user's contact sets. Each tick it
+/// node builds them (world::BuildSceneModels), fed with every user's contact sets. Each tick it
 ///   - arbitrates ownership of grasped rigid bodies (OwnershipArbiter, from the contact sets'
 ///     grasp claims and vanished members), follows an owned body at its owner's reported pose
 ///     and simulates free bodies itself (gravity, support, the users' pushes);
@@ -24,17 +24,18 @@
 #include <string>
 #include <vector>
 
+#include "handshare/common/session_clock.hpp"
 #include "handshare/dds/messages.hpp"
 #include "handshare/scene/scene.hpp"
 #include "handshare/session/peer_contacts.hpp"
-#include "handshare/world/scene_world.hpp"
+#include "handshare/world/scene_models.hpp"
 #include "handshare/world_server/deformation_delta.hpp"
 #include "handshare/world_server/ownership_arbiter.hpp"
 
-namespace handshare::world {
+namespace handshare::server {
 
-struct SharedWorldOptions {
-  SceneWorldOptions models;
+struct ObjectAuthorityOptions {
+  world::SceneModelsOptions models;
   double physics_dt_s = 0.001;           ///< body integration sub-step (support stiffness needs <= 2 ms)
   DeformationDeltaConfig delta;
   OwnershipConfig ownership;
@@ -54,16 +55,20 @@ struct TickOutput {
   std::vector<std::pair<std::string, DeformationSample>> deformations;  ///< object id, sample
 };
 
-class SharedWorld {
+class ObjectAuthority {
  public:
   using Clock = std::chrono::steady_clock;
-  SharedWorld(std::string session, SharedWorldOptions options);
-  ~SharedWorld();
-  SharedWorld(const SharedWorld&) = delete;
-  SharedWorld& operator=(const SharedWorld&) = delete;
+  /// Periodic motions run on the session's `clock` (the origin the world server publishes).
+  ObjectAuthority(std::string session, ObjectAuthorityOptions options, common::SessionClock clock = {});
+  ~ObjectAuthority();
+  ObjectAuthority(const ObjectAuthority&) = delete;
+  ObjectAuthority& operator=(const ObjectAuthority&) = delete;
 
   /// A new revision of the scene. Another world: contacts, owners and deformations start
-  /// afresh. The same world (new gravity): bodies keep their poses and owners.
+  /// afresh. The same world (new gravity): bodies keep their poses and owners. Never waits:
+  /// the models are built on a loader thread; a build still in flight for an older revision is
+  /// superseded (its models are dropped when it finishes), so only the newest revision's
+  /// models are ever adopted.
   void SetScene(const scene::Scene& scene);
   void OnContactSet(const msg::ContactSet& set, Clock::time_point now);
   void OnUserGone(const std::string& user, Clock::time_point now);
@@ -73,6 +78,10 @@ class SharedWorld {
   TickOutput Tick(Clock::time_point now, double dt_s);
 
   bool ready() const { return models_ != nullptr; }
+  /// The scene whose models are adopted ("" before the first is ready).
+  const std::string& ready_scene() const { return ready_scene_; }
+  /// Builds superseded by a newer revision and not finished yet.
+  std::size_t superseded_builds() const { return superseded_.size(); }
   std::string owner(const std::string& object_id) const { return arbiter_.owner(object_id); }
 
  private:
@@ -85,17 +94,25 @@ class SharedWorld {
     std::vector<Eigen::Vector3d> u_slots;
     std::vector<double> u_W;                     // 3 per vertex
     bool touched_before = false;
-    const PreparedDeformable* prepared = nullptr;
+    const world::PreparedDeformable* prepared = nullptr;
     double E_Pa = 0.0, nu = 0.0;
   };
-  void Adopt(SceneWorld models, TickOutput& out);
+  void Adopt(world::SceneModels models, TickOutput& out);
+  void ReapSuperseded(TickOutput& out);
+  struct SupersededBuild {
+    std::string scene;
+    std::future<world::SceneModels> future;
+  };
   void Dump(const Deformable& d, std::uint32_t revision) const;
 
   std::string session_;
-  SharedWorldOptions options_;
+  ObjectAuthorityOptions options_;
+  common::SessionClock clock_;
   scene::Scene scene_;
-  std::unique_ptr<SceneWorld> models_;
-  std::future<SceneWorld> loading_;
+  std::unique_ptr<world::SceneModels> models_;
+  std::future<world::SceneModels> loading_;
+  std::vector<SupersededBuild> superseded_;
+  std::string ready_scene_;
   std::string loading_scene_;
   Clock::time_point loading_since_{};
   session::PeerContacts peers_;
@@ -108,4 +125,4 @@ class SharedWorld {
   bool keyframes_requested_ = false;
 };
 
-}  // namespace handshare::world
+}  // namespace handshare::server

@@ -1,4 +1,4 @@
-#include "handshare/world/scene_world.hpp"
+#include "handshare/world/scene_models.hpp"
 
 #include <stdexcept>
 
@@ -34,13 +34,13 @@ contact::RigidMaterial MaterialOf(const scene::SceneObject& o) {
 
 }  // namespace
 
-SceneWorld BuildSceneWorld(const scene::Scene& scene, const SceneWorldOptions& options) {
+SceneModels BuildSceneModels(const scene::Scene& scene, const SceneModelsOptions& options) {
   contact::WorldConfig config;
   config.max_hands = options.max_hands;
   config.fingertip_radius_m = options.fingertip_radius_m;
   config.max_force_N = options.max_force_N;
   config.gravity_W_m_per_s2 = scene.gravity_W_m_per_s2;
-  SceneWorld out;
+  SceneModels out;
   out.world = std::make_unique<contact::HapticWorld>(config);
   auto& w = *out.world;
   for (const auto& o : scene.objects) {

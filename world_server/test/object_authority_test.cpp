@@ -1,7 +1,7 @@
-// SharedWorld hand-over of a rigid body: the owner reports the ball's pose and velocity while
+// ObjectAuthority hand-over of a rigid body: the owner reports the ball's pose and velocity while
 // it holds it; when it lets go and the server frees the ball, the server simulates the ball on
 // from there with that velocity (it used to restart from rest, stopping in mid-air).
-#include "handshare/world_server/shared_world.hpp"
+#include "handshare/world_server/object_authority.hpp"
 
 #include <gtest/gtest.h>
 
@@ -10,10 +10,10 @@
 
 #include "test_support.hpp"
 
-namespace handshare::world {
+namespace handshare::server {
 namespace {
 
-using Clock = SharedWorld::Clock;
+using Clock = ObjectAuthority::Clock;
 constexpr double kMoon = 1.62;
 
 msg::ContactSet OwnerSet(const std::string& grasped, const Eigen::Vector3d& p, const Eigen::Vector3d& v) {
@@ -38,7 +38,7 @@ const msg::ObjectState* BallState(const TickOutput& out) {
   return nullptr;
 }
 
-TEST(SharedWorld, ALetGoBallFliesOnWithTheOwnersVelocity) {
+TEST(ObjectAuthority, ALetGoBallFliesOnWithTheOwnersVelocity) {
   testing::TempDir dir;
   std::filesystem::create_directories(dir.path() / "scenes");
   const auto file = dir.path() / "scenes" / "moon.json";
@@ -46,9 +46,9 @@ TEST(SharedWorld, ALetGoBallFliesOnWithTheOwnersVelocity) {
       {"id": "ground", "kind": "rigid", "shape": "box", "position_m": [0, 0, -0.02], "half_extent_m": [0.3, 0.3, 0.02]},
       {"id": "ball", "kind": "rigid", "shape": "sphere", "position_m": [0, 0, 0.04], "radius_m": 0.04, "mass_kg": 0.2}],
       "messages": [{"language": "en", "text": "t", "next_action": "a"}]})";
-  SharedWorldOptions options;
+  ObjectAuthorityOptions options;
   options.models.cache_dir = dir.path() / "cache";
-  SharedWorld world("s", options);
+  ObjectAuthority world("s", options);
   world.SetScene(scene::LoadScene(file));
   Clock::time_point now = Clock::now();
   const auto dt = std::chrono::milliseconds(10);
@@ -104,4 +104,58 @@ TEST(SharedWorld, ALetGoBallFliesOnWithTheOwnersVelocity) {
 }
 
 }  // namespace
-}  // namespace handshare::world
+}  // namespace handshare::server
+
+namespace handshare::server {
+namespace {
+
+// A world change that arrives while the models of the previous world are still being built
+// (tetgen and a compliance precompute take seconds): the server neither waits for that build
+// (its tick goes on) nor ever adopts it; the newest world's models are the ones adopted.
+TEST(ObjectAuthority, AWorldChangeWhileAModelBuildIsInFlightSupersedesIt) {
+  testing::TempDir dir;
+  std::filesystem::create_directories(dir.path() / "scenes");
+  const auto soft = dir.path() / "scenes" / "soft.json";
+  std::ofstream(soft) << R"({"name": "soft", "gravity_m_per_s2": [0, 0, -9.81], "objects": [
+      {"id": "block", "kind": "deformable", "shape": "box", "position_m": [0, 0, 0.02],
+       "half_extent_m": [0.03, 0.03, 0.015], "material": {"E_Pa": 20000, "nu": 0.4}, "fixed": {"below_m": -0.0149}}],
+      "messages": [{"language": "en", "text": "t", "next_action": "a"}]})";
+  const auto moon = dir.path() / "scenes" / "moon.json";
+  std::ofstream(moon) << R"({"name": "moon", "gravity_m_per_s2": [0, 0, -1.62], "objects": [
+      {"id": "ground", "kind": "rigid", "shape": "box", "position_m": [0, 0, -0.02], "half_extent_m": [0.3, 0.3, 0.02]},
+      {"id": "ball", "kind": "rigid", "shape": "sphere", "position_m": [0, 0, 0.04], "radius_m": 0.04, "mass_kg": 0.2}],
+      "messages": [{"language": "en", "text": "t", "next_action": "a"}]})";
+  ObjectAuthorityOptions options;
+  options.models.cache_dir = dir.path() / "cache";  // empty: the soft block is tetrahedralized and precomputed
+  ObjectAuthority world("s", options);
+  world.SetScene(scene::LoadScene(soft));
+  world.SetScene(scene::LoadScene(moon));  // at once: the soft world's build is in flight
+  EXPECT_EQ(world.superseded_builds(), 1u);
+  EXPECT_FALSE(world.ready());
+
+  std::vector<std::string> notes;
+  Clock::time_point now = Clock::now();
+  const auto dt = std::chrono::milliseconds(10);
+  for (int i = 0; i < 6000 && (!world.ready() || world.superseded_builds() > 0); ++i) {
+    std::this_thread::sleep_for(dt);
+    now += dt;
+    TickOutput out = world.Tick(now, 0.01);
+    EXPECT_TRUE(out.deformations.empty()) << "the soft world's block was published";
+    for (auto& n : out.notes) notes.push_back(n);
+  }
+  ASSERT_TRUE(world.ready());
+  EXPECT_EQ(world.ready_scene(), "moon");
+  EXPECT_EQ(world.superseded_builds(), 0u);
+  bool dropped = false;
+  for (const auto& n : notes) {
+    EXPECT_EQ(n.find("models of 'soft' ready"), std::string::npos) << n;
+    dropped |= n.find("models of 'soft' dropped") != std::string::npos;
+  }
+  EXPECT_TRUE(dropped);
+  // The adopted world is the Moon: the ball falls at the Moon's gravity, no block exists.
+  TickOutput out = world.Tick(now + dt, 0.01);
+  for (const auto& st : out.states) EXPECT_NE(st.object_id().to_string(), "block");
+}
+
+}  // namespace
+}  // namespace handshare::server

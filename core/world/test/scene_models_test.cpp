@@ -1,4 +1,4 @@
-#include "handshare/world/scene_world.hpp"
+#include "handshare/world/scene_models.hpp"
 
 #include <gtest/gtest.h>
 
@@ -26,12 +26,12 @@ const char* kGroundAndBall =
        {"id": "ball", "kind": "rigid", "shape": "sphere", "position_m": [0, 0, 0.06], "radius_m": 0.04, "mass_kg": 0.2})";
 
 // The ball falls onto the ground's top face under the scene's (Moon) gravity and rests there.
-TEST(SceneWorld, DynamicBallRestsOnTheGroundUnderTheSceneGravity) {
+TEST(SceneModels, DynamicBallRestsOnTheGroundUnderTheSceneGravity) {
   const auto dir = TempDir("ball");
   const scene::Scene s = WriteAndLoad(dir, "moon", kGroundAndBall);
-  SceneWorldOptions options;
+  SceneModelsOptions options;
   options.cache_dir = dir / "cache";
-  SceneWorld sw = BuildSceneWorld(s, options);
+  SceneModels sw = BuildSceneModels(s, options);
   ASSERT_EQ(sw.dynamic_bodies.size(), 1u);
   const auto ball = sw.Find("ball");
   ASSERT_GE(ball, 0);
@@ -46,7 +46,7 @@ TEST(SceneWorld, DynamicBallRestsOnTheGroundUnderTheSceneGravity) {
   EXPECT_LT(sw.world->body_velocity_W(ball).norm(), 1e-3);
 }
 
-TEST(SceneWorld, DeformableBoxIsPreparedOnceThenLoadedFromTheCache) {
+TEST(SceneModels, DeformableBoxIsPreparedOnceThenLoadedFromTheCache) {
   const auto dir = TempDir("box");
   const std::string block =
       R"({"id": "block", "kind": "deformable", "shape": "box", "position_m": [0, 0, 0.02],
@@ -61,9 +61,9 @@ TEST(SceneWorld, DeformableBoxIsPreparedOnceThenLoadedFromTheCache) {
   const PreparedDeformable second = PrepareDeformable(s, o, dir / "cache");
   EXPECT_EQ(second.compliance->input_hash(), first.compliance->input_hash());
   EXPECT_NE(second.cache_note, first.cache_note);  // precomputed, then loaded
-  SceneWorldOptions options;
+  SceneModelsOptions options;
   options.cache_dir = dir / "cache";
-  SceneWorld sw = BuildSceneWorld(s, options);
+  SceneModels sw = BuildSceneModels(s, options);
   ASSERT_EQ(sw.deformables.size(), 1u);
   // A fingertip pressed 2 mm into the top face feels an upward force.
   std::array<Eigen::Vector3d, 5> tips;
@@ -76,7 +76,7 @@ TEST(SceneWorld, DeformableBoxIsPreparedOnceThenLoadedFromTheCache) {
   EXPECT_EQ(sw.world->fingers()[1].object, sw.Find("block"));
 }
 
-TEST(SceneWorld, ADeformableWithoutFixedNodesIsAnErrorNamingFileAndObject) {
+TEST(SceneModels, ADeformableWithoutFixedNodesIsAnErrorNamingFileAndObject) {
   const auto dir = TempDir("free");
   const std::string block =
       R"({"id": "floater", "kind": "deformable", "shape": "box", "position_m": [0, 0, 0.02],

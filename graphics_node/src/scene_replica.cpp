@@ -1,4 +1,4 @@
-#include "handshare/graphics/shared_world.hpp"
+#include "handshare/graphics/scene_replica.hpp"
 
 #include <cmath>
 #include <fstream>
@@ -34,10 +34,10 @@ render::Rgb RgbOf(const msg::SceneObject& o) { return {o.rgb()[0], o.rgb()[1], o
 
 }  // namespace
 
-SharedWorld::SharedWorld(std::filesystem::path assets_dir, std::ostream& errors, std::string prefix)
+SceneReplica::SceneReplica(std::filesystem::path assets_dir, std::ostream& errors, std::string prefix)
     : errors_(errors), prefix_(std::move(prefix)), meshes_(std::move(assets_dir)) {}
 
-void SharedWorld::OnSceneState(const msg::SceneState& state) {
+void SceneReplica::OnSceneState(const msg::SceneState& state) {
   const std::string scene = state.scene().to_string();
   const bool another_scene = !has_scene_ || scene != scene_;
   if (another_scene) {
@@ -88,7 +88,7 @@ void SharedWorld::OnSceneState(const msg::SceneState& state) {
   objects_ = std::move(next);
 }
 
-void SharedWorld::OnDeformation(const msg::Deformation& sample) {
+void SceneReplica::OnDeformation(const msg::Deformation& sample) {
   ++stats_.deformation_samples;
   const auto it = objects_.find(sample.object_id().to_string());
   if (it == objects_.end()) {
@@ -106,7 +106,7 @@ void SharedWorld::OnDeformation(const msg::Deformation& sample) {
   field.Apply(sample.revision(), sample.keyframe(), sample.node_ids(), sample.u_W_m());
 }
 
-void SharedWorld::OnObjectState(const msg::ObjectState& state) {
+void SceneReplica::OnObjectState(const msg::ObjectState& state) {
   const auto it = objects_.find(state.object_id().to_string());
   if (it == objects_.end()) {
     ++stats_.object_states_unknown;
@@ -121,18 +121,18 @@ void SharedWorld::OnObjectState(const msg::ObjectState& state) {
   ++stats_.object_states;
 }
 
-std::optional<Eigen::Isometry3d> SharedWorld::X_WO(const std::string& object_id) const {
+std::optional<Eigen::Isometry3d> SceneReplica::X_WO(const std::string& object_id) const {
   const auto it = objects_.find(object_id);
   if (it == objects_.end()) return std::nullopt;
   return it->second.X_WO();
 }
 
-const DeformationField* SharedWorld::deformation(const std::string& object_id) const {
+const DeformationField* SceneReplica::deformation(const std::string& object_id) const {
   const auto it = objects_.find(object_id);
   return it == objects_.end() ? nullptr : it->second.field.get();
 }
 
-DeformationStats SharedWorld::deformation_stats() const {
+DeformationStats SceneReplica::deformation_stats() const {
   DeformationStats sum = retired_;
   for (const auto& [id, o] : objects_) {
     if (o.field) Add(sum, o.field->stats());
@@ -140,7 +140,7 @@ DeformationStats SharedWorld::deformation_stats() const {
   return sum;
 }
 
-void SharedWorld::AddObjects(render::SceneView& view) const {
+void SceneReplica::AddObjects(render::SceneView& view) const {
   for (const std::string& id : order_) {
     const Object& o = objects_.at(id);
     const Eigen::Isometry3d& X_WO = o.X_WO();
@@ -173,7 +173,7 @@ void SharedWorld::AddObjects(render::SceneView& view) const {
   }
 }
 
-void SharedWorld::WriteDeformationJson(const std::filesystem::path& file) const {
+void SceneReplica::WriteDeformationJson(const std::filesystem::path& file) const {
   nlohmann::ordered_json out = nlohmann::ordered_json::object();
   for (const std::string& id : order_) {
     const Object& o = objects_.at(id);

@@ -1,4 +1,4 @@
-#include "handshare/graphics/shared_world.hpp"
+#include "handshare/graphics/scene_replica.hpp"
 
 #include <gtest/gtest.h>
 
@@ -41,9 +41,9 @@ scene::Mesh Tail() { return scene::LoadMesh(kAssets / kTailUri); }
 // ---------------------------------------------------------------------------------------------
 // What the world holds and hands to the renderer.
 
-TEST(SharedWorld, MeshObjectIsTheFilesMeshAtItsPose) {
+TEST(SceneReplica, MeshObjectIsTheFilesMeshAtItsPose) {
   std::ostringstream errors;
-  SharedWorld world(kAssets, errors);
+  SceneReplica world(kAssets, errors);
   const Eigen::Isometry3d X_WO = TestPose();
   world.OnSceneState(Scene("dinosaur", 1, {Object("tail", "mesh", kTailUri, X_WO, {0.5F, 0.45F, 0.3F})}));
   render::SceneView view;
@@ -66,9 +66,9 @@ TEST(SharedWorld, MeshObjectIsTheFilesMeshAtItsPose) {
   EXPECT_FLOAT_EQ(drawn.rgb.g, 0.45F);
 }
 
-TEST(SharedWorld, EachMeshFileIsLoadedOnce) {
+TEST(SceneReplica, EachMeshFileIsLoadedOnce) {
   std::ostringstream errors;
-  SharedWorld world(kAssets, errors);
+  SceneReplica world(kAssets, errors);
   const Eigen::Isometry3d X = TestPose();
   world.OnSceneState(Scene("a", 1, {Object("left", "mesh", kTailUri, X, {}), Object("right", "mesh", kTailUri, X, {})}));
   world.OnSceneState(Scene("b", 1, {Object("again", "mesh", kTailUri, X, {})}));
@@ -78,9 +78,9 @@ TEST(SharedWorld, EachMeshFileIsLoadedOnce) {
   EXPECT_EQ(view.meshes.size(), 1U);
 }
 
-TEST(SharedWorld, DrawnVertexIsPoseTimesVertexPlusWorldDisplacement) {
+TEST(SceneReplica, DrawnVertexIsPoseTimesVertexPlusWorldDisplacement) {
   std::ostringstream errors;
-  SharedWorld world(kAssets, errors);
+  SceneReplica world(kAssets, errors);
   const Eigen::Isometry3d X_WO = TestPose();
   world.OnSceneState(Scene("dinosaur", 1, {Object("tail", "mesh", kTailUri, X_WO, {})}));
   const std::vector<std::uint32_t> ids = {0, 17, 500};
@@ -129,9 +129,9 @@ TEST(SharedWorld, DrawnVertexIsPoseTimesVertexPlusWorldDisplacement) {
   EXPECT_GT(compared, 900);
 }
 
-TEST(SharedWorld, DeformationsFollowTheReceiverRuleAndResetWithTheScene) {
+TEST(SceneReplica, DeformationsFollowTheReceiverRuleAndResetWithTheScene) {
   std::ostringstream errors;
-  SharedWorld world(kAssets, errors);
+  SceneReplica world(kAssets, errors);
   const Eigen::Isometry3d X = TestPose();
   const auto dinosaur = [&](std::uint32_t revision) {
     return Scene("dinosaur", revision, {Object("tail", "mesh", kTailUri, X, {}),
@@ -183,9 +183,9 @@ TEST(SharedWorld, DeformationsFollowTheReceiverRuleAndResetWithTheScene) {
   EXPECT_EQ(world.deformation_stats().ids_out_of_range, 2U);
 }
 
-TEST(SharedWorld, ObjectStatesMoveObjectsOfTheSceneOnly) {
+TEST(SceneReplica, ObjectStatesMoveObjectsOfTheSceneOnly) {
   std::ostringstream errors;
-  SharedWorld world(kAssets, errors);
+  SceneReplica world(kAssets, errors);
   const Eigen::Isometry3d X_scene = TestPose();
   world.OnSceneState(Scene("microscopic", 1, {Object("daphnia", "mesh", kTailUri, X_scene, {}),
                                               Object("ball", "sphere", "", X_scene, {}, Eigen::Vector3d(0.03, 0, 0))}));
@@ -225,10 +225,10 @@ TEST(SharedWorld, ObjectStatesMoveObjectsOfTheSceneOnly) {
   EXPECT_TRUE(world.X_WO("daphnia")->isApprox(X_scene, 1e-12));
 }
 
-TEST(SharedWorld, DeformationJsonHoldsTheNonZeroDisplacements) {
+TEST(SceneReplica, DeformationJsonHoldsTheNonZeroDisplacements) {
   TempDir dir;
   std::ostringstream errors;
-  SharedWorld world(kAssets, errors);
+  SceneReplica world(kAssets, errors);
   world.OnSceneState(Scene("dinosaur", 1, {Object("tail", "mesh", kTailUri, TestPose(), {}),
                                            Object("leg", "mesh", kTailUri, TestPose(), {})}));
   world.OnDeformation(Deformation("tail", 7, true, {4, 9, 11}, {0.25F, -0.5F, 0.125F, 0, 0, 0, 0, 0, -0.001F}));
@@ -251,12 +251,12 @@ TEST(SharedWorld, DeformationJsonHoldsTheNonZeroDisplacements) {
   EXPECT_THROW(world.WriteDeformationJson(dir.path() / "no_such_folder" / "d.json"), std::runtime_error);
 }
 
-TEST(SharedWorld, MissingOrBadMeshIsReportedOnceAndDrawnAsItsBox) {
+TEST(SceneReplica, MissingOrBadMeshIsReportedOnceAndDrawnAsItsBox) {
   TempDir dir;
   const auto junk = dir.path() / "junk.obj";
   std::ofstream(junk) << "this is not a mesh\n";
   std::ostringstream errors;
-  SharedWorld world(kAssets, errors, "[spectator] ");
+  SceneReplica world(kAssets, errors, "[spectator] ");
   const Eigen::Isometry3d X = TestPose();
   const auto state = Scene("dinosaur", 1, {Object("ghost", "mesh", "meshes/no_such_mesh.obj", X, {0, 1, 0}, {0.03, 0.02, 0.01}),
                                            Object("junk", "mesh", junk.string(), X, {0, 0, 1}),
@@ -365,9 +365,9 @@ std::vector<bool> Dilate(const std::vector<bool>& mask, int width, int height, i
   return out;
 }
 
-TEST(SharedWorldOffscreen, TailMeshCoversExactlyItsIndependentlyProjectedTriangles) {
+TEST(SceneReplicaOffscreen, TailMeshCoversExactlyItsIndependentlyProjectedTriangles) {
   std::ostringstream errors;
-  SharedWorld world(kAssets, errors);
+  SceneReplica world(kAssets, errors);
   const Eigen::Isometry3d X_WO = TestPose();
   world.OnSceneState(Scene("dinosaur", 1, {Object("tail", "mesh", kTailUri, X_WO, kGreen)}));
   render::SceneView view = Bare();
@@ -414,9 +414,9 @@ TEST(SharedWorldOffscreen, TailMeshCoversExactlyItsIndependentlyProjectedTriangl
   EXPECT_GT(covered, interior);
 }
 
-TEST(SharedWorldOffscreen, DentChangesThePixelsOfTheDisplacedPatchAndNothingElse) {
+TEST(SceneReplicaOffscreen, DentChangesThePixelsOfTheDisplacedPatchAndNothingElse) {
   std::ostringstream errors;
-  SharedWorld world(kAssets, errors);
+  SceneReplica world(kAssets, errors);
   const Eigen::Isometry3d X_WO = TestPose();
   world.OnSceneState(Scene("dinosaur", 1, {Object("tail", "mesh", kTailUri, X_WO, kGreen)}));
   const render::Camera camera = TailCamera(X_WO);
@@ -502,9 +502,9 @@ TEST(SharedWorldOffscreen, DentChangesThePixelsOfTheDisplacedPatchAndNothingElse
   EXPECT_EQ(renderer.Render(again, camera).rgb, rest.rgb);
 }
 
-TEST(SharedWorldOffscreen, MissingMeshIsDrawnAsItsBox) {
+TEST(SceneReplicaOffscreen, MissingMeshIsDrawnAsItsBox) {
   std::ostringstream errors;
-  SharedWorld world(kAssets, errors);
+  SceneReplica world(kAssets, errors);
   const Eigen::Isometry3d X_WO = TestPose();
   world.OnSceneState(Scene("dinosaur", 1, {Object("ghost", "mesh", "meshes/no_such_mesh.obj", X_WO, kGreen,
                                                   {0.03, 0.03, 0.03})}));

@@ -1,0 +1,64 @@
+#pragma once
+/// The haptic node's conversions between DDS samples and the haptic world's types: pure
+/// functions (no participant, no I/O, no clock read: times come in as arguments), unit-tested
+/// without DDS (haptic_node/test/bridge_conversions_test.cpp). Private to the node library:
+/// they are the DDS boundary, so they may name the generated message types; the public
+/// headers of haptic_node/include never do.
+#include <cstdint>
+#include <map>
+#include <string>
+
+#include <Eigen/Geometry>
+
+#include "handshare/common/latency_histogram.hpp"
+#include "handshare/common/periodic_loop.hpp"
+#include "handshare/dds/messages.hpp"
+#include "handshare/haptic/haptic_snapshot.hpp"
+#include "handshare/haptic/scene_renderer.hpp"
+#include "handshare/session/peer_contacts.hpp"
+#include "handshare/world/scene_models.hpp"
+
+namespace handshare::haptic {
+
+/// The device state viewers get from one haptic snapshot (user and session are set once).
+void ToDeviceState(const HapticSnapshot& s, msg::DeviceState& out);
+
+/// The loop statistics sample of the haptic loop's statistics and its fault count.
+void ToLoopStatistics(const common::LoopStats& s, std::uint64_t faults, msg::LoopStatistics& out);
+
+/// The dynamic body this hand claims for simulating it: the one it grasps (world::IsGrasp on
+/// the forces on the body), else the one it touches with the largest force, or -1. The world
+/// server gives a claimed free body to its claimant; a body held by another stays theirs.
+std::int32_t ClaimedBody(const ContactReport& r);
+
+/// The pose a reported body is at (its quaternion normalized).
+Eigen::Isometry3d PoseOf(const ContactReport::Body& body);
+
+/// A published rigid-body state as this node received it.
+struct ReceivedBody {
+  msg::ObjectState state;
+  std::uint64_t received_ns = 0;  ///< when it arrived (this host's steady clock)
+};
+using ReceivedBodies = std::map<std::string, ReceivedBody>;  ///< object id -> newest
+
+/// The dynamic bodies of `models` this hand follows: every received body that is not owned by
+/// `user` (at most kMaxReportedBodies; unknown and static objects are skipped).
+FollowedBodies ToFollowedBodies(const ReceivedBodies& bodies, const std::string& user,
+                                const world::SceneModels& models);
+
+/// The body the world server gave `user` to simulate (object index), or -1.
+std::int32_t OwnedBody(const ReceivedBodies& bodies, const std::string& user, const world::SceneModels& models);
+
+/// The peers' contacts on this scene's deformables, faded by age at `now` (rigid bodies move
+/// by their owner's published pose instead; at most kMaxRemoteContacts).
+RemoteContacts ToRemoteContacts(const session::PeerContacts& peers, const world::SceneModels& models,
+                                session::PeerContacts::Clock::time_point now);
+
+/// Fills `out`'s fingers, grasp claim and simulated body from a contact report. `owned` is
+/// OwnedBody(); `radius_m` the fingertip radius. Returns whether the set says something the
+/// others need: a finger touches, or the hand grasps or simulates a body (an owner keeps
+/// reporting its body's pose after letting go, until the server frees it).
+bool ToContactSet(const ContactReport& report, const world::SceneModels& models, std::int32_t owned,
+                  double radius_m, msg::ContactSet& out);
+
+}  // namespace handshare::haptic

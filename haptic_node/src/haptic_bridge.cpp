@@ -1,0 +1,178 @@
+#include "haptic_bridge.hpp"
+
+#include <chrono>
+#include <cstdio>
+
+#include "handshare/common/clock.hpp"
+#include "handshare/haptic/replay.hpp"
+#include "handshare/session/control_events.hpp"
+
+namespace handshare::haptic {
+
+namespace {
+std::string Format(const char* format, auto... args) {
+  char line[200];
+  std::snprintf(line, sizeof line, format, args...);
+  return line;
+}
+}  // namespace
+
+HapticBridge::HapticBridge(const HapticNodeConfig& config, Device& device, HapticLoop& loop,
+                           dds::Participant& participant, std::ostream* trace, Say say)
+    : config_(config),
+      device_(device),
+      loop_(loop),
+      trace_(trace),
+      say_(std::move(say)),
+      state_writer_(dds::MakeWriter<msg::DeviceState>(participant, dds::topics::kDeviceState)),
+      stats_writer_(dds::MakeWriter<msg::LoopStatistics>(participant, dds::topics::kLoopStatistics)),
+      contact_writer_(dds::MakeWriter<msg::ContactSet>(participant, dds::topics::kContactSet)),
+      event_writer_(dds::MakeWriter<msg::ControlEvent>(participant, dds::topics::kControlEvent)),
+      scene_reader_(dds::MakeReader<msg::SceneState>(participant, dds::topics::kSceneState)),
+      contact_reader_(dds::MakeReader<msg::ContactSet>(participant, dds::topics::kContactSet)),
+      object_reader_(dds::MakeReader<msg::ObjectState>(participant, dds::topics::kObjectState)),
+      next_stats_(Clock::now() + std::chrono::seconds(1)) {
+  models_options_.cache_dir =
+      config_.cache_dir.empty() ? world::DefaultCacheDir() : std::filesystem::path(config_.cache_dir);
+  models_options_.fingertip_radius_m = device_.capabilities().fingertip_radius_m;
+  models_options_.max_force_N = device_.capabilities().max_fingertip_force_N;
+  state_msg_.user(config_.user);
+  state_msg_.session(config_.where.session);
+  contacts_msg_.user(config_.user);
+  contacts_msg_.session(config_.where.session);
+  stats_msg_.node("haptic_node/" + config_.user);
+  stats_msg_.session(config_.where.session);
+}
+
+void HapticBridge::Tick() {
+  ApplySceneChange();
+  loop_.CollectRetired();
+  if (renderer_) {
+    ForwardControlEvents();
+    if (renderer_->TakeReport(report_)) have_report_ = true;
+    ReceivePeers();
+    FollowPeerBodies();
+  }
+  PublishDeviceState();
+  PublishContactSet();
+  PublishStatistics();
+}
+
+void HapticBridge::ApplySceneChange() {
+  msg::SceneState state;
+  dds::SampleMeta meta;
+  while (scene_reader_.TakeNext(state, meta)) {
+    if (!meta.valid_data || state.revision() == scene_revision_) continue;
+    scene_revision_ = state.revision();
+    try {
+      AdoptScene(state);
+    } catch (const std::exception& e) {
+      // A scene this node cannot build: keep the old one (or none): no forces from it.
+      say_(std::string("cannot build scene '") + state.scene().to_string() + "': " + e.what());
+    }
+  }
+}
+
+void HapticBridge::AdoptScene(const msg::SceneState& state) {
+  scene::Scene scene = scene::LoadSceneByName(state.scene().to_string());
+  const auto& g = state.gravity_W_m_per_s2();
+  scene.gravity_W_m_per_s2 = Eigen::Vector3d(g[0], g[1], g[2]);
+  if (state.session_epoch_unix_ns() != 0) {
+    session_clock_ = common::SessionClock::FromEpoch(state.session_epoch_unix_ns());
+  }
+  const auto t0 = Clock::now();
+  auto next = std::make_shared<SceneRenderer>(scene, models_options_, session_clock_);
+  const bool same_world = renderer_ && renderer_->scene().name == scene.name;
+  if (same_world && have_report_) {
+    for (int b = 0; b < report_.num_bodies; ++b) {
+      const auto& body = report_.bodies[b];
+      const Eigen::Isometry3d X = PoseOf(body);
+      next->PlaceBody(renderer_->IdOf(body.object), X);
+      say_(Format("  %s stays at (%.3f, %.3f, %.3f) m", renderer_->IdOf(body.object).c_str(), X.translation().x(),
+                  X.translation().y(), X.translation().z()));
+    }
+  }
+  if (!same_world) bodies_.clear();
+  peers_.Clear();
+  renderer_ = next;
+  have_report_ = false;
+  loop_.SetRenderer(renderer_);
+  if (const double t_s = loop_.now_s(); device_.OnWorldReady(t_s)) {
+    say_(Format("hand script starts at loop time %.3f s (the first world is here)", t_s));
+  }
+  say_(Format("scene '%s' revision %u: %d objects, %zu controls, gravity %.2f m/s^2 (%.2f s)", scene.name.c_str(),
+              scene_revision_, renderer_->models().world->num_objects(), scene.controls.size(),
+              scene.gravity_W_m_per_s2.z(), std::chrono::duration<double>(Clock::now() - t0).count()));
+}
+
+void HapticBridge::ForwardControlEvents() {
+  controls::ControlEvent event;
+  while (renderer_->TakeEvent(event)) {
+    event_writer_.Write(session::ToMessage(event, config_.where.session, config_.user, common::SteadyNowNs()));
+    ++control_events_sent_;
+    say_(Format("control %s: %s (value %.3f, error %.1f mm)", std::string(event.id()).c_str(),
+                controls::ToString(event.kind), event.value, 1e3 * event.error_m));
+  }
+}
+
+void HapticBridge::ReceivePeers() {
+  // A peer touching something sends its contact set at its publish rate; one silent for
+  // longer has gone (or stopped touching without a last sample): its contacts fade out.
+  const auto now = Clock::now();
+  msg::ContactSet peer;
+  dds::SampleMeta meta;
+  while (contact_reader_.TakeNext(peer, meta)) {
+    if (meta.valid_data) peers_.Receive(peer, now, config_.user);
+  }
+  peers_.Expire(now);
+  renderer_->SetRemote(ToRemoteContacts(peers_, renderer_->models(), now));
+}
+
+void HapticBridge::FollowPeerBodies() {
+  // The owner simulates a grasped body, the world server a free one; this hand follows every
+  // body it does not own itself.
+  msg::ObjectState body;
+  dds::SampleMeta meta;
+  while (object_reader_.TakeNext(body, meta)) {
+    if (!meta.valid_data || body.session().to_string() != config_.where.session) continue;
+    bodies_[body.object_id().to_string()] = {body, common::SteadyNowNs()};
+  }
+  renderer_->SetFollowed(ToFollowedBodies(bodies_, config_.user, renderer_->models()));
+}
+
+void HapticBridge::PublishDeviceState() {
+  HapticSnapshot snapshot;
+  if (!loop_.TakeSnapshot(snapshot)) return;
+  ToDeviceState(snapshot, state_msg_);
+  // Skip what nobody needs: no viewer matched, nothing sent (the trace still records).
+  if (state_writer_.matched_readers() > 0) {
+    state_writer_.Write(state_msg_);
+    ++device_states_published_;
+  }
+  if (trace_ != nullptr) WriteTraceRow(*trace_, snapshot);
+}
+
+void HapticBridge::PublishContactSet() {
+  if (!renderer_ || !have_report_) return;
+  const std::int32_t owned = OwnedBody(bodies_, config_.user, renderer_->models());
+  const bool active =
+      ToContactSet(report_, renderer_->models(), owned, models_options_.fingertip_radius_m, contacts_msg_);
+  if ((active || last_sent_active_) && contact_writer_.matched_readers() > 0) {
+    contacts_msg_.stamp_ns(common::SteadyNowNs());
+    contacts_msg_.seq(contacts_msg_.seq() + 1);
+    contact_writer_.Write(contacts_msg_);
+  }
+  last_sent_active_ = active;
+}
+
+void HapticBridge::PublishStatistics() {
+  if (Clock::now() < next_stats_) return;
+  next_stats_ += std::chrono::seconds(1);
+  common::LoopStats stats;
+  if (loop_.TakeStats(stats) && stats_writer_.matched_readers() > 0) {
+    ToLoopStatistics(stats, loop_.faults(), stats_msg_);
+    stats_writer_.Write(stats_msg_);
+  }
+}
+
+}  // namespace handshare::haptic

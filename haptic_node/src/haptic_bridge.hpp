@@ -1,0 +1,91 @@
+#pragma once
+/// The haptic node's bridge thread, as a list of stages: everything between the haptic loop
+/// (its own real-time thread) and the session's DDS topics. One Tick() per bridge period
+/// (100 Hz by default); each stage is a short function over the bridge's state. Private to the
+/// node library: it holds DDS writers and readers.
+#include <cstdint>
+#include <functional>
+#include <memory>
+#include <ostream>
+#include <string>
+
+#include "bridge_conversions.hpp"
+#include "handshare/common/session_clock.hpp"
+#include "handshare/dds/messages.hpp"
+#include "handshare/haptic/haptic_loop.hpp"
+#include "handshare/haptic/haptic_node.hpp"
+#include "handshare/haptic/scene_renderer.hpp"
+#include "handshare/session/peer_contacts.hpp"
+#include "handshare/world/scene_models.hpp"
+
+namespace handshare::haptic {
+
+class HapticBridge {
+ public:
+  using Clock = std::chrono::steady_clock;
+  using Say = std::function<void(const std::string&)>;
+
+  /// trace: where every device state goes as a CSV row (nullptr: none). Not real-time.
+  HapticBridge(const HapticNodeConfig& config, Device& device, HapticLoop& loop, dds::Participant& participant,
+               std::ostream* trace, Say say);
+
+  /// One bridge period: the stages below, in this order.
+  void Tick();
+
+  std::uint64_t device_states_published() const { return device_states_published_; }
+  std::uint64_t control_events_sent() const { return control_events_sent_; }
+
+ private:
+  // ---- the stages of a tick ----
+  /// A new scene revision (another world, or the same world with new gravity) gets a new
+  /// renderer, handed to the haptic loop; dynamic bodies keep their poses in the same world.
+  void ApplySceneChange();
+  /// The renderer's control events, to the world server (reliably).
+  void ForwardControlEvents();
+  /// The other users' contact sets, on this world's deformables.
+  void ReceivePeers();
+  /// Rigid bodies another process simulates: this hand follows their published states.
+  void FollowPeerBodies();
+  /// The newest haptic snapshot, to viewers (and the trace).
+  void PublishDeviceState();
+  /// This hand's contacts: while touching, grasping or simulating, and once more at the end.
+  void PublishContactSet();
+  /// The loop statistics, once a second.
+  void PublishStatistics();
+
+  /// Builds the renderer of one scene state and hands it to the loop.
+  void AdoptScene(const msg::SceneState& state);
+
+  HapticNodeConfig config_;
+  Device& device_;
+  HapticLoop& loop_;
+  std::ostream* trace_;
+  Say say_;
+  world::SceneModelsOptions models_options_;
+
+  dds::Writer<msg::DeviceState> state_writer_;
+  dds::Writer<msg::LoopStatistics> stats_writer_;
+  dds::Writer<msg::ContactSet> contact_writer_;
+  dds::Writer<msg::ControlEvent> event_writer_;
+  dds::Reader<msg::SceneState> scene_reader_;
+  dds::Reader<msg::ContactSet> contact_reader_;
+  dds::Reader<msg::ObjectState> object_reader_;
+
+  std::shared_ptr<SceneRenderer> renderer_;  ///< the bridge's handle; the loop holds its own
+  std::uint32_t scene_revision_ = 0;
+  common::SessionClock session_clock_;
+  ContactReport report_;
+  bool have_report_ = false;
+  bool last_sent_active_ = false;
+  session::PeerContacts peers_;    ///< the other users' newest contact sets (faded when silent)
+  ReceivedBodies bodies_;          ///< published rigid-body states, followed unless owned here
+
+  msg::DeviceState state_msg_;
+  msg::LoopStatistics stats_msg_;
+  msg::ContactSet contacts_msg_;
+  Clock::time_point next_stats_;
+  std::uint64_t device_states_published_ = 0;
+  std::uint64_t control_events_sent_ = 0;
+};
+
+}  // namespace handshare::haptic

@@ -1,0 +1,56 @@
+#pragma once
+/// What the controls do to the session's scene: the one function the world server applies
+/// every control event with (go to another world, change gravity, retitle the scene, show
+/// messages on the board), over the scene alone. No DDS and no clock: the server turns the
+/// outcome into samples (a new scene revision, board messages) and log lines.
+///
+/// Which action an event takes (scene files, docs/scenes.md):
+///   button, arrow: `action` when pressed;
+///   book: `action` when its cover opens; `page_actions[i]` when turned to page i;
+///   lever: `detent_actions[i]` when it settles in detent i.
+/// Releases and misses take none; neither does a control the current world does not have (an
+/// event of a world already left) nor an index outside the lists.
+#include <cstdint>
+#include <functional>
+#include <string>
+#include <vector>
+
+#include "handshare/controls/controls.hpp"
+#include "handshare/scene/scene.hpp"
+
+namespace handshare::server {
+
+/// A control event as the scene's logic sees it.
+struct ControlInput {
+  std::string control_id;
+  controls::EventKind kind = controls::EventKind::kPressed;
+  std::int32_t index = -1;  ///< lever detent, book page; -1 otherwise
+  std::string user;         ///< who actuated it (for the log)
+};
+
+/// What applying one control event did.
+struct ControlOutcome {
+  bool taken = false;            ///< the event had an action (possibly one that failed)
+  bool world_changed = false;    ///< the scene is another world now
+  bool revised = false;          ///< the scene changed (world, gravity or title): a new revision
+  bool gravity_changed = false;  ///< same world, new gravity: its models need rebuilding
+  /// Messages for the board, in the order shown: the new world's, then the action's own. Each
+  /// entry is one board message in every language the scene has.
+  std::vector<std::vector<scene::Message>> boards;
+  std::vector<std::string> notes;        ///< lines for the server's log (errors included)
+};
+
+/// Loads a world by name (LoadWorld in the server; tests pass their own).
+using SceneLoader = std::function<scene::Scene(const std::string& name)>;
+/// The server's loader: scene::LoadSceneByName from the assets' scenes folder.
+scene::Scene LoadWorld(const std::string& name);
+
+/// The action `input` takes in `scene` (nullptr: none). The pointer is into `scene`.
+const scene::Action* ActionOf(const scene::Scene& scene, const ControlInput& input);
+
+/// Applies the action `input` takes to `scene`: another world first (through `load`; a world
+/// that cannot be loaded leaves the scene as it was and says why in notes), then gravity and
+/// title, then the messages (the new world's, then the action's own). Not real-time.
+ControlOutcome ApplyControlAction(scene::Scene& scene, const ControlInput& input, const SceneLoader& load);
+
+}  // namespace handshare::server

@@ -1,0 +1,76 @@
+#include "handshare/world_server/control_actions.hpp"
+
+#include <cstdio>
+
+namespace handshare::server {
+
+namespace {
+const scene::ControlSpec* FindControl(const scene::Scene& scene, const std::string& id) {
+  for (const auto& c : scene.controls) {
+    if (c.id == id) return &c;
+  }
+  return nullptr;
+}
+
+const scene::Action* At(const std::vector<scene::Action>& actions, std::int32_t index) {
+  return index >= 0 && static_cast<std::size_t>(index) < actions.size() ? &actions[static_cast<std::size_t>(index)]
+                                                                         : nullptr;
+}
+}  // namespace
+
+scene::Scene LoadWorld(const std::string& name) { return scene::LoadSceneByName(name); }
+
+const scene::Action* ActionOf(const scene::Scene& scene, const ControlInput& input) {
+  const scene::ControlSpec* spec = FindControl(scene, input.control_id);
+  if (spec == nullptr) return nullptr;  // a control of a world already left
+  const bool clickable = spec->type == scene::ControlType::kButton || spec->type == scene::ControlType::kArrow;
+  switch (input.kind) {
+    case controls::EventKind::kPressed: return clickable ? &spec->action : nullptr;
+    case controls::EventKind::kOpened: return spec->type == scene::ControlType::kBook ? &spec->action : nullptr;
+    case controls::EventKind::kMoved: return At(spec->detent_actions, input.index);
+    case controls::EventKind::kPageTurned: return At(spec->page_actions, input.index);
+    case controls::EventKind::kReleased:
+    case controls::EventKind::kMissed: return nullptr;
+  }
+  return nullptr;
+}
+
+ControlOutcome ApplyControlAction(scene::Scene& scene, const ControlInput& input, const SceneLoader& load) {
+  ControlOutcome out;
+  const scene::Action* found = ActionOf(scene, input);
+  if (found == nullptr || found->empty()) return out;
+  out.taken = true;
+  // A copy: going to another world replaces the scene that holds the control and its action.
+  const scene::Action action = *found;
+  const std::string by = "control " + input.control_id + " by " + input.user;
+  if (!action.goto_scene.empty()) {
+    try {
+      scene = load(action.goto_scene);
+    } catch (const std::exception& e) {
+      out.notes.push_back(by + ": cannot go to '" + action.goto_scene + "': " + e.what());
+      return out;
+    }
+    out.world_changed = out.revised = true;
+    if (!scene.messages.empty()) out.boards.push_back(scene.messages);
+    out.notes.push_back(by + ": scene '" + scene.name + "'");
+  }
+  if (action.set_gravity) {
+    scene.gravity_W_m_per_s2 = action.gravity_W_m_per_s2;
+    out.revised = true;
+    out.gravity_changed = !out.world_changed;
+  }
+  if (!action.title.empty()) {
+    scene.title = action.title;
+    out.revised = true;
+  }
+  if (action.set_gravity || !action.title.empty()) {
+    char line[200];
+    std::snprintf(line, sizeof line, "%s: gravity %.2f m/s^2, '%s'", by.c_str(), scene.gravity_W_m_per_s2.z(),
+                  scene.title.c_str());
+    out.notes.push_back(line);
+  }
+  if (!action.messages.empty()) out.boards.push_back(action.messages);
+  return out;
+}
+
+}  // namespace handshare::server

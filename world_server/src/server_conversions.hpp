@@ -1,0 +1,40 @@
+#pragma once
+/// The world server's conversions between DDS samples and its own types: pure functions (no
+/// participant, no clock read, no I/O), unit-tested without DDS
+/// (world_server/test/server_conversions_test.cpp). Private to the server library.
+#include <cstdint>
+#include <optional>
+#include <string>
+
+#include "handshare/dds/messages.hpp"
+#include "handshare/scene/scene.hpp"
+#include "handshare/world_server/control_actions.hpp"
+#include "handshare/world_server/deformation_delta.hpp"
+#include "handshare/world_server/member_registry.hpp"
+#include "handshare/world_server/session_log.hpp"
+
+namespace handshare::server {
+
+/// The scene state every node builds its world from: revision `revision` of `scene`, with the
+/// session clock's origin.
+msg::SceneState ToSceneState(const scene::Scene& s, const std::string& session, std::uint32_t revision,
+                             std::uint64_t session_epoch_unix_ns);
+
+/// A member as announced.
+Member ToMember(const msg::MemberInfo& info);
+
+/// A received control event for the scene's logic; empty for a kind outside the IDL's
+/// enumeration (a bad sample: dropped).
+std::optional<ControlInput> ToControlInput(const msg::ControlEvent& e);
+
+/// The session log's row of a control event received at unix_ns (a non-finite error is none).
+ControlRecord ToControlRecord(const msg::ControlEvent& e, const ControlInput& input, std::uint64_t unix_ns);
+
+/// The board sample of message number message_id.
+msg::MessageBoard ToMessageBoard(const scene::Message& m, const std::string& session, std::uint32_t message_id);
+
+/// One deformation sample of object_id.
+msg::Deformation ToDeformation(const std::string& object_id, const std::string& session,
+                               const DeformationSample& sample);
+
+}  // namespace handshare::server

@@ -1,0 +1,73 @@
+#pragma once
+/// The world server's tick, as a list of stages over one session: members, control events,
+/// contact sets, the shared objects, and what each publishes. Private to the server library:
+/// it holds the DDS writers and readers; WorldServer::Run() builds it and ticks it.
+#include <chrono>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "handshare/common/session_clock.hpp"
+#include "handshare/dds/messages.hpp"
+#include "handshare/scene/scene.hpp"
+#include "handshare/world_server/member_registry.hpp"
+#include "handshare/world_server/object_authority.hpp"
+#include "handshare/world_server/world_server.hpp"
+
+namespace handshare::server {
+
+class ServerSession {
+ public:
+  using Clock = std::chrono::steady_clock;
+
+  /// Joins the session and publishes `scene` as revision 1 with its board. Events go to
+  /// `server` (printed and logged). Not real-time.
+  ServerSession(WorldServer& server, const WorldServerConfig& config, dds::Participant& participant,
+                scene::Scene scene);
+
+  /// One tick at `now`, dt_s after the last: the stages below, in this order.
+  void Tick(Clock::time_point now, double dt_s);
+
+  const MemberRegistry& members() const { return members_; }
+  std::uint64_t deformations_sent() const { return deformations_sent_; }
+  std::uint64_t bad_control_events() const { return bad_control_events_; }
+
+ private:
+  // ---- the stages of a tick ----
+  /// Members joining, leaving and vanishing (writers lost without a dispose).
+  void TakeMembers(Clock::time_point now);
+  /// Control events: logged, and their scene actions applied (ApplyControlAction).
+  void TakeControlEvents();
+  /// The users' contact sets, for ownership claims and the shared deformables.
+  void TakeContactSets(Clock::time_point now);
+  /// One step of the shared objects, and what it publishes: owners, poses, deformations.
+  void StepObjects(Clock::time_point now, double dt_s);
+
+  /// Publishes the scene as its next revision.
+  void PublishScene();
+  /// Shows one board message (the board shows English for now; every scene file also holds
+  /// Japanese). Transient-local keeps the newest for late joiners.
+  void ShowMessage(const std::vector<scene::Message>& messages);
+
+  WorldServer& server_;
+  std::string session_;
+  common::SessionClock clock_;
+  scene::Scene scene_;
+  std::uint32_t revision_ = 0;
+  std::uint32_t message_id_ = 0;
+  ObjectAuthority objects_;
+  MemberRegistry members_;
+
+  dds::Writer<msg::SceneState> scene_writer_;
+  dds::Writer<msg::MessageBoard> board_writer_;
+  dds::Writer<msg::ObjectState> object_writer_;
+  dds::Writer<msg::Deformation> deformation_writer_;
+  dds::Reader<msg::MemberInfo> member_reader_;
+  dds::Reader<msg::ContactSet> contact_reader_;
+  dds::Reader<msg::ControlEvent> control_reader_;
+
+  std::uint64_t deformations_sent_ = 0;
+  std::uint64_t bad_control_events_ = 0;
+};
+
+}  // namespace handshare::server

@@ -1,0 +1,223 @@
+// The control actions over the scene: every kind of action a control can take, without DDS.
+#include "handshare/world_server/control_actions.hpp"
+
+#include <gtest/gtest.h>
+
+#include <map>
+#include <stdexcept>
+
+namespace handshare::server {
+namespace {
+
+using controls::EventKind;
+
+scene::Message Msg(const std::string& language, const std::string& text) { return {language, text, ""}; }
+
+scene::ControlSpec Control(const std::string& id, scene::ControlType type) {
+  scene::ControlSpec c;
+  c.id = id;
+  c.type = type;
+  return c;
+}
+
+scene::Scene World(const std::string& name, double g) {
+  scene::Scene s;
+  s.name = name;
+  s.title = name + " title";
+  s.gravity_W_m_per_s2 = Eigen::Vector3d(0, 0, -g);
+  s.messages = {Msg("en", "welcome to " + name), Msg("ja", name + " ja")};
+  return s;
+}
+
+// The start menu and two worlds, the way the scene files build them.
+class ControlActions : public ::testing::Test {
+ protected:
+  ControlActions() {
+    worlds_["solar_system"] = World("solar_system", 1.62);
+    worlds_["dinosaur"] = World("dinosaur", 9.81);
+    scene::Scene& moon = worlds_["solar_system"];
+    auto lever = Control("lever", scene::ControlType::kLever);
+    scene::Action mars;
+    mars.set_gravity = true;
+    mars.gravity_W_m_per_s2 = Eigen::Vector3d(0, 0, -3.71);
+    mars.title = "Mars";
+    mars.messages = {Msg("en", "Now lift it on Mars.")};
+    scene::Action back;
+    back.set_gravity = true;
+    back.gravity_W_m_per_s2 = Eigen::Vector3d(0, 0, -1.62);
+    back.title = "Moon";
+    lever.detent_actions = {back, mars};
+    moon.controls.push_back(lever);
+    auto home = Control("arrow_home", scene::ControlType::kArrow);
+    home.action.goto_scene = "start_menu";
+    moon.controls.push_back(home);
+
+    menu_ = World("start_menu", 9.81);
+    auto button = Control("button_dino", scene::ControlType::kButton);
+    button.action.goto_scene = "dinosaur";
+    menu_.controls.push_back(button);
+    auto book = Control("book_solar", scene::ControlType::kBook);
+    book.action.goto_scene = "solar_system";
+    scene::Action page1;
+    page1.messages = {Msg("en", "Planets."), Msg("ja", "惑星。")};
+    scene::Action page2;
+    page2.goto_scene = "dinosaur";
+    book.page_actions = {scene::Action{}, page1, page2};
+    menu_.controls.push_back(book);
+    auto broken = Control("button_nowhere", scene::ControlType::kButton);
+    broken.action.goto_scene = "atlantis";
+    menu_.controls.push_back(broken);
+    worlds_["start_menu"] = menu_;
+  }
+
+  SceneLoader Loader() {
+    return [this](const std::string& name) {
+      ++loads_;
+      const auto it = worlds_.find(name);
+      if (it == worlds_.end()) throw std::runtime_error("unknown scene '" + name + "'");
+      return it->second;
+    };
+  }
+
+  std::map<std::string, scene::Scene> worlds_;
+  scene::Scene menu_;
+  int loads_ = 0;
+};
+
+TEST_F(ControlActions, AButtonPressGoesToItsWorldAndShowsThatWorldsBoard) {
+  scene::Scene s = menu_;
+  const ControlOutcome out = ApplyControlAction(s, {"button_dino", EventKind::kPressed, -1, "alice"}, Loader());
+  EXPECT_TRUE(out.taken);
+  EXPECT_TRUE(out.world_changed);
+  EXPECT_TRUE(out.revised);
+  EXPECT_FALSE(out.gravity_changed);  // a new world is built anyway
+  EXPECT_EQ(s.name, "dinosaur");
+  ASSERT_EQ(out.boards.size(), 1u);
+  EXPECT_EQ(out.boards[0].size(), 2u);  // every language of the scene
+  EXPECT_EQ(out.boards[0][0].text, "welcome to dinosaur");
+  ASSERT_FALSE(out.notes.empty());
+  EXPECT_NE(out.notes[0].find("control button_dino by alice: scene 'dinosaur'"), std::string::npos);
+}
+
+TEST_F(ControlActions, AnArrowPressGoesToItsWorld) {
+  scene::Scene s = worlds_["solar_system"];
+  const ControlOutcome out = ApplyControlAction(s, {"arrow_home", EventKind::kPressed, -1, "bob"}, Loader());
+  EXPECT_TRUE(out.world_changed);
+  EXPECT_EQ(loads_, 1);
+  EXPECT_EQ(s.name, "start_menu");
+}
+
+TEST_F(ControlActions, ReleasesAndMissesTakeNoAction) {
+  for (EventKind k : {EventKind::kReleased, EventKind::kMissed}) {
+    scene::Scene s = menu_;
+    const ControlOutcome out = ApplyControlAction(s, {"button_dino", k, -1, "alice"}, Loader());
+    EXPECT_FALSE(out.taken) << controls::ToString(k);
+    EXPECT_EQ(s.name, "start_menu");
+    EXPECT_TRUE(out.boards.empty());
+  }
+  EXPECT_EQ(loads_, 0);
+}
+
+TEST_F(ControlActions, AButtonIsNotOpenedAndABookIsNotPressed) {
+  scene::Scene s = menu_;
+  EXPECT_FALSE(ApplyControlAction(s, {"button_dino", EventKind::kOpened, -1, "a"}, Loader()).taken);
+  EXPECT_FALSE(ApplyControlAction(s, {"book_solar", EventKind::kPressed, -1, "a"}, Loader()).taken);
+  EXPECT_EQ(s.name, "start_menu");
+}
+
+TEST_F(ControlActions, OpeningABookTakesItsAction) {
+  scene::Scene s = menu_;
+  const ControlOutcome out = ApplyControlAction(s, {"book_solar", EventKind::kOpened, 0, "alice"}, Loader());
+  EXPECT_TRUE(out.world_changed);
+  EXPECT_EQ(s.name, "solar_system");
+}
+
+TEST_F(ControlActions, ABooksPagesTakeTheirOwnActions) {
+  scene::Scene s = menu_;
+  // Page 0 has an empty action: nothing happens.
+  EXPECT_FALSE(ApplyControlAction(s, {"book_solar", EventKind::kPageTurned, 0, "alice"}, Loader()).taken);
+  // Page 1 shows its text on the board and stays in the menu.
+  ControlOutcome out = ApplyControlAction(s, {"book_solar", EventKind::kPageTurned, 1, "alice"}, Loader());
+  EXPECT_TRUE(out.taken);
+  EXPECT_FALSE(out.revised);
+  EXPECT_EQ(s.name, "start_menu");
+  ASSERT_EQ(out.boards.size(), 1u);
+  EXPECT_EQ(out.boards[0][0].text, "Planets.");
+  EXPECT_EQ(out.boards[0][1].language, "ja");
+  // Page 2 goes to a world.
+  out = ApplyControlAction(s, {"book_solar", EventKind::kPageTurned, 2, "alice"}, Loader());
+  EXPECT_TRUE(out.world_changed);
+  EXPECT_EQ(s.name, "dinosaur");
+}
+
+TEST_F(ControlActions, APageOrDetentOutsideTheListsTakesNothing) {
+  scene::Scene s = menu_;
+  for (std::int32_t page : {-1, 3, 99}) {
+    EXPECT_FALSE(ApplyControlAction(s, {"book_solar", EventKind::kPageTurned, page, "a"}, Loader()).taken) << page;
+  }
+  scene::Scene moon = worlds_["solar_system"];
+  EXPECT_FALSE(ApplyControlAction(moon, {"lever", EventKind::kMoved, 2, "a"}, Loader()).taken);
+  EXPECT_FALSE(ApplyControlAction(moon, {"lever", EventKind::kMoved, -1, "a"}, Loader()).taken);
+}
+
+TEST_F(ControlActions, ALeverDetentChangesGravityAndTitleInTheSameWorld) {
+  scene::Scene s = worlds_["solar_system"];
+  ControlOutcome out = ApplyControlAction(s, {"lever", EventKind::kMoved, 1, "alice"}, Loader());
+  EXPECT_TRUE(out.taken);
+  EXPECT_FALSE(out.world_changed);
+  EXPECT_TRUE(out.revised);
+  EXPECT_TRUE(out.gravity_changed);
+  EXPECT_EQ(s.name, "solar_system");
+  EXPECT_DOUBLE_EQ(s.gravity_W_m_per_s2.z(), -3.71);
+  EXPECT_EQ(s.title, "Mars");
+  ASSERT_EQ(out.boards.size(), 1u);
+  EXPECT_EQ(out.boards[0][0].text, "Now lift it on Mars.");
+  ASSERT_FALSE(out.notes.empty());
+  EXPECT_NE(out.notes.back().find("gravity -3.71 m/s^2, 'Mars'"), std::string::npos);
+  // And back to the Moon.
+  out = ApplyControlAction(s, {"lever", EventKind::kMoved, 0, "alice"}, Loader());
+  EXPECT_TRUE(out.gravity_changed);
+  EXPECT_DOUBLE_EQ(s.gravity_W_m_per_s2.z(), -1.62);
+  EXPECT_TRUE(out.boards.empty());
+  EXPECT_EQ(loads_, 0);
+}
+
+TEST_F(ControlActions, AControlOfAWorldAlreadyLeftTakesNothing) {
+  scene::Scene s = worlds_["dinosaur"];
+  EXPECT_EQ(ActionOf(s, {"button_dino", EventKind::kPressed, -1, "a"}), nullptr);
+  EXPECT_FALSE(ApplyControlAction(s, {"button_dino", EventKind::kPressed, -1, "a"}, Loader()).taken);
+  EXPECT_EQ(s.name, "dinosaur");
+}
+
+TEST_F(ControlActions, AWorldThatCannotBeLoadedLeavesTheSceneAsItWasAndSaysWhy) {
+  scene::Scene s = menu_;
+  const ControlOutcome out = ApplyControlAction(s, {"button_nowhere", EventKind::kPressed, -1, "carol"}, Loader());
+  EXPECT_TRUE(out.taken);
+  EXPECT_FALSE(out.revised);
+  EXPECT_FALSE(out.world_changed);
+  EXPECT_EQ(s.name, "start_menu");
+  EXPECT_TRUE(out.boards.empty());
+  ASSERT_EQ(out.notes.size(), 1u);
+  EXPECT_NE(out.notes[0].find("cannot go to 'atlantis': unknown scene 'atlantis'"), std::string::npos);
+}
+
+TEST_F(ControlActions, TheShippedStartMenuBookTakesItsPageActions) {
+  // The real scene files: page 0 of the solar-system book has a bilingual text, and opening the
+  // book goes to the solar system.
+  scene::Scene s = scene::LoadSceneByName("start_menu");
+  const ControlInput page{"book_solar_system", EventKind::kPageTurned, 0, "a"};
+  const ControlOutcome turned = ApplyControlAction(s, page, LoadWorld);
+  EXPECT_TRUE(turned.taken);
+  EXPECT_EQ(s.name, "start_menu");
+  ASSERT_EQ(turned.boards.size(), 1u);
+  ASSERT_EQ(turned.boards[0].size(), 2u);
+  EXPECT_EQ(turned.boards[0][0].text, "Planets in the solar system.");
+  EXPECT_EQ(turned.boards[0][1].language, "ja");
+  const ControlOutcome opened =
+      ApplyControlAction(s, {"book_solar_system", EventKind::kOpened, 0, "a"}, LoadWorld);
+  EXPECT_TRUE(opened.world_changed);
+  EXPECT_EQ(s.name, "solar_system");
+}
+
+}  // namespace
+}  // namespace handshare::server
