@@ -9,6 +9,7 @@
 #include "handshare/common/shutdown.hpp"
 #include "handshare/dds/membership.hpp"
 #include "handshare/dds/messages.hpp"
+#include "handshare/dds/sample_checks.hpp"
 #include "handshare/speech/audio_clip.hpp"
 #include "handshare/speech/playback.hpp"
 #include "handshare/speech/speech_synthesizer.hpp"
@@ -32,6 +33,7 @@ int Guide::Run() {
   int spoken = 0;
   msg::MessageBoard board;
   dds::SampleMeta meta;
+  dds::DroppedSamples dropped;
   while (!common::ShutdownRequested()) {
     if (config_.where.duration.count() > 0 && Clock::now() - start >= config_.where.duration) break;
     if (!board_reader.TakeNext(board, meta)) {
@@ -39,6 +41,12 @@ int Guide::Run() {
       continue;
     }
     if (!meta.valid_data || board.message_id() == last_id) continue;  // already spoken
+    if (const std::string reason = dds::CheckMessageBoard(board, config_.where.session); !reason.empty()) {
+      if (const std::string line = dropped.Count("message_board", "world_server", reason); !line.empty()) {
+        std::fprintf(stderr, "[audio_guide %s] %s\n", name.c_str(), line.c_str());
+      }
+      continue;
+    }
     last_id = board.message_id();
     std::string text = board.text().to_string();
     if (board.next_action().size() > 0) text += " " + board.next_action().to_string();

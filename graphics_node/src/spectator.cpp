@@ -14,6 +14,7 @@
 #include "handshare/common/shutdown.hpp"
 #include "handshare/dds/membership.hpp"
 #include "handshare/dds/messages.hpp"
+#include "handshare/dds/sample_checks.hpp"
 #include "handshare/graphics/scene_replica.hpp"
 #include "handshare/render/image.hpp"
 #include "handshare/render/offscreen_renderer.hpp"
@@ -37,8 +38,11 @@ struct UserHand {
 /// Everything the view needs, updated from DDS on the render thread.
 class WorldView {
  public:
-  WorldView(dds::Participant& p, const std::filesystem::path& assets_dir, const std::string& name)
-      : scene_reader_(dds::MakeReader<msg::SceneState>(p, dds::topics::kSceneState)),
+  WorldView(dds::Participant& p, const std::filesystem::path& assets_dir, const std::string& name,
+            const std::string& session)
+      : session_(session),
+        prefix_("[graphics_node " + name + "] "),
+        scene_reader_(dds::MakeReader<msg::SceneState>(p, dds::topics::kSceneState)),
         device_reader_(dds::MakeReader<msg::DeviceState>(p, dds::topics::kDeviceState)),
         board_reader_(dds::MakeReader<msg::MessageBoard>(p, dds::topics::kMessageBoard)),
         deformation_reader_(dds::MakeReader<msg::Deformation>(p, dds::topics::kDeformation)),
@@ -49,27 +53,38 @@ class WorldView {
     dds::SampleMeta meta;
     msg::SceneState scene;
     while (scene_reader_.TakeNext(scene, meta)) {
-      if (meta.valid_data) world_.OnSceneState(scene);
+      if (meta.valid_data && Accept("scene_state", "world_server", dds::CheckSceneState(scene, session_))) {
+        world_.OnSceneState(scene);
+      }
     }
     // Deformations and object states name objects of a scene: take them only once a scene is
     // known (a late joiner may get their transient-local history before the scene state's),
     // and after this round's scene state, so they apply to the scene they were sent for.
     if (world_.has_scene()) {
       while (deformation_reader_.TakeNext(deformation_, meta)) {
-        if (meta.valid_data) world_.OnDeformation(deformation_);
+        if (meta.valid_data && Accept("deformation", "world_server", dds::CheckDeformation(deformation_, session_))) {
+          world_.OnDeformation(deformation_);
+        }
       }
       msg::ObjectState object;
       while (object_reader_.TakeNext(object, meta)) {
-        if (meta.valid_data) world_.OnObjectState(object);
+        if (meta.valid_data &&
+            Accept("object_state", object.owner().to_string(), dds::CheckObjectState(object, session_))) {
+          world_.OnObjectState(object);
+        }
       }
     }
     msg::DeviceState state;
     while (device_reader_.TakeNext(state, meta)) {
-      if (meta.valid_data) hands_[state.user().to_string()] = UserHand{state, Clock::now()};
+      if (meta.valid_data && Accept("device_state", state.user().to_string(), dds::CheckDeviceState(state, session_))) {
+        hands_[state.user().to_string()] = UserHand{state, Clock::now()};
+      }
     }
     msg::MessageBoard board;
     while (board_reader_.TakeNext(board, meta)) {
-      if (meta.valid_data) caption_ = board.text().to_string();
+      if (meta.valid_data && Accept("message_board", "world_server", dds::CheckMessageBoard(board, session_))) {
+        caption_ = board.text().to_string();
+      }
     }
     for (auto it = hands_.begin(); it != hands_.end();) {
       it = (Clock::now() - it->second.received > kHandTimeout) ? hands_.erase(it) : std::next(it);
@@ -79,6 +94,7 @@ class WorldView {
   bool has_scene() const { return world_.has_scene(); }
   const std::map<std::string, UserHand>& hands() const { return hands_; }
   const SceneReplica& world() const { return world_; }
+  const dds::DroppedSamples& dropped() const { return dropped_; }
 
   render::SceneView Build() const {
     render::SceneView view;
@@ -99,6 +115,18 @@ class WorldView {
   }
 
  private:
+  // True when `reason` is empty; else the sample is dropped, counted and (rate-limited) named.
+  bool Accept(std::string_view topic, std::string_view sender, const std::string& reason) {
+    if (reason.empty()) return true;
+    if (const std::string line = dropped_.Count(topic, sender, reason); !line.empty()) {
+      std::fprintf(stderr, "%s%s\n", prefix_.c_str(), line.c_str());
+    }
+    return false;
+  }
+
+  std::string session_;
+  std::string prefix_;
+  dds::DroppedSamples dropped_;
   dds::Reader<msg::SceneState> scene_reader_;
   dds::Reader<msg::DeviceState> device_reader_;
   dds::Reader<msg::MessageBoard> board_reader_;
@@ -111,18 +139,19 @@ class WorldView {
 };
 
 // One line on what the shared world received, for the node's log.
-void PrintWorldSummary(const std::string& name, const SceneReplica& world) {
+void PrintWorldSummary(const std::string& name, const SceneReplica& world, const dds::DroppedSamples& dropped) {
   const SceneReplicaStats& s = world.stats();
   const DeformationStats d = world.deformation_stats();
   const auto n = [](std::uint64_t v) { return static_cast<unsigned long long>(v); };
   std::printf("[graphics_node %s] deformation: %llu samples (%llu applied, %llu keyframes, %llu ids "
               "out of range, %llu non-finite, %llu malformed, %llu for unknown objects, %llu without "
               "mesh, %llu with another node count); object states: %llu applied, %llu unknown, %llu "
-              "non-finite; mesh errors: %llu\n",
+              "non-finite; mesh errors: %llu; samples dropped: %s\n",
               name.c_str(), n(s.deformation_samples), n(d.samples), n(d.keyframes),
               n(d.ids_out_of_range), n(d.nonfinite), n(d.malformed), n(s.deformation_unknown_object),
               n(s.deformation_without_mesh), n(s.deformation_count_mismatch), n(s.object_states),
-              n(s.object_states_unknown), n(s.object_states_nonfinite), n(s.mesh_errors));
+              n(s.object_states_unknown), n(s.object_states_nonfinite), n(s.mesh_errors),
+              dropped.Summary().c_str());
   std::fflush(stdout);
 }
 
@@ -198,11 +227,11 @@ int Spectator::Run() {
 
   dds::Participant participant(config_.where.domain_id, config_.where.session, name, config_.where.qos_file);
   dds::MemberAnnouncement member(participant, name, msg::NODE_GRAPHICS);
-  WorldView world(participant, assets_dir, name);
+  WorldView world(participant, assets_dir, name, config_.where.session);
   // When the frames are written or the window closes: what the spectator received, for a
   // comparison with an oracle.
   const auto finish = [&] {
-    PrintWorldSummary(name, world.world());
+    PrintWorldSummary(name, world.world(), world.dropped());
     if (!config_.deformation_out.empty()) world.world().WriteDeformationJson(config_.deformation_out);
   };
 

@@ -58,11 +58,18 @@ void HapticBridge::Tick() {
   PublishStatistics();
 }
 
+bool HapticBridge::Accept(std::string_view topic, std::string_view sender, const std::string& reason) {
+  if (reason.empty()) return true;
+  if (const std::string line = dropped_.Count(topic, sender, reason); !line.empty()) say_(line);
+  return false;
+}
+
 void HapticBridge::ApplySceneChange() {
   msg::SceneState state;
   dds::SampleMeta meta;
   while (scene_reader_.TakeNext(state, meta)) {
     if (!meta.valid_data || state.revision() == scene_revision_) continue;
+    if (!Accept("scene_state", "world_server", dds::CheckSceneState(state, config_.where.session))) continue;
     scene_revision_ = state.revision();
     try {
       AdoptScene(state);
@@ -122,7 +129,10 @@ void HapticBridge::ReceivePeers() {
   msg::ContactSet peer;
   dds::SampleMeta meta;
   while (contact_reader_.TakeNext(peer, meta)) {
-    if (meta.valid_data) peers_.Receive(peer, now, config_.user);
+    if (!meta.valid_data || peer.user().to_string() == config_.user) continue;
+    if (Accept("contact_set", peer.user().to_string(), dds::CheckContactSet(peer, config_.where.session))) {
+      peers_.Receive(peer, now, config_.user);
+    }
   }
   peers_.Expire(now);
   renderer_->SetRemote(ToRemoteContacts(peers_, renderer_->models(), now));
@@ -134,7 +144,10 @@ void HapticBridge::FollowPeerBodies() {
   msg::ObjectState body;
   dds::SampleMeta meta;
   while (object_reader_.TakeNext(body, meta)) {
-    if (!meta.valid_data || body.session().to_string() != config_.where.session) continue;
+    if (!meta.valid_data) continue;
+    if (!Accept("object_state", body.owner().to_string(), dds::CheckObjectState(body, config_.where.session))) {
+      continue;
+    }
     bodies_[body.object_id().to_string()] = {body, common::SteadyNowNs()};
   }
   renderer_->SetFollowed(ToFollowedBodies(bodies_, config_.user, renderer_->models()));
@@ -171,6 +184,7 @@ void HapticBridge::PublishStatistics() {
   common::LoopStats stats;
   if (loop_.TakeStats(stats) && stats_writer_.matched_readers() > 0) {
     ToLoopStatistics(stats, loop_.faults(), stats_msg_);
+    stats_msg_.samples_dropped(dropped_.total());
     stats_writer_.Write(stats_msg_);
   }
 }

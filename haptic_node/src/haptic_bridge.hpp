@@ -16,6 +16,7 @@
 #include "handshare/haptic/haptic_node.hpp"
 #include "handshare/haptic/scene_renderer.hpp"
 #include "handshare/session/peer_contacts.hpp"
+#include "handshare/dds/sample_checks.hpp"
 #include "handshare/world/scene_models.hpp"
 
 namespace handshare::haptic {
@@ -34,6 +35,8 @@ class HapticBridge {
 
   std::uint64_t device_states_published() const { return device_states_published_; }
   std::uint64_t control_events_sent() const { return control_events_sent_; }
+  /// Received samples refused by the checks (session/sample_checks.hpp), per topic.
+  const dds::DroppedSamples& dropped() const { return dropped_; }
 
  private:
   // ---- the stages of a tick ----
@@ -53,6 +56,8 @@ class HapticBridge {
   /// The loop statistics, once a second.
   void PublishStatistics();
 
+  /// True when `reason` is empty; else counts the sample as dropped (and says so, rate-limited).
+  bool Accept(std::string_view topic, std::string_view sender, const std::string& reason);
   /// Builds the renderer of one scene state and hands it to the loop.
   void AdoptScene(const msg::SceneState& state);
 
@@ -86,6 +91,7 @@ class HapticBridge {
   Clock::time_point next_stats_;
   std::uint64_t device_states_published_ = 0;
   std::uint64_t control_events_sent_ = 0;
+  dds::DroppedSamples dropped_;
 };
 
 }  // namespace handshare::haptic

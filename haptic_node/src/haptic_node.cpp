@@ -42,13 +42,13 @@ void PrintLoopSummary(const std::string& user, const common::LoopStats& stats, s
                       const HapticBridge& bridge) {
   std::printf("[haptic_node %s] loop statistics: rate %.1f Hz, steps %llu, jitter p50 %.0f us "
               "p99 %.0f us max %.0f us, step p50 %.1f us p99 %.1f us, overruns %llu, resyncs %llu, "
-              "faults %llu, device states published %llu, control events %llu\n",
+              "faults %llu, device states published %llu, control events %llu, samples dropped %s\n",
               user.c_str(), stats.rate_Hz, static_cast<unsigned long long>(stats.steps), stats.jitter.Quantile(0.5),
               stats.jitter.Quantile(0.99), stats.jitter.max_us(), stats.step.Quantile(0.5), stats.step.Quantile(0.99),
               static_cast<unsigned long long>(stats.overruns), static_cast<unsigned long long>(stats.resyncs),
               static_cast<unsigned long long>(faults),
               static_cast<unsigned long long>(bridge.device_states_published()),
-              static_cast<unsigned long long>(bridge.control_events_sent()));
+              static_cast<unsigned long long>(bridge.control_events_sent()), bridge.dropped().Summary().c_str());
   std::fflush(stdout);
 }
 

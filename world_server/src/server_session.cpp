@@ -52,6 +52,7 @@ void ServerSession::TakeMembers(Clock::time_point now) {
   while (member_reader_.TakeNext(info, meta)) {
     std::optional<MemberEvent> event;
     if (meta.valid_data && meta.instance_state == dds::InstanceState::kAlive) {
+      if (!Accept("member_info", info.user().to_string(), dds::CheckMemberInfo(info, session_))) continue;
       event = members_.OnInfo(meta.instance, meta.writer, ToMember(info));
     } else if (meta.instance_state != dds::InstanceState::kAlive) {
       event = members_.OnGone(meta.instance, meta.instance_state == dds::InstanceState::kDisposed);
@@ -78,13 +79,9 @@ void ServerSession::TakeControlEvents() {
   dds::SampleMeta meta;
   while (control_reader_.TakeNext(sample, meta)) {
     if (!meta.valid_data) continue;
+    if (!Accept("control_event", sample.user().to_string(), dds::CheckControlEvent(sample, session_))) continue;
     const auto input = ToControlInput(sample);
-    if (!input) {
-      ++bad_control_events_;
-      server_.Say("control event of unknown kind " + std::to_string(static_cast<int>(sample.kind())) + " from '" +
-                  sample.user().to_string() + "' dropped");
-      continue;
-    }
+    if (!input) continue;  // CheckControlEvent refused every kind ToControlInput cannot map
     server_.OnControlEvent(ToControlRecord(sample, *input, common::UnixNowNs()));
     const ControlOutcome outcome = ApplyControlAction(scene_, *input, LoadWorld);
     if (outcome.world_changed || outcome.gravity_changed) objects_.SetScene(scene_);
@@ -101,7 +98,10 @@ void ServerSession::TakeContactSets(Clock::time_point now) {
   msg::ContactSet set;
   dds::SampleMeta meta;
   while (contact_reader_.TakeNext(set, meta)) {
-    if (meta.valid_data) objects_.OnContactSet(set, now);
+    if (!meta.valid_data) continue;
+    if (Accept("contact_set", set.user().to_string(), dds::CheckContactSet(set, session_))) {
+      objects_.OnContactSet(set, now);
+    }
   }
 }
 
@@ -114,6 +114,12 @@ void ServerSession::StepObjects(Clock::time_point now, double dt_s) {
     deformation_writer_.Write(ToDeformation(object_id, session_, sample));
     ++deformations_sent_;
   }
+}
+
+bool ServerSession::Accept(std::string_view topic, std::string_view sender, const std::string& reason) {
+  if (reason.empty()) return true;
+  if (const std::string line = dropped_.Count(topic, sender, reason); !line.empty()) server_.Say(line);
+  return false;
 }
 
 void ServerSession::PublishScene() {

@@ -10,6 +10,7 @@
 #include "handshare/common/session_clock.hpp"
 #include "handshare/dds/messages.hpp"
 #include "handshare/scene/scene.hpp"
+#include "handshare/dds/sample_checks.hpp"
 #include "handshare/world_server/member_registry.hpp"
 #include "handshare/world_server/object_authority.hpp"
 #include "handshare/world_server/world_server.hpp"
@@ -30,7 +31,8 @@ class ServerSession {
 
   const MemberRegistry& members() const { return members_; }
   std::uint64_t deformations_sent() const { return deformations_sent_; }
-  std::uint64_t bad_control_events() const { return bad_control_events_; }
+  /// Received samples refused by the checks (session/sample_checks.hpp), per topic.
+  const dds::DroppedSamples& dropped() const { return dropped_; }
 
  private:
   // ---- the stages of a tick ----
@@ -43,6 +45,8 @@ class ServerSession {
   /// One step of the shared objects, and what it publishes: owners, poses, deformations.
   void StepObjects(Clock::time_point now, double dt_s);
 
+  /// True when `reason` is empty; else counts the sample as dropped (and says so, rate-limited).
+  bool Accept(std::string_view topic, std::string_view sender, const std::string& reason);
   /// Publishes the scene as its next revision.
   void PublishScene();
   /// Shows one board message (the board shows English for now; every scene file also holds
@@ -67,7 +71,7 @@ class ServerSession {
   dds::Reader<msg::ControlEvent> control_reader_;
 
   std::uint64_t deformations_sent_ = 0;
-  std::uint64_t bad_control_events_ = 0;
+  dds::DroppedSamples dropped_;
 };
 
 }  // namespace handshare::server

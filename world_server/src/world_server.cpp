@@ -112,7 +112,8 @@ int WorldServer::Run() {
   }
   Say("shutting down: " + std::to_string(session.members().joined_total()) + " members joined, " +
       std::to_string(session.members().present().size()) + " still present, " +
-      std::to_string(session.deformations_sent()) + " deformation samples sent");
+      std::to_string(session.deformations_sent()) + " deformation samples sent, samples dropped: " +
+      session.dropped().Summary());
   CloseLog();
   return log_failed_ ? 1 : 0;
 }

@@ -1,0 +1,177 @@
+// Received samples are checked before they touch a simulation: every kind of bad value is
+// named, and good samples pass.
+#include "handshare/dds/sample_checks.hpp"
+
+#include <gtest/gtest.h>
+
+#include <limits>
+
+namespace handshare::dds {
+namespace {
+
+constexpr double kNan = std::numeric_limits<double>::quiet_NaN();
+constexpr double kInf = std::numeric_limits<double>::infinity();
+
+msg::ContactSet GoodContacts() {
+  msg::ContactSet s;
+  s.session("museum");
+  s.user("bob");
+  auto& f = s.fingers()[1];
+  f.active(true);
+  f.object_id("tail");
+  f.p_W_m({0.1, 0.0, 0.05});
+  f.n_W({0.0, 0.0, 1.0});
+  f.p_WE_m({0.1, 0.0, 0.052});
+  f.radius_m(0.008);
+  f.depth_m(0.002);
+  f.u_imposed_W_m({0.0, 0.0, -0.002});
+  f.f_W_N({0.0, 0.0, -1.0});
+  s.q_WO_wxyz({1.0, 0.0, 0.0, 0.0});
+  return s;
+}
+
+TEST(SampleChecks, AGoodContactSetPasses) { EXPECT_EQ(CheckContactSet(GoodContacts(), "museum"), ""); }
+
+TEST(SampleChecks, ContactSetsWithBadNumbersAreNamed) {
+  auto s = GoodContacts();
+  s.fingers()[1].u_imposed_W_m()[1] = kNan;
+  EXPECT_EQ(CheckContactSet(s, "museum"), "fingers[1].u_imposed_W_m[1] is nan");
+  s = GoodContacts();
+  s.fingers()[1].f_W_N()[0] = -kInf;
+  EXPECT_EQ(CheckContactSet(s, "museum"), "fingers[1].f_W_N[0] is -inf");
+  s = GoodContacts();
+  s.fingers()[1].u_imposed_W_m()[2] = -5.0;  // a 5 m dent: pushes a user's finger with no bound
+  EXPECT_NE(CheckContactSet(s, "museum").find("fingers[1].u_imposed_W_m has norm 5"), std::string::npos);
+  s = GoodContacts();
+  s.fingers()[1].radius_m(-0.01);
+  EXPECT_NE(CheckContactSet(s, "museum").find("fingers[1].radius_m is -0.01"), std::string::npos);
+  s = GoodContacts();
+  s.fingers()[1].object_id("");
+  EXPECT_EQ(CheckContactSet(s, "museum"), "fingers[1].object_id is empty");
+  // An inactive finger's garbage is never read, so it is not checked.
+  s = GoodContacts();
+  s.fingers()[3].u_imposed_W_m()[0] = kNan;
+  EXPECT_EQ(CheckContactSet(s, "museum"), "");
+}
+
+TEST(SampleChecks, AnotherSessionsOrAnonymousSampleIsRefused) {
+  auto s = GoodContacts();
+  EXPECT_EQ(CheckContactSet(s, "lab"), "session 'museum' is not this session ('lab')");
+  s.user("");
+  EXPECT_EQ(CheckContactSet(s, "museum"), "user is empty");
+}
+
+TEST(SampleChecks, ASimulatedBodyNeedsAFinitePoseAUnitQuaternionAndAPlausibleSpeed) {
+  auto s = GoodContacts();
+  s.simulating(true);
+  s.simulated_object_id("ball");
+  EXPECT_EQ(CheckContactSet(s, "museum"), "");
+  s.q_WO_wxyz({0.0, 0.0, 0.0, 0.0});
+  EXPECT_NE(CheckContactSet(s, "museum").find("q_WO_wxyz has norm 0"), std::string::npos);
+  s.q_WO_wxyz({1.0, 0.0, 0.0, 0.0});
+  s.v_WO_m_per_s({1e6, 0.0, 0.0});
+  EXPECT_NE(CheckContactSet(s, "museum").find("v_WO_m_per_s has norm"), std::string::npos);
+}
+
+TEST(SampleChecks, ObjectStates) {
+  msg::ObjectState s;
+  s.session("museum");
+  s.object_id("ball");
+  s.q_WO_wxyz({1.0, 0.0, 0.0, 0.0});
+  EXPECT_EQ(CheckObjectState(s, "museum"), "");
+  s.p_WO_m()[2] = kNan;
+  EXPECT_EQ(CheckObjectState(s, "museum"), "p_WO_m[2] is nan");
+  s.p_WO_m()[2] = 1e9;
+  EXPECT_NE(CheckObjectState(s, "museum").find("p_WO_m has norm"), std::string::npos);
+}
+
+TEST(SampleChecks, SceneStatesNameAPlainWorldWithFiniteGravity) {
+  msg::SceneState s;
+  s.session("museum");
+  s.scene("dinosaur");
+  s.gravity_W_m_per_s2({0.0, 0.0, -9.81});
+  EXPECT_EQ(CheckSceneState(s, "museum"), "");
+  s.scene("../../etc/passwd");
+  EXPECT_NE(CheckSceneState(s, "museum").find("is not a plain name"), std::string::npos);
+  s.scene("dinosaur");
+  s.gravity_W_m_per_s2({0.0, 0.0, kNan});
+  EXPECT_EQ(CheckSceneState(s, "museum"), "gravity_W_m_per_s2[2] is nan");
+}
+
+TEST(SampleChecks, ControlEventsOfUnknownKindOrIndexAreRefused) {
+  msg::ControlEvent e;
+  e.session("museum");
+  e.user("alice");
+  e.control_id("lever");
+  e.kind(msg::CONTROL_MOVED);
+  e.index(1);
+  EXPECT_EQ(CheckControlEvent(e, "museum"), "");
+  e.kind(static_cast<msg::ControlEventKind>(99));
+  EXPECT_EQ(CheckControlEvent(e, "museum"), "kind 99 is not a control event kind");
+  e.kind(msg::CONTROL_MOVED);
+  e.index(-7);
+  EXPECT_NE(CheckControlEvent(e, "museum").find("index is -7"), std::string::npos);
+}
+
+TEST(SampleChecks, DeformationsNeedThreeDisplacementsPerIdAndIdsInRange) {
+  msg::Deformation d;
+  d.session("museum");
+  d.object_id("tail");
+  d.surface_node_count(10);
+  d.node_ids({1, 9});
+  d.u_W_m({0.f, 0.f, -1e-3f, 0.f, 0.f, 0.f});
+  EXPECT_EQ(CheckDeformation(d, "museum"), "");
+  d.node_ids({1, 10});
+  EXPECT_EQ(CheckDeformation(d, "museum"), "node_ids[1] = 10 is not below surface_node_count 10");
+  d.node_ids({1});
+  EXPECT_EQ(CheckDeformation(d, "museum"), "6 displacements for 1 node ids (3 each)");
+  d.node_ids({1, 2});
+  d.u_W_m()[4] = std::numeric_limits<float>::quiet_NaN();
+  EXPECT_EQ(CheckDeformation(d, "museum"), "u_W_m of node_ids[1][1] is nan");
+}
+
+TEST(SampleChecks, DeviceStatesBoardsAndMembers) {
+  msg::DeviceState d;
+  d.session("museum");
+  d.user("alice");
+  d.q_WH_wxyz({1.0, 0.0, 0.0, 0.0});
+  d.fingertip_radius_m(0.008);
+  EXPECT_EQ(CheckDeviceState(d, "museum"), "");
+  d.p_WE_m()[4][0] = kInf;
+  EXPECT_EQ(CheckDeviceState(d, "museum"), "p_WE_m[4][0] is inf");
+  msg::MessageBoard b;
+  b.session("museum");
+  b.language("en");
+  EXPECT_EQ(CheckMessageBoard(b, "museum"), "");
+  b.session("lab");
+  EXPECT_NE(CheckMessageBoard(b, "museum"), "");
+  msg::MemberInfo m;
+  m.session("museum");
+  m.user("alice");
+  m.kind(msg::NODE_HAPTIC);
+  EXPECT_EQ(CheckMemberInfo(m, "museum"), "");
+  m.kind(static_cast<msg::NodeKind>(12));
+  EXPECT_EQ(CheckMemberInfo(m, "museum"), "kind 12 is not a node kind");
+}
+
+TEST(DroppedSamples, CountsPerTopicAndPrintsAFloodOncePerThousand) {
+  DroppedSamples d;
+  EXPECT_EQ(d.Summary(), "none");
+  std::size_t lines = 0;
+  for (int i = 0; i < 2500; ++i) lines += d.Count("contact_set", "mallory", "x is nan").empty() ? 0 : 1;
+  EXPECT_EQ(lines, 3u);  // the 1st, 1000th and 2000th
+  // Another sender is named at its first bad sample.
+  EXPECT_FALSE(d.Count("contact_set", "trudy", "y is inf").empty());
+  // Forged names, one per sample: only the first 64 senders are named, then one per 1000.
+  lines = 0;
+  for (int i = 0; i < 999; ++i) lines += d.Count("contact_set", "forged" + std::to_string(i), "z").empty() ? 0 : 1;
+  EXPECT_LE(lines, 64u);
+  EXPECT_NE(d.Count("object_state", "mallory", "p is nan").find("dropped a bad object_state sample from 'mallory'"),
+            std::string::npos);
+  EXPECT_EQ(d.of("contact_set"), 3500u);
+  EXPECT_EQ(d.total(), 3501u);
+  EXPECT_EQ(d.Summary(), "contact_set 3500, object_state 1");
+}
+
+}  // namespace
+}  // namespace handshare::dds
