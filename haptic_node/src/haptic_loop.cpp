@@ -74,6 +74,7 @@ void HapticLoop::CollectRetired() {
 void HapticLoop::Step(double t_s) noexcept {
   if (has_pending_.exchange(false, std::memory_order_acq_rel)) {
     renderer_ = pending_.load(std::memory_order_acquire);
+    if (adoption_hook_ != nullptr) adoption_hook_(adoption_hook_arg_);
     in_use_.store(renderer_, std::memory_order_release);
   }
   const double dt_s = last_t_s_ < 0.0 ? 1.0 / config_.rate_Hz : std::max(0.0, t_s - last_t_s_);

@@ -56,6 +56,14 @@ class HapticLoop {
   void SetRenderer(std::shared_ptr<ForceRenderer> renderer);
   /// Bridge side: frees renderers the haptic thread no longer uses. Not real-time.
   void CollectRetired();
+  /// Tests only: Step() calls hook(arg) while it adopts a posted renderer, between taking it
+  /// and telling the bridge it uses it, to widen that window in stress tests. Set it before
+  /// any thread calls Step(); nullptr (the default) turns it off at the cost of one load.
+  /// The hook runs on the haptic thread; not real-time.
+  void SetAdoptionHookForTest(void (*hook)(void*) noexcept, void* arg) noexcept {
+    adoption_hook_ = hook;
+    adoption_hook_arg_ = arg;
+  }
   /// Safety status of the last step (haptic thread; tests).
   const ForceSafetyOutput& safety_output() const noexcept { return safety_out_; }
 
@@ -86,6 +94,8 @@ class HapticLoop {
   std::atomic<bool> has_pending_{false};
   ForceRenderer* renderer_ = nullptr;
   std::vector<std::shared_ptr<ForceRenderer>> owned_;
+  void (*adoption_hook_)(void*) noexcept = nullptr;  // tests only: see SetAdoptionHookForTest
+  void* adoption_hook_arg_ = nullptr;
   std::uint64_t seq_ = 0;
   common::TripleBuffer<HapticSnapshot> snapshots_;
   // Heap-held: LoopStats is about 16 KB; three copies live in the buffer.
