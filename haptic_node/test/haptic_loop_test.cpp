@@ -263,11 +263,7 @@ void WidenAdoptionWindow(void* arg) noexcept {
 // window: no renderer is used after the loop let it be freed, and none leaks. After each swap
 // the bridge waits (up to 1 ms) for a step, or for a window to swap in, so that swaps meet steps.
 TEST(HapticLoop, RendererSwapsUnderStressNeverFreeARendererInUse) {
-#if defined(__SANITIZE_THREAD__)
-  constexpr long kSwaps = 20'000;
-#else
   constexpr long kSwaps = 100'000;
-#endif
   RendererTally tally;
   std::deque<CanaryRenderer> storage;  // outlives the loop: see CanaryRenderer
   FakeDevice device;
