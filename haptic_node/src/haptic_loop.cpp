@@ -11,6 +11,13 @@
 namespace handshare::haptic {
 
 namespace {
+/// Posted for "no renderer", so that nullptr in the mailbox means empty. Never called.
+class NoRenderer final : public ForceRenderer {
+ public:
+  void Render(double, double, const DeviceReading&, std::array<Eigen::Vector3d, kFingers>&) noexcept override {}
+};
+NoRenderer no_renderer;
+
 bool AllFinite(const DeviceReading& r) noexcept {
   if (!r.p_WH.allFinite() || !r.q_WH_wxyz.allFinite()) return false;
   for (const auto& p : r.p_WE) {
@@ -59,22 +66,33 @@ void HapticLoop::Stop() {
 }
 
 void HapticLoop::SetRenderer(std::shared_ptr<ForceRenderer> renderer) {
-  if (renderer) owned_.push_back(renderer);
-  pending_.store(renderer.get(), std::memory_order_release);
-  has_pending_.store(true, std::memory_order_release);
+  ForceRenderer* const post = renderer ? renderer.get() : &no_renderer;
+  posted_.push_back({std::move(renderer), numbered_ + 1});  // owned before the haptic thread can take it
+  if (pending_.exchange(post, std::memory_order_release) == nullptr) {
+    ++numbered_;  // the slot was empty: the previous post was taken
+  } else {
+    // The previous post (the entry before this one) came back untaken: free it, and this post
+    // is the next take instead.
+    posted_.erase(posted_.end() - 2);
+    posted_.back().number = numbered_;
+  }
   CollectRetired();
 }
 
 void HapticLoop::CollectRetired() {
-  const ForceRenderer* used = in_use_.load(std::memory_order_acquire);
-  const ForceRenderer* next = has_pending_.load(std::memory_order_acquire) ? pending_.load() : nullptr;
-  std::erase_if(owned_, [&](const std::shared_ptr<ForceRenderer>& r) { return r.get() != used && r.get() != next; });
+  const std::uint64_t in_use = adopted_.load(std::memory_order_acquire);
+  const auto first_kept = std::find_if(posted_.begin(), posted_.end(),
+                                       [&](const Posted& p) { return p.number >= in_use; });
+  posted_.erase(posted_.begin(), first_kept);
 }
 
 void HapticLoop::Step(double t_s) noexcept {
-  if (has_pending_.exchange(false, std::memory_order_acq_rel)) {
-    renderer_ = pending_.load(std::memory_order_acquire);
-    in_use_.store(renderer_, std::memory_order_release);
+  // Only this thread empties the slot, so a slot seen full is still full at the exchange.
+  if (pending_.load(std::memory_order_relaxed) != nullptr) {
+    ForceRenderer* const taken = pending_.exchange(nullptr, std::memory_order_acquire);
+    renderer_ = taken == &no_renderer ? nullptr : taken;
+    if (adoption_hook_ != nullptr) adoption_hook_(adoption_hook_arg_);
+    adopted_.store(adopted_.load(std::memory_order_relaxed) + 1, std::memory_order_release);
   }
   const double dt_s = last_t_s_ < 0.0 ? 1.0 / config_.rate_Hz : std::max(0.0, t_s - last_t_s_);
   last_t_s_ = t_s;

@@ -2,7 +2,12 @@
 
 #include <gtest/gtest.h>
 
+#include <atomic>
+#include <chrono>
+#include <cstdio>
+#include <deque>
 #include <limits>
+#include <memory>
 #include <thread>
 #include <vector>
 
@@ -185,6 +190,129 @@ TEST(HapticLoop, RendererSwapIsAdoptedAndTheOldOneFreedWithoutAllocationInTheSte
   loop.CollectRetired();
   EXPECT_TRUE(first_alive.expired());
   EXPECT_NEAR(device.last[0].z(), 2.0, 1e-12);
+}
+
+/// Counts of the hand-over stress test's renderers, shared by both threads.
+struct RendererTally {
+  std::atomic<long> created{0};
+  std::atomic<long> freed{0};
+  std::atomic<long> renders{0};
+  std::atomic<long> used_after_free{0};
+  std::atomic<long> double_frees{0};
+};
+
+/// A renderer with a canary: alive from construction until its owner frees it through
+/// Free() (the deleter of the shared_ptr handed to the loop), which poisons the canary. Its
+/// storage outlives the test's loop, so a late Render() reads the poisoned canary and counts a
+/// use after free (no sanitizer needed). Free() does not run the destructor: that would reset
+/// the vtable to the abstract base and turn a late call into a "pure virtual call" abort.
+class CanaryRenderer final : public ForceRenderer {
+ public:
+  explicit CanaryRenderer(RendererTally& tally) : tally_(tally) { tally_.created.fetch_add(1, std::memory_order_relaxed); }
+  void Render(double, double, const DeviceReading&, std::array<Eigen::Vector3d, kFingers>& out) noexcept override {
+    Check();
+    for (auto& f : out) f = Eigen::Vector3d(0, 0, 0.1);
+    tally_.renders.fetch_add(1, std::memory_order_relaxed);
+  }
+  void ReleaseAll() noexcept override { Check(); }
+  void Free() noexcept {
+    if (canary_.exchange(kFreed, std::memory_order_relaxed) != kAlive) {
+      tally_.double_frees.fetch_add(1, std::memory_order_relaxed);
+    }
+    tally_.freed.fetch_add(1, std::memory_order_relaxed);
+  }
+
+ private:
+  static constexpr std::uint64_t kAlive = 0xA11FE0A11FE0A11Full;
+  static constexpr std::uint64_t kFreed = 0xDEADBEEFDEADBEEFull;
+  void Check() noexcept {
+    if (canary_.load(std::memory_order_relaxed) != kAlive) {
+      tally_.used_after_free.fetch_add(1, std::memory_order_relaxed);
+    }
+  }
+  RendererTally& tally_;
+  std::atomic<std::uint64_t> canary_{kAlive};
+};
+
+/// How the two threads of the stress test pace each other.
+struct SwapPacing {
+  std::atomic<long> swaps_in_window{0};  // bridge: swaps begun and finished in an open window
+  std::atomic<bool> bridge_done{false};
+  std::atomic<long> steps_done{0};     // haptic thread: steps finished
+  std::atomic<long> windows{0};        // haptic thread: adoption windows entered
+  std::atomic<bool> in_window{false};  // haptic thread: inside an adoption window now
+};
+
+/// Holds the haptic thread inside the adoption window until the bridge has done a whole swap
+/// (SetRenderer and CollectRetired) in it, or 200 us have passed.
+void WidenAdoptionWindow(void* arg) noexcept {
+  auto& pacing = *static_cast<SwapPacing*>(arg);
+  const long seen = pacing.swaps_in_window.load(std::memory_order_acquire);
+  pacing.windows.fetch_add(1, std::memory_order_relaxed);
+  pacing.in_window.store(true, std::memory_order_release);
+  const auto until = std::chrono::steady_clock::now() + std::chrono::microseconds(200);
+  while (pacing.swaps_in_window.load(std::memory_order_acquire) == seen &&
+         !pacing.bridge_done.load(std::memory_order_acquire) && std::chrono::steady_clock::now() < until) {
+    std::this_thread::yield();
+  }
+  pacing.in_window.store(false, std::memory_order_release);
+}
+
+// The bridge swaps renderers 100,000 times, as the node does (SetRenderer, then CollectRetired),
+// while the haptic thread steps as fast as it can and the hook holds it inside the adoption
+// window: no renderer is used after the loop let it be freed, and none leaks. After each swap
+// the bridge waits (up to 1 ms) for a step, or for a window to swap in, so that swaps meet steps.
+TEST(HapticLoop, RendererSwapsUnderStressNeverFreeARendererInUse) {
+  constexpr long kSwaps = 100'000;
+  RendererTally tally;
+  std::deque<CanaryRenderer> storage;  // outlives the loop: see CanaryRenderer
+  FakeDevice device;
+  auto loop = std::make_unique<HapticLoop>(device, HapticLoopConfig{1000.0, false});
+  SwapPacing pacing;
+  loop->SetAdoptionHookForTest(&WidenAdoptionWindow, &pacing);
+
+  std::thread haptic([&] {
+    double t_s = 0.0;
+    while (!pacing.bridge_done.load(std::memory_order_acquire)) {
+      loop->Step(t_s += 1e-3);
+      pacing.steps_done.fetch_add(1, std::memory_order_release);
+    }
+  });
+  const auto start = std::chrono::steady_clock::now();
+  for (long i = 0; i < kSwaps; ++i) {
+    const long steps = pacing.steps_done.load(std::memory_order_acquire);
+    const bool in_window = pacing.in_window.load(std::memory_order_acquire);
+    if (i % 64 == 63) {
+      loop->SetRenderer(nullptr);
+    } else {
+      CanaryRenderer& r = storage.emplace_back(tally);
+      loop->SetRenderer(std::shared_ptr<ForceRenderer>(&r, [](ForceRenderer* p) { static_cast<CanaryRenderer*>(p)->Free(); }));
+    }
+    loop->CollectRetired();
+    if (in_window) pacing.swaps_in_window.fetch_add(1, std::memory_order_release);
+    const auto until = std::chrono::steady_clock::now() + std::chrono::milliseconds(1);
+    while (pacing.steps_done.load(std::memory_order_acquire) == steps &&
+           (in_window || !pacing.in_window.load(std::memory_order_acquire)) &&
+           std::chrono::steady_clock::now() < until) {
+      std::this_thread::yield();
+    }
+  }
+  pacing.bridge_done.store(true, std::memory_order_release);
+  haptic.join();
+  const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+
+  EXPECT_EQ(tally.used_after_free.load(), 0) << "renders or releases on a freed renderer";
+  EXPECT_EQ(tally.double_frees.load(), 0);
+  EXPECT_GT(tally.renders.load(), 0);
+  EXPECT_GT(pacing.windows.load(), kSwaps / 100) << "few swaps met an adoption window";
+  loop->Step(0.0);  // adopts the last post if the haptic thread stopped before it
+  loop->CollectRetired();
+  EXPECT_LE(tally.created.load() - tally.freed.load(), 1) << "only the one in use stays owned";
+  loop.reset();
+  EXPECT_EQ(tally.created.load(), kSwaps - kSwaps / 64);
+  EXPECT_EQ(tally.freed.load(), tally.created.load()) << "every renderer is freed with the loop";
+  std::printf("%ld swaps in %.2f s: %ld steps, %ld adoption windows, %ld renders\n", kSwaps, seconds,
+              pacing.steps_done.load(), pacing.windows.load(), tally.renders.load());
 }
 
 }  // namespace

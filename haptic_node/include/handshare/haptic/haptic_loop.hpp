@@ -7,7 +7,32 @@
 ///
 /// The renderer is swapped by the bridge thread (scene change) without a lock: SetRenderer()
 /// posts it, the next Step() adopts it, and the bridge frees a replaced renderer only after
-/// the haptic thread has let go of it (CollectRetired()).
+/// the haptic thread has confirmed that it let go of it (CollectRetired()).
+///
+/// Renderer hand-over. Invariant: the bridge frees a posted renderer only when the haptic
+/// thread never took it, or when every use the haptic thread made of it happens-before the
+/// free. Why it holds:
+///  1. pending_ is a one-slot mailbox written only by exchanges: SetRenderer() exchanges the
+///     new renderer in (release; "no renderer" is posted as a marker, so nullptr means empty),
+///     Step() exchanges nullptr in when a relaxed load saw the slot full (only Step() empties
+///     it, so it is still full; acquire: the renderer's construction happens-before its use).
+///     The exchanges of one atomic form one modification order in which each reads the value
+///     the one before it wrote, so every posted renderer is taken out exactly once: by Step()
+///     (adopted), or by the bridge's next SetRenderer(), which gets it back untouched by the
+///     haptic thread and frees it at once.
+///  2. The bridge numbers the renderers it posts 1, 2, ..., giving the number of one it gets
+///     back to the next. Its exchanges are sequenced, so they sit in posting order in the
+///     modification order, and Step() takes renderers in that order: renderer k is the k-th
+///     the haptic thread takes.
+///  3. adopted_ (written only by Step(), release) counts the takes; Step() stores k after it
+///     switched renderer_ to renderer k, and renderer_ only moves on to later takes. So the
+///     haptic thread used renderers below k only before that store, and never after it.
+///  4. CollectRetired() reads n = adopted_ (acquire) and frees only renderers numbered below
+///     n. Its load reads the release store of n, so every use of those renderers happens-before
+///     the free (3). Renderer n, in use, and later ones (posted, or taken but not yet counted:
+///     the window the test hook widens) stay owned.
+/// Step() costs one relaxed load when nothing is posted, and an exchange and a store when it
+/// adopts: lock-free, no allocation.
 #include <atomic>
 #include <cstdint>
 #include <memory>
@@ -52,10 +77,19 @@ class HapticLoop {
   void Step(double t_s) noexcept;
 
   /// Bridge side: the renderer the loop uses from its next step on (nullptr: no forces).
-  /// The loop keeps it alive; not real-time.
+  /// The loop keeps it alive until the haptic thread confirmed that it let go of it; not
+  /// real-time. Call it (and CollectRetired) from one thread only.
   void SetRenderer(std::shared_ptr<ForceRenderer> renderer);
-  /// Bridge side: frees renderers the haptic thread no longer uses. Not real-time.
+  /// Bridge side: frees renderers the haptic thread confirmed it no longer uses. Not real-time.
   void CollectRetired();
+  /// Tests only: Step() calls hook(arg) while it adopts a posted renderer, between taking it
+  /// and counting it in adopted_, to widen that window in stress tests. Set it before
+  /// any thread calls Step(); nullptr (the default) turns it off at the cost of one load.
+  /// The hook runs on the haptic thread; not real-time.
+  void SetAdoptionHookForTest(void (*hook)(void*) noexcept, void* arg) noexcept {
+    adoption_hook_ = hook;
+    adoption_hook_arg_ = arg;
+  }
   /// Safety status of the last step (haptic thread; tests).
   const ForceSafetyOutput& safety_output() const noexcept { return safety_out_; }
 
@@ -78,14 +112,21 @@ class HapticLoop {
   ForceSafetyOutput safety_out_;
   double last_t_s_ = -1.0;
   common::PeriodicLoop::Clock::time_point start_{};  // set by Start() before the thread runs
-  // Renderer hand-over: pending_ is posted by the bridge, adopted by the haptic thread, which
-  // publishes what it uses in in_use_; owned_ (bridge only) keeps every posted renderer alive
-  // until it is neither pending nor in use.
+  // Renderer hand-over (see the top of this file). pending_: the mailbox, nullptr when empty.
+  // adopted_: how many renderers the haptic thread has taken (it uses the newest). renderer_:
+  // the one it uses (haptic thread only). posted_ and numbered_ (bridge only): the renderers
+  // posted and not yet freed, by number, and the number of the newest.
+  struct Posted {
+    std::shared_ptr<ForceRenderer> renderer;
+    std::uint64_t number;
+  };
   std::atomic<ForceRenderer*> pending_{nullptr};
-  std::atomic<ForceRenderer*> in_use_{nullptr};
-  std::atomic<bool> has_pending_{false};
+  std::atomic<std::uint64_t> adopted_{0};
   ForceRenderer* renderer_ = nullptr;
-  std::vector<std::shared_ptr<ForceRenderer>> owned_;
+  std::vector<Posted> posted_;
+  std::uint64_t numbered_ = 0;
+  void (*adoption_hook_)(void*) noexcept = nullptr;  // tests only: see SetAdoptionHookForTest
+  void* adoption_hook_arg_ = nullptr;
   std::uint64_t seq_ = 0;
   common::TripleBuffer<HapticSnapshot> snapshots_;
   // Heap-held: LoopStats is about 16 KB; three copies live in the buffer.
