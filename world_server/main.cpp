@@ -14,7 +14,9 @@ int main(int argc, char** argv) {
       .Value("cache", "DIR", "deformable models' cache (default: $HANDSHARE_CACHE, else ~/.cache/handshare)", "")
       .Value("dump-deformation", "DIR", "write the loads and field of every published deformation to DIR "
                                         "(for an independent FEM check)", "")
-      .Value("deformation-threshold", "M", "re-send a deformed surface node when it moved more than M metres", "1e-4");
+      .Value("deformation-threshold", "M", "re-send a deformed surface node when it moved more than M metres", "1e-4")
+      .Value("resume-within", "SEC", "with --log: a session of this name whose server was killed less than SEC "
+                                     "ago is resumed where it was (0: always start afresh)", "600");
   return handshare::common::RunNodeMain(argc, argv, options, [](const auto& o) {
     handshare::server::WorldServerConfig config;
     config.where = handshare::common::ReadSessionOptions(o);
@@ -23,6 +25,7 @@ int main(int argc, char** argv) {
     config.cache_dir = o.GetString("cache");
     config.dump_dir = o.GetString("dump-deformation");
     config.deformation_threshold_m = o.GetDouble("deformation-threshold", 1e-9, 0.01);
+    config.resume_within_s = o.GetDouble("resume-within", 0.0, 1e9);
     return handshare::server::WorldServer(config).Run();
   });
 }

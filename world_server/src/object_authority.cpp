@@ -104,6 +104,10 @@ void ObjectAuthority::OnUserGone(const std::string& user, Clock::time_point now)
   claims_.erase(user);
 }
 
+void ObjectAuthority::PlaceBody(const std::string& object_id, const Eigen::Isometry3d& X_WO) {
+  placed_[object_id] = X_WO;
+}
+
 void ObjectAuthority::RequestKeyframes() {
   keyframes_requested_ = true;
   for (auto& d : deformables_) d.delta->RequestKeyframe();
@@ -130,6 +134,15 @@ void ObjectAuthority::Adopt(world::SceneModels models, TickOutput& out) {
       if (id >= 0) models.world->SetPose(id, models_->world->pose(body));
     }
   }
+  for (const auto& [id, X] : placed_) {
+    const auto body = models.Find(id);
+    if (body >= 0 && std::find(models.dynamic_bodies.begin(), models.dynamic_bodies.end(), body) !=
+                         models.dynamic_bodies.end()) {
+      models.world->SetPose(body, X);
+      out.notes.push_back("object '" + id + "' placed where the session left it");
+    }
+  }
+  placed_.clear();
   models_ = std::make_unique<world::SceneModels>(std::move(models));
   ready_scene_ = scene_.name;
   deformables_.clear();

@@ -17,11 +17,24 @@ ObjectAuthorityOptions AuthorityOptions(const WorldServerConfig& config) {
 }
 }  // namespace
 
+namespace {
+// The scene a resume point describes (its world, with the gravity and title it had then).
+scene::Scene ResumedScene(scene::Scene fallback, const ResumePoint* resume) {
+  if (resume == nullptr) return fallback;
+  scene::Scene s = scene::LoadSceneByName(resume->state.scene);
+  const auto& g = resume->state.gravity_W_m_per_s2;
+  s.gravity_W_m_per_s2 = Eigen::Vector3d(g[0], g[1], g[2]);
+  s.title = resume->state.title;
+  return s;
+}
+}  // namespace
+
 ServerSession::ServerSession(WorldServer& server, const WorldServerConfig& config, dds::Participant& participant,
-                             scene::Scene scene)
+                             scene::Scene scene, const ResumePoint* resume)
     : server_(server),
       session_(config.where.session),
-      scene_(std::move(scene)),
+      clock_(resume ? common::SessionClock::FromEpoch(resume->state.epoch_unix_ns) : common::SessionClock()),
+      scene_(ResumedScene(std::move(scene), resume)),
       objects_(config.where.session, AuthorityOptions(config), clock_),
       scene_writer_(dds::MakeWriter<msg::SceneState>(participant, dds::topics::kSceneState)),
       board_writer_(dds::MakeWriter<msg::MessageBoard>(participant, dds::topics::kMessageBoard)),
@@ -30,12 +43,25 @@ ServerSession::ServerSession(WorldServer& server, const WorldServerConfig& confi
       member_reader_(dds::MakeReader<msg::MemberInfo>(participant, dds::topics::kMemberInfo)),
       contact_reader_(dds::MakeReader<msg::ContactSet>(participant, dds::topics::kContactSet)),
       control_reader_(dds::MakeReader<msg::ControlEvent>(participant, dds::topics::kControlEvent)) {
+  if (resume != nullptr) {
+    // The same revision and message number again: nodes that have them change nothing.
+    revision_ = resume->state.revision - 1;
+    message_id_ = resume->state.message_id - 1;
+    for (const auto& p : resume->poses) {
+      Eigen::Isometry3d X = Eigen::Isometry3d::Identity();
+      X.linear() = Eigen::Quaterniond(p.q_WO_wxyz[0], p.q_WO_wxyz[1], p.q_WO_wxyz[2], p.q_WO_wxyz[3])
+                       .normalized()
+                       .toRotationMatrix();
+      X.translation() = Eigen::Vector3d(p.p_WO_m[0], p.p_WO_m[1], p.p_WO_m[2]);
+      objects_.PlaceBody(p.object_id, X);
+    }
+  }
   PublishScene();
   server_.Say("session '" + session_ + "' on domain " + std::to_string(config.where.domain_id) + ": scene '" +
               scene_.name + "' (" + std::to_string(scene_.objects.size()) + " objects)");
   server_.OnSceneChange(scene_.name, scene_.title);
   objects_.SetScene(scene_);
-  ShowMessage(scene_.messages);
+  ShowMessage(resume != nullptr && !resume->state.board.empty() ? resume->state.board : scene_.messages);
 }
 
 void ServerSession::Tick(Clock::time_point now, double dt_s) {
@@ -84,6 +110,10 @@ void ServerSession::TakeControlEvents() {
     if (!input) continue;  // CheckControlEvent refused every kind ToControlInput cannot map
     server_.OnControlEvent(ToControlRecord(sample, *input, common::UnixNowNs()));
     const ControlOutcome outcome = ApplyControlAction(scene_, *input, LoadWorld);
+    if (outcome.world_changed) {
+      pose_logged_.clear();
+      if (SessionLog* log = server_.session_log()) log->ForgetObjectPoses();
+    }
     if (outcome.world_changed || outcome.gravity_changed) objects_.SetScene(scene_);
     if (outcome.revised) PublishScene();
     for (const auto& note : outcome.notes) {
@@ -110,6 +140,7 @@ void ServerSession::StepObjects(Clock::time_point now, double dt_s) {
   for (const auto& note : out.notes) server_.Say(note);
   for (const auto& change : out.ownership) server_.OnOwnershipChange(change);
   for (const auto& state : out.states) object_writer_.Write(state);
+  LogPoses(out.states, now);
   for (const auto& [object_id, sample] : out.deformations) {
     deformation_writer_.Write(ToDeformation(object_id, session_, sample));
     ++deformations_sent_;
@@ -124,14 +155,49 @@ bool ServerSession::Accept(std::string_view topic, std::string_view sender, cons
 
 void ServerSession::PublishScene() {
   scene_writer_.Write(ToSceneState(scene_, session_, ++revision_, clock_.EpochUnixNs()));
+  LogState();
 }
 
 void ServerSession::ShowMessage(const std::vector<scene::Message>& messages) {
   for (const auto& m : messages) {
     if (m.language != "en") continue;
     board_writer_.Write(ToMessageBoard(m, session_, ++message_id_));
+    board_ = messages;
     server_.Say("message board #" + std::to_string(message_id_) + ": " + m.text);
+    LogState();
     return;
+  }
+}
+
+void ServerSession::LogState() {
+  SessionLog* log = server_.session_log();
+  if (log == nullptr) return;
+  SessionState st;
+  st.unix_ns = common::UnixNowNs();
+  st.scene = scene_.name;
+  st.title = scene_.title;
+  st.revision = revision_;
+  for (int k = 0; k < 3; ++k) st.gravity_W_m_per_s2[k] = scene_.gravity_W_m_per_s2[k];
+  st.epoch_unix_ns = clock_.EpochUnixNs();
+  st.message_id = message_id_;
+  st.board = board_;
+  log->OnState(st);
+}
+
+void ServerSession::LogPoses(const std::vector<msg::ObjectState>& states, Clock::time_point now) {
+  SessionLog* log = server_.session_log();
+  if (log == nullptr) return;
+  for (const auto& s : states) {
+    auto& last = pose_logged_[s.object_id().to_string()];
+    if (now - last < kPoseLogPeriod) continue;
+    last = now;
+    ObjectPose p;
+    p.object_id = s.object_id().to_string();
+    p.owner = s.owner().to_string();
+    p.unix_ns = common::UnixNowNs();
+    for (int k = 0; k < 3; ++k) p.p_WO_m[k] = s.p_WO_m()[k];
+    for (int k = 0; k < 4; ++k) p.q_WO_wxyz[k] = s.q_WO_wxyz()[k];
+    log->OnObjectPose(p);
   }
 }
 

@@ -3,6 +3,7 @@
 /// contact sets, the shared objects, and what each publishes. Private to the server library:
 /// it holds the DDS writers and readers; WorldServer::Run() builds it and ticks it.
 #include <chrono>
+#include <map>
 #include <cstdint>
 #include <string>
 #include <vector>
@@ -21,10 +22,12 @@ class ServerSession {
  public:
   using Clock = std::chrono::steady_clock;
 
-  /// Joins the session and publishes `scene` as revision 1 with its board. Events go to
-  /// `server` (printed and logged). Not real-time.
+  /// Joins the session and publishes `scene` as revision 1 with its board, or, given a resume
+  /// point, the world, revision, session clock, board and body poses it holds (the nodes see
+  /// the revision they already have and keep their models). Events go to `server` (printed and
+  /// logged). Not real-time.
   ServerSession(WorldServer& server, const WorldServerConfig& config, dds::Participant& participant,
-                scene::Scene scene);
+                scene::Scene scene, const ResumePoint* resume = nullptr);
 
   /// One tick at `now`, dt_s after the last: the stages below, in this order.
   void Tick(Clock::time_point now, double dt_s);
@@ -49,6 +52,11 @@ class ServerSession {
   bool Accept(std::string_view topic, std::string_view sender, const std::string& reason);
   /// Publishes the scene as its next revision.
   void PublishScene();
+  /// Records where the session is (world, revision, clock, board) in the session log.
+  void LogState();
+  /// Records the poses of the bodies just published (at most every kPoseLogPeriod a body).
+  void LogPoses(const std::vector<msg::ObjectState>& states, Clock::time_point now);
+  static constexpr std::chrono::milliseconds kPoseLogPeriod{100};
   /// Shows one board message (the board shows English for now; every scene file also holds
   /// Japanese). Transient-local keeps the newest for late joiners.
   void ShowMessage(const std::vector<scene::Message>& messages);
@@ -59,6 +67,8 @@ class ServerSession {
   scene::Scene scene_;
   std::uint32_t revision_ = 0;
   std::uint32_t message_id_ = 0;
+  std::vector<scene::Message> board_;                  // the board's message, every language
+  std::map<std::string, Clock::time_point> pose_logged_;  // body -> when its pose was last logged
   ObjectAuthority objects_;
   MemberRegistry members_;
 

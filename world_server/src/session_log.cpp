@@ -11,6 +11,8 @@
 #include "session_schema.hpp"
 #include "sqlite_db.hpp"
 
+#include <nlohmann/json.hpp>
+
 namespace handshare::server {
 
 const char* LogName(controls::EventKind kind) {
@@ -58,7 +60,14 @@ struct OwnershipRow {
 struct EndRow {
   std::uint64_t unix_ns;
 };
-using Row = std::variant<MemberRow, SceneRow, ControlRecord, OwnershipRow, EndRow>;
+struct ForgetPosesRow {};
+using Row = std::variant<MemberRow, SceneRow, ControlRecord, OwnershipRow, EndRow, SessionState, ObjectPose, ForgetPosesRow>;
+
+std::string BoardJson(const std::vector<scene::Message>& board) {
+  nlohmann::json j = nlohmann::json::array();
+  for (const auto& m : board) j.push_back({{"language", m.language}, {"text", m.text}, {"next_action", m.next_action}});
+  return j.dump();
+}
 
 std::int64_t Ns(std::uint64_t unix_ns) { return static_cast<std::int64_t>(unix_ns); }
 
@@ -87,6 +96,7 @@ void OpenSchema(sqlite::Db& db) {
     try {
       db.Exec(schema::kCreateV1, "creating the schema");
       db.Exec(schema::kStampV1, "writing the schema version");
+      db.Exec(schema::kMigrateV1ToV2, "creating the schema's version 2");
       db.Exec("COMMIT", "committing the schema");
     } catch (...) {
       sqlite3_exec(db.get(), "ROLLBACK", nullptr, nullptr, nullptr);  // the first error is the one to report
@@ -105,6 +115,20 @@ void OpenSchema(sqlite::Db& db) {
   if (version < 1) throw SessionLogError(db.file_name() + ": session log without a schema version");
   const std::string mode = db.QueryText("PRAGMA journal_mode=WAL", "switching to WAL journal mode");
   if (mode != "wal") throw SessionLogError(db.file_name() + ": cannot use WAL journal mode (got '" + mode + "')");
+  if (version == 1) {
+    // Every row stays; the version is read again inside the transaction, so two servers
+    // opening one old log at once migrate it once.
+    db.Exec("BEGIN IMMEDIATE", "starting the migration to schema version 2");
+    try {
+      if (db.QueryInt("PRAGMA user_version", "reading the schema version") == 1) {
+        db.Exec(schema::kMigrateV1ToV2, "migrating the session log to schema version 2");
+      }
+      db.Exec("COMMIT", "committing the migration to schema version 2");
+    } catch (...) {
+      sqlite3_exec(db.get(), "ROLLBACK", nullptr, nullptr, nullptr);
+      throw;
+    }
+  }
 }
 
 }  // namespace
@@ -143,7 +167,7 @@ struct SessionLog::Impl {
 
   // Prepared in the constructor, in the caller's thread, so a broken file fails there; the
   // writer thread owns the connection from then on.
-  std::optional<sqlite::Statement> member, scene, control, owner, end, seen;
+  std::optional<sqlite::Statement> member, scene, control, owner, end, seen, state, pose, forget;
 
   void Prepare() {
     member.emplace(db, schema::kInsertMember, "inserting a member event");
@@ -152,6 +176,9 @@ struct SessionLog::Impl {
     owner.emplace(db, schema::kInsertOwnership, "inserting an ownership change");
     end.emplace(db, schema::kUpdateEnd, "writing the session end");
     seen.emplace(db, schema::kUpdateSeen, "writing the session's last-seen time");
+    state.emplace(db, schema::kUpsertState, "writing the session state");
+    pose.emplace(db, schema::kUpsertPose, "writing an object pose");
+    forget.emplace(db, "DELETE FROM object_poses WHERE session_id = ?1", "forgetting the object poses");
   }
 
   void WriterLoop() {
@@ -212,6 +239,24 @@ struct SessionLog::Impl {
               .Bind(5, o->reason);
           owner->Step();
           owner->Reset();
+        } else if (const auto* st = std::get_if<SessionState>(&row)) {
+          const auto& g = st->gravity_W_m_per_s2;
+          state->Bind(1, session_id).Bind(2, Ns(st->unix_ns)).Bind(3, st->scene).Bind(4, st->title)
+              .Bind(5, static_cast<std::int64_t>(st->revision)).Bind(6, g[0]).Bind(7, g[1]).Bind(8, g[2])
+              .Bind(9, Ns(st->epoch_unix_ns)).Bind(10, static_cast<std::int64_t>(st->message_id))
+              .Bind(11, BoardJson(st->board));
+          state->Step();
+          state->Reset();
+        } else if (const auto* p = std::get_if<ObjectPose>(&row)) {
+          pose->Bind(1, session_id).Bind(2, p->object_id).Bind(3, Ns(p->unix_ns)).Bind(4, p->owner)
+              .Bind(5, p->p_WO_m[0]).Bind(6, p->p_WO_m[1]).Bind(7, p->p_WO_m[2]).Bind(8, p->q_WO_wxyz[0])
+              .Bind(9, p->q_WO_wxyz[1]).Bind(10, p->q_WO_wxyz[2]).Bind(11, p->q_WO_wxyz[3]);
+          pose->Step();
+          pose->Reset();
+        } else if (std::holds_alternative<ForgetPosesRow>(row)) {
+          forget->Bind(1, session_id);
+          forget->Step();
+          forget->Reset();
         } else if (const auto* e = std::get_if<EndRow>(&row)) {
           end->Bind(1, Ns(e->unix_ns)).Bind(2, session_id);
           end->Step();
@@ -245,6 +290,11 @@ SessionLog::SessionLog(const std::filesystem::path& file, const SessionStart& st
   }
   session_id_ = sqlite3_last_insert_rowid(db.get());
   impl_->session_id = session_id_;
+  if (start.resumed_from != 0) {
+    sqlite::Statement resumed(db, schema::kUpdateResumedFrom, "writing the session it resumes");
+    resumed.Bind(1, start.resumed_from).Bind(2, session_id_);
+    resumed.Step();
+  }
   impl_->Prepare();
   impl_->writer = std::thread([impl = impl_.get()] {
     try {
@@ -285,7 +335,80 @@ void SessionLog::OnOwnership(const std::string& object_id, const std::string& ow
   impl_->Push(OwnershipRow{unix_ns, object_id, owner, reason});
 }
 
+void SessionLog::OnState(const SessionState& state) { impl_->Push(state); }
+
+void SessionLog::OnObjectPose(const ObjectPose& pose) { impl_->Push(pose); }
+
+void SessionLog::ForgetObjectPoses() { impl_->Push(ForgetPosesRow{}); }
+
 void SessionLog::End(std::uint64_t unix_ns) { impl_->Push(EndRow{unix_ns}); }
+
+std::optional<ResumePoint> FindResumePoint(const std::filesystem::path& file, const std::string& session,
+                                           std::uint64_t now_unix_ns, std::uint64_t max_age_ns) {
+  std::error_code ec;
+  if (!std::filesystem::exists(file, ec) || std::filesystem::file_size(file, ec) == 0) return std::nullopt;
+  sqlite::Db db(file, SQLITE_OPEN_READONLY);
+  db.Check(sqlite3_busy_timeout(db.get(), 2000), "setting the busy timeout");
+  if (db.QueryInt("PRAGMA application_id", "reading the application id") != SessionLog::kApplicationId) {
+    throw SessionLogError(file.string() + ": not a handshare session log");
+  }
+  if (db.QueryInt("PRAGMA user_version", "reading the schema version") < 2) return std::nullopt;  // no states
+  ResumePoint r;
+  {
+    sqlite::Statement s(db,
+                        "SELECT s.id, s.last_seen_unix_ns, st.unix_ns, st.scene, st.title, st.revision, st.gravity_x, "
+                        "st.gravity_y, st.gravity_z, st.epoch_unix_ns, st.message_id, st.board_json "
+                        "FROM sessions s JOIN session_state st ON st.session_id = s.id "
+                        "WHERE s.name = ?1 ORDER BY s.id DESC LIMIT 1",
+                        "reading the newest session's state");
+    s.Bind(1, session);
+    if (!s.Step()) return std::nullopt;
+    r.session_id = s.Int(0);
+    r.last_seen_unix_ns = static_cast<std::uint64_t>(s.Int(1));
+    SessionState& st = r.state;
+    st.unix_ns = static_cast<std::uint64_t>(s.Int(2));
+    st.scene = s.Text(3);
+    st.title = s.Text(4);
+    st.revision = static_cast<std::uint32_t>(s.Int(5));
+    for (int k = 0; k < 3; ++k) st.gravity_W_m_per_s2[k] = s.Double(6 + k);
+    st.epoch_unix_ns = static_cast<std::uint64_t>(s.Int(9));
+    st.message_id = static_cast<std::uint32_t>(s.Int(10));
+    try {
+      for (const auto& m : nlohmann::json::parse(s.Text(11))) {
+        st.board.push_back({m.at("language").get<std::string>(), m.at("text").get<std::string>(),
+                            m.at("next_action").get<std::string>()});
+      }
+    } catch (const nlohmann::json::exception& e) {
+      throw SessionLogError(file.string() + ": session " + std::to_string(r.session_id) + ": bad board_json: " + e.what());
+    }
+  }
+  // The newest session of that name must be the one that never ended, and recent.
+  {
+    sqlite::Statement s(db, "SELECT ended_unix_ns IS NULL FROM sessions WHERE id = ?1", "reading the session end");
+    s.Bind(1, r.session_id);
+    if (!s.Step() || s.Int(0) == 0) return std::nullopt;
+    sqlite::Statement newer(db, "SELECT count(*) FROM sessions WHERE name = ?1 AND id > ?2",
+                            "looking for a newer session");
+    newer.Bind(1, session).Bind(2, r.session_id);
+    if (newer.Step() && newer.Int(0) > 0) return std::nullopt;
+  }
+  if (now_unix_ns > r.last_seen_unix_ns && now_unix_ns - r.last_seen_unix_ns > max_age_ns) return std::nullopt;
+  sqlite::Statement s(db,
+                      "SELECT object_id, owner, unix_ns, px, py, pz, qw, qx, qy, qz FROM object_poses "
+                      "WHERE session_id = ?1 ORDER BY object_id",
+                      "reading the object poses");
+  s.Bind(1, r.session_id);
+  while (s.Step()) {
+    ObjectPose p;
+    p.object_id = s.Text(0);
+    p.owner = s.Text(1);
+    p.unix_ns = static_cast<std::uint64_t>(s.Int(2));
+    for (int k = 0; k < 3; ++k) p.p_WO_m[k] = s.Double(3 + k);
+    for (int k = 0; k < 4; ++k) p.q_WO_wxyz[k] = s.Double(6 + k);
+    r.poses.push_back(std::move(p));
+  }
+  return r;
+}
 
 void SessionLog::Flush() {
   std::unique_lock lock(impl_->mutex);

@@ -1,7 +1,11 @@
 #pragma once
-// The session log's schema, version 1 (PRAGMA user_version = 1, application_id "HSLG").
-// Times are wall-clock ns since the Unix epoch. A change of schema gets a new version number
-// and a migration in OpenSchema; a reader refuses versions newer than it knows.
+// The session log's schema (PRAGMA user_version, application_id "HSLG"). Times are wall-clock
+// ns since the Unix epoch. A change of schema gets a new version number and a migration in
+// OpenSchema; a reader refuses versions newer than it knows.
+//   version 1: sessions, member_events, scene_changes, control_events, ownership_changes.
+//   version 2: control_events may say 'opened' (a book's cover); session_state and
+//              object_poses hold where a session is, so a restarted server resumes it;
+//              sessions.resumed_from names the session a resumed one continues.
 namespace handshare::server::schema {
 
 inline constexpr const char* kCreateV1 = R"sql(
@@ -59,6 +63,51 @@ CREATE INDEX IF NOT EXISTS control_events_by_session ON control_events(session_i
 CREATE INDEX IF NOT EXISTS ownership_changes_by_session ON ownership_changes(session_id, unix_ns);
 )sql";
 
+// Version 2 on top of version 1 (a new file runs kCreateV1 then this; a version-1 file this).
+// SQLite cannot change a CHECK in place: control_events is rebuilt with its rows.
+inline constexpr const char* kMigrateV1ToV2 = R"sql(
+CREATE TABLE control_events_v2(
+  id         INTEGER PRIMARY KEY,
+  session_id INTEGER NOT NULL REFERENCES sessions(id),
+  unix_ns    INTEGER NOT NULL,
+  user       TEXT    NOT NULL,
+  control_id TEXT    NOT NULL,
+  kind       TEXT    NOT NULL CHECK (kind IN ('pressed', 'released', 'moved', 'page_turned', 'missed', 'opened')),
+  value      REAL    NOT NULL,
+  error_m    REAL
+);
+INSERT INTO control_events_v2(id, session_id, unix_ns, user, control_id, kind, value, error_m)
+  SELECT id, session_id, unix_ns, user, control_id, kind, value, error_m FROM control_events;
+DROP INDEX IF EXISTS control_events_by_session;
+DROP TABLE control_events;
+ALTER TABLE control_events_v2 RENAME TO control_events;
+CREATE INDEX control_events_by_session ON control_events(session_id, control_id);
+ALTER TABLE sessions ADD COLUMN resumed_from INTEGER REFERENCES sessions(id);
+CREATE TABLE session_state(                      -- one row per session: where it is now
+  session_id    INTEGER PRIMARY KEY REFERENCES sessions(id),
+  unix_ns       INTEGER NOT NULL,
+  scene         TEXT    NOT NULL,
+  title         TEXT    NOT NULL,
+  revision      INTEGER NOT NULL,                -- of the scene state last published
+  gravity_x     REAL    NOT NULL,
+  gravity_y     REAL    NOT NULL,
+  gravity_z     REAL    NOT NULL,
+  epoch_unix_ns INTEGER NOT NULL,                -- the session clock's origin
+  message_id    INTEGER NOT NULL,                -- the board's last message, every language
+  board_json    TEXT    NOT NULL                 -- [{"language", "text", "next_action"}, ...]
+);
+CREATE TABLE object_poses(                       -- the newest pose of each rigid body
+  session_id INTEGER NOT NULL REFERENCES sessions(id),
+  object_id  TEXT    NOT NULL,
+  unix_ns    INTEGER NOT NULL,
+  owner      TEXT    NOT NULL,
+  px REAL NOT NULL, py REAL NOT NULL, pz REAL NOT NULL,
+  qw REAL NOT NULL, qx REAL NOT NULL, qy REAL NOT NULL, qz REAL NOT NULL,
+  PRIMARY KEY(session_id, object_id)
+);
+PRAGMA user_version = 2;
+)sql";
+
 // 0x48534C47 = "HSLG"; PRAGMAs take no parameters, so the numbers are spelled out.
 inline constexpr const char* kStampV1 = "PRAGMA application_id = 1213418567; PRAGMA user_version = 1;";
 
@@ -75,6 +124,13 @@ inline constexpr const char* kInsertControl =
     "VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7)";
 inline constexpr const char* kInsertOwnership =
     "INSERT INTO ownership_changes(session_id, unix_ns, object_id, owner, reason) VALUES (?1, ?2, ?3, ?4, ?5)";
+inline constexpr const char* kUpsertState =
+    "INSERT OR REPLACE INTO session_state(session_id, unix_ns, scene, title, revision, gravity_x, gravity_y, "
+    "gravity_z, epoch_unix_ns, message_id, board_json) VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8, ?9, ?10, ?11)";
+inline constexpr const char* kUpsertPose =
+    "INSERT OR REPLACE INTO object_poses(session_id, object_id, unix_ns, owner, px, py, pz, qw, qx, qy, qz) "
+    "VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8, ?9, ?10, ?11)";
+inline constexpr const char* kUpdateResumedFrom = "UPDATE sessions SET resumed_from = ?1 WHERE id = ?2";
 inline constexpr const char* kUpdateEnd = "UPDATE sessions SET ended_unix_ns = ?1 WHERE id = ?2";
 inline constexpr const char* kUpdateSeen =
     "UPDATE sessions SET last_seen_unix_ns = ?1, dropped_rows = ?2 WHERE id = ?3";

@@ -83,16 +83,31 @@ int WorldServer::Run() {
   using Clock = std::chrono::steady_clock;
   start_ = Clock::now();
   scene::Scene scene = scene::LoadSceneByName(config_.scene);
+  // A session whose server was killed goes on where its log says it was (read before this
+  // run's own session row exists).
+  std::optional<ResumePoint> resume;
+  if (!config_.log_file.empty() && config_.resume_within_s > 0.0) {
+    resume = FindResumePoint(config_.log_file, config_.where.session, common::UnixNowNs(),
+                             static_cast<std::uint64_t>(config_.resume_within_s * 1e9));
+  }
   // The log opens once the scene is known to load (a bad scene name leaves no empty session
   // behind) and before any DDS entity exists (a bad log file keeps us out of the session).
   if (!config_.log_file.empty() && !log_) {
     log_ = std::make_unique<SessionLog>(
         config_.log_file, SessionStart{config_.where.session, config_.where.domain_id, HostName(),
-                                       static_cast<std::int64_t>(getpid()), common::UnixNowNs()});
+                                       static_cast<std::int64_t>(getpid()), common::UnixNowNs(),
+                                       resume ? resume->session_id : 0});
   }
   dds::Participant participant(config_.where.domain_id, config_.where.session, "world_server", config_.where.qos_file);
   if (log_) Say("session log " + log_->file().string() + ": session #" + std::to_string(log_->session_id()));
-  ServerSession session(*this, config_, participant, std::move(scene));
+  if (resume) {
+    Say("resuming session #" + std::to_string(resume->session_id) + ", whose server was lost " +
+        std::to_string((common::UnixNowNs() - std::min(common::UnixNowNs(), resume->last_seen_unix_ns)) / 1000000) +
+        " ms ago: world '" + resume->state.scene + "' revision " + std::to_string(resume->state.revision) + ", " +
+        std::to_string(resume->poses.size()) + " body poses, board message #" +
+        std::to_string(resume->state.message_id));
+  }
+  ServerSession session(*this, config_, participant, std::move(scene), resume ? &*resume : nullptr);
 
   // One tick per period at absolute deadlines, re-synced after a stall.
   const auto period = std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(1.0 / config_.tick_Hz));

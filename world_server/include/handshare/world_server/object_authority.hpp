@@ -72,6 +72,9 @@ class ObjectAuthority {
   void SetScene(const scene::Scene& scene);
   void OnContactSet(const msg::ContactSet& set, Clock::time_point now);
   void OnUserGone(const std::string& user, Clock::time_point now);
+  /// Where a dynamic body is when the next models of this world are adopted (a resumed session:
+  /// the poses its log last held). Ignored for objects the world does not have.
+  void PlaceBody(const std::string& object_id, const Eigen::Isometry3d& X_WO);
   /// A reader of deformations joined: the next tick sends keyframes.
   void RequestKeyframes();
   /// Advances to `now` (dt_s since the last tick, sub-stepped) and returns what to publish.
@@ -113,6 +116,7 @@ class ObjectAuthority {
   std::future<world::SceneModels> loading_;
   std::vector<SupersededBuild> superseded_;
   std::string ready_scene_;
+  std::map<std::string, Eigen::Isometry3d> placed_;  // PlaceBody: applied at the next Adopt
   std::string loading_scene_;
   Clock::time_point loading_since_{};
   session::PeerContacts peers_;

@@ -15,8 +15,10 @@
 #include <stdexcept>
 #include <string>
 #include <string_view>
+#include <vector>
 
 #include "handshare/controls/controls.hpp"
+#include "handshare/scene/scene.hpp"
 #include "handshare/world_server/member_registry.hpp"
 
 namespace handshare::server {
@@ -54,7 +56,44 @@ struct SessionStart {
   std::string host;
   std::int64_t pid = 0;
   std::uint64_t unix_ns = 0;
+  std::int64_t resumed_from = 0;      // the session this one resumes (0: a new session)
 };
+
+/// Where a session is: what a restarted server needs to go on from there.
+struct SessionState {
+  std::uint64_t unix_ns = 0;
+  std::string scene;                      // the current world
+  std::string title;
+  std::uint32_t revision = 0;             // of the scene state last published
+  double gravity_W_m_per_s2[3] = {0.0, 0.0, 0.0};
+  std::uint64_t epoch_unix_ns = 0;        // the session clock's origin
+  std::uint32_t message_id = 0;           // the board's last message ...
+  std::vector<scene::Message> board;      // ... in every language
+};
+
+/// The newest pose of a rigid body and who held it.
+struct ObjectPose {
+  std::string object_id;
+  std::string owner;                      // "" free
+  std::uint64_t unix_ns = 0;
+  double p_WO_m[3] = {0.0, 0.0, 0.0};
+  double q_WO_wxyz[4] = {1.0, 0.0, 0.0, 0.0};
+};
+
+/// A session a killed server left behind (never ended), with the state it last committed.
+struct ResumePoint {
+  std::int64_t session_id = 0;
+  std::uint64_t last_seen_unix_ns = 0;    // the killed server's last commit
+  SessionState state;
+  std::vector<ObjectPose> poses;
+};
+
+/// The newest session named `session` in `file` that did not end (its server was killed or
+/// lost power), whose last commit is at most `max_age_ns` before `now_unix_ns`, and that
+/// recorded a state. Empty when there is none (no file, a clean end, too old, no state).
+/// Throws SessionLogError for a file that is not a readable session log.
+std::optional<ResumePoint> FindResumePoint(const std::filesystem::path& file, const std::string& session,
+                                           std::uint64_t now_unix_ns, std::uint64_t max_age_ns);
 
 struct SessionLogConfig {
   std::chrono::milliseconds flush_period{200};  // the writer commits at least this often
@@ -65,7 +104,7 @@ struct SessionLogConfig {
 class SessionLog {
  public:
   /// Schema version (PRAGMA user_version); the file also carries kApplicationId.
-  static constexpr int kSchemaVersion = 1;
+  static constexpr int kSchemaVersion = 2;
   static constexpr std::int32_t kApplicationId = 0x48534C47;  // "HSLG"
 
   /// Opens `file` (created with the schema if absent or empty), checks it is a handshare log
@@ -87,6 +126,12 @@ class SessionLog {
   /// owner "" : the object became free.
   void OnOwnership(const std::string& object_id, const std::string& owner, const std::string& reason,
                    std::uint64_t unix_ns);
+  /// Where the session is now (replaces the previous state: one row per session).
+  void OnState(const SessionState& state);
+  /// The newest pose of a body (replaces its previous pose).
+  void OnObjectPose(const ObjectPose& pose);
+  /// Another world: the poses of the last one are forgotten.
+  void ForgetObjectPoses();
   /// Marks the session as ended at unix_ns (once; later calls are ignored).
   void End(std::uint64_t unix_ns);
 

@@ -22,6 +22,9 @@ struct WorldServerConfig {
   std::string cache_dir;         // deformable models' cache ("": world::DefaultCacheDir())
   std::string dump_dir;          // "": none; else every published deformation's loads (ObjectAuthority)
   double deformation_threshold_m = 1e-4;  // re-send a surface node when it moved more than this
+  /// With a log file: a session of this name whose server was killed (never ended) at most this
+  /// long ago is resumed where its log says it was; 0 never resumes.
+  double resume_within_s = 600.0;
 };
 
 class WorldServer {
