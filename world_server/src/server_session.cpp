@@ -103,6 +103,7 @@ void ServerSession::TakeMembers(Clock::time_point now) {
 void ServerSession::TakeControlEvents() {
   msg::ControlEvent sample;
   dds::SampleMeta meta;
+  bool applied = false;
   while (control_reader_.TakeNext(sample, meta)) {
     if (!meta.valid_data) continue;
     if (!Accept("control_event", sample.user().to_string(), dds::CheckControlEvent(sample, session_))) continue;
@@ -121,7 +122,11 @@ void ServerSession::TakeControlEvents() {
     }
     if (outcome.revised) server_.OnSceneChange(scene_.name, scene_.title);
     for (const auto& board : outcome.boards) ShowMessage(board);
+    applied = true;
   }
+  // A control event and what it did are committed before the tick goes on (a few a minute):
+  // a server killed right after still leaves them in the log, and a restart resumes from them.
+  if (applied) server_.CommitLog();
 }
 
 void ServerSession::TakeContactSets(Clock::time_point now) {

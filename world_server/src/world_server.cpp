@@ -133,6 +133,15 @@ int WorldServer::Run() {
   return log_failed_ ? 1 : 0;
 }
 
+void WorldServer::CommitLog() {
+  if (!log_ || log_failed_) return;
+  try {
+    log_->Flush();
+  } catch (const SessionLogError&) {
+    // CheckLog() reports it once and the session goes on without the log.
+  }
+}
+
 void WorldServer::CloseLog() {
   if (!log_) return;
   // Members still present stay open in the log: the report shows them "present at end".

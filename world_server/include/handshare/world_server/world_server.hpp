@@ -52,6 +52,10 @@ class WorldServer {
   /// Prints one line of the server's log (stdout, with the time since start).
   void Say(const std::string& line);
 
+  /// Commits what the log has queued now (waits for the disk: for the few rows a restart must
+  /// find, control events and their effects). A failure is reported by the next CheckLog().
+  void CommitLog();
+
   /// nullptr without a log file, or before Run() opened it.
   SessionLog* session_log() { return log_.get(); }
 
