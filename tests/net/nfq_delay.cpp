@@ -11,7 +11,9 @@
 // distribution is shifted up as with netem's rate/ordering).
 //
 // usage: nfq_delay --queue N --delay-ms D [--jitter-ms J] [--dist normal|uniform] [--seed S]
-//                  [--loss-percent P] [--no-reorder] [--max-held M]
+//                  [--loss-percent P] [--no-reorder] [--max-held M] [--rt-priority R]
+//   --rt-priority: run under SCHED_FIFO R (root); on a loaded machine the default scheduler
+//   releases packets milliseconds late.
 //   normal:  delay ~ N(D, J) clamped at 0 (J is the standard deviation)
 //   uniform: delay ~ U(D - J, D + J) clamped at 0 (standard deviation J / sqrt(3))
 #include <arpa/inet.h>
@@ -27,6 +29,7 @@
 #include <poll.h>
 #include <queue>
 #include <random>
+#include <sched.h>
 #include <string>
 #include <string_view>
 #include <sys/prctl.h>
@@ -57,13 +60,14 @@ struct Options {
   double loss_percent = 0;
   bool reorder = true;
   unsigned max_held = 65536;
+  int rt_priority = 0;  // SCHED_FIFO priority; 0 keeps the normal scheduler
 };
 
 [[noreturn]] void Usage(const std::string& error) {
   std::fprintf(stderr,
                "nfq_delay: %s\n"
                "usage: nfq_delay --queue N --delay-ms D [--jitter-ms J] [--dist normal|uniform] [--seed S]\n"
-               "                 [--loss-percent P] [--no-reorder] [--max-held M]\n",
+               "                 [--loss-percent P] [--no-reorder] [--max-held M] [--rt-priority R]\n",
                error.c_str());
   std::exit(2);
 }
@@ -113,6 +117,9 @@ Options Parse(int argc, char** argv) {
       ++i;
     } else if (a == "--max-held") {
       o.max_held = static_cast<unsigned>(ParseNumber(a, v, 1, 1 << 24));
+      ++i;
+    } else if (a == "--rt-priority") {
+      o.rt_priority = static_cast<int>(ParseNumber(a, v, 0, 99));
       ++i;
     } else if (a == "--no-reorder") {
       o.reorder = false;
@@ -217,6 +224,14 @@ int main(int argc, char** argv) {
   State s(opt);
   // Default timer slack (50 us) would add to every release; ask for the finest.
   prctl(PR_SET_TIMERSLACK, 1UL, 0, 0, 0);
+  if (opt.rt_priority > 0) {
+    sched_param sp{};
+    sp.sched_priority = opt.rt_priority;
+    if (sched_setscheduler(0, SCHED_FIFO, &sp) != 0) {
+      std::fprintf(stderr, "nfq_delay: SCHED_FIFO %d refused (%s): releases may be late under load\n", opt.rt_priority,
+                   std::strerror(errno));
+    }
+  }
 
   nfq_handle* h = nfq_open();
   if (h == nullptr) {
