@@ -132,20 +132,26 @@ class Proc:
                                       stderr=subprocess.STDOUT, env=env, start_new_session=True)
 
     def log(self):
-        self.log_file.flush()
+        if not self.log_file.closed:
+            self.log_file.flush()
         with open(self.log_path, errors="replace") as f:
             return f.read()
 
-    def wait_for(self, text, timeout):
-        """Monotonic time when `text` first appeared in the output (polled every 10 ms)."""
+    def wait_for(self, text, timeout, count=1):
+        """Monotonic time when `text` (a string, or a compiled regex) appeared in the output for
+        the `count`th time (polled every 10 ms)."""
         end = time.monotonic() + timeout
+        if isinstance(text, re.Pattern):
+            found = lambda log: len(text.findall(log)) >= count  # noqa: E731
+        else:
+            found = lambda log: log.count(text) >= count  # noqa: E731
         while True:
-            if text in self.log():
+            if found(self.log()):
                 return time.monotonic()
-            if self.popen.poll() is not None and text not in self.log():
-                raise Failure(f"{self.label} ended (rc {self.popen.returncode}) without '{text}':\n{self.log()}")
+            if self.popen.poll() is not None and not found(self.log()):
+                raise Failure(f"{self.label} ended (rc {self.popen.returncode}) without '{text}' x{count}:\n{self.log()}")
             if time.monotonic() > end:
-                raise Failure(f"'{text}' not in {self.label}'s output within {timeout} s:\n{self.log()}")
+                raise Failure(f"'{text}' x{count} not in {self.label}'s output within {timeout} s:\n{self.log()}")
             time.sleep(0.01)
 
     def wait(self, timeout):
