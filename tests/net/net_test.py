@@ -47,6 +47,19 @@ def probe(sender, receiver, count, rate=1000, idle=1.0):
     return r.rows()
 
 
+def delayed_probe(a, b, n, what, **delay):
+    """rows and delayer counters for n datagrams through b's delayer. Measured once more when the
+    delayer itself reports a release more than 2 ms late: the shared VM stalled it (printed)."""
+    for attempt in (1, 2):
+        b.delay(**delay)
+        rows = probe(a, b, n)
+        c = b.clear_delay()
+        if not c or c.get("late_max_us", 0) <= 2000 or attempt == 2:
+            return rows, c
+        print(f"{what}: delayer released a packet {c['late_max_us'] / 1000:.1f} ms late (machine stalled): "
+              "measuring again")
+
+
 def delays_ms(rows):
     return [(recv - sent) / 1e6 for _, sent, recv in rows]
 
@@ -84,10 +97,10 @@ def case_delayer_distribution(args):
               f"(overhead {1000 * (z_mean - base_mean):.0f} us)")
         check(zc and zc.get("accepted") == len(zero), f"delayer at 0 ms: counters {zc} vs {len(zero)} received")
 
-        if not args.without_delayer:
-            b.delay(D, jitter_ms=J, seed=7)
-        rows = probe(a, b, N)
-        c = b.clear_delay()
+        if args.without_delayer:
+            rows, c = probe(a, b, N), None
+        else:
+            rows, c = delayed_probe(a, b, N, "normal jitter", ms=D, jitter_ms=J, seed=7)
         d = delays_ms(rows)
         mean, sd = stats(d)
         print(f"delayer {D} ms +- {J} ms (normal sd): {len(rows)}/{N} received, one-way mean {mean:.3f} ms, "
@@ -113,9 +126,7 @@ def case_delayer_reorder(args):
     N, D, J = 2000, 20.0, 5.0
     with Network(2, nfq_delay=args.nfq_delay, use_netem=False) as net:
         a, b = net.hosts
-        b.delay(D, jitter_ms=J, seed=3, reorder=False)
-        rows = probe(a, b, N)
-        b.clear_delay()
+        rows, _ = delayed_probe(a, b, N, "FIFO", ms=D, jitter_ms=J, seed=3, reorder=False)
         d = delays_ms(rows)
         mean, sd = stats(d)
         print(f"delayer {D} ms +- {J} ms FIFO: {len(rows)}/{N} received, {inversions(rows)} reordered, "
@@ -125,9 +136,8 @@ def case_delayer_reorder(args):
         # FIFO holds a packet behind slower ones: the mean can only grow.
         check(mean >= D - 0.5, f"FIFO mean {mean:.3f} ms below the asked {D} ms")
 
-        b.delay(D, jitter_ms=J, seed=3, dist="uniform")
-        rows = probe(a, b, N)
-        b.clear_delay()
+        rows, c = delayed_probe(a, b, N, "uniform jitter", ms=D, jitter_ms=J, seed=3, dist="uniform")
+        print(f"delayer counters: {c and c.get('raw')}")
         d = delays_ms(rows)
         mean, sd = stats(d)
         print(f"delayer {D} ms +- {J} ms uniform: mean {mean:.3f} ms, sd {sd:.3f} ms (expected {J / math.sqrt(3):.3f}), "
