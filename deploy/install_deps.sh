@@ -22,6 +22,9 @@ PACKAGES=(
   libsqlite3-dev sqlite3 nlohmann-json3-dev
   # asset preparation and independent FEM oracle (called as external programs)
   tetgen calculix-ccx
+  # network tests (tests/net): namespaces, nft loss/partition, the NFQUEUE delayer; iptables
+  # (iptables-nft) reaches the xt NFQUEUE target where the kernel lacks nft's queue expression
+  iproute2 nftables iptables libnetfilter-queue-dev
   # plots for bench/ and WAV checks
   python3 python3-matplotlib python3-numpy python3-pil sox
 )

@@ -1,0 +1,101 @@
+#!/usr/bin/env python3
+"""Smoke tests of handshare over a real (impaired) network: the executables in separate network
+namespaces, so Fast DDS talks UDP over veth and a bridge, not shared memory.
+
+usage: net_dds_test.py two_hosts --bin-dir DIR --nfq-delay PATH --domain D --work DIR
+"""
+import os
+import re
+import sys
+import time
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+sys.path.insert(0, HERE)
+from netharness import Network, Failure, check, main  # noqa: E402
+
+DATA = os.path.join(HERE, "..", "data")
+
+
+def exe(bin_dir, name):
+    path = os.path.join(bin_dir, name, name)
+    check(os.access(path, os.X_OK), f"executable not built: {path}")
+    return path
+
+
+def shm_files():
+    try:
+        return {f for f in os.listdir("/dev/shm") if "fastrtps" in f or "fastdds" in f}
+    except FileNotFoundError:
+        return set()
+
+
+def case_two_hosts(args):
+    """world_server on one host, a simulated haptic node on another; 20 ms +- 5 ms and 2 % loss
+    on what arrives at each host (so each direction of each link)."""
+    os.makedirs(args.work, exist_ok=True)
+    server_exe, node_exe = exe(args.bin_dir, "world_server"), exe(args.bin_dir, "haptic_node")
+    session = f"net-two-hosts-{os.getpid()}"
+    common = ["--domain", args.domain, "--session", session]
+    with Network(2, nfq_delay=args.nfq_delay) as net:
+        a, b = net.hosts
+        for seed, h in enumerate((a, b), start=1):
+            h.loss(2)
+            h.delay(20, jitter_ms=5, seed=seed)
+        shm_before = shm_files()
+        t0 = time.monotonic()
+        server = a.start("world_server", [server_exe, *common, "--duration", 60], args.work)
+        node = b.start("alice", [node_exe, *common, "--user", "alice", "--device", "sim", "--script",
+                                 os.path.join(DATA, "alice.hand"), "--duration", 45], args.work)
+        try:
+            t_join = server.wait_for("member joined: user=alice", 30)
+            t_scene = node.wait_for(re.compile(r"scene '[^']+' revision \d+"), 30)
+            c0 = a.counters()
+            time.sleep(1.0)  # a measurement window of the traffic, not a wait for an event
+            c1 = a.counters()
+            unicast = (c1["udp_in"] - c1["udp_in_mcast"]) - (c0["udp_in"] - c0["udp_in_mcast"])
+            mcast = c1["udp_in_mcast"] - c0["udp_in_mcast"]
+            # It is really UDP: cut the node's host off (nft drops UDP only); over shared memory
+            # nothing would change. Over UDP the server loses alice (1 s participant lease) and
+            # finds her again when the link heals.
+            t_cut = time.monotonic()
+            net.isolate(b)
+            t_lost = server.wait_for("member lost: user=alice", 15)
+            t_heal = time.monotonic()
+            net.heal_all()
+            # Not asserted (yet): after the heal the server does not list alice again (seen with
+            # Fast DDS 2.9.1 and the 1 s leases of deploy/qos); reported for the fault-tolerance work.
+            try:
+                t_back = server.wait_for("member joined: user=alice", 10, count=2)
+            except Failure:
+                t_back = None
+            t_stop_sent = time.monotonic()
+            node.stop()
+            # A member the server already lost is not reported again when it leaves.
+            t_left = server.wait_for("member left: user=alice", 15) if t_back else None
+            t_stop = node.popen.returncode
+        except Failure:
+            for p in (server, node):
+                sys.stderr.write(f"----- {p.label} -----\n{p.log()}\n")
+            raise
+        server.stop()
+        stats = {h.ns: h.clear_delay() for h in (a, b)}
+    scene_line = re.search(r"scene '[^']+' revision \d+[^\n]*", node.log()).group(0)
+    print(f"two hosts ({a.addr} server, {b.addr} haptic node), 20 ms +- 5 ms and 2% loss on arrival at each:")
+    print(f"  member joined {t_join - t0:.2f} s after start; scene at the node {t_scene - t0:.2f} s ({scene_line})")
+    print(f"  UDP datagrams arriving at the server's host in 1 s: {unicast} unicast, {mcast} multicast")
+    back = f"joined again after {t_back - t_heal:.2f} s" if t_back else "NOT listed again within 10 s (not asserted)"
+    print(f"  node's host isolated: member lost after {t_lost - t_cut:.2f} s; healed: {back}")
+    if t_left:
+        print(f"  member left {t_left - t_stop_sent:.2f} s after SIGTERM to the node (rc {t_stop})")
+    else:
+        print(f"  node stopped with SIGTERM (rc {t_stop}); the server, having lost alice, reported no leave")
+    for ns, st in stats.items():
+        print(f"  delayer {ns}: {st and st.get('raw')}")
+    new_shm = sorted(shm_files() - shm_before)
+    print(f"  /dev/shm Fast DDS files left after the run: {new_shm or 'none'}")
+    check(unicast > 0, "no unicast UDP reached the server")
+    check(all(st and st["accepted"] > 0 for st in stats.values()), "a delayer saw no traffic")
+
+
+if __name__ == "__main__":
+    main({"two_hosts": case_two_hosts})
