@@ -60,18 +60,25 @@ def case_two_hosts(args):
             t_cut = time.monotonic()
             net.isolate(b)
             t_lost = server.wait_for("member lost: user=alice", 15)
+            # The cut lasts 3 s (the issue's partition): long enough for both sides' participant
+            # leases (1 s) to end. (A heal between the member's liveliness loss and the lease's end
+            # left the writer unmatched for good in one run: noted in docs/network.md.)
+            time.sleep(max(0.0, t_cut + 3.0 - time.monotonic()))  # the partition's length, not a wait
             t_heal = time.monotonic()
             net.heal_all()
-            # Not asserted (yet): after the heal the server does not list alice again (seen with
-            # Fast DDS 2.9.1 and the 1 s leases of deploy/qos); reported for the fault-tolerance work.
-            try:
-                t_back = server.wait_for("member joined: user=alice", 10, count=2)
-            except Failure:
-                t_back = None
+            # Back when the link heals: Fast DDS 2.9 does not deliver her member sample again, so
+            # the server restores the member when her writer matches again (MemberRegistry).
+            joins = server.log().count("member joined: user=alice")
+            t_back = server.wait_for("member joined: user=alice", 10, count=joins + 1)
             t_stop_sent = time.monotonic()
             node.stop()
-            # A member the server already lost is not reported again when it leaves.
-            t_left = server.wait_for("member left: user=alice", 15) if t_back else None
+            # Her clean leave after the partition: not asserted. With Fast DDS 2.9.1 the server has
+            # not received her dispose once her writer was re-matched (3 runs of 3): it reports her
+            # lost when her writer goes, ~40 ms later (docs/network.md).
+            try:
+                t_left = server.wait_for("member left: user=alice", 5)
+            except Failure:
+                t_left = None
             t_stop = node.popen.returncode
         except Failure:
             for p in (server, node):
@@ -83,12 +90,12 @@ def case_two_hosts(args):
     print(f"two hosts ({a.addr} server, {b.addr} haptic node), 20 ms +- 5 ms and 2% loss on arrival at each:")
     print(f"  member joined {t_join - t0:.2f} s after start; scene at the node {t_scene - t0:.2f} s ({scene_line})")
     print(f"  UDP datagrams arriving at the server's host in 1 s: {unicast} unicast, {mcast} multicast")
-    back = f"joined again after {t_back - t_heal:.2f} s" if t_back else "NOT listed again within 10 s (not asserted)"
+    back = f"joined again after {t_back - t_heal:.2f} s"
     print(f"  node's host isolated: member lost after {t_lost - t_cut:.2f} s; healed: {back}")
     if t_left:
         print(f"  member left {t_left - t_stop_sent:.2f} s after SIGTERM to the node (rc {t_stop})")
     else:
-        print(f"  node stopped with SIGTERM (rc {t_stop}); the server, having lost alice, reported no leave")
+        print(f"  node stopped with SIGTERM (rc {t_stop}); the server reported no clean leave (known, not asserted)")
     for ns, st in stats.items():
         print(f"  delayer {ns}: {st and st.get('raw')}")
     new_shm = sorted(shm_files() - shm_before)

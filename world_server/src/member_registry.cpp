@@ -4,6 +4,7 @@ namespace handshare::server {
 
 std::optional<MemberEvent> MemberRegistry::OnInfo(const InstanceKey& key, const InstanceKey& writer,
                                                   const Member& member) {
+  lost_.erase(key);  // announced again (by the same writer, or a restarted process's new one)
   const auto [it, inserted] = present_.try_emplace(key, Entry{member, writer});
   if (!inserted) {
     it->second = Entry{member, writer};  // an update of a present member is not a join
@@ -26,7 +27,22 @@ std::vector<MemberEvent> MemberRegistry::OnWriterLost(const InstanceKey& writer)
   for (auto it = present_.begin(); it != present_.end();) {
     if (it->second.writer == writer) {
       events.push_back(MemberEvent{MemberChange::kLost, it->second.member});
+      lost_.insert_or_assign(it->first, it->second);
       it = present_.erase(it);
+    } else {
+      ++it;
+    }
+  }
+  return events;
+}
+
+std::vector<MemberEvent> MemberRegistry::OnWriterRegained(const InstanceKey& writer) {
+  std::vector<MemberEvent> events;
+  for (auto it = lost_.begin(); it != lost_.end();) {
+    if (it->second.writer == writer && present_.try_emplace(it->first, it->second).second) {
+      ++joined_total_;
+      events.push_back(MemberEvent{MemberChange::kJoined, it->second.member});
+      it = lost_.erase(it);
     } else {
       ++it;
     }

@@ -85,10 +85,13 @@ void ServerSession::TakeMembers(Clock::time_point now) {
     }
     if (event) events.push_back(*event);
   }
-  // Writers that vanished without disposing: killed processes, lost hosts.
-  dds::SampleMeta::Key lost_writer;
-  while (member_reader_.TakeLostWriter(lost_writer)) {
-    for (auto& e : members_.OnWriterLost(lost_writer)) events.push_back(e);
+  // Writers that vanished without disposing (killed processes, lost hosts), and writers back
+  // after a partition healed: their members rejoin, once each.
+  dds::WriterChange change;
+  while (member_reader_.TakeWriterChange(change)) {
+    for (auto& e : change.alive ? members_.OnWriterRegained(change.writer) : members_.OnWriterLost(change.writer)) {
+      events.push_back(e);
+    }
   }
   for (const auto& event : events) {
     server_.OnMemberEvent(event, members_.present().size());

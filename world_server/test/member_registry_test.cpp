@@ -56,3 +56,56 @@ TEST(MemberRegistry, UnknownInstanceGoneIsIgnored) {
 
 }  // namespace
 }  // namespace handshare::server
+
+namespace handshare::server {
+namespace {
+
+// A partition: alice's writer is lost (her member too), then matches again when the network
+// heals. Fast DDS 2.9 does not deliver her transient-local member sample again, so the
+// registry brings back what that writer had announced: one rejoin, no duplicate member.
+TEST(MemberRegistry, AMemberLostWithItsWriterRejoinsOnceWhenTheWriterComesBack) {
+  MemberRegistry r;
+  const InstanceKey alice_key{1}, alice_writer{7}, bob_key{2}, bob_writer{8};
+  ASSERT_TRUE(r.OnInfo(alice_key, alice_writer, Member{"s/alice", "alice", "haptic", "sim", 11}));
+  ASSERT_TRUE(r.OnInfo(bob_key, bob_writer, Member{"s/bob", "bob", "haptic", "sim", 12}));
+  ASSERT_EQ(r.OnWriterLost(alice_writer).size(), 1u);
+  EXPECT_EQ(r.present().size(), 1u);
+  // A writer that was never lost (bob's matching again, a new one) brings nothing back.
+  EXPECT_TRUE(r.OnWriterRegained(bob_writer).empty());
+  EXPECT_TRUE(r.OnWriterRegained(InstanceKey{9}).empty());
+  const auto back = r.OnWriterRegained(alice_writer);
+  ASSERT_EQ(back.size(), 1u);
+  EXPECT_EQ(back[0].change, MemberChange::kJoined);
+  EXPECT_EQ(back[0].member.user, "alice");
+  EXPECT_EQ(r.present().size(), 2u);
+  // Matched and regained liveliness both report it: still one alice.
+  EXPECT_TRUE(r.OnWriterRegained(alice_writer).empty());
+  EXPECT_FALSE(r.OnInfo(alice_key, alice_writer, Member{"s/alice", "alice", "haptic", "sim", 11}).has_value());
+  EXPECT_EQ(r.present().size(), 2u);
+  EXPECT_EQ(r.joined_total(), 3u);  // alice, bob, alice again
+}
+
+TEST(MemberRegistry, ACleanLeaveDoesNotComeBackWithItsWriter) {
+  MemberRegistry r;
+  const InstanceKey key{1}, writer{7};
+  ASSERT_TRUE(r.OnInfo(key, writer, Member{"s/carol", "carol", "graphics", "", 13}));
+  ASSERT_TRUE(r.OnGone(key, /*disposed=*/true));
+  EXPECT_TRUE(r.OnWriterLost(writer).empty());
+  EXPECT_TRUE(r.OnWriterRegained(writer).empty());
+  EXPECT_TRUE(r.present().empty());
+}
+
+// A process restarted after a loss announces itself with a new writer: a normal join, and the
+// old writer coming back later (it cannot, but a stale match might) adds no second member.
+TEST(MemberRegistry, ARestartedMembersNewWriterJoinsAndTheOldOneBringsNothingBack) {
+  MemberRegistry r;
+  const InstanceKey key{1}, old_writer{7}, new_writer{8};
+  ASSERT_TRUE(r.OnInfo(key, old_writer, Member{"s/dave", "dave", "haptic", "sim", 14}));
+  ASSERT_EQ(r.OnWriterLost(old_writer).size(), 1u);
+  ASSERT_TRUE(r.OnInfo(key, new_writer, Member{"s/dave", "dave", "haptic", "sim", 15}));
+  EXPECT_TRUE(r.OnWriterRegained(old_writer).empty());
+  EXPECT_EQ(r.present().size(), 1u);
+}
+
+}  // namespace
+}  // namespace handshare::server

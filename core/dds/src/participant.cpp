@@ -22,6 +22,7 @@
 
 #include <cstdlib>
 #include <random>
+#include <deque>
 #include <filesystem>
 #include <map>
 #include <mutex>
@@ -137,33 +138,38 @@ class WriterImpl final : public detail::UntypedWriter {
   std::string topic_;
 };
 
-// Writers that went away (unmatched: killed, lost, or deleted) or lost liveliness. The
-// listener only records them; the reader's owner takes them on its own thread.
+// Writers that went away (unmatched: killed, lost, or deleted) or lost liveliness, and writers
+// that matched or regained liveliness (a partition healed). The listener only records them;
+// the reader's owner takes them on its own thread.
 class LostWriterListener final : public fdds::DataReaderListener {
  public:
   void on_subscription_matched(fdds::DataReader*, const fdds::SubscriptionMatchedStatus& s) override {
-    if (s.current_count_change < 0) Push(s.last_publication_handle);
+    if (s.current_count_change < 0) Push(false, s.last_publication_handle);
+    if (s.current_count_change > 0) Push(true, s.last_publication_handle);
   }
   void on_liveliness_changed(fdds::DataReader*, const fdds::LivelinessChangedStatus& s) override {
-    if (s.not_alive_count_change > 0) Push(s.last_publication_handle);
+    if (s.not_alive_count_change > 0) Push(false, s.last_publication_handle);
+    if (s.alive_count_change > 0) Push(true, s.last_publication_handle);
   }
-  bool Take(std::array<std::uint8_t, 16>& out) {
+  // In the order they happened (a flapping link: lost, back, lost).
+  bool Take(WriterChange& out) {
     std::lock_guard<std::mutex> lock(mutex_);
-    if (lost_.empty()) return false;
-    out = lost_.back();
-    lost_.pop_back();
+    if (changes_.empty()) return false;
+    out = changes_.front();
+    changes_.pop_front();
     return true;
   }
 
  private:
-  void Push(const fdds::InstanceHandle_t& h) {
-    std::array<std::uint8_t, 16> key{};
-    for (std::size_t i = 0; i < key.size(); ++i) key[i] = h.value[i];
+  void Push(bool alive, const fdds::InstanceHandle_t& h) {
+    WriterChange c;
+    c.alive = alive;
+    for (std::size_t i = 0; i < c.writer.size(); ++i) c.writer[i] = h.value[i];
     std::lock_guard<std::mutex> lock(mutex_);
-    lost_.push_back(key);
+    changes_.push_back(c);
   }
   std::mutex mutex_;
-  std::vector<std::array<std::uint8_t, 16>> lost_;
+  std::deque<WriterChange> changes_;
 };
 
 class ReaderImpl final : public detail::UntypedReader {
@@ -186,7 +192,7 @@ class ReaderImpl final : public detail::UntypedReader {
     owner_->subscriber->delete_datareader(r_);
   }
 
-  bool TakeLostWriter(std::array<std::uint8_t, 16>& writer) override { return listener_.Take(writer); }
+  bool TakeWriterChange(WriterChange& change) override { return listener_.Take(change); }
 
   bool TakeNext(void* sample, SampleMeta& meta) override {
     fdds::SampleInfo info;

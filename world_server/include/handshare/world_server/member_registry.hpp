@@ -37,6 +37,9 @@ class MemberRegistry {
   std::optional<MemberEvent> OnGone(const InstanceKey& key, bool disposed);
   /// A writer went away: every member it announced is lost (if not already gone).
   std::vector<MemberEvent> OnWriterLost(const InstanceKey& writer);
+  /// A writer matched again or regained liveliness (a partition healed): the members it had
+  /// announced and lost that way are back (kJoined), once each; a writer never lost is ignored.
+  std::vector<MemberEvent> OnWriterRegained(const InstanceKey& writer);
 
   std::vector<Member> present() const;
   std::size_t joined_total() const { return joined_total_; }
@@ -47,6 +50,7 @@ class MemberRegistry {
     InstanceKey writer;
   };
   std::map<InstanceKey, Entry> present_;
+  std::map<InstanceKey, Entry> lost_;  // lost with their writer: may come back with it
   std::size_t joined_total_ = 0;
 };
 

@@ -32,7 +32,15 @@ struct SampleMeta {
   InstanceState instance_state = InstanceState::kAlive;
   std::array<std::uint8_t, 16> instance{};  // key hash: identifies the instance (e.g. a member)
   std::int64_t source_timestamp_ns = 0;     // writer's clock (UTC)
-  std::array<std::uint8_t, 16> writer{};    // the writer that sent it (see TakeLostWriter)
+  std::array<std::uint8_t, 16> writer{};    // the writer that sent it (see TakeWriterChange)
+};
+
+/// A writer of a reader's topic that went away (unmatched: killed, lost, deleted; or lost its
+/// liveliness) or came (matched, or regained liveliness: a new one, or a lost one back after a
+/// partition healed), identified as in SampleMeta::writer.
+struct WriterChange {
+  std::array<std::uint8_t, 16> writer{};
+  bool alive = false;  ///< false: went away; true: came or came back
 };
 
 namespace detail {
@@ -53,7 +61,7 @@ class UntypedReader {
   virtual bool TakeNext(void* sample, SampleMeta& meta) = 0;
   virtual bool WaitForData(std::chrono::nanoseconds timeout) = 0;
   virtual int matched_writers() const = 0;
-  virtual bool TakeLostWriter(std::array<std::uint8_t, 16>& writer) = 0;
+  virtual bool TakeWriterChange(WriterChange& change) = 0;
 };
 
 /// Defined in types.cpp for every message type of handshare.idl.
@@ -91,10 +99,10 @@ class Reader {
   /// Blocks on a WaitSet until data is available or the timeout passes.
   bool WaitForData(std::chrono::nanoseconds timeout) { return r_->WaitForData(timeout); }
   int matched_writers() const { return r_->matched_writers(); }
-  /// A writer that went away (killed process, lost network, deleted) or lost liveliness,
-  /// identified as in SampleMeta::writer. Fast DDS 2.9 does not reliably turn a killed writer
-  /// into a NOT_ALIVE_NO_WRITERS sample, so owners match these against the writers they saw.
-  bool TakeLostWriter(std::array<std::uint8_t, 16>& writer) { return r_->TakeLostWriter(writer); }
+  /// The next writer change, in the order they happened. Fast DDS 2.9 does not reliably turn a
+  /// killed writer into a NOT_ALIVE_NO_WRITERS sample, nor deliver a transient-local sample
+  /// again to a reader it re-matches after a partition, so owners track the writers they saw.
+  bool TakeWriterChange(WriterChange& change) { return r_->TakeWriterChange(change); }
   explicit operator bool() const { return r_ != nullptr; }
 
  private:
