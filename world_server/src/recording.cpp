@@ -55,12 +55,15 @@ CREATE TABLE samples(
 
 std::string Where(const std::filesystem::path& file) { return file.string(); }
 
+}  // namespace
+
 // ---------------------------------------------------------------------------------------------
 // Writer: SessionLog creates the file (the session log's schema and its session row); this
 // connection adds the recording's tables and inserts the samples on its own thread.
-class RecordingWriter {
+namespace detail {
+class RecordingWriterImpl {
  public:
-  RecordingWriter(const std::filesystem::path& file, const SessionStart& start, std::chrono::milliseconds flush)
+  RecordingWriterImpl(const std::filesystem::path& file, const SessionStart& start, std::chrono::milliseconds flush)
       : log_(file, start, SessionLogConfig{flush}), db_(file, SQLITE_OPEN_READWRITE), flush_(flush) {
     db_.Check(sqlite3_busy_timeout(db_.get(), 5000), "setting the busy timeout");
     db_.Exec("PRAGMA synchronous=NORMAL", "setting synchronous=NORMAL");
@@ -77,13 +80,13 @@ class RecordingWriter {
     db_.Exec("COMMIT", "committing the recording's schema");
     thread_ = std::thread([this] { Loop(); });
   }
-  ~RecordingWriter() {
+  ~RecordingWriterImpl() {
     {
       std::lock_guard<std::mutex> lock(mutex_);
       stop_ = true;
     }
     wake_.notify_all();
-    thread_.join();
+    if (thread_.joinable()) thread_.join();
   }
 
   SessionLog& log() { return log_; }
@@ -171,6 +174,32 @@ class RecordingWriter {
   std::string error_;         // writer thread only (read after join)
   std::thread thread_;
 };
+}  // namespace detail
+
+RecordingWriter::RecordingWriter(const std::filesystem::path& file, const SessionStart& start,
+                                 std::chrono::milliseconds flush_period) {
+  if (std::filesystem::exists(file)) {
+    throw RecordingError(file.string() + ": already exists (a recording is never overwritten or appended to)");
+  }
+  try {
+    impl_ = std::make_unique<detail::RecordingWriterImpl>(file, start, flush_period);
+  } catch (const SessionLogError& e) {
+    throw RecordingError(e.what());
+  }
+}
+RecordingWriter::~RecordingWriter() = default;
+void RecordingWriter::Push(RecordedSample sample) { impl_->Push(std::move(sample)); }
+void RecordingWriter::Finish(std::int64_t ended_unix_ns) {
+  try {
+    impl_->Finish(ended_unix_ns);
+  } catch (const SessionLogError& e) {
+    throw RecordingError(e.what());
+  }
+}
+SessionLog& RecordingWriter::log() { return impl_->log(); }
+std::int64_t RecordingWriter::written() const { return impl_->written(); }
+
+namespace {
 
 // A file SQLite would call "malformed" somewhere later: say where it is cut, from its header.
 void CheckFileHeader(const std::filesystem::path& file) {
@@ -427,9 +456,6 @@ class Tap : public TopicTap {
 
 int RunRecorder(const RecordConfig& config) {
   const auto& where = config.where;
-  if (std::filesystem::exists(config.out)) {
-    throw RecordingError(Where(config.out) + ": already exists (a recording is never overwritten or appended to)");
-  }
   char host[256] = {};
   gethostname(host, sizeof host - 1);
   SessionStart start;
@@ -438,12 +464,7 @@ int RunRecorder(const RecordConfig& config) {
   start.host = host;
   start.pid = getpid();
   start.unix_ns = common::UnixNowNs();
-  std::unique_ptr<RecordingWriter> writer;
-  try {
-    writer = std::make_unique<RecordingWriter>(config.out, start, config.flush_period);
-  } catch (const SessionLogError& e) {
-    throw RecordingError(e.what());
-  }
+  auto writer = std::make_unique<RecordingWriter>(config.out, start, config.flush_period);
   SessionLog& log = writer->log();
 
   // The session log, rebuilt as the world server writes it: members, worlds, control events.

@@ -62,6 +62,33 @@ struct RecordingInfo {
   std::int64_t dropped = 0;             ///< samples the disk could not keep up with
 };
 
+struct SessionStart;
+class SessionLog;
+namespace detail {
+class RecordingWriterImpl;
+}
+
+/// Creates a recording (the file must not exist) and inserts samples on its own thread, one
+/// transaction per flush period. The recorder's; public for tests that make recordings.
+class RecordingWriter {
+ public:
+  RecordingWriter(const std::filesystem::path& file, const SessionStart& start,
+                  std::chrono::milliseconds flush_period = std::chrono::milliseconds(250));
+  ~RecordingWriter();
+  RecordingWriter(const RecordingWriter&) = delete;
+  RecordingWriter& operator=(const RecordingWriter&) = delete;
+  /// Queues a sample (id is assigned by the file); thread-safe, never waits on the disk.
+  void Push(RecordedSample sample);
+  /// Commits what is queued and writes the end; throws RecordingError after a write error.
+  void Finish(std::int64_t ended_unix_ns);
+  /// The session log the recording also is (members, worlds, control events).
+  SessionLog& log();
+  std::int64_t written() const;
+
+ private:
+  std::unique_ptr<detail::RecordingWriterImpl> impl_;
+};
+
 /// The topics a recording holds, in topics.hpp's names.
 const std::vector<std::string>& RecordedTopics();
 
