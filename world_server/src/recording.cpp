@@ -550,7 +550,8 @@ class TopicOut {
 template <class T>
 class Out : public TopicOut {
  public:
-  Out(dds::Participant& p, const dds::topics::TopicSpec& spec) : writer_(dds::MakeWriter<T>(p, spec)) {}
+  Out(dds::Participant& p, const dds::topics::TopicSpec& spec)
+      : writer_(dds::MakeWriter<T>(p, spec)), session_(p.session()) {}
   int matched_readers() const override { return writer_.matched_readers(); }
   void Publish(const std::filesystem::path& file, const RecordedSample& s) override {
     if (s.cdr.empty()) return;
@@ -560,6 +561,9 @@ class Out : public TopicOut {
       throw RecordingError(Where(file) + ": sample #" + std::to_string(s.id) + " (topic " + s.topic + ", offset " +
                            std::to_string(e.offset()) + " bytes into its payload): " + e.what());
     }
+    // Every sample names its session, and receivers drop another session's: played into
+    // another session, the samples are that session's.
+    sample_.session(session_);
     switch (s.state) {
       case RecordedState::kAlive:
         writer_.Write(sample_);
@@ -574,6 +578,7 @@ class Out : public TopicOut {
 
  private:
   dds::Writer<T> writer_;
+  std::string session_;
   T sample_;
 };
 
