@@ -26,6 +26,7 @@ from session_test import DATA, Failure, Harness, check
 # (deformation, object poses, 60 Hz) arrived a tick earlier or later in one of the runs.
 MAX_MEAN_ABS = 2.0          # mean |difference| over all pixels and channels, of 255
 MAX_DIFFERING_SHARE = 0.01  # share of pixels whose largest channel difference exceeds 32
+MAX_MB_PER_HOUR_PER_USER = 400  # the recording's size bound stated in docs/network.md
 
 
 class RecordHarness(Harness):
@@ -146,6 +147,9 @@ def main():
               f"{size / seconds * 3600 / 1e6:.0f} MB per hour")
         for topic, count, payload in per_topic:
             print(f"  {topic}: {count} samples, {payload} payload bytes ({count / seconds:.1f}/s)")
+        # docs/network.md: an hour with one haptic user stays below 400 MB (measured 333 MB).
+        check(size / seconds * 3600 < MAX_MB_PER_HOUR_PER_USER * 1e6,
+              f"{size / seconds * 3600 / 1e6:.0f} MB per hour exceeds {MAX_MB_PER_HOUR_PER_USER} MB for one user")
         print("PASS")
         return 0
     except Failure as e:
