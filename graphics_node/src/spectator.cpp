@@ -55,6 +55,8 @@ class WorldView {
     while (scene_reader_.TakeNext(scene, meta)) {
       if (meta.valid_data && Accept("scene_state", "world_server", dds::CheckSceneState(scene, session_))) {
         world_.OnSceneState(scene);
+        scene_name_ = scene.scene().to_string();
+        scene_revision_ = scene.revision();
       }
     }
     // Deformations and object states name objects of a scene: take them only once a scene is
@@ -92,6 +94,8 @@ class WorldView {
   }
 
   bool has_scene() const { return world_.has_scene(); }
+  const std::string& scene_name() const { return scene_name_; }
+  std::uint32_t scene_revision() const { return scene_revision_; }
   const std::map<std::string, UserHand>& hands() const { return hands_; }
   const SceneReplica& world() const { return world_; }
   const dds::DroppedSamples& dropped() const { return dropped_; }
@@ -127,6 +131,8 @@ class WorldView {
   std::string session_;
   std::string prefix_;
   dds::DroppedSamples dropped_;
+  std::string scene_name_;
+  std::uint32_t scene_revision_ = 0;
   dds::Reader<msg::SceneState> scene_reader_;
   dds::Reader<msg::DeviceState> device_reader_;
   dds::Reader<msg::MessageBoard> board_reader_;
@@ -215,6 +221,7 @@ int Spectator::Run() {
 
   std::filesystem::path out_dir;
   std::ofstream index;
+  std::ofstream times;
   if (config_.headless) {
     out_dir = config_.out_dir;
     std::filesystem::create_directories(out_dir);
@@ -223,6 +230,12 @@ int Spectator::Run() {
     index.open(out_dir / "frames.csv");
     if (!index) throw std::runtime_error("cannot write " + (out_dir / "frames.csv").string());
     index << "frame,file,user,finger,x_m,y_m,z_m,radius_m\n" << std::setprecision(9);
+    // frame_times.csv: what each frame shows by the senders' own stamps (the scene state's
+    // revision, each hand's device-state stamp_ns), which a replay (session_play) carries
+    // unchanged: frames of a live session and of its replay are matched on them.
+    times.open(out_dir / "frame_times.csv");
+    if (!times) throw std::runtime_error("cannot write " + (out_dir / "frame_times.csv").string());
+    times << "frame,file,scene,revision,hands\n";
   }
 
   dds::Participant participant(config_.where.domain_id, config_.where.session, name, config_.where.qos_file);
@@ -263,6 +276,13 @@ int Spectator::Run() {
                 << "," << p[2] << "," << hand.state.fingertip_radius_m() << "\n";
         }
       }
+      times << written << "," << file << "," << world.scene_name() << "," << world.scene_revision() << ",";
+      const char* sep = "";
+      for (const auto& [user, hand] : world.hands()) {
+        times << sep << user << "@" << hand.state.stamp_ns();
+        sep = ";";
+      }
+      times << "\n";
       next += period;
       std::this_thread::sleep_until(next);
     }

@@ -109,5 +109,14 @@ std::string Statement::Text(int column) const {
   return std::string(text, static_cast<std::size_t>(sqlite3_column_bytes(stmt_, column)));
 }
 bool Statement::IsNull(int column) const { return sqlite3_column_type(stmt_, column) == SQLITE_NULL; }
+std::vector<std::uint8_t> Statement::Blob(int column) const {
+  const auto* data = static_cast<const std::uint8_t*>(sqlite3_column_blob(stmt_, column));
+  if (!data) return {};
+  return std::vector<std::uint8_t>(data, data + sqlite3_column_bytes(stmt_, column));
+}
+Statement& Statement::BindBlob(int index, std::span<const std::uint8_t> bytes) {
+  db_.Check(sqlite3_bind_blob64(stmt_, index, bytes.data(), bytes.size(), SQLITE_TRANSIENT), what_);
+  return *this;
+}
 
 }  // namespace handshare::server::sqlite

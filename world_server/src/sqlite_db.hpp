@@ -7,6 +7,8 @@
 #include <cstdint>
 #include <filesystem>
 #include <optional>
+#include <span>
+#include <vector>
 #include <string>
 #include <string_view>
 
@@ -55,6 +57,7 @@ class Statement {
   Statement& Bind(int index, std::string_view text);
   Statement& Bind(int index, const std::optional<double>& value);
   Statement& BindNull(int index);
+  Statement& BindBlob(int index, std::span<const std::uint8_t> bytes);
 
   /// Returns true while there is a row, false when done. Throws on an error.
   bool Step();
@@ -65,6 +68,9 @@ class Statement {
   double Double(int column) const;
   std::string Text(int column) const;
   bool IsNull(int column) const;
+  std::vector<std::uint8_t> Blob(int column) const;
+  /// The statement itself, for what this wrapper does not cover.
+  sqlite3_stmt* get() const { return stmt_; }
 
  private:
   Db& db_;

@@ -1,0 +1,18 @@
+// session_record: records every topic of a session, with its timing, into one file.
+#include "handshare/common/node_main.hpp"
+#include "handshare/world_server/recording.hpp"
+
+int main(int argc, char** argv) {
+  handshare::common::Options options(
+      "session_record", "Records every topic of a handshare session (samples with their receive times, disposes "
+                        "and lost writers) into one SQLite file that is also a session log: play it with "
+                        "session_play, read it with session_report.");
+  handshare::common::DeclareSessionOptions(options);
+  options.Value("out", "FILE", "the recording to create (must not exist)", std::nullopt, true);
+  return handshare::common::RunNodeMain(argc, argv, options, [](const auto& o) {
+    handshare::server::RecordConfig config;
+    config.where = handshare::common::ReadSessionOptions(o);
+    config.out = o.GetString("out");
+    return handshare::server::RunRecorder(config);
+  });
+}
