@@ -419,8 +419,10 @@ class Tap : public TopicTap {
       out.Push(std::move(r));
       ++n;
     }
-    dds::SampleMeta::Key lost;
-    while (reader_.TakeLostWriter(lost)) {
+    dds::WriterChange change;
+    while (reader_.TakeWriterChange(change)) {
+      if (change.alive) continue;  // a writer coming back brings its samples itself
+      const auto& lost = change.writer;
       const auto unix_ns = static_cast<std::int64_t>(common::UnixNowNs());
       for (const auto& [key, inst] : instances_) {
         if (inst.writer != lost || inst.last.empty()) continue;
