@@ -43,17 +43,18 @@ TEST(Spectator, ShowsObjectStatesAndWritesTheDeformationsItReceived) {
                            {Object("ball", "sphere", "", At(p_A.x(), p_A.y(), p_A.z()), {1, 0, 0},
                                    {0.03, 0, 0}),
                             Object("tail", "mesh", "meshes/triceratops_tail.obj", At(0.15, 0.15, 0.05),
-                                   {0.5F, 0.45F, 0.3F})}));
+                                   {0.5F, 0.45F, 0.3F})},
+                           session));
   // Keyframe revision 1 split in two samples, then a delta; one id beyond the 962 vertices.
-  deformation_writer.Write(Deformation("tail", 1, true, {10, 20}, {0.001F, 0, 0, 0, 0.002F, 0}));
-  deformation_writer.Write(Deformation("tail", 1, true, {30, 5000}, {0, 0, -0.003F, 1, 1, 1}));
-  deformation_writer.Write(Deformation("tail", 2, false, {20}, {0, 0.0025F, 0}));
+  deformation_writer.Write(Deformation("tail", 1, true, {10, 20}, {0.001F, 0, 0, 0, 0.002F, 0}, session));
+  deformation_writer.Write(Deformation("tail", 1, true, {30, 5000}, {0, 0, -0.003F, 0.001F, 0.001F, 0.001F}, session));
+  deformation_writer.Write(Deformation("tail", 2, false, {20}, {0, 0.0025F, 0}, session));
 
   std::atomic<bool> stop{false};
   std::thread mover([&] {
     while (!stop) {
-      object_writer.Write(State("ball", p_B, {1, 0, 0, 0}));
-      object_writer.Write(State("moon", p_B, {1, 0, 0, 0}));  // not in this scene
+      object_writer.Write(State("ball", p_B, {1, 0, 0, 0}, session));
+      object_writer.Write(State("moon", p_B, {1, 0, 0, 0}, session));  // not in this scene
       std::this_thread::sleep_for(std::chrono::milliseconds(20));
     }
   });

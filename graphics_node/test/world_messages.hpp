@@ -55,9 +55,9 @@ inline msg::SceneObject Object(const std::string& id, const std::string& shape,
 }
 
 inline msg::SceneState Scene(const std::string& name, std::uint32_t revision,
-                             const std::vector<msg::SceneObject>& objects) {
+                             const std::vector<msg::SceneObject>& objects, const std::string& session = "test") {
   msg::SceneState s;
-  s.session("test");
+  s.session(session);
   s.scene(name);
   s.revision(revision);
   s.gravity_W_m_per_s2({0.0, 0.0, -9.81});
@@ -67,10 +67,10 @@ inline msg::SceneState Scene(const std::string& name, std::uint32_t revision,
 
 inline msg::Deformation Deformation(const std::string& id, std::uint32_t revision, bool keyframe,
                                     const std::vector<std::uint32_t>& ids,
-                                    const std::vector<float>& u) {
+                                    const std::vector<float>& u, const std::string& session = "test") {
   msg::Deformation d;
   d.object_id(id);
-  d.session("test");
+  d.session(session);
   d.revision(revision);
   d.keyframe(keyframe);
   d.surface_node_count(0);
@@ -80,10 +80,10 @@ inline msg::Deformation Deformation(const std::string& id, std::uint32_t revisio
 }
 
 inline msg::ObjectState State(const std::string& id, const Eigen::Vector3d& p,
-                              const Eigen::Vector4d& q_wxyz) {
+                              const Eigen::Vector4d& q_wxyz, const std::string& session = "test") {
   msg::ObjectState s;
   s.object_id(id);
-  s.session("test");
+  s.session(session);
   s.p_WO_m({p.x(), p.y(), p.z()});
   s.q_WO_wxyz({q_wxyz[0], q_wxyz[1], q_wxyz[2], q_wxyz[3]});
   return s;

