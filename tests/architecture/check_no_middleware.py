@@ -74,11 +74,11 @@ def include_tree(compiler, flags, header):
         m = re.match(r"^(\.+) (.*)$", line)
         if m:
             tree.append((len(m.group(1)), m.group(2)))
-        elif "error" in line:
+        elif re.search(r"\berror: ", line):
             errors.append(line)
-    if r.returncode != 0 and not errors:
-        errors = [f"{' '.join(cmd)} exited with {r.returncode}"]
-    return tree, errors
+    if r.returncode == 0:
+        return tree, []  # warnings (such as "#pragma once in main file") are no concern here
+    return tree, errors or [f"{' '.join(cmd)} exited with {r.returncode}"]
 
 
 def offending_chains(header, tree):
