@@ -1,6 +1,9 @@
 #!/usr/bin/env bash
-# Configures and builds handshare into ./build (RelWithDebInfo) with 2 jobs.
+# Configures and builds handshare into ./build (RelWithDebInfo) with 2 jobs, warnings as errors
+# (the `ci` preset of CMakePresets.json). Extra configure arguments come from
+# HANDSHARE_CMAKE_ARGS, e.g. "-DCMAKE_CXX_COMPILER_LAUNCHER=ccache -DCMAKE_C_COMPILER_LAUNCHER=ccache",
+# or "-DHANDSHARE_WARNINGS_AS_ERRORS=OFF" for a compiler newer than the project's gcc 12.
 set -euo pipefail
 cd "$(dirname "$0")/.."
-cmake -S . -B build -DCMAKE_BUILD_TYPE=RelWithDebInfo ${HANDSHARE_CMAKE_ARGS:-}
+cmake --preset ci ${HANDSHARE_CMAKE_ARGS:-}
 cmake --build build -j "${HANDSHARE_JOBS:-2}"

@@ -1,4 +1,5 @@
 // haptic_node: one user at one haptic device (HIRO II or simulated) joining a session.
+#include "handshare/common/data_dir.hpp"
 #include "handshare/common/node_main.hpp"
 #include "handshare/haptic/haptic_node.hpp"
 
@@ -8,9 +9,11 @@ int main(int argc, char** argv) {
   handshare::common::DeclareSessionOptions(options);
   options.Value("user", "U", "user name, unique in the session", std::nullopt, true)
       .Value("device", "KIND", "device driver: sim, hiro (simulated HIRO II plant), replay", "sim")
-      .Value("hiro-config", "FILE", "hiro: device geometry", HANDSHARE_HIRO_CONFIG)
+      .Value("hiro-config", "FILE", "hiro: device geometry",
+             (handshare::common::AssetsDir() / "devices" / "hiro2.json").string())
       .Value("cache", "DIR", "compliance cache of the deformable objects (default: ~/.cache/handshare)", "")
-      .Value("script", "FILE", "sim, hiro: the (simulated) user's hand script (see haptic_node/scripts/)", "")
+      .Value("script", "FILE", "sim, hiro: the (simulated) user's hand script (examples in " +
+                                   handshare::common::HandScriptsDir().string() + ")", "")
       .Value("replay", "FILE", "replay: device-state log to play back (a --trace file)", "")
       .Flag("replay-loop", "replay: start over at the end of the log")
       .Value("rate", "HZ", "haptic loop rate", "1000")

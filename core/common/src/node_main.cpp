@@ -11,7 +11,8 @@ void DeclareSessionOptions(Options& options) {
   options.Value("domain", "D", "DDS domain id (0..232)", "0")
       .Value("session", "S", "session name (the DDS partition)", std::nullopt, true)
       .Value("duration", "SEC", "run this long, then end (0: until SIGINT/SIGTERM)", "0")
-      .Value("qos", "FILE", "QoS profile XML (default: deploy/qos/handshare_qos.xml)", "");
+      .Value("qos", "FILE", "QoS profile XML (default: $HANDSHARE_QOS_FILE, else handshare_qos.xml of the "
+                        "installed share/handshare/qos or the source tree's deploy/qos)", "");
 }
 
 SessionOptions ReadSessionOptions(const Options& options) {

@@ -2,6 +2,8 @@
 // turned into a DdsError that names what failed.
 #include "handshare/dds/participant.hpp"
 
+#include "handshare/common/data_dir.hpp"
+
 #include <fastdds/dds/core/condition/StatusCondition.hpp>
 #include <fastdds/dds/core/condition/WaitSet.hpp>
 #include <fastdds/dds/domain/DomainParticipant.hpp>
@@ -58,7 +60,7 @@ void LoadProfilesOnce(const std::string& file) {
   if (loaded.count(file)) return;
   if (!std::filesystem::exists(file)) {
     throw DdsError("DDS: QoS profile file not found: " + file +
-                   " (set HANDSHARE_QOS_FILE or run from the source tree)");
+                   " (set HANDSHARE_QOS_FILE, or give --qos FILE)");
   }
   Check(fdds::DomainParticipantFactory::get_instance()->load_XML_profiles_file(file),
         "loading QoS profiles from " + file);
@@ -280,7 +282,7 @@ std::string DefaultQosFile() {
   if (const char* env = std::getenv("HANDSHARE_QOS_FILE"); env != nullptr && *env != '\0') {
     return env;
   }
-  return HANDSHARE_DEFAULT_QOS_FILE;
+  return (common::QosDir() / "handshare_qos.xml").string();
 }
 
 

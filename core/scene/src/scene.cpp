@@ -2,6 +2,8 @@
 
 #include <nlohmann/json.hpp>
 
+#include "handshare/common/data_dir.hpp"
+
 #include <algorithm>
 #include <cmath>
 #include <fstream>
@@ -673,12 +675,7 @@ Scene LoadScene(const std::filesystem::path& file, const LoadOptions& options) {
   return s;
 }
 
-std::filesystem::path DefaultSceneDir() {
-  if (const char* env = std::getenv("HANDSHARE_ASSETS"); env != nullptr && *env != '\0') {
-    return std::filesystem::path(env) / "scenes";
-  }
-  return std::filesystem::path(HANDSHARE_SOURCE_ASSETS) / "scenes";
-}
+std::filesystem::path DefaultSceneDir() { return common::AssetsDir() / "scenes"; }
 
 Scene LoadSceneByName(const std::string& name, const std::filesystem::path& dir,
                       const LoadOptions& options) {

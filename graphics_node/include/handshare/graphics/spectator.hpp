@@ -28,7 +28,8 @@ struct SpectatorConfig {
   std::filesystem::path deformation_out;  // "" = none; else at exit: SceneReplica::WriteDeformationJson
 };
 
-/// $HANDSHARE_ASSETS if set, else the source tree's assets/ (as core/scene finds scenes).
+/// $HANDSHARE_ASSETS if set, else the installed or source tree's assets (common::AssetsDir, as
+/// core/scene finds scenes).
 std::filesystem::path DefaultAssetsDir();
 
 class Spectator {

@@ -20,7 +20,8 @@ class DdsError : public std::runtime_error {
 };
 
 /// Where the QoS profiles come from: $HANDSHARE_QOS_FILE if set, else the file given here,
-/// else the project's deploy/qos/handshare_qos.xml (path compiled in).
+/// else handshare_qos.xml in common::QosDir() (installed share/handshare/qos, or the source
+/// tree's deploy/qos).
 std::string DefaultQosFile();
 
 enum class InstanceState { kAlive, kDisposed, kNoWriters };

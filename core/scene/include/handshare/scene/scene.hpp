@@ -226,8 +226,8 @@ struct LoadOptions {
 /// Loads and validates one scene file. Throws SceneError naming the file, line and field.
 Scene LoadScene(const std::filesystem::path& file, const LoadOptions& options = {});
 
-/// The folder of the project's scene files: $HANDSHARE_ASSETS/scenes if set, else the source
-/// tree's assets/scenes (path compiled in).
+/// The folder of the project's scene files: $HANDSHARE_ASSETS/scenes if set, else the installed
+/// share/handshare/assets/scenes, else the source tree's assets/scenes (common::AssetsDir).
 std::filesystem::path DefaultSceneDir();
 
 /// Loads scene `name` from dir/name.json. Throws SceneError listing the scenes available.
