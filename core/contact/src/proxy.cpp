@@ -59,6 +59,7 @@ int ProxySolver::CollectConstraints(const MeshCollider& collider, const ProxyPar
   const double R = params.radius_m;
   const double touch = R + params.skin_m + kTouchBand_m;
   int m = 0;
+  touching_.n = 0;
   for (std::int32_t i = 0; i < num_candidates_; ++i) {
     const std::int32_t t = candidates_[static_cast<std::size_t>(i)];
     // The distance to a triangle is at least the distance to its plane: a plane beyond the
@@ -83,6 +84,7 @@ int ProxySolver::CollectConstraints(const MeshCollider& collider, const ProxyPar
         k.dist = dist;
         k.tri = t;
       }
+      touching_.Add(t, j);
       continue;
     }
     if (m == kMaxConstraints) {  // keep the closest ones
@@ -90,9 +92,14 @@ int ProxySolver::CollectConstraints(const MeshCollider& collider, const ProxyPar
       for (int q = 1; q < m; ++q) {
         if (cons_[static_cast<std::size_t>(q)].dist > cons_[static_cast<std::size_t>(worst)].dist) worst = q;
       }
-      if (dist < cons_[static_cast<std::size_t>(worst)].dist) cons_[static_cast<std::size_t>(worst)] = Constraint{n, c, b, dist, t};
+      if (dist < cons_[static_cast<std::size_t>(worst)].dist) {
+        cons_[static_cast<std::size_t>(worst)] = Constraint{n, c, b, dist, t};
+        touching_.DropConstraint(worst);  // swept again, as every triangle without a plane
+        touching_.Add(t, worst);
+      }
       continue;
     }
+    touching_.Add(t, m);
     cons_[static_cast<std::size_t>(m++)] = Constraint{n, c, b, dist, t};
   }
   // The constraints are a function of (mesh, x, R, skin) alone when the candidates held every
@@ -211,6 +218,13 @@ Eigen::Vector3d ProxySolver::MoveFrom(MeshCollider& collider, const ProxyParams&
         const double h0 = pl.x() * x.x() + pl.y() * x.y() + pl.z() * x.z() - pl.w();
         const double h1 = h0 + (pl.x() * d.x() + pl.y() * d.y() + pl.z() * d.z());
         if (!reference_ && ((h0 > lim && h1 > lim) || (h0 < -lim && h1 < -lim))) continue;
+        // A triangle in the touch band at x is a constraint: its plane n . t >= n . c + R + skin
+        // at its closest point c bounds the whole triangle grown by R + skin (the triangle lies in
+        // n . (q - c) <= 0), x and t both satisfy it, so the straight move between them cannot
+        // enter it. Sweeping it would instead see the features that rest exactly at R + skin
+        // (an edge or vertex next to the face the proxy slides on, in round-off of the touch)
+        // as hit at s = 0 by any move that grazes them: the freeze at shared edges and vertices.
+        if (touching_.Has(tri)) continue;
         if (reference_) {
           const auto& P = collider.triangle(tri).v;
           s = std::min(s, SweepSphereTriangle(x, d, Rs, P[0], P[1], P[2]));
@@ -256,6 +270,7 @@ ProxyContact ProxySolver::Step(MeshCollider& collider, const ProxyParams& params
     const EndEntry& e = ends_[EndSlot(x0)];
     if (e.site.Is(collider, params, x0)) {
       std::copy(e.cons.begin(), e.cons.begin() + e.m, cons_.begin());
+      touching_ = e.touching;
       cons_m_ = e.m;
       cons_site_ = e.site;
     }
@@ -300,6 +315,7 @@ ProxyContact ProxySolver::Step(MeshCollider& collider, const ProxyParams& params
     end.site = cons_site_;
     end.m = m;
     std::copy(cons_.begin(), cons_.begin() + m, end.cons.begin());
+    end.touching = touching_;
   }
   out.truncated = trunc || truncated_;
   out.iterations = iters;

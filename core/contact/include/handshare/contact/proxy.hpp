@@ -93,6 +93,34 @@ class ProxySolver {
 
  private:
   static constexpr int kMaxConstraints = 8;
+  // Triangles within the touch band of the proxy (the constraints' own triangles, merged ones
+  // included): the projection keeps the move outside each of them, so the sweep skips them.
+  static constexpr int kMaxTouching = 32;
+  struct Touching {
+    int n = 0;
+    std::array<std::int32_t, kMaxTouching> tri{};
+    std::array<std::int8_t, kMaxTouching> con{};  // the constraint (index in cons_) that holds it
+    bool Has(std::int32_t t) const noexcept {
+      for (int i = 0; i < n; ++i) {
+        if (tri[static_cast<std::size_t>(i)] == t) return true;
+      }
+      return false;
+    }
+    void Add(std::int32_t t, int c) noexcept {  // a full list sweeps the rest (conservative)
+      if (n == kMaxTouching) return;
+      tri[static_cast<std::size_t>(n)] = t;
+      con[static_cast<std::size_t>(n++)] = static_cast<std::int8_t>(c);
+    }
+    void DropConstraint(int c) noexcept {  // its triangles are no longer held by a plane
+      int k = 0;
+      for (int i = 0; i < n; ++i) {
+        if (con[static_cast<std::size_t>(i)] == c) continue;
+        tri[static_cast<std::size_t>(k)] = tri[static_cast<std::size_t>(i)];
+        con[static_cast<std::size_t>(k++)] = con[static_cast<std::size_t>(i)];
+      }
+      n = k;
+    }
+  };
   struct Constraint {
     Eigen::Vector3d n;   // unit, outward
     Eigen::Vector3d c;   // closest surface point
@@ -119,6 +147,7 @@ class ProxySolver {
   bool last_gather_truncated_ = false;
   bool reference_ = false;
   std::array<Constraint, kMaxConstraints> cons_{};
+  Touching touching_;  // at the point cons_ were collected
   // Where a set of constraints was collected: they are a function of (mesh, x, R, skin) alone
   // when the gather was not truncated. collider_id 0: none.
   struct Site {
@@ -137,6 +166,7 @@ class ProxySolver {
     Site site;
     int m = 0;
     std::array<Constraint, kMaxConstraints> cons{};
+    Touching touching;
   };
   static constexpr std::size_t kEndEntries = 64;
   std::vector<EndEntry> ends_;
