@@ -14,8 +14,10 @@
 /// The swept test and the previous position are what keep it from popping through a thin plate
 /// or around an edge when the fingertip moves fast. Friction (Coulomb, static and kinetic) acts
 /// on the proxy (two states, as in Salisbury et al. 1995): a stuck proxy stays while the force
-/// is inside the static cone; once it slips it slides, keeping the force on the kinetic cone's
-/// boundary, until the force falls inside the kinetic cone (the fingertip slows or stops). Real-time: noexcept, no allocation after construction.
+/// is inside the static cone about the frictionless god-object's contact normal (that god-object
+/// is tracked alongside, ProxyState::x_free_O_m); once it slips it slides, keeping the force on
+/// the kinetic cone's boundary, until the force falls inside the kinetic cone (the fingertip
+/// slows or stops). Real-time: noexcept, no allocation after construction.
 
 #include <array>
 #include <cstdint>
@@ -49,6 +51,11 @@ struct FrictionParams {
 /// Per finger and object: where the proxy is. Plain data.
 struct ProxyState {
   Eigen::Vector3d x_O_m = Eigen::Vector3d::Zero();  ///< proxy centre in O.
+  /// The frictionless god-object, tracked alongside while in contact with friction (equal to
+  /// x_O_m otherwise): the friction cone is tested about it. Tracked from where it was, not
+  /// restarted from the (lagging) proxy each step, so it converges however far the proxy is held.
+  Eigen::Vector3d x_free_O_m = Eigen::Vector3d::Zero();
+  bool free_tracked = false;  ///< x_free_O_m holds the tracked god-object (else: start from x_O_m).
   bool initialized = false;                         ///< false: next step starts at the goal.
   bool in_contact = false;                          ///< touched the surface last step.
   bool sliding = false;  ///< slipped last step: stays slipping while outside the kinetic cone.
@@ -140,6 +147,10 @@ class ProxySolver {
   // The constraints at x (cons_, m returned): the ones at hand when they were collected there
   // for this collider and params from an untruncated gather, else a fresh gather and collection.
   int ConstraintsAt(MeshCollider& collider, const ProxyParams& params, const Eigen::Vector3d& x) noexcept;
+  // The constraints where an earlier Step ended at x, if the end table holds them (fast path).
+  void LoadEnd(const MeshCollider& collider, const ProxyParams& params, const Eigen::Vector3d& x) noexcept;
+  // Remembers the constraints at hand for a later Step starting where they were collected.
+  void StoreEnd() noexcept;
 
   std::vector<std::int32_t> candidates_;
   std::int32_t num_candidates_ = 0;
