@@ -35,8 +35,9 @@ struct ProxyParams {
   double radius_m = 0.008;       ///< fingertip (and proxy) radius R.
   double skin_m = 1e-6;          ///< gap kept between proxy sphere and surface (1 um: at 1e4 N/m
                                  ///< a 10 mN error, below what HIRO II resolves).
-  double max_step_m = 2e-3;      ///< most the proxy moves per step while near a surface (2 m/s at
-                                 ///< 1 kHz, four times HIRO II's fastest fingertip).
+  double max_step_m = 2e-3;      ///< most the proxy moves per round while near a surface (2 m/s at
+                                 ///< 1 kHz, four times HIRO II's fastest fingertip; up to
+                                 ///< max_iterations rounds a step).
   std::int32_t max_iterations = 4;  ///< constrain-project-sweep rounds per move (a proxy that
                                     ///< has not converged goes on next step; every round is a
                                     ///< swept, feasible move, so fewer rounds never tunnel).
