@@ -1,7 +1,9 @@
 // haptic_bench: time of one HapticWorld::Step (5 fingers: collision, proxy, contact solve,
 // forces) while the fingers move along trajectories that touch the object.
 //
-//   haptic_bench --csv [--cache-dir DIR] [--steps N] [--only NAME]  scenario,p50_us,p99_us rows
+//   haptic_bench --csv [--cache-dir DIR] [--steps N] [--only NAME]  scenario,p50_us,p99_us,lost_share rows
+//     lost_share: share of the measured finger-steps whose proxy is more than 15 mm from its
+//     fingertip (a proxy that stopped following); it must be 0.
 //   haptic_bench [google benchmark flags]                            the same as Google Benchmarks
 //
 // Scenarios:
@@ -17,6 +19,7 @@
 #include <benchmark/benchmark.h>
 
 #include <algorithm>
+#include <array>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -200,12 +203,22 @@ const char* kNames[] = {"rigid_mesh_20k", "dynamic_ball_grasp", "deformable_2k",
 
 struct Stats {
   double p50_us, p99_us, max_us, contact_fraction, mean_patch;
+  double lost_share;                        // finger-steps with a proxy > kLostDistance_m from its fingertip
+  std::array<long, kFingers> lost_steps{};  // per finger
+  double max_gap_m = 0.0;                   // largest proxy-fingertip distance seen
 };
+
+// A proxy farther than this from its fingertip is lost: the fingertips press at most 3.2 mm
+// (3.5 mm with the bumps' slope and friction's tangential offset), so a healthy proxy is never
+// near 15 mm away.
+constexpr double kLostDistance_m = 0.015;
 
 Stats Run(Scenario& s, int steps) {
   std::vector<double> us;
   us.reserve(static_cast<std::size_t>(steps));
-  long contacts = 0, patch = 0;
+  long contacts = 0, patch = 0, lost = 0;
+  std::array<long, kFingers> lost_steps{};
+  double max_gap = 0.0;
   for (int k = 0; k < 500; ++k) {  // warm-up (and the ball grasp closes)
     s.before_step(k);
     s.world->Step(1e-3, s.tips(k), s.remote);
@@ -222,11 +235,24 @@ Stats Run(Scenario& s, int steps) {
       contacts += r.in_contact ? 1 : 0;
       patch += r.patch_nodes;
     }
+    for (int i = 0; i < kFingers; ++i) {  // every proxy of the finger, touching or not
+      double gap = 0.0;
+      for (ObjectId o = 0; o < s.world->num_objects(); ++o) {
+        Eigen::Vector3d p;
+        if (s.world->proxy_W(i, o, p)) gap = std::max(gap, (p - tips[static_cast<std::size_t>(i)]).norm());
+      }
+      max_gap = std::max(max_gap, gap);
+      if (gap > kLostDistance_m) {
+        ++lost;
+        ++lost_steps[static_cast<std::size_t>(i)];
+      }
+    }
   }
   std::sort(us.begin(), us.end());
   auto q = [&](double f) { return us[static_cast<std::size_t>(f * static_cast<double>(us.size() - 1))]; };
   return {q(0.5), q(0.99), us.back(), static_cast<double>(contacts) / (kFingers * steps),
-          contacts ? static_cast<double>(patch) / static_cast<double>(contacts) : 0.0};
+          contacts ? static_cast<double>(patch) / static_cast<double>(contacts) : 0.0,
+          static_cast<double>(lost) / (kFingers * steps), lost_steps, max_gap};
 }
 
 void BM_HapticStep(benchmark::State& state, const char* name) {
@@ -265,15 +291,18 @@ int main(int argc, char** argv) {
   }
   try {
     if (csv) {
-      std::printf("scenario,p50_us,p99_us\n");
+      std::printf("scenario,p50_us,p99_us,lost_share\n");
       for (const char* name : kNames) {
         if (!only.empty() && only != name) continue;
         auto s = Make(name);
         const Stats st = Run(*s, steps);
-        std::printf("%s,%.2f,%.2f\n", name, st.p50_us, st.p99_us);
+        std::printf("%s,%.2f,%.2f,%.4f\n", name, st.p50_us, st.p99_us, st.lost_share);
         std::fflush(stdout);
         std::fprintf(stderr, "# %s: max %.1f us, fingers in contact %.0f%% of finger-steps, mean patch %.1f nodes, %d steps\n",
                      name, st.max_us, 100.0 * st.contact_fraction, st.mean_patch, steps);
+        std::fprintf(stderr, "# %s: proxy > %.0f mm from its fingertip in %.2f%% of finger-steps (per finger %ld %ld %ld %ld %ld), largest gap %.2f mm\n",
+                     name, 1e3 * kLostDistance_m, 100.0 * st.lost_share, st.lost_steps[0], st.lost_steps[1], st.lost_steps[2],
+                     st.lost_steps[3], st.lost_steps[4], 1e3 * st.max_gap_m);
       }
       return 0;
     }

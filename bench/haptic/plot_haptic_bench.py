@@ -1,6 +1,8 @@
 #!/usr/bin/python3
-"""Plots `haptic_bench --csv` output (scenario,p50_us,p99_us) as grouped bars with the 50 us
-target line. Usage: plot_haptic_bench.py RESULTS.csv OUT.png  (Debian's python3-matplotlib)."""
+"""Plots `haptic_bench --csv` output (scenario,p50_us,p99_us[,lost_share]) as grouped bars with
+the 50 us target line; lost_share (finger-steps whose proxy is > 15 mm from its fingertip, must
+be 0) goes under each scenario's name when the file has it (older results do not).
+Usage: plot_haptic_bench.py RESULTS.csv OUT.png  (Debian's python3-matplotlib)."""
 import csv
 import sys
 
@@ -17,6 +19,8 @@ def main() -> int:
     with open(sys.argv[1], newline="") as f:
         rows = [r for r in csv.DictReader(row for row in f if not row.startswith("#"))]
     names = [r["scenario"] for r in rows]
+    if rows and "lost_share" in rows[0]:
+        names = [f"{n}\nlost {100.0 * float(r['lost_share']):.2f}%" for n, r in zip(names, rows)]
     p50 = [float(r["p50_us"]) for r in rows]
     p99 = [float(r["p99_us"]) for r in rows]
     x = range(len(names))

@@ -256,6 +256,14 @@ Eigen::Vector3d HapticWorld::finger_reaction_W(ObjectId id) const noexcept {
   return objects_[static_cast<std::size_t>(id)]->reaction_W_N;
 }
 
+bool HapticWorld::proxy_W(int finger, ObjectId object, Eigen::Vector3d& p_WP_m) const noexcept {
+  if (!initialized_ || finger < 0 || finger >= kFingers || object < 0 || object >= num_objects()) return false;
+  const FingerObject& fo = fo_[static_cast<std::size_t>(finger) * objects_.size() + static_cast<std::size_t>(object)];
+  if (!fo.proxy.initialized) return false;
+  p_WP_m = objects_[static_cast<std::size_t>(object)]->X_WO * fo.proxy.x_O_m;
+  return true;
+}
+
 void HapticWorld::SetPose(ObjectId id, const Eigen::Isometry3d& X) noexcept {
   if (id < 0 || id >= num_objects() || !X.matrix().allFinite()) return;
   Object& o = *objects_[static_cast<std::size_t>(id)];

@@ -59,6 +59,7 @@ int ProxySolver::CollectConstraints(const MeshCollider& collider, const ProxyPar
   const double R = params.radius_m;
   const double touch = R + params.skin_m + kTouchBand_m;
   int m = 0;
+  touching_.n = 0;
   for (std::int32_t i = 0; i < num_candidates_; ++i) {
     const std::int32_t t = candidates_[static_cast<std::size_t>(i)];
     // The distance to a triangle is at least the distance to its plane: a plane beyond the
@@ -83,6 +84,7 @@ int ProxySolver::CollectConstraints(const MeshCollider& collider, const ProxyPar
         k.dist = dist;
         k.tri = t;
       }
+      touching_.Add(t, j);
       continue;
     }
     if (m == kMaxConstraints) {  // keep the closest ones
@@ -90,9 +92,14 @@ int ProxySolver::CollectConstraints(const MeshCollider& collider, const ProxyPar
       for (int q = 1; q < m; ++q) {
         if (cons_[static_cast<std::size_t>(q)].dist > cons_[static_cast<std::size_t>(worst)].dist) worst = q;
       }
-      if (dist < cons_[static_cast<std::size_t>(worst)].dist) cons_[static_cast<std::size_t>(worst)] = Constraint{n, c, b, dist, t};
+      if (dist < cons_[static_cast<std::size_t>(worst)].dist) {
+        cons_[static_cast<std::size_t>(worst)] = Constraint{n, c, b, dist, t};
+        touching_.DropConstraint(worst);  // swept again, as every triangle without a plane
+        touching_.Add(t, worst);
+      }
       continue;
     }
+    touching_.Add(t, m);
     cons_[static_cast<std::size_t>(m++)] = Constraint{n, c, b, dist, t};
   }
   // The constraints are a function of (mesh, x, R, skin) alone when the candidates held every
@@ -113,6 +120,25 @@ int ProxySolver::ConstraintsAt(MeshCollider& collider, const ProxyParams& params
   if (!reference_ && cons_site_.Is(collider, params, x)) return cons_m_;
   Gather(collider, x, params.radius_m + params.skin_m + kGatherMarginSkins * params.skin_m);
   return CollectConstraints(collider, params, x);
+}
+
+void ProxySolver::LoadEnd(const MeshCollider& collider, const ProxyParams& params, const Eigen::Vector3d& x) noexcept {
+  if (reference_ || cons_site_.Is(collider, params, x)) return;
+  const EndEntry& e = ends_[EndSlot(x)];
+  if (!e.site.Is(collider, params, x)) return;
+  std::copy(e.cons.begin(), e.cons.begin() + e.m, cons_.begin());
+  touching_ = e.touching;
+  cons_m_ = e.m;
+  cons_site_ = e.site;
+}
+
+void ProxySolver::StoreEnd() noexcept {
+  if (reference_ || cons_site_.collider_id == 0) return;
+  EndEntry& end = ends_[EndSlot(cons_site_.x)];
+  end.site = cons_site_;
+  end.m = cons_m_;
+  std::copy(cons_.begin(), cons_.begin() + cons_m_, end.cons.begin());
+  end.touching = touching_;
 }
 
 Eigen::Vector3d ProxySolver::Project(const Eigen::Vector3d& goal, const Eigen::Vector3d& x,
@@ -211,6 +237,13 @@ Eigen::Vector3d ProxySolver::MoveFrom(MeshCollider& collider, const ProxyParams&
         const double h0 = pl.x() * x.x() + pl.y() * x.y() + pl.z() * x.z() - pl.w();
         const double h1 = h0 + (pl.x() * d.x() + pl.y() * d.y() + pl.z() * d.z());
         if (!reference_ && ((h0 > lim && h1 > lim) || (h0 < -lim && h1 < -lim))) continue;
+        // A triangle in the touch band at x is a constraint: its plane n . t >= n . c + R + skin
+        // at its closest point c bounds the whole triangle grown by R + skin (the triangle lies in
+        // n . (q - c) <= 0), x and t both satisfy it, so the straight move between them cannot
+        // enter it. Sweeping it would instead see the features that rest exactly at R + skin
+        // (an edge or vertex next to the face the proxy slides on, in round-off of the touch)
+        // as hit at s = 0 by any move that grazes them: the freeze at shared edges and vertices.
+        if (touching_.Has(tri)) continue;
         if (reference_) {
           const auto& P = collider.triangle(tri).v;
           s = std::min(s, SweepSphereTriangle(x, d, Rs, P[0], P[1], P[2]));
@@ -238,6 +271,7 @@ ProxyContact ProxySolver::Step(MeshCollider& collider, const ProxyParams& params
     state.x_O_m = goal;
     state.initialized = true;
     state.in_contact = false;
+    state.free_tracked = false;
   }
   const Eigen::Vector3d x0 = state.x_O_m;
   // Far from the mesh's bounding sphere at both ends: free.
@@ -245,28 +279,33 @@ ProxyContact ProxySolver::Step(MeshCollider& collider, const ProxyParams& params
   if ((x0 - collider.bound_center_O_m()).norm() > reach &&
       (goal - collider.bound_center_O_m()).norm() > reach) {
     state.x_O_m = goal;
+    state.free_tracked = false;
     state.in_contact = false;
     out.x_O_m = goal;
     return out;
   }
   bool trunc = false;
   std::int32_t iters = 0;
-  // Where the last Step of this proxy ended, the constraints are already known.
-  if (!reference_) {
-    const EndEntry& e = ends_[EndSlot(x0)];
-    if (e.site.Is(collider, params, x0)) {
-      std::copy(e.cons.begin(), e.cons.begin() + e.m, cons_.begin());
-      cons_m_ = e.m;
-      cons_site_ = e.site;
-    }
-  }
-  const Eigen::Vector3d x_f = MoveFrom(collider, params, x0, goal, &trunc, &iters);
-  Eigen::Vector3d x = x_f;
+  Eigen::Vector3d x = x0;
+  Eigen::Vector3d x_free = x0;
   bool slipped = false;
-  const Eigen::Vector3d e = x_f - goal;  // frictionless reaction direction (normal cone)
+  const bool frictional = state.in_contact && friction.mu_static > 0.0;
+  // The frictionless god-object: from where it was with friction (it is tracked alongside the
+  // held proxy), else from the proxy itself. Where a Step ended, the constraints are known.
+  const Eigen::Vector3d xf0 = frictional && state.free_tracked && state.x_free_O_m.allFinite() ? state.x_free_O_m : x0;
+  LoadEnd(collider, params, xf0);
+  x_free = MoveFrom(collider, params, xf0, goal, &trunc, &iters);
+  x = x_free;
+  const Eigen::Vector3d e = x_free - goal;  // frictionless reaction direction (normal cone)
   const double e_norm = e.norm();
-  if (state.in_contact && friction.mu_static > 0.0 && e_norm > 0.0) {
-    // Coulomb on the proxy: would the force with the proxy held at x0 lie in the static cone?
+  if (frictional && e_norm > 0.0) {
+    // Coulomb on the proxy, about the frictionless god-object's contact (Salisbury et al.
+    // 1995): would the force with the proxy held at x0 lie in the static cone about its normal?
+    // That god-object is tracked from step to step, so it is where the surface puts it however
+    // long the proxy has been held. (Restarted from the held proxy each step, as before, it got
+    // no farther than max_iterations rounds of at most max_step_m: a fingertip that had drawn
+    // the proxy's spring longer than that stayed "inside the cone" of a point a few mm from the
+    // proxy, and the proxy stayed for good -- another freeze.)
     const Eigen::Vector3d n = e / e_norm;
     const Eigen::Vector3d f0 = x0 - goal;
     const Eigen::Vector3d ft = f0 - f0.dot(n) * n;
@@ -278,29 +317,29 @@ ProxyContact ProxySolver::Step(MeshCollider& collider, const ProxyParams& params
       out.sticking = true;
     } else if (fn > 0.0 && ft_norm > 0.0) {
       slipped = true;
-      // Slip: back from the frictionless point toward x0 until the tangential force is
+      // Slip: back from the frictionless position toward x0 until the tangential force is
       // mu_kinetic times the normal one (the kinetic cone's boundary), as a constrained move.
       const double alpha = std::min(1.0, friction.mu_kinetic * fn / ft_norm);
       if (alpha > 0.0) {
+        StoreEnd();  // the constraints at x_free, for its next Step
         std::int32_t it2 = 0;
         bool tr2 = false;
-        x = MoveFrom(collider, params, x_f, x_f + alpha * (x0 - x_f), &tr2, &it2);
+        x = MoveFrom(collider, params, x_free, x_free + alpha * (x0 - x_free), &tr2, &it2);
         trunc = trunc || tr2;
         iters += it2;
       }
     }
+  }
+  if (out.sticking) {
+    StoreEnd();  // at x_free
+    LoadEnd(collider, params, x0);
   }
   // Contact geometry at the final proxy (its neighbourhood is in the last gather, re-query to
   // be exact when the proxy stuck at x0).
   // x is where the last Move ended unless the proxy stuck at x0: then the constraints at hand
   // are reused, else collected there.
   const int m = ConstraintsAt(collider, params, x);
-  if (!reference_ && cons_site_.Is(collider, params, x)) {  // for the next Step from x
-    EndEntry& end = ends_[EndSlot(x)];
-    end.site = cons_site_;
-    end.m = m;
-    std::copy(cons_.begin(), cons_.begin() + m, end.cons.begin());
-  }
+  if (cons_site_.Is(collider, params, x)) StoreEnd();  // for the next Step from x
   out.truncated = trunc || truncated_;
   out.iterations = iters;
   out.x_O_m = x;
@@ -335,6 +374,9 @@ ProxyContact ProxySolver::Step(MeshCollider& collider, const ProxyParams& params
   if (!out.touching) out.sticking = false;
   state.in_contact = out.touching;
   state.sliding = out.touching && slipped;
+  // Tracked while the proxy is held or slides; otherwise the god-object is the proxy.
+  state.free_tracked = out.touching && friction.mu_static > 0.0;
+  state.x_free_O_m = state.free_tracked ? x_free : x;
   return out;
 }
 

@@ -205,6 +205,9 @@ class HapticWorld {
   /// the fingertips feel).
   Eigen::Vector3d finger_reaction_W(ObjectId id) const noexcept;
   std::int32_t num_objects() const noexcept { return static_cast<std::int32_t>(objects_.size()); }
+  /// Where finger `finger`'s proxy on `object` is, in W, touching or not (a free proxy sits on
+  /// its fingertip); false (p untouched) for a bad index or a proxy that has not started.
+  bool proxy_W(int finger, ObjectId object, Eigen::Vector3d& p_WP_m) const noexcept;
   const WorldConfig& config() const noexcept { return config_; }
 
  private:

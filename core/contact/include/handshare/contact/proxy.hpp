@@ -14,8 +14,10 @@
 /// The swept test and the previous position are what keep it from popping through a thin plate
 /// or around an edge when the fingertip moves fast. Friction (Coulomb, static and kinetic) acts
 /// on the proxy (two states, as in Salisbury et al. 1995): a stuck proxy stays while the force
-/// is inside the static cone; once it slips it slides, keeping the force on the kinetic cone's
-/// boundary, until the force falls inside the kinetic cone (the fingertip slows or stops). Real-time: noexcept, no allocation after construction.
+/// is inside the static cone about the frictionless god-object's contact normal (that god-object
+/// is tracked alongside, ProxyState::x_free_O_m); once it slips it slides, keeping the force on
+/// the kinetic cone's boundary, until the force falls inside the kinetic cone (the fingertip
+/// slows or stops). Real-time: noexcept, no allocation after construction.
 
 #include <array>
 #include <cstdint>
@@ -33,8 +35,9 @@ struct ProxyParams {
   double radius_m = 0.008;       ///< fingertip (and proxy) radius R.
   double skin_m = 1e-6;          ///< gap kept between proxy sphere and surface (1 um: at 1e4 N/m
                                  ///< a 10 mN error, below what HIRO II resolves).
-  double max_step_m = 2e-3;      ///< most the proxy moves per step while near a surface (2 m/s at
-                                 ///< 1 kHz, four times HIRO II's fastest fingertip).
+  double max_step_m = 2e-3;      ///< most the proxy moves per round while near a surface (2 m/s at
+                                 ///< 1 kHz, four times HIRO II's fastest fingertip; up to
+                                 ///< max_iterations rounds a step).
   std::int32_t max_iterations = 4;  ///< constrain-project-sweep rounds per move (a proxy that
                                     ///< has not converged goes on next step; every round is a
                                     ///< swept, feasible move, so fewer rounds never tunnel).
@@ -49,6 +52,11 @@ struct FrictionParams {
 /// Per finger and object: where the proxy is. Plain data.
 struct ProxyState {
   Eigen::Vector3d x_O_m = Eigen::Vector3d::Zero();  ///< proxy centre in O.
+  /// The frictionless god-object, tracked alongside while in contact with friction (equal to
+  /// x_O_m otherwise): the friction cone is tested about it. Tracked from where it was, not
+  /// restarted from the (lagging) proxy each step, so it converges however far the proxy is held.
+  Eigen::Vector3d x_free_O_m = Eigen::Vector3d::Zero();
+  bool free_tracked = false;  ///< x_free_O_m holds the tracked god-object (else: start from x_O_m).
   bool initialized = false;                         ///< false: next step starts at the goal.
   bool in_contact = false;                          ///< touched the surface last step.
   bool sliding = false;  ///< slipped last step: stays slipping while outside the kinetic cone.
@@ -93,6 +101,34 @@ class ProxySolver {
 
  private:
   static constexpr int kMaxConstraints = 8;
+  // Triangles within the touch band of the proxy (the constraints' own triangles, merged ones
+  // included): the projection keeps the move outside each of them, so the sweep skips them.
+  static constexpr int kMaxTouching = 32;
+  struct Touching {
+    int n = 0;
+    std::array<std::int32_t, kMaxTouching> tri{};
+    std::array<std::int8_t, kMaxTouching> con{};  // the constraint (index in cons_) that holds it
+    bool Has(std::int32_t t) const noexcept {
+      for (int i = 0; i < n; ++i) {
+        if (tri[static_cast<std::size_t>(i)] == t) return true;
+      }
+      return false;
+    }
+    void Add(std::int32_t t, int c) noexcept {  // a full list sweeps the rest (conservative)
+      if (n == kMaxTouching) return;
+      tri[static_cast<std::size_t>(n)] = t;
+      con[static_cast<std::size_t>(n++)] = static_cast<std::int8_t>(c);
+    }
+    void DropConstraint(int c) noexcept {  // its triangles are no longer held by a plane
+      int k = 0;
+      for (int i = 0; i < n; ++i) {
+        if (con[static_cast<std::size_t>(i)] == c) continue;
+        tri[static_cast<std::size_t>(k)] = tri[static_cast<std::size_t>(i)];
+        con[static_cast<std::size_t>(k++)] = con[static_cast<std::size_t>(i)];
+      }
+      n = k;
+    }
+  };
   struct Constraint {
     Eigen::Vector3d n;   // unit, outward
     Eigen::Vector3d c;   // closest surface point
@@ -112,6 +148,10 @@ class ProxySolver {
   // The constraints at x (cons_, m returned): the ones at hand when they were collected there
   // for this collider and params from an untruncated gather, else a fresh gather and collection.
   int ConstraintsAt(MeshCollider& collider, const ProxyParams& params, const Eigen::Vector3d& x) noexcept;
+  // The constraints where an earlier Step ended at x, if the end table holds them (fast path).
+  void LoadEnd(const MeshCollider& collider, const ProxyParams& params, const Eigen::Vector3d& x) noexcept;
+  // Remembers the constraints at hand for a later Step starting where they were collected.
+  void StoreEnd() noexcept;
 
   std::vector<std::int32_t> candidates_;
   std::int32_t num_candidates_ = 0;
@@ -119,6 +159,7 @@ class ProxySolver {
   bool last_gather_truncated_ = false;
   bool reference_ = false;
   std::array<Constraint, kMaxConstraints> cons_{};
+  Touching touching_;  // at the point cons_ were collected
   // Where a set of constraints was collected: they are a function of (mesh, x, R, skin) alone
   // when the gather was not truncated. collider_id 0: none.
   struct Site {
@@ -137,6 +178,7 @@ class ProxySolver {
     Site site;
     int m = 0;
     std::array<Constraint, kMaxConstraints> cons{};
+    Touching touching;
   };
   static constexpr std::size_t kEndEntries = 64;
   std::vector<EndEntry> ends_;
