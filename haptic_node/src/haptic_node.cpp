@@ -219,7 +219,7 @@ int HapticNode::Run() {
         renderer = next_renderer;
         have_report = false;
         loop.SetRenderer(renderer);
-        if (const double t_s = loop.now_s(); device->OnWorldReady(t_s)) {
+        if (const double t_s = loop.now_s(); device->OnWorldReady(t_s, scene.name)) {
           char started[120];
           std::snprintf(started, sizeof started, "hand script starts at loop time %.3f s (the first world is here)",
                         t_s);
