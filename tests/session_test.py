@@ -12,8 +12,8 @@ import argparse
 import glob
 import json
 import math
-import re
 import os
+import shutil
 import signal
 import sqlite3
 import subprocess
@@ -601,7 +601,7 @@ def case_encyclopedia(h, domain):
         check(needle in report.stdout, f"session report lacks '{needle}':\n{report.stdout}")
     # The log's order of worlds is the tour's.
     db = sqlite3.connect(log_db)
-    # This run's session: the log keeps earlier runs' sessions (a rerun in the same build tree).
+    # This run's session (the newest in the log).
     scenes = [r[0] for r in db.execute(
         "SELECT scene FROM scene_changes WHERE session_id = (SELECT MAX(session_id) FROM scene_changes) ORDER BY id")]
     db.close()
@@ -746,6 +746,12 @@ def main():
     args = parser.parse_args()
     work = args.work or tempfile.mkdtemp(prefix=f"handshare-{args.case}-")
     os.makedirs(work, exist_ok=True)
+    # A rerun in the same folder starts clean: the waits read files (dumps, frames, traces)
+    # that an earlier run's would otherwise satisfy. The FEM model cache stays (it is keyed).
+    for entry in os.listdir(work):
+        if entry != "cache":
+            path = os.path.join(work, entry)
+            shutil.rmtree(path) if os.path.isdir(path) and not os.path.islink(path) else os.remove(path)
     h = Harness(args.bin_dir, work)
     try:
         CASES[args.case](h, args.domain)
