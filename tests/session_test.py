@@ -39,6 +39,7 @@ def check(cond, what):
 
 
 POLL_S = 0.02  # how often a wait looks again
+BACKSTOP_S = 900  # the longest a node may live (the test ends it long before)
 
 
 def wait_until(what, timeout, probe, explain=None):
@@ -78,7 +79,11 @@ class Harness:
         return path
 
     def start(self, label, name, *args):
+        """Starts a node. The test ends it when it has seen what it needs; --duration is only a
+        backstop, so that a node whose test was killed (a ctest timeout) does not run forever."""
         log = open(os.path.join(self.work, label + ".log"), "w")
+        if "--duration" not in args:
+            args = (*args, "--duration", BACKSTOP_S)
         proc = subprocess.Popen([self.exe(name), *map(str, args)], stdout=log, stderr=subprocess.STDOUT)
         self.procs[label] = (proc, log)
         return proc
@@ -705,11 +710,19 @@ def case_vanished_member(h, domain):
     f_before, f_after = mean(-2.5, -0.5), mean(2.0, 3.5)
     change = abs(f_after - f_before)
     check(change >= 0.01, f"alice's press did not matter to bob's fingertip ({f_before:.4f} -> {f_after:.4f} N)")
-    window = [f for t, f in fz if -0.5 <= t < 2.0]
-    largest_step = max(abs(b - a) for a, b in zip(window, window[1:]))
-    check(largest_step <= 0.3 * change,  # without the fade: the whole change in one step
-          f"bob's force jumped by {largest_step:.4f} N in one step when alice vanished (whole change {change:.4f} N)")
-    print(f"alice vanished: bob's force {f_before:.4f} -> {f_after:.4f} N, largest 1 ms step {largest_step:.5f} N")
+    # Without the fade the whole change comes in one step. The trace has a row per bridge cycle
+    # (about 10 ms), and a loaded host can stall that thread: rows dt apart may also show what
+    # the fade (0.5 s) does in dt, counted here at twice its speed. A step still fails for any
+    # gap under 175 ms.
+    window = [(t, f) for t, f in fz if -0.5 <= t < 2.0]
+    excess = [(abs(f1 - f0) - change * (t1 - t0) / 0.25, abs(f1 - f0), t1 - t0)
+              for (t0, f0), (t1, f1) in zip(window, window[1:])]
+    worst, largest_step, gap = max(excess)
+    check(worst <= 0.3 * change,
+          f"bob's force jumped by {largest_step:.4f} N between trace rows {1e3 * gap:.0f} ms apart when alice vanished "
+          f"(whole change {change:.4f} N)")
+    print(f"alice vanished: bob's force {f_before:.4f} -> {f_after:.4f} N, steepest step {largest_step:.5f} N "
+          f"(rows {1e3 * gap:.0f} ms apart)")
     # 2. A grasped object.
     session2 = f"it-vanish-owner-{os.getpid()}"
     owner_trace = os.path.join(h.work, "owner.csv")
@@ -753,6 +766,8 @@ def main():
             path = os.path.join(work, entry)
             shutil.rmtree(path) if os.path.isdir(path) and not os.path.islink(path) else os.remove(path)
     h = Harness(args.bin_dir, work)
+    # Killed by ctest (a timeout): end the nodes too (the finally below).
+    signal.signal(signal.SIGTERM, lambda *_: sys.exit(143))
     try:
         CASES[args.case](h, args.domain)
     except Failure as e:

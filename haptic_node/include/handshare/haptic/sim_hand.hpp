@@ -44,7 +44,6 @@
 #include <limits>
 #include <filesystem>
 #include <stdexcept>
-#include <memory>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -126,9 +125,6 @@ class ScriptClock {
   bool OnWorldReady(double t_s, std::string_view world) noexcept;
   /// Script time at device time t_s (the script's time at a hold while it waits).
   double ScriptTime(double t_s) noexcept;
-  /// Index of the next await_world the script has not passed (waits().size(): all passed).
-  /// The ScriptTime thread only.
-  std::size_t next_wait() const noexcept { return next_; }
 
  private:
   static constexpr std::uint64_t kNoWorld = 0;

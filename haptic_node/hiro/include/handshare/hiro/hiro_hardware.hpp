@@ -132,6 +132,8 @@ class SimulatedHiro final : public HiroHardware {
  private:
   void RefreshKinematics() noexcept;
   void Substep(double h) noexcept;
+  /// The script's time at plant time t_s (non-decreasing: it passes the script's await_world
+  /// holds on the way), looped if so configured.
   double ScriptTime(double t_s) const noexcept;
   /// The user's scripted fingertips at t_s: script, turn, offset.
   std::array<Eigen::Vector3d, kFingerCount> UserTargets(double t_s) const noexcept;
