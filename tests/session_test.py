@@ -366,20 +366,24 @@ def case_killed_member(h, domain):
 
 
 def shm_segments():
-    """Per-participant segments no live process has mapped (port files, fastrtps_port*, are
-    shared and reused by design). Another user's session on this host holds its segments
-    mapped, so only what a dead process left behind counts."""
+    """Per-participant segments no live process holds (port files, fastrtps_port*, are shared
+    and reused by design). Another session on this host holds its segments mapped and its
+    lock files (*_el) open, so only what a dead process left behind counts."""
     names = {f for f in os.listdir("/dev/shm") if f.startswith("fastrtps_") and "port" not in f}
-    mapped = set()
-    for maps in glob.glob("/proc/[0-9]*/maps"):
+    held = set()
+    for pid in os.listdir("/proc"):
+        if not pid.isdigit():
+            continue
         try:
-            with open(maps) as f:
-                for line in f:
-                    if "/dev/shm/fastrtps_" in line:
-                        mapped.add(line.rsplit("/", 1)[1].strip())
+            with open(f"/proc/{pid}/maps") as f:
+                held.update(line.rsplit("/", 1)[1].strip() for line in f if "/dev/shm/fastrtps_" in line)
+            for fd in os.listdir(f"/proc/{pid}/fd"):
+                target = os.readlink(f"/proc/{pid}/fd/{fd}")
+                if target.startswith("/dev/shm/fastrtps_"):
+                    held.add(target[len("/dev/shm/"):])
         except OSError:
             pass  # the process has gone, or is not ours to read
-    return names - mapped
+    return names - held
 
 
 def case_signals(h, domain):
