@@ -244,6 +244,7 @@ int Spectator::Run() {
   // When the frames are written or the window closes: what the spectator received, for a
   // comparison with an oracle.
   const auto finish = [&] {
+    world.Update();  // what arrived since the last frame counts too (a stop between frames)
     PrintWorldSummary(name, world.world(), world.dropped());
     if (!config_.deformation_out.empty()) world.world().WriteDeformationJson(config_.deformation_out);
   };

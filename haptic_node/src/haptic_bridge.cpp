@@ -104,7 +104,7 @@ void HapticBridge::AdoptScene(const msg::SceneState& state) {
   renderer_ = next;
   have_report_ = false;
   loop_.SetRenderer(renderer_);
-  if (const double t_s = loop_.now_s(); device_.OnWorldReady(t_s)) {
+  if (const double t_s = loop_.now_s(); device_.OnWorldReady(t_s, scene.name)) {
     say_(Format("hand script starts at loop time %.3f s (the first world is here)", t_s));
   }
   say_(Format("scene '%s' revision %u: %d objects, %zu controls, gravity %.2f m/s^2 (%.2f s)", scene.name.c_str(),

@@ -27,7 +27,7 @@ void WriteTraceHeader(std::ostream& out) {
   out << "seq,t_s,fault,hx,hy,hz,qw,qx,qy,qz";
   for (int i = 0; i < kFingers; ++i) out << ",x" << i << ",y" << i << ",z" << i;
   for (int i = 0; i < kFingers; ++i) out << ",fx" << i << ",fy" << i << ",fz" << i;
-  out << "\n";
+  out << ",stamp_ns\n";
 }
 
 void WriteTraceRow(std::ostream& out, const HapticSnapshot& s) {
@@ -36,7 +36,11 @@ void WriteTraceRow(std::ostream& out, const HapticSnapshot& s) {
   for (double v : s.q_WH_wxyz) out << "," << v;
   for (const auto& p : s.p_WE_m) out << "," << p[0] << "," << p[1] << "," << p[2];
   for (const auto& f : s.f_E_W_N) out << "," << f[0] << "," << f[1] << "," << f[2];
-  out << "\n";
+  // The host's steady clock (CLOCK_MONOTONIC), so a test can place events it timed itself.
+  // Flushed per row: a test can follow the trace while the node runs (the bridge thread
+  // writes it at the publish rate; the haptic thread never does).
+  out << "," << s.stamp_ns << "\n";
+  out.flush();
 }
 
 ReplayLog ReplayLog::Parse(const std::string& text, const std::string& origin) {

@@ -1,6 +1,7 @@
 #include "handshare/haptic/sim_hand.hpp"
 
 #include <algorithm>
+#include <cctype>
 #include <cmath>
 #include <fstream>
 #include <numbers>
@@ -161,9 +162,26 @@ HandScript HandScript::Parse(const std::string& text, const std::string& origin)
     }
     if (!started) p.Fail("the script must begin with 'start X Y Z'");
     if (cmd == "await_world") {
-      if (!script.segments_.empty() || script.await_world_) p.Fail("'await_world' must come right after 'start'");
+      std::string world;
+      if (!p.Word(world)) {
+        // Plain: the first world, at the start only (later it would always be here already).
+        if (!script.segments_.empty() || !script.waits_.empty()) {
+          p.Fail("'await_world' must come right after 'start' (later in a script, name the world: "
+                 "await_world NAME)");
+        }
+        script.waits_.push_back(WorldWait{t, {}, line_no});
+        continue;
+      }
+      const bool is_name = std::isalpha(static_cast<unsigned char>(world.front())) &&
+                           std::all_of(world.begin(), world.end(), [](char c) {
+                             return std::isalnum(static_cast<unsigned char>(c)) || c == '_';
+                           });
+      if (!is_name) {
+        p.Fail("await_world: '" + world + "' is not a world name (a scene name such as solar_system; "
+               "to wait a time, use hold DUR)");
+      }
       end_of_line();
-      script.await_world_ = true;
+      script.waits_.push_back(WorldWait{t, world, line_no});
       continue;
     }
     static constexpr std::array<std::string_view, 11> kVerbs = {
@@ -316,23 +334,85 @@ std::array<Eigen::Vector3d, kFingers> SimFingertips(const HandPose& pose) noexce
   return p_WE;
 }
 
-bool SimDevice::OnWorldReady(double t_s) noexcept {
-  if (!script_.awaits_world() || !std::isfinite(t_s)) return false;
-  // First call wins. compare_exchange compares bit patterns, so it matches the NaN just read.
-  double current = script_origin_s_.load();
-  while (std::isnan(current)) {
-    if (script_origin_s_.compare_exchange_weak(current, t_s)) return true;
+ScriptClock::ScriptClock(const HandScript& script) {
+  for (const auto& wait : script.waits()) {
+    std::uint64_t code = kNoWorld;
+    if (!wait.world.empty()) {
+      auto it = std::find(names_.begin(), names_.end(), wait.world);
+      if (it == names_.end()) it = names_.insert(names_.end(), wait.world);
+      code = static_cast<std::uint64_t>(it - names_.begin()) + 1;
+    }
+    wait_t_s_.push_back(wait.t_s);
+    wait_code_.push_back(code);
   }
-  return false;
+  static_assert(std::atomic<std::uint64_t>::is_always_lock_free && std::atomic<double>::is_always_lock_free);
+}
+
+std::uint64_t ScriptClock::CodeOf(std::string_view world) const noexcept {
+  for (std::size_t i = 0; i < names_.size(); ++i) {
+    if (names_[i] == world) return static_cast<std::uint64_t>(i) + 1;
+  }
+  return kOtherWorld;
+}
+
+bool ScriptClock::OnWorldReady(double t_s, std::string_view world) noexcept {
+  if (wait_t_s_.empty() || !std::isfinite(t_s)) return false;
+  t_s = std::max(t_s, 0.0);
+  bool first = false;
+  // The first world: compare_exchange compares bit patterns, so it matches the NaN just read.
+  double none = first_world_s_.load();
+  while (std::isnan(none)) {
+    if (first_world_s_.compare_exchange_weak(none, t_s)) {
+      first = true;
+      break;
+    }
+  }
+  // The current world, with the time it arrived; a new revision of it keeps that time.
+  const std::uint64_t code = CodeOf(world);
+  const std::uint64_t arrived = (static_cast<std::uint64_t>(std::llround(t_s * 1e6)) << 16) | code;
+  std::uint64_t old = world_.load();
+  bool changed = false;
+  while ((old & 0xFFFF) != code) {
+    if (world_.compare_exchange_weak(old, arrived)) {
+      changed = true;
+      break;
+    }
+  }
+  // A script that holds at its very start begins now if this is the world it awaits there.
+  const bool starts = wait_t_s_.front() <= 0.0 && (wait_code_.front() == kNoWorld ? first
+                                                     : changed && code == wait_code_.front());
+  return starts && !start_released_.exchange(true);
+}
+
+double ScriptClock::ScriptTime(double t_s) noexcept {
+  while (next_ < wait_t_s_.size()) {
+    const double t_wait = wait_t_s_[next_];
+    if (t_s - origin_s_ < t_wait) break;  // not there yet
+    // The script is at this wait (since device time origin_s_ + t_wait): is its world here,
+    // and since when?
+    double arrived_s = 0.0;
+    if (wait_code_[next_] == kNoWorld) {
+      arrived_s = first_world_s_.load(std::memory_order_acquire);
+      if (std::isnan(arrived_s)) return t_wait;  // hold
+    } else {
+      const std::uint64_t now = world_.load(std::memory_order_acquire);
+      if ((now & 0xFFFF) != wait_code_[next_]) return t_wait;  // hold
+      arrived_s = static_cast<double>(now >> 16) * 1e-6;
+    }
+    // Already here when the script got to the wait: no hold. Else run on from its arrival
+    // (not later than now: the bridge's clock may be read just after this thread's).
+    origin_s_ = std::max(origin_s_, std::min(arrived_s, t_s) - t_wait);
+    ++next_;
+  }
+  return t_s - origin_s_;
+}
+
+bool SimDevice::OnWorldReady(double t_s, std::string_view world) noexcept {
+  return clock_.OnWorldReady(t_s, world);
 }
 
 void SimDevice::Read(double t_s, DeviceReading& out) noexcept {
-  double script_t_s = t_s;
-  if (script_.awaits_world()) {
-    const double origin = script_origin_s_.load(std::memory_order_relaxed);
-    script_t_s = std::isnan(origin) ? 0.0 : t_s - origin;  // the start pose until then
-  }
-  const HandPose pose = script_.PoseAt(script_t_s);
+  const HandPose pose = script_.PoseAt(clock_.ScriptTime(t_s));
   out.p_WH = pose.p_WH;
   out.q_WH_wxyz = Eigen::Vector4d(1, 0, 0, 0);
   out.p_WE = SimFingertips(pose);

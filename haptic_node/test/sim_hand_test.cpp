@@ -3,6 +3,9 @@
 #include <gtest/gtest.h>
 
 #include <filesystem>
+#include <string>
+
+#include "handshare/testing/allocation_counter.hpp"
 
 namespace handshare::haptic {
 namespace {
@@ -62,24 +65,126 @@ TEST(HandScript, AwaitWorldStartsTheScriptWhenTheWorldIsHere) {
   DeviceReading r;
   awaiting.Read(5.0, r);  // no world yet: still at the start
   EXPECT_NEAR(r.p_WH.x(), 0.0, 1e-15);
-  EXPECT_TRUE(awaiting.OnWorldReady(5.0));
-  EXPECT_FALSE(awaiting.OnWorldReady(6.0));  // the first call counts
+  EXPECT_TRUE(awaiting.OnWorldReady(5.0, "start_menu"));
+  EXPECT_FALSE(awaiting.OnWorldReady(6.0, "solar_system"));  // the first call counts
   awaiting.Read(6.0, r);                      // script time 1 s: half way
   EXPECT_NEAR(r.p_WH.x(), 0.1, 1e-15);
   awaiting.Read(7.0, r);
   EXPECT_NEAR(r.p_WH.x(), 0.2, 1e-15);
 
   SimDevice plain(HandScript::Parse("start 0 0 0\nmove 2.0 0.2 0 0\n", "t"));
-  EXPECT_FALSE(plain.OnWorldReady(0.5));
+  EXPECT_FALSE(plain.OnWorldReady(0.5, "start_menu"));
   plain.Read(1.0, r);
   EXPECT_NEAR(r.p_WH.x(), 0.1, 1e-15);
 
   auto error_of = [](const std::string& text) { return ParseError(text, "h"); };
   EXPECT_NE(error_of("start 0 0 0\nhold 1\nawait_world\n").find("h:3: 'await_world' must come right after 'start'"),
             std::string::npos);
+  EXPECT_NE(error_of("start 0 0 0\nhold 1\nawait_world\n").find("await_world NAME"), std::string::npos);
   EXPECT_NE(error_of("start 0 0 0\nawait_world\nawait_world\n").find("h:3:"), std::string::npos);
-  EXPECT_NE(error_of("start 0 0 0\nawait_world now\n").find("unexpected 'now'"), std::string::npos);
   EXPECT_NE(error_of("await_world\n").find("h:1: the script must begin with 'start X Y Z'"), std::string::npos);
+}
+
+// await_world NAME in the middle of a script: the hand holds where it is until that world is
+// the node's, ignores other worlds, and runs on from when it arrived.
+constexpr const char* kWaitsForDinosaur =
+    "start 0 0 0\nmove 1 0.1 0 0\nawait_world dinosaur\nmove 1 0.2 0 0\n";
+
+TEST(HandScript, AwaitWorldNameHoldsUntilThatWorldIsHere) {
+  const HandScript script = HandScript::Parse(kWaitsForDinosaur, "t");
+  ASSERT_EQ(script.waits().size(), 1u);
+  EXPECT_EQ(script.waits()[0].world, "dinosaur");
+  EXPECT_DOUBLE_EQ(script.waits()[0].t_s, 1.0);
+  EXPECT_EQ(script.waits()[0].line, 3);
+  SimDevice hand(script);
+  DeviceReading r;
+  hand.Read(0.5, r);  // moving: a wait later in the script does not hold the start
+  EXPECT_NEAR(r.p_WH.x(), 0.05, 1e-12);
+  EXPECT_FALSE(hand.OnWorldReady(0.8, "start_menu"));  // not the one it waits for
+  hand.Read(2.0, r);
+  EXPECT_NEAR(r.p_WH.x(), 0.1, 1e-12);  // holds at the wait
+  EXPECT_FALSE(hand.OnWorldReady(2.5, "solar_system"));
+  hand.Read(3.0, r);
+  EXPECT_NEAR(r.p_WH.x(), 0.1, 1e-12);  // other worlds are ignored
+  EXPECT_FALSE(hand.OnWorldReady(3.5, "dinosaur"));  // runs on; the script had started before
+  hand.Read(4.0, r);                                  // 0.5 s after the world arrived: half way
+  EXPECT_NEAR(r.p_WH.x(), 0.15, 1e-9);
+  hand.Read(4.5, r);
+  EXPECT_NEAR(r.p_WH.x(), 0.2, 1e-12);
+  hand.Read(9.0, r);
+  EXPECT_NEAR(r.p_WH.x(), 0.2, 1e-12);
+}
+
+TEST(HandScript, AwaitWorldNameDoesNotHoldWhenTheWorldIsAlreadyHere) {
+  DeviceReading r;
+  // Here before the script got to the wait: no hold at all.
+  SimDevice early(HandScript::Parse(kWaitsForDinosaur, "t"));
+  early.OnWorldReady(0.2, "dinosaur");
+  early.OnWorldReady(0.7, "dinosaur");  // a new revision of the same world (new gravity)
+  early.Read(1.5, r);
+  EXPECT_NEAR(r.p_WH.x(), 0.15, 1e-9);
+  // Came and went before the script got there: it holds until the world is back.
+  SimDevice gone(HandScript::Parse(kWaitsForDinosaur, "t"));
+  gone.OnWorldReady(0.2, "dinosaur");
+  gone.OnWorldReady(0.5, "microscopic");
+  gone.Read(1.5, r);
+  EXPECT_NEAR(r.p_WH.x(), 0.1, 1e-12);
+  gone.OnWorldReady(2.0, "dinosaur");
+  gone.Read(2.5, r);
+  EXPECT_NEAR(r.p_WH.x(), 0.15, 1e-9);
+}
+
+// Several waits, one at the start: the start one releases the script (true once), the later
+// one holds it again; the script times shift by each hold.
+TEST(HandScript, AwaitWorldAtTheStartAndLaterEachHold) {
+  SimDevice hand(HandScript::Parse("start 0 0 0\nawait_world solar_system\nmove 1 0.1 0 0\n"
+                                   "await_world dinosaur\nmove 1 0.2 0 0\nawait_world start_menu\n"
+                                   "move 1 0.3 0 0\n", "t"));
+  DeviceReading r;
+  EXPECT_FALSE(hand.OnWorldReady(1.0, "start_menu"));
+  hand.Read(2.0, r);
+  EXPECT_NEAR(r.p_WH.x(), 0.0, 1e-12);  // the start pose until the solar system is here
+  EXPECT_TRUE(hand.OnWorldReady(3.0, "solar_system"));
+  EXPECT_FALSE(hand.OnWorldReady(3.1, "solar_system"));  // true only once
+  hand.Read(3.5, r);
+  EXPECT_NEAR(r.p_WH.x(), 0.05, 1e-9);
+  hand.Read(5.0, r);
+  EXPECT_NEAR(r.p_WH.x(), 0.1, 1e-12);
+  EXPECT_FALSE(hand.OnWorldReady(6.0, "dinosaur"));
+  hand.Read(6.5, r);
+  EXPECT_NEAR(r.p_WH.x(), 0.15, 1e-9);
+  EXPECT_FALSE(hand.OnWorldReady(6.8, "start_menu"));  // here before the script gets there
+  hand.Read(7.5, r);                                   // script time 2.5: no hold at 2
+  EXPECT_NEAR(r.p_WH.x(), 0.25, 1e-9);
+}
+
+// The bridge thread's call and the haptic thread's read allocate nothing (real-time rules).
+TEST(HandScript, AwaitWorldCallsDoNotAllocate) {
+  SimDevice hand(HandScript::Parse(kWaitsForDinosaur, "t"));
+  DeviceReading r;
+  const std::string world = "dinosaur";
+  const long before = testing::AllocationCount();
+  hand.Read(2.0, r);
+  hand.OnWorldReady(2.5, "start_menu");
+  hand.OnWorldReady(3.0, world);
+  hand.Read(3.5, r);
+  EXPECT_EQ(testing::AllocationCount() - before, 0);
+  EXPECT_NEAR(r.p_WH.x(), 0.15, 1e-9);
+}
+
+TEST(HandScript, AwaitWorldBadUsesNameTheLine) {
+  auto error_of = [](const std::string& text) { return ParseError(text, "h.hand"); };
+  EXPECT_NE(error_of("await_world dinosaur\n").find("h.hand:1: the script must begin with 'start X Y Z'"),
+            std::string::npos);
+  EXPECT_NE(error_of("start 0 0 0\nhold 1\nawait_world 2.0\n").find("h.hand:3: await_world: '2.0' is not a world name"),
+            std::string::npos);
+  EXPECT_NE(error_of("start 0 0 0\nawait_world solar-system\n").find("h.hand:2: await_world: 'solar-system'"),
+            std::string::npos);
+  EXPECT_NE(error_of("start 0 0 0\nawait_world dinosaur now\n").find("h.hand:2: unexpected 'now'"),
+            std::string::npos);
+  EXPECT_NE(error_of("start 0 0 0\nawait_world now later\n").find("h.hand:2: unexpected 'later'"),
+            std::string::npos);
+  EXPECT_EQ(error_of("start 0 0 0\nawait_world\nawait_world dinosaur\nhold 1\nawait_world dinosaur\n"), "");
 }
 
 TEST(SimFingertips, FiveDistinctFingertipsThatCloseTogether) {
@@ -111,6 +216,12 @@ TEST(HandScript, ShippedScriptsParse) {
       if (entry.path().extension() != ".hand") continue;
       const HandScript s = HandScript::Load(entry.path());
       EXPECT_GT(s.duration_s(), 1.0) << entry.path();
+      // A world a script waits for is one of the project's scenes (a typo would hold forever).
+      for (const auto& wait : s.waits()) {
+        if (wait.world.empty()) continue;
+        EXPECT_TRUE(std::filesystem::exists(std::filesystem::path(HANDSHARE_SCENE_DIR) / (wait.world + ".json")))
+            << entry.path() << ":" << wait.line << ": no scene '" << wait.world << "'";
+      }
       for (double t = 0.0; t <= s.duration_s(); t += 0.1) {
         EXPECT_LT(s.PoseAt(t).p_WH.norm(), 0.5) << entry.path() << " at " << t << " s";
       }

@@ -482,6 +482,14 @@ void HapticWorld::StepDeformable(Object& o, std::span<const RemoteContact> remot
 }
 
 void HapticWorld::StepBody(Object& o, double dt) noexcept {
+  dt = std::min(dt, kMaxBodyStep_s);
+  const int n = std::max(1, static_cast<int>(std::ceil(dt / kMaxBodySubstep_s - 1e-9)));
+  for (int k = 0; k < n; ++k) SubstepBody(o, dt / n);
+  o.force_W.setZero();
+  o.torque_W.setZero();
+}
+
+void HapticWorld::SubstepBody(Object& o, double dt) noexcept {
   Eigen::Vector3d F = o.force_W + o.mass_kg * config_.gravity_W_m_per_s2 - o.lin_damp * o.v_W;
   Eigen::Vector3d T = o.torque_W - o.ang_damp * o.w_W;
   const Eigen::Vector3d c = o.X_WO.translation();
@@ -524,8 +532,6 @@ void HapticWorld::StepBody(Object& o, double dt) noexcept {
     q.normalize();
     o.X_WO.linear() = q.toRotationMatrix();
   }
-  o.force_W.setZero();
-  o.torque_W.setZero();
 }
 
 }  // namespace handshare::contact

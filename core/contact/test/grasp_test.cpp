@@ -110,5 +110,27 @@ TEST(Grasp, BallFallsWithoutFingersAndRestsOnTheSupport) {
   EXPECT_LT(w.body_velocity_W(ball).norm(), 1e-4);
 }
 
+// A loop that stalls hands the world long steps: the body must still come to rest on the
+// support (one explicit 20 ms step of its 5000 N/m spring under 0.2 kg diverges).
+TEST(Grasp, BallDroppedWithStalledStepsStillRestsOnTheSupport) {
+  HapticWorld w;
+  BodyProperties body;
+  body.mass_kg = kMass;
+  const ObjectId ball = w.AddDynamic(Shape::Sphere(kBall, 3), RigidMaterial{}, body,
+                                     Eigen::Isometry3d(Eigen::Translation3d(0, 0, 0.05)));
+  w.SetSupport(SupportPlane{});
+  w.SetGravity(Eigen::Vector3d(0, 0, -kMoonGravity_m_per_s2));
+  w.Init();
+  const auto far = test::OneFinger(Eigen::Vector3d(1, 1, 1));
+  double highest = 0.0;
+  for (int k = 0; k < 200; ++k) {  // 4 s in 20 ms steps, and one 0.5 s stall
+    w.Step(k == 100 ? 0.5 : 0.02, far);
+    if (k > 50) highest = std::max(highest, w.pose(ball).translation().z());
+  }
+  EXPECT_NEAR(w.pose(ball).translation().z(), kBall - kMass * kMoonGravity_m_per_s2 / 5000.0, 1e-5);
+  EXPECT_LT(w.body_velocity_W(ball).norm(), 1e-3);
+  EXPECT_LT(highest, kBall + 1e-3);  // it never bounced off
+}
+
 }  // namespace
 }  // namespace handshare::contact

@@ -87,6 +87,7 @@ SimulatedHiro::SimulatedHiro(const HiroModel& model, HiroSimOptions options)
     }
     script_ = haptic::HandScript::Default(options_.p_WB + mean_dev - mean_open);
   }
+  clock_ = std::make_unique<haptic::ScriptClock>(script_);
   const std::array<Eigen::Vector3d, kFingerCount> p_WU0 = UserTargets(0.0);
   p_WB_ = options_.p_WB;
   if (options_.place_base_at_script_start) {
@@ -109,8 +110,14 @@ SimulatedHiro::SimulatedHiro(const HiroModel& model, HiroSimOptions options)
 }
 
 double SimulatedHiro::ScriptTime(double t_s) const noexcept {
+  // The script's own time (held at an await_world until its world is here), then the loop.
+  const double script_t_s = clock_->ScriptTime(t_s);
   const double d = script_.duration_s();
-  return options_.loop_script && d > 0.0 ? std::fmod(t_s, d) : t_s;
+  return options_.loop_script && d > 0.0 ? std::fmod(script_t_s, d) : script_t_s;
+}
+
+bool SimulatedHiro::OnWorldReady(double t_s, std::string_view world) noexcept {
+  return clock_->OnWorldReady(t_s, world);
 }
 
 std::array<Eigen::Vector3d, kFingerCount> SimulatedHiro::UserTargets(double t_s) const noexcept {

@@ -131,6 +131,29 @@ TEST(HiroDevice, ForceControlTracksAStepCommandOnTheUsersFingertip) {
   EXPECT_LT(off_sum.norm(), 0.1) << off_sum.transpose();
 }
 
+// The simulated user's hand runs the same scripts as the sim device: through the driver, an
+// await_world NAME holds the scripted hand until the node has that world.
+TEST(HiroDevice, ScriptedUserHandAwaitsItsWorld) {
+  auto device = MakeSimulatedHiroDevice(
+      HANDSHARE_HIRO_CONFIG, Options("start 0 0 0\nawait_world solar_system\nmove 0.5 0.04 0 0\n"));
+  auto& plant = static_cast<SimulatedHiro&>(device->hardware());
+  haptic::DeviceReading r;
+  std::array<Eigen::Vector3d, haptic::kFingers> f{};
+  const Eigen::Vector3d start_index = haptic::SimFingertips(haptic::HandPose{})[1];
+  auto step_to = [&](int n0, int n1) {
+    for (int n = n0; n <= n1; ++n) {
+      device->Read(n * 1e-3, r);
+      device->Command(f);
+    }
+  };
+  EXPECT_FALSE(device->OnWorldReady(0.1, "start_menu"));
+  step_to(1, 1000);  // 1 s in another world: the user's hand stays at the start
+  EXPECT_LT((plant.p_WU()[1] - start_index).norm(), 2e-3) << plant.p_WU()[1].transpose();
+  EXPECT_TRUE(device->OnWorldReady(1.0, "solar_system"));
+  step_to(1001, 2000);  // moved 40 mm along x within 0.5 s of the world, then still
+  EXPECT_NEAR((plant.p_WU()[1] - start_index).x(), 0.04, 2e-3) << plant.p_WU()[1].transpose();
+}
+
 TEST(HiroDevice, ReadAndCommandDoNotAllocate) {
   auto device = MakeSimulatedHiroDevice(HANDSHARE_HIRO_CONFIG, Options("start 0 0 0\nmove 1 0.05 0 0 grip 0.5\n"));
   haptic::DeviceReading r;

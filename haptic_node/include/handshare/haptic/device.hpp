@@ -5,6 +5,7 @@
 #include <Eigen/Core>
 #include <array>
 #include <cstdint>
+#include <string_view>
 
 #include "handshare/common/hand.hpp"
 
@@ -45,9 +46,12 @@ class Device {
   virtual void Command(const std::array<Eigen::Vector3d, kFingers>& f_E_W) noexcept = 0;
   /// Short name: "sim", "hiro", "replay".
   virtual const char* name() const noexcept = 0;
-  /// The session's first world is here (t_s on the Read clock). A scripted hand that awaits
-  /// the world starts its script then and returns true; other devices ignore it.
-  virtual bool OnWorldReady(double /*t_s*/) noexcept { return false; }
+  /// The node has the world `world` (its scene name) from t_s on the Read clock: called after
+  /// every scene change, from the bridge thread, while Read runs on the haptic thread (no
+  /// allocation, no locks). A scripted hand holding at an await_world for it runs on; the
+  /// return is true the one time this starts a script that holds at its very start. Devices
+  /// without a script ignore it.
+  virtual bool OnWorldReady(double /*t_s*/, std::string_view /*world*/) noexcept { return false; }
 };
 
 }  // namespace handshare::haptic

@@ -19,6 +19,7 @@
 namespace handshare::haptic {
 
 /// Writes the log format's header / one row for a haptic snapshot (what `--trace` records).
+/// The last column, stamp_ns, is the host's steady clock at the sample; each row is flushed.
 void WriteTraceHeader(std::ostream& out);
 void WriteTraceRow(std::ostream& out, const HapticSnapshot& s);
 

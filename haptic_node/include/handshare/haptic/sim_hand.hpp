@@ -13,6 +13,12 @@
 ///                                 then (Device::OnWorldReady), not when the device starts, so a
 ///                                 slow discovery cannot put the hand on a control before the
 ///                                 control exists
+///   await_world NAME              (anywhere after start) hold the current pose until the world
+///                                 NAME (a scene name: solar_system, dinosaur, ...) is the one
+///                                 the node has; no hold if it already is. The rest of the
+///                                 script runs on from when it arrived, so a hand that pressed
+///                                 a control waits for the world the control opens instead of
+///                                 holding for a guessed time
 ///   move DUR X Y Z [grip G]       move the hand base (and grip); a shaped hand keeps its shape
 ///   reach DUR X Y Z               move the hand base to X Y Z with a relaxed open hand
 ///   grip DUR G                    close (G -> 1) or open (G -> 0) the hand
@@ -34,10 +40,12 @@
 /// After the last command the hand holds its final pose. Errors name the file and line.
 #include <array>
 #include <atomic>
+#include <cstdint>
 #include <limits>
 #include <filesystem>
 #include <stdexcept>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "handshare/haptic/device.hpp"
@@ -68,6 +76,13 @@ struct ScriptSegment {
   HandPose from, to;
 };
 
+/// An await_world in a script: the script time it holds at and the world it waits for.
+struct WorldWait {
+  double t_s = 0.0;
+  std::string world;  // empty: the session's first world (plain await_world)
+  int line = 0;       // in the script, for messages
+};
+
 class HandScript {
  public:
   /// Parses script text; `origin` names it in error messages (file path).
@@ -79,13 +94,54 @@ class HandScript {
   /// Pose at time t_s (minimum-jerk within a segment, held after the end). Real-time safe.
   HandPose PoseAt(double t_s) const noexcept;
   double duration_s() const noexcept { return segments_.empty() ? 0.0 : segments_.back().t1_s; }
-  /// True if the script begins with await_world (its time 0 is when the first world is here).
-  bool awaits_world() const noexcept { return await_world_; }
+  /// True if the script has an await_world (ScriptClock maps device time to script time).
+  bool awaits_world() const noexcept { return !waits_.empty(); }
+  /// The script's await_world lines in script order (non-decreasing t_s).
+  const std::vector<WorldWait>& waits() const noexcept { return waits_; }
 
  private:
   HandPose start_;
-  bool await_world_ = false;
+  std::vector<WorldWait> waits_;
   std::vector<ScriptSegment> segments_;
+};
+
+/// Script time for device time, for a script with await_world lines: the script holds at each
+/// wait until its world is the node's (or, plain, until any world is here), then runs on from
+/// when that world arrived. OnWorldReady is told every world the node gets (bridge thread);
+/// ScriptTime is asked by one thread (the haptic thread) with non-decreasing times. Both are
+/// real-time safe: world names become indices into the script's own list, and what the bridge
+/// tells the haptic thread travels in lock-free atomics.
+class ScriptClock {
+ public:
+  /// Allocates; setup only.
+  explicit ScriptClock(const HandScript& script);
+  ScriptClock(const ScriptClock&) = delete;
+  ScriptClock& operator=(const ScriptClock&) = delete;
+
+  /// The world `world` is the node's from device time t_s (a new revision of the same world
+  /// keeps its first arrival time). Returns true the one time a call lets a script that
+  /// holds at its very start begin (its first await_world, at script time 0, is satisfied).
+  /// Any thread (one at a time); no allocation.
+  bool OnWorldReady(double t_s, std::string_view world) noexcept;
+  /// Script time at device time t_s (the script's time at a hold while it waits).
+  double ScriptTime(double t_s) noexcept;
+
+ private:
+  static constexpr std::uint64_t kNoWorld = 0;
+  static constexpr std::uint64_t kOtherWorld = 0xFFFF;  // a world no await_world names
+  // The current world packed in one lock-free word: (arrival time in us << 16) | code, where
+  // code is 1 + the index of the world's name in names_, kOtherWorld, or kNoWorld (none yet).
+  std::uint64_t CodeOf(std::string_view world) const noexcept;
+
+  std::vector<std::string> names_;      // distinct named worlds the script awaits
+  std::vector<double> wait_t_s_;        // per wait: its script time
+  std::vector<std::uint64_t> wait_code_;  // per wait: its world's code, kNoWorld for plain
+  std::atomic<std::uint64_t> world_{0};
+  std::atomic<double> first_world_s_{std::numeric_limits<double>::quiet_NaN()};
+  std::atomic<bool> start_released_{false};
+  // The ScriptTime thread's: the next wait and device time at script time 0.
+  std::size_t next_ = 0;
+  double origin_s_ = 0.0;
 };
 
 /// Fingertip positions of the simulated hand for a hand pose (grip blended with task shape).
@@ -96,22 +152,21 @@ std::array<Eigen::Vector3d, kFingers> SimFingertips(const HandPose& pose) noexce
 /// is not moved by them; issue-level plants live in their own drivers).
 class SimDevice final : public Device {
  public:
-  explicit SimDevice(HandScript script) : script_(std::move(script)) {}
+  explicit SimDevice(HandScript script) : script_(std::move(script)), clock_(script_) {}
   DeviceCapabilities capabilities() const noexcept override { return {}; }
   void Read(double t_s, DeviceReading& out) noexcept override;
   void Command(const std::array<Eigen::Vector3d, kFingers>& f_E_W) noexcept override {
     last_command_ = f_E_W;
   }
   const char* name() const noexcept override { return "sim"; }
-  /// Starts the clock of a script that awaits the world (script time = t_s - the t_s given
-  /// here); true if it did. Any thread; the first call counts.
-  bool OnWorldReady(double t_s) noexcept override;
+  /// Tells the script's clock (ScriptClock) that `world` is here from t_s; true the one time
+  /// this starts a script that holds at its start. Any thread.
+  bool OnWorldReady(double t_s, std::string_view world) noexcept override;
   const std::array<Eigen::Vector3d, kFingers>& last_command() const noexcept { return last_command_; }
 
  private:
   HandScript script_;
-  // Device time at which the script's clock started; NaN while it awaits the world.
-  std::atomic<double> script_origin_s_{std::numeric_limits<double>::quiet_NaN()};
+  ScriptClock clock_;  // after script_: built from it
   std::array<Eigen::Vector3d, kFingers> last_command_{};
 };
 

@@ -60,6 +60,10 @@ class HiroDevice final : public haptic::Device {
   /// an invalid Read() only the last good gravity torques are sent. Real-time safe.
   void Command(const std::array<Eigen::Vector3d, haptic::kFingers>& f_E_W) noexcept override;
   const char* name() const noexcept override { return "hiro"; }
+  /// Passed to the hardware: the simulated plant's scripted user hand awaits worlds.
+  bool OnWorldReady(double t_s, std::string_view world) noexcept override {
+    return hardware_->OnWorldReady(t_s, world);
+  }
 
   const HiroModel& model() const noexcept { return model_; }
   HiroHardware& hardware() noexcept { return *hardware_; }

@@ -7,6 +7,8 @@
 /// motor amplifier holds its command), in substeps of period / substeps, then latches the
 /// encoders and force sensors. Nothing sleeps: a test steps 10^6 periods as fast as it can.
 #include <array>
+#include <memory>
+#include <string_view>
 #include <cstdint>
 #include <optional>
 #include <random>
@@ -38,6 +40,10 @@ class HiroHardware {
   virtual void ReadForceSensors(std::array<SensorWrench, kFingerCount>& out) const noexcept = 0;
   /// Motor torque commands at the joints [N m]; held until the next call. Real-time safe.
   virtual void WriteMotorTorques(const ArmJointArray& tau_arm_N_m, const HandJointArray& tau_hand_N_m) noexcept = 0;
+  /// The node has the world `world` from t_s (haptic::Device::OnWorldReady, bridge thread).
+  /// The simulated plant's scripted user hand uses it for its await_world lines; the robot
+  /// has nothing to do with it. Returns true the one time it starts a script held at its start.
+  virtual bool OnWorldReady(double /*t_s*/, std::string_view /*world*/) noexcept { return false; }
 };
 
 /// The simulated user's fingertip: a mass pulled by a spring-damper towards the scripted
@@ -101,6 +107,8 @@ class SimulatedHiro final : public HiroHardware {
   void ReadEncoders(ArmJointArray& q_arm_rad, HandJointArray& q_hand_rad) const noexcept override;
   void ReadForceSensors(std::array<SensorWrench, kFingerCount>& out) const noexcept override;
   void WriteMotorTorques(const ArmJointArray& tau_arm_N_m, const HandJointArray& tau_hand_N_m) noexcept override;
+  /// The scripted user hand's await_world lines (haptic::ScriptClock). Any thread.
+  bool OnWorldReady(double t_s, std::string_view world) noexcept override;
 
   // Ground truth, for tests and telemetry.
   double time_s() const noexcept { return t_s_; }
@@ -124,6 +132,8 @@ class SimulatedHiro final : public HiroHardware {
  private:
   void RefreshKinematics() noexcept;
   void Substep(double h) noexcept;
+  /// The script's time at plant time t_s (non-decreasing: it passes the script's await_world
+  /// holds on the way), looped if so configured.
   double ScriptTime(double t_s) const noexcept;
   /// The user's scripted fingertips at t_s: script, turn, offset.
   std::array<Eigen::Vector3d, kFingerCount> UserTargets(double t_s) const noexcept;
@@ -131,6 +141,7 @@ class SimulatedHiro final : public HiroHardware {
   HiroModel model_;
   HiroSimOptions options_;
   haptic::HandScript script_;
+  std::unique_ptr<haptic::ScriptClock> clock_;  // the script's time (its await_world holds)
   double h_s_;
   double t_s_ = 0.0;
   Eigen::Vector3d p_WB_;
