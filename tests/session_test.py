@@ -638,12 +638,14 @@ class PressWatch:
         return held
 
     def loaded_near(self, held, user):
-        """The loads of the dump within 15 mm (in the plane) of the user's fingertip."""
+        """The loads of the dump within 15 mm (in the plane) of the user's fingertip, of at least
+        1 mN: a contact that faded out ends at a load of ~1e-7 N, and the field's change from there
+        to none is below the re-send threshold, so the last dump may still list it."""
         if self.nodes is None:
             self.nodes = read_inp_nodes(os.path.join(os.path.dirname(self.file), held["mesh"]))
         x, y = self.fingertips_xy[user]
         return [l for l in held["loads"]
-                if math.hypot(self.nodes[l["node"]][0] + self.p_object[0] - x,
+                if math.sqrt(sum(c * c for c in l["f_N"])) >= 1e-3 and math.hypot(self.nodes[l["node"]][0] + self.p_object[0] - x,
                               self.nodes[l["node"]][1] + self.p_object[1] - y) < 0.015]
 
     def still_for(self, seconds):
