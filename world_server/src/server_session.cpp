@@ -77,7 +77,9 @@ void ServerSession::TakeMembers(Clock::time_point now) {
   dds::SampleMeta meta;
   while (member_reader_.TakeNext(info, meta)) {
     std::optional<MemberEvent> event;
-    if (meta.valid_data && meta.instance_state == dds::InstanceState::kAlive) {
+    if (meta.valid_data && info.leaving()) {
+      event = members_.OnGone(meta.instance, /*disposed=*/true);  // a clean leave, said in data
+    } else if (meta.valid_data && meta.instance_state == dds::InstanceState::kAlive) {
       if (!Accept("member_info", info.user().to_string(), dds::CheckMemberInfo(info, session_))) continue;
       event = members_.OnInfo(meta.instance, meta.writer, ToMember(info));
     } else if (meta.instance_state != dds::InstanceState::kAlive) {

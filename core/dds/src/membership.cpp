@@ -30,6 +30,11 @@ MemberAnnouncement::MemberAnnouncement(Participant& participant, const std::stri
 
 MemberAnnouncement::~MemberAnnouncement() {
   try {
+    // A leave in data first: under load the server may take the dispose only after the writer
+    // is gone (the instance then reads "no writers", a loss), and after a partition Fast DDS
+    // 2.9 did not deliver the dispose at all; a valid sample carries "left" either way.
+    info_.leaving(true);
+    writer_.Write(info_);
     writer_.Dispose(info_);
   } catch (const std::exception& e) {
     // A destructor must not throw; the world server then sees the member lost instead.
