@@ -8,7 +8,6 @@ unchanged (the bad contact sets never reach her FEM solve).
 
 usage: bad_samples_test.py --bin-dir DIR --domain D --work DIR
 """
-import argparse
 import csv
 import math
 import os
@@ -16,9 +15,8 @@ import re
 import signal
 import subprocess
 import sys
-import tempfile
 
-from session_test import Failure, Harness, check
+from session_test import check, run_cases
 
 MAX_FORCE_N = 3.5  # the simulated hand's fingertip limit (HIRO II's)
 SCRIPT = """# alice presses the tail 3 mm and holds (bad_samples_test.py)
@@ -122,25 +120,5 @@ def run(h, domain):
           f"{re.search(r'samples dropped: (.*)', server).group(1)}")
 
 
-def main():
-    parser = argparse.ArgumentParser()
-    parser.add_argument("--bin-dir", required=True)
-    parser.add_argument("--domain", type=int, required=True)
-    parser.add_argument("--work", default="")
-    args = parser.parse_args()
-    work = args.work or tempfile.mkdtemp(prefix="handshare-bad-samples-")
-    os.makedirs(work, exist_ok=True)
-    h = Harness(args.bin_dir, work)
-    try:
-        run(h, args.domain)
-    except Failure as e:
-        h.dump_logs()
-        print(f"FAILED: bad_samples: {e}\n(work folder: {work})", file=sys.stderr)
-        return 1
-    finally:
-        h.cleanup()
-    return 0
-
-
 if __name__ == "__main__":
-    sys.exit(main())
+    sys.exit(run_cases({"bad_samples": run}))

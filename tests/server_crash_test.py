@@ -10,18 +10,15 @@ alice from her claim; no row the killed server committed is lost.
 
 usage: server_crash_test.py --bin-dir DIR --domain D --work DIR
 """
-import argparse
 import csv
 import os
 import re
 import signal
 import sqlite3
-import subprocess
 import sys
-import tempfile
 import time
 
-from session_test import Failure, Harness, check
+from session_test import Failure, check, run_cases
 
 MARS = 3.71
 BALL_KG = 0.2  # assets/scenes/solar_system.json
@@ -157,25 +154,5 @@ def run(h, domain):
           f"{rows1} control events committed of {printed} printed")
 
 
-def main():
-    parser = argparse.ArgumentParser()
-    parser.add_argument("--bin-dir", required=True)
-    parser.add_argument("--domain", type=int, required=True)
-    parser.add_argument("--work", default="")
-    args = parser.parse_args()
-    work = args.work or tempfile.mkdtemp(prefix="handshare-crash-")
-    os.makedirs(work, exist_ok=True)
-    h = Harness(args.bin_dir, work)
-    try:
-        run(h, args.domain)
-    except Failure as e:
-        h.dump_logs()
-        print(f"FAILED: server_crash: {e}\n(work folder: {work})", file=sys.stderr)
-        return 1
-    finally:
-        h.cleanup()
-    return 0
-
-
 if __name__ == "__main__":
-    sys.exit(main())
+    sys.exit(run_cases({"server_crash": run}))

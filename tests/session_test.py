@@ -756,9 +756,13 @@ CASES = {"shared_session": case_shared_session, "encyclopedia": case_encyclopedi
          "signals": case_signals, "bad_input": case_bad_input}
 
 
-def main():
+def run_cases(cases, harness=None):
+    """The command line of every cross-process test script: CASE (optional when there is one)
+    --bin-dir DIR --domain D --work DIR; runs the case in a Harness that always cleans up.
+    Returns the exit code: 0, or 1 with every process's log dumped."""
     parser = argparse.ArgumentParser()
-    parser.add_argument("case", choices=sorted(CASES))
+    parser.add_argument("case", choices=sorted(cases), nargs="?" if len(cases) == 1 else None,
+                        default=next(iter(cases)) if len(cases) == 1 else None)
     parser.add_argument("--bin-dir", required=True)
     parser.add_argument("--domain", type=int, required=True)
     parser.add_argument("--work", default="")
@@ -771,11 +775,11 @@ def main():
         if entry != "cache":
             path = os.path.join(work, entry)
             shutil.rmtree(path) if os.path.isdir(path) and not os.path.islink(path) else os.remove(path)
-    h = Harness(args.bin_dir, work)
+    h = (harness or Harness)(args.bin_dir, work)
     # Killed by ctest (a timeout): end the nodes too (the finally below).
     signal.signal(signal.SIGTERM, lambda *_: sys.exit(143))
     try:
-        CASES[args.case](h, args.domain)
+        cases[args.case](h, args.domain)
     except Failure as e:
         h.dump_logs()
         print(f"FAILED: {args.case}: {e}\n(work folder: {work})", file=sys.stderr)
@@ -783,6 +787,10 @@ def main():
     finally:
         h.cleanup()
     return 0
+
+
+def main():
+    return run_cases(CASES)
 
 
 if __name__ == "__main__":

@@ -41,10 +41,10 @@ int Guide::Run() {
       continue;
     }
     if (!meta.valid_data || board.message_id() == last_id) continue;  // already spoken
-    if (const std::string reason = dds::CheckMessageBoard(board, config_.where.session); !reason.empty()) {
-      if (const std::string line = dropped.Count("message_board", "world_server", reason); !line.empty()) {
-        std::fprintf(stderr, "[audio_guide %s] %s\n", name.c_str(), line.c_str());
-      }
+    const std::string bad = dds::CheckMessageBoard(board, config_.where.session);
+    if (!dropped.Accept("message_board", "world_server", bad, [&](const std::string& line) {
+          std::fprintf(stderr, "[audio_guide %s] %s\n", name.c_str(), line.c_str());
+        })) {
       continue;
     }
     last_id = board.message_id();

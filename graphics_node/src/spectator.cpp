@@ -121,11 +121,8 @@ class WorldView {
  private:
   // True when `reason` is empty; else the sample is dropped, counted and (rate-limited) named.
   bool Accept(std::string_view topic, std::string_view sender, const std::string& reason) {
-    if (reason.empty()) return true;
-    if (const std::string line = dropped_.Count(topic, sender, reason); !line.empty()) {
-      std::fprintf(stderr, "%s%s\n", prefix_.c_str(), line.c_str());
-    }
-    return false;
+    return dropped_.Accept(topic, sender, reason,
+                           [this](const std::string& line) { std::fprintf(stderr, "%s%s\n", prefix_.c_str(), line.c_str()); });
   }
 
   std::string session_;

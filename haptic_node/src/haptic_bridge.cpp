@@ -58,18 +58,13 @@ void HapticBridge::Tick() {
   PublishStatistics();
 }
 
-bool HapticBridge::Accept(std::string_view topic, std::string_view sender, const std::string& reason) {
-  if (reason.empty()) return true;
-  if (const std::string line = dropped_.Count(topic, sender, reason); !line.empty()) say_(line);
-  return false;
-}
-
 void HapticBridge::ApplySceneChange() {
   msg::SceneState state;
   dds::SampleMeta meta;
   while (scene_reader_.TakeNext(state, meta)) {
     if (!meta.valid_data || state.revision() == scene_revision_) continue;
-    if (!Accept("scene_state", "world_server", dds::CheckSceneState(state, config_.where.session))) continue;
+    const std::string bad = dds::CheckSceneState(state, config_.where.session);
+    if (!dropped_.Accept("scene_state", "world_server", bad, say_)) continue;
     scene_revision_ = state.revision();
     try {
       AdoptScene(state);
@@ -130,7 +125,8 @@ void HapticBridge::ReceivePeers() {
   dds::SampleMeta meta;
   while (contact_reader_.TakeNext(peer, meta)) {
     if (!meta.valid_data || peer.user().to_string() == config_.user) continue;
-    if (Accept("contact_set", peer.user().to_string(), dds::CheckContactSet(peer, config_.where.session))) {
+    const std::string bad = dds::CheckContactSet(peer, config_.where.session);
+    if (dropped_.Accept("contact_set", peer.user().to_string(), bad, say_)) {
       peers_.Receive(peer, now, config_.user);
     }
   }
@@ -145,9 +141,8 @@ void HapticBridge::FollowPeerBodies() {
   dds::SampleMeta meta;
   while (object_reader_.TakeNext(body, meta)) {
     if (!meta.valid_data) continue;
-    if (!Accept("object_state", body.owner().to_string(), dds::CheckObjectState(body, config_.where.session))) {
-      continue;
-    }
+    const std::string bad = dds::CheckObjectState(body, config_.where.session);
+    if (!dropped_.Accept("object_state", body.owner().to_string(), bad, say_)) continue;
     bodies_[body.object_id().to_string()] = {body, common::SteadyNowNs()};
   }
   renderer_->SetFollowed(ToFollowedBodies(bodies_, config_.user, renderer_->models()));

@@ -56,8 +56,6 @@ class HapticBridge {
   /// The loop statistics, once a second.
   void PublishStatistics();
 
-  /// True when `reason` is empty; else counts the sample as dropped (and says so, rate-limited).
-  bool Accept(std::string_view topic, std::string_view sender, const std::string& reason);
   /// Builds the renderer of one scene state and hands it to the loop.
   void AdoptScene(const msg::SceneState& state);
 

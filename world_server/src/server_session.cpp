@@ -80,7 +80,7 @@ void ServerSession::TakeMembers(Clock::time_point now) {
     if (meta.valid_data && info.leaving()) {
       event = members_.OnGone(meta.instance, /*disposed=*/true);  // a clean leave, said in data
     } else if (meta.valid_data && meta.instance_state == dds::InstanceState::kAlive) {
-      if (!Accept("member_info", info.user().to_string(), dds::CheckMemberInfo(info, session_))) continue;
+      if (!Accepted("member_info", info.user().to_string(), dds::CheckMemberInfo(info, session_))) continue;
       event = members_.OnInfo(meta.instance, meta.writer, ToMember(info));
     } else if (meta.instance_state != dds::InstanceState::kAlive) {
       event = members_.OnGone(meta.instance, meta.instance_state == dds::InstanceState::kDisposed);
@@ -111,7 +111,7 @@ void ServerSession::TakeControlEvents() {
   bool applied = false;
   while (control_reader_.TakeNext(sample, meta)) {
     if (!meta.valid_data) continue;
-    if (!Accept("control_event", sample.user().to_string(), dds::CheckControlEvent(sample, session_))) continue;
+    if (!Accepted("control_event", sample.user().to_string(), dds::CheckControlEvent(sample, session_))) continue;
     const auto input = ToControlInput(sample);
     if (!input) continue;  // CheckControlEvent refused every kind ToControlInput cannot map
     server_.OnControlEvent(ToControlRecord(sample, *input, common::UnixNowNs()));
@@ -139,7 +139,7 @@ void ServerSession::TakeContactSets(Clock::time_point now) {
   dds::SampleMeta meta;
   while (contact_reader_.TakeNext(set, meta)) {
     if (!meta.valid_data) continue;
-    if (Accept("contact_set", set.user().to_string(), dds::CheckContactSet(set, session_))) {
+    if (Accepted("contact_set", set.user().to_string(), dds::CheckContactSet(set, session_))) {
       objects_.OnContactSet(set, now);
     }
   }
@@ -155,12 +155,6 @@ void ServerSession::StepObjects(Clock::time_point now, double dt_s) {
     deformation_writer_.Write(ToDeformation(object_id, session_, sample));
     ++deformations_sent_;
   }
-}
-
-bool ServerSession::Accept(std::string_view topic, std::string_view sender, const std::string& reason) {
-  if (reason.empty()) return true;
-  if (const std::string line = dropped_.Count(topic, sender, reason); !line.empty()) server_.Say(line);
-  return false;
 }
 
 void ServerSession::PublishScene() {

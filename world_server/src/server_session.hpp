@@ -48,8 +48,10 @@ class ServerSession {
   /// One step of the shared objects, and what it publishes: owners, poses, deformations.
   void StepObjects(Clock::time_point now, double dt_s);
 
-  /// True when `reason` is empty; else counts the sample as dropped (and says so, rate-limited).
-  bool Accept(std::string_view topic, std::string_view sender, const std::string& reason);
+  /// True when `reason` is empty; else the sample is dropped, counted and (rate-limited) named.
+  bool Accepted(std::string_view topic, std::string_view sender, const std::string& reason) {
+    return dropped_.Accept(topic, sender, reason, [this](const std::string& line) { server_.Say(line); });
+  }
   /// Publishes the scene as its next revision.
   void PublishScene();
   /// Records where the session is (world, revision, clock, board) in the session log.

@@ -5,6 +5,8 @@
 #include <gtest/gtest.h>
 
 #include <limits>
+#include <string>
+#include <vector>
 
 namespace handshare::dds {
 namespace {
@@ -171,6 +173,15 @@ TEST(DroppedSamples, CountsPerTopicAndPrintsAFloodOncePerThousand) {
   EXPECT_EQ(d.of("contact_set"), 3500u);
   EXPECT_EQ(d.total(), 3501u);
   EXPECT_EQ(d.Summary(), "contact_set 3500, object_state 1");
+  // Accept: a good sample passes uncounted; a bad one is counted and its line said once.
+  std::vector<std::string> said;
+  const auto say = [&](const std::string& line) { said.push_back(line); };
+  EXPECT_TRUE(d.Accept("device_state", "alice", "", say));
+  EXPECT_FALSE(d.Accept("device_state", "alice", "p is nan", say));
+  EXPECT_FALSE(d.Accept("device_state", "alice", "p is nan", say));
+  EXPECT_EQ(d.of("device_state"), 2u);
+  ASSERT_EQ(said.size(), 1u);
+  EXPECT_NE(said[0].find("dropped a bad device_state sample from 'alice': p is nan"), std::string::npos);
 }
 
 }  // namespace

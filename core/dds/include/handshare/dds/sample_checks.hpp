@@ -9,6 +9,7 @@
 /// skipped where the models are (PeerContacts::ForEach), not counted as bad.
 /// Not real-time (the bridge thread, the server's tick, the graphics thread).
 #include <cstdint>
+#include <functional>
 #include <map>
 #include <set>
 #include <utility>
@@ -49,6 +50,14 @@ class DroppedSamples {
   /// bad sample of each sender on each topic (up to kNamedSenders senders a topic) and for every 1000th of
   /// a topic, else "" (a flood prints a line per 1000 samples, not one per sample).
   std::string Count(std::string_view topic, std::string_view sender, const std::string& reason);
+  /// True when `reason` is empty (the sample may be applied); else counts it and passes the
+  /// line to print, if any, to `say`.
+  bool Accept(std::string_view topic, std::string_view sender, const std::string& reason,
+              const std::function<void(const std::string&)>& say) {
+    if (reason.empty()) return true;
+    if (const std::string line = Count(topic, sender, reason); !line.empty()) say(line);
+    return false;
+  }
   std::uint64_t total() const { return total_; }
   std::uint64_t of(std::string_view topic) const;
   /// "contact_set 12, object_state 3" ("none" when nothing was dropped).
