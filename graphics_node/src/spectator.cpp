@@ -235,7 +235,7 @@ int Spectator::Run() {
     times << "frame,file,scene,revision,hands\n";
   }
 
-  dds::Participant participant(config_.where.domain_id, config_.where.session, name, config_.where.qos_file);
+  dds::Participant participant(config_.where, name);
   dds::MemberAnnouncement member(participant, name, msg::NODE_GRAPHICS);
   WorldView world(participant, assets_dir, name, config_.where.session);
   // When the frames are written or the window closes: what the spectator received, for a

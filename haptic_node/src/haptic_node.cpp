@@ -73,8 +73,7 @@ int HapticNode::Run() {
     WriteTraceHeader(trace);
   }
 
-  dds::Participant participant(config_.where.domain_id, config_.where.session, "haptic_node/" + config_.user,
-                               config_.where.qos_file);
+  dds::Participant participant(config_.where, "haptic_node/" + config_.user);
   dds::MemberAnnouncement member(participant, config_.user, msg::NODE_HAPTIC, device->name());
   HapticLoop loop(*device, HapticLoopConfig{config_.rate_Hz, true});
   HapticBridge bridge(config_, *device, loop, participant, trace ? &trace : nullptr, say);

@@ -43,7 +43,7 @@ int Run(const common::Options& o) {
   const common::SessionOptions where = common::ReadSessionOptions(o);
   const std::string object = o.GetString("object");
   const double rate_Hz = o.GetDouble("rate", 1.0, 10000.0);
-  dds::Participant participant(where.domain_id, where.session, "bad_sample_publisher", where.qos_file);
+  dds::Participant participant(where, "bad_sample_publisher");
   auto contacts = dds::MakeWriter<msg::ContactSet>(participant, dds::topics::kContactSet);
   auto objects = dds::MakeWriter<msg::ObjectState>(participant, dds::topics::kObjectState);
   auto events = dds::MakeWriter<msg::ControlEvent>(participant, dds::topics::kControlEvent);

@@ -477,7 +477,7 @@ int RunRecorder(const RecordConfig& config) {
   std::string scene_name;
   std::uint32_t scene_revision = 0;
 
-  dds::Participant participant(where.domain_id, where.session, "session_record", where.qos_file);
+  dds::Participant participant(where, "session_record");
   std::vector<std::unique_ptr<TopicTap>> taps;
   namespace t = dds::topics;
   taps.push_back(std::make_unique<Tap<msg::MemberInfo>>(
@@ -590,7 +590,7 @@ int RunPlayer(const PlayConfig& config) {
   RecordingReader reader(config.file);
   const RecordingInfo& info = reader.info();
   const auto& where = config.where;
-  dds::Participant participant(where.domain_id, where.session, "session_play", where.qos_file);
+  dds::Participant participant(where, "session_play");
   // The player is the session's source of truth, as a world server would be, but named and
   // marked as a replay: device "replay" tells it from a live server. Recorded members are not
   // announced again: they are not here, and a world server must not wait for them.

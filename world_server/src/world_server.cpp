@@ -98,7 +98,7 @@ int WorldServer::Run() {
                                        static_cast<std::int64_t>(getpid()), common::UnixNowNs(),
                                        resume ? resume->session_id : 0});
   }
-  dds::Participant participant(config_.where.domain_id, config_.where.session, "world_server", config_.where.qos_file);
+  dds::Participant participant(config_.where, "world_server");
   if (log_) Say("session log " + log_->file().string() + ": session #" + std::to_string(log_->session_id()));
   if (resume) {
     Say("resuming session #" + std::to_string(resume->session_id) + ", whose server was lost " +

@@ -314,6 +314,9 @@ Participant::Participant(int domain_id, const std::string& session, const std::s
   impl_->subscriber = CheckEntity(impl_->participant->create_subscriber(sub_qos), "subscriber");
 }
 
+Participant::Participant(const common::SessionOptions& where, const std::string& name)
+    : Participant(where.domain_id, where.session, name, where.qos_file) {}
+
 Participant::~Participant() = default;
 
 std::unique_ptr<detail::UntypedWriter> Participant::CreateUntypedWriter(

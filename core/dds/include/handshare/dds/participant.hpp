@@ -12,6 +12,8 @@
 #include <stdexcept>
 #include <string>
 
+#include "handshare/common/node_main.hpp"
+
 namespace handshare::dds {
 
 class DdsError : public std::runtime_error {
@@ -119,6 +121,9 @@ class Participant {
   /// @param qos_file    XML profiles; empty: DefaultQosFile().
   Participant(int domain_id, const std::string& session, const std::string& name,
               const std::string& qos_file = "");
+  /// A node's participant from its session options (--domain, --session, --qos, and the
+  /// discovery and security options every node shares).
+  Participant(const common::SessionOptions& where, const std::string& name);
   ~Participant();
   Participant(const Participant&) = delete;
   Participant& operator=(const Participant&) = delete;
