@@ -27,6 +27,7 @@ from session_test import DATA, Failure, Harness, check
 MAX_MEAN_ABS = 2.0          # mean |difference| over all pixels and channels, of 255
 MAX_DIFFERING_SHARE = 0.01  # share of pixels whose largest channel difference exceeds 32
 MAX_MB_PER_HOUR_PER_USER = 400  # the recording's size bound stated in docs/network.md
+LIVE_FPS, REPLAY_FPS = 20, 27   # incommensurate: see where the replay spectator starts
 
 
 class RecordHarness(Harness):
@@ -84,7 +85,7 @@ def main():
         h.start("record", "session_record", "--domain", live_domain, "--session", session, "--out", recording)
         h.wait_for_line("record", "recording session", 15)
         h.start("live", "graphics_node", "--domain", live_domain, "--session", session, "--headless",
-                "--frames", 100000, "--fps", 20, "--out", os.path.join(args.work, "live"))
+                "--frames", 100000, "--fps", LIVE_FPS, "--out", os.path.join(args.work, "live"))
         h.start("world_server", "world_server", "--domain", live_domain, "--session", session, "--scene", "dinosaur")
         h.wait_for_line("world_server", "message board #1", 30)
         h.start("alice", "haptic_node", "--domain", live_domain, "--session", session, "--user", "alice",
@@ -103,8 +104,13 @@ def main():
         check(checked.returncode == 0, f"session_play --check failed: {checked.stderr}")
         print(checked.stdout.strip())
 
+        # The replay spectator draws at another, incommensurate rate (27 fps against 20 fps live).
+        # At the same rate both would sample the 100 Hz device states in a phase fixed for the
+        # whole run: at an offset near 25 ms no live frame has a replayed one within 10 ms (the
+        # runs that paired 2-4 frames instead of ~100). At 27 fps the offset sweeps through the
+        # 50 ms period, so about half of the live frames have a replayed one within 10 ms.
         h.start("replay", "graphics_node", "--domain", replay_domain, "--session", session + "-replay", "--headless",
-                "--frames", 100000, "--fps", 20, "--out", os.path.join(args.work, "replay"))
+                "--frames", 100000, "--fps", REPLAY_FPS, "--out", os.path.join(args.work, "replay"))
         h.start("play", "session_play", "--domain", replay_domain, "--session", session + "-replay",
                 "--wait-for-readers", 1, "--hold", 1, recording)
         check(h.wait("play", 120) == 0, f"session_play failed:\n{h.log('play')}")
@@ -113,9 +119,9 @@ def main():
 
         live, replay = frame_times(os.path.join(args.work, "live")), frame_times(os.path.join(args.work, "replay"))
         # Pairs: the same world and revision, and hands' device states at most one device-state
-        # period (10 ms at 100 Hz) apart. The two spectators draw at 20 fps in their own phase, so
-        # showing the very same states is luck (2 of ~270 frames on a loaded machine); a hand
-        # moves at most a few mm in 10 ms, which the pixel tolerance covers.
+        # period (10 ms at 100 Hz) apart. The two spectators draw in their own phase, so showing
+        # the very same states is luck (2 of ~270 frames on a loaded machine); a hand moves at
+        # most a few mm in 10 ms, which the pixel tolerance covers.
         def stamps(hands):
             return {u: int(t) for u, t in (h.split("@") for h in hands.split(";") if h)}
         replay_by_world = {}
