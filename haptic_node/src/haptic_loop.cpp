@@ -124,6 +124,7 @@ void HapticLoop::Step(double t_s) noexcept {
   safety_.Step(safety_in_, safety_out_);
   const bool fault = device_fault || safety_out_.any_fault;
   if (fault) faults_.fetch_add(1, std::memory_order_relaxed);
+  rate_limited_steps_.store(safety_.rate_limited_steps(), std::memory_order_relaxed);
   device_.Command(safety_out_.f_E_W);
 
   HapticSnapshot& s = snapshots_.WriteSlot();

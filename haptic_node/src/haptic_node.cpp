@@ -39,14 +39,14 @@ std::unique_ptr<Device> MakeDevice(const HapticNodeConfig& c) {
 }
 
 void PrintLoopSummary(const std::string& user, const common::LoopStats& stats, std::uint64_t faults,
-                      const HapticBridge& bridge) {
+                      std::uint64_t rate_limited_steps, const HapticBridge& bridge) {
   std::printf("[haptic_node %s] loop statistics: rate %.1f Hz, steps %llu, jitter p50 %.0f us "
               "p99 %.0f us max %.0f us, step p50 %.1f us p99 %.1f us, overruns %llu, resyncs %llu, "
-              "faults %llu, device states published %llu, control events %llu, samples dropped %s\n",
+              "faults %llu, rate-limited steps %llu, device states published %llu, control events %llu, samples dropped %s\n",
               user.c_str(), stats.rate_Hz, static_cast<unsigned long long>(stats.steps), stats.jitter.Quantile(0.5),
               stats.jitter.Quantile(0.99), stats.jitter.max_us(), stats.step.Quantile(0.5), stats.step.Quantile(0.99),
               static_cast<unsigned long long>(stats.overruns), static_cast<unsigned long long>(stats.resyncs),
-              static_cast<unsigned long long>(faults),
+              static_cast<unsigned long long>(faults), static_cast<unsigned long long>(rate_limited_steps),
               static_cast<unsigned long long>(bridge.device_states_published()),
               static_cast<unsigned long long>(bridge.control_events_sent()), bridge.dropped().Summary().c_str());
   std::fflush(stdout);
@@ -97,7 +97,7 @@ int HapticNode::Run() {
   loop.Stop();
   common::LoopStats stats;
   loop.TakeStats(stats);
-  PrintLoopSummary(config_.user, stats, loop.faults(), bridge);
+  PrintLoopSummary(config_.user, stats, loop.faults(), loop.rate_limited_steps(), bridge);
   return 0;
 }
 

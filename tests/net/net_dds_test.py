@@ -2,16 +2,21 @@
 """Smoke tests of handshare over a real (impaired) network: the executables in separate network
 namespaces, so Fast DDS talks UDP over veth and a bridge, not shared memory.
 
-usage: net_dds_test.py two_hosts --bin-dir DIR --nfq-delay PATH --domain D --work DIR
+usage: net_dds_test.py two_hosts|partitioned_user --bin-dir DIR --nfq-delay PATH --domain D --work DIR
 """
+import json
 import os
 import re
+import subprocess
 import sys
 import time
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 sys.path.insert(0, HERE)
 from netharness import Network, Failure, check, main  # noqa: E402
+
+sys.path.insert(0, os.path.join(HERE, ".."))
+import session_test  # noqa: E402  (trace and deformation-dump readers shared with the loopback tests)
 
 DATA = os.path.join(HERE, "..", "data")
 
@@ -104,5 +109,157 @@ def case_two_hosts(args):
     check(all(st and st["accepted"] > 0 for st in stats.values()), "a delayer saw no traffic")
 
 
+def loop_summary(log, user):
+    """The figures of a haptic node's exit summary (rate, jitter, overruns, faults, rate-limited steps)."""
+    m = re.search(rf"\[haptic_node {user}\] loop statistics: rate ([\d.]+) Hz, steps (\d+), jitter p50 (\d+) us "
+                  r"p99 (\d+) us max (\d+) us, step p50 [\d.]+ us p99 [\d.]+ us, overruns (\d+), resyncs (\d+), "
+                  r"faults (\d+), rate-limited steps (\d+)", log)
+    check(m is not None, f"{user}'s haptic node printed no loop summary:\n{log[-3000:]}")
+    keys = ("rate_Hz", "steps", "jitter_p50_us", "jitter_p99_us", "jitter_max_us", "overruns", "resyncs", "faults",
+            "rate_limited")
+    return {k: float(v) for k, v in zip(keys, m.groups())}
+
+
+def loop_rate(rows, t_a, t_b):
+    """The haptic loop's rate [Hz] between two times of the host's steady clock, from a trace's rows
+    (seq counts the loop's steps; stamp_ns is the step's time)."""
+    w = [r for r in rows if t_a <= r["stamp_ns"] * 1e-9 <= t_b]
+    check(len(w) > 20, f"only {len(w)} trace rows in [{t_a:.2f}, {t_b:.2f}] s")
+    return (w[-1]["seq"] - w[0]["seq"]) / ((w[-1]["stamp_ns"] - w[0]["stamp_ns"]) * 1e-9)
+
+
+def smoothness(rows, t_ref, t_a, t_b, change, fade_s=0.25):
+    """The worst step of a trace's net vertical force in [t_a, t_b) s of t_ref beyond what a fade
+    of the whole `change` over fade_s could do between those rows: (excess, step, gap)."""
+    fz = [(r["stamp_ns"] * 1e-9 - t_ref, session_test.net_fz(r)) for r in rows]
+    window = [(t, f) for t, f in fz if t_a <= t < t_b]
+    check(len(window) > 20, f"only {len(window)} trace rows in [{t_a}, {t_b}) s")
+    return max((abs(f1 - f0) - change * (t1 - t0) / fade_s, abs(f1 - f0), t1 - t0)
+               for (t0, f0), (t1, f1) in zip(window, window[1:]))
+
+
+def case_partitioned_user(args):
+    """Three hosts (world server; alice; bob), 20 ms +- 5 ms and 2 % loss on what arrives at each.
+    alice and bob press the triceratops tail together; alice's host is cut off for 3 s, then
+    healed. Asserted: the server marks alice lost within 1.5 s; bob's force moves to its
+    alone-value without a step (alice's contacts fade at his node); alice's haptic loop keeps its
+    rate through the cut and its safety never has to cut a force step (rate-limited steps 0);
+    after the heal alice is back within 1 s, once (present=2, no duplicate), with her contacts:
+    the tail's solve holds her fingertip again and bob's force returns to its shared value."""
+    os.makedirs(args.work, exist_ok=True)
+    server_exe, node_exe = exe(args.bin_dir, "world_server"), exe(args.bin_dir, "haptic_node")
+    cache = os.path.join(args.work, "cache")
+    os.environ["HANDSHARE_CACHE"] = cache
+    prep = subprocess.run([os.path.join(args.bin_dir, "core", "world", "world_prepare"), "--cache", cache,
+                           "--scenes", "dinosaur"], capture_output=True, text=True, timeout=600)
+    check(prep.returncode == 0, f"world_prepare failed: {prep.stdout}{prep.stderr}")
+    session = f"net-partition-{os.getpid()}"
+    common = ["--domain", args.domain, "--session", session]
+    dump = os.path.join(args.work, "deformation")
+    traces = {u: os.path.join(args.work, f"{u}.csv") for u in ("alice", "bob")}
+    for f in traces.values():
+        if os.path.exists(f):
+            os.remove(f)
+    with open(os.path.join(HERE, "..", "..", "assets", "scenes", "dinosaur.json")) as f:
+        p_tail = [o for o in json.load(f)["objects"] if o["id"] == "triceratops_tail"][0]["position_m"]
+    with Network(3, nfq_delay=args.nfq_delay) as net:
+        a, b, c = net.hosts
+        for seed, h in enumerate((a, b, c), start=1):
+            h.loss(2)
+            h.delay(20, jitter_ms=5, seed=seed)
+        server = a.start("world_server", [server_exe, *common, "--scene", "dinosaur", "--dump-deformation", dump,
+                                          "--deformation-threshold", "1e-6", "--duration", 120], args.work)
+        server.wait_for("models of 'dinosaur' ready", 60)
+        nodes = {}
+        for host, user in ((b, "alice"), (c, "bob")):
+            nodes[user] = host.start(user, [node_exe, *common, "--user", user, "--device", "sim", "--script",
+                                            os.path.join(DATA, f"vanish_{user}.hand"), "--trace", traces[user],
+                                            "--duration", 60], args.work)
+        alice, bob = nodes["alice"], nodes["bob"]
+        tail = session_test.PressWatch(os.path.join(dump, "triceratops_tail.json"), p_tail,
+                                       {"alice": (0.225, 0.08), "bob": (0.27, 0.08)})
+        try:
+            server.wait_for("member joined: user=alice", 30)
+            server.wait_for("member joined: user=bob", 30)
+            session_test.wait_until("the tail pressed by alice and bob, held still for 3 s", 90,
+                                    lambda: tail.still_for(3.0), tail.explain)
+            joins = server.log().count("member joined: user=alice")
+            t_cut = time.monotonic()  # the host's steady clock, which stamps both traces
+            net.isolate(b)
+            t_lost = server.wait_for("member lost: user=alice", 10)
+
+            def bob_alone():
+                held = tail.poll()
+                return held is not None and not tail.loaded_near(held, "alice") and tail.loaded_near(held, "bob")
+            session_test.wait_until("the tail loaded by bob alone", 5, bob_alone, tail.explain)
+            t_alone = time.monotonic()
+            time.sleep(max(0.0, t_cut + 3.0 - time.monotonic()))  # the partition's length, not a wait
+            t_heal = time.monotonic()
+            net.heal_all()
+            t_back = server.wait_for("member joined: user=alice", 10, count=joins + 1)
+            rejoin = re.findall(r"member joined: user=alice[^\n]*present=(\d+)", server.log())[-1]
+            session_test.wait_until("the tail pressed by both again", 10,
+                                    lambda: (held := tail.poll()) is not None and tail.loaded_near(held, "alice")
+                                    and tail.loaded_near(held, "bob"), tail.explain)
+            t_shared = time.monotonic()
+            # Both traces 2.5 s past the heal (the shared press settles), flushed row by row.
+            for user in ("alice", "bob"):
+                session_test.wait_until(f"{user}'s trace 2.5 s past the heal", 30,
+                                        lambda u=user: (rows := session_test.read_trace(traces[u]))
+                                        and rows[-1]["stamp_ns"] * 1e-9 >= t_heal + 2.6)
+            for user in ("alice", "bob"):
+                check(nodes[user].stop(timeout=30) == 0, f"{user}'s haptic node failed:\n{nodes[user].log()[-3000:]}")
+        except Failure:
+            for p in (server, alice, bob):
+                sys.stderr.write(f"----- {p.label} -----\n{p.log()[-6000:]}\n")
+            raise
+        server.stop()
+        summaries = {u: loop_summary(nodes[u].log(), u) for u in ("alice", "bob")}
+        ws_log = server.log()
+    rows = {u: session_test.read_trace(traces[u]) for u in ("alice", "bob")}
+
+    def mean_fz(user, t_a, t_b):
+        v = [session_test.net_fz(r) for r in rows[user] if t_a <= r["stamp_ns"] * 1e-9 - t_cut < t_b]
+        check(len(v) > 20, f"{user}'s trace has {len(v)} rows in [{t_a}, {t_b}) s of the cut")
+        return sum(v) / len(v)
+    heal = t_heal - t_cut
+    bob_before, bob_cut, bob_after = mean_fz("bob", -2.0, -0.2), mean_fz("bob", 2.0, 3.0), mean_fz("bob", heal + 1.5, heal + 2.5)
+    alice_before, alice_cut = mean_fz("alice", -2.0, -0.2), mean_fz("alice", 2.0, 3.0)
+    change = abs(bob_cut - bob_before)
+    worst, step, gap = smoothness(rows["bob"], t_cut, -0.5, 3.0, change)
+    a_change = abs(alice_cut - alice_before)
+    a_worst, a_step, a_gap = smoothness(rows["alice"], t_cut, -0.5, 3.0, a_change)
+    rate_cut = loop_rate(rows["alice"], t_cut + 0.2, t_heal - 0.2)
+    rate_before = loop_rate(rows["alice"], t_cut - 2.5, t_cut - 0.2)
+    print("partitioned user: server | alice | bob on three hosts, 20 ms +- 5 ms and 2 % loss on arrival at each; "
+          "alice's host cut off for 3 s while both press the tail")
+    print(f"  server: alice lost {t_lost - t_cut:.2f} s after the cut; tail loaded by bob alone "
+          f"{t_alone - t_cut:.2f} s after it; alice back {t_back - t_heal:.2f} s after the heal (present={rejoin}), "
+          f"her contacts in the tail's solve again {t_shared - t_heal:.2f} s after it")
+    print(f"  bob's force {bob_before:.4f} -> {bob_cut:.4f} N during the cut -> {bob_after:.4f} N after; steepest "
+          f"step {step:.5f} N (rows {1e3 * gap:.0f} ms apart)")
+    print(f"  alice's force {alice_before:.4f} -> {alice_cut:.4f} N during the cut; steepest step {a_step:.5f} N "
+          f"(rows {1e3 * a_gap:.0f} ms apart); loop {rate_before:.1f} Hz before, {rate_cut:.1f} Hz during the cut")
+    for u, s in summaries.items():
+        print(f"  {u}'s loop: {s['rate_Hz']:.1f} Hz, jitter p99 {s['jitter_p99_us']:.0f} us max "
+              f"{s['jitter_max_us']:.0f} us, overruns {s['overruns']:.0f}, faults {s['faults']:.0f}, "
+              f"rate-limited steps {s['rate_limited']:.0f}")
+    check(t_lost - t_cut <= 1.5, f"the server marked alice lost {t_lost - t_cut:.2f} s after the cut (> 1.5 s)")
+    check(t_back - t_heal <= 1.0, f"alice was back {t_back - t_heal:.2f} s after the heal (> 1 s)")
+    check(rejoin == "2", f"after the heal the server counts {rejoin} members present (alice and bob: 2)")
+    check(ws_log.count("member joined: user=alice") == joins + 1, "alice joined more than once after the heal")
+    check(change >= 0.01, f"alice's press did not matter to bob's fingertip ({bob_before:.4f} -> {bob_cut:.4f} N)")
+    check(worst <= 0.3 * change, f"bob's force jumped by {step:.4f} N between rows {1e3 * gap:.0f} ms apart when "
+                                 f"alice was cut off (whole change {change:.4f} N)")
+    check(a_change < 0.01 or a_worst <= 0.3 * a_change,
+          f"alice's force jumped by {a_step:.4f} N between rows {1e3 * a_gap:.0f} ms apart when she was cut off")
+    check(abs(bob_after - bob_before) <= 0.1 * change + 2e-3,
+          f"bob's force after the heal {bob_after:.4f} N is not the shared press's {bob_before:.4f} N")
+    check(rate_cut >= 0.98 * rate_before, f"alice's loop ran at {rate_cut:.1f} Hz during the cut ({rate_before:.1f} before)")
+    for u, s in summaries.items():
+        check(s["faults"] == 0, f"{u}'s haptic loop had {s['faults']:.0f} faulted steps")
+        check(s["rate_limited"] == 0, f"{u}'s force safety had to cut {s['rate_limited']:.0f} force steps")
+
+
 if __name__ == "__main__":
-    main({"two_hosts": case_two_hosts})
+    main({"two_hosts": case_two_hosts, "partitioned_user": case_partitioned_user})

@@ -49,19 +49,23 @@ ForceSafety::ForceSafety(const ForceSafetyConfig& config) : config_(config) {
 void ForceSafety::Reset() noexcept {
   fingers_ = {};
   fault_onsets_ = 0;
+  rate_limited_steps_ = 0;
 }
 
 void ForceSafety::Step(const ForceSafetyInput& in, ForceSafetyOutput& out) noexcept {
   bool onset = false;
+  bool limited = false;
   out.any_fault = false;
   for (int i = 0; i < kFingers; ++i) {
     const bool was_ok = fingers_[i].state == SafetyState::kOk;
     StepFinger(in.finger[i], in.device_fault, fingers_[i], out.f_E_W[i], out.finger[i]);
     const bool faulted = out.finger[i].fault_bits != kFaultNone;
     onset = onset || (was_ok && faulted);
+    limited = limited || out.finger[i].rate_limited;
     out.any_fault = out.any_fault || faulted;
   }
   if (onset) ++fault_onsets_;
+  if (limited) ++rate_limited_steps_;
 }
 
 void ForceSafety::StepFinger(const FingerSafetyInput& in, bool device_fault, Finger& s,
@@ -99,6 +103,7 @@ void ForceSafety::StepFinger(const FingerSafetyInput& in, bool device_fault, Fin
   status.fault_bits = bits;
   status.v_WE = v;
   status.damping_N_s_per_m = 0.0;
+  status.rate_limited = false;
 
   Eigen::Vector3d f;
   if (bits != kFaultNone) {
@@ -156,7 +161,8 @@ void ForceSafety::StepFinger(const FingerSafetyInput& in, bool device_fault, Fin
     // Stage 4b: rate bound, |f(n) - f(n-1)| <= max_rate T, last so it holds for the output.
     const Eigen::Vector3d df = f - s.f_prev;
     const double dn = df.norm();
-    if (dn > max_step_N_) f = s.f_prev + df * (max_step_N_ / dn);
+    status.rate_limited = dn > max_step_N_;
+    if (status.rate_limited) f = s.f_prev + df * (max_step_N_ / dn);
   }
 
   s.f_prev = f;

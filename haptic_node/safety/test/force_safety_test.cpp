@@ -65,6 +65,30 @@ TEST(ForceSafety, BoundsTheRateOfChange) {
   }
 }
 
+TEST(ForceSafety, CountsTheStepsTheRateBoundCuts) {
+  ForceSafetyConfig c;
+  c.max_force_rate_N_per_s = 500.0;  // 0.5 N per 1 ms step
+  ForceSafety safety(c);
+  ForceSafetyOutput out;
+  // 2.75 N asked at once: 5 steps cut to 0.5 N, then 0.25 N within the bound.
+  for (int n = 1; n <= 8; ++n) {
+    safety.Step(Uniform(Eigen::Vector3d(0, 0, 2.75), Eigen::Vector3d::Zero()), out);
+    EXPECT_EQ(out.finger[2].rate_limited, n <= 5) << "step " << n;
+  }
+  EXPECT_EQ(safety.rate_limited_steps(), 5u);  // steps, however many fingers were cut
+  // A change within the bound is not counted; a step in one finger is.
+  safety.Step(Uniform(Eigen::Vector3d(0, 0, 2.4), Eigen::Vector3d::Zero()), out);
+  EXPECT_EQ(safety.rate_limited_steps(), 5u);
+  ForceSafetyInput one = Uniform(Eigen::Vector3d(0, 0, 2.4), Eigen::Vector3d::Zero());
+  one.finger[4].f_desired_E_W = Eigen::Vector3d(0, 0, 0.4);
+  safety.Step(one, out);
+  EXPECT_TRUE(out.finger[4].rate_limited);
+  EXPECT_FALSE(out.finger[0].rate_limited);
+  EXPECT_EQ(safety.rate_limited_steps(), 6u);
+  safety.Reset();
+  EXPECT_EQ(safety.rate_limited_steps(), 0u);
+}
+
 TEST(ForceSafety, FaultMidContactRampsToZeroWithinTheRampTimeThenRampsBackByTheRateBound) {
   ForceSafetyConfig c;
   c.period = std::chrono::duration<double>(1e-3);

@@ -98,6 +98,9 @@ class HapticLoop {
   /// Bridge side: loop statistics, refreshed about 10 times a second by the haptic thread.
   bool TakeStats(common::LoopStats& out) noexcept { return stats_.Read(out); }
   std::uint64_t faults() const noexcept { return faults_.load(std::memory_order_relaxed); }
+  /// Steps in which the safety's rate bound cut a finger's force change (a step in what the
+  /// world renders: a peer's contact appearing or vanishing at once, a body thrown).
+  std::uint64_t rate_limited_steps() const noexcept { return rate_limited_steps_.load(std::memory_order_relaxed); }
 
  private:
   void ThreadMain();
@@ -135,6 +138,7 @@ class HapticLoop {
   common::TripleBuffer<common::LoopStats>& stats_ = *stats_holder_;
   std::atomic<bool> running_{false};
   std::atomic<std::uint64_t> faults_{0};
+  std::atomic<std::uint64_t> rate_limited_steps_{0};
   std::thread thread_;
 };
 

@@ -78,6 +78,9 @@ struct FingerSafetyStatus {
   double observed_energy_J = 0.0;
   double damping_N_s_per_m = 0.0;           // passivity controller's alpha, this step
   Eigen::Vector3d v_WE = Eigen::Vector3d::Zero();  // backward-difference velocity [m/s]
+  /// The rate bound cut this step's change: the force asked for moved faster than
+  /// max_force_rate_N_per_s (a step in what the world renders, or the ramp back after a fault).
+  bool rate_limited = false;
 };
 
 struct ForceSafetyOutput {
@@ -100,6 +103,8 @@ class ForceSafety {
   const ForceSafetyConfig& config() const noexcept { return config_; }
   /// Steps that began a fault (any finger), since construction.
   std::uint64_t fault_onsets() const noexcept { return fault_onsets_; }
+  /// Steps in which the rate bound cut any finger's change, since construction.
+  std::uint64_t rate_limited_steps() const noexcept { return rate_limited_steps_; }
 
  private:
   struct Finger {
@@ -120,6 +125,7 @@ class ForceSafety {
   int ramp_steps_;     // ceil(fault_ramp_time / period)
   std::array<Finger, kFingers> fingers_{};
   std::uint64_t fault_onsets_ = 0;
+  std::uint64_t rate_limited_steps_ = 0;
 };
 
 }  // namespace handshare::haptic
