@@ -272,6 +272,54 @@ def check_frames(frames_dir, expected_users):
     return checked
 
 
+def check_hands_in_last_frame(frames_dir, traces):
+    """The last frame shows each user's five fingertips at a pose that user's haptic node traced
+    (the hand held still while the spectator stopped), each in its colour within its projected
+    disc. Hands side by side hide parts of each other's fingertips (bob's thumb in front of
+    alice's ring finger on the tail), so a fingertip counts as shown when at least 5 pixels of
+    its disc have its colour, not only its centre pixel. Returns the fingertips checked."""
+    from PIL import Image
+
+    with open(os.path.join(frames_dir, "camera.json")) as f:
+        camera = json.load(f)
+    pngs = sorted(glob.glob(os.path.join(frames_dir, "frame_*.png")))
+    check(pngs, f"no frames written in {frames_dir}")
+    frame_no = int(os.path.basename(pngs[-1])[6:11])
+    image = Image.open(pngs[-1]).convert("RGB")
+    drawn = {}
+    with open(os.path.join(frames_dir, "frames.csv")) as f:
+        next(f)
+        for line in f:
+            frame, _, user, finger, x, y, z, radius = line.strip().split(",")
+            if int(frame) == frame_no:
+                drawn.setdefault(user, {})[int(finger)] = ([float(x), float(y), float(z)], float(radius))
+    checked = 0
+    for user, trace in traces.items():
+        check(len(drawn.get(user, {})) == 5, f"frame {frame_no} shows {len(drawn.get(user, {}))} of {user}'s fingers")
+        want = [drawn[user][i][0] for i in range(5)]
+        rows = read_trace(trace)
+        check(any(all(abs(r[f"{a}{i}"] - want[i][k]) < 1e-6 for i in range(5) for k, a in enumerate("xyz"))
+                  for r in rows),
+              f"{user}'s fingertips in frame {frame_no} ({want}) are at no pose of {user}'s trace")
+        for i, (p, radius) in enumerate(drawn[user][k] for k in range(5)):
+            col, row, depth, focal_px = project(camera, p)
+            r_px = radius * focal_px / depth
+            check(r_px >= 2.0, f"{user} finger {i}: {r_px:.1f} px is too small to check")
+            inside = [(x, y) for x in range(int(col - r_px), int(col + r_px) + 1)
+                      for y in range(int(row - r_px), int(row + r_px) + 1)
+                      if (x - col) ** 2 + (y - row) ** 2 <= (0.9 * r_px) ** 2
+                      and 0 <= x < image.size[0] and 0 <= y < image.size[1]]
+            lit = sum(1 for xy in inside if colour_matches(image.getpixel(xy), FINGER_RGB[i]))
+            check(lit >= 5, f"{user} finger {i} at pixel ({col:.1f}, {row:.1f}): {lit} of {len(inside)} pixels of its "
+                            f"disc have its colour {FINGER_RGB[i]} in {pngs[-1]}")
+            # Negative control: well outside the sphere the colour is not the fingertip's.
+            away = image.getpixel((int(col), int(row - 3.5 * r_px)))
+            check(not colour_matches(away, FINGER_RGB[i]),
+                  f"{user} finger {i}: colour {away} also found 3.5 radii above the fingertip")
+            checked += 1
+    return checked
+
+
 def check_speech(wav_path):
     """Non-silent speech: long enough, loud enough, with voiced stretches and pauses."""
     with wave.open(wav_path) as w:
@@ -437,20 +485,31 @@ def case_bad_input(h, domain):
     print("bad input: clear messages and non-zero exits")
 
 
+def net_jz(row):
+    """Net vertical impulse the five fingertips' commanded forces have delivered since the loop
+    started [N s] (the haptic loop sums every step's force times the time it was held)."""
+    return sum(row[f"jz{i}"] for i in range(5))
+
+
 def held_weights(trace_path, min_weight_N, hold_s=2.9, window_s=2.0):
     """The holds of an object in a trace: for each still run of at least hold_s in which the
-    hand holds more than min_weight_N, (t0, t1, mean weight [N] over its last window_s)."""
+    hand holds more than min_weight_N, (t0, t1, mean weight [N] over its last window_s).
+
+    The mean is the impulse over the window divided by its length: every haptic step's force,
+    not the bridge's ~100 Hz samples of it. A held ball jiggles in the grip (+-20% at the
+    fingertips on a loaded machine), and the mean of 200 samples of that missed m g by 2% in
+    3 of 20 loaded runs, while the impulse is m g + m dv/T whatever the sampling."""
     rows = read_trace(trace_path)
     holds = []
     for first, last in still_runs(rows):
         t_end = rows[last]["t_s"]
         if t_end - rows[first]["t_s"] < hold_s:
             continue
-        weights = [-net_fz(r) for r in rows[first:last + 1] if r["t_s"] >= t_end - window_s]
-        check(len(weights) > 50, f"trace {trace_path} has only {len(weights)} samples in [{t_end - window_s}, {t_end}] s")
-        mean = sum(weights) / len(weights)
+        window = [r for r in rows[first:last + 1] if r["t_s"] >= t_end - window_s]
+        check(len(window) > 50, f"trace {trace_path} has only {len(window)} samples in [{t_end - window_s}, {t_end}] s")
+        mean = -(net_jz(window[-1]) - net_jz(window[0])) / (window[-1]["t_s"] - window[0]["t_s"])
         if mean > min_weight_N:
-            holds.append((t_end - window_s, t_end, mean))
+            holds.append((window[0]["t_s"], t_end, mean))
     return holds
 
 
@@ -538,6 +597,7 @@ def case_encyclopedia(h, domain):
     check(prep.returncode == 0, f"world_prepare failed: {prep.stdout}{prep.stderr}")
     log_db = os.path.join(h.work, "session.db")
     trace = os.path.join(h.work, "alice.csv")
+    bob_trace = os.path.join(h.work, "bob.csv")
     dump = os.path.join(h.work, "deformation")
     received_file = os.path.join(h.work, "received_deformation.json")
     h.start("world_server", "world_server", "--domain", domain, "--session", session,
@@ -546,10 +606,16 @@ def case_encyclopedia(h, domain):
     h.start("spectator", "graphics_node", "--domain", domain, "--session", session, "--headless",
             "--frames", 100000, "--fps", 2, "--out", os.path.join(h.work, "frames"),
             "--deformation-out", received_file)
+    h.start("audio_guide", "audio_guide", "--domain", domain, "--session", session,
+            "--out", os.path.join(h.work, "speech"))
+    # The guide is in the room before the tour starts: it speaks the board it finds (the
+    # start menu's, transient-local) and every one after it. (One that joins later speaks the
+    # current board only: keep-last 1.)
+    h.wait_for_line("world_server", "member joined: user=audio-", 60)
     h.start("alice", "haptic_node", "--domain", domain, "--session", session, "--user", "alice",
             "--script", os.path.join(SCRIPTS, "tour_alice.hand"), "--trace", trace)
     h.start("bob", "haptic_node", "--domain", domain, "--session", session, "--user", "bob",
-            "--script", os.path.join(SCRIPTS, "tour_bob.hand"))
+            "--script", os.path.join(SCRIPTS, "tour_bob.hand"), "--trace", bob_trace)
     # The scripts await the first world, and after each control that opens a world, that world
     # (await_world NAME): the tour goes at the pace the session allows. Follow it in the
     # world server's log.
@@ -573,6 +639,8 @@ def case_encyclopedia(h, domain):
     held = wait_until("the tail pressed by alice and bob, held still for 2.5 s", 90,
                       lambda: pressed.still_for(2.5), pressed.explain)
     check(h.stop("spectator", 20) == 0, "the spectator did not end cleanly")
+    # Its last frame shows both hands pressing the tail.
+    fingertips = check_hands_in_last_frame(os.path.join(h.work, "frames"), {"alice": trace, "bob": bob_trace})
     for step in ("control arrow_next by alice: scene 'microscopic'", "control arrow_start by alice: scene 'start_menu'"):
         h.wait_for_line("world_server", step, 90)
     for user in ("alice", "bob"):
@@ -581,7 +649,17 @@ def case_encyclopedia(h, domain):
     check(h.stop("bob", 30) == 0, "bob's haptic node failed")
     for user in ("alice", "bob"):
         h.wait_for_line("world_server", f"member left: user={user}", 10)
+    # The audio guide spoke every board of the tour: one per world (the start menu twice) and
+    # the one after the gravity change.
+    boards = h.log("world_server").count("message board #")
+    h.wait_for_line("audio_guide", f"message #{boards} (", 60)
+    check(h.stop("audio_guide", 30) == 0, "audio_guide failed")
     check(h.stop("world_server", 30) == 0, "world_server failed")
+    wavs = sorted(glob.glob(os.path.join(h.work, "speech", "*.wav")))
+    check(len(wavs) == boards, f"{boards} board messages, {len(wavs)} WAV files: {wavs}")
+    speech_s = sum(check_speech(w)[0] for w in wavs)
+    print(f"spectator: both hands in its last frame ({fingertips} fingertips checked); audio guide: {len(wavs)} "
+          f"messages spoken, {speech_s:.1f} s of speech")
     ws = h.log("world_server")
     for needle in ("control button_solar_system by alice: scene 'solar_system'", "gravity -3.71 m/s^2",
                    "control arrow_next by alice: scene 'dinosaur'", "control arrow_next by alice: scene 'microscopic'",

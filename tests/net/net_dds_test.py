@@ -2,7 +2,7 @@
 """Smoke tests of handshare over a real (impaired) network: the executables in separate network
 namespaces, so Fast DDS talks UDP over veth and a bridge, not shared memory.
 
-usage: net_dds_test.py two_hosts|partitioned_user --bin-dir DIR --nfq-delay PATH --domain D --work DIR
+usage: net_dds_test.py two_hosts|partitioned_user|tour --bin-dir DIR --nfq-delay PATH --domain D --work DIR
 """
 import json
 import os
@@ -261,5 +261,62 @@ def case_partitioned_user(args):
         check(s["rate_limited"] == 0, f"{u}'s force safety had to cut {s['rate_limited']:.0f} force steps")
 
 
+class NetHarness(session_test.Harness):
+    """session_test's Harness with each process in the network namespace of its host: a
+    loopback case runs unchanged across hosts (labels not in `hosts_by_label` run in the first)."""
+
+    def __init__(self, bin_dir, work, hosts_by_label, default_host):
+        super().__init__(bin_dir, work)
+        self.hosts_by_label, self.default_host = hosts_by_label, default_host
+
+    def start(self, label, name, *args):
+        host = self.hosts_by_label.get(label, self.default_host)
+        log = open(os.path.join(self.work, label + ".log"), "w")
+        if "--duration" not in args:
+            args = (*args, "--duration", session_test.BACKSTOP_S)
+        proc = subprocess.Popen(["ip", "netns", "exec", host.ns, self.exe(name), *map(str, args)], stdout=log,
+                                stderr=subprocess.STDOUT)
+        self.procs[label] = (proc, log)
+        return proc
+
+
+def case_tour(args):
+    """The encyclopedia tour (session_test.py's case, with the same assertions: Moon and Mars
+    weights, the jointly pressed tail against fem_solve, both hands in the spectator's frames,
+    every board message spoken) with the world server, alice, bob, the spectator and the audio
+    guide on five hosts, 20 ms +- 5 ms one-way delay and 2 % loss on what arrives at each."""
+    os.makedirs(args.work, exist_ok=True)
+    for entry in os.listdir(args.work):  # a rerun starts clean; the FEM model cache stays
+        if entry != "cache":
+            path = os.path.join(args.work, entry)
+            subprocess.run(["rm", "-rf", path], check=True)
+    labels = ("world_server", "alice", "bob", "spectator", "audio_guide")
+    with Network(5, nfq_delay=args.nfq_delay) as net:
+        for seed, host in enumerate(net.hosts, start=1):
+            host.loss(2)
+            host.delay(20, jitter_ms=5, seed=seed)
+        h = NetHarness(args.bin_dir, args.work, dict(zip(labels, net.hosts)), net.hosts[0])
+        t0 = time.monotonic()
+        try:
+            session_test.case_encyclopedia(h, args.domain)
+        except Failure:
+            h.dump_logs()
+            raise
+        except session_test.Failure as e:
+            h.dump_logs()
+            raise Failure(str(e))
+        finally:
+            h.cleanup()
+        took = time.monotonic() - t0
+        counters = {label: host.counters() for label, host in zip(labels, net.hosts)}
+        delays = {label: host.clear_delay() for label, host in zip(labels, net.hosts)}
+    print(f"tour across five hosts ({', '.join(labels)}), 20 ms +- 5 ms and 2 % loss on arrival at each: "
+          f"completed in {took:.1f} s")
+    for label in labels:
+        raw = delays[label] and delays[label].get("raw")
+        print(f"  {label}: UDP datagrams arrived {counters[label]['udp_in']} "
+              f"({counters[label]['udp_in_mcast']} multicast); delayer {raw}")
+
+
 if __name__ == "__main__":
-    main({"two_hosts": case_two_hosts, "partitioned_user": case_partitioned_user})
+    main({"two_hosts": case_two_hosts, "partitioned_user": case_partitioned_user, "tour": case_tour})
