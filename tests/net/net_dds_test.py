@@ -145,7 +145,8 @@ def case_partitioned_user(args):
     alone-value without a step (alice's contacts fade at his node); alice's haptic loop keeps its
     rate through the cut and its safety never has to cut a force step (rate-limited steps 0);
     after the heal alice is back within 1 s, once (present=2, no duplicate), with her contacts:
-    the tail's solve holds her fingertip again and bob's force returns to its shared value."""
+    the tail's solve holds her fingertip again and bob's force returns to its shared value; a
+    control event she sends afterwards (a reliable sample of her re-matched writer) is applied."""
     os.makedirs(args.work, exist_ok=True)
     server_exe, node_exe = exe(args.bin_dir, "world_server"), exe(args.bin_dir, "haptic_node")
     cache = os.path.join(args.work, "cache")
@@ -173,8 +174,9 @@ def case_partitioned_user(args):
         nodes = {}
         for host, user in ((b, "alice"), (c, "bob")):
             nodes[user] = host.start(user, [node_exe, *common, "--user", user, "--device", "sim", "--script",
-                                            os.path.join(DATA, f"vanish_{user}.hand"), "--trace", traces[user],
-                                            "--duration", 60], args.work)
+                                            os.path.join(DATA, "partition_alice.hand" if user == "alice"
+                                                         else "vanish_bob.hand"),
+                                            "--trace", traces[user], "--duration", 90], args.work)
         alice, bob = nodes["alice"], nodes["bob"]
         tail = session_test.PressWatch(os.path.join(dump, "triceratops_tail.json"), p_tail,
                                        {"alice": (0.225, 0.08), "bob": (0.27, 0.08)})
@@ -207,6 +209,10 @@ def case_partitioned_user(args):
                 session_test.wait_until(f"{user}'s trace 2.5 s past the heal", 30,
                                         lambda u=user: (rows := session_test.read_trace(traces[u]))
                                         and rows[-1]["stamp_ns"] * 1e-9 >= t_heal + 2.6)
+            # A reliable sample from alice's writer after the partition: her script presses the
+            # arrow to the microscopic world 30 s after her press began.
+            t_sent = alice.wait_for("control arrow_next: PRESSED", 60)
+            t_applied = server.wait_for("control arrow_next by alice: scene 'microscopic'", 30)
             for user in ("alice", "bob"):
                 check(nodes[user].stop(timeout=30) == 0, f"{user}'s haptic node failed:\n{nodes[user].log()[-3000:]}")
         except Failure:
@@ -236,6 +242,8 @@ def case_partitioned_user(args):
     print(f"  server: alice lost {t_lost - t_cut:.2f} s after the cut; tail loaded by bob alone "
           f"{t_alone - t_cut:.2f} s after it; alice back {t_back - t_heal:.2f} s after the heal (present={rejoin}), "
           f"her contacts in the tail's solve again {t_shared - t_heal:.2f} s after it")
+    print(f"  alice's control event {t_sent - t_heal:.1f} s after the heal (a reliable sample of her re-matched "
+          f"writer): applied by the server {1e3 * (t_applied - t_sent):.0f} ms after her node sent it")
     print(f"  bob's force {bob_before:.4f} -> {bob_cut:.4f} N during the cut -> {bob_after:.4f} N after; steepest "
           f"step {step:.5f} N (rows {1e3 * gap:.0f} ms apart)")
     print(f"  alice's force {alice_before:.4f} -> {alice_cut:.4f} N during the cut; steepest step {a_step:.5f} N "
