@@ -112,7 +112,7 @@ def case_unicast_peers(args):
     os.makedirs(args.work, exist_ok=True)
     server_exe, node_exe = exe(args.bin_dir, "world_server"), exe(args.bin_dir, "haptic_node")
     # A bad peer is an option error naming the value (exit 2), before any DDS entity exists.
-    bad = subprocess.run([node_exe, "--session", "x", "--peers", "10.0.0.1:99999"], capture_output=True, text=True,
+    bad = subprocess.run([node_exe, "--session", "x", "--user", "x", "--peers", "10.0.0.1:99999"], capture_output=True, text=True,
                          timeout=30)
     check(bad.returncode == 2 and "'10.0.0.1:99999': port 99999 is not in 1..65535" in bad.stderr,
           f"bad --peers: rc {bad.returncode}, stderr {bad.stderr!r}")
@@ -158,6 +158,7 @@ def case_unicast_peers(args):
         try:
             t_join = server.wait_for("member joined: user=alice", 30)
             t_scene = node.wait_for(re.compile(r"scene 'start_menu' revision \d+"), 30)
+            t_stop = time.monotonic()
             node.stop()
             t_left = server.wait_for("member left: user=alice", 10)
         except Failure:
@@ -172,7 +173,7 @@ def case_unicast_peers(args):
     print(f"no multicast ({a.addr} server, {b.addr} haptic node; nft drops 224.0.0.0/4 arriving at both):")
     print(f"  without --peers: no match in {t_neg:.1f} s; multicast datagrams dropped on arrival: {mcast_dropped}")
     print(f"  with --peers: member joined {t_join - t0:.2f} s after start, scene at the node {t_scene - t0:.2f} s, "
-          f"member left {t_left - t_join:.2f} s after joining (clean leave over unicast)")
+          f"member left {t_left - t_stop:.2f} s after SIGTERM to the node (clean leave over unicast)")
     print(f"  UDP datagrams that arrived in the --peers run: unicast {unicast}, multicast (dropped) {mcast}")
     check(all(n > 0 for n in unicast.values()), f"no unicast UDP arrived at a host: {unicast}")
 
