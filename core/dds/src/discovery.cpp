@@ -91,16 +91,23 @@ void ConfigureDiscovery(const common::SessionOptions& where, fdds::DomainPartici
   // Initial peers replace the multicast announcement (Fast DDS keeps listening on the group):
   // this host's other participants are reached on the loopback, the peers on their addresses.
   auto& initial = qos.wire_protocol().builtin.initialPeersList;
+  const auto add = [&](const std::string& ipv4, int port) {  // once each (a peer may be listed twice)
+    const Locator_t l = Udp(ipv4, port);
+    for (const Locator_t& known : initial) {
+      if (known == l) return;
+    }
+    initial.push_back(l);
+  };
   const auto add_host = [&](const std::string& ipv4) {
     for (int id = 0; id < kPeerParticipantIds; ++id) {
       const int port = MetatrafficPort(ports, where.domain_id, id);
-      if (port <= 65535) initial.push_back(Udp(ipv4, port));
+      if (port <= 65535) add(ipv4, port);
     }
   };
   add_host("127.0.0.1");
   for (const common::Peer& peer : where.peers) {
     if (peer.port != 0) {
-      initial.push_back(Udp(peer.ipv4, peer.port));
+      add(peer.ipv4, peer.port);
     } else {
       add_host(peer.ipv4);
     }
