@@ -8,6 +8,7 @@
 #include <iomanip>
 #include <iostream>
 #include <map>
+#include <optional>
 #include <set>
 #include <sstream>
 #include <thread>
@@ -291,6 +292,22 @@ int Spectator::Run() {
     times << "frame,file,scene,revision,hands\n";
   }
 
+  // The renderer before joining: OpenGL's start-up (3.8 s once on a loaded machine) would
+  // otherwise hold up the first look at what a late joiner is sent.
+  std::optional<render::OffscreenRenderer> offscreen;
+  std::optional<render::WindowRenderer> window_renderer;
+  if (config_.headless) {
+    offscreen.emplace();
+  } else {
+    render::WindowRenderer::Options options;
+    options.title = "handshare - " + config_.where.session;
+    options.width_px = config_.width_px;
+    options.height_px = config_.height_px;
+    options.stereo = ToRender(config_.stereo);
+    options.fullscreen = config_.fullscreen;
+    window_renderer.emplace(options);
+  }
+
   dds::Participant participant(config_.where, name);
   // The readers first: the server re-sends body poses (best-effort) when it sees the member
   // join, and a reader created after the announcement could miss them.
@@ -309,7 +326,7 @@ int Spectator::Run() {
   const auto period = std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(1.0 / config_.fps));
 
   if (config_.headless) {
-    render::OffscreenRenderer renderer;
+    render::OffscreenRenderer& renderer = *offscreen;
     // Late joiner: the scene arrives transient-local within discovery time; do not draw an
     // empty world unless it never comes.
     while (!world.has_scene() && Clock::now() - start < config_.wait_for_scene && !common::ShutdownRequested()) {
@@ -349,13 +366,7 @@ int Spectator::Run() {
     return 0;
   }
 
-  render::WindowRenderer::Options options;
-  options.title = "handshare - " + config_.where.session;
-  options.width_px = config_.width_px;
-  options.height_px = config_.height_px;
-  options.stereo = ToRender(config_.stereo);
-  options.fullscreen = config_.fullscreen;
-  render::WindowRenderer window(options);
+  render::WindowRenderer& window = *window_renderer;
   auto next = Clock::now();
   while (!window.ShouldClose() && !common::ShutdownRequested()) {
     if (config_.where.duration.count() > 0 && Clock::now() - start >= config_.where.duration) break;
