@@ -2,7 +2,8 @@
 """Smoke tests of handshare over a real (impaired) network: the executables in separate network
 namespaces, so Fast DDS talks UDP over veth and a bridge, not shared memory.
 
-usage: net_dds_test.py two_hosts|unicast_peers --bin-dir DIR --nfq-delay PATH --domain D --work DIR
+usage: net_dds_test.py two_hosts|unicast_peers|late_joiners_unicast --bin-dir DIR --nfq-delay PATH --domain D
+                      --work DIR
 """
 import os
 import re
@@ -178,5 +179,66 @@ def case_unicast_peers(args):
     check(all(n > 0 for n in unicast.values()), f"no unicast UDP arrived at a host: {unicast}")
 
 
+class HostsHarness:
+    """session_test.Harness's interface over netharness hosts: each label runs on the host
+    `placement` gives it, with --peers listing every other host (multicast is dropped)."""
+
+    def __init__(self, net, bin_dir, work, placement):
+        self.net, self.bin_dir, self.work, self.placement = net, bin_dir, work, placement
+        self.procs = {}
+
+    def start(self, label, name, *args):
+        host = self.placement[label]
+        peers = ",".join(h.addr for h in self.net.hosts if h is not host)
+        if "--duration" not in args:
+            args = (*args, "--duration", 900)  # a backstop; the test ends each node
+        self.procs[label] = host.start(label, [exe(self.bin_dir, name), *args, "--peers", peers], self.work)
+        return self.procs[label]
+
+    def wait_for_line(self, label, text, timeout):
+        return self.procs[label].wait_for(text, timeout)
+
+    def log(self, label):
+        return self.procs[label].log()
+
+    def stop(self, label, timeout):
+        return self.procs[label].stop(timeout=timeout)
+
+
+def case_late_joiners_unicast(args):
+    """tests/late_join_test.py's late joiners across a network without multicast: the world
+    server on one host, the scripted hand on another, the late spectator and audio guide on a
+    third; every node with --peers, multicast dropped on arrival at every host, 10 ms +- 2 ms
+    and 1 % loss on what arrives at each host."""
+    sys.path.insert(0, os.path.join(HERE, ".."))
+    import late_join_test  # noqa: E402
+    os.makedirs(args.work, exist_ok=True)
+    for entry in os.listdir(args.work):  # a rerun starts clean (the waits read files); the cache stays
+        if entry != "cache":
+            path = os.path.join(args.work, entry)
+            subprocess.run(["rm", "-rf", path], check=True)
+    with Network(3, nfq_delay=args.nfq_delay) as net:
+        a, b, c = net.hosts
+        for seed, h in enumerate(net.hosts, start=1):
+            h.drop_multicast()
+            h.loss(1)
+            h.delay(10, jitter_ms=2, seed=seed)
+        h = HostsHarness(net, args.bin_dir, args.work,
+                         {"world_server": a, "alice": b, "spectator": c, "audio_guide": c})
+        try:
+            late_join_test.case_late_joiners(h, args.domain)
+        except (Failure, late_join_test.Failure) as e:  # the harness's, or session_test's checks'
+            for label in h.procs:
+                sys.stderr.write(f"----- {label} -----\n{h.log(label)}\n")
+            raise Failure(str(e))
+        c_in = c.counters()
+        stats = {x.ns: x.clear_delay() for x in net.hosts}
+    print(f"  (hosts: server {a.addr}, hand {b.addr}, late joiners {c.addr}; UDP arriving at the late joiners' host: "
+          f"{c_in['udp_in']} datagrams, {c_in['udp_in_mcast']} multicast, dropped)")
+    for ns, st in stats.items():
+        print(f"  delayer {ns}: {st and st.get('raw')}")
+
+
 if __name__ == "__main__":
-    main({"two_hosts": case_two_hosts, "unicast_peers": case_unicast_peers})
+    main({"two_hosts": case_two_hosts, "unicast_peers": case_unicast_peers,
+          "late_joiners_unicast": case_late_joiners_unicast})
