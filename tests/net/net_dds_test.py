@@ -2,7 +2,8 @@
 """Smoke tests of handshare over a real (impaired) network: the executables in separate network
 namespaces, so Fast DDS talks UDP over veth and a bridge, not shared memory.
 
-usage: net_dds_test.py two_hosts|partitioned_user|tour --bin-dir DIR --nfq-delay PATH --domain D --work DIR
+usage: net_dds_test.py two_hosts|partitioned_user|tour|unicast_peers|late_joiners_unicast --bin-dir DIR
+                      --nfq-delay PATH --domain D --work DIR
 """
 import json
 import os
@@ -326,5 +327,139 @@ def case_tour(args):
               f"({counters[label]['udp_in_mcast']} multicast); delayer {raw}")
 
 
+def case_unicast_peers(args):
+    """A network without multicast (nft drops every multicast datagram arriving at either host):
+    the world server and a haptic node on two hosts match with --peers (unicast discovery to the
+    listed hosts), and do not without it (the negative control)."""
+    os.makedirs(args.work, exist_ok=True)
+    server_exe, node_exe = exe(args.bin_dir, "world_server"), exe(args.bin_dir, "haptic_node")
+    # A bad peer is an option error naming the value (exit 2), before any DDS entity exists.
+    bad = subprocess.run([node_exe, "--session", "x", "--user", "x", "--peers", "10.0.0.1:99999"], capture_output=True, text=True,
+                         timeout=30)
+    check(bad.returncode == 2 and "'10.0.0.1:99999': port 99999 is not in 1..65535" in bad.stderr,
+          f"bad --peers: rc {bad.returncode}, stderr {bad.stderr!r}")
+    node_script = os.path.join(DATA, "alice.hand")
+    with Network(2, nfq_delay=args.nfq_delay) as net:
+        a, b = net.hosts
+        for h in (a, b):
+            h.drop_multicast()
+
+        def session_of(label, peers_of_server, peers_of_node):
+            session = f"net-peers-{label}-{os.getpid()}"
+            common = ["--domain", args.domain, "--session", session]
+            c0 = {h: h.counters() for h in (a, b)}
+            t0 = time.monotonic()
+            server = a.start(f"world_server_{label}", [server_exe, *common, *peers_of_server, "--duration", 60],
+                             args.work)
+            node = b.start(f"alice_{label}", [node_exe, *common, *peers_of_node, "--user", "alice", "--device", "sim",
+                                              "--script", node_script, "--duration", 45], args.work)
+            return server, node, t0, c0
+
+        # Negative control: simple discovery without --peers. Its announcements are multicast
+        # only; nothing of it arrives, so the two never match. 8 s is 10x the time they take
+        # to match with multicast across these hosts (0.6-0.8 s, net.two_hosts, with 20 ms
+        # delay and loss), and 40 announcements.
+        server, node, t0, c0 = session_of("without_peers", [], [])
+        try:
+            server.wait_for("member joined: user=alice", 8)
+            joined = True
+        except Failure:
+            joined = False
+        check(not joined, "without --peers and without multicast the server still saw alice join")
+        check("scene '" not in node.log(), "without --peers the node still received a scene")
+        mcast_dropped = {h.ns: h.counters()["udp_in_mcast"] - c0[h]["udp_in_mcast"] for h in (a, b)}
+        check(all(n > 0 for n in mcast_dropped.values()),
+              f"no multicast announcement reached a host (so none was dropped): {mcast_dropped}")
+        check(server.popen.poll() is None and node.popen.poll() is None, "a node of the negative control ended")
+        server.stop()
+        node.stop()
+        t_neg = time.monotonic() - t0
+
+        # With --peers on both: each announces to the other's host (and its own loopback).
+        server, node, t0, c0 = session_of("with_peers", ["--peers", b.addr], ["--peers", a.addr])
+        try:
+            t_join = server.wait_for("member joined: user=alice", 30)
+            t_scene = node.wait_for(re.compile(r"scene 'start_menu' revision \d+"), 30)
+            t_stop = time.monotonic()
+            node.stop()
+            t_left = server.wait_for("member left: user=alice", 10)
+        except Failure:
+            for p in (server, node):
+                sys.stderr.write(f"----- {p.label} -----\n{p.log()}\n")
+            raise
+        server.stop()
+        c1 = {h: h.counters() for h in (a, b)}
+        unicast = {h.ns: (c1[h]["udp_in"] - c1[h]["udp_in_mcast"]) - (c0[h]["udp_in"] - c0[h]["udp_in_mcast"])
+                   for h in (a, b)}
+        mcast = {h.ns: c1[h]["udp_in_mcast"] - c0[h]["udp_in_mcast"] for h in (a, b)}
+    print(f"no multicast ({a.addr} server, {b.addr} haptic node; nft drops 224.0.0.0/4 arriving at both):")
+    print(f"  without --peers: no match in {t_neg:.1f} s; multicast datagrams dropped on arrival: {mcast_dropped}")
+    print(f"  with --peers: member joined {t_join - t0:.2f} s after start, scene at the node {t_scene - t0:.2f} s, "
+          f"member left {t_left - t_stop:.2f} s after SIGTERM to the node (clean leave over unicast)")
+    print(f"  UDP datagrams that arrived in the --peers run: unicast {unicast}, multicast (dropped) {mcast}")
+    check(all(n > 0 for n in unicast.values()), f"no unicast UDP arrived at a host: {unicast}")
+
+
+class HostsHarness:
+    """session_test.Harness's interface over netharness hosts: each label runs on the host
+    `placement` gives it, with --peers listing every other host (multicast is dropped)."""
+
+    def __init__(self, net, bin_dir, work, placement):
+        self.net, self.bin_dir, self.work, self.placement = net, bin_dir, work, placement
+        self.procs = {}
+
+    def start(self, label, name, *args):
+        host = self.placement[label]
+        peers = ",".join(h.addr for h in self.net.hosts if h is not host)
+        if "--duration" not in args:
+            args = (*args, "--duration", 900)  # a backstop; the test ends each node
+        self.procs[label] = host.start(label, [exe(self.bin_dir, name), *args, "--peers", peers], self.work)
+        return self.procs[label]
+
+    def wait_for_line(self, label, text, timeout):
+        return self.procs[label].wait_for(text, timeout)
+
+    def log(self, label):
+        return self.procs[label].log()
+
+    def stop(self, label, timeout):
+        return self.procs[label].stop(timeout=timeout)
+
+
+def case_late_joiners_unicast(args):
+    """tests/late_join_test.py's late joiners across a network without multicast: the world
+    server on one host, the scripted hand on another, the late spectator and audio guide on a
+    third; every node with --peers, multicast dropped on arrival at every host, 10 ms +- 2 ms
+    and 1 % loss on what arrives at each host."""
+    sys.path.insert(0, os.path.join(HERE, ".."))
+    import late_join_test  # noqa: E402
+    os.makedirs(args.work, exist_ok=True)
+    for entry in os.listdir(args.work):  # a rerun starts clean (the waits read files); the cache stays
+        if entry != "cache":
+            path = os.path.join(args.work, entry)
+            subprocess.run(["rm", "-rf", path], check=True)
+    with Network(3, nfq_delay=args.nfq_delay) as net:
+        a, b, c = net.hosts
+        for seed, h in enumerate(net.hosts, start=1):
+            h.drop_multicast()
+            h.loss(1)
+            h.delay(10, jitter_ms=2, seed=seed)
+        h = HostsHarness(net, args.bin_dir, args.work,
+                         {"world_server": a, "alice": b, "spectator": c, "audio_guide": c})
+        try:
+            late_join_test.case_late_joiners(h, args.domain)
+        except (Failure, late_join_test.Failure) as e:  # the harness's, or session_test's checks'
+            for label in h.procs:
+                sys.stderr.write(f"----- {label} -----\n{h.log(label)}\n")
+            raise Failure(str(e))
+        c_in = c.counters()
+        stats = {x.ns: x.clear_delay() for x in net.hosts}
+    print(f"  (hosts: server {a.addr}, hand {b.addr}, late joiners {c.addr}; UDP arriving at the late joiners' host: "
+          f"{c_in['udp_in']} datagrams, {c_in['udp_in_mcast']} multicast, dropped)")
+    for ns, st in stats.items():
+        print(f"  delayer {ns}: {st and st.get('raw')}")
+
+
 if __name__ == "__main__":
-    main({"two_hosts": case_two_hosts, "partitioned_user": case_partitioned_user, "tour": case_tour})
+    main({"two_hosts": case_two_hosts, "partitioned_user": case_partitioned_user, "tour": case_tour,
+          "unicast_peers": case_unicast_peers, "late_joiners_unicast": case_late_joiners_unicast})

@@ -2,6 +2,7 @@
 // turned into a DdsError that names what failed.
 #include "handshare/dds/participant.hpp"
 
+#include "discovery.hpp"
 #include "handshare/common/data_dir.hpp"
 
 #include <fastdds/dds/core/condition/StatusCondition.hpp>
@@ -17,13 +18,7 @@
 #include <fastdds/dds/topic/Topic.hpp>
 #include <fastdds/dds/topic/TypeSupport.hpp>
 
-#include <arpa/inet.h>
-#include <netinet/in.h>
-#include <sys/socket.h>
-#include <unistd.h>
-
 #include <cstdlib>
-#include <random>
 #include <deque>
 #include <filesystem>
 #include <map>
@@ -248,36 +243,6 @@ class ReaderImpl final : public detail::UntypedReader {
 
 }  // namespace
 
-// RTPS well-known ports (DDSI-RTPS 9.6.1.1): metatraffic and user unicast of participant id.
-constexpr int kParticipantIds = 120;
-bool UdpPortFree(int port) {
-  const int fd = socket(AF_INET, SOCK_DGRAM, 0);
-  if (fd < 0) return false;
-  sockaddr_in a{};
-  a.sin_family = AF_INET;
-  a.sin_port = htons(static_cast<std::uint16_t>(port));
-  a.sin_addr.s_addr = htonl(INADDR_ANY);
-  const bool free = bind(fd, reinterpret_cast<sockaddr*>(&a), sizeof a) == 0;
-  close(fd);
-  return free;
-}
-
-// A participant id whose unicast ports are free, starting the search at a random id. Fast DDS
-// takes the lowest free id: a process restarted at once (a killed server, a crashed haptic
-// node) then gets the id, and the ports, of the participant it replaces, and the others,
-// who still hold that dead participant until its lease ends, took 2.2-3.6 s to match the new
-// one (0.3 s with other ports; tests/server_crash_test.py). -1 (Fast DDS picks) if none is.
-int FreshParticipantId(int domain_id) {
-  std::random_device seed;
-  const int start = static_cast<int>(seed() % kParticipantIds);
-  for (int k = 0; k < kParticipantIds; ++k) {
-    const int id = (start + k) % kParticipantIds;
-    const int metatraffic = 7400 + 250 * domain_id + 10 + 2 * id;
-    if (UdpPortFree(metatraffic) && UdpPortFree(metatraffic + 1)) return id;
-  }
-  return -1;
-}
-
 std::string DefaultQosFile() {
   if (const char* env = std::getenv("HANDSHARE_QOS_FILE"); env != nullptr && *env != '\0') {
     return env;
@@ -288,7 +253,21 @@ std::string DefaultQosFile() {
 
 Participant::Participant(int domain_id, const std::string& session, const std::string& name,
                          const std::string& qos_file)
-    : domain_id_(domain_id), session_(session), impl_(std::make_shared<detail::ParticipantImpl>()) {
+    : Participant(
+          [&] {
+            common::SessionOptions where;
+            where.domain_id = domain_id;
+            where.session = session;
+            where.qos_file = qos_file;
+            return where;
+          }(),
+          name) {}
+
+Participant::Participant(const common::SessionOptions& where, const std::string& name)
+    : domain_id_(where.domain_id), session_(where.session), impl_(std::make_shared<detail::ParticipantImpl>()) {
+  const int domain_id = where.domain_id;
+  const std::string& session = where.session;
+  const std::string& qos_file = where.qos_file;
   if (domain_id < 0 || domain_id > 232) {
     throw DdsError("DDS: domain id " + std::to_string(domain_id) + " is outside 0..232");
   }
@@ -301,7 +280,7 @@ Participant::Participant(int domain_id, const std::string& session, const std::s
   Check(factory->get_participant_qos_from_profile(kParticipantProfile, pqos),
         std::string("reading participant profile '") + kParticipantProfile + "' from " + file);
   pqos.name(name);
-  if (pqos.wire_protocol().participant_id < 0) pqos.wire_protocol().participant_id = FreshParticipantId(domain_id);
+  detail::ConfigureDiscovery(where, pqos);  // participant id, --peers (discovery.cpp)
   impl_->participant = CheckEntity(factory->create_participant(domain_id, pqos),
                                    "participant '" + name + "' on domain " +
                                        std::to_string(domain_id));
@@ -313,9 +292,6 @@ Participant::Participant(int domain_id, const std::string& session, const std::s
   sub_qos.partition().push_back(session.c_str());
   impl_->subscriber = CheckEntity(impl_->participant->create_subscriber(sub_qos), "subscriber");
 }
-
-Participant::Participant(const common::SessionOptions& where, const std::string& name)
-    : Participant(where.domain_id, where.session, name, where.qos_file) {}
 
 Participant::~Participant() = default;
 
