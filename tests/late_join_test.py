@@ -24,7 +24,7 @@ import time
 HERE = os.path.dirname(os.path.abspath(__file__))
 sys.path.insert(0, HERE)
 from session_test import (DATA, Failure, PressWatch, check, check_speech, read_json, run_cases,  # noqa: E402
-                          wait_until)
+                          fem_cache, wait_until)
 
 ASSETS = os.path.join(HERE, "..", "assets")
 BALL_DROP_M = 0.08  # the ball starts this far above its resting place
@@ -77,7 +77,7 @@ def case_late_joiners(h, domain):
     w = h.work
     assets, ball = make_assets(w)
     os.environ["HANDSHARE_ASSETS"] = assets
-    cache = os.path.join(w, "cache")
+    cache = fem_cache(w)
     os.environ["HANDSHARE_CACHE"] = cache
     prep = subprocess.run([os.path.join(h.bin_dir, "core", "world", "world_prepare"), "--cache", cache,
                            "--scenes", "dinosaur,microscopic"], capture_output=True, text=True, timeout=600)

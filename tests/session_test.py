@@ -29,6 +29,14 @@ SCRIPTS = os.path.join(HERE, "..", "haptic_node", "scripts")
 FINGER_RGB = [(1, 0, 0), (0, 1, 0), (0, 0, 1), (1, 1, 0), (0, 1, 1)]  # thumb first
 
 
+def fem_cache(work):
+    """The FEM model cache of a test: one shared by every cross-process test of a build tree
+    ($HANDSHARE_TEST_FEM_CACHE, set by tests/CMakeLists.txt: the models are computed once per
+    build, not once per test; the cache is keyed by mesh and material and safe for concurrent
+    writers), else the test's own folder."""
+    return os.environ.get("HANDSHARE_TEST_FEM_CACHE") or os.path.join(work, "cache")
+
+
 class Failure(Exception):
     pass
 
@@ -589,7 +597,7 @@ def case_encyclopedia(h, domain):
     contacts, and the spectator receives it) -> the microscopic world -> back to the start menu;
     the session log then holds every step."""
     session = f"it-encyclopedia-{os.getpid()}"  # own partition: concurrent runs on one host stay apart
-    cache = os.path.join(h.work, "cache")
+    cache = fem_cache(h.work)
     os.environ["HANDSHARE_CACHE"] = cache  # the nodes' model cache
     # The deformable worlds' models, prepared before the session (as the README advises).
     prep = subprocess.run([os.path.join(h.bin_dir, "core", "world", "world_prepare"), "--cache", cache,
@@ -746,7 +754,7 @@ def case_vanished_member(h, domain):
     dinosaur world alice and bob press the tail, alice is killed, and the force on bob's fingertip
     moves to its new value without a step (alice's contacts fade out); on the Moon alice holds the
     ball and is killed: the world server frees the ball within 2 s."""
-    cache = os.path.join(h.work, "cache")
+    cache = fem_cache(h.work)
     os.environ["HANDSHARE_CACHE"] = cache
     prep = subprocess.run([os.path.join(h.bin_dir, "core", "world", "world_prepare"), "--cache", cache,
                            "--scenes", "dinosaur"], capture_output=True, text=True, timeout=600)

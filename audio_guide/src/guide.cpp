@@ -75,6 +75,7 @@ int Guide::Run() {
     std::fflush(stdout);
   }
   std::printf("[audio_guide %s] spoke %d messages\n", name.c_str(), spoken);
+  std::printf("[audio_guide %s] %s\n", name.c_str(), participant.TrafficSummary().c_str());
   return 0;
 }
 

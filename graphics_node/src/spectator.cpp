@@ -318,6 +318,8 @@ int Spectator::Run() {
   const auto finish = [&] {
     world.Update();  // what arrived since the last frame counts too (a stop between frames)
     PrintWorldSummary(name, world.world(), world.dropped());
+    std::printf("[graphics_node %s] %s\n", name.c_str(), participant.TrafficSummary().c_str());
+    std::fflush(stdout);
     if (!config_.deformation_out.empty()) world.world().WriteDeformationJson(config_.deformation_out);
     if (!config_.state_out.empty()) world.WriteStateJson(config_.state_out);
   };

@@ -98,6 +98,7 @@ int HapticNode::Run() {
   common::LoopStats stats;
   loop.TakeStats(stats);
   PrintLoopSummary(config_.user, stats, loop.faults(), loop.rate_limited_steps(), bridge);
+  say(participant.TrafficSummary());
   return 0;
 }
 

@@ -110,6 +110,15 @@ def case_two_hosts(args):
     check(all(st and st["accepted"] > 0 for st in stats.values()), "a delayer saw no traffic")
 
 
+def traffic_lines(logs):
+    """Each process's exit line of samples written, taken and lost per topic ("traffic: ...")."""
+    out = []
+    for label, log in logs.items():
+        m = re.findall(r"traffic: [^\n]*", log)
+        out.append(f"  {label} {m[-1] if m else 'printed no traffic line'}")
+    return out
+
+
 def loop_summary(log, user):
     """The figures of a haptic node's exit summary (rate, jitter, overruns, faults, rate-limited steps)."""
     m = re.search(rf"\[haptic_node {user}\] loop statistics: rate ([\d.]+) Hz, steps (\d+), jitter p50 (\d+) us "
@@ -150,7 +159,7 @@ def case_partitioned_user(args):
     control event she sends afterwards (a reliable sample of her re-matched writer) is applied."""
     os.makedirs(args.work, exist_ok=True)
     server_exe, node_exe = exe(args.bin_dir, "world_server"), exe(args.bin_dir, "haptic_node")
-    cache = os.path.join(args.work, "cache")
+    cache = session_test.fem_cache(args.work)
     os.environ["HANDSHARE_CACHE"] = cache
     prep = subprocess.run([os.path.join(args.bin_dir, "core", "world", "world_prepare"), "--cache", cache,
                            "--scenes", "dinosaur"], capture_output=True, text=True, timeout=600)
@@ -223,6 +232,7 @@ def case_partitioned_user(args):
         server.stop()
         summaries = {u: loop_summary(nodes[u].log(), u) for u in ("alice", "bob")}
         ws_log = server.log()
+        traffic = traffic_lines({p.label: p.log() for p in (server, alice, bob)})
     rows = {u: session_test.read_trace(traces[u]) for u in ("alice", "bob")}
 
     def mean_fz(user, t_a, t_b):
@@ -249,6 +259,8 @@ def case_partitioned_user(args):
           f"step {step:.5f} N (rows {1e3 * gap:.0f} ms apart)")
     print(f"  alice's force {alice_before:.4f} -> {alice_cut:.4f} N during the cut; steepest step {a_step:.5f} N "
           f"(rows {1e3 * a_gap:.0f} ms apart); loop {rate_before:.1f} Hz before, {rate_cut:.1f} Hz during the cut")
+    print("  samples per topic (out: written, in: taken, lost: reported lost by the middleware):")
+    print("\n".join("  " + t for t in traffic))
     for u, s in summaries.items():
         print(f"  {u}'s loop: {s['rate_Hz']:.1f} Hz, jitter p99 {s['jitter_p99_us']:.0f} us max "
               f"{s['jitter_max_us']:.0f} us, overruns {s['overruns']:.0f}, faults {s['faults']:.0f}, "
@@ -317,10 +329,13 @@ def case_tour(args):
         finally:
             h.cleanup()
         took = time.monotonic() - t0
+        traffic = traffic_lines({label: h.log(label) for label in labels})
         counters = {label: host.counters() for label, host in zip(labels, net.hosts)}
         delays = {label: host.clear_delay() for label, host in zip(labels, net.hosts)}
     print(f"tour across five hosts ({', '.join(labels)}), 20 ms +- 5 ms and 2 % loss on arrival at each: "
           f"completed in {took:.1f} s")
+    print("  samples per topic (out: written, in: taken, lost: reported lost by the middleware):")
+    print("\n".join("  " + t for t in traffic))
     for label in labels:
         raw = delays[label] and delays[label].get("raw")
         print(f"  {label}: UDP datagrams arrived {counters[label]['udp_in']} "

@@ -21,6 +21,7 @@
 #include <cstdlib>
 #include <deque>
 #include <filesystem>
+#include <atomic>
 #include <map>
 #include <mutex>
 #include <set>
@@ -69,6 +70,13 @@ std::int64_t ToNs(const eprosima::fastrtps::rtps::Time_t& t) {
 }  // namespace
 
 namespace detail {
+// One topic's counters, shared by the participant and its endpoints on that topic.
+struct TrafficCounters {
+  std::atomic<std::uint64_t> written{0};
+  std::atomic<std::uint64_t> taken{0};
+  std::atomic<std::uint64_t> lost_by_gone_readers{0};  // readers deleted: their last lost count
+};
+
 class ParticipantImpl {
  public:
   fdds::DomainParticipant* participant = nullptr;
@@ -77,6 +85,15 @@ class ParticipantImpl {
   std::map<std::string, fdds::Topic*> topics;
   std::map<std::string, std::shared_ptr<void>> types;  // keeps type supports alive
   std::mutex mutex;  // topics and types are created from any thread
+  std::map<std::string, std::shared_ptr<TrafficCounters>> traffic;  // by topic, under mutex
+  std::map<fdds::DataReader*, std::string> live_readers;            // for their lost counts
+
+  std::shared_ptr<TrafficCounters> CountersFor(const std::string& topic) {
+    std::lock_guard<std::mutex> lock(mutex);
+    auto& c = traffic[topic];
+    if (!c) c = std::make_shared<TrafficCounters>();
+    return c;
+  }
 
   // Owned by shared_ptr: every writer and reader holds one, so the DDS participant is deleted
   // only after its last endpoint, whatever order the owners are destroyed in.
@@ -112,13 +129,15 @@ namespace {
 class WriterImpl final : public detail::UntypedWriter {
  public:
   WriterImpl(std::shared_ptr<detail::ParticipantImpl> owner, fdds::DataWriter* w, std::string topic)
-      : owner_(std::move(owner)), w_(w), topic_(std::move(topic)) {}
+      : owner_(std::move(owner)), w_(w), topic_(std::move(topic)), counters_(owner_->CountersFor(topic_)) {}
   ~WriterImpl() override { owner_->publisher->delete_datawriter(w_); }
   void Write(const void* sample) override {
     if (!w_->write(const_cast<void*>(sample))) throw DdsError("DDS: write on " + topic_ + " failed");
+    counters_->written.fetch_add(1, std::memory_order_relaxed);
   }
   void Dispose(const void* sample) override {
     Check(w_->dispose(const_cast<void*>(sample), fdds::HANDLE_NIL), "dispose on " + topic_);
+    counters_->written.fetch_add(1, std::memory_order_relaxed);
     // A dispose usually precedes deleting the writer: give reliable readers up to 0.5 s to
     // acknowledge it, so a clean leave is not mistaken for a lost member.
     w_->wait_for_acknowledgments(eprosima::fastrtps::Duration_t(0, 500000000));
@@ -133,6 +152,7 @@ class WriterImpl final : public detail::UntypedWriter {
   std::shared_ptr<detail::ParticipantImpl> owner_;
   fdds::DataWriter* w_;
   std::string topic_;
+  std::shared_ptr<detail::TrafficCounters> counters_;
 };
 
 // Writers that went away (unmatched: killed, lost, or deleted) or lost liveliness, and writers
@@ -173,7 +193,7 @@ class ReaderImpl final : public detail::UntypedReader {
  public:
   ReaderImpl(std::shared_ptr<detail::ParticipantImpl> owner, fdds::Topic* topic,
              const fdds::DataReaderQos& qos, std::string topic_name)
-      : owner_(std::move(owner)), topic_(std::move(topic_name)) {
+      : owner_(std::move(owner)), topic_(std::move(topic_name)), counters_(owner_->CountersFor(topic->get_name())) {
     r_ = CheckEntity(owner_->subscriber->create_datareader(
                          topic, qos, &listener_,
                          fdds::StatusMask::subscription_matched() << fdds::StatusMask::liveliness_changed()),
@@ -182,8 +202,18 @@ class ReaderImpl final : public detail::UntypedReader {
     Check(condition.set_enabled_statuses(fdds::StatusMask::data_available()),
           "status mask of " + topic_);
     Check(waitset_.attach_condition(condition), "attaching wait set of " + topic_);
+    std::lock_guard<std::mutex> lock(owner_->mutex);
+    owner_->live_readers[r_] = topic->get_name();
   }
   ~ReaderImpl() override {
+    {
+      std::lock_guard<std::mutex> lock(owner_->mutex);
+      owner_->live_readers.erase(r_);
+      fdds::SampleLostStatus lost;
+      if (r_->get_sample_lost_status(lost) == ReturnCode_t::RETCODE_OK && lost.total_count > 0) {
+        counters_->lost_by_gone_readers.fetch_add(static_cast<std::uint64_t>(lost.total_count));
+      }
+    }
     waitset_.detach_condition(r_->get_statuscondition());
     r_->set_listener(nullptr);
     owner_->subscriber->delete_datareader(r_);
@@ -197,6 +227,7 @@ class ReaderImpl final : public detail::UntypedReader {
     if (rc == ReturnCode_t::RETCODE_NO_DATA) return false;
     Check(rc, "take on " + topic_);
     meta.valid_data = info.valid_data;
+    if (info.valid_data) counters_->taken.fetch_add(1, std::memory_order_relaxed);
     switch (info.instance_state) {
       case fdds::NOT_ALIVE_DISPOSED_INSTANCE_STATE:
         meta.instance_state = InstanceState::kDisposed;
@@ -236,6 +267,7 @@ class ReaderImpl final : public detail::UntypedReader {
  private:
   std::shared_ptr<detail::ParticipantImpl> owner_;
   std::string topic_;
+  std::shared_ptr<detail::TrafficCounters> counters_;
   LostWriterListener listener_;
   fdds::DataReader* r_ = nullptr;
   fdds::WaitSet waitset_;
@@ -305,6 +337,43 @@ std::unique_ptr<detail::UntypedWriter> Participant::CreateUntypedWriter(
   fdds::DataWriter* w = CheckEntity(impl_->publisher->create_datawriter(t, qos),
                                     "writer on " + topic + " (profile " + profile + ")");
   return std::make_unique<WriterImpl>(impl_, w, topic);
+}
+
+std::vector<TopicTraffic> Participant::Traffic() const {
+  std::lock_guard<std::mutex> lock(impl_->mutex);
+  std::map<std::string, std::uint64_t> live_lost;
+  for (const auto& [reader, topic] : impl_->live_readers) {
+    fdds::SampleLostStatus lost;
+    if (reader->get_sample_lost_status(lost) == ReturnCode_t::RETCODE_OK && lost.total_count > 0) {
+      live_lost[topic] += static_cast<std::uint64_t>(lost.total_count);
+    }
+  }
+  std::vector<TopicTraffic> out;
+  for (const auto& [topic, c] : impl_->traffic) {
+    TopicTraffic t;
+    t.topic = topic;
+    t.written = c->written.load(std::memory_order_relaxed);
+    t.taken = c->taken.load(std::memory_order_relaxed);
+    t.lost = c->lost_by_gone_readers.load() + live_lost[topic];
+    out.push_back(std::move(t));
+  }
+  return out;
+}
+
+std::string Participant::TrafficSummary() const {
+  std::string line = "traffic:";
+  const char* sep = " ";
+  for (const TopicTraffic& t : Traffic()) {
+    if (t.written == 0 && t.taken == 0 && t.lost == 0) continue;
+    std::string name = t.topic;
+    if (name.rfind("handshare/", 0) == 0) name.erase(0, 10);
+    line += sep + name;
+    if (t.written > 0) line += " out " + std::to_string(t.written);
+    if (t.taken > 0 || t.lost > 0) line += " in " + std::to_string(t.taken);
+    if (t.lost > 0) line += " lost " + std::to_string(t.lost);
+    sep = "; ";
+  }
+  return std::string(sep) == " " ? line + " none" : line;
 }
 
 std::unique_ptr<detail::UntypedReader> Participant::CreateUntypedReader(
