@@ -121,6 +121,7 @@ void HapticBridge::ReceivePeers() {
   // A peer touching something sends its contact set at its publish rate; one silent for
   // longer has gone (or stopped touching without a last sample): its contacts fade out.
   const auto now = Clock::now();
+  const std::uint64_t now_ns = common::SteadyNowNs();
   msg::ContactSet peer;
   dds::SampleMeta meta;
   while (contact_reader_.TakeNext(peer, meta)) {
@@ -128,6 +129,9 @@ void HapticBridge::ReceivePeers() {
     const std::string bad = dds::CheckContactSet(peer, config_.where.session);
     if (dropped_.Accept("contact_set", peer.user().to_string(), bad, say_)) {
       peers_.Receive(peer, now, config_.user);
+      // The sender's write to this take, on the steady clock both share on one host (the
+      // DDS hop plus the wait for this bridge's tick): bench/net reports it.
+      if (peer.stamp_ns() <= now_ns) peer_age_.Record(1e-3 * static_cast<double>(now_ns - peer.stamp_ns()));
     }
   }
   peers_.Expire(now);

@@ -10,6 +10,7 @@
 #include <string>
 
 #include "bridge_conversions.hpp"
+#include "handshare/common/latency_histogram.hpp"
 #include "handshare/common/session_clock.hpp"
 #include "handshare/dds/messages.hpp"
 #include "handshare/haptic/haptic_loop.hpp"
@@ -37,6 +38,9 @@ class HapticBridge {
   std::uint64_t control_events_sent() const { return control_events_sent_; }
   /// Received samples refused by the checks (session/sample_checks.hpp), per topic.
   const dds::DroppedSamples& dropped() const { return dropped_; }
+  /// Age of the peers' contact sets when this bridge took them: their sender's stamp (its
+  /// steady clock: meaningful for peers on this host only) to the take.
+  const common::LatencyHistogram& peer_contact_age() const { return peer_age_; }
 
  private:
   // ---- the stages of a tick ----
@@ -90,6 +94,7 @@ class HapticBridge {
   std::uint64_t device_states_published_ = 0;
   std::uint64_t control_events_sent_ = 0;
   dds::DroppedSamples dropped_;
+  common::LatencyHistogram peer_age_;
 };
 
 }  // namespace handshare::haptic
