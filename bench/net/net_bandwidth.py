@@ -50,8 +50,8 @@ def loadavg():
 class Procs:
     """Processes with their output in files; all killed on leaving, shm leftovers cleaned."""
 
-    def __init__(self, bin_dir, work):
-        self.bin_dir, self.work, self.procs = bin_dir, work, {}
+    def __init__(self, bin_dir, work, case):
+        self.bin_dir, self.work, self.case, self.procs = bin_dir, work, case, {}
 
     def __enter__(self):
         return self
@@ -69,12 +69,15 @@ class Procs:
         path = os.path.join(self.bin_dir, exe)
         if not os.access(path, os.X_OK):
             raise Failure(f"executable not built: {path}")
-        log = open(os.path.join(self.work, label + ".log"), "w")
+        log = open(self.log_path(label), "w")
         self.procs[label] = (subprocess.Popen([path, *map(str, args)], stdout=log, stderr=subprocess.STDOUT), log)
+
+    def log_path(self, label):
+        return os.path.join(self.work, f"{self.case}_{label}.log")
 
     def log(self, label):
         self.procs[label][1].flush()
-        with open(os.path.join(self.work, label + ".log")) as f:
+        with open(self.log_path(label)) as f:
             return f.read()
 
     def wait_for_line(self, label, text, timeout):
@@ -248,7 +251,7 @@ def main(argv=None):
         for case in cases:
             session = f"net-bandwidth-{case}-{os.getpid()}"
             load_before = loadavg()
-            with Procs(args.bin_dir, work) as p:
+            with Procs(args.bin_dir, work, case) as p:
                 rec, notes = (run_tour if case == "tour" else run_press)(p, args.domain, session, work)
             seconds, rows = analyse(case, rec)
             lines.append(f"# {case}: {seconds:.1f} s window; load before {load_before}, after {loadavg()}")

@@ -36,6 +36,8 @@
 //             --count N --rate HZ --out FILE
 //     one end (what --csv runs, in a namespace for netns).
 #include <fcntl.h>
+#include <pthread.h>
+#include <sched.h>
 #include <signal.h>
 #include <spawn.h>
 #include <sys/wait.h>
@@ -219,6 +221,14 @@ struct Stamped {
   std::int64_t bridge_ns = 0;  // receiver: when its bridge took it
 };
 
+// The emulated haptic thread runs as HapticLoop's does: SCHED_FIFO at half the maximum
+// priority when permitted. Returns whether it was.
+bool HapticPriority() {
+  sched_param param{};
+  param.sched_priority = sched_get_priority_max(SCHED_FIFO) / 2;
+  return pthread_setschedparam(pthread_self(), SCHED_FIFO, &param) == 0;
+}
+
 // The first deadline of a grid of `period` at or after t, plus phase.
 std::int64_t OnGrid(std::int64_t t, std::int64_t period, std::int64_t phase) {
   return (t / period + 1) * period + phase;
@@ -235,7 +245,9 @@ int RunNodeWriter(const Options& o) {
   WaitForReader(w);
   common::TripleBuffer<Stamped> to_bridge;
   std::atomic<bool> stop{false};
+  std::atomic<bool> realtime{false};
   std::thread haptic([&] {
+    realtime = HapticPriority();
     std::int64_t next = OnGrid(Now(), kHapticPeriodNs, 0);
     for (std::int64_t k = 0; !stop.load(std::memory_order_relaxed); ++k) {
       SleepUntilNs(next);
@@ -264,6 +276,7 @@ int RunNodeWriter(const Options& o) {
   }
   stop = true;
   haptic.join();
+  out << "realtime " << (realtime ? 1 : 0) << "\n";
   for (const auto& r : rows) out << "p " << r[0] << ' ' << r[1] << ' ' << r[2] << "\n";
   std::this_thread::sleep_for(std::chrono::milliseconds(500));
   return 0;
@@ -282,7 +295,9 @@ int RunNodeReader(const Options& o) {
   std::atomic<bool> stop{false};
   std::vector<std::array<std::int64_t, 4>> rows;
   rows.reserve(static_cast<std::size_t>(o.node_count + kWarmup));
+  std::atomic<bool> realtime{false};
   std::thread haptic([&] {
+    realtime = HapticPriority();
     std::int64_t next = OnGrid(Now(), kHapticPeriodNs, 0);
     Stamped in;
     std::int64_t seen = -1;
@@ -325,6 +340,7 @@ int RunNodeReader(const Options& o) {
   std::this_thread::sleep_for(std::chrono::milliseconds(5));  // the last one reaches the loop
   stop = true;
   haptic.join();
+  out << "realtime " << (realtime ? 1 : 0) << "\n";
   for (const auto& x : rows) out << "h " << x[0] << ' ' << x[1] << ' ' << x[2] << ' ' << x[3] << "\n";
   return 0;
 }
@@ -624,11 +640,14 @@ void MeasureNodePath(const Options& o, const std::string& transport, const std::
   WaitBoth({reader, writer}, logs, 60.0 + o.node_count * 0.01);
 
   std::map<std::int64_t, std::int64_t> written;  // seq -> bridge write time
+  int realtime = 0;
   for (const Row& r : ReadRows(wf)) {
     if (r.tag == "p" && r.v.at(0) >= kWarmup) written[r.v[0]] = r.v[2];
+    if (r.tag == "realtime") realtime += static_cast<int>(r.v.at(0));
   }
   std::vector<double> total, sender, hop, receiver;
   for (const Row& r : ReadRows(rf)) {
+    if (r.tag == "realtime") realtime += static_cast<int>(r.v.at(0));
     if (r.tag != "h" || r.v.at(0) < kWarmup) continue;
     const auto it = written.find(r.v[0]);
     if (it == written.end()) continue;
@@ -637,8 +656,10 @@ void MeasureNodePath(const Options& o, const std::string& transport, const std::
     hop.push_back(1e-3 * static_cast<double>(r.v[2] - it->second));
     receiver.push_back(1e-3 * static_cast<double>(r.v[3] - r.v[2]));
   }
-  std::printf("# %s node path: %zu of %zu bridge writes reached the receiver's haptic thread, load %s\n",
-              transport.c_str(), total.size(), written.size(), LoadAvg().c_str());
+  std::printf("# %s node path: %zu of %zu bridge writes reached the receiver's haptic thread; haptic threads "
+              "%s; load %s\n",
+              transport.c_str(), total.size(), written.size(),
+              realtime == 2 ? "SCHED_FIFO" : "NOT both SCHED_FIFO (no permission): normal priority", LoadAvg().c_str());
   PrintRow(transport, "node_path", total);
   PrintRow(transport, "node_sender_handoff", sender);
   PrintRow(transport, "node_dds_and_tick", hop);
