@@ -6,7 +6,9 @@
 // haptic thread).
 //
 //   net_bench --csv [--count N] [--rate HZ] [--node-count N] [--domain D] [--transports LIST]
-//             [--keep DIR]
+//             [--fifo PRIO] [--keep DIR]
+//     --fifo PRIO: both ends' processes run SCHED_FIFO at PRIO (every thread, Fast DDS's receive
+//     threads included: they inherit it), to show what scheduling does to the tail.
 //     prints transport,measure,p50_us,p99_us,max_us rows (and '#' comment lines with the load,
 //     losses and what was skipped). transport: shm | udp | netns; measure:
 //       contact_one_way      stamp before the writer's write() -> sample taken by the reader
@@ -90,6 +92,7 @@ struct Options {
   std::string keep;
   std::vector<std::string> transports = {"shm", "udp", "netns"};
   int domain = 160;
+  int fifo = 0;           // > 0: both ends run SCHED_FIFO at this priority (every thread)
   int count = 5000;       // samples measured in the contact_one_way run
   int node_count = 2000;  // bridge ticks measured in the node-shaped run
   double rate_Hz = 1000.0;
@@ -577,6 +580,7 @@ void MeasureHop(const Options& o, const std::string& transport, const std::strin
     a.insert(a.end(), {self, "--role", role, "--qos", qos, "--domain", std::to_string(domain), "--session", session,
                        "--count", std::to_string(o.count), "--node-count", std::to_string(o.node_count), "--rate",
                        std::to_string(o.rate_Hz), "--out", out});
+    if (o.fifo > 0) a.insert(a.end(), {"--fifo", std::to_string(o.fifo)});
     return a;
   };
   const std::string rf = (dir / (transport + "_reader.txt")).string(), wf = (dir / (transport + "_writer.txt")).string();
@@ -629,6 +633,7 @@ void MeasureNodePath(const Options& o, const std::string& transport, const std::
     a.insert(a.end(), {self, "--role", role, "--qos", qos, "--domain", std::to_string(domain), "--session", session,
                        "--count", std::to_string(o.count), "--node-count", std::to_string(o.node_count), "--rate",
                        std::to_string(o.rate_Hz), "--out", out});
+    if (o.fifo > 0) a.insert(a.end(), {"--fifo", std::to_string(o.fifo)});
     return a;
   };
   const std::string rf = (dir / (transport + "_node_reader.txt")).string();
@@ -675,8 +680,11 @@ int RunCsv(const Options& o) {
   const fs::path dir = o.keep.empty() ? fs::temp_directory_path() / ("net_bench." + std::to_string(getpid()))
                                       : fs::path(o.keep);
   fs::create_directories(dir);
-  std::printf("# net_bench: %d samples at %.0f Hz per transport, %d node-shaped bridge ticks; load before %s\n",
-              o.count, o.rate_Hz, o.node_count, LoadAvg().c_str());
+  std::printf("# net_bench: %d samples at %.0f Hz per transport, %d node-shaped bridge ticks; %s; load before %s\n",
+              o.count, o.rate_Hz, o.node_count,
+              o.fifo > 0 ? ("both ends SCHED_FIFO " + std::to_string(o.fifo) + " (every thread)").c_str()
+                         : "both ends at normal priority (emulated haptic threads SCHED_FIFO)",
+              LoadAvg().c_str());
   std::printf("transport,measure,p50_us,p99_us,max_us\n");
   std::fflush(stdout);
   int status = 0;
@@ -713,7 +721,7 @@ int RunCsv(const Options& o) {
 
 const char* kUsage =
     "usage: net_bench --csv [--count N] [--rate HZ] [--node-count N] [--domain D] [--transports shm,udp,netns]\n"
-    "                 [--keep DIR]\n"
+    "                 [--fifo PRIO] [--keep DIR]\n"
     "       net_bench --role writer|reader|node-writer|node-reader --qos FILE --domain D --session S\n"
     "                 --out FILE [--count N] [--node-count N] [--rate HZ]\n"
     "Prints transport,measure,p50_us,p99_us,max_us rows; see the top of bench/net/net_bench.cpp.\n";
@@ -750,6 +758,8 @@ Options Parse(int argc, char** argv) {
       o.keep = value();
     } else if (a == "--domain") {
       o.domain = ToInt(a, value(), 0, 232);
+    } else if (a == "--fifo") {
+      o.fifo = ToInt(a, value(), 1, 99);
     } else if (a == "--count") {
       o.count = ToInt(a, value(), 1, 10'000'000);
     } else if (a == "--node-count") {
@@ -801,6 +811,14 @@ int main(int argc, char** argv) {
     return 2;
   }
   try {
+    if (!o.csv && o.fifo > 0) {
+      // Before the participant: Fast DDS's receive and event threads inherit the policy.
+      sched_param param{};
+      param.sched_priority = o.fifo;
+      if (sched_setscheduler(0, SCHED_FIFO, &param) != 0) {
+        throw std::runtime_error("--fifo " + std::to_string(o.fifo) + ": SCHED_FIFO refused: " + std::strerror(errno));
+      }
+    }
     if (o.csv) return RunCsv(o);
     if (o.role == "writer") return RunWriter(o);
     if (o.role == "reader") return RunReader(o);
