@@ -1,5 +1,6 @@
 #include "haptic_bridge.hpp"
 
+#include <algorithm>
 #include <chrono>
 #include <cstdio>
 
@@ -49,7 +50,10 @@ void HapticBridge::Tick() {
   loop_.CollectRetired();
   if (renderer_) {
     ForwardControlEvents();
-    if (renderer_->TakeReport(report_)) have_report_ = true;
+    if (renderer_->TakeReport(report_)) {
+      have_report_ = true;
+      RecordPeerLoopAge();
+    }
     ReceivePeers();
     FollowPeerBodies();
   }
@@ -132,10 +136,22 @@ void HapticBridge::ReceivePeers() {
       // The sender's write to this take, on the steady clock both share on one host (the
       // DDS hop plus the wait for this bridge's tick): bench/net reports it.
       if (peer.stamp_ns() <= now_ns) peer_age_.Record(1e-3 * static_cast<double>(now_ns - peer.stamp_ns()));
+      newest_peer_stamp_ns_ = std::max(newest_peer_stamp_ns_, peer.stamp_ns());
     }
   }
   peers_.Expire(now);
-  renderer_->SetRemote(ToRemoteContacts(peers_, renderer_->models(), now));
+  RemoteContacts remote = ToRemoteContacts(peers_, renderer_->models(), now);
+  remote.newest_stamp_ns = newest_peer_stamp_ns_;
+  renderer_->SetRemote(remote);
+}
+
+void HapticBridge::RecordPeerLoopAge() {
+  // The sender's write to the haptic step that first used the set (same host: one clock).
+  if (report_.peer_stamp_ns == 0 || report_.peer_stamp_ns == last_loop_peer_stamp_ns_) return;
+  last_loop_peer_stamp_ns_ = report_.peer_stamp_ns;
+  if (report_.peer_seen_ns >= report_.peer_stamp_ns) {
+    peer_loop_age_.Record(1e-3 * static_cast<double>(report_.peer_seen_ns - report_.peer_stamp_ns));
+  }
 }
 
 void HapticBridge::FollowPeerBodies() {

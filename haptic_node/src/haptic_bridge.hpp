@@ -41,6 +41,9 @@ class HapticBridge {
   /// Age of the peers' contact sets when this bridge took them: their sender's stamp (its
   /// steady clock: meaningful for peers on this host only) to the take.
   const common::LatencyHistogram& peer_contact_age() const { return peer_age_; }
+  /// The same up to the haptic step that first used the set (at most one per bridge tick:
+  /// a set replaced before the loop used it is not counted).
+  const common::LatencyHistogram& peer_contact_loop_age() const { return peer_loop_age_; }
 
  private:
   // ---- the stages of a tick ----
@@ -60,6 +63,8 @@ class HapticBridge {
   /// The loop statistics, once a second.
   void PublishStatistics();
 
+  /// The newest report's peer set stamps, into peer_loop_age_.
+  void RecordPeerLoopAge();
   /// Builds the renderer of one scene state and hands it to the loop.
   void AdoptScene(const msg::SceneState& state);
 
@@ -95,6 +100,9 @@ class HapticBridge {
   std::uint64_t control_events_sent_ = 0;
   dds::DroppedSamples dropped_;
   common::LatencyHistogram peer_age_;
+  common::LatencyHistogram peer_loop_age_;
+  std::uint64_t newest_peer_stamp_ns_ = 0;
+  std::uint64_t last_loop_peer_stamp_ns_ = 0;
 };
 
 }  // namespace handshare::haptic
