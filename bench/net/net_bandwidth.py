@@ -132,10 +132,10 @@ def run_tour(p, domain, session, work):
 
 
 def peer_age_lines(p):
-    """The haptic nodes' own account of the peers' contact sets (age when their bridge took
-    them: the DDS hop plus the wait for the bridge's tick)."""
+    """The haptic nodes' own account of the contact sets: their own report's age when the bridge
+    wrote it, and the peers' sets' age when the bridge took them and when the loop used them."""
     return [line.strip() for user in ("alice", "bob") for line in p.log(user).splitlines()
-            if "peer contact sets:" in line]
+            if "contact sets:" in line]
 
 
 def run_press(p, domain, session, work):

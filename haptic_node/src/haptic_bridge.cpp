@@ -189,6 +189,9 @@ void HapticBridge::PublishContactSet() {
     contacts_msg_.stamp_ns(common::SteadyNowNs());
     contacts_msg_.seq(contacts_msg_.seq() + 1);
     contact_writer_.Write(contacts_msg_);
+    if (report_.step_ns != 0 && report_.step_ns <= contacts_msg_.stamp_ns()) {
+      report_age_.Record(1e-3 * static_cast<double>(contacts_msg_.stamp_ns() - report_.step_ns));
+    }
   }
   last_sent_active_ = active;
 }

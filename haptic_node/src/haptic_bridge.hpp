@@ -44,6 +44,9 @@ class HapticBridge {
   /// The same up to the haptic step that first used the set (at most one per bridge tick:
   /// a set replaced before the loop used it is not counted).
   const common::LatencyHistogram& peer_contact_loop_age() const { return peer_loop_age_; }
+  /// Age of this hand's contact report when its contact set was written (the haptic step
+  /// that made it to the write): the sender's part of the node-to-node path.
+  const common::LatencyHistogram& contact_report_age() const { return report_age_; }
 
  private:
   // ---- the stages of a tick ----
@@ -101,6 +104,7 @@ class HapticBridge {
   dds::DroppedSamples dropped_;
   common::LatencyHistogram peer_age_;
   common::LatencyHistogram peer_loop_age_;
+  common::LatencyHistogram report_age_;
   std::uint64_t newest_peer_stamp_ns_ = 0;
   std::uint64_t last_loop_peer_stamp_ns_ = 0;
 };

@@ -55,6 +55,12 @@ void PrintLoopSummary(const std::string& user, const common::LoopStats& stats, s
                 user.c_str(), static_cast<unsigned long long>(age.count()), age.Quantile(0.5), age.Quantile(0.99),
                 age.max_us());
   }
+  if (const auto& age = bridge.contact_report_age(); age.count() > 0) {
+    std::printf("[haptic_node %s] contact sets: %llu written, age of the haptic step's report at the write "
+                "p50 %.0f us p99 %.0f us max %.0f us\n",
+                user.c_str(), static_cast<unsigned long long>(age.count()), age.Quantile(0.5), age.Quantile(0.99),
+                age.max_us());
+  }
   if (const auto& age = bridge.peer_contact_loop_age(); age.count() > 0) {
     std::printf("[haptic_node %s] peer contact sets: %llu used, age at the haptic loop (sender's write to the "
                 "first step using it, same host) p50 %.0f us p99 %.0f us max %.0f us\n",

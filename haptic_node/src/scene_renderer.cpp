@@ -100,6 +100,7 @@ void SceneRenderer::Render(double /*t_s*/, double dt_s, const DeviceReading& rea
   // 5. Report for the bridge (contact set, grasp claims, body poses).
   ContactReport& r = reports_.WriteSlot();
   r.seq = ++seq_;
+  r.step_ns = common::SteadyNowNs();
   r.peer_stamp_ns = peer_stamp_ns_;
   r.peer_seen_ns = peer_seen_ns_;
   for (int i = 0; i < kFingers; ++i) {

@@ -59,7 +59,7 @@ TEST(SceneRenderer, FollowedBodyGlidesOnAtItsPublishedVelocityBetweenSamples) {
 
 // The newest peer set's sender stamp comes back in the report with the step that first used
 // it (the bridge turns the two into the set's age at the haptic loop, bench/net); a set the
-// loop already used keeps its first step's time.
+// loop already used keeps its first step's time. Every report carries its step's time.
 TEST(SceneRenderer, ReportsTheStepThatFirstUsedANewPeerSet) {
   const auto dir = std::filesystem::temp_directory_path() / "handshare_scene_renderer_peer_test";
   std::filesystem::remove_all(dir);
@@ -92,6 +92,8 @@ TEST(SceneRenderer, ReportsTheStepThatFirstUsedANewPeerSet) {
   EXPECT_EQ(report.peer_stamp_ns, remote.newest_stamp_ns);
   EXPECT_GE(report.peer_seen_ns, before);
   EXPECT_LE(report.peer_seen_ns, after);
+  EXPECT_GE(report.step_ns, before);  // the step's own time: the sender's report age
+  EXPECT_LE(report.step_ns, after);
 
   // The same set again (the bridge sends the newest every tick): the first step's time stays.
   const std::uint64_t first_seen = report.peer_seen_ns;

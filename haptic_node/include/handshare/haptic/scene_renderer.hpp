@@ -26,6 +26,7 @@ inline constexpr int kMaxReportedBodies = 8;
 /// What the haptic thread reports each step (trivially copyable).
 struct ContactReport {
   std::uint64_t seq = 0;
+  std::uint64_t step_ns = 0;  ///< the step that made it (steady clock) [ns]
   struct Finger {
     bool active = false;
     std::int32_t object = -1;       // world object index (SceneModels::ids)
