@@ -7,6 +7,8 @@
 //
 //   net_bench --csv [--count N] [--rate HZ] [--node-count N] [--domain D] [--transports LIST]
 //             [--fifo PRIO] [--keep DIR]
+//     --domain D (default 160): the runs use D, D+1, ... (two per transport, each on a domain
+//     of its own so none meets a participant an earlier run left in its lease).
 //     --fifo PRIO: both ends' processes run SCHED_FIFO at PRIO (every thread, Fast DDS's receive
 //     threads included: they inherit it), to show what scheduling does to the tail.
 //     prints transport,measure,p50_us,p99_us,max_us rows (and '#' comment lines with the load,
