@@ -221,6 +221,7 @@ def case_late_joiners(h, domain):
           f"moved, largest difference to the server's {worst:.2e} m")
     print(f"  ball: fell {fell * 1e3:.1f} mm, drawn at the server's pose (difference {ball_err:.1e} m); speech "
           f"{duration:.1f} s, RMS {rms:.0f}; everything within {t_all - t_join:.2f} s of starting both")
+    h.print_traffic()
 
 
 if __name__ == "__main__":

@@ -13,6 +13,7 @@ import glob
 import json
 import math
 import os
+import re
 import shutil
 import signal
 import sqlite3
@@ -139,6 +140,14 @@ class Harness:
         # Killed participants leave shared-memory segments behind; Fast DDS's tool removes
         # the ones no live process holds.
         subprocess.run(["fastdds", "shm", "clean"], stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+
+    def print_traffic(self):
+        """Prints each process's exit line of samples written ("out"), taken ("in") and reported
+        lost per topic ("traffic: ..."); a killed process has none."""
+        print("samples per topic (out: written, in: taken, lost: reported lost by the middleware):")
+        for label in self.procs:
+            lines = re.findall(r"traffic: [^\n]*", self.log(label))
+            print(f"  {label}: {lines[-1] if lines else 'no traffic line (killed, or still running)'}")
 
     def dump_logs(self):
         for label in self.procs:
@@ -703,6 +712,7 @@ def case_encyclopedia(h, domain):
     db.close()
     tour = ["start_menu", "solar_system", "solar_system", "dinosaur", "microscopic", "start_menu"]
     check(scenes == tour, f"the session log's worlds {scenes}, expected {tour}")
+    h.print_traffic()
 
 
 class PressWatch:

@@ -329,13 +329,10 @@ def case_tour(args):
         finally:
             h.cleanup()
         took = time.monotonic() - t0
-        traffic = traffic_lines({label: h.log(label) for label in labels})
         counters = {label: host.counters() for label, host in zip(labels, net.hosts)}
         delays = {label: host.clear_delay() for label, host in zip(labels, net.hosts)}
     print(f"tour across five hosts ({', '.join(labels)}), 20 ms +- 5 ms and 2 % loss on arrival at each: "
           f"completed in {took:.1f} s")
-    print("  samples per topic (out: written, in: taken, lost: reported lost by the middleware):")
-    print("\n".join("  " + t for t in traffic))
     for label in labels:
         raw = delays[label] and delays[label].get("raw")
         print(f"  {label}: UDP datagrams arrived {counters[label]['udp_in']} "
