@@ -243,17 +243,16 @@ def last_trace_row(path):
     return [[last[f"{a}{i}"] for a in "xyz"] for i in range(5)]
 
 
-def check_frames(frames_dir, expected_users):
-    """The last frame shows every expected user's five fingertips where their haptic nodes
-    traced them, in the right colours."""
+def last_frame(frames_dir):
+    """(camera, path, number, image, drawn) of a headless spectator's last frame, with drawn
+    {(user, finger): (position, radius)} from its frames.csv."""
     from PIL import Image
 
     with open(os.path.join(frames_dir, "camera.json")) as f:
         camera = json.load(f)
     pngs = sorted(glob.glob(os.path.join(frames_dir, "frame_*.png")))
-    check(pngs, "no frames written")
-    last_png = pngs[-1]
-    frame_no = int(os.path.basename(last_png)[6:11])
+    check(pngs, f"no frames written in {frames_dir}")
+    frame_no = int(os.path.basename(pngs[-1])[6:11])
     drawn = {}
     with open(os.path.join(frames_dir, "frames.csv")) as f:
         next(f)
@@ -261,8 +260,17 @@ def check_frames(frames_dir, expected_users):
             frame, _, user, finger, x, y, z, radius = line.strip().split(",")
             if int(frame) == frame_no:
                 drawn[(user, int(finger))] = ([float(x), float(y), float(z)], float(radius))
-    image = Image.open(last_png).convert("RGB")
+    image = Image.open(pngs[-1]).convert("RGB")
     check(image.size == (camera["width_px"], camera["height_px"]), f"frame size {image.size} != camera")
+    return camera, pngs[-1], frame_no, image, drawn
+
+
+def check_frames(frames_dir, expected_users):
+    """The last frame shows every expected user's five fingertips where their haptic nodes
+    traced them, each in its colour within its projected disc. Hands side by side hide parts
+    of each other's fingertips (bob's thumb in front of alice's ring finger on the tail), so a
+    fingertip counts as shown when at least 5 pixels of its disc have its colour."""
+    camera, last_png, frame_no, image, drawn = last_frame(frames_dir)
     checked = 0
     for user, tips in expected_users.items():
         for i, p in enumerate(tips):
@@ -272,13 +280,17 @@ def check_frames(frames_dir, expected_users):
             check(max(abs(a - b) for a, b in zip(p, p_drawn)) < 1e-6,
                   f"{user} finger {i}: drawn at {p_drawn}, traced at {p}")
             col, row, depth, focal_px = project(camera, p)
-            radius_px = radius * focal_px / depth
-            check(radius_px >= 2.0, f"{user} finger {i}: {radius_px:.1f} px is too small to check")
-            pixel = image.getpixel((int(col), int(row)))
-            check(colour_matches(pixel, FINGER_RGB[i]),
-                  f"{user} finger {i} at pixel ({col:.1f}, {row:.1f}): colour {pixel}, expected {FINGER_RGB[i]}")
+            r_px = radius * focal_px / depth
+            check(r_px >= 2.0, f"{user} finger {i}: {r_px:.1f} px is too small to check")
+            inside = [(x, y) for x in range(int(col - r_px), int(col + r_px) + 1)
+                      for y in range(int(row - r_px), int(row + r_px) + 1)
+                      if (x - col) ** 2 + (y - row) ** 2 <= (0.9 * r_px) ** 2
+                      and 0 <= x < image.size[0] and 0 <= y < image.size[1]]
+            lit = sum(1 for xy in inside if colour_matches(image.getpixel(xy), FINGER_RGB[i]))
+            check(lit >= 5, f"{user} finger {i} at pixel ({col:.1f}, {row:.1f}): {lit} of {len(inside)} pixels of its "
+                            f"disc have its colour {FINGER_RGB[i]} in {last_png}")
             # Negative control: well outside the sphere the colour is not the fingertip's.
-            away = image.getpixel((int(col), int(row - 3.5 * radius_px)))
+            away = image.getpixel((int(col), int(row - 3.5 * r_px)))
             check(not colour_matches(away, FINGER_RGB[i]),
                   f"{user} finger {i}: colour {away} also found 3.5 radii above the fingertip")
             checked += 1
@@ -291,50 +303,17 @@ def check_frames(frames_dir, expected_users):
 
 def check_hands_in_last_frame(frames_dir, traces):
     """The last frame shows each user's five fingertips at a pose that user's haptic node traced
-    (the hand held still while the spectator stopped), each in its colour within its projected
-    disc. Hands side by side hide parts of each other's fingertips (bob's thumb in front of
-    alice's ring finger on the tail), so a fingertip counts as shown when at least 5 pixels of
-    its disc have its colour, not only its centre pixel. Returns the fingertips checked."""
-    from PIL import Image
-
-    with open(os.path.join(frames_dir, "camera.json")) as f:
-        camera = json.load(f)
-    pngs = sorted(glob.glob(os.path.join(frames_dir, "frame_*.png")))
-    check(pngs, f"no frames written in {frames_dir}")
-    frame_no = int(os.path.basename(pngs[-1])[6:11])
-    image = Image.open(pngs[-1]).convert("RGB")
-    drawn = {}
-    with open(os.path.join(frames_dir, "frames.csv")) as f:
-        next(f)
-        for line in f:
-            frame, _, user, finger, x, y, z, radius = line.strip().split(",")
-            if int(frame) == frame_no:
-                drawn.setdefault(user, {})[int(finger)] = ([float(x), float(y), float(z)], float(radius))
-    checked = 0
+    (the hand held still while the spectator stopped), in their colours (check_frames)."""
+    _, _, frame_no, _, drawn = last_frame(frames_dir)
+    tips = {}
     for user, trace in traces.items():
-        check(len(drawn.get(user, {})) == 5, f"frame {frame_no} shows {len(drawn.get(user, {}))} of {user}'s fingers")
-        want = [drawn[user][i][0] for i in range(5)]
-        rows = read_trace(trace)
+        want = [drawn[(user, i)][0] for i in range(5) if (user, i) in drawn]
+        check(len(want) == 5, f"frame {frame_no} shows {len(want)} of {user}'s fingers")
         check(any(all(abs(r[f"{a}{i}"] - want[i][k]) < 1e-6 for i in range(5) for k, a in enumerate("xyz"))
-                  for r in rows),
+                  for r in read_trace(trace)),
               f"{user}'s fingertips in frame {frame_no} ({want}) are at no pose of {user}'s trace")
-        for i, (p, radius) in enumerate(drawn[user][k] for k in range(5)):
-            col, row, depth, focal_px = project(camera, p)
-            r_px = radius * focal_px / depth
-            check(r_px >= 2.0, f"{user} finger {i}: {r_px:.1f} px is too small to check")
-            inside = [(x, y) for x in range(int(col - r_px), int(col + r_px) + 1)
-                      for y in range(int(row - r_px), int(row + r_px) + 1)
-                      if (x - col) ** 2 + (y - row) ** 2 <= (0.9 * r_px) ** 2
-                      and 0 <= x < image.size[0] and 0 <= y < image.size[1]]
-            lit = sum(1 for xy in inside if colour_matches(image.getpixel(xy), FINGER_RGB[i]))
-            check(lit >= 5, f"{user} finger {i} at pixel ({col:.1f}, {row:.1f}): {lit} of {len(inside)} pixels of its "
-                            f"disc have its colour {FINGER_RGB[i]} in {pngs[-1]}")
-            # Negative control: well outside the sphere the colour is not the fingertip's.
-            away = image.getpixel((int(col), int(row - 3.5 * r_px)))
-            check(not colour_matches(away, FINGER_RGB[i]),
-                  f"{user} finger {i}: colour {away} also found 3.5 radii above the fingertip")
-            checked += 1
-    return checked
+        tips[user] = want
+    return check_frames(frames_dir, tips)
 
 
 def check_speech(wav_path):
