@@ -96,6 +96,8 @@ def case_two_hosts(args):
     print(f"two hosts ({a.addr} server, {b.addr} haptic node), 20 ms +- 5 ms and 2% loss on arrival at each:")
     print(f"  member joined {t_join - t0:.2f} s after start; scene at the node {t_scene - t0:.2f} s ({scene_line})")
     print(f"  UDP datagrams arriving at the server's host in 1 s: {unicast} unicast, {mcast} multicast")
+    print("  samples per topic (out: written, in: taken, lost: reported lost by the middleware):")
+    print("\n".join("  " + t for t in traffic_lines({p.label: p.log() for p in (server, node)})))
     back = f"joined again after {t_back - t_heal:.2f} s"
     print(f"  node's host isolated: member lost after {t_lost - t_cut:.2f} s; healed: {back}")
     if t_left:
@@ -409,6 +411,8 @@ def case_unicast_peers(args):
     print(f"  with --peers: member joined {t_join - t0:.2f} s after start, scene at the node {t_scene - t0:.2f} s, "
           f"member left {t_left - t_stop:.2f} s after SIGTERM to the node (clean leave over unicast)")
     print(f"  UDP datagrams that arrived in the --peers run: unicast {unicast}, multicast (dropped) {mcast}")
+    print("  samples per topic in the --peers run (out: written, in: taken, lost: reported lost):")
+    print("\n".join("  " + t for t in traffic_lines({p.label: p.log() for p in (server, node)})))
     check(all(n > 0 for n in unicast.values()), f"no unicast UDP arrived at a host: {unicast}")
 
 
