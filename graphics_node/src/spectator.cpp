@@ -235,7 +235,7 @@ int Spectator::Run() {
     times << "frame,file,scene,revision,hands\n";
   }
 
-  dds::Participant participant(config_.where, name);
+  dds::Participant participant(config_.where, "graphics_node/" + name);  // the role picks its identity
   dds::MemberAnnouncement member(participant, name, msg::NODE_GRAPHICS);
   WorldView world(participant, assets_dir, name, config_.where.session);
   // When the frames are written or the window closes: what the spectator received, for a

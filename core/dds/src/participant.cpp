@@ -3,6 +3,7 @@
 #include "handshare/dds/participant.hpp"
 
 #include "handshare/common/data_dir.hpp"
+#include "security_properties.hpp"
 
 #include <fastdds/dds/core/condition/StatusCondition.hpp>
 #include <fastdds/dds/core/condition/WaitSet.hpp>
@@ -287,7 +288,7 @@ std::string DefaultQosFile() {
 
 
 Participant::Participant(int domain_id, const std::string& session, const std::string& name,
-                         const std::string& qos_file)
+                         const std::string& qos_file, const std::string& security_dir)
     : domain_id_(domain_id), session_(session), impl_(std::make_shared<detail::ParticipantImpl>()) {
   if (domain_id < 0 || domain_id > 232) {
     throw DdsError("DDS: domain id " + std::to_string(domain_id) + " is outside 0..232");
@@ -301,10 +302,11 @@ Participant::Participant(int domain_id, const std::string& session, const std::s
   Check(factory->get_participant_qos_from_profile(kParticipantProfile, pqos),
         std::string("reading participant profile '") + kParticipantProfile + "' from " + file);
   pqos.name(name);
+  if (!security_dir.empty()) detail::ApplySecurity(security_dir, name, pqos);
   if (pqos.wire_protocol().participant_id < 0) pqos.wire_protocol().participant_id = FreshParticipantId(domain_id);
   impl_->participant = CheckEntity(factory->create_participant(domain_id, pqos),
                                    "participant '" + name + "' on domain " +
-                                       std::to_string(domain_id));
+                                       std::to_string(domain_id) + detail::SecurityFailureHint(security_dir, name));
   // The session is the partition: sessions sharing a domain never exchange samples.
   fdds::PublisherQos pub_qos = fdds::PUBLISHER_QOS_DEFAULT;
   pub_qos.partition().push_back(session.c_str());
@@ -315,7 +317,7 @@ Participant::Participant(int domain_id, const std::string& session, const std::s
 }
 
 Participant::Participant(const common::SessionOptions& where, const std::string& name)
-    : Participant(where.domain_id, where.session, name, where.qos_file) {}
+    : Participant(where.domain_id, where.session, name, where.qos_file, where.security_dir) {}
 
 Participant::~Participant() = default;
 

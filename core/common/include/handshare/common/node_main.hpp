@@ -15,9 +15,10 @@ struct SessionOptions {
   std::string session;
   std::chrono::duration<double> duration{0.0};  // 0: until SIGINT/SIGTERM
   std::string qos_file;                          // "": the default profiles
+  std::string security_dir;                      // "": no DDS-Security (docs/security.md)
 };
 
-/// Declares --domain, --session (required), --duration and --qos.
+/// Declares --domain, --session (required), --duration, --qos and --security.
 void DeclareSessionOptions(Options& options);
 /// Reads them back after parsing; throws OptionError for a bad value.
 SessionOptions ReadSessionOptions(const Options& options);
