@@ -47,8 +47,10 @@ class TypedProbe final : public TopicProbe {
       refused.push_back(std::string("writer ") + spec.name);
     }
   }
-  int matched_writers() const override { return reader_ ? reader_.matched_writers() : 0; }
-  int matched_readers() const override { return writer_ ? writer_.matched_readers() : 0; }
+  // The session's endpoints only: a participant's own reader and writer of a topic match
+  // each other.
+  int matched_writers() const override { return reader_ ? std::max(0, reader_.matched_writers() - (writer_ ? 1 : 0)) : 0; }
+  int matched_readers() const override { return writer_ ? std::max(0, writer_.matched_readers() - (reader_ ? 1 : 0)) : 0; }
   long TakeAll() override {
     if (!reader_) return 0;
     long n = 0;
@@ -102,13 +104,13 @@ int Run(const common::Options& o) {
   Figures seen;
   while (!common::ShutdownRequested() && std::chrono::steady_clock::now() < end) {
     Figures now;
+    const long before = seen.samples;
     for (auto& p : probes) {
       now.matched_writers += p->matched_writers();
       now.matched_readers += p->matched_readers();
       seen.samples += p->TakeAll();
     }
     const bool grew = now.matched_writers > seen.matched_writers || now.matched_readers > seen.matched_readers;
-    const long before = seen.samples;
     seen.matched_writers = std::max(seen.matched_writers, now.matched_writers);
     seen.matched_readers = std::max(seen.matched_readers, now.matched_readers);
     // Samples: report the first one, then every hundredth.
