@@ -376,7 +376,7 @@ def udp_only_qos(path):
         <useBuiltinTransports>false</useBuiltinTransports>
         <builtin>""", 1)
     xml = xml.replace("<qos>", "<qos>\n        <data_sharing><kind>OFF</kind></data_sharing>")
-    check(xml.count("useBuiltinTransports") == 1 and "<data_sharing>" in xml, "could not derive the UDP-only QoS")
+    check(xml.count("<useBuiltinTransports>false") == 1 and "<data_sharing>" in xml, "could not derive the UDP-only QoS")
     with open(path, "w") as f:
         f.write(xml)
     return path
