@@ -23,6 +23,10 @@ and count the session's endpoints they match and the samples they read:
 The keystores are made with the clock set back 3 days (faketime), so that the set-back probes'
 CA, grants and CRL are already valid for them.
 
+  every_node: each node and tool runs with its own identity's grant (world server, haptic node,
+      spectator, audio guide, recorder, and the player replaying the recording into another
+      secured session); a bad keystore is an error naming the file.
+
 usage: security_test.py CASE --bin-dir DIR --domain D --work DIR   (domains D and D+1)
 """
 import datetime
@@ -31,6 +35,7 @@ import os
 import re
 import shutil
 import socket
+import sqlite3
 import struct
 import subprocess
 import sys
@@ -282,6 +287,79 @@ def case_controls(h, domain):
           f"set-back clock with a valid certificate matched {set_back[0]}, read {set_back[2]}")
 
 
+def case_every_node(h, domain):
+    """Every node and tool runs with its own identity and nothing more: the world server, a
+    haptic user, a spectator, the audio guide and the recorder in one secured session, and the
+    recording played by the player into another one, to a secured spectator. A bad keystore is
+    an error naming the file, before anything joins."""
+    w = h.work
+    session = f"it-sec-nodes-{os.getpid()}"
+    ks = os.path.join(w, "keystore")
+    make_keystore("--session", "it-sec-*", ks, "alice")
+    d = str(domain)
+
+    # Bad keystores: exit 1, and the error names what is missing.
+    broken = os.path.join(w, "broken")
+    shutil.copytree(ks, broken)
+    os.remove(os.path.join(broken, "enclaves", "spectator", "key.pem"))
+    with open(os.path.join(broken, "enclaves", "audio_guide", "permissions.p7s"), "w") as f:
+        f.write("not signed\n")
+    for argv, expected in (
+            ([h.exe("world_server"), "--security", os.path.join(w, "nowhere")],
+             f"keystore {os.path.join(w, 'nowhere')} is not a folder"),
+            ([h.exe("haptic_node"), "--security", ks, "--user", "mallory", "--device", "sim", "--script",
+              os.path.join(HERE, "data", "alice.hand")],
+             f"no identity for 'haptic_node/mallory' in {ks}"),
+            ([h.exe("graphics_node"), "--security", broken, "--headless", "--frames", "1", "--out", os.path.join(w, "none")],
+             f"private key {os.path.join(broken, 'enclaves', 'spectator', 'key.pem')} not found"),
+            ([h.exe("audio_guide"), "--security", broken, "--out", os.path.join(w, "none")],
+             f"with identity 'audio_guide' of keystore {broken}")):
+        r = subprocess.run([*argv, "--domain", d, "--session", session], capture_output=True, text=True, timeout=60)
+        check(r.returncode == 1 and expected in r.stderr,
+              f"{os.path.basename(argv[0])} with a bad keystore: rc {r.returncode}, expected '{expected}' in:\n{r.stderr}")
+
+    start_session(h, domain, session, ks, PRESS_SCRIPT, scene="dinosaur")
+    h.start("audio_guide", "audio_guide", "--domain", d, "--session", session, "--security", ks,
+            "--out", os.path.join(w, "speech"))
+    recording = os.path.join(w, "session.rec")
+    h.start_argv("recorder", [os.path.join(h.bin_dir, "world_server", "session_record"), "--domain", d, "--session",
+                              session, "--security", ks, "--out", recording, "--duration", 600])
+    h.wait_for_line("recorder", "recording session", 30)
+    h.wait_for_line("audio_guide", "message #1 (", 60)  # the board, read and spoken
+    h.wait_for_line("world_server", "member joined: user=audio-", 30)
+    h.wait_for_line("world_server", "models of 'dinosaur' ready", 120)
+    # The recorder holds alice's device states (read only with the recorder's grant).
+    wait_until("alice's hand in the recording", 60, lambda: os.path.exists(recording) and recorded(recording) > 200)
+    check(h.stop("recorder", 30) == 0, f"session_record failed:\n{h.log('recorder')}")
+    check(h.stop("audio_guide", 30) == 0, f"audio_guide failed:\n{h.log('audio_guide')}")
+    stop_session(h)
+    samples = int(re.search(r"recorded (\d+) samples", h.log("recorder")).group(1))
+
+    # The player replays it into another secured session, to a secured spectator.
+    replay = f"it-sec-replay-{os.getpid()}"
+    h.start("replay_spectator", "graphics_node", "--domain", domain + 1, "--session", replay, "--security", ks,
+            "--headless", "--frames", 100000, "--fps", 2, "--out", os.path.join(w, "replay_frames"))
+    h.start_argv("player", [os.path.join(h.bin_dir, "world_server", "session_play"), recording, "--domain",
+                            domain + 1, "--session", replay, "--security", ks, "--speed", 4, "--wait-for-readers", 1])
+    check(h.wait("player", 120) == 0, f"session_play failed:\n{h.log('player')}")
+    played = int(re.search(r"played (\d+) samples", h.log("player")).group(1))
+    check(h.stop("replay_spectator", 30) == 0, f"the replay's spectator failed:\n{h.log('replay_spectator')}")
+    check("no scene state received" not in h.log("replay_spectator"), "the replay's spectator got no scene")
+    check(played > 0, "the player played nothing")
+    print(f"every node: bad keystores refused with the file named; recorder recorded {samples} samples of a secured "
+          f"session, the player played {played} into another, to a secured spectator")
+
+
+def recorded(path):
+    """Device-state samples in a recording so far (0 while it cannot be read)."""
+    try:
+        with sqlite3.connect(f"file:{path}?mode=ro", uri=True) as db:
+            return db.execute("SELECT COUNT(*) FROM samples JOIN instances ON samples.instance = instances.id "
+                              "WHERE instances.topic = 'handshare/device_state'").fetchone()[0]
+    except sqlite3.Error:
+        return 0
+
+
 # --- packet capture ----------------------------------------------------------------------------
 
 ETH_P_ALL = 0x0003
@@ -409,12 +487,13 @@ def captured_session(h, domain, keystore, qos, prefix):
         index_N = [math.sqrt(sum(float(r[f"f{a}1"] or 0) ** 2 for a in "xyz")) for r in rows[:-1]]
         return sum(1 for f in index_N if f > 0.05) > 100  # a second of pressing at 100 Hz
     labels = [prefix + n for n in ("world_server", "alice", "spectator")]
-    cpu0, t0 = {n: cpu_s(h, n) for n in labels}, time.monotonic()
+    cpu0, t0, n0 = {n: cpu_s(h, n) for n in labels}, time.monotonic(), len(capture.payloads)
     wait_until(f"{prefix}alice pressing the tail", 90, pressing, lambda: h.log(prefix + "alice"))
-    # CPU load of each process over the press (join, models and press: the same work secured
-    # or not), as a share of one core.
+    # Load over the press (the same work secured or not): CPU of each process as a share of
+    # one core, and bytes on the wire per second.
     wall = time.monotonic() - t0
     load = {n.removeprefix(prefix): (cpu_s(h, n) - cpu0[n]) / wall for n in labels}
+    load["wire_kB_per_s"] = sum(map(len, capture.payloads[n0:])) / wall / 1e3
     stop_session(h, prefix)
     payloads = capture.stop()
     m = re.search(r"deformation: (\d+) samples \((\d+) applied", h.log(prefix + "spectator"))
@@ -461,12 +540,14 @@ def case_capture(h, domain):
         print(f"capture {label}: {r['packets']} packets, {r['bytes']} bytes, {r['sec']} secure submessages, "
               f"{r['applied']} deformations applied; board text in clear {sum(r['board'])} times; 'alice' in clear "
               f"{r['user'][0]} times in announcements/handshakes, {r['user'][1]} times elsewhere; CPU "
-              + ", ".join(f"{n} {100 * c:.0f}%" for n, c in r["load"].items()))
+              + ", ".join(f"{n} {100 * c:.0f}%" for n, c in r["load"].items() if n != "wire_kB_per_s")
+              + f"; {r['load']['wire_kB_per_s']:.0f} kB/s on the wire while pressing")
     return 0
 
 
 def main():
-    cases = {"outsiders": case_outsiders, "controls": case_controls, "capture": case_capture}
+    cases = {"outsiders": case_outsiders, "controls": case_controls, "capture": case_capture,
+             "every_node": case_every_node}
     outcome = {}
 
     def wrap(case):
