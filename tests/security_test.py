@@ -231,7 +231,10 @@ def case_outsiders(h, domain):
     h.probe("insider", domain, session, "--security", ks, "--as", "probe")
     h.probe("unauthenticated", domain, session, "--as", "probe")
     h.probe("foreign_ca", domain, session, "--security", foreign, "--as", "probe")
-    h.probe("expired", domain, session, "--security", ks, "--as", "expired", env=faketime_env(2))
+    # A set-back clock and shared memory do not mix (boost's timed locks take wall-clock
+    # deadlines): the set-back probes talk UDP, as a station on another host would.
+    udp = udp_only_qos(os.path.join(w, "udp_only_qos.xml"))
+    h.probe("expired", domain, session, "--security", ks, "--as", "expired", "--qos", udp, env=faketime_env(2))
     h.probe("revoked", domain, session, "--security", bob, "--as", "haptic_node/bob")
     outsiders = ("unauthenticated", "foreign_ca", "expired", "revoked")
     for label in outsiders:
@@ -276,7 +279,9 @@ def case_controls(h, domain):
     issue_probe(ks, "still_valid", now - datetime.timedelta(days=3), now + datetime.timedelta(days=30))
     start_session(h, domain + 1, session, ks, HOLD_SCRIPT)
     h.probe("bob", domain + 1, session, "--security", ks, "--as", "haptic_node/bob")
-    h.probe("set_back", domain + 1, session, "--security", ks, "--as", "still_valid", env=faketime_env(2))
+    udp = udp_only_qos(os.path.join(w, "udp_only_qos.xml"))  # as for the expired probe
+    h.probe("set_back", domain + 1, session, "--security", ks, "--as", "still_valid", "--qos", udp,
+            env=faketime_env(2))
     bob = wait_reads(h, "bob")
     set_back = wait_reads(h, "set_back")
     for label in ("bob", "set_back"):
@@ -291,7 +296,7 @@ def case_every_node(h, domain):
     """Every node and tool runs with its own identity and nothing more: the world server, a
     haptic user, a spectator, the audio guide and the recorder in one secured session, and the
     recording played by the player into another one, to a secured spectator. A bad keystore is
-    an error naming the file, before anything joins."""
+    an error naming the file, before anything joins; a session the grants do not name is refused."""
     w = h.work
     session = f"it-sec-nodes-{os.getpid()}"
     ks = os.path.join(w, "keystore")
@@ -313,8 +318,13 @@ def case_every_node(h, domain):
             ([h.exe("graphics_node"), "--security", broken, "--headless", "--frames", "1", "--out", os.path.join(w, "none")],
              f"private key {os.path.join(broken, 'enclaves', 'spectator', 'key.pem')} not found"),
             ([h.exe("audio_guide"), "--security", broken, "--out", os.path.join(w, "none")],
-             f"with identity 'audio_guide' of keystore {broken}")):
-        r = subprocess.run([*argv, "--domain", d, "--session", session], capture_output=True, text=True, timeout=60)
+             f"with identity 'audio_guide' of keystore {broken}"),
+            # Grants name the sessions (partitions) they allow: this keystore's, it-sec-*.
+            ([h.exe("world_server"), "--security", ks, "--session", "elsewhere"],
+             "could not create writer on handshare/scene_state")):
+        if "--session" not in argv:
+            argv = [*argv, "--session", session]
+        r = subprocess.run([*argv, "--domain", d], capture_output=True, text=True, timeout=60)
         check(r.returncode == 1 and expected in r.stderr,
               f"{os.path.basename(argv[0])} with a bad keystore: rc {r.returncode}, expected '{expected}' in:\n{r.stderr}")
 

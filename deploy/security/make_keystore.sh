@@ -97,10 +97,16 @@ topics_xml() {
   for t in $1; do printf '              <topic>%s</topic>\n' "$t"; done
 }
 
+# Certificates and grants start a day early: a station whose clock is a little behind still
+# accepts them.
+START_S=$(($(date -u +%s) - 86400))
+valid_from() { date -u -d "@$START_S" "$1"; }
+valid_until() { date -u -d "@$((START_S + 86400 * (DAYS + 1)))" "$1"; }
+
 permissions_xml() {  # $1 subject (RFC 2253)  $2 role  $3 grant name
   local not_before not_after pub sub
-  not_before=$(date -u +%Y-%m-%dT%H:%M:%S)
-  not_after=$(date -u -d "+$DAYS days" +%Y-%m-%dT%H:%M:%S)
+  not_before=$(valid_from +%Y-%m-%dT%H:%M:%S)
+  not_after=$(valid_until +%Y-%m-%dT%H:%M:%S)
   pub=$(role_publish "$2")
   sub=$(role_subscribe "$2")
   cat <<EOF
@@ -206,7 +212,8 @@ make_enclave() {  # $1 enclave path  $2 role  $3 station
     -keyout "$e/key.pem" -out "$e/cert.csr" -subj "/O=handshare/OU=$2/CN=$3" 2>/dev/null ||
     die "key for $1 failed"
   chmod 600 "$e/key.pem"
-  openssl ca -config "$DIR/private/ca.cnf" -batch -notext -days "$DAYS" -extensions station \
+  openssl ca -config "$DIR/private/ca.cnf" -batch -notext -extensions station \
+    -startdate "$(valid_from +%Y%m%d%H%M%SZ)" -enddate "$(valid_until +%Y%m%d%H%M%SZ)" \
     -in "$e/cert.csr" -out "$e/cert.pem" 2>/dev/null || die "certificate for $1 failed"
   rm -f "$e/cert.csr"
   # The grant's subject must equal the certificate's, as OpenSSL writes it in RFC 2253.
