@@ -181,12 +181,16 @@ def start_session(h, domain, session, keystore, script, scene="start_menu", qos=
     script_file = os.path.join(h.work, prefix + "alice.hand")
     with open(script_file, "w") as f:
         f.write(script)
+    # One at a time: with all three starting at once, about 1 secured start in 30 left alice
+    # unauthenticated with the server for good (Fast DDS 2.9.1; docs/security.md, "Known
+    # problems"), while the spectator joined.
     h.start(prefix + "world_server", "world_server", *common, "--scene", scene)
+    h.wait_for_line(prefix + "world_server", f"session '{session}' on domain", 60)
     h.start(prefix + "alice", "haptic_node", *common, "--user", "alice", "--device", "sim",
             "--script", script_file, "--trace", os.path.join(h.work, prefix + "alice.csv"))
+    h.wait_for_line(prefix + "world_server", "member joined: user=alice", 60)
     h.start(prefix + "spectator", "graphics_node", *common, "--headless", "--frames", 100000, "--fps", 2,
             "--out", os.path.join(h.work, prefix + "frames"))
-    h.wait_for_line(prefix + "world_server", "member joined: user=alice", 60)
     h.wait_for_line(prefix + "world_server", "member joined: user=graphics-", 60)
 
 
