@@ -232,7 +232,12 @@ def case_outsiders(h, domain):
           f"a haptic user's identity was not refused an object-state writer after its contact-set writer "
           f"(rc {haptic.returncode}):\n{haptic.stdout}{haptic.stderr}")
 
+    # The invited probe first, until it reads all three nodes (world server 4 writers, alice 5,
+    # the spectator 1): handshakes started all at once sometimes never complete (docs/security.md,
+    # "Known problems"), and the outsiders' refused handshakes go on while they watch.
     h.probe("insider", domain, session, "--security", ks, "--as", "probe")
+    wait_until("the invited probe matching the session's 10 writers", 60,
+               lambda: (probe_figures(h, "insider") or (0, 0, 0))[0] >= 10, lambda: h.log("insider"))
     h.probe("unauthenticated", domain, session, "--as", "probe")
     h.probe("foreign_ca", domain, session, "--security", foreign, "--as", "probe")
     # A set-back clock and shared memory do not mix (boost's timed locks take wall-clock
@@ -335,12 +340,12 @@ def case_every_node(h, domain):
     start_session(h, domain, session, ks, PRESS_SCRIPT, scene="dinosaur")
     h.start("audio_guide", "audio_guide", "--domain", d, "--session", session, "--security", ks,
             "--out", os.path.join(w, "speech"))
+    h.wait_for_line("world_server", "member joined: user=audio-", 60)  # one join at a time
     recording = os.path.join(w, "session.rec")
     h.start_argv("recorder", [os.path.join(h.bin_dir, "world_server", "session_record"), "--domain", d, "--session",
                               session, "--security", ks, "--out", recording, "--duration", 600])
     h.wait_for_line("recorder", "recording session", 30)
     h.wait_for_line("audio_guide", "message #1 (", 60)  # the board, read and spoken
-    h.wait_for_line("world_server", "member joined: user=audio-", 30)
     h.wait_for_line("world_server", "models of 'dinosaur' ready", 120)
     # The recorder holds alice's device states (read only with the recorder's grant).
     wait_until("alice's hand in the recording", 60, lambda: os.path.exists(recording) and recorded(recording) > 200)
@@ -351,17 +356,23 @@ def case_every_node(h, domain):
 
     # The player replays it into another secured session, to a secured spectator.
     replay = f"it-sec-replay-{os.getpid()}"
-    h.start("replay_spectator", "graphics_node", "--domain", domain + 1, "--session", replay, "--security", ks,
-            "--headless", "--frames", 100000, "--fps", 2, "--out", os.path.join(w, "replay_frames"))
+    # The player first (it waits for the spectator), so that the spectator's wait for a scene
+    # does not include the player's start.
     h.start_argv("player", [os.path.join(h.bin_dir, "world_server", "session_play"), recording, "--domain",
                             domain + 1, "--session", replay, "--security", ks, "--speed", 4, "--wait-for-readers", 1])
+    h.wait_for_line("player", "[session_play] playing", 60)
+    h.start("replay_spectator", "graphics_node", "--domain", domain + 1, "--session", replay, "--security", ks,
+            "--headless", "--frames", 100000, "--fps", 2, "--out", os.path.join(w, "replay_frames"))
     check(h.wait("player", 120) == 0, f"session_play failed:\n{h.log('player')}")
     played = int(re.search(r"played (\d+) samples", h.log("player")).group(1))
     check(h.stop("replay_spectator", 30) == 0, f"the replay's spectator failed:\n{h.log('replay_spectator')}")
-    check("no scene state received" not in h.log("replay_spectator"), "the replay's spectator got no scene")
+    # Deformations are applied only to the objects of a scene it has.
+    m = re.search(r"deformation: \d+ samples \((\d+) applied", h.log("replay_spectator"))
+    check(m and int(m.group(1)) > 0, f"the replay's spectator applied no deformation:\n{h.log('replay_spectator')}")
     check(played > 0, "the player played nothing")
     print(f"every node: bad keystores refused with the file named; recorder recorded {samples} samples of a secured "
-          f"session, the player played {played} into another, to a secured spectator")
+          f"session, the player played {played} into another, to a secured spectator that applied {m.group(1)} "
+          f"deformations")
 
 
 def recorded(path):
