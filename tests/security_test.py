@@ -10,10 +10,13 @@ and count the session's endpoints they match and the samples they read:
       only the session's refuse it) and a revoked station (bob, revoked in the keystore's CRL;
       his station still holds the CRL from before) each match 0 endpoints and read 0 samples,
       while an invited probe of the same keystore reads the session. A spectator's identity
-      cannot create a contact-set writer (a haptic user's can, and cannot write object states).
+      cannot create a contact-set writer (a haptic user's can, and cannot write object states),
+      and a spectator that signed itself a grant to write everything (its station taking its own
+      CA as permissions CA, so that its own checks pass) matches nothing either.
   controls: what the outsiders test would see without the change it guards: the same probe
       without security reads an unsecured session; bob, not yet revoked, reads a secured one;
-      a probe with the same set-back clock but a certificate still valid reads it too.
+      a probe with the same set-back clock but a certificate still valid reads it too, and so
+      does the tampered spectator's station with its grant signed by the keystore's CA.
   capture: a packet capture of a secured dinosaur session (alice presses the tail) on loopback
       UDP holds none of the message board's text or alice's name outside participant
       announcements and authentication handshakes, and every user sample is encrypted; the same
@@ -106,8 +109,15 @@ def issue_probe(keystore, enclave, start, end):
     run_quiet(["openssl", "ca", "-config", f"{keystore}/private/ca.cnf", "-batch", "-notext",
                "-extensions", "station", "-startdate", asn1_time(start), "-enddate", asn1_time(end),
                "-in", f"{e}/cert.csr", "-out", f"{e}/cert.pem"], "probe certificate", env)
+    grant_everything(e, keystore, start, end)
+
+
+def grant_everything(e, signer, start, end):
+    """permissions.p7s in enclave folder e: its certificate's subject may publish and subscribe
+    every topic from start to end, signed by the CA of keystore signer."""
     subject = run_quiet(["openssl", "x509", "-in", f"{e}/cert.pem", "-noout", "-subject", "-nameopt", "RFC2253"],
                         "probe subject").strip().removeprefix("subject=")
+    enclave = os.path.basename(e)
     topics = "".join(f"<topic>handshare/{t}</topic>" for t in TOPICS)
     rule = f"<topics>{topics}</topics><partitions><partition>*</partition></partitions>"
     with open(f"{e}/permissions.xml", "w") as f:
@@ -119,7 +129,7 @@ def issue_probe(keystore, enclave, start, end):
 <default>DENY</default></grant></permissions></dds>
 """)
     run_quiet(["openssl", "smime", "-sign", "-in", f"{e}/permissions.xml", "-text", "-out", f"{e}/permissions.p7s",
-               "-signer", f"{keystore}/public/ca.cert.pem", "-inkey", f"{keystore}/private/ca.key.pem"],
+               "-signer", f"{signer}/public/ca.cert.pem", "-inkey", f"{signer}/private/ca.key.pem"],
               "signing the probe's grant")
 
 
@@ -215,6 +225,16 @@ def case_outsiders(h, domain):
     issue_probe(ks, "expired", now - datetime.timedelta(days=3), now - datetime.timedelta(days=1))
     make_keystore(foreign)
     issue_probe(foreign, "probe", now - datetime.timedelta(days=3), now + datetime.timedelta(days=30))
+    # A tampered spectator: the spectator's own certificate and key, and a grant to write
+    # everything that it signed with a CA of its own, which its station takes as permissions
+    # CA (with a governance signed by it too), so that its own access control lets it create
+    # every writer: only the session's check of its grant can refuse it.
+    tampered = os.path.join(w, "tampered_station")
+    station_copy(ks, "spectator", tampered)
+    shutil.copy(os.path.join(foreign, "public", "ca.cert.pem"), os.path.join(tampered, "public", "permissions_ca.cert.pem"))
+    shutil.copy(os.path.join(foreign, "public", "governance.p7s"), os.path.join(tampered, "public", "governance.p7s"))
+    grant_everything(os.path.join(tampered, "enclaves", "spectator"), foreign, now - datetime.timedelta(days=3),
+                     now + datetime.timedelta(days=30))
 
     start_session(h, domain, session, ks, HOLD_SCRIPT)
 
@@ -232,12 +252,12 @@ def case_outsiders(h, domain):
           f"a haptic user's identity was not refused an object-state writer after its contact-set writer "
           f"(rc {haptic.returncode}):\n{haptic.stdout}{haptic.stderr}")
 
-    # The invited probe first, until it reads all three nodes (world server 4 writers, alice 5,
-    # the spectator 1): handshakes started all at once sometimes never complete (docs/security.md,
-    # "Known problems"), and the outsiders' refused handshakes go on while they watch.
+    # The invited probe first, until alice's device states reach it: handshakes started all at
+    # once sometimes never complete (docs/security.md, "Known problems"), and the outsiders'
+    # refused handshakes go on while they watch.
     h.probe("insider", domain, session, "--security", ks, "--as", "probe")
-    wait_until("the invited probe matching the session's 10 writers", 60,
-               lambda: (probe_figures(h, "insider") or (0, 0, 0))[0] >= 10, lambda: h.log("insider"))
+    wait_until("the invited probe reading 100 samples", 60,
+               lambda: (probe_figures(h, "insider") or (0, 0, 0))[2] >= 100, lambda: h.log("insider"))
     h.probe("unauthenticated", domain, session, "--as", "probe")
     h.probe("foreign_ca", domain, session, "--security", foreign, "--as", "probe")
     # A set-back clock and shared memory do not mix (boost's timed locks take wall-clock
@@ -245,7 +265,8 @@ def case_outsiders(h, domain):
     udp = udp_only_qos(os.path.join(w, "udp_only_qos.xml"))
     h.probe("expired", domain, session, "--security", ks, "--as", "expired", "--qos", udp, env=faketime_env(2))
     h.probe("revoked", domain, session, "--security", bob, "--as", "haptic_node/bob")
-    outsiders = ("unauthenticated", "foreign_ca", "expired", "revoked")
+    h.probe("tampered_spectator", domain, session, "--security", tampered, "--as", "graphics_node/tampered")
+    outsiders = ("unauthenticated", "foreign_ca", "expired", "revoked", "tampered_spectator")
     for label in outsiders:
         h.wait_for_line(label, "probe: joined", 60)
     # The outsiders watch while the invited probe reads 300 samples more than it had when the
@@ -262,12 +283,15 @@ def case_outsiders(h, domain):
               f"{figures[label][1]} readers and read {figures[label][2]} samples of the session")
     check(figures["insider"][0] > 0 and figures["insider"][1] > 0 and figures["insider"][2] > 0,
           f"the invited probe did not read the session: {figures['insider']}")
+    check("probe: own permissions refuse" not in h.log("tampered_spectator"),
+          f"the tampered spectator's own access control refused something:\n{h.log('tampered_spectator')}")
     stop_session(h)
     log = h.log("world_server")
     check("member joined: user=bob" not in log, "the revoked bob joined")
     print("outsiders: " + "; ".join(f"{label} matched {f[0]} writers, {f[1]} readers, read {f[2]} samples"
                                     for label, f in figures.items()))
-    print("outsiders: spectator identity refused a contact-set writer; haptic identity refused an object-state writer")
+    print("outsiders: spectator identity refused a contact-set writer; haptic identity refused an object-state writer; "
+          "a spectator that granted itself every writer matched nothing")
 
 
 def case_controls(h, domain):
@@ -286,7 +310,20 @@ def case_controls(h, domain):
     make_keystore("--session", "it-sec-*", ks, "alice", "bob")
     now = now_utc()
     issue_probe(ks, "still_valid", now - datetime.timedelta(days=3), now + datetime.timedelta(days=30))
+    # The tampered spectator's station of security.outsiders, but its grant signed by the
+    # keystore's CA (given as a permissions CA file of its own, as there): it reads.
+    regranted = os.path.join(w, "regranted_station")
+    station_copy(ks, "spectator", regranted)
+    shutil.copy(os.path.join(ks, "public", "ca.cert.pem"), os.path.join(regranted, "public", "permissions_ca.cert.pem"))
+    grant_everything(os.path.join(regranted, "enclaves", "spectator"), ks, now - datetime.timedelta(days=3),
+                     now + datetime.timedelta(days=30))
     start_session(h, domain + 1, session, ks, HOLD_SCRIPT)
+    h.probe("regranted", domain + 1, session, "--security", regranted, "--as", "graphics_node/regranted")
+    # Its writers (a contact set among them) are matched by the session's readers.
+    regranted_figures = wait_until("the regranted spectator matching readers and reading", 60,
+                                   lambda: (lambda f: f if f and min(f) > 0 else None)(probe_figures(h, "regranted")),
+                                   lambda: h.log("regranted"))
+    stop_probe(h, "regranted")
     h.probe("bob", domain + 1, session, "--security", ks, "--as", "haptic_node/bob")
     udp = udp_only_qos(os.path.join(w, "udp_only_qos.xml"))  # as for the expired probe
     h.probe("set_back", domain + 1, session, "--security", ks, "--as", "still_valid", "--qos", udp,
@@ -298,7 +335,8 @@ def case_controls(h, domain):
     stop_session(h)
     print(f"controls: unauthenticated probe on an unsecured session matched {unauthenticated[0]} writers, "
           f"read {unauthenticated[2]} samples; bob before revocation matched {bob[0]}, read {bob[2]}; "
-          f"set-back clock with a valid certificate matched {set_back[0]}, read {set_back[2]}")
+          f"set-back clock with a valid certificate matched {set_back[0]}, read {set_back[2]}; a spectator granted "
+          f"everything by the keystore's CA matched {regranted_figures[0]} writers, {regranted_figures[1]} readers")
 
 
 def case_every_node(h, domain):
@@ -449,6 +487,13 @@ def submessages(payload):
         i = end
 
 
+def plain_user_data(payloads):
+    """DATA and DATA_FRAG submessages of the session's own (user-defined) writers that travel
+    as they are, not wrapped in secure submessages (entity kind: builtin ones have 0xc0 set)."""
+    return sum(1 for p in payloads for kind, _, _, writer in submessages(p)
+               if kind in (DATA, DATA_FRAG) and writer is not None and writer[3] & 0xC0 == 0)
+
+
 def classify(payloads, needle):
     """Where needle appears in clear: (in participant announcements or handshakes, elsewhere)."""
     announced, leaked = 0, 0
@@ -548,6 +593,7 @@ def case_capture(h, domain):
         payloads, applied, load = captured_session(h, d, keystore, qos, label + "_")
         sec = sum(1 for p in payloads for s in submessages(p) if s[0] in SEC_SUBMESSAGES)
         results[label] = dict(packets=len(payloads), bytes=sum(map(len, payloads)), sec=sec, applied=applied,
+                              plain=plain_user_data(payloads),
                               board=classify(payloads, BOARD_TEXT.encode()), user=classify(payloads, b"alice"),
                               load=load)
         check(applied > 0, f"the {label} spectator applied no deformation: alice's press did not reach it")
@@ -557,12 +603,15 @@ def case_capture(h, domain):
     check(u["board"][1] > 0, f"the unsecured capture holds no board text in user data: {u}")
     check(u["user"][1] > 0, f"the unsecured capture holds no user name in user data: {u}")
     check(u["sec"] == 0, f"the unsecured capture holds secure submessages: {u}")
+    check(u["plain"] > 100, f"the unsecured capture holds only {u['plain']} plain user samples: {u}")
+    check(s["plain"] == 0, f"the secured capture holds {s['plain']} user samples outside secure submessages")
     check(s["sec"] > 100, f"the secured capture holds only {s['sec']} secure submessages: {s}")
     check(s["board"] == (0, 0), f"the secured capture holds the board text: {s['board']} (announcements, other)")
     check(s["user"][1] == 0, f"the secured capture holds the user name outside announcements and handshakes "
           f"{s['user'][1]} times")
     for label, r in results.items():
         print(f"capture {label}: {r['packets']} packets, {r['bytes']} bytes, {r['sec']} secure submessages, "
+              f"{r['plain']} plain user DATA submessages, "
               f"{r['applied']} deformations applied; board text in clear {sum(r['board'])} times; 'alice' in clear "
               f"{r['user'][0]} times in announcements/handshakes, {r['user'][1]} times elsewhere; CPU "
               + ", ".join(f"{n} {100 * c:.0f}%" for n, c in r["load"].items() if n != "wire_kB_per_s")

@@ -73,6 +73,9 @@ SecurityFiles FindSecurityFiles(const std::string& dir, const std::string& parti
                    " not found)");
   }
   f.ca = Readable(root / "public" / "ca.cert.pem", "CA certificate");
+  // A separate permissions CA, as sros2 keystores allow; make_keystore.sh makes one CA.
+  const std::filesystem::path permissions_ca = root / "public" / "permissions_ca.cert.pem";
+  f.permissions_ca = std::filesystem::exists(permissions_ca, ec) ? Readable(permissions_ca, "permissions CA") : f.ca;
   f.governance = Readable(root / "public" / "governance.p7s", "governance");
   f.crl = Readable(root / "public" / "crl.pem", "certificate revocation list");
   f.certificate = Readable(enclave / "cert.pem", "certificate");
@@ -96,7 +99,7 @@ void ApplySecurity(const std::string& dir, const std::string& participant_name,
   // Revoked stations: checked against every peer's certificate in the handshake.
   set("dds.sec.auth.builtin.PKI-DH.identity_crl", uri(f.crl));
   set("dds.sec.access.plugin", "builtin.Access-Permissions");
-  set("dds.sec.access.builtin.Access-Permissions.permissions_ca", uri(f.ca));
+  set("dds.sec.access.builtin.Access-Permissions.permissions_ca", uri(f.permissions_ca));
   set("dds.sec.access.builtin.Access-Permissions.governance", uri(f.governance));
   set("dds.sec.access.builtin.Access-Permissions.permissions", uri(f.permissions));
   set("dds.sec.crypto.plugin", "builtin.AES-GCM-GMAC");

@@ -62,6 +62,10 @@ TEST_F(Keystore, FindsEveryFileOfTheEnclave) {
   EXPECT_EQ(f.certificate, (dir_ / "enclaves/haptic/alice/cert.pem").string());
   EXPECT_EQ(f.permissions, (dir_ / "enclaves/haptic/alice/permissions.p7s").string());
   EXPECT_EQ(f.crl, (dir_ / "public/crl.pem").string());
+  EXPECT_EQ(f.permissions_ca, f.ca);  // one CA for both unless the keystore has two
+  std::ofstream(dir_ / "public/permissions_ca.cert.pem") << "x";
+  EXPECT_EQ(FindSecurityFiles(dir_.string(), "haptic_node/alice").permissions_ca,
+            (dir_ / "public/permissions_ca.cert.pem").string());
 }
 
 TEST_F(Keystore, AMissingFileIsNamed) {

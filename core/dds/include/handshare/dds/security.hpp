@@ -9,7 +9,8 @@ namespace handshare::dds {
 /// The files a secured participant reads (absolute paths).
 struct SecurityFiles {
   std::string enclave;          ///< e.g. "haptic/alice"
-  std::string ca;               ///< public/ca.cert.pem: identity and permissions CA
+  std::string ca;               ///< public/ca.cert.pem: identity CA (and permissions CA)
+  std::string permissions_ca;   ///< public/permissions_ca.cert.pem if there is one, else ca
   std::string governance;       ///< public/governance.p7s
   std::string crl;              ///< public/crl.pem: revoked certificates
   std::string certificate;      ///< enclaves/<enclave>/cert.pem
