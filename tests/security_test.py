@@ -19,21 +19,23 @@ and count the session's endpoints they match and the samples they read:
       does the tampered spectator's station with its grant signed by the keystore's CA.
   capture: a packet capture of a secured dinosaur session (alice presses the tail) on loopback
       UDP holds none of the message board's text or alice's name outside participant
-      announcements and authentication handshakes, and every user sample is encrypted; the same
-      capture of the unsecured session holds both in clear (needs root for the raw socket;
-      SKIP, 77, otherwise).
-
-The keystores are made with the clock set back 3 days (faketime), so that the set-back probes'
-CA, grants and CRL are already valid for them.
-
+      announcements and authentication handshakes, and no user DATA submessage outside secure
+      submessages; the same capture of the unsecured session holds all of them in clear (needs
+      root for the raw socket; SKIP, 77, otherwise).
   every_node: each node and tool runs with its own identity's grant (world server, haptic node,
       spectator, audio guide, recorder, and the player replaying the recording into another
       secured session); a bad keystore is an error naming the file.
 
+The keystores are made with the clock set back 3 days (faketime), so that the set-back probes'
+CA, grants and CRL are already valid for them. Nodes join one at a time (docs/security.md,
+"Known problems").
+
 usage: security_test.py CASE --bin-dir DIR --domain D --work DIR   (domains D and D+1)
 """
+import csv
 import datetime
 import glob
+import math
 import os
 import re
 import shutil
@@ -44,9 +46,6 @@ import subprocess
 import sys
 import threading
 import time
-
-import csv
-import math
 
 from session_test import Harness, check, run_cases, wait_until
 
