@@ -25,6 +25,9 @@ PACKAGES=(
   # network tests (tests/net): namespaces, nft loss/partition, the NFQUEUE delayer; iptables
   # (iptables-nft) reaches the xt NFQUEUE target where the kernel lacks nft's queue expression
   iproute2 nftables iptables libnetfilter-queue-dev
+  # DDS-Security keystores (deploy/security/make_keystore.sh); the security tests set a
+  # station's clock back with faketime (tests/security_test.py)
+  openssl faketime
   # plots for bench/ and WAV checks
   python3 python3-matplotlib python3-numpy python3-pil sox
 )

@@ -24,7 +24,7 @@ int Guide::Run() {
   if (!config_.out_dir.empty()) std::filesystem::create_directories(config_.out_dir);
   speech::SpeechSynthesizer synthesizer;  // fails early if eSpeak NG data is missing
 
-  dds::Participant participant(config_.where, name);
+  dds::Participant participant(config_.where, "audio_guide/" + name);  // the role picks its identity
   dds::MemberAnnouncement member(participant, name, msg::NODE_AUDIO_GUIDE);
   auto board_reader = dds::MakeReader<msg::MessageBoard>(participant, dds::topics::kMessageBoard);
 

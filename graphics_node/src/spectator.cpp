@@ -308,7 +308,7 @@ int Spectator::Run() {
     window_renderer.emplace(options);
   }
 
-  dds::Participant participant(config_.where, name);
+  dds::Participant participant(config_.where, "graphics_node/" + name);  // the role picks its identity
   // The readers first: the server re-sends body poses (best-effort) when it sees the member
   // join, and a reader created after the announcement could miss them.
   WorldView world(participant, assets_dir, name, config_.where.session);

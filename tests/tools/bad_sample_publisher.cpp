@@ -43,7 +43,7 @@ int Run(const common::Options& o) {
   const common::SessionOptions where = common::ReadSessionOptions(o);
   const std::string object = o.GetString("object");
   const double rate_Hz = o.GetDouble("rate", 1.0, 10000.0);
-  dds::Participant participant(where, "bad_sample_publisher");
+  dds::Participant participant(where, o.GetString("as"));
   auto contacts = dds::MakeWriter<msg::ContactSet>(participant, dds::topics::kContactSet);
   auto objects = dds::MakeWriter<msg::ObjectState>(participant, dds::topics::kObjectState);
   auto events = dds::MakeWriter<msg::ControlEvent>(participant, dds::topics::kControlEvent);
@@ -126,6 +126,8 @@ int main(int argc, char** argv) {
                                      "Publishes malformed samples on every topic of a session (a test's hostile peer).");
   handshare::common::DeclareSessionOptions(options);
   options.Value("object", "ID", "the object the bad contact sets and deformations name", "tail")
-      .Value("rate", "HZ", "rounds per second", "1000");
+      .Value("rate", "HZ", "rounds per second", "1000")
+      .Value("as", "NAME", "participant name; with --security it picks the identity (e.g. graphics_node/x: a "
+                           "spectator's)", "bad_sample_publisher");
   return handshare::common::RunNodeMain(argc, argv, options, [](const handshare::common::Options& o) { return Run(o); });
 }

@@ -14,7 +14,9 @@ void DeclareSessionOptions(Options& options) {
       .Value("qos", "FILE", "QoS profile XML (default: $HANDSHARE_QOS_FILE, else handshare_qos.xml of the "
                         "installed share/handshare/qos or the source tree's deploy/qos)", "")
       .Value("peers", "HOST[:PORT],...", "unicast discovery where multicast does not pass: the hosts (or one "
-                                        "participant's discovery port) to announce to; give it to every node", "");
+                                        "participant's discovery port) to announce to; give it to every node", "")
+      .Value("security", "DIR", "DDS-Security keystore (deploy/security/make_keystore.sh): join with this "
+                                "node's identity in DIR; without it, no security", "");
 }
 
 SessionOptions ReadSessionOptions(const Options& options) {
@@ -24,6 +26,7 @@ SessionOptions ReadSessionOptions(const Options& options) {
   s.duration = std::chrono::duration<double>(options.GetDouble("duration", 0.0, 1e7));
   s.qos_file = options.GetString("qos");
   s.peers = ParsePeers(options.GetString("peers"));
+  s.security_dir = options.GetString("security");
   return s;
 }
 

@@ -4,6 +4,7 @@
 
 #include "discovery.hpp"
 #include "handshare/common/data_dir.hpp"
+#include "security_properties.hpp"
 
 #include <fastdds/dds/core/condition/StatusCondition.hpp>
 #include <fastdds/dds/core/condition/WaitSet.hpp>
@@ -284,13 +285,14 @@ std::string DefaultQosFile() {
 
 
 Participant::Participant(int domain_id, const std::string& session, const std::string& name,
-                         const std::string& qos_file)
+                         const std::string& qos_file, const std::string& security_dir)
     : Participant(
           [&] {
             common::SessionOptions where;
             where.domain_id = domain_id;
             where.session = session;
             where.qos_file = qos_file;
+            where.security_dir = security_dir;
             return where;
           }(),
           name) {}
@@ -312,10 +314,12 @@ Participant::Participant(const common::SessionOptions& where, const std::string&
   Check(factory->get_participant_qos_from_profile(kParticipantProfile, pqos),
         std::string("reading participant profile '") + kParticipantProfile + "' from " + file);
   pqos.name(name);
+  // The identity first: security decides what the participant may announce (security.cpp).
+  if (!where.security_dir.empty()) detail::ApplySecurity(where.security_dir, name, pqos);
   detail::ConfigureDiscovery(where, pqos);  // participant id, --peers (discovery.cpp)
   impl_->participant = CheckEntity(factory->create_participant(domain_id, pqos),
                                    "participant '" + name + "' on domain " +
-                                       std::to_string(domain_id));
+                                       std::to_string(domain_id) + detail::SecurityFailureHint(where.security_dir, name));
   // The session is the partition: sessions sharing a domain never exchange samples.
   fdds::PublisherQos pub_qos = fdds::PUBLISHER_QOS_DEFAULT;
   pub_qos.partition().push_back(session.c_str());

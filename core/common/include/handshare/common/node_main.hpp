@@ -18,9 +18,10 @@ struct SessionOptions {
   std::chrono::duration<double> duration{0.0};  // 0: until SIGINT/SIGTERM
   std::string qos_file;                          // "": the default profiles
   std::vector<Peer> peers;                       // --peers: unicast discovery (docs/network.md)
+  std::string security_dir;                      // "": no DDS-Security (docs/security.md)
 };
 
-/// Declares --domain, --session (required), --duration, --qos and --peers.
+/// Declares --domain, --session (required), --duration, --qos, --peers and --security.
 void DeclareSessionOptions(Options& options);
 /// Reads them back after parsing; throws OptionError for a bad value.
 SessionOptions ReadSessionOptions(const Options& options);

@@ -131,8 +131,10 @@ class Participant {
   ///                    domain never see each other's samples.
   /// @param name        participant name shown by DDS tools.
   /// @param qos_file    XML profiles; empty: DefaultQosFile().
+  /// @param security_dir  DDS-Security keystore; the identity is the enclave of name
+  ///                    (EnclaveOf in security.hpp); empty: no security.
   Participant(int domain_id, const std::string& session, const std::string& name,
-              const std::string& qos_file = "");
+              const std::string& qos_file = "", const std::string& security_dir = "");
   /// A node's participant from its session options (--domain, --session, --qos, and the
   /// discovery and security options every node shares).
   Participant(const common::SessionOptions& where, const std::string& name);
