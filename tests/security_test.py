@@ -47,7 +47,7 @@ import sys
 import threading
 import time
 
-from session_test import Harness, check, run_cases, wait_until
+from session_test import Failure, Harness, check, run_cases, wait_until
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 ROOT = os.path.join(HERE, "..")
@@ -174,6 +174,21 @@ def wait_reads(h, label, timeout=60):
                       lambda: h.log(label))
 
 
+def probe_reads(h, label, domain, session, *args, env=None, attempts=3, timeout=20):
+    """Starts an invited probe and waits until it reads; one that has not within timeout is
+    stopped and started again (Fast DDS 2.9.1 sometimes never completes a secured handshake:
+    docs/security.md, "Known problems"), at most attempts times. Returns its figures."""
+    for attempt in range(1, attempts + 1):
+        h.probe(label, domain, session, *args, env=env)
+        try:
+            return wait_reads(h, label, timeout)
+        except Failure:
+            if attempt == attempts:
+                raise
+            print(f"{label}: not reading after {timeout} s (attempt {attempt}); starting it again")
+            h.stop(label, 30)
+
+
 def stop_probe(h, label):
     check(h.stop(label, 30) == 0, f"{label} failed:\n{h.log(label)}")
     figures = probe_figures(h, label, final=True)
@@ -254,7 +269,7 @@ def case_outsiders(h, domain):
     # The invited probe first, until alice's device states reach it: handshakes started all at
     # once sometimes never complete (docs/security.md, "Known problems"), and the outsiders'
     # refused handshakes go on while they watch.
-    h.probe("insider", domain, session, "--security", ks, "--as", "probe")
+    probe_reads(h, "insider", domain, session, "--security", ks, "--as", "probe")
     wait_until("the invited probe reading 100 samples", 60,
                lambda: (probe_figures(h, "insider") or (0, 0, 0))[2] >= 100, lambda: h.log("insider"))
     h.probe("unauthenticated", domain, session, "--as", "probe")
@@ -323,12 +338,13 @@ def case_controls(h, domain):
                                    lambda: (lambda f: f if f and min(f) > 0 else None)(probe_figures(h, "regranted")),
                                    lambda: h.log("regranted"))
     stop_probe(h, "regranted")
-    h.probe("bob", domain + 1, session, "--security", ks, "--as", "haptic_node/bob")
+    # One join at a time (two secured probes started at once once left one of them never
+    # authenticated: 1 run in 4 here), and a probe that has not read within 20 s is started
+    # again, as docs/security.md tells users to restart a node that does not join.
+    bob = probe_reads(h, "bob", domain + 1, session, "--security", ks, "--as", "haptic_node/bob")
     udp = udp_only_qos(os.path.join(w, "udp_only_qos.xml"))  # as for the expired probe
-    h.probe("set_back", domain + 1, session, "--security", ks, "--as", "still_valid", "--qos", udp,
-            env=faketime_env(2))
-    bob = wait_reads(h, "bob")
-    set_back = wait_reads(h, "set_back")
+    set_back = probe_reads(h, "set_back", domain + 1, session, "--security", ks, "--as", "still_valid", "--qos", udp,
+                           env=faketime_env(2))
     for label in ("bob", "set_back"):
         stop_probe(h, label)
     stop_session(h)
