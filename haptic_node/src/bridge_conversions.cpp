@@ -105,6 +105,7 @@ std::int32_t OwnedBody(const ReceivedBodies& bodies, const std::string& user, co
 RemoteContacts ToRemoteContacts(const session::PeerContacts& peers, const world::SceneModels& models,
                                 session::PeerContacts::Clock::time_point now) {
   RemoteContacts remote;
+  remote.fade = peers.fade();
   peers.ForEach(models, now, [&](const contact::PeerContact& c, const msg::ContactSet&) {
     if (remote.count >= kMaxRemoteContacts || models.world->contact_solver(c.object) == nullptr) return;
     remote.items[remote.count++] = c;

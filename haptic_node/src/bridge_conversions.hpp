@@ -49,8 +49,9 @@ FollowedBodies ToFollowedBodies(const ReceivedBodies& bodies, const std::string&
 /// The body the world server gave `user` to simulate (object index), or -1.
 std::int32_t OwnedBody(const ReceivedBodies& bodies, const std::string& user, const world::SceneModels& models);
 
-/// The peers' contacts on this scene's deformables, faded by age at `now` (rigid bodies move
-/// by their owner's published pose instead; at most kMaxRemoteContacts).
+/// The peers' contacts on this scene's deformables that have not faded out at `now`, not faded,
+/// with their arrival times and the fade law: the haptic thread fades them at each step
+/// (rigid bodies move by their owner's published pose instead; at most kMaxRemoteContacts).
 RemoteContacts ToRemoteContacts(const session::PeerContacts& peers, const world::SceneModels& models,
                                 session::PeerContacts::Clock::time_point now);
 

@@ -14,7 +14,7 @@ namespace {
 /// Posted for "no renderer", so that nullptr in the mailbox means empty. Never called.
 class NoRenderer final : public ForceRenderer {
  public:
-  void Render(double, double, const DeviceReading&, std::array<Eigen::Vector3d, kFingers>&) noexcept override {}
+  void Render(double, double, std::uint64_t, const DeviceReading&, std::array<Eigen::Vector3d, kFingers>&) noexcept override {}
 };
 NoRenderer no_renderer;
 
@@ -114,7 +114,7 @@ void HapticLoop::Step(double t_s) noexcept {
     if (device_fault) {
       renderer_->ReleaseAll();
     } else {
-      renderer_->Render(t_s, dt_s, reading_, f_E_W_);
+      renderer_->Render(t_s, dt_s, now_ns, reading_, f_E_W_);
     }
   }
 

@@ -44,7 +44,7 @@ void SceneRenderer::ReleaseAll() noexcept {
   reports_.Publish();
 }
 
-void SceneRenderer::Render(double /*t_s*/, double dt_s, const DeviceReading& reading,
+void SceneRenderer::Render(double /*t_s*/, double dt_s, std::uint64_t now_ns, const DeviceReading& reading,
                            std::array<Eigen::Vector3d, kFingers>& f_E_W) noexcept {
   auto& world = *models_.world;
   // 1. Objects that move by themselves (the Daphnia swims), on the session's clock.
@@ -59,7 +59,6 @@ void SceneRenderer::Render(double /*t_s*/, double dt_s, const DeviceReading& rea
   // 1b. Bodies simulated elsewhere (another user owns them, or the world server): follow.
   followed_in_.Read(followed_);
   if (followed_.count > 0) {
-    const std::uint64_t now_ns = common::SteadyNowNs();
     for (int i = 0; i < std::min(followed_.count, kMaxReportedBodies); ++i) {
       const auto& b = followed_.items[i];
       if (b.object < 0 || b.object >= world.num_objects()) continue;
@@ -77,14 +76,18 @@ void SceneRenderer::Render(double /*t_s*/, double dt_s, const DeviceReading& rea
       world.SetVelocity(b.object, v, Eigen::Vector3d::Zero());
     }
   }
-  // 2. The other hands' contacts (newest set; kept until a newer one arrives).
+  // 2. The other hands' contacts (newest set; kept until a newer one arrives), faded by their
+  // age at this step: a silent peer's contacts ramp out at the haptic rate even while the
+  // bridge is late with the next hand-over. A faded-out one leaves the solve.
   if (remote_in_.Read(remote_) && remote_.newest_stamp_ns != peer_stamp_ns_) {
     peer_stamp_ns_ = remote_.newest_stamp_ns;
     peer_seen_ns_ = common::SteadyNowNs();
   }
-  const int n_remote = std::min(remote_.count, kMaxRemoteContacts);
-  for (int i = 0; i < n_remote; ++i) {
-    remote_contacts_[static_cast<std::size_t>(i)] = contact::ToRemoteContact(remote_.items[i]);
+  int n_remote = 0;
+  for (int i = 0; i < std::min(remote_.count, kMaxRemoteContacts); ++i) {
+    const contact::PeerContact& c = remote_.items[i];
+    if (remote_.fade.WeightAt(now_ns, c.received_ns) <= 0.0) continue;
+    remote_contacts_[static_cast<std::size_t>(n_remote++)] = contact::ToRemoteContact(c, remote_.fade, now_ns);
   }
   // 3. Contacts: rigid, dynamic and deformable objects, all hands on a deformable together.
   world.Step(dt_s, reading.p_WE, {remote_contacts_.data(), static_cast<std::size_t>(n_remote)});

@@ -191,6 +191,14 @@ TEST_F(BridgeConversions, PeersReachTheRendererOnlyOnDeformables) {
   EXPECT_EQ(remote.items[0].object, models().Find("block"));
   EXPECT_EQ(remote.items[0].finger, 0);
   EXPECT_EQ(remote.items[0].u_W_m[2], -0.001);
+  EXPECT_EQ(remote.items[0].received_ns, session::PeerContacts::SteadyNs(now));
+  // Fading at the bridge's tick: handed over as received, with the fade law, for the haptic
+  // thread to fade at each of its steps.
+  remote = ToRemoteContacts(peers, models(), now + std::chrono::milliseconds(350));
+  ASSERT_EQ(remote.count, 1);
+  EXPECT_EQ(remote.items[0].u_W_m[2], -0.001);
+  EXPECT_EQ(remote.fade.fade_after_ns, peers.fade().fade_after_ns);
+  EXPECT_EQ(remote.fade.lifespan_ns, peers.fade().lifespan_ns);
   // Silent for longer than the lifespan: gone.
   remote = ToRemoteContacts(peers, models(), now + std::chrono::seconds(1));
   EXPECT_EQ(remote.count, 0);

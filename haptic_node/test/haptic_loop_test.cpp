@@ -102,7 +102,7 @@ TEST(HapticLoop, ThreadRunsAndHandsOffMonotonicSnapshots) {
 class ConstantRenderer final : public ForceRenderer {
  public:
   explicit ConstantRenderer(Eigen::Vector3d f) : f_(f) {}
-  void Render(double, double, const DeviceReading&, std::array<Eigen::Vector3d, kFingers>& out) noexcept override {
+  void Render(double, double, std::uint64_t, const DeviceReading&, std::array<Eigen::Vector3d, kFingers>& out) noexcept override {
     for (auto& f : out) f = f_;
     ++renders;
   }
@@ -242,7 +242,7 @@ struct RendererTally {
 class CanaryRenderer final : public ForceRenderer {
  public:
   explicit CanaryRenderer(RendererTally& tally) : tally_(tally) { tally_.created.fetch_add(1, std::memory_order_relaxed); }
-  void Render(double, double, const DeviceReading&, std::array<Eigen::Vector3d, kFingers>& out) noexcept override {
+  void Render(double, double, std::uint64_t, const DeviceReading&, std::array<Eigen::Vector3d, kFingers>& out) noexcept override {
     Check();
     for (auto& f : out) f = Eigen::Vector3d(0, 0, 0.1);
     tally_.renders.fetch_add(1, std::memory_order_relaxed);

@@ -5,11 +5,19 @@
 
 #include <gtest/gtest.h>
 
+#include <unistd.h>
+
+#include <chrono>
+#include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <string>
 
+#include "bridge_conversions.hpp"
 #include "handshare/common/clock.hpp"
 #include "handshare/scene/scene.hpp"
+#include "handshare/session/peer_contacts.hpp"
+#include "handshare/testing/allocation_counter.hpp"
 
 namespace handshare::haptic {
 namespace {
@@ -43,7 +51,7 @@ TEST(SceneRenderer, FollowedBodyGlidesOnAtItsPublishedVelocityBetweenSamples) {
     fb.items[0].v_WO_m_per_s[0] = 0.5;
     fb.items[0].received_ns = common::SteadyNowNs() - static_cast<std::uint64_t>(age_s * 1e9);
     r.SetFollowed(fb);
-    r.Render(0.0, 1e-3, far, f);
+    r.Render(0.0, 1e-3, common::SteadyNowNs(), far, f);
     return r.models().world->pose(ball).translation();
   };
   // A sample that arrived 20 ms ago: 10 mm on (+ the step's own 0.5 mm), not where it was.
@@ -77,7 +85,7 @@ TEST(SceneRenderer, ReportsTheStepThatFirstUsedANewPeerSet) {
   std::array<Eigen::Vector3d, kFingers> f{};
   ContactReport report;
 
-  r.Render(0.0, 1e-3, far, f);
+  r.Render(0.0, 1e-3, common::SteadyNowNs(), far, f);
   ASSERT_TRUE(r.TakeReport(report));
   EXPECT_EQ(report.peer_stamp_ns, 0u);  // no peer set yet
   EXPECT_EQ(report.peer_seen_ns, 0u);
@@ -86,7 +94,7 @@ TEST(SceneRenderer, ReportsTheStepThatFirstUsedANewPeerSet) {
   remote.newest_stamp_ns = common::SteadyNowNs();
   r.SetRemote(remote);
   const std::uint64_t before = common::SteadyNowNs();
-  r.Render(0.0, 1e-3, far, f);
+  r.Render(0.0, 1e-3, common::SteadyNowNs(), far, f);
   const std::uint64_t after = common::SteadyNowNs();
   ASSERT_TRUE(r.TakeReport(report));
   EXPECT_EQ(report.peer_stamp_ns, remote.newest_stamp_ns);
@@ -98,9 +106,131 @@ TEST(SceneRenderer, ReportsTheStepThatFirstUsedANewPeerSet) {
   // The same set again (the bridge sends the newest every tick): the first step's time stays.
   const std::uint64_t first_seen = report.peer_seen_ns;
   r.SetRemote(remote);
-  r.Render(0.0, 1e-3, far, f);
+  r.Render(0.0, 1e-3, common::SteadyNowNs(), far, f);
   ASSERT_TRUE(r.TakeReport(report));
   EXPECT_EQ(report.peer_seen_ns, first_seen);
+  std::filesystem::remove_all(dir);
+}
+
+// A peer that vanished fades out at the haptic rate whatever the bridge does. The bridge
+// (ReceivePeers, ~100 Hz) hands the peers' contacts over; under load it stalls for tens to
+// 100+ ms. Here bob's last set arrives at t0, the bridge ticks every 10 ms but stalls from
+// 250 to 400 ms (inside the fade, 200-500 ms), and the haptic thread steps every 1 ms while
+// alice presses the same block. Oracle: a second renderer, stepped with the same readings,
+// is handed at every step a fresh copy of bob's set with u and f scaled by the fade law's
+// weight at that step's time, i.e. a weight that moves by exactly (fade rate x 1 ms) per step.
+// Alice's force must be the oracle's at every step, so it never moves faster than the fade.
+// With the weight computed by the bridge, the stall held it at 0.87 and the next tick stepped
+// it to 0.33 in one haptic step (net.partitioned_user, load 10: 0.0355 N in one 7 ms row).
+TEST(SceneRenderer, AVanishedPeerFadesAtTheHapticRateWhileTheBridgeStalls) {
+  using namespace std::chrono_literals;
+  using Clock = session::PeerContacts::Clock;
+  const auto dir = std::filesystem::temp_directory_path() /
+                   ("handshare_scene_renderer_fade_test_" + std::to_string(getpid()));
+  std::filesystem::remove_all(dir);
+  std::filesystem::create_directories(dir / "scenes");
+  const auto file = dir / "scenes" / "lab.json";
+  std::ofstream(file) << R"({"name": "lab", "gravity_m_per_s2": [0, 0, -9.81], "objects": [
+      {"id": "ground", "kind": "rigid", "shape": "box", "position_m": [0, 0, -0.02], "half_extent_m": [0.3, 0.3, 0.02]},
+      {"id": "block", "kind": "deformable", "shape": "box", "position_m": [-0.1, 0, 0.01],
+       "half_extent_m": [0.02, 0.02, 0.01], "material": {"E_Pa": 20000, "nu": 0.4}, "fixed": {"below_m": -0.0099}}],
+      "messages": [{"language": "en", "text": "t", "next_action": "a"}]})";
+  world::SceneModelsOptions options;
+  options.cache_dir = dir / "cache";
+  const scene::Scene scene = scene::LoadScene(file);
+  SceneRenderer r(scene, options);
+  SceneRenderer oracle(scene, options);
+  ASSERT_GE(r.models().Find("block"), 0);
+
+  const auto t0 = Clock::now();
+  std::array<Eigen::Vector3d, kFingers> f{};
+  // One haptic step of `renderer` at t0 + t_ms; alice's index finger's force along z [N].
+  auto step = [&](SceneRenderer& renderer, const DeviceReading& reading, double t_ms) {
+    const auto step_ns = session::PeerContacts::SteadyNs(t0) + static_cast<std::uint64_t>(t_ms * 1e6);
+    renderer.Render(0.0, 1e-3, step_ns, reading, f);
+    return f[0].z();
+  };
+
+  // Alice's index finger comes down onto the block's top (z = 0.02 m) and presses 2 mm.
+  DeviceReading alice;
+  alice.valid = true;
+  for (auto& p : alice.p_WE) p = Eigen::Vector3d(1.0, 1.0, 1.0);
+  const double radius_m = options.fingertip_radius_m;
+  double f_alone = 0.0;
+  for (int i = 0; i <= 50; ++i) {
+    alice.p_WE[0] = Eigen::Vector3d(-0.105, 0.0, 0.02 + radius_m + 0.002 - 1e-4 * std::min(i, 40));
+    f_alone = step(r, alice, -100.0 + i);
+    ASSERT_EQ(step(oracle, alice, -100.0 + i), f_alone);
+  }
+  ASSERT_GT(f_alone, 0.05);  // she presses the block
+
+  // Bob presses 5 mm away, 3 mm deep: his set arrives at t0 and is his last.
+  auto bob = [](double weight) {
+    msg::ContactSet s;
+    s.user("bob");
+    s.session("s");
+    s.fingers()[0].active(true);
+    s.fingers()[0].object_id("block");
+    s.fingers()[0].p_W_m({-0.095, 0.0, 0.02});
+    s.fingers()[0].u_imposed_W_m({0.0, 0.0, weight * -0.003});
+    s.fingers()[0].f_W_N({0.0, 0.0, weight * -0.5});
+    return s;
+  };
+  const session::PeerContactsConfig fade{200ms, 500ms};
+  session::PeerContacts peers(fade);
+  peers.Receive(bob(1.0), t0, "alice");
+
+  // The bridge's tick as ReceivePeers runs it (without DDS), at t0 + t_ms.
+  auto at = [&](double t_ms) { return t0 + std::chrono::microseconds(static_cast<std::int64_t>(t_ms * 1e3)); };
+  auto bridge_tick = [&](double t_ms) {
+    peers.Expire(at(t_ms));
+    r.SetRemote(ToRemoteContacts(peers, r.models(), at(t_ms)));
+  };
+  // The oracle's peer: bob's set scaled by the law's weight at t_ms, received just now.
+  auto oracle_tick = [&](double t_ms) {
+    session::PeerContacts now_peers(fade);
+    const double w = now_peers.Weight(at(t_ms) - t0);
+    if (w > 0.0) now_peers.Receive(bob(w), at(t_ms), "alice");
+    oracle.SetRemote(ToRemoteContacts(now_peers, oracle.models(), at(t_ms)));
+  };
+  bridge_tick(0.0);
+  oracle_tick(0.0);
+  const double f_full = step(r, alice, 0.0);
+  ASSERT_EQ(step(oracle, alice, 0.0), f_full);
+  ASSERT_GT(std::abs(f_full - f_alone), 0.01) << "bob's press must change alice's force to test its fade";
+
+  // 1 ms haptic steps to 600 ms; bridge ticks every 10 ms, none from 250 to 400 ms (stalled).
+  double prev = f_full, prev_oracle = f_full;
+  double worst = 0.0, worst_at_ms = 0.0, worst_oracle = 0.0, off = 0.0, off_at_ms = 0.0;
+  long allocations = 0;  // by the haptic thread's steps (the fade is computed there)
+  for (int t = 1; t <= 600; ++t) {
+    if (t % 10 == 0 && !(t >= 250 && t < 400)) bridge_tick(t);
+    oracle_tick(t);
+    const long before = testing::AllocationCount();
+    const double now_f = step(r, alice, t);
+    allocations += testing::AllocationCount() - before;
+    const double now_oracle = step(oracle, alice, t);
+    if (std::abs(now_f - prev) > worst) {
+      worst = std::abs(now_f - prev);
+      worst_at_ms = t;
+    }
+    worst_oracle = std::max(worst_oracle, std::abs(now_oracle - prev_oracle));
+    if (std::abs(now_f - now_oracle) > off) {
+      off = std::abs(now_f - now_oracle);
+      off_at_ms = t;
+    }
+    prev = now_f;
+    prev_oracle = now_oracle;
+  }
+  // The same solve with the same inputs: equal but for round-off (1e-9 N, far below a step).
+  EXPECT_LE(worst, worst_oracle + 1e-9)
+      << "alice's force moved " << worst << " N in one 1 ms step at " << worst_at_ms
+      << " ms; a weight falling at the fade's rate moves it at most " << worst_oracle << " N per step";
+  EXPECT_LE(off, 1e-9) << "alice's force at " << off_at_ms << " ms is " << off
+                       << " N off the force with bob's contact at the fade's weight for that step";
+  EXPECT_LT(worst_oracle, 0.02 * std::abs(f_full - f_alone));  // the oracle itself ramps (300 steps)
+  EXPECT_NEAR(prev, f_alone, 1e-9);                             // gone at the lifespan
+  EXPECT_EQ(allocations, 0);
   std::filesystem::remove_all(dir);
 }
 

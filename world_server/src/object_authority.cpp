@@ -249,7 +249,7 @@ TickOutput ObjectAuthority::Tick(Clock::time_point now, double dt_s) {
   std::size_t n_all = 0;
   peers_.ForEach(*models_, now, [&](const contact::PeerContact& c, const msg::ContactSet&) {
     if (n_all >= remote_.size() || world.contact_solver(c.object) == nullptr) return;
-    remote_[n_all++] = contact::ToRemoteContact(c);
+    remote_[n_all++] = contact::ToRemoteContact(c, peers_.fade(), session::PeerContacts::SteadyNs(now));
   });
 
   const double motion_t =

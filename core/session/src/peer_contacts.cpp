@@ -1,6 +1,7 @@
 #include "handshare/session/peer_contacts.hpp"
 
 #include <algorithm>
+#include <chrono>
 #include <stdexcept>
 
 namespace handshare::session {
@@ -9,6 +10,8 @@ PeerContacts::PeerContacts(PeerContactsConfig config) : config_(config) {
   if (config_.fade_after.count() < 0 || config_.lifespan <= config_.fade_after) {
     throw std::invalid_argument("PeerContacts: need 0 <= fade_after < lifespan");
   }
+  fade_.fade_after_ns = std::chrono::duration_cast<std::chrono::nanoseconds>(config_.fade_after).count();
+  fade_.lifespan_ns = std::chrono::duration_cast<std::chrono::nanoseconds>(config_.lifespan).count();
 }
 
 void PeerContacts::Receive(const msg::ContactSet& set, Clock::time_point now, const std::string& self) {
@@ -22,10 +25,7 @@ void PeerContacts::Expire(Clock::time_point now) {
 }
 
 double PeerContacts::Weight(Clock::duration age) const {
-  if (age <= config_.fade_after) return 1.0;
-  if (age >= config_.lifespan) return 0.0;
-  const double span = std::chrono::duration<double>(config_.lifespan - config_.fade_after).count();
-  return std::clamp(1.0 - std::chrono::duration<double>(age - config_.fade_after).count() / span, 0.0, 1.0);
+  return fade_.Weight(std::chrono::duration_cast<std::chrono::nanoseconds>(age).count());
 }
 
 }  // namespace handshare::session

@@ -28,10 +28,13 @@ struct Seen {
   double u_z, f_z, weight;
 };
 
+// The contacts as a solve at `now` takes them: faded by their age (contact::ToRemoteContact).
 std::vector<Seen> Collect(const PeerContacts& peers, const world::SceneModels& models, Clock::time_point now) {
   std::vector<Seen> out;
+  const std::uint64_t now_ns = PeerContacts::SteadyNs(now);
   peers.ForEach(models, now, [&](const PeerContact& c, const msg::ContactSet&) {
-    out.push_back({c.object, c.finger, c.hand, c.u_W_m[2], c.f_E_W_N[2], c.weight});
+    const contact::RemoteContact r = contact::ToRemoteContact(c, peers.fade(), now_ns);
+    out.push_back({c.object, c.finger, c.hand, r.u_W_m.z(), r.f_E_W_N.z(), peers.fade().WeightAt(now_ns, c.received_ns)});
   });
   return out;
 }
@@ -95,6 +98,25 @@ TEST_F(PeerContactsTest, ANewerSetReplacesTheOldAndRefreshes) {
   EXPECT_EQ(peers.sets().size(), 1u);
 }
 
+// The contacts come out as their set carried them, with the set's arrival time: the step that
+// uses them fades them at its own time, so a late hand-over cannot hold the fade still.
+TEST_F(PeerContactsTest, ContactsComeOutUnfadedWithTheirArrivalTime) {
+  PeerContacts peers({200ms, 500ms});
+  const auto t0 = Clock::now();
+  peers.Receive(Set("bob", "ball", -0.004, -2.0), t0);
+  int seen = 0;
+  peers.ForEach(*models_, t0 + 350ms, [&](const PeerContact& c, const msg::ContactSet&) {
+    ++seen;
+    EXPECT_EQ(c.received_ns, PeerContacts::SteadyNs(t0));
+    EXPECT_DOUBLE_EQ(c.u_W_m[2], -0.004);
+    EXPECT_DOUBLE_EQ(c.f_E_W_N[2], 2.0);
+  });
+  EXPECT_EQ(seen, 1);
+  EXPECT_EQ(peers.fade().fade_after_ns, 200'000'000);
+  EXPECT_EQ(peers.fade().lifespan_ns, 500'000'000);
+  EXPECT_NEAR(peers.fade().rate_per_s(), 1.0 / 0.3, 1e-12);
+}
+
 TEST(PeerContactsConfig, RejectsAnEmptyFade) {
   EXPECT_THROW(PeerContacts({500ms, 500ms}), std::invalid_argument);
 }
@@ -104,23 +126,33 @@ TEST(PeerContactsConfig, RejectsAnEmptyFade) {
 
 namespace handshare::session {
 namespace {
-TEST(ToRemoteContact, CarriesEveryField) {
+TEST(ToRemoteContact, CarriesEveryFieldFadedByItsAgeAtTheStep) {
   PeerContact c;
   c.hand = 2;
   c.finger = 4;
   c.object = 7;
+  c.received_ns = 1'000'000'000;
   for (int k = 0; k < 3; ++k) {
     c.p_WC_m[k] = 0.1 * (k + 1);
     c.u_W_m[k] = -0.001 * (k + 1);
     c.f_E_W_N[k] = 1.5 * (k + 1);
   }
-  const contact::RemoteContact r = ToRemoteContact(c);
+  const contact::PeerFade fade;  // 200 ms, 500 ms
+  const contact::RemoteContact r = ToRemoteContact(c, fade, c.received_ns + 200'000'000);
   EXPECT_EQ(r.hand, 2);
   EXPECT_EQ(r.finger, 4);
   EXPECT_EQ(r.object, 7);
   EXPECT_EQ(r.p_WC_m, Eigen::Vector3d(0.1, 0.2, 0.30000000000000004));
   EXPECT_EQ(r.u_W_m, Eigen::Vector3d(-0.001, -0.002, -0.003));
   EXPECT_EQ(r.f_E_W_N, Eigen::Vector3d(1.5, 3.0, 4.5));
+  // Half-way through the fade: u and f halved, the point kept.
+  const contact::RemoteContact half = ToRemoteContact(c, fade, c.received_ns + 350'000'000);
+  EXPECT_EQ(half.p_WC_m, r.p_WC_m);
+  EXPECT_TRUE(half.u_W_m.isApprox(0.5 * r.u_W_m, 1e-12));
+  EXPECT_TRUE(half.f_E_W_N.isApprox(0.5 * r.f_E_W_N, 1e-12));
+  // A step stamped before the set arrived (the hand-over raced the step's clock read): fresh.
+  EXPECT_EQ(fade.WeightAt(c.received_ns - 1000, c.received_ns), 1.0);
+  EXPECT_EQ(fade.WeightAt(c.received_ns + 500'000'000, c.received_ns), 0.0);
 }
 }  // namespace
 }  // namespace handshare::session

@@ -47,10 +47,13 @@ struct ContactReport {
   std::uint64_t peer_seen_ns = 0;
 };
 
-/// Other hands' contacts on this scene's objects (trivially copyable).
+/// Other hands' contacts on this scene's objects (trivially copyable), as received: the
+/// haptic thread fades each by its age at every step (fade, items[i].received_ns), so the fade
+/// moves at the haptic rate however seldom the bridge hands a new set over.
 struct RemoteContacts {
   std::int32_t count = 0;
   contact::PeerContact items[kMaxRemoteContacts];
+  contact::PeerFade fade;  ///< the fade law (session::PeerContacts::fade())
   /// The sender's stamp (ContactSet::stamp_ns) of the newest peer set received so far [ns].
   std::uint64_t newest_stamp_ns = 0;
 };
@@ -80,7 +83,7 @@ class SceneRenderer final : public ForceRenderer {
   SceneRenderer(const scene::Scene& scene, const world::SceneModelsOptions& options,
                 common::SessionClock clock = {});
 
-  void Render(double t_s, double dt_s, const DeviceReading& reading,
+  void Render(double t_s, double dt_s, std::uint64_t now_ns, const DeviceReading& reading,
               std::array<Eigen::Vector3d, kFingers>& f_E_W) noexcept override;
   void ReleaseAll() noexcept override;
 

@@ -3,33 +3,59 @@
 /// it: plain, trivially copyable data with no middleware type, so the haptic renderer's
 /// headers never reach the DDS layer. handshare::session turns received contact sets into
 /// these (the DDS boundary); the haptic renderer and the world server turn them into
-/// RemoteContacts for the solves.
+/// RemoteContacts for the solves, faded by the contact's age at their own step (PeerFade).
 #include <cstdint>
 
 #include "handshare/contact/haptic_world.hpp"
 
 namespace handshare::contact {
 
-/// One peer fingertip on an object of the local models. Plain data.
+/// How a silent peer's contact fades out, so the others feel a ramp, not a step, when it
+/// vanishes: weight 1 while its set is at most fade_after old, falling linearly to 0 at
+/// lifespan (then the set is dropped). Plain data; Weight() is real-time safe.
+struct PeerFade {
+  std::int64_t fade_after_ns = 200'000'000;
+  std::int64_t lifespan_ns = 500'000'000;
+
+  /// The weight of a contact whose set arrived `age_ns` ago (negative: fresh, 1).
+  double Weight(std::int64_t age_ns) const noexcept {
+    if (age_ns <= fade_after_ns) return 1.0;
+    if (age_ns >= lifespan_ns) return 0.0;
+    const double w = 1.0 - static_cast<double>(age_ns - fade_after_ns) / static_cast<double>(lifespan_ns - fade_after_ns);
+    return w < 0.0 ? 0.0 : (w > 1.0 ? 1.0 : w);
+  }
+  /// The weight at `now_ns` of a set received at `received_ns` (one steady clock) [ns].
+  double WeightAt(std::uint64_t now_ns, std::uint64_t received_ns) const noexcept {
+    return Weight(static_cast<std::int64_t>(now_ns - received_ns));  // two's complement: earlier is negative
+  }
+  /// The largest change of the weight per second (the fade's slope) [1/s].
+  double rate_per_s() const noexcept { return 1e9 / static_cast<double>(lifespan_ns - fade_after_ns); }
+};
+
+/// One peer fingertip on an object of the local models, as its set carried it (not faded).
+/// Plain data.
 struct PeerContact {
   std::int32_t hand = 0;        ///< 1, 2, ... in user-name order
   std::int32_t finger = 0;
   std::int32_t object = -1;     ///< object index of the local models (world::SceneModels)
   double p_WC_m[3] = {};        ///< contact point on the undeformed surface [m], in W
-  double u_W_m[3] = {};         ///< imposed displacement (deformables), faded [m], in W
-  double f_E_W_N[3] = {};       ///< force on the peer's fingertip, faded [N], in W
-  double weight = 1.0;          ///< the fade factor applied (1: fresh)
+  double u_W_m[3] = {};         ///< imposed displacement (deformables) [m], in W, not faded
+  double f_E_W_N[3] = {};       ///< force on the peer's fingertip [N], in W, not faded
+  std::uint64_t received_ns = 0;  ///< when its set arrived here (steady clock, common::SteadyNowNs) [ns]
 };
 
-/// The contact as the haptic world takes it. Real-time safe.
-inline RemoteContact ToRemoteContact(const PeerContact& c) noexcept {
+/// The contact as a solve takes it at `now_ns` (steady clock): u and f scaled by the fade's
+/// weight at the contact's age. Whoever steps the solve calls this with its own step time, so
+/// the fade moves with every step however late the contact was handed over. Real-time safe.
+inline RemoteContact ToRemoteContact(const PeerContact& c, const PeerFade& fade, std::uint64_t now_ns) noexcept {
+  const double w = fade.WeightAt(now_ns, c.received_ns);
   RemoteContact r;
   r.hand = c.hand;
   r.finger = c.finger;
   r.object = c.object;
   r.p_WC_m = Eigen::Vector3d(c.p_WC_m[0], c.p_WC_m[1], c.p_WC_m[2]);
-  r.u_W_m = Eigen::Vector3d(c.u_W_m[0], c.u_W_m[1], c.u_W_m[2]);
-  r.f_E_W_N = Eigen::Vector3d(c.f_E_W_N[0], c.f_E_W_N[1], c.f_E_W_N[2]);
+  r.u_W_m = w * Eigen::Vector3d(c.u_W_m[0], c.u_W_m[1], c.u_W_m[2]);
+  r.f_E_W_N = w * Eigen::Vector3d(c.f_E_W_N[0], c.f_E_W_N[1], c.f_E_W_N[2]);
   return r;
 }
 

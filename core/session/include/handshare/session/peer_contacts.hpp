@@ -10,6 +10,11 @@
 /// that vanishes loses its contacts within 2 s, smoothly, without a force jump for the others").
 /// A peer that lifts its hand sends one last set with no active finger: that ends at once (its
 /// own fingertips already came off smoothly).
+///
+/// The contacts come out as received, each with its set's arrival time; whoever steps a solve
+/// fades them at its own step time (contact::ToRemoteContact with fade()): the world server at
+/// its tick, the haptic node on its haptic thread, so a stalled bridge thread cannot hold the
+/// weight still and then step it.
 #include <chrono>
 #include <cstdint>
 #include <map>
@@ -41,14 +46,16 @@ class PeerContacts {
   void Clear() { sets_.clear(); }
 
   /// Calls fn(const PeerContact&, const msg::ContactSet&) for every active finger of every
-  /// peer on an object of `models` (unknown objects are skipped), faded by age at `now`.
+  /// peer on an object of `models` (unknown objects are skipped) whose set has not faded out
+  /// at `now`. The contacts are not faded: fade them at the step that uses them
+  /// (contact::ToRemoteContact(c, fade(), now_ns)).
   template <typename Fn>
   void ForEach(const world::SceneModels& models, Clock::time_point now, Fn&& fn) const {
     std::int32_t hand = 0;
     for (const auto& [user, entry] : sets_) {
       ++hand;
-      const double w = Weight(now - entry.received);
-      if (w <= 0.0) continue;
+      if (Weight(now - entry.received) <= 0.0) continue;
+      const std::uint64_t received_ns = SteadyNs(entry.received);
       for (int i = 0; i < static_cast<int>(entry.set.fingers().size()); ++i) {
         const auto& f = entry.set.fingers()[i];
         if (!f.active()) continue;
@@ -57,11 +64,11 @@ class PeerContacts {
         if (c.object < 0) continue;
         c.hand = hand;
         c.finger = i;
-        c.weight = w;
+        c.received_ns = received_ns;
         for (int k = 0; k < 3; ++k) {
           c.p_WC_m[k] = f.p_W_m()[k];
-          c.u_W_m[k] = w * f.u_imposed_W_m()[k];
-          c.f_E_W_N[k] = -w * f.f_W_N()[k];
+          c.u_W_m[k] = f.u_imposed_W_m()[k];
+          c.f_E_W_N[k] = -f.f_W_N()[k];
         }
         fn(c, entry.set);
       }
@@ -74,11 +81,19 @@ class PeerContacts {
     Clock::time_point received;
   };
   const std::map<std::string, Entry>& sets() const { return sets_; }
-  /// 1 while fresh, falling linearly to 0 between fade_after and lifespan.
+  /// 1 while fresh, falling linearly to 0 between fade_after and lifespan (fade().Weight).
   double Weight(Clock::duration age) const;
+  /// The fade law as plain data, for the step that fades the contacts (the haptic thread).
+  const contact::PeerFade& fade() const noexcept { return fade_; }
+  /// A time point of Clock as the steady nanoseconds PeerContact::received_ns counts
+  /// (common::SteadyNowNs() reads the same clock).
+  static std::uint64_t SteadyNs(Clock::time_point t) noexcept {
+    return static_cast<std::uint64_t>(std::chrono::duration_cast<std::chrono::nanoseconds>(t.time_since_epoch()).count());
+  }
 
  private:
   PeerContactsConfig config_;
+  contact::PeerFade fade_;
   std::map<std::string, Entry> sets_;
 };
 
