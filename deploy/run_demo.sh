@@ -1,9 +1,9 @@
 #!/usr/bin/env bash
 # The demo: installs what is missing, builds, installs the build into build/install, and runs a
 # shared session on loopback DDS from there (bin/handshare-demo, deploy/handshare-demo here): the
-# encyclopedia tour of a world server, two simulated haptic users, a headless spectator writing
-# PNG frames, and the audio guide writing one WAV per message-board text; then prints the
-# session report. Output goes to ./out/demo (or $1).
+# encyclopedia tour of a world server, two haptic users (a simulated hand, and a HIRO II on its
+# simulated plant), a headless spectator writing PNG frames, and the audio guide writing one
+# WAV per message-board text; then prints the session report. Output goes to ./out/demo (or $1).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 ./deploy/install_deps.sh

@@ -158,6 +158,13 @@ void HiroDevice::Command(const std::array<Eigen::Vector3d, haptic::kFingers>& f_
   // Arm: the servo that carries the hand to where every finger is near its optimum pose
   // (hiro_follow.hpp), plus the reaction of the fingertip forces; gravity and limits first.
   const ArmVector& tau_servo = follower_.Step(q_arm_, qd_arm_, arm_, p_HE, f_error_W, dt_s_, gains_.arm_following);
+  // What the fingertip forces ask of the arm at the hand base is at most the chapter's 45 N
+  // and 2.6 N m: the reaction is scaled down as a whole (direction kept). The servo that
+  // carries the arm after the user's hand is left alone: most of its torque accelerates the
+  // arm's own drives, and it is bounded by the joint torque and speed limits.
+  hand_wrench_scale_ = LimitHandWrench(ArmHandJacobian(arm_), model_.arm.max_hand_force_N,
+                                       model_.arm.max_hand_moment_N_m, tau_reaction);
+  tau_reaction_ = tau_reaction;
   const ArmVector tau_task = tau_servo + tau_reaction;
   ArmVector tau_fixed = tau_gravity_arm_;
   ArmVector tau_max;

@@ -1,5 +1,6 @@
 #include "handshare/hiro/hiro_model.hpp"
 
+#include <Eigen/SVD>
 #include <cmath>
 #include <fstream>
 #include <nlohmann/json.hpp>
@@ -263,6 +264,28 @@ ArmPointJacobian ArmPointJacobianAt(const ArmKinematics& k, const Eigen::Vector3
   ArmPointJacobian J = ArmPointJacobian::Zero();
   for (int i = 0; i < joints && i < kArmJoints; ++i) J.col(i) = k.axis_B[i].cross(p_B - k.point_B[i]);
   return J;
+}
+
+HandWrench ArmHandWrench(const ArmJacobian& J_H, const ArmVector& tau_N_m) noexcept {
+  // Fixed-size SVD: no allocation. Singular values below 1e-9 of the largest count as zero.
+  Eigen::JacobiSVD<Eigen::Matrix<double, 6, 6>> svd(J_H.transpose(), Eigen::ComputeFullU | Eigen::ComputeFullV);
+  svd.setThreshold(1e-9);
+  return svd.solve(tau_N_m);
+}
+
+double LimitHandWrench(const ArmJacobian& J_H, double max_force_N, double max_moment_N_m,
+                       ArmVector& tau_N_m) noexcept {
+  const HandWrench w = ArmHandWrench(J_H, tau_N_m);
+  if (!w.allFinite() || !tau_N_m.allFinite()) {  // nothing to scale: no task torque at all
+    tau_N_m.setZero();
+    return 0.0;
+  }
+  const double f = w.tail<3>().norm(), m = w.head<3>().norm();
+  double s = 1.0;
+  if (f > max_force_N) s = std::min(s, max_force_N / f);
+  if (m > max_moment_N_m) s = std::min(s, max_moment_N_m / m);
+  tau_N_m *= s;
+  return s;
 }
 
 FingerKinematics FingerFk(const FingerSpec& f, const FingerVector& q_rad) noexcept {

@@ -90,6 +90,91 @@ TEST(HiroLimits, ClosedLoopTorquesAndJointsStayWithinLimits) {
   EXPECT_GT(saturated_steps, 0) << "the case should drive some finger into torque saturation";
 }
 
+// The chapter: "Maximum output force is 45 N" (and 2.6 N m) at the hand base. A wrench
+// beyond either is scaled into it, direction kept; one within both is left alone.
+TEST(HiroLimits, HandWrenchIsScaledIntoTheArmsOutputLimits) {
+  const HiroModel m = HiroModel::Load(HANDSHARE_HIRO_CONFIG);
+  EXPECT_DOUBLE_EQ(m.arm.max_hand_force_N, 45.0);
+  EXPECT_DOUBLE_EQ(m.arm.max_hand_moment_N_m, 2.6);
+  const ArmJacobian J = ArmHandJacobian(ArmFk(m.arm, m.arm.q_home_rad));
+  auto torques_for = [&](const Eigen::Vector3d& moment, const Eigen::Vector3d& force) {
+    HandWrench w;
+    w << moment, force;
+    return ArmVector(J.transpose() * w);
+  };
+  const Eigen::Vector3d n = Eigen::Vector3d(0.3, -0.5, -0.8).normalized();
+  // 100 N asked: 45 N given, same direction.
+  ArmVector tau = torques_for(Eigen::Vector3d(0.1, 0.0, 0.2), 100.0 * n);
+  EXPECT_NEAR(LimitHandWrench(J, 45.0, 2.6, tau), 0.45, 1e-9);
+  HandWrench w = ArmHandWrench(J, tau);
+  EXPECT_NEAR(w.tail<3>().norm(), 45.0, 1e-6);
+  EXPECT_NEAR(w.tail<3>().normalized().dot(n), 1.0, 1e-12);
+  // 5.2 N m asked with 10 N: the moment binds, the force is halved with it.
+  tau = torques_for(Eigen::Vector3d(0.0, 5.2, 0.0), 10.0 * n);
+  EXPECT_NEAR(LimitHandWrench(J, 45.0, 2.6, tau), 0.5, 1e-9);
+  w = ArmHandWrench(J, tau);
+  EXPECT_NEAR(w.head<3>().norm(), 2.6, 1e-9);
+  EXPECT_NEAR(w.tail<3>().norm(), 5.0, 1e-9);
+  // Within both: untouched.
+  const ArmVector small = torques_for(Eigen::Vector3d(0.5, 0.0, 0.0), 44.0 * n);
+  tau = small;
+  EXPECT_DOUBLE_EQ(LimitHandWrench(J, 45.0, 2.6, tau), 1.0);
+  EXPECT_EQ(tau, small);
+  // Not finite: no task torque at all.
+  tau = small;
+  tau[2] = std::nan("");
+  EXPECT_EQ(LimitHandWrench(J, 45.0, 2.6, tau), 0.0);
+  EXPECT_EQ(tau, ArmVector::Zero());
+}
+
+// Through the driver on the simulated plant: a hand whose fingertips could each push 20 N
+// (the model's 3.5 N raised, so five fingers ask the arm for 100 N, more than it may give)
+// gets at most 45 N from the arm at the hand base for them. The request is recomputed here
+// from the commanded fingertip forces (sum J_E^T f_cmd), and what the driver gave from its
+// reaction torque (before joint saturation, which only scales it down further).
+TEST(HiroDevice, ArmGivesAtMost45NAtTheHandBase) {
+  HiroModel model = HiroModel::Load(HANDSHARE_HIRO_CONFIG);
+  model.max_fingertip_force_N = 20.0;
+  auto plant = std::make_unique<SimulatedHiro>(model, Options("start 0 0 0\n"));
+  const Eigen::Vector3d p_WB = plant->p_WB();
+  HiroDevice device(model, std::move(plant));
+  device.set_p_WB(p_WB);
+  haptic::DeviceReading r;
+  std::array<Eigen::Vector3d, haptic::kFingers> f{};
+  double largest_asked_N = 0.0, largest_N = 0.0, largest_N_m = 0.0, worst_direction = 1.0;
+  for (int n = 1; n <= 600; ++n) {
+    device.Read(n * 1e-3, r);
+    // From the hand base through the fingertips' centroid: no moment about the hand base,
+    // so the force limit binds, not the 2.6 N m.
+    Eigen::Vector3d centroid = Eigen::Vector3d::Zero();
+    for (const auto& p : r.p_WE) centroid += p / kFingerCount;
+    const Eigen::Vector3d n_W = (centroid - r.p_WH).normalized();
+    for (auto& fi : f) fi = n > 100 ? Eigen::Vector3d(20.0 * n_W) : Eigen::Vector3d::Zero();
+    device.Command(f);
+    if (n <= 100) continue;
+    ArmVector q_arm;
+    for (int j = 0; j < kArmJoints; ++j) q_arm[j] = r.q_arm_rad[j];
+    const ArmKinematics arm = ArmFk(model.arm, q_arm);
+    ArmVector tau_asked = ArmVector::Zero();
+    for (int i = 0; i < kFingerCount; ++i) {
+      const Eigen::Vector3d p_BE = r.p_WE[i] - p_WB;
+      tau_asked += ArmPointJacobianAt(arm, p_BE).transpose() * device.finger_status()[i].f_command_E_W;
+    }
+    const ArmJacobian J = ArmHandJacobian(arm);
+    const HandWrench asked = ArmHandWrench(J, tau_asked), given = ArmHandWrench(J, device.tau_reaction_N_m());
+    largest_asked_N = std::max(largest_asked_N, asked.tail<3>().norm());
+    largest_N = std::max(largest_N, given.tail<3>().norm());
+    largest_N_m = std::max(largest_N_m, given.head<3>().norm());
+    worst_direction = std::min(worst_direction, given.normalized().dot(asked.normalized()));
+  }
+  EXPECT_NEAR(largest_asked_N, 100.0, 1e-6);
+  // Measured: 45.00 N at most.
+  EXPECT_LE(largest_N, 45.0 + 1e-6);
+  EXPECT_GT(largest_N, 44.0) << "the force limit should bind in this case";
+  EXPECT_LE(largest_N_m, 2.6 + 1e-6);
+  EXPECT_GT(worst_direction, 1.0 - 1e-9) << "the wrench should keep its direction";
+}
+
 TEST(HiroDevice, ReportsCapabilitiesAndAValidReading) {
   auto device = MakeSimulatedHiroDevice(HANDSHARE_HIRO_CONFIG, Options("start 0.1 0.2 0.3\n"));
   const auto caps = device->capabilities();

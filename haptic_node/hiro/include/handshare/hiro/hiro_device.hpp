@@ -10,6 +10,8 @@
 ///            the least-squares rigid fit of the fingers' optimum-pose fingertips to the
 ///            current fingertips (position and orientation; ArmFollower, hiro_follow.hpp),
 ///            plus the reaction of every commanded fingertip force;
+///            The reaction part is scaled down so that its wrench at the hand base stays
+///            within the arm's 45 N and 2.6 N m (LimitHandWrench);
 ///   both     saturated at the joint torque limits, the force part scaled down as a whole so
 ///            its direction is kept (gravity and limit terms first).
 /// Read() and Command() are noexcept and allocation-free.
@@ -69,6 +71,12 @@ class HiroDevice final : public haptic::Device {
   HiroHardware& hardware() noexcept { return *hardware_; }
   const std::array<HiroFingerStatus, kFingerCount>& finger_status() const noexcept { return status_; }
   const ArmVector& tau_arm_N_m() const noexcept { return tau_arm_; }
+  /// The arm's torque for the reaction of the commanded fingertip forces in the last
+  /// Command(), after LimitHandWrench, before joint saturation [N m].
+  const ArmVector& tau_reaction_N_m() const noexcept { return tau_reaction_; }
+  /// The scale LimitHandWrench put on that reaction (1: its hand-base wrench was within
+  /// 45 N and 2.6 N m).
+  double hand_wrench_scale() const noexcept { return hand_wrench_scale_; }
   /// The arm-following controller (its last target, error and reference).
   const ArmFollower& follower() const noexcept { return follower_; }
   const Eigen::Vector3d& p_WB() const noexcept { return p_WB_; }
@@ -97,6 +105,8 @@ class HiroDevice final : public haptic::Device {
   ArmFollower follower_;
   std::array<Eigen::Vector3d, kFingerCount> force_integral_{};
   ArmVector tau_arm_ = ArmVector::Zero(), tau_gravity_arm_ = ArmVector::Zero();
+  ArmVector tau_reaction_ = ArmVector::Zero();
+  double hand_wrench_scale_ = 1.0;
   std::array<FingerVector, kFingerCount> tau_gravity_finger_{};
   std::array<HiroFingerStatus, kFingerCount> status_{};
 };

@@ -134,6 +134,19 @@ ArmPointJacobian ArmPointJacobianAt(const ArmKinematics& k, const Eigen::Vector3
 
 FingerKinematics FingerFk(const FingerSpec& finger, const FingerVector& q_rad) noexcept;
 
+using HandWrench = Eigen::Matrix<double, 6, 1>;  // [moment; force] in B, about H's origin
+
+/// The wrench at the hand base that arm joint torques produce: tau = J_H^T w, w = [m; f] in B
+/// about H's origin (J_H from ArmHandJacobian). Least squares (SVD) where J_H is singular:
+/// the part of tau that no hand-base wrench gives is held by the structure. [N m; N]
+HandWrench ArmHandWrench(const ArmJacobian& J_H, const ArmVector& tau_N_m) noexcept;
+
+/// Scales arm torques so that the hand-base wrench they produce stays within the arm's
+/// output limits (the chapter: 45 N, 2.6 N m): tau *= s, s = min(1, max_force_N / |f|,
+/// max_moment_N_m / |m|), so the wrench keeps its direction. Returns s.
+double LimitHandWrench(const ArmJacobian& J_H, double max_force_N, double max_moment_N_m,
+                       ArmVector& tau_N_m) noexcept;
+
 /// Joint torques that hold the arm against gravity (hand and fingers included, fingers at
 /// q_hand). tau = -sum_links J_com^T m g, g = (0, 0, -9.81) in B. [N m]
 ArmVector ArmGravityTorque(const HiroModel& m, const ArmKinematics& arm,
