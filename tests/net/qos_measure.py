@@ -17,6 +17,7 @@ losing any one loses the datagram.
   field_max   Deformation of 4096 nodes (65.7 kB, the IDL's largest), 60 Hz, 600, 1 % loss.
   contact     ContactSet at 1 kHz (10000) while 4096-node fields go at 60 Hz from the same
               participant, over a 100 Mbit/s link (tbf on A's egress), 2 % loss.
+  contact_link  the same over the 100 Mbit/s link alone: no delay, no loss.
 
 Needs root (namespaces, nft, tc); without it, exits 77 with SKIP. Not a ctest test: it measures,
 it asserts nothing but that every run produced its figures.
@@ -33,12 +34,15 @@ from netharness import Failure, Network, Skip, SKIP_RETURN_CODE  # noqa: E402
 
 ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 
-# name: (probe case, rate Hz, count, nodes, field rate Hz, loss %, link Mbit/s or None, within ms)
+# name: (probe case, rate Hz, count, nodes, field rate Hz, loss %, delay ms, link Mbit/s or None,
+#        within ms)
 CASES = {
-    "event": ("event", 10, 300, 962, 0, 2.0, None, 100),
-    "field_tail": ("field", 60, 600, 962, 0, 1.0, None, 100),
-    "field_max": ("field", 60, 600, 4096, 0, 1.0, None, 100),
-    "contact": ("contact", 1000, 10000, 4096, 60, 2.0, 100, 30),
+    "event": ("event", 10, 300, 962, 0, 2.0, 20, None, 100),
+    "field_tail": ("field", 60, 600, 962, 0, 1.0, 20, None, 100),
+    "field_max": ("field", 60, 600, 4096, 0, 1.0, 20, None, 100),
+    "contact": ("contact", 1000, 10000, 4096, 60, 2.0, 20, 100, 30),
+    # The link alone (no delay, no loss): what the fields' bursts do to the contact sets' queue.
+    "contact_link": ("contact", 1000, 10000, 4096, 60, 0.0, 0, 100, 5),
 }
 
 
@@ -66,7 +70,7 @@ def uptime():
 
 
 def run_one(args, name, label, qos_file, domain, seed):
-    case, rate, count, nodes, field_rate, loss, link, within = CASES[name]
+    case, rate, count, nodes, field_rate, loss, delay_ms, link, within = CASES[name]
     probe = os.path.join(args.bin_dir, "tests", "qos_probe")
     work = os.path.join(args.work, f"{name}_{label}_{domain}")
     os.makedirs(work, exist_ok=True)
@@ -75,10 +79,12 @@ def run_one(args, name, label, qos_file, domain, seed):
         a, b = net.hosts
         for k, h in enumerate((a, b)):
             packet_loss(h, loss)
+            if delay_ms == 0:
+                continue
             # FIFO: the delayer's normal jitter (sd 5 ms) reorders a 1 kHz stream's packets, and a
             # best-effort reader drops every sample older than one it has (most of them), which a
             # real link with 5 ms of jitter does not do to packets of one flow.
-            h.delay(20, jitter_ms=5, seed=seed + k, reorder=False)
+            h.delay(delay_ms, jitter_ms=5, seed=seed + k, reorder=False)
         if link:
             # The sender's link: a token bucket at `link` Mbit/s on A's egress (the kernel has tbf).
             a.run(["tc", "qdisc", "add", "dev", a.ifname, "root", "tbf", "rate", f"{link}mbit", "burst", "16kb",
@@ -87,7 +93,7 @@ def run_one(args, name, label, qos_file, domain, seed):
         sub = b.start("sub", [probe, "--role", "sub", *common, "--duration", duration, "--within-ms", within], work)
         sub.wait_for("ready", timeout=30)
         pub = a.start("pub", [probe, "--role", "pub", *common, "--rate", rate, "--nodes", nodes, "--field-rate",
-                              field_rate, "--linger", 5], work)
+                              field_rate, "--linger", 10], work)
         pub.wait_for("matched", timeout=60)
         pub.wait_for(re.compile(r"sent \d+"), timeout=count / rate * 3 + 60)
         rc = sub.wait(timeout=duration + 30)
