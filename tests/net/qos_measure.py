@@ -23,6 +23,7 @@ Needs root (namespaces, nft, tc); without it, exits 77 with SKIP. Not a ctest te
 it asserts nothing but that every run produced its figures.
 """
 import argparse
+import multiprocessing
 import os
 import re
 import subprocess
@@ -71,6 +72,7 @@ def uptime():
 
 def run_one(args, name, label, qos_file, domain, seed):
     case, rate, count, nodes, field_rate, loss, delay_ms, link, within = CASES[name]
+    count = max(10, int(count * args.scale))
     probe = os.path.join(args.bin_dir, "tests", "qos_probe")
     work = os.path.join(args.work, f"{name}_{label}_{domain}")
     os.makedirs(work, exist_ok=True)
@@ -114,6 +116,31 @@ def run_one(args, name, label, qos_file, domain, seed):
     return res
 
 
+def _child(queue, args, name, label, qos_file, domain, seed):
+    try:
+        queue.put(("ok", run_one(args, name, label, qos_file, domain, seed)))
+    except Skip as e:
+        queue.put(("skip", str(e)))
+    except Exception as e:  # Failure, or a bug: the parent reports it
+        queue.put(("fail", f"{type(e).__name__}: {e}"))
+
+
+def run_isolated(args, name, label, qos_file, domain, seed):
+    """run_one in a child process: the harness allows 9 networks per process, and a child also
+    leaves nothing of one run's state to the next."""
+    ctx = multiprocessing.get_context("fork")
+    queue = ctx.Queue()
+    p = ctx.Process(target=_child, args=(queue, args, name, label, qos_file, domain, seed))
+    p.start()
+    kind, value = queue.get()
+    p.join()
+    if kind == "skip":
+        raise Skip(value)
+    if kind == "fail":
+        raise Failure(f"{name}/{label}: {value}")
+    return value
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--bin-dir", required=True)
@@ -122,6 +149,7 @@ def main():
     ap.add_argument("--work", default="/tmp/qos_measure")
     ap.add_argument("--cases", default=",".join(CASES))
     ap.add_argument("--runs", type=int, default=1)
+    ap.add_argument("--scale", type=float, default=1.0, help="multiply every case's sample count (quick checks)")
     ap.add_argument("--before", default=os.path.join(ROOT, "tests/net/data/qos_before.xml"))
     ap.add_argument("--after", default=os.path.join(ROOT, "deploy/qos/handshare_qos.xml"))
     ap.add_argument("--also", action="append", default=[], metavar="LABEL=FILE",
@@ -135,7 +163,7 @@ def main():
         for name in args.cases.split(","):
             for run in range(args.runs):
                 for label, qos in configs:
-                    res = run_one(args, name, label, qos, domain, seed=11 + 2 * run)
+                    res = run_isolated(args, name, label, qos, domain, seed=11 + 2 * run)
                     rows.append((name, label, res))
                     print(f"{name:10s} {label:6s} {res}", flush=True)
     except Skip as e:
