@@ -112,7 +112,8 @@ def run_one(args, name, label, qos_file, domain, seed):
         pub.stop()
         d = b.clear_delay() or {}
         a.clear_delay()
-        res["delayer_B"] = f"{d.get('accepted', '?')}/{d.get('received', '?')} late mean {d.get('late_mean_us', '?')} us max {d.get('late_max_us', '?')} us"
+        res["delayer_B"] = (f"{d['accepted']}/{d['received']} passed, release late mean {d['late_mean_us']} us "
+                            f"max {d['late_max_us']} us" if "accepted" in d else "none")
     return res
 
 
