@@ -22,7 +22,10 @@ int main(int argc, char** argv) {
              handshare::graphics::DefaultAssetsDir().string())
       .Value("deformation-out", "FILE",
              "at exit, write the deformations received as JSON: {object_id: {revision, "
-             "vertex_count, u_W_m: {vertex: [x, y, z]}}} (non-zero vertices only)", "");
+             "vertex_count, u_W_m: {vertex: [x, y, z]}}} (non-zero vertices only)", "")
+      .Value("state-out", "FILE",
+             "at exit, write what the spectator shows as JSON: scene, revision, board {message_id, text}, "
+             "objects {id: {p_WO_m, q_WO_wxyz, from}}", "");
   return handshare::common::RunNodeMain(argc, argv, options, [](const auto& o) {
     handshare::graphics::SpectatorConfig c;
     c.where = handshare::common::ReadSessionOptions(o);
@@ -34,6 +37,7 @@ int main(int argc, char** argv) {
     c.fullscreen = o.FlagSet("fullscreen");
     c.assets_dir = o.GetString("assets");
     c.deformation_out = o.GetString("deformation-out");
+    c.state_out = o.GetString("state-out");
     const std::string stereo = o.GetString("stereo");
     if (stereo == "mono") c.stereo = handshare::graphics::StereoOutput::kMono;
     else if (stereo == "side-by-side") c.stereo = handshare::graphics::StereoOutput::kSideBySide;

@@ -16,7 +16,7 @@ import signal
 import subprocess
 import sys
 
-from session_test import check, run_cases
+from session_test import check, fem_cache, run_cases
 
 MAX_FORCE_N = 3.5  # the simulated hand's fingertip limit (HIRO II's)
 SCRIPT = """# alice presses the tail 3 mm and holds (bad_samples_test.py)
@@ -40,7 +40,7 @@ def force(row, i):
 def run(h, domain):
     domain = str(domain)
     session = f"it-bad-samples-{os.getpid()}"
-    cache = os.path.join(h.work, "cache")
+    cache = fem_cache(h.work)
     os.environ["HANDSHARE_CACHE"] = cache
     prep = subprocess.run([os.path.join(h.bin_dir, "core", "world", "world_prepare"), "--cache", cache,
                            "--scenes", "dinosaur"], capture_output=True, text=True, timeout=600)

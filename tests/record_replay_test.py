@@ -20,7 +20,7 @@ import time
 
 from PIL import Image, ImageChops
 
-from session_test import DATA, Failure, Harness, check
+from session_test import DATA, Failure, Harness, check, fem_cache
 
 # Pixel tolerance: frames of the same device states differ only where the other streams
 # (deformation, object poses, 60 Hz) arrived a tick earlier or later in one of the runs.
@@ -74,7 +74,7 @@ def main():
     h = RecordHarness(args.bin_dir, args.work)
     live_domain, replay_domain = args.domain, args.domain + 1
     session = f"it-record-{os.getpid()}"
-    cache = os.path.join(args.work, "cache")
+    cache = fem_cache(args.work)
     os.environ["HANDSHARE_CACHE"] = cache
     recording = os.path.join(args.work, "session.rec")
     exe = lambda folder, name: os.path.join(args.bin_dir, folder, name)

@@ -152,6 +152,7 @@ def run(h, domain):
           f"{m.group(3)} poses, message #{m.group(4)}); ball alice's again after {owner_s:.2f} s; held weight "
           f"{before:.3f} N before, {low:.3f}..{high:.3f} N through the crash, {after_mean:.3f} N after; "
           f"{rows1} control events committed of {printed} printed")
+    h.print_traffic()
 
 
 if __name__ == "__main__":

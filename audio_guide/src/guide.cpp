@@ -48,6 +48,9 @@ int Guide::Run() {
       continue;
     }
     last_id = board.message_id();
+    // When it arrived, counted from joining (the reader exists): a late joiner's figure.
+    std::printf("[audio_guide %s] message board #%u received %.3f s after joining\n", name.c_str(), last_id,
+                std::chrono::duration<double>(Clock::now() - start).count());
     std::string text = board.text().to_string();
     if (board.next_action().size() > 0) text += " " + board.next_action().to_string();
     const speech::Utterance u = synthesizer.Synthesize(text, board.language().to_string());
@@ -72,6 +75,7 @@ int Guide::Run() {
     std::fflush(stdout);
   }
   std::printf("[audio_guide %s] spoke %d messages\n", name.c_str(), spoken);
+  std::printf("[audio_guide %s] %s\n", name.c_str(), participant.TrafficSummary().c_str());
   return 0;
 }
 

@@ -127,6 +127,11 @@ std::optional<Eigen::Isometry3d> SceneReplica::X_WO(const std::string& object_id
   return it->second.X_WO();
 }
 
+bool SceneReplica::pose_received(const std::string& object_id) const {
+  const auto it = objects_.find(object_id);
+  return it != objects_.end() && it->second.X_WO_state.has_value();
+}
+
 const DeformationField* SceneReplica::deformation(const std::string& object_id) const {
   const auto it = objects_.find(object_id);
   return it == objects_.end() ? nullptr : it->second.field.get();

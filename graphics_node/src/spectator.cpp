@@ -8,8 +8,12 @@
 #include <iomanip>
 #include <iostream>
 #include <map>
+#include <optional>
+#include <set>
 #include <sstream>
 #include <thread>
+
+#include <nlohmann/json.hpp>
 
 #include "handshare/common/shutdown.hpp"
 #include "handshare/dds/membership.hpp"
@@ -41,6 +45,7 @@ class WorldView {
   WorldView(dds::Participant& p, const std::filesystem::path& assets_dir, const std::string& name,
             const std::string& session)
       : session_(session),
+        joined_(Clock::now()),
         prefix_("[graphics_node " + name + "] "),
         scene_reader_(dds::MakeReader<msg::SceneState>(p, dds::topics::kSceneState)),
         device_reader_(dds::MakeReader<msg::DeviceState>(p, dds::topics::kDeviceState)),
@@ -54,9 +59,11 @@ class WorldView {
     msg::SceneState scene;
     while (scene_reader_.TakeNext(scene, meta)) {
       if (meta.valid_data && Accept("scene_state", "world_server", dds::CheckSceneState(scene, session_))) {
+        if (scene.scene().to_string() != scene_name_) first_seen_.clear();  // poses, fields: per scene
         world_.OnSceneState(scene);
         scene_name_ = scene.scene().to_string();
         scene_revision_ = scene.revision();
+        Arrived("scene '" + scene_name_ + "' revision " + std::to_string(scene_revision_));
       }
     }
     // Deformations and object states name objects of a scene: take them only once a scene is
@@ -66,6 +73,11 @@ class WorldView {
       while (deformation_reader_.TakeNext(deformation_, meta)) {
         if (meta.valid_data && Accept("deformation", "world_server", dds::CheckDeformation(deformation_, session_))) {
           world_.OnDeformation(deformation_);
+          const std::string id = deformation_.object_id().to_string();
+          if (world_.deformation(id) != nullptr && first_seen_.insert("deformation " + id).second) {
+            Arrived("first deformation of '" + id + "' (revision " + std::to_string(deformation_.revision()) +
+                    (deformation_.keyframe() ? ", keyframe)" : ")"));
+          }
         }
       }
       msg::ObjectState object;
@@ -73,6 +85,10 @@ class WorldView {
         if (meta.valid_data &&
             Accept("object_state", object.owner().to_string(), dds::CheckObjectState(object, session_))) {
           world_.OnObjectState(object);
+          const std::string id = object.object_id().to_string();
+          if (world_.pose_received(id) && first_seen_.insert("pose " + id).second) {
+            Arrived("first pose of '" + id + "'");
+          }
         }
       }
     }
@@ -86,6 +102,8 @@ class WorldView {
     while (board_reader_.TakeNext(board, meta)) {
       if (meta.valid_data && Accept("message_board", "world_server", dds::CheckMessageBoard(board, session_))) {
         caption_ = board.text().to_string();
+        board_id_ = board.message_id();
+        Arrived("message board #" + std::to_string(board_id_));
       }
     }
     for (auto it = hands_.begin(); it != hands_.end();) {
@@ -102,6 +120,32 @@ class WorldView {
   /// A user's device-state stream that stalled for a deadline period (100 ms): counted, and the
   /// hand is dropped from the view when it stays silent for kHandTimeout.
   std::uint64_t device_deadlines_missed() const { return device_reader_.deadlines_missed(); }
+
+  /// The scene, board and poses shown, as JSON (SpectatorConfig::state_out).
+  void WriteStateJson(const std::filesystem::path& file) const {
+    nlohmann::ordered_json objects = nlohmann::ordered_json::object();
+    for (const std::string& id : world_.object_ids()) {
+      const Eigen::Isometry3d X = *world_.X_WO(id);
+      const Eigen::Quaterniond q(X.linear());
+      objects[id] = {{"p_WO_m", {X.translation().x(), X.translation().y(), X.translation().z()}},
+                     {"q_WO_wxyz", {q.w(), q.x(), q.y(), q.z()}},
+                     {"from", world_.pose_received(id) ? "object_state" : "scene_state"}};
+    }
+    const nlohmann::ordered_json out = {{"scene", scene_name_},
+                                        {"revision", scene_revision_},
+                                        {"board", {{"message_id", board_id_}, {"text", caption_}}},
+                                        {"objects", std::move(objects)}};
+    std::filesystem::path tmp = file;
+    tmp += ".tmp";
+    {
+      std::ofstream stream(tmp);
+      stream << out.dump(2) << "\n";  // doubles round-trip exactly
+      if (!stream) throw std::runtime_error("cannot write state file " + tmp.string());
+    }
+    std::error_code ec;
+    std::filesystem::rename(tmp, file, ec);
+    if (ec) throw std::runtime_error("cannot write state file " + file.string() + ": " + ec.message());
+  }
 
   render::SceneView Build() const {
     render::SceneView view;
@@ -122,6 +166,14 @@ class WorldView {
   }
 
  private:
+  // When each piece of the shared state first arrived, counted from joining (this view's
+  // readers exist): the late joiner's figures (docs/network.md).
+  void Arrived(const std::string& what) {
+    const double t_s = std::chrono::duration<double>(Clock::now() - joined_).count();
+    std::printf("%s%s received %.3f s after joining\n", prefix_.c_str(), what.c_str(), t_s);
+    std::fflush(stdout);
+  }
+
   // True when `reason` is empty; else the sample is dropped, counted and (rate-limited) named.
   bool Accept(std::string_view topic, std::string_view sender, const std::string& reason) {
     return dropped_.Accept(topic, sender, reason,
@@ -129,7 +181,10 @@ class WorldView {
   }
 
   std::string session_;
+  Clock::time_point joined_;
   std::string prefix_;
+  std::set<std::string> first_seen_;  // "deformation ID", "pose ID" of this scene already reported
+  std::uint32_t board_id_ = 0;
   dds::DroppedSamples dropped_;
   std::string scene_name_;
   std::uint32_t scene_revision_ = 0;
@@ -213,10 +268,12 @@ int Spectator::Run() {
   if (!std::filesystem::is_directory(assets_dir)) {
     throw std::runtime_error("assets folder " + assets_dir.string() + " does not exist (option --assets)");
   }
-  if (!config_.deformation_out.empty()) {
-    const std::filesystem::path folder = std::filesystem::absolute(config_.deformation_out).parent_path();
+  for (const auto& [file, option] : {std::pair{config_.deformation_out, "--deformation-out"},
+                                     std::pair{config_.state_out, "--state-out"}}) {
+    if (file.empty()) continue;
+    const std::filesystem::path folder = std::filesystem::absolute(file).parent_path();
     if (!std::filesystem::is_directory(folder)) {
-      throw std::runtime_error("folder " + folder.string() + " of --deformation-out does not exist");
+      throw std::runtime_error("folder " + folder.string() + " of " + option + " does not exist");
     }
   }
 
@@ -239,22 +296,43 @@ int Spectator::Run() {
     times << "frame,file,scene,revision,hands\n";
   }
 
+  // The renderer before joining: OpenGL's start-up (3.8 s once on a loaded machine) would
+  // otherwise hold up the first look at what a late joiner is sent.
+  std::optional<render::OffscreenRenderer> offscreen;
+  std::optional<render::WindowRenderer> window_renderer;
+  if (config_.headless) {
+    offscreen.emplace();
+  } else {
+    render::WindowRenderer::Options options;
+    options.title = "handshare - " + config_.where.session;
+    options.width_px = config_.width_px;
+    options.height_px = config_.height_px;
+    options.stereo = ToRender(config_.stereo);
+    options.fullscreen = config_.fullscreen;
+    window_renderer.emplace(options);
+  }
+
   dds::Participant participant(config_.where, name);
-  dds::MemberAnnouncement member(participant, name, msg::NODE_GRAPHICS);
+  // The readers first: the server re-sends body poses (best-effort) when it sees the member
+  // join, and a reader created after the announcement could miss them.
   WorldView world(participant, assets_dir, name, config_.where.session);
+  dds::MemberAnnouncement member(participant, name, msg::NODE_GRAPHICS);
   // When the frames are written or the window closes: what the spectator received, for a
   // comparison with an oracle.
   const auto finish = [&] {
     world.Update();  // what arrived since the last frame counts too (a stop between frames)
     PrintWorldSummary(name, world.world(), world.dropped(), world.device_deadlines_missed());
+    std::printf("[graphics_node %s] %s\n", name.c_str(), participant.TrafficSummary().c_str());
+    std::fflush(stdout);
     if (!config_.deformation_out.empty()) world.world().WriteDeformationJson(config_.deformation_out);
+    if (!config_.state_out.empty()) world.WriteStateJson(config_.state_out);
   };
 
   const auto start = Clock::now();
   const auto period = std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(1.0 / config_.fps));
 
   if (config_.headless) {
-    render::OffscreenRenderer renderer;
+    render::OffscreenRenderer& renderer = *offscreen;
     // Late joiner: the scene arrives transient-local within discovery time; do not draw an
     // empty world unless it never comes.
     while (!world.has_scene() && Clock::now() - start < config_.wait_for_scene && !common::ShutdownRequested()) {
@@ -294,13 +372,7 @@ int Spectator::Run() {
     return 0;
   }
 
-  render::WindowRenderer::Options options;
-  options.title = "handshare - " + config_.where.session;
-  options.width_px = config_.width_px;
-  options.height_px = config_.height_px;
-  options.stereo = ToRender(config_.stereo);
-  options.fullscreen = config_.fullscreen;
-  render::WindowRenderer window(options);
+  render::WindowRenderer& window = *window_renderer;
   auto next = Clock::now();
   while (!window.ShouldClose() && !common::ShutdownRequested()) {
     if (config_.where.duration.count() > 0 && Clock::now() - start >= config_.where.duration) break;

@@ -1,5 +1,6 @@
 #include "haptic_bridge.hpp"
 
+#include <algorithm>
 #include <chrono>
 #include <cstdio>
 
@@ -49,7 +50,10 @@ void HapticBridge::Tick() {
   loop_.CollectRetired();
   if (renderer_) {
     ForwardControlEvents();
-    if (renderer_->TakeReport(report_)) have_report_ = true;
+    if (renderer_->TakeReport(report_)) {
+      have_report_ = true;
+      RecordPeerLoopAge();
+    }
     ReceivePeers();
     FollowPeerBodies();
   }
@@ -121,6 +125,7 @@ void HapticBridge::ReceivePeers() {
   // A peer touching something sends its contact set at its publish rate; one silent for
   // longer has gone (or stopped touching without a last sample): its contacts fade out.
   const auto now = Clock::now();
+  const std::uint64_t now_ns = common::SteadyNowNs();
   msg::ContactSet peer;
   dds::SampleMeta meta;
   while (contact_reader_.TakeNext(peer, meta)) {
@@ -128,10 +133,25 @@ void HapticBridge::ReceivePeers() {
     const std::string bad = dds::CheckContactSet(peer, config_.where.session);
     if (dropped_.Accept("contact_set", peer.user().to_string(), bad, say_)) {
       peers_.Receive(peer, now, config_.user);
+      // The sender's write to this take, on the steady clock both share on one host (the
+      // DDS hop plus the wait for this bridge's tick): bench/net reports it.
+      if (peer.stamp_ns() <= now_ns) peer_age_.Record(1e-3 * static_cast<double>(now_ns - peer.stamp_ns()));
+      newest_peer_stamp_ns_ = std::max(newest_peer_stamp_ns_, peer.stamp_ns());
     }
   }
   peers_.Expire(now);
-  renderer_->SetRemote(ToRemoteContacts(peers_, renderer_->models(), now));
+  RemoteContacts remote = ToRemoteContacts(peers_, renderer_->models(), now);
+  remote.newest_stamp_ns = newest_peer_stamp_ns_;
+  renderer_->SetRemote(remote);
+}
+
+void HapticBridge::RecordPeerLoopAge() {
+  // The sender's write to the haptic step that first used the set (same host: one clock).
+  if (report_.peer_stamp_ns == 0 || report_.peer_stamp_ns == last_loop_peer_stamp_ns_) return;
+  last_loop_peer_stamp_ns_ = report_.peer_stamp_ns;
+  if (report_.peer_seen_ns >= report_.peer_stamp_ns) {
+    peer_loop_age_.Record(1e-3 * static_cast<double>(report_.peer_seen_ns - report_.peer_stamp_ns));
+  }
 }
 
 void HapticBridge::FollowPeerBodies() {
@@ -169,6 +189,9 @@ void HapticBridge::PublishContactSet() {
     contacts_msg_.stamp_ns(common::SteadyNowNs());
     contacts_msg_.seq(contacts_msg_.seq() + 1);
     contact_writer_.Write(contacts_msg_);
+    if (report_.step_ns != 0 && report_.step_ns <= contacts_msg_.stamp_ns()) {
+      report_age_.Record(1e-3 * static_cast<double>(contacts_msg_.stamp_ns() - report_.step_ns));
+    }
   }
   last_sent_active_ = active;
 }

@@ -10,6 +10,7 @@
 #include <string>
 
 #include "bridge_conversions.hpp"
+#include "handshare/common/latency_histogram.hpp"
 #include "handshare/common/session_clock.hpp"
 #include "handshare/dds/messages.hpp"
 #include "handshare/haptic/haptic_loop.hpp"
@@ -37,6 +38,15 @@ class HapticBridge {
   std::uint64_t control_events_sent() const { return control_events_sent_; }
   /// Received samples refused by the checks (session/sample_checks.hpp), per topic.
   const dds::DroppedSamples& dropped() const { return dropped_; }
+  /// Age of the peers' contact sets when this bridge took them: their sender's stamp (its
+  /// steady clock: meaningful for peers on this host only) to the take.
+  const common::LatencyHistogram& peer_contact_age() const { return peer_age_; }
+  /// The same up to the haptic step that first used the set (at most one per bridge tick:
+  /// a set replaced before the loop used it is not counted).
+  const common::LatencyHistogram& peer_contact_loop_age() const { return peer_loop_age_; }
+  /// Age of this hand's contact report when its contact set was written (the haptic step
+  /// that made it to the write): the sender's part of the node-to-node path.
+  const common::LatencyHistogram& contact_report_age() const { return report_age_; }
 
  private:
   // ---- the stages of a tick ----
@@ -56,6 +66,8 @@ class HapticBridge {
   /// The loop statistics, once a second.
   void PublishStatistics();
 
+  /// The newest report's peer set stamps, into peer_loop_age_.
+  void RecordPeerLoopAge();
   /// Builds the renderer of one scene state and hands it to the loop.
   void AdoptScene(const msg::SceneState& state);
 
@@ -90,6 +102,11 @@ class HapticBridge {
   std::uint64_t device_states_published_ = 0;
   std::uint64_t control_events_sent_ = 0;
   dds::DroppedSamples dropped_;
+  common::LatencyHistogram peer_age_;
+  common::LatencyHistogram peer_loop_age_;
+  common::LatencyHistogram report_age_;
+  std::uint64_t newest_peer_stamp_ns_ = 0;
+  std::uint64_t last_loop_peer_stamp_ns_ = 0;
 };
 
 }  // namespace handshare::haptic

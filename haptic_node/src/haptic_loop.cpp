@@ -42,6 +42,10 @@ HapticLoop::HapticLoop(Device& device, HapticLoopConfig config)
       caps_(device.capabilities()),
       safety_(SafetyFor(config, caps_)) {
   for (auto& f : f_E_W_) f.setZero();
+  // Eigen leaves vectors uninitialised: the impulse sums from zero, and the first step adds the
+  // "previous" command, which is none.
+  for (auto& j : impulse_E_W_Ns_) j.setZero();
+  for (auto& f : safety_out_.f_E_W) f.setZero();
 }
 
 HapticLoop::~HapticLoop() { Stop(); }
@@ -121,6 +125,8 @@ void HapticLoop::Step(double t_s) noexcept {
     safety_in_.finger[i].p_WE = reading_.p_WE[i];
     safety_in_.finger[i].fault = false;
   }
+  // The force commanded at the previous step was held until now.
+  for (int i = 0; i < kFingers; ++i) impulse_E_W_Ns_[i] += safety_out_.f_E_W[i] * dt_s;
   safety_.Step(safety_in_, safety_out_);
   const bool fault = device_fault || safety_out_.any_fault;
   if (fault) faults_.fetch_add(1, std::memory_order_relaxed);
@@ -139,6 +145,7 @@ void HapticLoop::Step(double t_s) noexcept {
     for (int k = 0; k < 3; ++k) {
       s.p_WE_m[i][k] = device_fault ? 0.0 : reading_.p_WE[i][k];
       s.f_E_W_N[i][k] = safety_out_.f_E_W[i][k];
+      s.impulse_E_W_Ns[i][k] = impulse_E_W_Ns_[i][k];
     }
   }
   snapshots_.Publish();

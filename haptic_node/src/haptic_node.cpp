@@ -49,6 +49,24 @@ void PrintLoopSummary(const std::string& user, const common::LoopStats& stats, s
               static_cast<unsigned long long>(faults), static_cast<unsigned long long>(rate_limited_steps),
               static_cast<unsigned long long>(bridge.device_states_published()),
               static_cast<unsigned long long>(bridge.control_events_sent()), bridge.dropped().Summary().c_str());
+  if (const auto& age = bridge.peer_contact_age(); age.count() > 0) {
+    std::printf("[haptic_node %s] peer contact sets: %llu taken, age at the bridge (sender's write to take, "
+                "same host) p50 %.0f us p99 %.0f us max %.0f us\n",
+                user.c_str(), static_cast<unsigned long long>(age.count()), age.Quantile(0.5), age.Quantile(0.99),
+                age.max_us());
+  }
+  if (const auto& age = bridge.contact_report_age(); age.count() > 0) {
+    std::printf("[haptic_node %s] contact sets: %llu written, age of the haptic step's report at the write "
+                "p50 %.0f us p99 %.0f us max %.0f us\n",
+                user.c_str(), static_cast<unsigned long long>(age.count()), age.Quantile(0.5), age.Quantile(0.99),
+                age.max_us());
+  }
+  if (const auto& age = bridge.peer_contact_loop_age(); age.count() > 0) {
+    std::printf("[haptic_node %s] peer contact sets: %llu used, age at the haptic loop (sender's write to the "
+                "first step using it, same host) p50 %.0f us p99 %.0f us max %.0f us\n",
+                user.c_str(), static_cast<unsigned long long>(age.count()), age.Quantile(0.5), age.Quantile(0.99),
+                age.max_us());
+  }
   std::fflush(stdout);
 }
 
@@ -98,6 +116,7 @@ int HapticNode::Run() {
   common::LoopStats stats;
   loop.TakeStats(stats);
   PrintLoopSummary(config_.user, stats, loop.faults(), loop.rate_limited_steps(), bridge);
+  say(participant.TrafficSummary());
   return 0;
 }
 

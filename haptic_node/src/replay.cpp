@@ -27,7 +27,9 @@ void WriteTraceHeader(std::ostream& out) {
   out << "seq,t_s,fault,hx,hy,hz,qw,qx,qy,qz";
   for (int i = 0; i < kFingers; ++i) out << ",x" << i << ",y" << i << ",z" << i;
   for (int i = 0; i < kFingers; ++i) out << ",fx" << i << ",fy" << i << ",fz" << i;
-  out << ",stamp_ns\n";
+  out << ",stamp_ns";
+  for (int i = 0; i < kFingers; ++i) out << ",jx" << i << ",jy" << i << ",jz" << i;
+  out << "\n";
 }
 
 void WriteTraceRow(std::ostream& out, const HapticSnapshot& s) {
@@ -39,7 +41,9 @@ void WriteTraceRow(std::ostream& out, const HapticSnapshot& s) {
   // The host's steady clock (CLOCK_MONOTONIC), so a test can place events it timed itself.
   // Flushed per row: a test can follow the trace while the node runs (the bridge thread
   // writes it at the publish rate; the haptic thread never does).
-  out << "," << s.stamp_ns << "\n";
+  out << "," << s.stamp_ns;
+  for (const auto& j : s.impulse_E_W_Ns) out << "," << j[0] << "," << j[1] << "," << j[2];
+  out << "\n";
   out.flush();
 }
 

@@ -78,7 +78,10 @@ void SceneRenderer::Render(double /*t_s*/, double dt_s, const DeviceReading& rea
     }
   }
   // 2. The other hands' contacts (newest set; kept until a newer one arrives).
-  remote_in_.Read(remote_);
+  if (remote_in_.Read(remote_) && remote_.newest_stamp_ns != peer_stamp_ns_) {
+    peer_stamp_ns_ = remote_.newest_stamp_ns;
+    peer_seen_ns_ = common::SteadyNowNs();
+  }
   const int n_remote = std::min(remote_.count, kMaxRemoteContacts);
   for (int i = 0; i < n_remote; ++i) {
     remote_contacts_[static_cast<std::size_t>(i)] = contact::ToRemoteContact(remote_.items[i]);
@@ -97,6 +100,9 @@ void SceneRenderer::Render(double /*t_s*/, double dt_s, const DeviceReading& rea
   // 5. Report for the bridge (contact set, grasp claims, body poses).
   ContactReport& r = reports_.WriteSlot();
   r.seq = ++seq_;
+  r.step_ns = common::SteadyNowNs();
+  r.peer_stamp_ns = peer_stamp_ns_;
+  r.peer_seen_ns = peer_seen_ns_;
   for (int i = 0; i < kFingers; ++i) {
     const auto& in = fingers[i];
     auto& out = r.fingers[i];

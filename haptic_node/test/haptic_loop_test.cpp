@@ -143,6 +143,39 @@ TEST(HapticLoop, FaultMidContactRampsForceToZeroWithinTheConfiguredTime) {
   EXPECT_NEAR(device.last[1].z(), 3.5, 1e-12);
 }
 
+// The snapshot's impulse is the sum of every step's commanded force times the time it was held,
+// so a window's mean force comes out exact however unevenly the steps (or the bridge's samples
+// of them) are spaced: here steps of 1 ms and a stall of 40 ms, with the force stepping.
+TEST(HapticLoop, SnapshotImpulseIsTheForceHeldOverEveryStep) {
+  FakeDevice device;
+  HapticLoopConfig config{1000.0, false};
+  config.safety.passivity = false;
+  config.safety.max_force_rate_N_per_s = 1e9;  // outputs equal the demands
+  HapticLoop loop(device, config);
+  auto renderer = std::make_shared<ConstantRenderer>(Eigen::Vector3d(0, 0, 1.0));
+  loop.SetRenderer(renderer);
+  std::vector<double> times;
+  for (int k = 0; k <= 100; ++k) times.push_back(k * 1e-3);
+  times.push_back(0.140);  // a stall: the 1 N force was held for 40 ms
+  for (int k = 1; k <= 50; ++k) times.push_back(0.140 + k * 1e-3);
+  double expected_z = 0.0;
+  double held_z = 0.0;  // the force commanded at the previous step
+  double last_t = -1.0;
+  for (double t : times) {
+    if (last_t >= 0.0) expected_z += held_z * (t - last_t);
+    loop.Step(t);
+    held_z = device.last[1].z();
+    last_t = t;
+  }
+  HapticSnapshot s;
+  ASSERT_TRUE(loop.TakeSnapshot(s));
+  EXPECT_NEAR(expected_z, 0.190, 1e-12);  // 1 N over 0.190 s (the first step commands from t = 0)
+  for (int i = 0; i < kFingers; ++i) {
+    EXPECT_NEAR(s.impulse_E_W_Ns[i][2], expected_z, 1e-12) << "finger " << i;
+    EXPECT_EQ(s.impulse_E_W_Ns[i][0], 0.0);
+  }
+}
+
 // Data older than stale_after_s is a fault even when it claims to be valid.
 class StaleDevice final : public Device {
  public:

@@ -57,5 +57,52 @@ TEST(SceneRenderer, FollowedBodyGlidesOnAtItsPublishedVelocityBetweenSamples) {
   std::filesystem::remove_all(dir);
 }
 
+// The newest peer set's sender stamp comes back in the report with the step that first used
+// it (the bridge turns the two into the set's age at the haptic loop, bench/net); a set the
+// loop already used keeps its first step's time. Every report carries its step's time.
+TEST(SceneRenderer, ReportsTheStepThatFirstUsedANewPeerSet) {
+  const auto dir = std::filesystem::temp_directory_path() / "handshare_scene_renderer_peer_test";
+  std::filesystem::remove_all(dir);
+  std::filesystem::create_directories(dir / "scenes");
+  const auto file = dir / "scenes" / "flat.json";
+  std::ofstream(file) << R"({"name": "flat", "gravity_m_per_s2": [0, 0, -9.81], "objects": [
+      {"id": "ground", "kind": "rigid", "shape": "box", "position_m": [0, 0, -0.02], "half_extent_m": [0.3, 0.3, 0.02]}],
+      "messages": [{"language": "en", "text": "t", "next_action": "a"}]})";
+  world::SceneModelsOptions options;
+  options.cache_dir = dir / "cache";
+  SceneRenderer r(scene::LoadScene(file), options);
+  DeviceReading far;
+  for (auto& p : far.p_WE) p = Eigen::Vector3d(1.0, 1.0, 1.0);
+  far.valid = true;
+  std::array<Eigen::Vector3d, kFingers> f{};
+  ContactReport report;
+
+  r.Render(0.0, 1e-3, far, f);
+  ASSERT_TRUE(r.TakeReport(report));
+  EXPECT_EQ(report.peer_stamp_ns, 0u);  // no peer set yet
+  EXPECT_EQ(report.peer_seen_ns, 0u);
+
+  RemoteContacts remote;
+  remote.newest_stamp_ns = common::SteadyNowNs();
+  r.SetRemote(remote);
+  const std::uint64_t before = common::SteadyNowNs();
+  r.Render(0.0, 1e-3, far, f);
+  const std::uint64_t after = common::SteadyNowNs();
+  ASSERT_TRUE(r.TakeReport(report));
+  EXPECT_EQ(report.peer_stamp_ns, remote.newest_stamp_ns);
+  EXPECT_GE(report.peer_seen_ns, before);
+  EXPECT_LE(report.peer_seen_ns, after);
+  EXPECT_GE(report.step_ns, before);  // the step's own time: the sender's report age
+  EXPECT_LE(report.step_ns, after);
+
+  // The same set again (the bridge sends the newest every tick): the first step's time stays.
+  const std::uint64_t first_seen = report.peer_seen_ns;
+  r.SetRemote(remote);
+  r.Render(0.0, 1e-3, far, f);
+  ASSERT_TRUE(r.TakeReport(report));
+  EXPECT_EQ(report.peer_seen_ns, first_seen);
+  std::filesystem::remove_all(dir);
+}
+
 }  // namespace
 }  // namespace handshare::haptic

@@ -2,7 +2,8 @@
 """Smoke tests of handshare over a real (impaired) network: the executables in separate network
 namespaces, so Fast DDS talks UDP over veth and a bridge, not shared memory.
 
-usage: net_dds_test.py two_hosts|partitioned_user --bin-dir DIR --nfq-delay PATH --domain D --work DIR
+usage: net_dds_test.py two_hosts|partitioned_user|tour|unicast_peers|late_joiners_unicast --bin-dir DIR
+                      --nfq-delay PATH --domain D --work DIR
 """
 import json
 import os
@@ -95,6 +96,8 @@ def case_two_hosts(args):
     print(f"two hosts ({a.addr} server, {b.addr} haptic node), 20 ms +- 5 ms and 2% loss on arrival at each:")
     print(f"  member joined {t_join - t0:.2f} s after start; scene at the node {t_scene - t0:.2f} s ({scene_line})")
     print(f"  UDP datagrams arriving at the server's host in 1 s: {unicast} unicast, {mcast} multicast")
+    print("  samples per topic (out: written, in: taken, lost: reported lost by the middleware):")
+    print("\n".join("  " + t for t in traffic_lines({p.label: p.log() for p in (server, node)})))
     back = f"joined again after {t_back - t_heal:.2f} s"
     print(f"  node's host isolated: member lost after {t_lost - t_cut:.2f} s; healed: {back}")
     if t_left:
@@ -107,6 +110,15 @@ def case_two_hosts(args):
     print(f"  /dev/shm Fast DDS files left after the run: {new_shm or 'none'}")
     check(unicast > 0, "no unicast UDP reached the server")
     check(all(st and st["accepted"] > 0 for st in stats.values()), "a delayer saw no traffic")
+
+
+def traffic_lines(logs):
+    """Each process's exit line of samples written, taken and lost per topic ("traffic: ...")."""
+    out = []
+    for label, log in logs.items():
+        m = re.findall(r"traffic: [^\n]*", log)
+        out.append(f"  {label} {m[-1] if m else 'printed no traffic line'}")
+    return out
 
 
 def loop_summary(log, user):
@@ -145,10 +157,11 @@ def case_partitioned_user(args):
     alone-value without a step (alice's contacts fade at his node); alice's haptic loop keeps its
     rate through the cut and its safety never has to cut a force step (rate-limited steps 0);
     after the heal alice is back within 1 s, once (present=2, no duplicate), with her contacts:
-    the tail's solve holds her fingertip again and bob's force returns to its shared value."""
+    the tail's solve holds her fingertip again and bob's force returns to its shared value; a
+    control event she sends afterwards (a reliable sample of her re-matched writer) is applied."""
     os.makedirs(args.work, exist_ok=True)
     server_exe, node_exe = exe(args.bin_dir, "world_server"), exe(args.bin_dir, "haptic_node")
-    cache = os.path.join(args.work, "cache")
+    cache = session_test.fem_cache(args.work)
     os.environ["HANDSHARE_CACHE"] = cache
     prep = subprocess.run([os.path.join(args.bin_dir, "core", "world", "world_prepare"), "--cache", cache,
                            "--scenes", "dinosaur"], capture_output=True, text=True, timeout=600)
@@ -173,8 +186,9 @@ def case_partitioned_user(args):
         nodes = {}
         for host, user in ((b, "alice"), (c, "bob")):
             nodes[user] = host.start(user, [node_exe, *common, "--user", user, "--device", "sim", "--script",
-                                            os.path.join(DATA, f"vanish_{user}.hand"), "--trace", traces[user],
-                                            "--duration", 60], args.work)
+                                            os.path.join(DATA, "partition_alice.hand" if user == "alice"
+                                                         else "vanish_bob.hand"),
+                                            "--trace", traces[user], "--duration", 90], args.work)
         alice, bob = nodes["alice"], nodes["bob"]
         tail = session_test.PressWatch(os.path.join(dump, "triceratops_tail.json"), p_tail,
                                        {"alice": (0.225, 0.08), "bob": (0.27, 0.08)})
@@ -207,6 +221,10 @@ def case_partitioned_user(args):
                 session_test.wait_until(f"{user}'s trace 2.5 s past the heal", 30,
                                         lambda u=user: (rows := session_test.read_trace(traces[u]))
                                         and rows[-1]["stamp_ns"] * 1e-9 >= t_heal + 2.6)
+            # A reliable sample from alice's writer after the partition: her script presses the
+            # arrow to the microscopic world 30 s after her press began.
+            t_sent = alice.wait_for("control arrow_next: PRESSED", 60)
+            t_applied = server.wait_for("control arrow_next by alice: scene 'microscopic'", 30)
             for user in ("alice", "bob"):
                 check(nodes[user].stop(timeout=30) == 0, f"{user}'s haptic node failed:\n{nodes[user].log()[-3000:]}")
         except Failure:
@@ -216,6 +234,7 @@ def case_partitioned_user(args):
         server.stop()
         summaries = {u: loop_summary(nodes[u].log(), u) for u in ("alice", "bob")}
         ws_log = server.log()
+        traffic = traffic_lines({p.label: p.log() for p in (server, alice, bob)})
     rows = {u: session_test.read_trace(traces[u]) for u in ("alice", "bob")}
 
     def mean_fz(user, t_a, t_b):
@@ -236,10 +255,14 @@ def case_partitioned_user(args):
     print(f"  server: alice lost {t_lost - t_cut:.2f} s after the cut; tail loaded by bob alone "
           f"{t_alone - t_cut:.2f} s after it; alice back {t_back - t_heal:.2f} s after the heal (present={rejoin}), "
           f"her contacts in the tail's solve again {t_shared - t_heal:.2f} s after it")
+    print(f"  alice's control event {t_sent - t_heal:.1f} s after the heal (a reliable sample of her re-matched "
+          f"writer): applied by the server {1e3 * (t_applied - t_sent):.0f} ms after her node sent it")
     print(f"  bob's force {bob_before:.4f} -> {bob_cut:.4f} N during the cut -> {bob_after:.4f} N after; steepest "
           f"step {step:.5f} N (rows {1e3 * gap:.0f} ms apart)")
     print(f"  alice's force {alice_before:.4f} -> {alice_cut:.4f} N during the cut; steepest step {a_step:.5f} N "
           f"(rows {1e3 * a_gap:.0f} ms apart); loop {rate_before:.1f} Hz before, {rate_cut:.1f} Hz during the cut")
+    print("  samples per topic (out: written, in: taken, lost: reported lost by the middleware):")
+    print("\n".join("  " + t for t in traffic))
     for u, s in summaries.items():
         print(f"  {u}'s loop: {s['rate_Hz']:.1f} Hz, jitter p99 {s['jitter_p99_us']:.0f} us max "
               f"{s['jitter_max_us']:.0f} us, overruns {s['overruns']:.0f}, faults {s['faults']:.0f}, "
@@ -261,5 +284,198 @@ def case_partitioned_user(args):
         check(s["rate_limited"] == 0, f"{u}'s force safety had to cut {s['rate_limited']:.0f} force steps")
 
 
+class NetHarness(session_test.Harness):
+    """session_test's Harness with each process in the network namespace of its host: a
+    loopback case runs unchanged across hosts (labels not in `hosts_by_label` run in the first)."""
+
+    def __init__(self, bin_dir, work, hosts_by_label, default_host):
+        super().__init__(bin_dir, work)
+        self.hosts_by_label, self.default_host = hosts_by_label, default_host
+
+    def start(self, label, name, *args):
+        host = self.hosts_by_label.get(label, self.default_host)
+        log = open(os.path.join(self.work, label + ".log"), "w")
+        if "--duration" not in args:
+            args = (*args, "--duration", session_test.BACKSTOP_S)
+        proc = subprocess.Popen(["ip", "netns", "exec", host.ns, self.exe(name), *map(str, args)], stdout=log,
+                                stderr=subprocess.STDOUT)
+        self.procs[label] = (proc, log)
+        return proc
+
+
+def case_tour(args):
+    """The encyclopedia tour (session_test.py's case, with the same assertions: Moon and Mars
+    weights, the jointly pressed tail against fem_solve, both hands in the spectator's frames,
+    every board message spoken) with the world server, alice, bob, the spectator and the audio
+    guide on five hosts, 20 ms +- 5 ms one-way delay and 2 % loss on what arrives at each."""
+    os.makedirs(args.work, exist_ok=True)
+    for entry in os.listdir(args.work):  # a rerun starts clean; the FEM model cache stays
+        if entry != "cache":
+            path = os.path.join(args.work, entry)
+            subprocess.run(["rm", "-rf", path], check=True)
+    labels = ("world_server", "alice", "bob", "spectator", "audio_guide")
+    with Network(5, nfq_delay=args.nfq_delay) as net:
+        for seed, host in enumerate(net.hosts, start=1):
+            host.loss(2)
+            host.delay(20, jitter_ms=5, seed=seed)
+        h = NetHarness(args.bin_dir, args.work, dict(zip(labels, net.hosts)), net.hosts[0])
+        t0 = time.monotonic()
+        try:
+            session_test.case_encyclopedia(h, args.domain)
+        except Failure:
+            h.dump_logs()
+            raise
+        except session_test.Failure as e:
+            h.dump_logs()
+            raise Failure(str(e))
+        finally:
+            h.cleanup()
+        took = time.monotonic() - t0
+        counters = {label: host.counters() for label, host in zip(labels, net.hosts)}
+        delays = {label: host.clear_delay() for label, host in zip(labels, net.hosts)}
+    print(f"tour across five hosts ({', '.join(labels)}), 20 ms +- 5 ms and 2 % loss on arrival at each: "
+          f"completed in {took:.1f} s")
+    for label in labels:
+        raw = delays[label] and delays[label].get("raw")
+        print(f"  {label}: UDP datagrams arrived {counters[label]['udp_in']} "
+              f"({counters[label]['udp_in_mcast']} multicast); delayer {raw}")
+
+
+def case_unicast_peers(args):
+    """A network without multicast (nft drops every multicast datagram arriving at either host):
+    the world server and a haptic node on two hosts match with --peers (unicast discovery to the
+    listed hosts), and do not without it (the negative control)."""
+    os.makedirs(args.work, exist_ok=True)
+    server_exe, node_exe = exe(args.bin_dir, "world_server"), exe(args.bin_dir, "haptic_node")
+    # A bad peer is an option error naming the value (exit 2), before any DDS entity exists.
+    bad = subprocess.run([node_exe, "--session", "x", "--user", "x", "--peers", "10.0.0.1:99999"], capture_output=True, text=True,
+                         timeout=30)
+    check(bad.returncode == 2 and "'10.0.0.1:99999': port 99999 is not in 1..65535" in bad.stderr,
+          f"bad --peers: rc {bad.returncode}, stderr {bad.stderr!r}")
+    node_script = os.path.join(DATA, "alice.hand")
+    with Network(2, nfq_delay=args.nfq_delay) as net:
+        a, b = net.hosts
+        for h in (a, b):
+            h.drop_multicast()
+
+        def session_of(label, peers_of_server, peers_of_node):
+            session = f"net-peers-{label}-{os.getpid()}"
+            common = ["--domain", args.domain, "--session", session]
+            c0 = {h: h.counters() for h in (a, b)}
+            t0 = time.monotonic()
+            server = a.start(f"world_server_{label}", [server_exe, *common, *peers_of_server, "--duration", 60],
+                             args.work)
+            node = b.start(f"alice_{label}", [node_exe, *common, *peers_of_node, "--user", "alice", "--device", "sim",
+                                              "--script", node_script, "--duration", 45], args.work)
+            return server, node, t0, c0
+
+        # Negative control: simple discovery without --peers. Its announcements are multicast
+        # only; nothing of it arrives, so the two never match. 8 s is 10x the time they take
+        # to match with multicast across these hosts (0.6-0.8 s, net.two_hosts, with 20 ms
+        # delay and loss), and 40 announcements.
+        server, node, t0, c0 = session_of("without_peers", [], [])
+        try:
+            server.wait_for("member joined: user=alice", 8)
+            joined = True
+        except Failure:
+            joined = False
+        check(not joined, "without --peers and without multicast the server still saw alice join")
+        check("scene '" not in node.log(), "without --peers the node still received a scene")
+        mcast_dropped = {h.ns: h.counters()["udp_in_mcast"] - c0[h]["udp_in_mcast"] for h in (a, b)}
+        check(all(n > 0 for n in mcast_dropped.values()),
+              f"no multicast announcement reached a host (so none was dropped): {mcast_dropped}")
+        check(server.popen.poll() is None and node.popen.poll() is None, "a node of the negative control ended")
+        server.stop()
+        node.stop()
+        t_neg = time.monotonic() - t0
+
+        # With --peers on both: each announces to the other's host (and its own loopback).
+        server, node, t0, c0 = session_of("with_peers", ["--peers", b.addr], ["--peers", a.addr])
+        try:
+            t_join = server.wait_for("member joined: user=alice", 30)
+            t_scene = node.wait_for(re.compile(r"scene 'start_menu' revision \d+"), 30)
+            t_stop = time.monotonic()
+            node.stop()
+            t_left = server.wait_for("member left: user=alice", 10)
+        except Failure:
+            for p in (server, node):
+                sys.stderr.write(f"----- {p.label} -----\n{p.log()}\n")
+            raise
+        server.stop()
+        c1 = {h: h.counters() for h in (a, b)}
+        unicast = {h.ns: (c1[h]["udp_in"] - c1[h]["udp_in_mcast"]) - (c0[h]["udp_in"] - c0[h]["udp_in_mcast"])
+                   for h in (a, b)}
+        mcast = {h.ns: c1[h]["udp_in_mcast"] - c0[h]["udp_in_mcast"] for h in (a, b)}
+    print(f"no multicast ({a.addr} server, {b.addr} haptic node; nft drops 224.0.0.0/4 arriving at both):")
+    print(f"  without --peers: no match in {t_neg:.1f} s; multicast datagrams dropped on arrival: {mcast_dropped}")
+    print(f"  with --peers: member joined {t_join - t0:.2f} s after start, scene at the node {t_scene - t0:.2f} s, "
+          f"member left {t_left - t_stop:.2f} s after SIGTERM to the node (clean leave over unicast)")
+    print(f"  UDP datagrams that arrived in the --peers run: unicast {unicast}, multicast (dropped) {mcast}")
+    print("  samples per topic in the --peers run (out: written, in: taken, lost: reported lost):")
+    print("\n".join("  " + t for t in traffic_lines({p.label: p.log() for p in (server, node)})))
+    check(all(n > 0 for n in unicast.values()), f"no unicast UDP arrived at a host: {unicast}")
+
+
+class HostsHarness:
+    """session_test.Harness's interface over netharness hosts: each label runs on the host
+    `placement` gives it, with --peers listing every other host (multicast is dropped)."""
+
+    def __init__(self, net, bin_dir, work, placement):
+        self.net, self.bin_dir, self.work, self.placement = net, bin_dir, work, placement
+        self.procs = {}
+
+    def start(self, label, name, *args):
+        host = self.placement[label]
+        peers = ",".join(h.addr for h in self.net.hosts if h is not host)
+        if "--duration" not in args:
+            args = (*args, "--duration", 900)  # a backstop; the test ends each node
+        self.procs[label] = host.start(label, [exe(self.bin_dir, name), *args, "--peers", peers], self.work)
+        return self.procs[label]
+
+    def wait_for_line(self, label, text, timeout):
+        return self.procs[label].wait_for(text, timeout)
+
+    def log(self, label):
+        return self.procs[label].log()
+
+    def stop(self, label, timeout):
+        return self.procs[label].stop(timeout=timeout)
+
+
+def case_late_joiners_unicast(args):
+    """tests/late_join_test.py's late joiners across a network without multicast: the world
+    server on one host, the scripted hand on another, the late spectator and audio guide on a
+    third; every node with --peers, multicast dropped on arrival at every host, 10 ms +- 2 ms
+    and 1 % loss on what arrives at each host."""
+    sys.path.insert(0, os.path.join(HERE, ".."))
+    import late_join_test  # noqa: E402
+    os.makedirs(args.work, exist_ok=True)
+    for entry in os.listdir(args.work):  # a rerun starts clean (the waits read files); the cache stays
+        if entry != "cache":
+            path = os.path.join(args.work, entry)
+            subprocess.run(["rm", "-rf", path], check=True)
+    with Network(3, nfq_delay=args.nfq_delay) as net:
+        a, b, c = net.hosts
+        for seed, h in enumerate(net.hosts, start=1):
+            h.drop_multicast()
+            h.loss(1)
+            h.delay(10, jitter_ms=2, seed=seed)
+        h = HostsHarness(net, args.bin_dir, args.work,
+                         {"world_server": a, "alice": b, "spectator": c, "audio_guide": c})
+        try:
+            late_join_test.case_late_joiners(h, args.domain)
+        except (Failure, late_join_test.Failure) as e:  # the harness's, or session_test's checks'
+            for label in h.procs:
+                sys.stderr.write(f"----- {label} -----\n{h.log(label)}\n")
+            raise Failure(str(e))
+        c_in = c.counters()
+        stats = {x.ns: x.clear_delay() for x in net.hosts}
+    print(f"  (hosts: server {a.addr}, hand {b.addr}, late joiners {c.addr}; UDP arriving at the late joiners' host: "
+          f"{c_in['udp_in']} datagrams, {c_in['udp_in_mcast']} multicast, dropped)")
+    for ns, st in stats.items():
+        print(f"  delayer {ns}: {st and st.get('raw')}")
+
+
 if __name__ == "__main__":
-    main({"two_hosts": case_two_hosts, "partitioned_user": case_partitioned_user})
+    main({"two_hosts": case_two_hosts, "partitioned_user": case_partitioned_user, "tour": case_tour,
+          "unicast_peers": case_unicast_peers, "late_joiners_unicast": case_late_joiners_unicast})

@@ -7,6 +7,7 @@
         p = b.start("srv", [exe, ...], log_dir)           # a process in b, output in log_dir/srv.log
         p.wait_for("text", timeout=10)                   # monotonic time of the line, or Failure
         b.partition(); b.heal()                          # all UDP into b dropped / restored
+        b.drop_multicast()                               # no multicast arrives at b (for good)
         net.isolate(a); net.heal_all()                   # a cut off from everyone, both ways
         stats = b.clear_delay()                          # the delayer's counters
 
@@ -221,6 +222,12 @@ class Host:
 
     def heal(self):
         self.nft(f"flush chain inet {TABLE} partition\n")
+
+    def drop_multicast(self):
+        """Drops every arriving multicast datagram (a network without multicast), for good:
+        chain `multicast` (priority -35, after the counters, untouched by heal())."""
+        self.nft(f"add chain inet {TABLE} multicast {{ type filter hook input priority -35; }}\n"
+                 f"add rule inet {TABLE} multicast ip daddr 224.0.0.0/4 drop\n")
 
     def delay(self, ms, jitter_ms=0.0, seed=1, reorder=True, dist="normal", loss_percent=0.0, queue=0,
               force_nfq=False, rt_priority=50):

@@ -277,7 +277,10 @@ TickOutput ObjectAuthority::Tick(Clock::time_point now, double dt_s) {
     world.Step(h, no_hand, std::span<const contact::RemoteContact>(remote_.data(), n));
   }
 
-  // Rigid bodies to publish: owned ones at their owner's pose, free ones while they move.
+  // Rigid bodies to publish: owned ones at their owner's pose, free ones while they move, and
+  // every one when a spectator joins and once per refresh period.
+  const bool refresh = keyframes_requested_ || (options_.pose_refresh_period.count() > 0 && now >= next_pose_refresh_);
+  if (refresh) next_pose_refresh_ = now + std::chrono::duration_cast<Clock::duration>(options_.pose_refresh_period);
   for (const auto body : models_->dynamic_bodies) {
     const std::string& id = models_->ids[static_cast<std::size_t>(body)];
     if (const auto it = owned.find(body); it != owned.end()) {
@@ -294,7 +297,7 @@ TickOutput ObjectAuthority::Tick(Clock::time_point now, double dt_s) {
     const Eigen::Isometry3d X = world.pose(body);
     const auto last = last_published_.find(body);
     if (last != last_published_.end() && (last->second - X.translation()).norm() <= options_.rest_tolerance_m &&
-        !keyframes_requested_) {
+        !refresh) {
       continue;
     }
     last_published_[body] = X.translation();

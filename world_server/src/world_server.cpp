@@ -129,6 +129,7 @@ int WorldServer::Run() {
       std::to_string(session.members().present().size()) + " still present, " +
       std::to_string(session.deformations_sent()) + " deformation samples sent, samples dropped: " +
       session.dropped().Summary());
+  Say(participant.TrafficSummary());
   CloseLog();
   return log_failed_ ? 1 : 0;
 }

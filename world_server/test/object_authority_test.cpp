@@ -159,3 +159,52 @@ TEST(ObjectAuthority, AWorldChangeWhileAModelBuildIsInFlightSupersedesIt) {
 
 }  // namespace
 }  // namespace handshare::server
+
+namespace handshare::server {
+namespace {
+
+// A body at rest is not streamed, but its pose is published again once per refresh period:
+// object states are best-effort, and a receiver that missed the last one (a late joiner whose
+// reader matched after the join's re-send) would otherwise draw the body where the scene put it.
+int RestingBallPublications(double refresh_period_s) {
+  testing::TempDir dir;
+  std::filesystem::create_directories(dir.path() / "scenes");
+  const auto file = dir.path() / "scenes" / "rest.json";
+  std::ofstream(file) << R"({"name": "rest", "gravity_m_per_s2": [0, 0, -9.81], "objects": [
+      {"id": "ground", "kind": "rigid", "shape": "box", "position_m": [0, 0, -0.02], "half_extent_m": [0.3, 0.3, 0.02]},
+      {"id": "ball", "kind": "rigid", "shape": "sphere", "position_m": [0, 0, 0.04], "radius_m": 0.04, "mass_kg": 0.2}],
+      "messages": [{"language": "en", "text": "t", "next_action": "a"}]})";
+  ObjectAuthorityOptions options;
+  options.models.cache_dir = dir.path() / "cache";
+  options.pose_refresh_period = std::chrono::duration<double>(refresh_period_s);
+  ObjectAuthority world("s", options);
+  world.SetScene(scene::LoadScene(file));
+  Clock::time_point now = Clock::now();
+  const auto dt = std::chrono::milliseconds(10);
+  for (int i = 0; i < 2000 && !world.ready(); ++i) {
+    std::this_thread::sleep_for(dt);
+    now += dt;
+    world.Tick(now, 0.01);
+  }
+  EXPECT_TRUE(world.ready());
+  for (int i = 0; i < 200; ++i) {  // 2 s to settle on the ground
+    now += dt;
+    world.Tick(now, 0.01);
+  }
+  int published = 0;
+  for (int i = 0; i < 350; ++i) {  // 3.5 s at rest
+    now += dt;
+    if (BallState(world.Tick(now, 0.01)) != nullptr) ++published;
+  }
+  return published;
+}
+
+TEST(ObjectAuthority, ABodyAtRestIsPublishedAgainOncePerRefreshPeriod) {
+  const int refreshed = RestingBallPublications(1.0);
+  EXPECT_GE(refreshed, 3);  // at 1.0 s, 2.0 s, 3.0 s (+ one at the start of the window)
+  EXPECT_LE(refreshed, 4);
+  EXPECT_EQ(RestingBallPublications(0.0), 0);  // the negative control: a resting body is not streamed
+}
+
+}  // namespace
+}  // namespace handshare::server

@@ -12,7 +12,9 @@ void DeclareSessionOptions(Options& options) {
       .Value("session", "S", "session name (the DDS partition)", std::nullopt, true)
       .Value("duration", "SEC", "run this long, then end (0: until SIGINT/SIGTERM)", "0")
       .Value("qos", "FILE", "QoS profile XML (default: $HANDSHARE_QOS_FILE, else handshare_qos.xml of the "
-                        "installed share/handshare/qos or the source tree's deploy/qos)", "");
+                        "installed share/handshare/qos or the source tree's deploy/qos)", "")
+      .Value("peers", "HOST[:PORT],...", "unicast discovery where multicast does not pass: the hosts (or one "
+                                        "participant's discovery port) to announce to; give it to every node", "");
 }
 
 SessionOptions ReadSessionOptions(const Options& options) {
@@ -21,6 +23,7 @@ SessionOptions ReadSessionOptions(const Options& options) {
   s.session = options.GetString("session");
   s.duration = std::chrono::duration<double>(options.GetDouble("duration", 0.0, 1e7));
   s.qos_file = options.GetString("qos");
+  s.peers = ParsePeers(options.GetString("peers"));
   return s;
 }
 

@@ -2,6 +2,7 @@
 // turned into a DdsError that names what failed.
 #include "handshare/dds/participant.hpp"
 
+#include "discovery.hpp"
 #include "handshare/common/data_dir.hpp"
 
 #include <fastdds/dds/core/condition/StatusCondition.hpp>
@@ -18,16 +19,10 @@
 #include <fastdds/dds/topic/TypeSupport.hpp>
 #include <fastdds/rtps/flowcontrol/FlowControllerDescriptor.hpp>
 
-#include <arpa/inet.h>
-#include <netinet/in.h>
-#include <sys/socket.h>
-#include <unistd.h>
-
-#include <atomic>
 #include <cstdlib>
-#include <random>
 #include <deque>
 #include <filesystem>
+#include <atomic>
 #include <map>
 #include <mutex>
 #include <set>
@@ -99,6 +94,13 @@ std::int64_t ToNs(const eprosima::fastrtps::rtps::Time_t& t) {
 }  // namespace
 
 namespace detail {
+// One topic's counters, shared by the participant and its endpoints on that topic.
+struct TrafficCounters {
+  std::atomic<std::uint64_t> written{0};
+  std::atomic<std::uint64_t> taken{0};
+  std::atomic<std::uint64_t> lost_by_gone_readers{0};  // readers deleted: their last lost count
+};
+
 class ParticipantImpl {
  public:
   fdds::DomainParticipant* participant = nullptr;
@@ -110,6 +112,15 @@ class ParticipantImpl {
   // The flow controller registered from the participant profile ("" if none); writer QoS
   // points at this string (Fast DDS 2.9 keeps the name as a const char*).
   std::string flow_controller;
+  std::map<std::string, std::shared_ptr<TrafficCounters>> traffic;  // by topic, under mutex
+  std::map<fdds::DataReader*, std::string> live_readers;            // for their lost counts
+
+  std::shared_ptr<TrafficCounters> CountersFor(const std::string& topic) {
+    std::lock_guard<std::mutex> lock(mutex);
+    auto& c = traffic[topic];
+    if (!c) c = std::make_shared<TrafficCounters>();
+    return c;
+  }
 
   // Owned by shared_ptr: every writer and reader holds one, so the DDS participant is deleted
   // only after its last endpoint, whatever order the owners are destroyed in.
@@ -145,13 +156,15 @@ namespace {
 class WriterImpl final : public detail::UntypedWriter {
  public:
   WriterImpl(std::shared_ptr<detail::ParticipantImpl> owner, fdds::DataWriter* w, std::string topic)
-      : owner_(std::move(owner)), w_(w), topic_(std::move(topic)) {}
+      : owner_(std::move(owner)), w_(w), topic_(std::move(topic)), counters_(owner_->CountersFor(topic_)) {}
   ~WriterImpl() override { owner_->publisher->delete_datawriter(w_); }
   void Write(const void* sample) override {
     if (!w_->write(const_cast<void*>(sample))) throw DdsError("DDS: write on " + topic_ + " failed");
+    counters_->written.fetch_add(1, std::memory_order_relaxed);
   }
   void Dispose(const void* sample) override {
     Check(w_->dispose(const_cast<void*>(sample), fdds::HANDLE_NIL), "dispose on " + topic_);
+    counters_->written.fetch_add(1, std::memory_order_relaxed);
     // A dispose usually precedes deleting the writer: give reliable readers up to 0.5 s to
     // acknowledge it, so a clean leave is not mistaken for a lost member.
     w_->wait_for_acknowledgments(eprosima::fastrtps::Duration_t(0, 500000000));
@@ -166,6 +179,7 @@ class WriterImpl final : public detail::UntypedWriter {
   std::shared_ptr<detail::ParticipantImpl> owner_;
   fdds::DataWriter* w_;
   std::string topic_;
+  std::shared_ptr<detail::TrafficCounters> counters_;
 };
 
 // Writers that went away (unmatched: killed, lost, or deleted) or lost liveliness, and writers
@@ -211,7 +225,7 @@ class ReaderImpl final : public detail::UntypedReader {
  public:
   ReaderImpl(std::shared_ptr<detail::ParticipantImpl> owner, fdds::Topic* topic,
              const fdds::DataReaderQos& qos, std::string topic_name)
-      : owner_(std::move(owner)), topic_(std::move(topic_name)) {
+      : owner_(std::move(owner)), topic_(std::move(topic_name)), counters_(owner_->CountersFor(topic->get_name())) {
     r_ = CheckEntity(owner_->subscriber->create_datareader(
                          topic, qos, &listener_,
                          fdds::StatusMask::subscription_matched() << fdds::StatusMask::liveliness_changed()
@@ -221,8 +235,18 @@ class ReaderImpl final : public detail::UntypedReader {
     Check(condition.set_enabled_statuses(fdds::StatusMask::data_available()),
           "status mask of " + topic_);
     Check(waitset_.attach_condition(condition), "attaching wait set of " + topic_);
+    std::lock_guard<std::mutex> lock(owner_->mutex);
+    owner_->live_readers[r_] = topic->get_name();
   }
   ~ReaderImpl() override {
+    {
+      std::lock_guard<std::mutex> lock(owner_->mutex);
+      owner_->live_readers.erase(r_);
+      fdds::SampleLostStatus lost;
+      if (r_->get_sample_lost_status(lost) == ReturnCode_t::RETCODE_OK && lost.total_count > 0) {
+        counters_->lost_by_gone_readers.fetch_add(static_cast<std::uint64_t>(lost.total_count));
+      }
+    }
     waitset_.detach_condition(r_->get_statuscondition());
     r_->set_listener(nullptr);
     owner_->subscriber->delete_datareader(r_);
@@ -237,6 +261,7 @@ class ReaderImpl final : public detail::UntypedReader {
     if (rc == ReturnCode_t::RETCODE_NO_DATA) return false;
     Check(rc, "take on " + topic_);
     meta.valid_data = info.valid_data;
+    if (info.valid_data) counters_->taken.fetch_add(1, std::memory_order_relaxed);
     switch (info.instance_state) {
       case fdds::NOT_ALIVE_DISPOSED_INSTANCE_STATE:
         meta.instance_state = InstanceState::kDisposed;
@@ -276,42 +301,13 @@ class ReaderImpl final : public detail::UntypedReader {
  private:
   std::shared_ptr<detail::ParticipantImpl> owner_;
   std::string topic_;
+  std::shared_ptr<detail::TrafficCounters> counters_;
   LostWriterListener listener_;
   fdds::DataReader* r_ = nullptr;
   fdds::WaitSet waitset_;
 };
 
 }  // namespace
-
-// RTPS well-known ports (DDSI-RTPS 9.6.1.1): metatraffic and user unicast of participant id.
-constexpr int kParticipantIds = 120;
-bool UdpPortFree(int port) {
-  const int fd = socket(AF_INET, SOCK_DGRAM, 0);
-  if (fd < 0) return false;
-  sockaddr_in a{};
-  a.sin_family = AF_INET;
-  a.sin_port = htons(static_cast<std::uint16_t>(port));
-  a.sin_addr.s_addr = htonl(INADDR_ANY);
-  const bool free = bind(fd, reinterpret_cast<sockaddr*>(&a), sizeof a) == 0;
-  close(fd);
-  return free;
-}
-
-// A participant id whose unicast ports are free, starting the search at a random id. Fast DDS
-// takes the lowest free id: a process restarted at once (a killed server, a crashed haptic
-// node) then gets the id, and the ports, of the participant it replaces, and the others,
-// who still hold that dead participant until its lease ends, took 2.2-3.6 s to match the new
-// one (0.3 s with other ports; tests/server_crash_test.py). -1 (Fast DDS picks) if none is.
-int FreshParticipantId(int domain_id) {
-  std::random_device seed;
-  const int start = static_cast<int>(seed() % kParticipantIds);
-  for (int k = 0; k < kParticipantIds; ++k) {
-    const int id = (start + k) % kParticipantIds;
-    const int metatraffic = 7400 + 250 * domain_id + 10 + 2 * id;
-    if (UdpPortFree(metatraffic) && UdpPortFree(metatraffic + 1)) return id;
-  }
-  return -1;
-}
 
 std::string DefaultQosFile() {
   if (const char* env = std::getenv("HANDSHARE_QOS_FILE"); env != nullptr && *env != '\0') {
@@ -323,7 +319,21 @@ std::string DefaultQosFile() {
 
 Participant::Participant(int domain_id, const std::string& session, const std::string& name,
                          const std::string& qos_file)
-    : domain_id_(domain_id), session_(session), impl_(std::make_shared<detail::ParticipantImpl>()) {
+    : Participant(
+          [&] {
+            common::SessionOptions where;
+            where.domain_id = domain_id;
+            where.session = session;
+            where.qos_file = qos_file;
+            return where;
+          }(),
+          name) {}
+
+Participant::Participant(const common::SessionOptions& where, const std::string& name)
+    : domain_id_(where.domain_id), session_(where.session), impl_(std::make_shared<detail::ParticipantImpl>()) {
+  const int domain_id = where.domain_id;
+  const std::string& session = where.session;
+  const std::string& qos_file = where.qos_file;
   if (domain_id < 0 || domain_id > 232) {
     throw DdsError("DDS: domain id " + std::to_string(domain_id) + " is outside 0..232");
   }
@@ -348,7 +358,7 @@ Participant::Participant(int domain_id, const std::string& session, const std::s
         PositiveProperty(pqos.properties(), "handshare.flow_controller.period_ms", 60000L));
     pqos.flow_controllers().push_back(descriptor);
   }
-  if (pqos.wire_protocol().participant_id < 0) pqos.wire_protocol().participant_id = FreshParticipantId(domain_id);
+  detail::ConfigureDiscovery(where, pqos);  // participant id, --peers (discovery.cpp)
   impl_->participant = CheckEntity(factory->create_participant(domain_id, pqos),
                                    "participant '" + name + "' on domain " +
                                        std::to_string(domain_id));
@@ -360,9 +370,6 @@ Participant::Participant(int domain_id, const std::string& session, const std::s
   sub_qos.partition().push_back(session.c_str());
   impl_->subscriber = CheckEntity(impl_->participant->create_subscriber(sub_qos), "subscriber");
 }
-
-Participant::Participant(const common::SessionOptions& where, const std::string& name)
-    : Participant(where.domain_id, where.session, name, where.qos_file) {}
 
 Participant::~Participant() = default;
 
@@ -389,6 +396,43 @@ std::unique_ptr<detail::UntypedWriter> Participant::CreateUntypedWriter(
   fdds::DataWriter* w = CheckEntity(impl_->publisher->create_datawriter(t, qos),
                                     "writer on " + topic + " (profile " + profile + ")");
   return std::make_unique<WriterImpl>(impl_, w, topic);
+}
+
+std::vector<TopicTraffic> Participant::Traffic() const {
+  std::lock_guard<std::mutex> lock(impl_->mutex);
+  std::map<std::string, std::uint64_t> live_lost;
+  for (const auto& [reader, topic] : impl_->live_readers) {
+    fdds::SampleLostStatus lost;
+    if (reader->get_sample_lost_status(lost) == ReturnCode_t::RETCODE_OK && lost.total_count > 0) {
+      live_lost[topic] += static_cast<std::uint64_t>(lost.total_count);
+    }
+  }
+  std::vector<TopicTraffic> out;
+  for (const auto& [topic, c] : impl_->traffic) {
+    TopicTraffic t;
+    t.topic = topic;
+    t.written = c->written.load(std::memory_order_relaxed);
+    t.taken = c->taken.load(std::memory_order_relaxed);
+    t.lost = c->lost_by_gone_readers.load() + live_lost[topic];
+    out.push_back(std::move(t));
+  }
+  return out;
+}
+
+std::string Participant::TrafficSummary() const {
+  std::string line = "traffic:";
+  const char* sep = " ";
+  for (const TopicTraffic& t : Traffic()) {
+    if (t.written == 0 && t.taken == 0 && t.lost == 0) continue;
+    std::string name = t.topic;
+    if (name.rfind("handshare/", 0) == 0) name.erase(0, 10);
+    line += sep + name;
+    if (t.written > 0) line += " out " + std::to_string(t.written);
+    if (t.taken > 0 || t.lost > 0) line += " in " + std::to_string(t.taken);
+    if (t.lost > 0) line += " lost " + std::to_string(t.lost);
+    sep = "; ";
+  }
+  return std::string(sep) == " " ? line + " none" : line;
 }
 
 std::unique_ptr<detail::UntypedReader> Participant::CreateUntypedReader(

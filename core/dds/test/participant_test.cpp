@@ -160,6 +160,42 @@ TEST(DdsParticipant, DisposeIsSeenAsDisposedInstance) {
   EXPECT_EQ(left.instance, joined.instance);  // the same member
 }
 
+// Every sample written and taken is counted per topic, on both sides (reliable keep-all
+// events: every one written arrives).
+TEST(DdsParticipant, TrafficCountsWrittenAndTakenSamplesPerTopic) {
+  Participant a(205, "s1", "node"), b(205, "s1", "server");
+  auto reader = MakeReader<msg::ControlEvent>(b, topics::kControlEvent);
+  auto writer = MakeWriter<msg::ControlEvent>(a, topics::kControlEvent);
+  const auto end = std::chrono::steady_clock::now() + 5s;
+  while (writer.matched_readers() == 0 && std::chrono::steady_clock::now() < end) std::this_thread::sleep_for(10ms);
+  ASSERT_EQ(writer.matched_readers(), 1);
+  msg::ControlEvent event;
+  event.session("s1");
+  for (int i = 0; i < 7; ++i) writer.Write(event);
+  msg::ControlEvent in;
+  SampleMeta meta;
+  int taken = 0;
+  while (taken < 7 && TakeWithin(reader, in, meta, 5000ms)) ++taken;
+  ASSERT_EQ(taken, 7);
+  const auto find = [](const std::vector<TopicTraffic>& all, const std::string& topic) {
+    for (const auto& t : all) {
+      if (t.topic == topic) return t;
+    }
+    return TopicTraffic{};
+  };
+  const TopicTraffic out = find(a.Traffic(), std::string(topics::kControlEvent.name));
+  const TopicTraffic got = find(b.Traffic(), std::string(topics::kControlEvent.name));
+  EXPECT_EQ(out.written, 7u);
+  EXPECT_EQ(out.taken, 0u);
+  EXPECT_EQ(got.written, 0u);
+  EXPECT_EQ(got.taken, 7u);
+  EXPECT_EQ(got.lost, 0u);
+  EXPECT_EQ(a.TrafficSummary(), "traffic: control_event out 7");
+  EXPECT_EQ(b.TrafficSummary(), "traffic: control_event in 7");
+  Participant idle(205, "s2", "idle");
+  EXPECT_EQ(idle.TrafficSummary(), "traffic: none");
+}
+
 TEST(DdsParticipant, ClearErrorsForBadSetup) {
   EXPECT_THROW(Participant(300, "s", "p"), DdsError);           // domain out of range
   EXPECT_THROW(Participant(205, "", "p"), DdsError);            // no session

@@ -72,6 +72,10 @@ class SceneReplica {
   const DeformationField* deformation(const std::string& object_id) const;
   /// Pose the object is drawn in; empty if it is not in the current scene.
   std::optional<Eigen::Isometry3d> X_WO(const std::string& object_id) const;
+  /// True when that pose came from an ObjectState (else it is the scene state's).
+  bool pose_received(const std::string& object_id) const;
+  /// The current scene's objects, in scene-state order.
+  const std::vector<std::string>& object_ids() const { return order_; }
   const SceneReplicaStats& stats() const { return stats_; }
   /// Deformation statistics summed over the current fields.
   DeformationStats deformation_stats() const;

@@ -26,6 +26,10 @@ struct SpectatorConfig {
   std::chrono::duration<double> wait_for_scene{5.0};  // headless: wait this long for the scene
   std::filesystem::path assets_dir;  // mesh uris are relative to it; "" = DefaultAssetsDir()
   std::filesystem::path deformation_out;  // "" = none; else at exit: SceneReplica::WriteDeformationJson
+  /// "" = none; else at exit, JSON: {"scene", "revision", "board": {"message_id", "text"},
+  /// "objects": {id: {"p_WO_m", "q_WO_wxyz", "from": "object_state" | "scene_state"}}}: the
+  /// scene, board and poses the spectator shows (a late joiner's check).
+  std::filesystem::path state_out;
 };
 
 /// $HANDSHARE_ASSETS if set, else the installed or source tree's assets (common::AssetsDir, as

@@ -33,6 +33,7 @@
 ///     the window the test hook widens) stay owned.
 /// Step() costs one relaxed load when nothing is posted, and an exchange and a store when it
 /// adopts: lock-free, no allocation.
+#include <array>
 #include <atomic>
 #include <cstdint>
 #include <memory>
@@ -131,6 +132,7 @@ class HapticLoop {
   void (*adoption_hook_)(void*) noexcept = nullptr;  // tests only: see SetAdoptionHookForTest
   void* adoption_hook_arg_ = nullptr;
   std::uint64_t seq_ = 0;
+  std::array<Eigen::Vector3d, kFingers> impulse_E_W_Ns_{};  // haptic thread only
   common::TripleBuffer<HapticSnapshot> snapshots_;
   // Heap-held: LoopStats is about 16 KB; three copies live in the buffer.
   std::unique_ptr<common::TripleBuffer<common::LoopStats>> stats_holder_ =

@@ -14,6 +14,10 @@ struct HapticSnapshot {
   double q_WH_wxyz[4] = {1, 0, 0, 0};
   double p_WE_m[kFingers][3] = {};
   double f_E_W_N[kFingers][3] = {};
+  /// Impulse each finger's commanded force has delivered since the loop started: the sum over
+  /// every step of f times the time it was held [N s]. Its change over a window divided by the
+  /// window's t_s span is the mean force over every step of it (not over the bridge's samples).
+  double impulse_E_W_Ns[kFingers][3] = {};
   double fingertip_radius_m = 0.0;
   bool fault = false;  // device fault or a finger's safety fault this step
 };

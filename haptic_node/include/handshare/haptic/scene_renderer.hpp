@@ -26,6 +26,7 @@ inline constexpr int kMaxReportedBodies = 8;
 /// What the haptic thread reports each step (trivially copyable).
 struct ContactReport {
   std::uint64_t seq = 0;
+  std::uint64_t step_ns = 0;  ///< the step that made it (steady clock) [ns]
   struct Finger {
     bool active = false;
     std::int32_t object = -1;       // world object index (SceneModels::ids)
@@ -40,12 +41,18 @@ struct ContactReport {
     double v_WO_m_per_s[3] = {};
   } bodies[kMaxReportedBodies];
   std::int32_t num_bodies = 0;
+  /// The newest peer contact set this loop has used: its sender's stamp (RemoteContacts::
+  /// newest_stamp_ns) and the step that first used it (steady clock) [ns]; 0 before any.
+  std::uint64_t peer_stamp_ns = 0;
+  std::uint64_t peer_seen_ns = 0;
 };
 
 /// Other hands' contacts on this scene's objects (trivially copyable).
 struct RemoteContacts {
   std::int32_t count = 0;
   contact::PeerContact items[kMaxRemoteContacts];
+  /// The sender's stamp (ContactSet::stamp_ns) of the newest peer set received so far [ns].
+  std::uint64_t newest_stamp_ns = 0;
 };
 
 /// Dynamic bodies another process simulates (owned by another user, or free and simulated by
@@ -112,6 +119,8 @@ class SceneRenderer final : public ForceRenderer {
   common::SpscQueue<controls::ControlEvent, 256> events_;
   std::atomic<std::uint64_t> dropped_events_{0};
   std::uint64_t seq_ = 0;
+  std::uint64_t peer_stamp_ns_ = 0;  // the newest peer set used, and the step that first used it
+  std::uint64_t peer_seen_ns_ = 0;
 };
 
 }  // namespace handshare::haptic

@@ -42,6 +42,11 @@ struct ObjectAuthorityOptions {
   session::PeerContactsConfig peers;
   /// Free bodies are published while they move more than this per tick, and once when they stop.
   double rest_tolerance_m = 1e-5;
+  /// Every free body's pose is published again at least this often (0: only on a spectator's
+  /// join): object states are best-effort, so a receiver that missed the last one of a body at
+  /// rest (a late joiner whose reader matched after the join's re-send, a lost datagram) would
+  /// otherwise draw it where the scene put it, for good.
+  std::chrono::duration<double> pose_refresh_period{1.0};
   /// When set: every published deformation also goes to DIR/<object>.json (the loads of the
   /// solve, the material, the fixed nodes and the field the receivers hold) with the
   /// tetrahedral mesh in DIR/<object>.inp, so the FEM can be checked independently.
@@ -127,6 +132,7 @@ class ObjectAuthority {
   std::map<contact::ObjectId, Eigen::Vector3d> last_published_;     // free bodies
   std::vector<contact::RemoteContact> remote_;
   bool keyframes_requested_ = false;
+  Clock::time_point next_pose_refresh_{};  // ObjectAuthorityOptions::pose_refresh_period
 };
 
 }  // namespace handshare::server

@@ -4,8 +4,10 @@
 #include <chrono>
 #include <functional>
 #include <string>
+#include <vector>
 
 #include "handshare/common/options.hpp"
+#include "handshare/common/peers.hpp"
 
 namespace handshare::common {
 
@@ -15,9 +17,10 @@ struct SessionOptions {
   std::string session;
   std::chrono::duration<double> duration{0.0};  // 0: until SIGINT/SIGTERM
   std::string qos_file;                          // "": the default profiles
+  std::vector<Peer> peers;                       // --peers: unicast discovery (docs/network.md)
 };
 
-/// Declares --domain, --session (required), --duration and --qos.
+/// Declares --domain, --session (required), --duration, --qos and --peers.
 void DeclareSessionOptions(Options& options);
 /// Reads them back after parsing; throws OptionError for a bad value.
 SessionOptions ReadSessionOptions(const Options& options);

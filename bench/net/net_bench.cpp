@@ -1,0 +1,833 @@
+// net_bench: one-way latency of a contact set (handshare/contact_set, ContactSet, the project's
+// stream profiles and typed layer) from one process's writer to another's reader, over Fast DDS
+// shared memory, UDP on loopback and UDP between two network namespaces on a bridge, with the
+// split of where the time goes; and the same path shaped like two haptic nodes (a 1 kHz haptic
+// thread -> triple buffer -> 100 Hz bridge -> DDS -> 100 Hz bridge -> triple buffer -> 1 kHz
+// haptic thread).
+//
+//   net_bench --csv [--count N] [--rate HZ] [--node-count N] [--domain D] [--transports LIST]
+//             [--fifo PRIO] [--keep DIR]
+//     --domain D (default 160): the runs use D, D+1, ... (two per transport, each on a domain
+//     of its own so none meets a participant an earlier run left in its lease).
+//     --fifo PRIO: both ends' processes run SCHED_FIFO at PRIO (every thread, Fast DDS's receive
+//     threads included: they inherit it), to show what scheduling does to the tail.
+//     prints transport,measure,p50_us,p99_us,max_us rows (and '#' comment lines with the load,
+//     losses and what was skipped). transport: shm | udp | netns; measure:
+//       contact_one_way      stamp before the writer's write() -> sample taken by the reader
+//       serialize            CDR encoding of the sample (dds::Serialize, in the writer process)
+//       deserialize          CDR decoding (dds::Deserialize)
+//       write_call           the writer's write() call (serialization, history, send)
+//       write_to_wake        write() returned -> the reader's WaitSet woke (transport, receive
+//                            thread, notification; negative when the reader wakes first)
+//       wake_to_taken        WaitSet woke -> take() returned (deserialization, copy)
+//       node_path            node-shaped path: sender's haptic step -> receiver's haptic step
+//                            that first sees the set
+//       node_sender_handoff  sender's haptic step -> its bridge's write()
+//       node_dds_and_tick    sender bridge's write() -> receiver bridge's take() (DDS hop plus
+//                            the wait for the receiver's next bridge tick)
+//       node_receiver_handoff receiver bridge's take() -> its haptic step that sees it
+//   The threads tick on grids of CLOCK_MONOTONIC whose phases sweep during the run (the
+//   sender's bridge against the receiver's by 1.1 ms every 50 ticks, the receiver's haptic
+//   steps against its bridge by 0.1 ms every 700 steps), so the run covers the phases a random
+//   pair of nodes has.
+//   One clock: CLOCK_MONOTONIC, shared by the processes of one host, network namespaces too.
+//   The shm and udp transports are forced by a QoS file made from the project's
+//   (deploy/qos/handshare_qos.xml, or $HANDSHARE_QOS_FILE) with the participant's builtin
+//   transports replaced by one user transport. netns needs root and `ip` (iproute2): without
+//   them its rows are skipped with a '#' line saying why.
+//
+//   net_bench --role writer|reader|node-writer|node-reader --qos FILE --domain D --session S
+//             --count N --rate HZ --out FILE
+//     one end (what --csv runs, in a namespace for netns).
+#include <fcntl.h>
+#include <pthread.h>
+#include <sched.h>
+#include <signal.h>
+#include <spawn.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <array>
+#include <atomic>
+#include <chrono>
+#include <cmath>
+#include <cstdint>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <sstream>
+#include <stdexcept>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "handshare/common/clock.hpp"
+#include "handshare/common/triple_buffer.hpp"
+#include "handshare/dds/messages.hpp"
+#include "handshare/dds/participant.hpp"
+#include "handshare/dds/serialization.hpp"
+#include "handshare/dds/topics.hpp"
+
+extern char** environ;
+
+namespace {
+
+using namespace handshare;
+namespace fs = std::filesystem;
+
+class UsageError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+struct Options {
+  bool csv = false;
+  std::string role;
+  std::string transport;
+  std::string qos;
+  std::string session;
+  std::string out;
+  std::string keep;
+  std::vector<std::string> transports = {"shm", "udp", "netns"};
+  int domain = 160;
+  int fifo = 0;           // > 0: both ends run SCHED_FIFO at this priority (every thread)
+  int count = 5000;       // samples measured in the contact_one_way run
+  int node_count = 2000;  // bridge ticks measured in the node-shaped run
+  double rate_Hz = 1000.0;
+};
+
+constexpr int kWarmup = 200;  // samples (or ticks) sent before the measured ones
+constexpr std::int64_t kBridgePeriodNs = 10'000'000;  // the haptic node's bridge: 100 Hz
+constexpr std::int64_t kHapticPeriodNs = 1'000'000;   // the haptic loop: 1 kHz
+
+std::int64_t Now() { return static_cast<std::int64_t>(common::SteadyNowNs()); }
+
+void SleepUntilNs(std::int64_t t) {
+  std::this_thread::sleep_until(std::chrono::steady_clock::time_point(std::chrono::nanoseconds(t)));
+}
+
+// A contact set as a hand pressing a deformable sends it: five fingers on one object.
+msg::ContactSet MakeContactSet(const std::string& session) {
+  msg::ContactSet s;
+  s.user("net_bench");
+  s.session(session);
+  for (int i = 0; i < 5; ++i) {
+    auto& f = s.fingers()[static_cast<std::size_t>(i)];
+    f.active(true);
+    f.object_id("triceratops_tail");
+    f.surface_node(100 + i);
+    f.p_W_m({0.2 + 0.01 * i, 0.08, 0.065});
+    f.n_W({0.0, 0.0, 1.0});
+    f.p_WE_m({0.2 + 0.01 * i, 0.08, 0.07});
+    f.radius_m(0.008);
+    f.depth_m(0.003);
+    f.u_imposed_W_m({0.0, 0.0, -0.003});
+    f.f_W_N({0.0, 0.0, -0.7});
+  }
+  s.q_WO_wxyz({1.0, 0.0, 0.0, 0.0});
+  return s;
+}
+
+// ---------------------------------------------------------------- the ends (child processes)
+
+std::ofstream OpenOut(const std::string& path) {
+  std::ofstream f(path);
+  if (!f) throw std::runtime_error("cannot write " + path);
+  return f;
+}
+
+void WaitForReader(dds::Writer<msg::ContactSet>& w) {
+  const std::int64_t deadline = Now() + 20'000'000'000;
+  while (w.matched_readers() == 0) {
+    if (Now() > deadline) throw std::runtime_error("no reader matched within 20 s");
+    std::this_thread::sleep_for(std::chrono::milliseconds(5));
+  }
+  // The reader's side of the match may come a little later: best-effort samples before it are
+  // lost, and the warm-up samples are not measured anyway.
+  std::this_thread::sleep_for(std::chrono::milliseconds(300));
+}
+
+// Writer: serialization timing, then count + warm-up samples at rate_Hz on absolute deadlines.
+// Rows: "ser NS", "deser NS", "w SEQ STAMP RETURNED".
+int RunWriter(const Options& o) {
+  dds::Participant p(o.domain, o.session, "net_bench_writer", o.qos);
+  auto w = dds::MakeWriter<msg::ContactSet>(p, dds::topics::kContactSet);
+  msg::ContactSet s = MakeContactSet(o.session);
+  std::ofstream out = OpenOut(o.out);
+  msg::ContactSet back;
+  for (int i = 0; i < 2000; ++i) {
+    s.seq(static_cast<std::uint32_t>(i));
+    const std::int64_t t0 = Now();
+    const std::vector<std::uint8_t> bytes = dds::Serialize(s);
+    const std::int64_t t1 = Now();
+    dds::Deserialize<msg::ContactSet>(bytes, back);
+    const std::int64_t t2 = Now();
+    out << "ser " << (t1 - t0) << "\ndeser " << (t2 - t1) << "\n";
+    if (i == 0) out << "bytes " << bytes.size() << "\n";
+  }
+  WaitForReader(w);
+  const std::int64_t period = static_cast<std::int64_t>(1e9 / o.rate_Hz);
+  std::vector<std::array<std::int64_t, 3>> rows;
+  rows.reserve(static_cast<std::size_t>(o.count + kWarmup));
+  std::int64_t next = Now();
+  for (int i = 0; i < o.count + kWarmup; ++i) {
+    next += period;
+    SleepUntilNs(next);
+    const std::int64_t stamp = Now();
+    s.seq(static_cast<std::uint32_t>(i));
+    s.stamp_ns(static_cast<std::uint64_t>(stamp));
+    w.Write(s);
+    rows.push_back({i, stamp, Now()});
+  }
+  for (const auto& r : rows) out << "w " << r[0] << ' ' << r[1] << ' ' << r[2] << "\n";
+  // Let the last samples arrive before the participant goes.
+  std::this_thread::sleep_for(std::chrono::milliseconds(500));
+  return 0;
+}
+
+// Reader: waits on its WaitSet, takes everything. Rows: "r SEQ STAMP WOKE TAKEN".
+int RunReader(const Options& o) {
+  dds::Participant p(o.domain, o.session, "net_bench_reader", o.qos);
+  auto r = dds::MakeReader<msg::ContactSet>(p, dds::topics::kContactSet);
+  std::ofstream out = OpenOut(o.out);
+  const int last = o.count + kWarmup - 1;
+  std::vector<std::array<std::int64_t, 4>> rows;
+  rows.reserve(static_cast<std::size_t>(o.count + kWarmup));
+  msg::ContactSet s;
+  dds::SampleMeta meta;
+  const std::int64_t give_up = Now() + 60'000'000'000;
+  std::int64_t last_data = 0;
+  bool done = false;
+  while (!done) {
+    const std::int64_t now = Now();
+    if (now > give_up || (last_data != 0 && now - last_data > 3'000'000'000)) break;
+    if (!r.WaitForData(std::chrono::milliseconds(100))) continue;
+    const std::int64_t woke = Now();
+    while (r.TakeNext(s, meta)) {
+      const std::int64_t taken = Now();
+      if (!meta.valid_data) continue;
+      rows.push_back({static_cast<std::int64_t>(s.seq()), static_cast<std::int64_t>(s.stamp_ns()), woke, taken});
+      last_data = taken;
+      if (static_cast<int>(s.seq()) >= last) done = true;
+    }
+  }
+  for (const auto& x : rows) out << "r " << x[0] << ' ' << x[1] << ' ' << x[2] << ' ' << x[3] << "\n";
+  return 0;
+}
+
+// What the haptic thread hands its bridge, and what a bridge hands its haptic thread.
+struct Stamped {
+  std::int64_t seq = -1;
+  std::int64_t haptic_ns = 0;  // the sender's haptic step
+  std::int64_t bridge_ns = 0;  // receiver: when its bridge took it
+};
+
+// The emulated haptic thread runs as HapticLoop's does: SCHED_FIFO at half the maximum
+// priority when permitted. Returns whether it was.
+bool HapticPriority() {
+  sched_param param{};
+  param.sched_priority = sched_get_priority_max(SCHED_FIFO) / 2;
+  return pthread_setschedparam(pthread_self(), SCHED_FIFO, &param) == 0;
+}
+
+// The first deadline of a grid of `period` at or after t, plus phase.
+std::int64_t OnGrid(std::int64_t t, std::int64_t period, std::int64_t phase) {
+  return (t / period + 1) * period + phase;
+}
+
+// Sender shaped like a haptic node: a 1 kHz haptic thread publishes its step's stamp through a
+// triple buffer; the 100 Hz bridge writes the newest as a contact set (stamp_ns = the haptic
+// step's time). Rows: "p SEQ HAPTIC_NS WRITE_NS".
+int RunNodeWriter(const Options& o) {
+  dds::Participant p(o.domain, o.session, "net_bench_node_writer", o.qos);
+  auto w = dds::MakeWriter<msg::ContactSet>(p, dds::topics::kContactSet);
+  msg::ContactSet s = MakeContactSet(o.session);
+  std::ofstream out = OpenOut(o.out);
+  WaitForReader(w);
+  common::TripleBuffer<Stamped> to_bridge;
+  std::atomic<bool> stop{false};
+  std::atomic<bool> realtime{false};
+  std::thread haptic([&] {
+    realtime = HapticPriority();
+    std::int64_t next = OnGrid(Now(), kHapticPeriodNs, 0);
+    for (std::int64_t k = 0; !stop.load(std::memory_order_relaxed); ++k) {
+      SleepUntilNs(next);
+      next += kHapticPeriodNs;
+      to_bridge.Write(Stamped{k, Now(), 0});
+    }
+  });
+  std::vector<std::array<std::int64_t, 3>> rows;
+  rows.reserve(static_cast<std::size_t>(o.node_count + kWarmup));
+  std::int64_t tick = OnGrid(Now(), kBridgePeriodNs, 0);
+  Stamped newest;
+  for (int i = 0; i < o.node_count + kWarmup; ++i) {
+    // The phase against the receiver's bridge steps by 1.1 ms every 50 ticks (0..9.9 ms), and
+    // so against this node's haptic steps by 0.1 ms (0..0.9 ms).
+    const std::int64_t phase = ((i / 50) % 10) * 1'100'000;
+    tick = OnGrid(tick, kBridgePeriodNs, phase);
+    SleepUntilNs(tick);
+    tick -= phase;
+    to_bridge.Read(newest);
+    if (newest.seq < 0) continue;
+    s.seq(static_cast<std::uint32_t>(i));
+    s.stamp_ns(static_cast<std::uint64_t>(newest.haptic_ns));
+    const std::int64_t write_ns = Now();
+    w.Write(s);
+    rows.push_back({i, newest.haptic_ns, write_ns});
+  }
+  stop = true;
+  haptic.join();
+  out << "realtime " << (realtime ? 1 : 0) << "\n";
+  for (const auto& r : rows) out << "p " << r[0] << ' ' << r[1] << ' ' << r[2] << "\n";
+  std::this_thread::sleep_for(std::chrono::milliseconds(500));
+  return 0;
+}
+
+// Receiver shaped like a haptic node: the 100 Hz bridge takes what arrived (no waiting, as
+// HapticBridge::ReceivePeers) and hands the newest to the 1 kHz haptic thread through a triple
+// buffer; the haptic thread notes the step at which each set first reaches it.
+// Rows: "h SEQ HAPTIC_NS BRIDGE_NS SEEN_NS".
+int RunNodeReader(const Options& o) {
+  dds::Participant p(o.domain, o.session, "net_bench_node_reader", o.qos);
+  auto r = dds::MakeReader<msg::ContactSet>(p, dds::topics::kContactSet);
+  std::ofstream out = OpenOut(o.out);
+  const int last = o.node_count + kWarmup - 1;
+  common::TripleBuffer<Stamped> to_haptic;
+  std::atomic<bool> stop{false};
+  std::vector<std::array<std::int64_t, 4>> rows;
+  rows.reserve(static_cast<std::size_t>(o.node_count + kWarmup));
+  std::atomic<bool> realtime{false};
+  std::thread haptic([&] {
+    realtime = HapticPriority();
+    std::int64_t next = OnGrid(Now(), kHapticPeriodNs, 0);
+    Stamped in;
+    std::int64_t seen = -1;
+    for (std::int64_t k = 0; !stop.load(std::memory_order_relaxed); ++k) {
+      // The haptic steps' phase against this node's bridge ticks: 0.05..0.95 ms, a step of
+      // 0.1 ms every 700 steps (not in step with the sender's sweep).
+      SleepUntilNs(next + ((k / 700) % 10) * 100'000 + 50'000);
+      next += kHapticPeriodNs;
+      const std::int64_t step = Now();
+      if (to_haptic.Read(in) && in.seq != seen) {
+        seen = in.seq;
+        rows.push_back({in.seq, in.haptic_ns, in.bridge_ns, step});
+      }
+    }
+  });
+  msg::ContactSet s;
+  dds::SampleMeta meta;
+  const std::int64_t give_up = Now() + 120'000'000'000;
+  std::int64_t last_data = 0;
+  std::int64_t tick = OnGrid(Now(), kBridgePeriodNs, 0);
+  bool done = false;
+  while (!done) {
+    SleepUntilNs(tick);
+    tick = OnGrid(tick, kBridgePeriodNs, 0);
+    const std::int64_t now = Now();
+    if (now > give_up || (last_data != 0 && now - last_data > 3'000'000'000)) break;
+    bool any = false;
+    Stamped newest;
+    while (r.TakeNext(s, meta)) {
+      if (!meta.valid_data) continue;
+      any = true;
+      newest = Stamped{static_cast<std::int64_t>(s.seq()), static_cast<std::int64_t>(s.stamp_ns()), Now()};
+      if (static_cast<int>(s.seq()) >= last) done = true;
+    }
+    if (any) {
+      last_data = newest.bridge_ns;
+      to_haptic.Write(newest);
+    }
+  }
+  std::this_thread::sleep_for(std::chrono::milliseconds(5));  // the last one reaches the loop
+  stop = true;
+  haptic.join();
+  out << "realtime " << (realtime ? 1 : 0) << "\n";
+  for (const auto& x : rows) out << "h " << x[0] << ' ' << x[1] << ' ' << x[2] << ' ' << x[3] << "\n";
+  return 0;
+}
+
+// ---------------------------------------------------------------- the driver (--csv)
+
+volatile sig_atomic_t g_interrupted = 0;
+void OnSignal(int) { g_interrupted = 1; }
+
+// Runs a command to completion, output discarded; returns its exit status (-1: not started).
+int RunQuiet(const std::vector<std::string>& argv) {
+  std::vector<char*> args;
+  for (const auto& a : argv) args.push_back(const_cast<char*>(a.c_str()));
+  args.push_back(nullptr);
+  posix_spawn_file_actions_t fa;
+  posix_spawn_file_actions_init(&fa);
+  posix_spawn_file_actions_addopen(&fa, 1, "/dev/null", O_WRONLY, 0);
+  posix_spawn_file_actions_addopen(&fa, 2, "/dev/null", O_WRONLY, 0);
+  pid_t pid = 0;
+  const int rc = posix_spawnp(&pid, args[0], &fa, nullptr, args.data(), environ);
+  posix_spawn_file_actions_destroy(&fa);
+  if (rc != 0) return -1;
+  int status = 0;
+  while (waitpid(pid, &status, 0) < 0 && errno == EINTR) {
+  }
+  return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+}
+
+void MustRun(const std::vector<std::string>& argv) {
+  if (RunQuiet(argv) != 0) {
+    std::string cmd;
+    for (const auto& a : argv) cmd += a + " ";
+    throw std::runtime_error("failed: " + cmd);
+  }
+}
+
+// Two namespaces (a, b) on a bridge, each with a veth "eth0" and multicast routed over it, as
+// tests/net/netharness.py builds them. Removed in the destructor.
+class NamespacePair {
+ public:
+  NamespacePair() : tag_("hsb" + std::to_string(getpid())) {
+    try {
+      MustRun({"ip", "link", "add", tag_ + "br", "type", "bridge", "mcast_snooping", "0"});
+      made_bridge_ = true;
+      MustRun({"ip", "link", "set", tag_ + "br", "up"});
+      for (int k = 0; k < 2; ++k) {
+        const std::string ns = Ns(k), port = tag_ + "p" + std::to_string(k);
+        MustRun({"ip", "netns", "add", ns});
+        made_ns_[k] = true;
+        MustRun({"ip", "link", "add", port, "type", "veth", "peer", "name", "eth0", "netns", ns});
+        MustRun({"ip", "link", "set", port, "master", tag_ + "br", "up"});
+        MustRun({"ip", "-n", ns, "addr", "add", "10.251.0." + std::to_string(k + 1) + "/24", "dev", "eth0"});
+        MustRun({"ip", "-n", ns, "link", "set", "eth0", "up"});
+        MustRun({"ip", "-n", ns, "link", "set", "lo", "up"});
+        MustRun({"ip", "-n", ns, "route", "add", "224.0.0.0/4", "dev", "eth0"});
+      }
+    } catch (...) {
+      Remove();
+      throw;
+    }
+  }
+  ~NamespacePair() { Remove(); }
+  NamespacePair(const NamespacePair&) = delete;
+  NamespacePair& operator=(const NamespacePair&) = delete;
+  std::string Ns(int k) const { return tag_ + (k == 0 ? "a" : "b"); }
+
+ private:
+  void Remove() {
+    for (int k = 0; k < 2; ++k) {
+      // The veth pair goes with its namespace end.
+      if (made_ns_[k]) RunQuiet({"ip", "netns", "del", Ns(k)});
+      made_ns_[k] = false;
+      RunQuiet({"ip", "link", "del", tag_ + "p" + std::to_string(k)});
+    }
+    if (made_bridge_) RunQuiet({"ip", "link", "del", tag_ + "br"});
+    made_bridge_ = false;
+  }
+  std::string tag_;
+  bool made_bridge_ = false;
+  std::array<bool, 2> made_ns_{false, false};
+};
+
+// Why netns cannot run here, or "" if it can.
+std::string NetnsUnavailable() {
+  if (geteuid() != 0) return "needs root (network namespaces, veth, bridge)";
+  if (RunQuiet({"ip", "-V"}) != 0) return "'ip' not found (Debian package iproute2)";
+  return "";
+}
+
+// The project's QoS file with the participant's builtin transports replaced by one user
+// transport: the transport under test is the only way between the two ends.
+std::string ForcedTransportQos(const std::string& transport, const fs::path& dir) {
+  const std::string source = dds::DefaultQosFile();
+  std::ifstream in(source);
+  if (!in) throw std::runtime_error("cannot read the QoS file " + source);
+  std::stringstream buffer;
+  buffer << in.rdbuf();
+  std::string xml = buffer.str();
+  const bool shm = transport == "shm";
+  const std::string descriptor = std::string("<transport_descriptors><transport_descriptor>") +
+                                 "<transport_id>net_bench_transport</transport_id><type>" +
+                                 (shm ? "SHM" : "UDPv4") + "</type></transport_descriptor></transport_descriptors>";
+  const std::string participant_tag = "<participant profile_name=\"handshare_participant\">";
+  const std::string use = "<userTransports><transport_id>net_bench_transport</transport_id></userTransports>"
+                          "<useBuiltinTransports>false</useBuiltinTransports>";
+  const auto profiles = xml.find("<profiles>");
+  const auto participant = xml.find(participant_tag);
+  const auto rtps = participant == std::string::npos ? std::string::npos : xml.find("<rtps>", participant);
+  if (profiles == std::string::npos || rtps == std::string::npos) {
+    throw std::runtime_error(source + ": no <profiles> or no participant profile 'handshare_participant' with <rtps>");
+  }
+  xml.insert(rtps + std::strlen("<rtps>"), use);
+  xml.insert(profiles + std::strlen("<profiles>"), descriptor);
+  const fs::path file = dir / ("qos_" + transport + ".xml");
+  std::ofstream(file) << xml;
+  return file.string();
+}
+
+struct Child {
+  pid_t pid = -1;
+  std::string label;
+};
+
+Child Spawn(const std::vector<std::string>& argv, const std::string& log, const std::string& label) {
+  std::vector<char*> args;
+  for (const auto& a : argv) args.push_back(const_cast<char*>(a.c_str()));
+  args.push_back(nullptr);
+  posix_spawn_file_actions_t fa;
+  posix_spawn_file_actions_init(&fa);
+  posix_spawn_file_actions_addopen(&fa, 1, log.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+  posix_spawn_file_actions_adddup2(&fa, 1, 2);
+  pid_t pid = 0;
+  const int rc = posix_spawnp(&pid, args[0], &fa, nullptr, args.data(), environ);
+  posix_spawn_file_actions_destroy(&fa);
+  if (rc != 0) throw std::runtime_error("cannot start " + argv[0] + ": " + std::strerror(rc));
+  return Child{pid, label};
+}
+
+std::string ReadAll(const std::string& path) {
+  std::ifstream f(path);
+  std::stringstream s;
+  s << f.rdbuf();
+  return s.str();
+}
+
+// Waits for both ends; kills them after timeout_s or on SIGINT/SIGTERM. Throws if one failed.
+void WaitBoth(std::array<Child, 2> children, const std::array<std::string, 2>& logs, double timeout_s) {
+  const std::int64_t deadline = Now() + static_cast<std::int64_t>(timeout_s * 1e9);
+  std::array<int, 2> status{-1, -1};
+  int running = 2;
+  std::string failure;
+  while (running > 0) {
+    for (int k = 0; k < 2; ++k) {
+      if (children[k].pid < 0) continue;
+      int st = 0;
+      if (waitpid(children[k].pid, &st, WNOHANG) == children[k].pid) {
+        status[k] = WIFEXITED(st) ? WEXITSTATUS(st) : 128 + WTERMSIG(st);
+        children[k].pid = -1;
+        --running;
+      }
+    }
+    if (running == 0) break;
+    if (g_interrupted || Now() > deadline) {
+      failure = g_interrupted ? "interrupted" : "timed out after " + std::to_string(static_cast<int>(timeout_s)) + " s";
+      for (auto& c : children) {
+        if (c.pid > 0) kill(c.pid, SIGKILL);
+      }
+      for (auto& c : children) {
+        if (c.pid > 0) waitpid(c.pid, nullptr, 0);
+      }
+      break;
+    }
+    std::this_thread::sleep_for(std::chrono::milliseconds(10));
+  }
+  for (int k = 0; k < 2 && failure.empty(); ++k) {
+    if (status[k] != 0) failure = children[k].label + " exited with status " + std::to_string(status[k]);
+  }
+  if (!failure.empty()) {
+    throw std::runtime_error(failure + "\n--- " + children[0].label + ":\n" + ReadAll(logs[0]) + "--- " +
+                             children[1].label + ":\n" + ReadAll(logs[1]));
+  }
+}
+
+struct Row {
+  std::string tag;
+  std::vector<std::int64_t> v;
+};
+
+std::vector<Row> ReadRows(const std::string& path) {
+  std::ifstream f(path);
+  if (!f) throw std::runtime_error("missing result file " + path);
+  std::vector<Row> rows;
+  std::string line;
+  while (std::getline(f, line)) {
+    std::istringstream s(line);
+    Row r;
+    s >> r.tag;
+    std::int64_t x = 0;
+    while (s >> x) r.v.push_back(x);
+    rows.push_back(std::move(r));
+  }
+  return rows;
+}
+
+void PrintRow(const std::string& transport, const std::string& measure, std::vector<double> us) {
+  if (us.empty()) {
+    std::printf("# %s %s: no samples\n", transport.c_str(), measure.c_str());
+    return;
+  }
+  std::sort(us.begin(), us.end());
+  auto at = [&](double q) {
+    const auto i = static_cast<std::size_t>(std::ceil(q * static_cast<double>(us.size()))) - 1;
+    return us[std::min(i, us.size() - 1)];
+  };
+  std::printf("%s,%s,%.1f,%.1f,%.1f\n", transport.c_str(), measure.c_str(), at(0.50), at(0.99), us.back());
+  std::fflush(stdout);
+}
+
+std::string LoadAvg() {
+  std::ifstream f("/proc/loadavg");
+  std::string a, b, c;
+  f >> a >> b >> c;
+  return a + " " + b + " " + c;
+}
+
+// The bare hop: writer and reader processes.
+void MeasureHop(const Options& o, const std::string& transport, const std::string& qos, const fs::path& dir,
+                const NamespacePair* ns, int domain) {
+  const std::string self = fs::read_symlink("/proc/self/exe").string();
+  const std::string session = "net_bench_" + std::to_string(getpid()) + "_" + transport;
+  auto argv = [&](const std::string& role, const std::string& out, int k) {
+    std::vector<std::string> a;
+    if (ns != nullptr) a = {"ip", "netns", "exec", ns->Ns(k)};
+    a.insert(a.end(), {self, "--role", role, "--qos", qos, "--domain", std::to_string(domain), "--session", session,
+                       "--count", std::to_string(o.count), "--node-count", std::to_string(o.node_count), "--rate",
+                       std::to_string(o.rate_Hz), "--out", out});
+    if (o.fifo > 0) a.insert(a.end(), {"--fifo", std::to_string(o.fifo)});
+    return a;
+  };
+  const std::string rf = (dir / (transport + "_reader.txt")).string(), wf = (dir / (transport + "_writer.txt")).string();
+  const std::array<std::string, 2> logs{(dir / (transport + "_reader.log")).string(),
+                                        (dir / (transport + "_writer.log")).string()};
+  Child reader = Spawn(argv("reader", rf, 0), logs[0], transport + " reader");
+  Child writer = Spawn(argv("writer", wf, 1), logs[1], transport + " writer");
+  WaitBoth({reader, writer}, logs, 60.0 + o.count / o.rate_Hz);
+
+  std::map<std::int64_t, std::array<std::int64_t, 2>> sent;  // seq -> stamp, returned
+  std::vector<double> ser, deser, write_call;
+  std::int64_t bytes = 0;
+  for (const Row& r : ReadRows(wf)) {
+    if (r.tag == "ser") ser.push_back(1e-3 * static_cast<double>(r.v.at(0)));
+    if (r.tag == "deser") deser.push_back(1e-3 * static_cast<double>(r.v.at(0)));
+    if (r.tag == "bytes") bytes = r.v.at(0);
+    if (r.tag == "w" && r.v.at(0) >= kWarmup) {
+      sent[r.v[0]] = {r.v[1], r.v[2]};
+      write_call.push_back(1e-3 * static_cast<double>(r.v[2] - r.v[1]));
+    }
+  }
+  std::vector<double> one_way, to_wake, to_taken;
+  for (const Row& r : ReadRows(rf)) {
+    if (r.tag != "r" || r.v.at(0) < kWarmup) continue;
+    const auto it = sent.find(r.v[0]);
+    if (it == sent.end()) continue;
+    one_way.push_back(1e-3 * static_cast<double>(r.v[3] - r.v[1]));
+    to_wake.push_back(1e-3 * static_cast<double>(r.v[2] - it->second[1]));
+    to_taken.push_back(1e-3 * static_cast<double>(r.v[3] - r.v[2]));
+  }
+  std::printf("# %s: %zu of %zu samples taken (keep-last 1: a sample not taken before the next one is "
+              "replaced) (%lld bytes CDR each, %.0f Hz), load %s\n", transport.c_str(),
+              one_way.size(), sent.size(), static_cast<long long>(bytes), o.rate_Hz, LoadAvg().c_str());
+  PrintRow(transport, "contact_one_way", one_way);
+  PrintRow(transport, "serialize", ser);
+  PrintRow(transport, "deserialize", deser);
+  PrintRow(transport, "write_call", write_call);
+  PrintRow(transport, "write_to_wake", to_wake);
+  PrintRow(transport, "wake_to_taken", to_taken);
+}
+
+// The node-shaped path.
+void MeasureNodePath(const Options& o, const std::string& transport, const std::string& qos, const fs::path& dir,
+                     const NamespacePair* ns, int domain) {
+  const std::string self = fs::read_symlink("/proc/self/exe").string();
+  const std::string session = "net_bench_" + std::to_string(getpid()) + "_node_" + transport;
+  auto argv = [&](const std::string& role, const std::string& out, int k) {
+    std::vector<std::string> a;
+    if (ns != nullptr) a = {"ip", "netns", "exec", ns->Ns(k)};
+    a.insert(a.end(), {self, "--role", role, "--qos", qos, "--domain", std::to_string(domain), "--session", session,
+                       "--count", std::to_string(o.count), "--node-count", std::to_string(o.node_count), "--rate",
+                       std::to_string(o.rate_Hz), "--out", out});
+    if (o.fifo > 0) a.insert(a.end(), {"--fifo", std::to_string(o.fifo)});
+    return a;
+  };
+  const std::string rf = (dir / (transport + "_node_reader.txt")).string();
+  const std::string wf = (dir / (transport + "_node_writer.txt")).string();
+  const std::array<std::string, 2> logs{(dir / (transport + "_node_reader.log")).string(),
+                                        (dir / (transport + "_node_writer.log")).string()};
+  Child reader = Spawn(argv("node-reader", rf, 0), logs[0], transport + " node reader");
+  Child writer = Spawn(argv("node-writer", wf, 1), logs[1], transport + " node writer");
+  WaitBoth({reader, writer}, logs, 60.0 + o.node_count * 0.01);
+
+  std::map<std::int64_t, std::int64_t> written;  // seq -> bridge write time
+  int realtime = 0;
+  for (const Row& r : ReadRows(wf)) {
+    if (r.tag == "p" && r.v.at(0) >= kWarmup) written[r.v[0]] = r.v[2];
+    if (r.tag == "realtime") realtime += static_cast<int>(r.v.at(0));
+  }
+  std::vector<double> total, sender, hop, receiver;
+  for (const Row& r : ReadRows(rf)) {
+    if (r.tag == "realtime") realtime += static_cast<int>(r.v.at(0));
+    if (r.tag != "h" || r.v.at(0) < kWarmup) continue;
+    const auto it = written.find(r.v[0]);
+    if (it == written.end()) continue;
+    total.push_back(1e-3 * static_cast<double>(r.v[3] - r.v[1]));
+    sender.push_back(1e-3 * static_cast<double>(it->second - r.v[1]));
+    hop.push_back(1e-3 * static_cast<double>(r.v[2] - it->second));
+    receiver.push_back(1e-3 * static_cast<double>(r.v[3] - r.v[2]));
+  }
+  std::printf("# %s node path: %zu of %zu bridge writes reached the receiver's haptic thread; haptic threads "
+              "%s; load %s\n",
+              transport.c_str(), total.size(), written.size(),
+              realtime == 2 ? "SCHED_FIFO" : "NOT both SCHED_FIFO (no permission): normal priority", LoadAvg().c_str());
+  PrintRow(transport, "node_path", total);
+  PrintRow(transport, "node_sender_handoff", sender);
+  PrintRow(transport, "node_dds_and_tick", hop);
+  PrintRow(transport, "node_receiver_handoff", receiver);
+}
+
+int RunCsv(const Options& o) {
+  struct sigaction sa {};
+  sa.sa_handler = OnSignal;
+  sigaction(SIGINT, &sa, nullptr);
+  sigaction(SIGTERM, &sa, nullptr);
+  sigaction(SIGHUP, &sa, nullptr);
+  const fs::path dir = o.keep.empty() ? fs::temp_directory_path() / ("net_bench." + std::to_string(getpid()))
+                                      : fs::path(o.keep);
+  fs::create_directories(dir);
+  std::printf("# net_bench: %d samples at %.0f Hz per transport, %d node-shaped bridge ticks; %s; load before %s\n",
+              o.count, o.rate_Hz, o.node_count,
+              o.fifo > 0 ? ("both ends SCHED_FIFO " + std::to_string(o.fifo) + " (every thread)").c_str()
+                         : "both ends at normal priority (emulated haptic threads SCHED_FIFO)",
+              LoadAvg().c_str());
+  std::printf("transport,measure,p50_us,p99_us,max_us\n");
+  std::fflush(stdout);
+  int status = 0;
+  int domain = o.domain;
+  for (const std::string& t : o.transports) {
+    if (g_interrupted) break;
+    try {
+      std::unique_ptr<NamespacePair> ns;
+      if (t == "netns") {
+        if (const std::string why = NetnsUnavailable(); !why.empty()) {
+          std::printf("# netns: skipped: %s\n", why.c_str());
+          continue;
+        }
+        ns = std::make_unique<NamespacePair>();
+      }
+      const std::string qos = ForcedTransportQos(t == "shm" ? "shm" : "udp", dir);
+      // A domain per run: no run discovers a participant an earlier one left in its lease.
+      MeasureHop(o, t, qos, dir, ns.get(), domain++);
+      if (o.node_count > 0 && !g_interrupted) MeasureNodePath(o, t, qos, dir, ns.get(), domain++);
+    } catch (const std::exception& e) {
+      std::fprintf(stderr, "net_bench: %s: %s\n", t.c_str(), e.what());
+      status = 1;
+    }
+  }
+  std::printf("# load after %s\n", LoadAvg().c_str());
+  // Segments of ends that were killed; those of live processes stay.
+  RunQuiet({"fastdds", "shm", "clean"});
+  if (o.keep.empty()) fs::remove_all(dir);
+  if (g_interrupted) return 130;
+  return status;
+}
+
+// ---------------------------------------------------------------- options
+
+const char* kUsage =
+    "usage: net_bench --csv [--count N] [--rate HZ] [--node-count N] [--domain D] [--transports shm,udp,netns]\n"
+    "                 [--fifo PRIO] [--keep DIR]\n"
+    "       net_bench --role writer|reader|node-writer|node-reader --qos FILE --domain D --session S\n"
+    "                 --out FILE [--count N] [--node-count N] [--rate HZ]\n"
+    "Prints transport,measure,p50_us,p99_us,max_us rows; see the top of bench/net/net_bench.cpp.\n";
+
+int ToInt(const std::string& flag, const std::string& v, int lo, int hi) {
+  try {
+    std::size_t used = 0;
+    const long x = std::stol(v, &used);
+    if (used == v.size() && x >= lo && x <= hi) return static_cast<int>(x);
+  } catch (const std::exception&) {
+  }
+  throw UsageError(flag + " wants an integer in " + std::to_string(lo) + ".." + std::to_string(hi) + ", got '" + v + "'");
+}
+
+Options Parse(int argc, char** argv) {
+  Options o;
+  for (int i = 1; i < argc; ++i) {
+    const std::string a = argv[i];
+    auto value = [&]() -> std::string {
+      if (i + 1 >= argc) throw UsageError(a + " needs a value");
+      return argv[++i];
+    };
+    if (a == "--csv") {
+      o.csv = true;
+    } else if (a == "--role") {
+      o.role = value();
+    } else if (a == "--qos") {
+      o.qos = value();
+    } else if (a == "--session") {
+      o.session = value();
+    } else if (a == "--out") {
+      o.out = value();
+    } else if (a == "--keep") {
+      o.keep = value();
+    } else if (a == "--domain") {
+      o.domain = ToInt(a, value(), 0, 232);
+    } else if (a == "--fifo") {
+      o.fifo = ToInt(a, value(), 1, 99);
+    } else if (a == "--count") {
+      o.count = ToInt(a, value(), 1, 10'000'000);
+    } else if (a == "--node-count") {
+      o.node_count = ToInt(a, value(), 0, 1'000'000);
+    } else if (a == "--rate") {
+      const std::string v = value();
+      char* end = nullptr;
+      o.rate_Hz = std::strtod(v.c_str(), &end);
+      if (end == v.c_str() || *end != '\0' || !(o.rate_Hz >= 1.0 && o.rate_Hz <= 100000.0)) {
+        throw UsageError("--rate wants a rate in Hz in 1..100000, got '" + v + "'");
+      }
+    } else if (a == "--transports") {
+      o.transports.clear();
+      std::stringstream s(value());
+      std::string t;
+      while (std::getline(s, t, ',')) {
+        if (t != "shm" && t != "udp" && t != "netns") {
+          throw UsageError("--transports: unknown transport '" + t + "' (shm, udp, netns)");
+        }
+        o.transports.push_back(t);
+      }
+      if (o.transports.empty()) throw UsageError("--transports is empty");
+    } else if (a == "--help" || a == "-h") {
+      std::fputs(kUsage, stdout);
+      std::exit(0);
+    } else {
+      throw UsageError("unknown option '" + a + "'");
+    }
+  }
+  if (o.csv == !o.role.empty()) throw UsageError("give either --csv or --role");
+  if (!o.role.empty()) {
+    if (o.role != "writer" && o.role != "reader" && o.role != "node-writer" && o.role != "node-reader") {
+      throw UsageError("unknown --role '" + o.role + "'");
+    }
+    if (o.qos.empty() || o.session.empty() || o.out.empty()) throw UsageError("--role needs --qos, --session and --out");
+  }
+  if (o.csv && o.domain + 2 * static_cast<int>(o.transports.size()) > 233) throw UsageError("--domain too high");
+  return o;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  Options o;
+  try {
+    o = Parse(argc, argv);
+  } catch (const UsageError& e) {
+    std::fprintf(stderr, "net_bench: %s\n%s", e.what(), kUsage);
+    return 2;
+  }
+  try {
+    if (!o.csv && o.fifo > 0) {
+      // Before the participant: Fast DDS's receive and event threads inherit the policy.
+      sched_param param{};
+      param.sched_priority = o.fifo;
+      if (sched_setscheduler(0, SCHED_FIFO, &param) != 0) {
+        throw std::runtime_error("--fifo " + std::to_string(o.fifo) + ": SCHED_FIFO refused: " + std::strerror(errno));
+      }
+    }
+    if (o.csv) return RunCsv(o);
+    if (o.role == "writer") return RunWriter(o);
+    if (o.role == "reader") return RunReader(o);
+    if (o.role == "node-writer") return RunNodeWriter(o);
+    return RunNodeReader(o);
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "net_bench: %s\n", e.what());
+    return 1;
+  }
+}
