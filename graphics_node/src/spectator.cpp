@@ -117,6 +117,9 @@ class WorldView {
   const std::map<std::string, UserHand>& hands() const { return hands_; }
   const SceneReplica& world() const { return world_; }
   const dds::DroppedSamples& dropped() const { return dropped_; }
+  /// A user's device-state stream that stalled for a deadline period (100 ms): counted, and the
+  /// hand is dropped from the view when it stays silent for kHandTimeout.
+  std::uint64_t device_deadlines_missed() const { return device_reader_.deadlines_missed(); }
 
   /// The scene, board and poses shown, as JSON (SpectatorConfig::state_out).
   void WriteStateJson(const std::filesystem::path& file) const {
@@ -197,19 +200,20 @@ class WorldView {
 };
 
 // One line on what the shared world received, for the node's log.
-void PrintWorldSummary(const std::string& name, const SceneReplica& world, const dds::DroppedSamples& dropped) {
+void PrintWorldSummary(const std::string& name, const SceneReplica& world, const dds::DroppedSamples& dropped,
+                       std::uint64_t device_deadlines_missed) {
   const SceneReplicaStats& s = world.stats();
   const DeformationStats d = world.deformation_stats();
   const auto n = [](std::uint64_t v) { return static_cast<unsigned long long>(v); };
   std::printf("[graphics_node %s] deformation: %llu samples (%llu applied, %llu keyframes, %llu ids "
               "out of range, %llu non-finite, %llu malformed, %llu for unknown objects, %llu without "
               "mesh, %llu with another node count); object states: %llu applied, %llu unknown, %llu "
-              "non-finite; mesh errors: %llu; samples dropped: %s\n",
+              "non-finite; mesh errors: %llu; device-state deadlines missed: %llu; samples dropped: %s\n",
               name.c_str(), n(s.deformation_samples), n(d.samples), n(d.keyframes),
               n(d.ids_out_of_range), n(d.nonfinite), n(d.malformed), n(s.deformation_unknown_object),
               n(s.deformation_without_mesh), n(s.deformation_count_mismatch), n(s.object_states),
               n(s.object_states_unknown), n(s.object_states_nonfinite), n(s.mesh_errors),
-              dropped.Summary().c_str());
+              n(device_deadlines_missed), dropped.Summary().c_str());
   std::fflush(stdout);
 }
 
@@ -317,7 +321,7 @@ int Spectator::Run() {
   // comparison with an oracle.
   const auto finish = [&] {
     world.Update();  // what arrived since the last frame counts too (a stop between frames)
-    PrintWorldSummary(name, world.world(), world.dropped());
+    PrintWorldSummary(name, world.world(), world.dropped(), world.device_deadlines_missed());
     std::printf("[graphics_node %s] %s\n", name.c_str(), participant.TrafficSummary().c_str());
     std::fflush(stdout);
     if (!config_.deformation_out.empty()) world.world().WriteDeformationJson(config_.deformation_out);

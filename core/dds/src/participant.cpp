@@ -18,6 +18,7 @@
 #include <fastdds/dds/subscriber/Subscriber.hpp>
 #include <fastdds/dds/topic/Topic.hpp>
 #include <fastdds/dds/topic/TypeSupport.hpp>
+#include <fastdds/rtps/flowcontrol/FlowControllerDescriptor.hpp>
 
 #include <cstdlib>
 #include <deque>
@@ -64,6 +65,29 @@ void LoadProfilesOnce(const std::string& file) {
   loaded.insert(file);
 }
 
+// A property of a QoS profile's propertiesPolicy, or nullptr.
+const std::string* FindProperty(const eprosima::fastrtps::rtps::PropertyPolicy& policy, const std::string& name) {
+  return eprosima::fastrtps::rtps::PropertyPolicyHelper::find_property(policy, name);
+}
+
+long PositiveProperty(const eprosima::fastrtps::rtps::PropertyPolicy& policy, const std::string& name,
+                      long max) {
+  const std::string* text = FindProperty(policy, name);
+  if (text == nullptr) throw DdsError("DDS: participant profile property " + name + " is missing");
+  std::size_t used = 0;
+  long value = 0;
+  try {
+    value = std::stol(*text, &used);
+  } catch (const std::exception&) {
+    used = 0;
+  }
+  if (used != text->size() || value < 1 || value > max) {
+    throw DdsError("DDS: participant profile property " + name + " = '" + *text + "': expected 1.." +
+                   std::to_string(max));
+  }
+  return value;
+}
+
 std::int64_t ToNs(const eprosima::fastrtps::rtps::Time_t& t) {
   return static_cast<std::int64_t>(t.seconds()) * 1000000000LL + t.nanosec();
 }
@@ -86,6 +110,9 @@ class ParticipantImpl {
   std::map<std::string, fdds::Topic*> topics;
   std::map<std::string, std::shared_ptr<void>> types;  // keeps type supports alive
   std::mutex mutex;  // topics and types are created from any thread
+  // The flow controller registered from the participant profile ("" if none); writer QoS
+  // points at this string (Fast DDS 2.9 keeps the name as a const char*).
+  std::string flow_controller;
   std::map<std::string, std::shared_ptr<TrafficCounters>> traffic;  // by topic, under mutex
   std::map<fdds::DataReader*, std::string> live_readers;            // for their lost counts
 
@@ -169,6 +196,10 @@ class LostWriterListener final : public fdds::DataReaderListener {
     if (s.not_alive_count_change > 0) Push(false, s.last_publication_handle);
     if (s.alive_count_change > 0) Push(true, s.last_publication_handle);
   }
+  void on_requested_deadline_missed(fdds::DataReader*, const fdds::RequestedDeadlineMissedStatus& s) override {
+    deadlines_missed_.store(static_cast<std::uint64_t>(s.total_count), std::memory_order_relaxed);
+  }
+  std::uint64_t deadlines_missed() const { return deadlines_missed_.load(std::memory_order_relaxed); }
   // In the order they happened (a flapping link: lost, back, lost).
   bool Take(WriterChange& out) {
     std::lock_guard<std::mutex> lock(mutex_);
@@ -188,6 +219,7 @@ class LostWriterListener final : public fdds::DataReaderListener {
   }
   std::mutex mutex_;
   std::deque<WriterChange> changes_;
+  std::atomic<std::uint64_t> deadlines_missed_{0};
 };
 
 class ReaderImpl final : public detail::UntypedReader {
@@ -197,7 +229,8 @@ class ReaderImpl final : public detail::UntypedReader {
       : owner_(std::move(owner)), topic_(std::move(topic_name)), counters_(owner_->CountersFor(topic->get_name())) {
     r_ = CheckEntity(owner_->subscriber->create_datareader(
                          topic, qos, &listener_,
-                         fdds::StatusMask::subscription_matched() << fdds::StatusMask::liveliness_changed()),
+                         fdds::StatusMask::subscription_matched() << fdds::StatusMask::liveliness_changed()
+                                                << fdds::StatusMask::requested_deadline_missed()),
                      "reader on " + topic_);
     fdds::StatusCondition& condition = r_->get_statuscondition();
     Check(condition.set_enabled_statuses(fdds::StatusMask::data_available()),
@@ -221,6 +254,7 @@ class ReaderImpl final : public detail::UntypedReader {
   }
 
   bool TakeWriterChange(WriterChange& change) override { return listener_.Take(change); }
+  std::uint64_t deadlines_missed() const override { return listener_.deadlines_missed(); }
 
   bool TakeNext(void* sample, SampleMeta& meta) override {
     fdds::SampleInfo info;
@@ -314,6 +348,18 @@ Participant::Participant(const common::SessionOptions& where, const std::string&
   Check(factory->get_participant_qos_from_profile(kParticipantProfile, pqos),
         std::string("reading participant profile '") + kParticipantProfile + "' from " + file);
   pqos.name(name);
+  // Flow controllers cannot be given in Fast DDS 2.9 XML: the profile's properties describe one.
+  if (const std::string* fc = FindProperty(pqos.properties(), "handshare.flow_controller.name")) {
+    impl_->flow_controller = *fc;
+    auto descriptor = std::make_shared<eprosima::fastdds::rtps::FlowControllerDescriptor>();
+    descriptor->name = impl_->flow_controller.c_str();
+    descriptor->scheduler = eprosima::fastdds::rtps::FlowControllerSchedulerPolicy::FIFO;
+    descriptor->max_bytes_per_period = static_cast<std::int32_t>(
+        PositiveProperty(pqos.properties(), "handshare.flow_controller.max_bytes_per_period", 2147483647L));
+    descriptor->period_ms = static_cast<std::uint64_t>(
+        PositiveProperty(pqos.properties(), "handshare.flow_controller.period_ms", 60000L));
+    pqos.flow_controllers().push_back(descriptor);
+  }
   // The identity first: security decides what the participant may announce (security.cpp).
   if (!where.security_dir.empty()) detail::ApplySecurity(where.security_dir, name, pqos);
   detail::ConfigureDiscovery(where, pqos);  // participant id, --peers (discovery.cpp)
@@ -338,6 +384,19 @@ std::unique_ptr<detail::UntypedWriter> Participant::CreateUntypedWriter(
   fdds::DataWriterQos qos;
   Check(impl_->publisher->get_datawriter_qos_from_profile(profile, qos),
         "reading data_writer profile '" + profile + "'");
+  // A writer profile names its flow controller in a property (2.9 XML cannot): it must be the
+  // participant's, and the writer asynchronous.
+  if (const std::string* fc = FindProperty(qos.properties(), "handshare.flow_controller")) {
+    if (*fc != impl_->flow_controller) {
+      throw DdsError("DDS: data_writer profile '" + profile + "' names flow controller '" + *fc +
+                     "', but the participant profile defines " +
+                     (impl_->flow_controller.empty() ? std::string("none") : "'" + impl_->flow_controller + "'"));
+    }
+    if (qos.publish_mode().kind != fdds::ASYNCHRONOUS_PUBLISH_MODE) {
+      throw DdsError("DDS: data_writer profile '" + profile + "' has a flow controller but is not ASYNCHRONOUS");
+    }
+    qos.publish_mode().flow_controller_name = impl_->flow_controller.c_str();
+  }
   fdds::DataWriter* w = CheckEntity(impl_->publisher->create_datawriter(t, qos),
                                     "writer on " + topic + " (profile " + profile + ")");
   return std::make_unique<WriterImpl>(impl_, w, topic);

@@ -3,6 +3,7 @@
 
 #include <chrono>
 #include <thread>
+#include <vector>
 
 #include "handshare/dds/messages.hpp"
 
@@ -44,6 +45,68 @@ TEST(DdsParticipant, StreamRoundTripKeepsEveryField) {
   EXPECT_EQ(in.seq(), 42u);
   EXPECT_DOUBLE_EQ(in.p_WE_m()[3][2], 0.125);
   EXPECT_DOUBLE_EQ(in.fingertip_radius_m(), 0.008);
+}
+
+// The device-state profile has a 100 ms deadline: a user that stops sending is counted, one
+// that keeps sending every 10 ms is not.
+TEST(DdsParticipant, AStalledDeviceStateStreamMissesItsDeadline) {
+  Participant a(206, "s1", "writer"), b(206, "s1", "reader");
+  auto writer = MakeWriter<msg::DeviceState>(a, topics::kDeviceState);
+  auto reader = MakeReader<msg::DeviceState>(b, topics::kDeviceState);
+  msg::DeviceState out;
+  out.user("alice");
+  msg::DeviceState in;
+  SampleMeta meta;
+  bool got = false;
+  for (int i = 0; i < 200 && !got; ++i) {
+    writer.Write(out);
+    got = TakeWithin(reader, in, meta, 10ms);
+  }
+  ASSERT_TRUE(got);
+  // Streaming at 100 Hz for 0.5 s: no period without a sample (at most one, where a loaded
+  // machine held the writing thread back for 100 ms).
+  const std::uint64_t before = reader.deadlines_missed();
+  for (int i = 0; i < 50; ++i) {
+    writer.Write(out);
+    std::this_thread::sleep_for(10ms);
+    while (reader.TakeNext(in, meta)) {
+    }
+  }
+  EXPECT_LE(reader.deadlines_missed(), before + 1);
+  const std::uint64_t streaming = reader.deadlines_missed();
+  // Then silence for 0.45 s: at least 3 whole periods of 100 ms missed.
+  std::this_thread::sleep_for(450ms);
+  EXPECT_GE(reader.deadlines_missed(), streaming + 3);
+}
+
+// Deformations go through the asynchronous writer and its flow controller in 1400-byte
+// fragments: the largest sample the IDL allows arrives whole.
+TEST(DdsParticipant, TheLargestDeformationArrivesWholeThroughTheFlowController) {
+  Participant a(207, "s1", "writer"), b(207, "s1", "reader");
+  auto writer = MakeWriter<msg::Deformation>(a, topics::kDeformation);
+  auto reader = MakeReader<msg::Deformation>(b, topics::kDeformation);
+  msg::Deformation out;
+  out.object_id("tail");
+  out.revision(7);
+  std::vector<std::uint32_t> ids(msg::kMaxSurfaceDelta);
+  std::vector<float> u(3 * ids.size());
+  for (std::size_t i = 0; i < ids.size(); ++i) {
+    ids[i] = static_cast<std::uint32_t>(i);
+    u[3 * i + 2] = -1e-6f * static_cast<float>(i);
+  }
+  out.surface_node_count(static_cast<std::uint32_t>(ids.size()));
+  out.node_ids(ids);
+  out.u_W_m(u);
+  for (int i = 0; i < 200 && writer.matched_readers() == 0; ++i) std::this_thread::sleep_for(10ms);
+  ASSERT_GT(writer.matched_readers(), 0);
+  writer.Write(out);
+  msg::Deformation in;
+  SampleMeta meta;
+  ASSERT_TRUE(TakeWithin(reader, in, meta, 5000ms));
+  EXPECT_EQ(in.revision(), 7u);
+  ASSERT_EQ(in.node_ids().size(), ids.size());
+  EXPECT_EQ(in.node_ids(), ids);
+  EXPECT_EQ(in.u_W_m(), u);
 }
 
 TEST(DdsParticipant, LateJoinerReceivesTransientLocalState) {

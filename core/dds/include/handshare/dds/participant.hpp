@@ -77,6 +77,7 @@ class UntypedReader {
   virtual bool WaitForData(std::chrono::nanoseconds timeout) = 0;
   virtual int matched_writers() const = 0;
   virtual bool TakeWriterChange(WriterChange& change) = 0;
+  virtual std::uint64_t deadlines_missed() const = 0;
 };
 
 /// Defined in types.cpp for every message type of handshare.idl.
@@ -118,6 +119,9 @@ class Reader {
   /// killed writer into a NOT_ALIVE_NO_WRITERS sample, nor deliver a transient-local sample
   /// again to a reader it re-matches after a partition, so owners track the writers they saw.
   bool TakeWriterChange(WriterChange& change) { return r_->TakeWriterChange(change); }
+  /// Requested-deadline misses so far (profiles with a deadline: a writer's instance that sent
+  /// nothing for a whole period, counted once per instance and period; 0 without a deadline).
+  std::uint64_t deadlines_missed() const { return r_->deadlines_missed(); }
   explicit operator bool() const { return r_ != nullptr; }
 
  private:

@@ -11,7 +11,7 @@ struct TopicSpec {
 
 inline constexpr TopicSpec kMemberInfo{"handshare/member_info", "member_writer", "member_reader"};
 inline constexpr TopicSpec kSceneState{"handshare/scene_state", "state_writer", "state_reader"};
-inline constexpr TopicSpec kDeviceState{"handshare/device_state", "stream_writer", "stream_reader"};
+inline constexpr TopicSpec kDeviceState{"handshare/device_state", "device_writer", "device_reader"};
 inline constexpr TopicSpec kContactSet{"handshare/contact_set", "stream_writer", "stream_reader"};
 inline constexpr TopicSpec kDeformation{"handshare/deformation", "bulk_writer", "bulk_reader"};
 inline constexpr TopicSpec kObjectState{"handshare/object_state", "stream_writer", "stream_reader"};
