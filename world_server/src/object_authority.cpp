@@ -69,7 +69,9 @@ void ObjectAuthority::SetScene(const scene::Scene& scene) {
   const bool same_world = scene.name == scene_.name;
   scene_ = scene;
   if (!same_world) {
-    // Another world: nothing of the old one carries over.
+    // Another world: nothing of the old one carries over (a resumed session's held bodies are
+    // for the world it resumed in, which the first SetScene names).
+    if (models_) reserved_.clear();
     models_.reset();
     ready_scene_.clear();
     deformables_.clear();
@@ -104,8 +106,10 @@ void ObjectAuthority::OnUserGone(const std::string& user, Clock::time_point now)
   claims_.erase(user);
 }
 
-void ObjectAuthority::PlaceBody(const std::string& object_id, const Eigen::Isometry3d& X_WO) {
+void ObjectAuthority::PlaceBody(const std::string& object_id, const Eigen::Isometry3d& X_WO, const std::string& owner,
+                                Clock::duration grace) {
   placed_[object_id] = X_WO;
+  if (!owner.empty()) reserved_[object_id] = {owner, grace, X_WO, std::nullopt};
 }
 
 void ObjectAuthority::RequestKeyframes() {
@@ -143,6 +147,7 @@ void ObjectAuthority::Adopt(world::SceneModels models, TickOutput& out) {
     }
   }
   placed_.clear();
+  std::erase_if(reserved_, [&](const auto& r) { return models.Find(r.first) < 0; });
   models_ = std::make_unique<world::SceneModels>(std::move(models));
   ready_scene_ = scene_.name;
   deformables_.clear();
@@ -230,11 +235,23 @@ TickOutput ObjectAuthority::Tick(Clock::time_point now, double dt_s) {
   if (!models_) return out;
   auto& world = *models_->world;
 
-  // Who simulates what: owned bodies follow their owner's newest reported pose.
+  // Who simulates what: owned bodies follow their owner's newest reported pose; a resumed
+  // session's bodies held for their owner's claim stay where the log left them.
   std::map<contact::ObjectId, std::pair<std::string, const msg::ContactSet*>> owned;
+  std::map<contact::ObjectId, Eigen::Isometry3d> held;
   for (const auto body : models_->dynamic_bodies) {
     const std::string& id = models_->ids[static_cast<std::size_t>(body)];
     const std::string owner = arbiter_.owner(id);
+    if (const auto r = reserved_.find(id); r != reserved_.end()) {
+      if (!r->second.until) r->second.until = now + r->second.grace;
+      if (!owner.empty() || now >= *r->second.until) {
+        if (owner.empty()) out.notes.push_back("object '" + id + "': no claim from '" + r->second.owner + "', free");
+        reserved_.erase(r);
+      } else {
+        held[body] = r->second.X_WO;
+        continue;
+      }
+    }
     if (owner.empty()) continue;
     const auto it = peers_.sets().find(owner);
     const msg::ContactSet* set = nullptr;
@@ -266,6 +283,10 @@ TickOutput ObjectAuthority::Tick(Clock::time_point now, double dt_s) {
   const int substeps = std::clamp(static_cast<int>(std::lround(dt_s / options_.physics_dt_s)), 1, 100);
   const double h = dt_s / substeps;
   for (int s = 0; s < substeps; ++s) {
+    for (const auto& [body, X] : held) {
+      world.SetPose(body, X);
+      world.SetVelocity(body, Eigen::Vector3d::Zero(), Eigen::Vector3d::Zero());
+    }
     for (const auto& [body, who] : owned) {
       if (who.second == nullptr) continue;
       // At the owner's pose, with its velocity: when the owner lets go, the body flies on
@@ -283,6 +304,7 @@ TickOutput ObjectAuthority::Tick(Clock::time_point now, double dt_s) {
   if (refresh) next_pose_refresh_ = now + std::chrono::duration_cast<Clock::duration>(options_.pose_refresh_period);
   for (const auto body : models_->dynamic_bodies) {
     const std::string& id = models_->ids[static_cast<std::size_t>(body)];
+    if (held.count(body) != 0) continue;  // its owner's claim decides, not this server
     if (const auto it = owned.find(body); it != owned.end()) {
       if (it->second.second == nullptr) {
         // Granted, and the owner has not taken it over yet: tell it where the body is.

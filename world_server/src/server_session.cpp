@@ -53,7 +53,9 @@ ServerSession::ServerSession(WorldServer& server, const WorldServerConfig& confi
                        .normalized()
                        .toRotationMatrix();
       X.translation() = Eigen::Vector3d(p.p_WO_m[0], p.p_WO_m[1], p.p_WO_m[2]);
-      objects_.PlaceBody(p.object_id, X);
+      // A body its owner held: kept for that owner's claim for 2 s (a participant lease of 1 s
+      // and rediscovery, 0.3 s measured), so it is not dropped and re-grabbed.
+      objects_.PlaceBody(p.object_id, X, p.owner, std::chrono::seconds(2));
     }
   }
   PublishScene();

@@ -208,3 +208,75 @@ TEST(ObjectAuthority, ABodyAtRestIsPublishedAgainOncePerRefreshPeriod) {
 
 }  // namespace
 }  // namespace handshare::server
+
+namespace handshare::server {
+namespace {
+
+// A resumed session (a restarted server) places the ball where its log left it, in alice's
+// hand. Until her claim arrives the server neither simulates nor publishes it as free (her
+// node would follow that free ball: a held weight read 0 to 11.7 N through a restart); her
+// claim grants it back. Without a claim it is free after the grace and falls.
+void ResumedBall(bool alice_claims) {
+  testing::TempDir dir;
+  std::filesystem::create_directories(dir.path() / "scenes");
+  const auto file = dir.path() / "scenes" / "moon.json";
+  std::ofstream(file) << R"({"name": "moon", "gravity_m_per_s2": [0, 0, -1.62], "objects": [
+      {"id": "ground", "kind": "rigid", "shape": "box", "position_m": [0, 0, -0.02], "half_extent_m": [0.3, 0.3, 0.02]},
+      {"id": "ball", "kind": "rigid", "shape": "sphere", "position_m": [0, 0, 0.04], "radius_m": 0.04, "mass_kg": 0.2}],
+      "messages": [{"language": "en", "text": "t", "next_action": "a"}]})";
+  ObjectAuthorityOptions options;
+  options.models.cache_dir = dir.path() / "cache";
+  ObjectAuthority world("s", options);
+  const Eigen::Vector3d held(0.0, 0.0, 0.15);  // lifted in her hand when the server died
+  Eigen::Isometry3d X = Eigen::Isometry3d::Identity();
+  X.translation() = held;
+  world.PlaceBody("ball", X, "alice", std::chrono::seconds(2));
+  world.SetScene(scene::LoadScene(file));
+  Clock::time_point now = Clock::now();
+  const auto dt = std::chrono::milliseconds(10);
+  for (int i = 0; i < 2000 && !world.ready(); ++i) {
+    std::this_thread::sleep_for(dt);
+    now += dt;
+    const TickOutput out = world.Tick(now, 0.01);
+    EXPECT_EQ(BallState(out), nullptr);
+  }
+  ASSERT_TRUE(world.ready());
+  // 1.5 s without her claim (her node rediscovering the new server): not published, not moved.
+  for (int i = 0; i < 150; ++i) {
+    now += dt;
+    const TickOutput out = world.Tick(now, 0.01);
+    ASSERT_EQ(BallState(out), nullptr) << "tick " << i << ": the held ball was published before its owner's claim";
+  }
+  if (alice_claims) {
+    now += dt;
+    world.OnContactSet(OwnerSet("ball", held, Eigen::Vector3d::Zero()), now);
+    const TickOutput out = world.Tick(now, 0.01);
+    EXPECT_EQ(world.owner("ball"), "alice");
+    const msg::ObjectState* st = BallState(out);
+    ASSERT_NE(st, nullptr);
+    EXPECT_EQ(st->owner().to_string(), "alice");
+    EXPECT_NEAR(st->p_WO_m()[2], held.z(), 1e-9);
+    return;
+  }
+  // No claim: free once the 2 s grace (from the models' adoption) has passed, then it falls.
+  bool freed = false;
+  double z = held.z();
+  for (int i = 0; i < 100; ++i) {
+    now += dt;
+    const TickOutput out = world.Tick(now, 0.01);
+    for (const auto& note : out.notes) freed = freed || note == "object 'ball': no claim from 'alice', free";
+    if (const msg::ObjectState* st = BallState(out)) {
+      EXPECT_EQ(st->owner().to_string(), "");
+      z = st->p_WO_m()[2];
+    }
+  }
+  EXPECT_TRUE(freed);
+  EXPECT_LT(z, held.z() - 0.01);  // falling on the Moon
+}
+
+TEST(ObjectAuthority, AResumedOwnersBodyWaitsForItsClaimInsteadOfBeingPublishedFree) { ResumedBall(true); }
+
+TEST(ObjectAuthority, AResumedOwnersBodyWithoutAClaimIsFreeAfterTheGrace) { ResumedBall(false); }
+
+}  // namespace
+}  // namespace handshare::server

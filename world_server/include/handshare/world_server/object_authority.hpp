@@ -79,7 +79,13 @@ class ObjectAuthority {
   void OnUserGone(const std::string& user, Clock::time_point now);
   /// Where a dynamic body is when the next models of this world are adopted (a resumed session:
   /// the poses its log last held). Ignored for objects the world does not have.
-  void PlaceBody(const std::string& object_id, const Eigen::Isometry3d& X_WO);
+  /// With an owner (the log says that user held it): the body is held where it is and not
+  /// published until that user's claim grants it back, or for `grace` after the models are
+  /// adopted (then it is free and falls). Otherwise a restarted server simulates and publishes a held ball as free before
+  /// its owner's claim arrives (33-84 ms on a busy machine), and the owner's hand follows the
+  /// server's ball for that long: a held weight read 0 to 11.7 N through a restart.
+  void PlaceBody(const std::string& object_id, const Eigen::Isometry3d& X_WO, const std::string& owner = "",
+                 Clock::duration grace = {});
   /// A reader of deformations joined: the next tick sends keyframes.
   void RequestKeyframes();
   /// Advances to `now` (dt_s since the last tick, sub-stepped) and returns what to publish.
@@ -122,6 +128,13 @@ class ObjectAuthority {
   std::vector<SupersededBuild> superseded_;
   std::string ready_scene_;
   std::map<std::string, Eigen::Isometry3d> placed_;  // PlaceBody: applied at the next Adopt
+  struct Reservation {
+    std::string owner;
+    Clock::duration grace{};
+    Eigen::Isometry3d X_WO = Eigen::Isometry3d::Identity();
+    std::optional<Clock::time_point> until;  // set at the first tick with models
+  };
+  std::map<std::string, Reservation> reserved_;  // PlaceBody with an owner: held for its claim
   std::string loading_scene_;
   Clock::time_point loading_since_{};
   session::PeerContacts peers_;
