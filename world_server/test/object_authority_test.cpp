@@ -6,6 +6,7 @@
 #include <gtest/gtest.h>
 
 #include <fstream>
+#include <functional>
 #include <thread>
 
 #include "test_support.hpp"
@@ -38,25 +39,41 @@ const msg::ObjectState* BallState(const TickOutput& out) {
   return nullptr;
 }
 
-TEST(ObjectAuthority, ALetGoBallFliesOnWithTheOwnersVelocity) {
-  testing::TempDir dir;
-  std::filesystem::create_directories(dir.path() / "scenes");
-  const auto file = dir.path() / "scenes" / "moon.json";
-  std::ofstream(file) << R"({"name": "moon", "gravity_m_per_s2": [0, 0, -1.62], "objects": [
+// The scene of these tests, written as dir/scenes/NAME.json: a ground box and a 0.2 kg ball of
+// radius 4 cm resting on it, under gravity g_z [m/s^2].
+std::filesystem::path WriteBallScene(const std::filesystem::path& dir, const std::string& name, double g_z) {
+  std::filesystem::create_directories(dir / "scenes");
+  const auto file = dir / "scenes" / (name + ".json");
+  std::ofstream(file) << R"({"name": ")" << name << R"(", "gravity_m_per_s2": [0, 0, )" << g_z << R"(], "objects": [
       {"id": "ground", "kind": "rigid", "shape": "box", "position_m": [0, 0, -0.02], "half_extent_m": [0.3, 0.3, 0.02]},
       {"id": "ball", "kind": "rigid", "shape": "sphere", "position_m": [0, 0, 0.04], "radius_m": 0.04, "mass_kg": 0.2}],
       "messages": [{"language": "en", "text": "t", "next_action": "a"}]})";
-  ObjectAuthorityOptions options;
-  options.models.cache_dir = dir.path() / "cache";
-  ObjectAuthority world("s", options);
-  world.SetScene(scene::LoadScene(file));
-  Clock::time_point now = Clock::now();
+  return file;
+}
+
+// Ticks every 10 ms (sleeping as long, for the loader thread) until the models are adopted;
+// `each` sees every tick's output. Returns the tick time reached.
+Clock::time_point TickUntilReady(ObjectAuthority& world, Clock::time_point now,
+                                 const std::function<void(const TickOutput&)>& each = nullptr) {
   const auto dt = std::chrono::milliseconds(10);
   for (int i = 0; i < 2000 && !world.ready(); ++i) {
     std::this_thread::sleep_for(dt);
     now += dt;
-    world.Tick(now, 0.01);
+    const TickOutput out = world.Tick(now, 0.01);
+    if (each) each(out);
   }
+  return now;
+}
+
+TEST(ObjectAuthority, ALetGoBallFliesOnWithTheOwnersVelocity) {
+  testing::TempDir dir;
+  const auto file = WriteBallScene(dir.path(), "moon", -kMoon);
+  ObjectAuthorityOptions options;
+  options.models.cache_dir = dir.path() / "cache";
+  ObjectAuthority world("s", options);
+  world.SetScene(scene::LoadScene(file));
+  const auto dt = std::chrono::milliseconds(10);
+  Clock::time_point now = TickUntilReady(world, Clock::now());
   ASSERT_TRUE(world.ready());
 
   // alice holds the ball and carries it up and sideways: 0.4 m/s in x, 0.6 m/s up.
@@ -168,24 +185,14 @@ namespace {
 // reader matched after the join's re-send) would otherwise draw the body where the scene put it.
 int RestingBallPublications(double refresh_period_s) {
   testing::TempDir dir;
-  std::filesystem::create_directories(dir.path() / "scenes");
-  const auto file = dir.path() / "scenes" / "rest.json";
-  std::ofstream(file) << R"({"name": "rest", "gravity_m_per_s2": [0, 0, -9.81], "objects": [
-      {"id": "ground", "kind": "rigid", "shape": "box", "position_m": [0, 0, -0.02], "half_extent_m": [0.3, 0.3, 0.02]},
-      {"id": "ball", "kind": "rigid", "shape": "sphere", "position_m": [0, 0, 0.04], "radius_m": 0.04, "mass_kg": 0.2}],
-      "messages": [{"language": "en", "text": "t", "next_action": "a"}]})";
+  const auto file = WriteBallScene(dir.path(), "rest", -9.81);
   ObjectAuthorityOptions options;
   options.models.cache_dir = dir.path() / "cache";
   options.pose_refresh_period = std::chrono::duration<double>(refresh_period_s);
   ObjectAuthority world("s", options);
   world.SetScene(scene::LoadScene(file));
-  Clock::time_point now = Clock::now();
   const auto dt = std::chrono::milliseconds(10);
-  for (int i = 0; i < 2000 && !world.ready(); ++i) {
-    std::this_thread::sleep_for(dt);
-    now += dt;
-    world.Tick(now, 0.01);
-  }
+  Clock::time_point now = TickUntilReady(world, Clock::now());
   EXPECT_TRUE(world.ready());
   for (int i = 0; i < 200; ++i) {  // 2 s to settle on the ground
     now += dt;
@@ -218,12 +225,7 @@ namespace {
 // claim grants it back. Without a claim it is free after the grace and falls.
 void ResumedBall(bool alice_claims) {
   testing::TempDir dir;
-  std::filesystem::create_directories(dir.path() / "scenes");
-  const auto file = dir.path() / "scenes" / "moon.json";
-  std::ofstream(file) << R"({"name": "moon", "gravity_m_per_s2": [0, 0, -1.62], "objects": [
-      {"id": "ground", "kind": "rigid", "shape": "box", "position_m": [0, 0, -0.02], "half_extent_m": [0.3, 0.3, 0.02]},
-      {"id": "ball", "kind": "rigid", "shape": "sphere", "position_m": [0, 0, 0.04], "radius_m": 0.04, "mass_kg": 0.2}],
-      "messages": [{"language": "en", "text": "t", "next_action": "a"}]})";
+  const auto file = WriteBallScene(dir.path(), "moon", -kMoon);
   ObjectAuthorityOptions options;
   options.models.cache_dir = dir.path() / "cache";
   ObjectAuthority world("s", options);
@@ -232,14 +234,9 @@ void ResumedBall(bool alice_claims) {
   X.translation() = held;
   world.PlaceBody("ball", X, "alice", std::chrono::seconds(2));
   world.SetScene(scene::LoadScene(file));
-  Clock::time_point now = Clock::now();
   const auto dt = std::chrono::milliseconds(10);
-  for (int i = 0; i < 2000 && !world.ready(); ++i) {
-    std::this_thread::sleep_for(dt);
-    now += dt;
-    const TickOutput out = world.Tick(now, 0.01);
-    EXPECT_EQ(BallState(out), nullptr);
-  }
+  Clock::time_point now =
+      TickUntilReady(world, Clock::now(), [](const TickOutput& out) { EXPECT_EQ(BallState(out), nullptr); });
   ASSERT_TRUE(world.ready());
   // 1.5 s without her claim (her node rediscovering the new server): not published, not moved.
   for (int i = 0; i < 150; ++i) {
