@@ -525,21 +525,17 @@ def classify(payloads, needle):
 
 
 def udp_only_qos(path):
-    """The project's QoS profiles with UDP as the only transport and data sharing off, so that
-    every sample between the processes crosses lo where the capture sees it."""
+    """The project's QoS profiles with UDP as the only transport (the file's shared-memory
+    transport dropped from the participant's list) and data sharing off, so that every sample
+    between the processes crosses lo where the capture sees it."""
     with open(os.path.join(ROOT, "deploy", "qos", "handshare_qos.xml")) as f:
         xml = f.read()
-    xml = xml.replace("<profiles>", """<profiles>
-    <transport_descriptors>
-      <transport_descriptor><transport_id>udp_only</transport_id><type>UDPv4</type></transport_descriptor>
-    </transport_descriptors>""", 1)
-    xml = xml.replace("""      <rtps>
-        <builtin>""", """      <rtps>
-        <userTransports><transport_id>udp_only</transport_id></userTransports>
-        <useBuiltinTransports>false</useBuiltinTransports>
-        <builtin>""", 1)
+    shm = "          <transport_id>handshare_shm</transport_id>\n"
+    check(xml.count(shm) == 1 and "<useBuiltinTransports>false" in xml,
+          "could not derive the UDP-only QoS: the participant's transport list changed")
+    xml = xml.replace(shm, "")
     xml = xml.replace("<qos>", "<qos>\n        <data_sharing><kind>OFF</kind></data_sharing>")
-    check(xml.count("<useBuiltinTransports>false") == 1 and "<data_sharing>" in xml, "could not derive the UDP-only QoS")
+    check("<data_sharing>" in xml, "could not derive the UDP-only QoS")
     with open(path, "w") as f:
         f.write(xml)
     return path

@@ -7,6 +7,8 @@
 #include <fstream>
 #include <utility>
 
+#include <fastdds/rtps/transport/UDPv4TransportDescriptor.h>
+
 #include "handshare/dds/participant.hpp"
 
 namespace handshare::dds {
@@ -86,6 +88,8 @@ SecurityFiles FindSecurityFiles(const std::string& dir, const std::string& parti
 
 namespace detail {
 
+constexpr std::uint32_t kSecuredUdpMessageSize = 65500;  // Fast DDS's UDPv4 default
+
 void ApplySecurity(const std::string& dir, const std::string& participant_name,
                    eprosima::fastdds::dds::DomainParticipantQos& qos) {
   const SecurityFiles f = FindSecurityFiles(dir, participant_name);
@@ -105,6 +109,19 @@ void ApplySecurity(const std::string& dir, const std::string& participant_name,
   set("dds.sec.crypto.plugin", "builtin.AES-GCM-GMAC");
   // Participant announcements travel in clear: the role, not the user.
   qos.name(AnnouncedName(participant_name));
+  // The handshake's messages (certificates, permissions: several kB) are never fragmented: a
+  // UDP transport limited to 1400-byte messages (the QoS file's, so that one lost packet costs
+  // one fragment of a field) cannot send them ("Cannot serialize ParticipantGenericMessage"),
+  // and no secured participant ever authenticates. A secured participant's UDP messages keep
+  // Fast DDS's default size (a copy: the profile's descriptor serves unsecured participants too).
+  for (auto& transport : qos.transport().user_transports) {
+    const auto udp = std::dynamic_pointer_cast<eprosima::fastdds::rtps::UDPv4TransportDescriptor>(transport);
+    if (udp && udp->maxMessageSize < kSecuredUdpMessageSize) {
+      auto whole = std::make_shared<eprosima::fastdds::rtps::UDPv4TransportDescriptor>(*udp);
+      whole->maxMessageSize = kSecuredUdpMessageSize;
+      transport = whole;
+    }
+  }
 }
 
 std::string SecurityFailureHint(const std::string& security_dir, const std::string& participant_name) {
