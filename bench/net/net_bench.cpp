@@ -457,6 +457,16 @@ std::string ForcedTransportQos(const std::string& transport, const fs::path& dir
   if (profiles == std::string::npos || rtps == std::string::npos) {
     throw std::runtime_error(source + ": no <profiles> or no participant profile 'handshare_participant' with <rtps>");
   }
+  // The file's own transport list (and builtin switch) in that profile goes: one of each.
+  for (const std::string tag : {"userTransports", "useBuiltinTransports"}) {
+    const auto open = xml.find("<" + tag + ">", rtps);
+    const auto end = xml.find("</participant>", rtps);
+    if (open == std::string::npos || open > end) continue;
+    const std::string closing = "</" + tag + ">";
+    const auto close = xml.find(closing, open);
+    if (close == std::string::npos) throw std::runtime_error(source + ": <" + tag + "> without its end");
+    xml.erase(open, close + closing.size() - open);
+  }
   xml.insert(rtps + std::strlen("<rtps>"), use);
   xml.insert(profiles + std::strlen("<profiles>"), descriptor);
   const fs::path file = dir / ("qos_" + transport + ".xml");

@@ -441,6 +441,10 @@ class HostsHarness:
     def stop(self, label, timeout):
         return self.procs[label].stop(timeout=timeout)
 
+    def print_traffic(self):
+        print("samples per topic (out: written, in: taken, lost: reported lost by the middleware):")
+        print("\n".join(traffic_lines({label: p.log() for label, p in self.procs.items()})))
+
 
 def case_late_joiners_unicast(args):
     """tests/late_join_test.py's late joiners across a network without multicast: the world
