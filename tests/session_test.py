@@ -38,6 +38,23 @@ def fem_cache(work):
     return os.environ.get("HANDSHARE_TEST_FEM_CACHE") or os.path.join(work, "cache")
 
 
+def traffic_line(log):
+    """A process's exit line of samples written ("out"), taken ("in") and reported lost per
+    topic ("traffic: ..."), or None (killed, or still running)."""
+    lines = re.findall(r"traffic: [^\n]*", log)
+    return lines[-1] if lines else None
+
+
+def clean_work(work):
+    """Empties a test's work folder for a rerun (its waits read files an earlier run's would
+    satisfy); the FEM model cache stays (it is keyed)."""
+    os.makedirs(work, exist_ok=True)
+    for entry in os.listdir(work):
+        if entry != "cache":
+            path = os.path.join(work, entry)
+            shutil.rmtree(path) if os.path.isdir(path) and not os.path.islink(path) else os.remove(path)
+
+
 class Failure(Exception):
     pass
 
@@ -146,8 +163,7 @@ class Harness:
         lost per topic ("traffic: ..."); a killed process has none."""
         print("samples per topic (out: written, in: taken, lost: reported lost by the middleware):")
         for label in self.procs:
-            lines = re.findall(r"traffic: [^\n]*", self.log(label))
-            print(f"  {label}: {lines[-1] if lines else 'no traffic line (killed, or still running)'}")
+            print(f"  {label}: {traffic_line(self.log(label)) or 'no traffic line (killed, or still running)'}")
 
     def dump_logs(self):
         for label in self.procs:
@@ -847,13 +863,7 @@ def run_cases(cases, harness=None):
     parser.add_argument("--work", default="")
     args = parser.parse_args()
     work = args.work or tempfile.mkdtemp(prefix=f"handshare-{args.case}-")
-    os.makedirs(work, exist_ok=True)
-    # A rerun in the same folder starts clean: the waits read files (dumps, frames, traces)
-    # that an earlier run's would otherwise satisfy. The FEM model cache stays (it is keyed).
-    for entry in os.listdir(work):
-        if entry != "cache":
-            path = os.path.join(work, entry)
-            shutil.rmtree(path) if os.path.isdir(path) and not os.path.islink(path) else os.remove(path)
+    clean_work(work)
     h = (harness or Harness)(args.bin_dir, work)
     # Killed by ctest (a timeout): end the nodes too (the finally below).
     signal.signal(signal.SIGTERM, lambda *_: sys.exit(143))

@@ -114,11 +114,7 @@ def case_two_hosts(args):
 
 def traffic_lines(logs):
     """Each process's exit line of samples written, taken and lost per topic ("traffic: ...")."""
-    out = []
-    for label, log in logs.items():
-        m = re.findall(r"traffic: [^\n]*", log)
-        out.append(f"  {label} {m[-1] if m else 'printed no traffic line'}")
-    return out
+    return [f"  {label} {session_test.traffic_line(log) or 'printed no traffic line'}" for label, log in logs.items()]
 
 
 def loop_summary(log, user):
@@ -308,11 +304,7 @@ def case_tour(args):
     weights, the jointly pressed tail against fem_solve, both hands in the spectator's frames,
     every board message spoken) with the world server, alice, bob, the spectator and the audio
     guide on five hosts, 20 ms +- 5 ms one-way delay and 2 % loss on what arrives at each."""
-    os.makedirs(args.work, exist_ok=True)
-    for entry in os.listdir(args.work):  # a rerun starts clean; the FEM model cache stays
-        if entry != "cache":
-            path = os.path.join(args.work, entry)
-            subprocess.run(["rm", "-rf", path], check=True)
+    session_test.clean_work(args.work)
     labels = ("world_server", "alice", "bob", "spectator", "audio_guide")
     with Network(5, nfq_delay=args.nfq_delay) as net:
         for seed, host in enumerate(net.hosts, start=1):
@@ -453,11 +445,7 @@ def case_late_joiners_unicast(args):
     and 1 % loss on what arrives at each host."""
     sys.path.insert(0, os.path.join(HERE, ".."))
     import late_join_test  # noqa: E402
-    os.makedirs(args.work, exist_ok=True)
-    for entry in os.listdir(args.work):  # a rerun starts clean (the waits read files); the cache stays
-        if entry != "cache":
-            path = os.path.join(args.work, entry)
-            subprocess.run(["rm", "-rf", path], check=True)
+    session_test.clean_work(args.work)
     with Network(3, nfq_delay=args.nfq_delay) as net:
         a, b, c = net.hosts
         for seed, h in enumerate(net.hosts, start=1):
