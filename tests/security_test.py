@@ -47,7 +47,7 @@ import sys
 import threading
 import time
 
-from session_test import Failure, Harness, check, run_cases, wait_until
+from session_test import Failure, Harness, check, fem_cache, run_cases, wait_until
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 ROOT = os.path.join(HERE, "..")
@@ -81,8 +81,9 @@ def faketime_env(days_ago):
     return env
 
 
-def run_quiet(argv, what, env=None):
-    r = subprocess.run(argv, capture_output=True, text=True, env=env, timeout=120)
+def run_quiet(argv, what, env=None, timeout=120):
+    """timeout None: bounded by the ctest timeout only (a model build on a loaded host)."""
+    r = subprocess.run(argv, capture_output=True, text=True, env=env, timeout=timeout)
     check(r.returncode == 0, f"{what} failed (rc {r.returncode}):\n{r.stdout}{r.stderr}")
     return r.stdout
 
@@ -592,10 +593,10 @@ def case_capture(h, domain):
         print("SKIP: no permission for a raw packet socket (CAP_NET_RAW)")
         return SKIP
     w = h.work
-    cache = os.path.join(w, "cache")
+    cache = fem_cache(w)  # the build's shared model cache: the tail's model is computed once per build
     os.environ["HANDSHARE_CACHE"] = cache
     run_quiet([os.path.join(h.bin_dir, "core", "world", "world_prepare"), "--cache", cache, "--scenes", "dinosaur"],
-              "world_prepare")
+              "world_prepare", timeout=None)
     ks = os.path.join(w, "keystore")
     make_keystore("--session", "it-sec-*", ks, "alice")
     qos = udp_only_qos(os.path.join(w, "udp_only_qos.xml"))
