@@ -18,6 +18,9 @@ int main(int argc, char** argv) {
       .Flag("replay-loop", "replay: start over at the end of the log")
       .Value("rate", "HZ", "haptic loop rate", "1000")
       .Value("publish-rate", "HZ", "device state rate for viewers", "100")
+      .Value("deadband", "FRACTION",
+             "Weber fraction of the contact-set deadband: a set goes out when a force or imposed "
+             "displacement changed by more than this share (0: every bridge tick)", "0.1")
       .Value("trace", "FILE", "write every published device state to a CSV file", "");
   return handshare::common::RunNodeMain(argc, argv, options, [](const auto& o) {
     handshare::haptic::HapticNodeConfig c;
@@ -38,6 +41,7 @@ int main(int argc, char** argv) {
     }
     c.rate_Hz = o.GetDouble("rate", 100.0, 20000.0);
     c.publish_Hz = o.GetDouble("publish-rate", 1.0, 1000.0);
+    c.deadband_weber = o.GetDouble("deadband", 0.0, 0.5);
     c.trace_file = o.GetString("trace");
     return handshare::haptic::HapticNode(c).Run();
   });

@@ -676,6 +676,17 @@ def case_encyclopedia(h, domain):
     speech_s = sum(check_speech(w)[0] for w in wavs)
     print(f"spectator: both hands in its last frame ({fingertips} fingertips checked); audio guide: {len(wavs)} "
           f"messages spoken, {speech_s:.1f} s of speech")
+    # The peer stream went through each hand's deadband (session/contact_deadband.hpp): of the
+    # contact sets the two bridges offered, most stayed home (88 % in the tour, loopback and
+    # quiet; none with --deadband 0), and the tour above still held its weights and fields.
+    offered = sent = 0
+    for user in ("alice", "bob"):
+        m = re.search(r"contact deadband: weber [0-9.]+, offered (\d+), sent (\d+)", h.log(user))
+        check(m is not None, f"{user}'s haptic node printed no contact deadband line")
+        offered, sent = offered + int(m.group(1)), sent + int(m.group(2))
+    check(offered >= 500 and sent <= 0.3 * offered,
+          f"the deadband let {sent} of {offered} contact sets through (expected at most 30 %)")
+    print(f"contact deadband: {sent} of {offered} contact sets sent ({100.0 * (1 - sent / offered):.1f} % kept home)")
     ws = h.log("world_server")
     for needle in ("control button_solar_system by alice: scene 'solar_system'", "gravity -3.71 m/s^2",
                    "control arrow_next by alice: scene 'dinosaur'", "control arrow_next by alice: scene 'microscopic'",

@@ -19,7 +19,13 @@ Payload bytes are the CDR (4-byte encapsulation included); each sample adds its 
 RTPS, UDP and IP headers on the wire. The recorder is one more reader of every topic, so writers
 that skip a topic nobody reads (device state, loop statistics) write it here.
 
-usage: net_bandwidth.py --bin-dir BUILD [--domain D] [--work DIR] [--cases tour,press] [--csv FILE]
+With --deadband W the haptic nodes run with that contact-set deadband (0: every bridge tick, as
+before the deadband; default: the node's own default); their account of what it let through goes
+into the '#' lines. With --work DIR the recordings stay there (DIR/tour.db, DIR/press.db): a
+recording at --deadband 0 is what deadband_bench reads.
+
+usage: net_bandwidth.py --bin-dir BUILD [--domain D] [--work DIR] [--cases tour,press] [--deadband W]
+                        [--csv FILE]
 Prints case,topic,node,samples_per_s,bytes_per_s,payload_B rows (and '#' lines with the load).
 """
 import argparse
@@ -109,6 +115,9 @@ def prepare(bin_dir, cache, scenes):
         raise Failure(f"world_prepare failed: {r.stdout}{r.stderr}")
 
 
+HAND_OPTIONS = []  # extra haptic_node options (--deadband)
+
+
 def run_tour(p, domain, session, work):
     rec = os.path.join(work, "tour.db")
     p.start("record", "world_server/session_record", "--domain", domain, "--session", session, "--out", rec)
@@ -120,7 +129,8 @@ def run_tour(p, domain, session, work):
             "--frames", 100000, "--fps", 2, "--duration", 80, "--out", os.path.join(work, "tour_frames"))
     for user in ("alice", "bob"):
         p.start(user, "haptic_node/haptic_node", "--domain", domain, "--session", session, "--user", user,
-                "--device", "sim", "--script", os.path.join(TOUR_SCRIPTS, f"tour_{user}.hand"), "--duration", 50)
+                "--device", "sim", "--script", os.path.join(TOUR_SCRIPTS, f"tour_{user}.hand"), "--duration", 50,
+                *HAND_OPTIONS)
     for user in ("alice", "bob"):
         if p.wait(user, 120) != 0:
             raise Failure(f"{user}'s haptic node failed:\n{p.log(user)}")
@@ -135,7 +145,7 @@ def peer_age_lines(p):
     """The haptic nodes' own account of the contact sets: their own report's age when the bridge
     wrote it, and the peers' sets' age when the bridge took them and when the loop used them."""
     return [line.strip() for user in ("alice", "bob") for line in p.log(user).splitlines()
-            if "contact sets:" in line]
+            if "contact sets:" in line or "contact deadband:" in line]
 
 
 def run_press(p, domain, session, work):
@@ -149,7 +159,8 @@ def run_press(p, domain, session, work):
             "--frames", 100000, "--fps", 2, "--duration", 80, "--out", os.path.join(work, "press_frames"))
     for user in ("alice", "bob"):
         p.start(user, "haptic_node/haptic_node", "--domain", domain, "--session", session, "--user", user,
-                "--device", "sim", "--script", os.path.join(HERE, f"press_{user}.hand"), "--duration", 25)
+                "--device", "sim", "--script", os.path.join(HERE, f"press_{user}.hand"), "--duration", 25,
+                *HAND_OPTIONS)
     for user in ("alice", "bob"):
         if p.wait(user, 90) != 0:
             raise Failure(f"{user}'s haptic node failed:\n{p.log(user)}")
@@ -230,8 +241,11 @@ def main(argv=None):
     ap.add_argument("--domain", type=int, default=168)
     ap.add_argument("--work", help="where logs and recordings go (default: a temporary folder, removed)")
     ap.add_argument("--cases", default="tour,press")
+    ap.add_argument("--deadband", type=float, help="the haptic nodes' contact-set deadband (Weber fraction)")
     ap.add_argument("--csv", help="also write the rows to this file")
     args = ap.parse_args(argv)
+    if args.deadband is not None:
+        HAND_OPTIONS[:] = ["--deadband", args.deadband]
     cases = args.cases.split(",")
     for c in cases:
         if c not in ("tour", "press"):
@@ -254,7 +268,9 @@ def main(argv=None):
             with Procs(args.bin_dir, work, case) as p:
                 rec, notes = (run_tour if case == "tour" else run_press)(p, args.domain, session, work)
             seconds, rows = analyse(case, rec)
-            lines.append(f"# {case}: {seconds:.1f} s window; load before {load_before}, after {loadavg()}")
+            deadband = "node default" if args.deadband is None else f"{args.deadband:g}"
+            lines.append(f"# {case}: {seconds:.1f} s window; deadband {deadband}; load before {load_before}, "
+                         f"after {loadavg()}")
             lines.extend(f"# {case}: {n}" for n in notes)
             total = defaultdict(lambda: [0.0, 0.0])
             for r in rows:

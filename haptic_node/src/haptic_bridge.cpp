@@ -32,6 +32,7 @@ HapticBridge::HapticBridge(const HapticNodeConfig& config, Device& device, Hapti
       scene_reader_(dds::MakeReader<msg::SceneState>(participant, dds::topics::kSceneState)),
       contact_reader_(dds::MakeReader<msg::ContactSet>(participant, dds::topics::kContactSet)),
       object_reader_(dds::MakeReader<msg::ObjectState>(participant, dds::topics::kObjectState)),
+      deadband_(session::DeadbandConfig{.weber = config.deadband_weber}),
       next_stats_(Clock::now() + std::chrono::seconds(1)) {
   models_options_.cache_dir =
       config_.cache_dir.empty() ? world::DefaultCacheDir() : std::filesystem::path(config_.cache_dir);
@@ -100,6 +101,7 @@ void HapticBridge::AdoptScene(const msg::SceneState& state) {
   }
   if (!same_world) bodies_.clear();
   peers_.Clear();
+  deadband_.Reset();
   renderer_ = next;
   have_report_ = false;
   loop_.SetRenderer(renderer_);
@@ -185,8 +187,9 @@ void HapticBridge::PublishContactSet() {
   const std::int32_t owned = OwnedBody(bodies_, config_.user, renderer_->models());
   const bool active =
       ToContactSet(report_, renderer_->models(), owned, models_options_.fingertip_radius_m, contacts_msg_);
-  if ((active || last_sent_active_) && contact_writer_.matched_readers() > 0) {
-    contacts_msg_.stamp_ns(common::SteadyNowNs());
+  const std::uint64_t now_ns = common::SteadyNowNs();
+  if ((active || last_sent_active_) && contact_writer_.matched_readers() > 0 && deadband_.Offer(contacts_msg_, now_ns)) {
+    contacts_msg_.stamp_ns(now_ns);
     contacts_msg_.seq(contacts_msg_.seq() + 1);
     contact_writer_.Write(contacts_msg_);
     if (report_.step_ns != 0 && report_.step_ns <= contacts_msg_.stamp_ns()) {

@@ -16,6 +16,7 @@
 #include "handshare/haptic/haptic_loop.hpp"
 #include "handshare/haptic/haptic_node.hpp"
 #include "handshare/haptic/scene_renderer.hpp"
+#include "handshare/session/contact_deadband.hpp"
 #include "handshare/session/peer_contacts.hpp"
 #include "handshare/dds/sample_checks.hpp"
 #include "handshare/world/scene_models.hpp"
@@ -47,6 +48,8 @@ class HapticBridge {
   /// Age of this hand's contact report when its contact set was written (the haptic step
   /// that made it to the write): the sender's part of the node-to-node path.
   const common::LatencyHistogram& contact_report_age() const { return report_age_; }
+  /// What the contact-set deadband let through (offered: sets a peer could read).
+  const session::ContactSetDeadband& deadband() const { return deadband_; }
 
  private:
   // ---- the stages of a tick ----
@@ -61,7 +64,8 @@ class HapticBridge {
   void FollowPeerBodies();
   /// The newest haptic snapshot, to viewers (and the trace).
   void PublishDeviceState();
-  /// This hand's contacts: while touching, grasping or simulating, and once more at the end.
+  /// This hand's contacts: while touching, grasping or simulating, and once more at the end,
+  /// each when it differs perceptibly from the last one sent or a keepalive is due.
   void PublishContactSet();
   /// The loop statistics, once a second.
   void PublishStatistics();
@@ -98,6 +102,7 @@ class HapticBridge {
   msg::DeviceState state_msg_;
   msg::LoopStatistics stats_msg_;
   msg::ContactSet contacts_msg_;
+  session::ContactSetDeadband deadband_;
   Clock::time_point next_stats_;
   std::uint64_t device_states_published_ = 0;
   std::uint64_t control_events_sent_ = 0;

@@ -61,6 +61,17 @@ void PrintLoopSummary(const std::string& user, const common::LoopStats& stats, s
                 user.c_str(), static_cast<unsigned long long>(age.count()), age.Quantile(0.5), age.Quantile(0.99),
                 age.max_us());
   }
+  if (const auto& d = bridge.deadband(); d.offered() > 0) {
+    // One line a test or a bench can read: how much of the peer stream the deadband saved.
+    std::string why;
+    for (int r = static_cast<int>(session::DeadbandReason::kOff); r < session::kDeadbandReasons; ++r) {
+      const auto reason = static_cast<session::DeadbandReason>(r);
+      if (d.sent_for(reason) > 0) why += std::string(" ") + session::ToString(reason) + " " + std::to_string(d.sent_for(reason));
+    }
+    std::printf("[haptic_node %s] contact deadband: weber %.2f, offered %llu, sent %llu, reduction %.1f %% (sent for:%s)\n",
+                user.c_str(), d.config().weber, static_cast<unsigned long long>(d.offered()),
+                static_cast<unsigned long long>(d.sent()), 100.0 * d.reduction(), why.c_str());
+  }
   if (const auto& age = bridge.peer_contact_loop_age(); age.count() > 0) {
     std::printf("[haptic_node %s] peer contact sets: %llu used, age at the haptic loop (sender's write to the "
                 "first step using it, same host) p50 %.0f us p99 %.0f us max %.0f us\n",

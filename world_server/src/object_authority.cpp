@@ -8,6 +8,7 @@
 #include <sstream>
 
 #include "handshare/common/clock.hpp"
+#include "handshare/session/contact_deadband.hpp"
 
 namespace handshare::server {
 
@@ -52,6 +53,16 @@ Eigen::Isometry3d Pose(const msg::ContactSet& s) {
   const auto& q = s.q_WO_wxyz();
   X.linear() = Eigen::Quaterniond(q[0], q[1], q[2], q[3]).normalized().toRotationMatrix();
   X.translation() = Eigen::Vector3d(s.p_WO_m()[0], s.p_WO_m()[1], s.p_WO_m()[2]);
+  return X;
+}
+
+/// Where an owner's body is at `now`: its newest set's pose, moved on at the set's velocity
+/// since the set arrived, for at most session::kMaxReckoning_s (the first-order hold the
+/// owner's deadband assumes: it sends a set only when the body leaves this reckoning).
+Eigen::Isometry3d ReckonedPose(const session::PeerContacts::Entry& e, std::chrono::steady_clock::time_point now) {
+  Eigen::Isometry3d X = Pose(e.set);
+  const double age_s = std::chrono::duration<double>(now - e.received).count();
+  X.translation() += Velocity(e.set) * std::clamp(age_s, 0.0, session::kMaxReckoning_s);
   return X;
 }
 
@@ -237,7 +248,7 @@ TickOutput ObjectAuthority::Tick(Clock::time_point now, double dt_s) {
 
   // Who simulates what: owned bodies follow their owner's newest reported pose; a resumed
   // session's bodies held for their owner's claim stay where the log left them.
-  std::map<contact::ObjectId, std::pair<std::string, const msg::ContactSet*>> owned;
+  std::map<contact::ObjectId, std::pair<std::string, const session::PeerContacts::Entry*>> owned;
   std::map<contact::ObjectId, Eigen::Isometry3d> held;
   for (const auto body : models_->dynamic_bodies) {
     const std::string& id = models_->ids[static_cast<std::size_t>(body)];
@@ -254,10 +265,10 @@ TickOutput ObjectAuthority::Tick(Clock::time_point now, double dt_s) {
     }
     if (owner.empty()) continue;
     const auto it = peers_.sets().find(owner);
-    const msg::ContactSet* set = nullptr;
+    const session::PeerContacts::Entry* set = nullptr;
     if (it != peers_.sets().end() && it->second.set.simulating() &&
         it->second.set.simulated_object_id().to_string() == id && Finite(it->second.set)) {
-      set = &it->second.set;
+      set = &it->second;
     }
     owned[body] = {owner, set};
   }
@@ -291,8 +302,8 @@ TickOutput ObjectAuthority::Tick(Clock::time_point now, double dt_s) {
       if (who.second == nullptr) continue;
       // At the owner's pose, with its velocity: when the owner lets go, the body flies on
       // from there instead of stopping in mid-air.
-      world.SetPose(body, Pose(*who.second));
-      world.SetVelocity(body, Velocity(*who.second), Eigen::Vector3d::Zero());
+      world.SetPose(body, ReckonedPose(*who.second, now));
+      world.SetVelocity(body, Velocity(who.second->set), Eigen::Vector3d::Zero());
     }
     const std::size_t n = s + 1 < substeps ? 0 : n_all;  // deformables: once per tick
     world.Step(h, no_hand, std::span<const contact::RemoteContact>(remote_.data(), n));
@@ -310,8 +321,8 @@ TickOutput ObjectAuthority::Tick(Clock::time_point now, double dt_s) {
         // Granted, and the owner has not taken it over yet: tell it where the body is.
         out.states.push_back(State(session_, id, it->second.first, world.pose(body), world.body_velocity_W(body)));
       } else {
-        const auto& set = *it->second.second;
-        out.states.push_back(State(session_, id, it->second.first, Pose(set), Velocity(set)));
+        const auto& entry = *it->second.second;
+        out.states.push_back(State(session_, id, it->second.first, ReckonedPose(entry, now), Velocity(entry.set)));
       }
       last_published_.erase(body);  // once free, its first pose is published
       continue;

@@ -9,6 +9,7 @@
 #include <functional>
 #include <thread>
 
+#include "handshare/session/contact_deadband.hpp"
 #include "test_support.hpp"
 
 namespace handshare::server {
@@ -118,6 +119,39 @@ TEST(ObjectAuthority, ALetGoBallFliesOnWithTheOwnersVelocity) {
   EXPECT_GT(last_p.z(), p_free.z() + 0.02);  // still rising: it did not stop in mid-air
   EXPECT_NEAR(last_v.x(), 0.4, 0.4 * 0.03);
   EXPECT_NEAR(last_v.z(), vb.z() - kMoon * 0.1, 0.02);
+}
+
+// The owner's deadband sends a carried body's pose only when it leaves the receivers'
+// reckoning (session/contact_deadband.hpp). Between two sets the server publishes the body
+// moved on at the set's velocity, for at most session::kMaxReckoning_s: not held still at the
+// set's pose (a stair step at 10 Hz for every spectator), nor flown away when sets stop.
+TEST(ObjectAuthority, AnOwnersBodyIsReckonedForwardBetweenItsSets) {
+  testing::TempDir dir;
+  const auto file = WriteBallScene(dir.path(), "moon", -kMoon);
+  ObjectAuthorityOptions options;
+  options.models.cache_dir = dir.path() / "cache";
+  ObjectAuthority world("s", options);
+  world.SetScene(scene::LoadScene(file));
+  const auto dt = std::chrono::milliseconds(10);
+  Clock::time_point now = TickUntilReady(world, Clock::now());
+  ASSERT_TRUE(world.ready());
+  const Eigen::Vector3d v(0.2, 0.0, 0.1), p0(0.0, 0.0, 0.15);
+  now += dt;
+  world.OnContactSet(OwnerSet("ball", p0, v), now);
+  const Clock::time_point sent = now;
+  world.Tick(now, 0.01);
+  ASSERT_EQ(world.owner("ball"), "alice");
+  for (int i = 1; i <= 40; ++i) {  // 0.4 s without a set
+    now += dt;
+    const msg::ObjectState* st = nullptr;
+    const TickOutput out = world.Tick(now, 0.01);
+    st = BallState(out);
+    ASSERT_NE(st, nullptr);
+    const double age_s = std::chrono::duration<double>(now - sent).count();
+    const Eigen::Vector3d expected = p0 + v * std::min(age_s, session::kMaxReckoning_s);
+    const Eigen::Vector3d got(st->p_WO_m()[0], st->p_WO_m()[1], st->p_WO_m()[2]);
+    EXPECT_LT((got - expected).norm(), 1e-9) << "at " << age_s << " s: " << got.transpose();
+  }
 }
 
 }  // namespace

@@ -137,7 +137,7 @@ TEST(ToRemoteContact, CarriesEveryFieldFadedByItsAgeAtTheStep) {
     c.u_W_m[k] = -0.001 * (k + 1);
     c.f_E_W_N[k] = 1.5 * (k + 1);
   }
-  const contact::PeerFade fade;  // 200 ms, 500 ms
+  const contact::PeerFade fade{200'000'000, 500'000'000};
   const contact::RemoteContact r = ToRemoteContact(c, fade, c.received_ns + 200'000'000);
   EXPECT_EQ(r.hand, 2);
   EXPECT_EQ(r.finger, 4);

@@ -20,6 +20,7 @@ struct HapticNodeConfig {
   std::string cache_dir;                         // compliance caches ("" = world::DefaultCacheDir())
   double rate_Hz = 1000.0;
   double publish_Hz = 100.0;                     // device state for viewers (60-120 Hz)
+  double deadband_weber = 0.10;                  // contact-set deadband (session/contact_deadband.hpp); 0: off
   std::string trace_file;                        // CSV of every published device state
 };
 

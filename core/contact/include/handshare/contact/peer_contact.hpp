@@ -13,9 +13,12 @@ namespace handshare::contact {
 /// How a silent peer's contact fades out, so the others feel a ramp, not a step, when it
 /// vanishes: weight 1 while its set is at most fade_after old, falling linearly to 0 at
 /// lifespan (then the set is dropped). Plain data; Weight() is real-time safe.
+/// fade_after is three keepalives of the sender's deadband (session/contact_deadband.hpp: a
+/// still hand sends every 100 ms), so one lost keepalive plus network jitter never dims a hand
+/// that is still there.
 struct PeerFade {
-  std::int64_t fade_after_ns = 200'000'000;
-  std::int64_t lifespan_ns = 500'000'000;
+  std::int64_t fade_after_ns = 300'000'000;
+  std::int64_t lifespan_ns = 600'000'000;
 
   /// The weight of a contact whose set arrived `age_ns` ago (negative: fresh, 1).
   double Weight(std::int64_t age_ns) const noexcept {

@@ -27,8 +27,8 @@
 namespace handshare::session {
 
 struct PeerContactsConfig {
-  std::chrono::nanoseconds fade_after = std::chrono::milliseconds(200);
-  std::chrono::nanoseconds lifespan = std::chrono::milliseconds(500);
+  std::chrono::nanoseconds fade_after = std::chrono::milliseconds(300);  // contact::PeerFade's defaults
+  std::chrono::nanoseconds lifespan = std::chrono::milliseconds(600);
 };
 
 using contact::PeerContact;  // handshare/contact/peer_contact.hpp: the plain, middleware-free type
