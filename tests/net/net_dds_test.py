@@ -470,4 +470,5 @@ def case_late_joiners_unicast(args):
 
 if __name__ == "__main__":
     main({"two_hosts": case_two_hosts, "partitioned_user": case_partitioned_user, "tour": case_tour,
-          "unicast_peers": case_unicast_peers, "late_joiners_unicast": case_late_joiners_unicast})
+          "unicast_peers": case_unicast_peers, "late_joiners_unicast": case_late_joiners_unicast},
+         failures=(session_test.Failure,))

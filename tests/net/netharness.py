@@ -478,8 +478,30 @@ def stats(values):
     return mean, sd
 
 
-def main(cases, argv=None):
-    """Runs cases[name](args) with SKIP (77) for Skip and 1 for Failure. args has .case."""
+def print_log_tails(work, since, lines=25):
+    """The last lines of every process log (*.log) written in `work` since `since` (time.time()):
+    what a failed case's processes said, for a failure in a loaded CI run that cannot be rerun."""
+    try:
+        logs = sorted(f for f in os.listdir(work) if f.endswith(".log"))
+    except OSError:
+        return
+    for name in logs:
+        path = os.path.join(work, name)
+        try:
+            if os.path.getmtime(path) < since:
+                continue
+            with open(path, errors="replace") as f:
+                tail = f.read().splitlines()[-lines:]
+        except OSError:
+            continue
+        print(f"----- {name} (last {len(tail)} lines) -----", flush=True)
+        print("\n".join(tail), flush=True)
+
+
+def main(cases, argv=None, failures=()):
+    """Runs cases[name](args) with SKIP (77) for Skip and 1 for Failure (or any of `failures`,
+    e.g. session_test.Failure from its helpers), then prints the tails of the processes' logs.
+    args has .case."""
     import argparse
     ap = argparse.ArgumentParser()
     ap.add_argument("case", choices=sorted(cases))
@@ -490,12 +512,15 @@ def main(cases, argv=None):
     ap.add_argument("--without-delayer", action="store_true",
                     help="negative control: do not insert the delayer (the delay checks must fail)")
     args = ap.parse_args(argv)
+    started = time.time()
     try:
         cases[args.case](args)
     except Skip as e:
         print(f"SKIP: {args.case}: {e}", flush=True)
         sys.exit(SKIP_RETURN_CODE)
-    except Failure as e:
+    except (Failure, *failures) as e:
         print(f"FAIL: {args.case}: {e}", flush=True)
+        if args.work:
+            print_log_tails(args.work, started)
         sys.exit(1)
     print(f"PASS: {args.case}", flush=True)
