@@ -7,6 +7,7 @@
 
 #include <fstream>
 #include <functional>
+#include <memory>
 #include <thread>
 
 #include "handshare/session/contact_deadband.hpp"
@@ -66,16 +67,28 @@ Clock::time_point TickUntilReady(ObjectAuthority& world, Clock::time_point now,
   return now;
 }
 
-TEST(ObjectAuthority, ALetGoBallFliesOnWithTheOwnersVelocity) {
-  testing::TempDir dir;
-  const auto file = WriteBallScene(dir.path(), "moon", -kMoon);
-  ObjectAuthorityOptions options;
-  options.models.cache_dir = dir.path() / "cache";
-  ObjectAuthority world("s", options);
-  world.SetScene(scene::LoadScene(file));
-  const auto dt = std::chrono::milliseconds(10);
-  Clock::time_point now = TickUntilReady(world, Clock::now());
-  ASSERT_TRUE(world.ready());
+// An ObjectAuthority of session "s" on the Moon with the ball scene, its models adopted at now_.
+class BallOnTheMoon : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    const auto file = WriteBallScene(dir_.path(), "moon", -kMoon);
+    ObjectAuthorityOptions options;
+    options.models.cache_dir = dir_.path() / "cache";
+    world_ = std::make_unique<ObjectAuthority>("s", options);
+    world_->SetScene(scene::LoadScene(file));
+    now_ = TickUntilReady(*world_, Clock::now());
+    ASSERT_TRUE(world_->ready());
+  }
+  static constexpr std::chrono::milliseconds kDt{10};
+  testing::TempDir dir_;
+  std::unique_ptr<ObjectAuthority> world_;
+  Clock::time_point now_;
+};
+
+TEST_F(BallOnTheMoon, ALetGoBallFliesOnWithTheOwnersVelocity) {
+  ObjectAuthority& world = *world_;
+  const auto dt = kDt;
+  Clock::time_point now = now_;
 
   // alice holds the ball and carries it up and sideways: 0.4 m/s in x, 0.6 m/s up.
   const Eigen::Vector3d v(0.4, 0.0, 0.6);
@@ -125,16 +138,10 @@ TEST(ObjectAuthority, ALetGoBallFliesOnWithTheOwnersVelocity) {
 // reckoning (session/contact_deadband.hpp). Between two sets the server publishes the body
 // moved on at the set's velocity, for at most session::kMaxReckoning_s: not held still at the
 // set's pose (a stair step at 10 Hz for every spectator), nor flown away when sets stop.
-TEST(ObjectAuthority, AnOwnersBodyIsReckonedForwardBetweenItsSets) {
-  testing::TempDir dir;
-  const auto file = WriteBallScene(dir.path(), "moon", -kMoon);
-  ObjectAuthorityOptions options;
-  options.models.cache_dir = dir.path() / "cache";
-  ObjectAuthority world("s", options);
-  world.SetScene(scene::LoadScene(file));
-  const auto dt = std::chrono::milliseconds(10);
-  Clock::time_point now = TickUntilReady(world, Clock::now());
-  ASSERT_TRUE(world.ready());
+TEST_F(BallOnTheMoon, AnOwnersBodyIsReckonedForwardBetweenItsSets) {
+  ObjectAuthority& world = *world_;
+  const auto dt = kDt;
+  Clock::time_point now = now_;
   const Eigen::Vector3d v(0.2, 0.0, 0.1), p0(0.0, 0.0, 0.15);
   now += dt;
   world.OnContactSet(OwnerSet("ball", p0, v), now);

@@ -27,6 +27,18 @@ msg::ContactSet Press(double f_z, double u_z) {
   return s;
 }
 
+// A hand that grasps and simulates the ball, carrying it up at 0.1 m/s, 10 cm above the origin.
+msg::ContactSet Carried() {
+  msg::ContactSet s;
+  s.grasped_object_id("ball");
+  s.simulating(true);
+  s.simulated_object_id("ball");
+  s.p_WO_m({0.0, 0.0, 0.1});
+  s.q_WO_wxyz({1.0, 0.0, 0.0, 0.0});
+  s.v_WO_m_per_s({0.0, 0.0, 0.1});
+  return s;
+}
+
 TEST(PerceptibleChange, ForceFollowsWebersLawAboveTheFloor) {
   const DeadbandConfig c;  // 10 %, floor 0.02 N
   const msg::ContactSet sent = Press(-2.0, -0.001);
@@ -121,13 +133,7 @@ TEST(PerceptibleChange, WhatTheReceiverSolvesAlwaysGoesOut) {
 
 TEST(PerceptibleChange, AHeldBodysPoseAndVelocity) {
   const DeadbandConfig c;
-  msg::ContactSet held;
-  held.grasped_object_id("ball");
-  held.simulating(true);
-  held.simulated_object_id("ball");
-  held.p_WO_m({0.0, 0.0, 0.1});
-  held.q_WO_wxyz({1.0, 0.0, 0.0, 0.0});
-  held.v_WO_m_per_s({0.0, 0.0, 0.1});
+  const msg::ContactSet held = Carried();
   msg::ContactSet next = held;
   next.p_WO_m()[2] += 0.0004;
   EXPECT_EQ(PerceptibleChange(held, next, 0.0, c), DeadbandReason::kNone);
@@ -152,12 +158,7 @@ TEST(PerceptibleChange, AHeldBodysPoseAndVelocity) {
 // they put it (5 mm on) and nothing goes out; had it stopped, it is 5 mm behind: a set goes out.
 TEST(PerceptibleChange, AHeldBodyAgainstTheReceiversReckoning) {
   const DeadbandConfig c;
-  msg::ContactSet held;
-  held.simulating(true);
-  held.simulated_object_id("ball");
-  held.p_WO_m({0.0, 0.0, 0.1});
-  held.q_WO_wxyz({1.0, 0.0, 0.0, 0.0});
-  held.v_WO_m_per_s({0.0, 0.0, 0.1});
+  const msg::ContactSet held = Carried();
   msg::ContactSet on = held;
   on.p_WO_m()[2] = 0.105;
   EXPECT_EQ(PerceptibleChange(held, on, 0.05, c), DeadbandReason::kNone);
