@@ -21,7 +21,10 @@ int main(int argc, char** argv) {
       .Value("deadband", "FRACTION",
              "Weber fraction of the contact-set deadband: a set goes out when a force or imposed "
              "displacement changed by more than this share (0: every bridge tick)", "0.1")
-      .Value("trace", "FILE", "write every published device state to a CSV file", "");
+      .Value("trace", "FILE", "write every published device state to a CSV file", "")
+      .Value("rejoin-after", "SEC",
+             "join again with a new participant when no world server was heard this long after joining "
+             "(a secured join whose handshake never finished; 0: never)", "15");
   return handshare::common::RunNodeMain(argc, argv, options, [](const auto& o) {
     handshare::haptic::HapticNodeConfig c;
     c.where = handshare::common::ReadSessionOptions(o);
@@ -43,6 +46,7 @@ int main(int argc, char** argv) {
     c.publish_Hz = o.GetDouble("publish-rate", 1.0, 1000.0);
     c.deadband_weber = o.GetDouble("deadband", 0.0, 0.5);
     c.trace_file = o.GetString("trace");
+    c.rejoin_after_s = o.GetDouble("rejoin-after", 0.0, 3600.0);
     return handshare::haptic::HapticNode(c).Run();
   });
 }

@@ -857,9 +857,46 @@ def case_vanished_member(h, domain):
     print(f"owner vanished: the ball was free after {t_free - t_kill:.2f} s")
 
 
+def case_rejoin(h, domain):
+    """A haptic node that hears no world server for --rejoin-after seconds after joining leaves
+    and joins again with a new participant, its haptic loop running on (the remedy for a
+    secured pair whose handshake never finishes, docs/security.md); once it hears one, it stays.
+    Here no server runs at first, so the rejoin is certain."""
+    session = f"it-rejoin-{os.getpid()}"  # own partition: concurrent runs on one host stay apart
+    trace = os.path.join(h.work, "alice.csv")
+    h.start("alice", "haptic_node", "--domain", domain, "--session", session, "--user", "alice",
+            "--rejoin-after", "2.5", "--trace", trace)
+    h.wait_for_line("alice", "leaving and joining again with a new participant (rejoin 1)", 30)
+    h.wait_for_line("alice", "(rejoin 2)", 30)  # still nobody: it goes on trying
+    h.start("world_server", "world_server", "--domain", domain, "--session", session)
+    h.wait_for_line("world_server", "member joined: user=alice", 30)
+    h.wait_for_line("alice", "scene 'start_menu' revision 1", 30)
+    rejoins = h.log("alice").count("leaving and joining again")
+    # Heard: no more rejoins. Watched over 4 s of alice's own loop time (her trace), more than
+    # twice the rejoin time.
+    joined_t = read_trace(trace)[-1]["t_s"]
+    wait_until("4 s of alice's loop after she heard the world server", 60,
+               lambda: (read_trace(trace) or [{"t_s": 0.0}])[-1]["t_s"] >= joined_t + 4.0)
+    check(h.log("alice").count("leaving and joining again") == rejoins,
+          f"alice rejoined after she heard the world server:\n{h.log('alice')}")
+    check(h.stop("alice", 10) == 0, "alice's haptic node did not end cleanly")
+    h.wait_for_line("world_server", "member left: user=alice", 10)
+    check(h.stop("world_server", 10) == 0, "world_server did not end cleanly")
+    # One alice at a time: a rejoin that raced the server's start leaves (a clean leave) before
+    # the new participant joins, so the server never counts two.
+    ws = h.log("world_server")
+    joins = re.findall(r"member joined: user=alice .*present=(\d+)", ws)
+    check(joins and all(p == "1" for p in joins), f"alice was in the session twice at once:\n{ws}")
+    check(f"rejoined the session {rejoins} time(s)" in h.log("alice"), "alice did not count her rejoins")
+    rows = read_trace(trace)
+    gaps = [b["t_s"] - a["t_s"] for a, b in zip(rows, rows[1:])]
+    print(f"rejoin: {rejoins} rejoins before the world server came, then one member; alice's loop ran on "
+          f"through them (trace rows {len(rows)}, largest gap {1e3 * max(gaps):.0f} ms)")
+
+
 CASES = {"shared_session": case_shared_session, "encyclopedia": case_encyclopedia, "killed_member": case_killed_member,
          "vanished_member": case_vanished_member,
-         "signals": case_signals, "bad_input": case_bad_input}
+         "signals": case_signals, "bad_input": case_bad_input, "rejoin": case_rejoin}
 
 
 def run_cases(cases, harness=None):

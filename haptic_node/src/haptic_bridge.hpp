@@ -36,6 +36,8 @@ class HapticBridge {
   void Tick();
 
   std::uint64_t device_states_published() const { return device_states_published_; }
+  /// Whether a scene state of the session's world server has arrived since this bridge began.
+  bool heard_world_server() const { return scene_revision_ != 0; }
   std::uint64_t control_events_sent() const { return control_events_sent_; }
   /// Received samples refused by the checks (session/sample_checks.hpp), per topic.
   const dds::DroppedSamples& dropped() const { return dropped_; }

@@ -6,6 +6,7 @@
 #include <iomanip>
 #include <memory>
 #include <stdexcept>
+#include <string>
 #include <thread>
 
 #include "haptic_bridge.hpp"
@@ -36,6 +37,25 @@ std::unique_ptr<Device> MakeDevice(const HapticNodeConfig& c) {
   }
   if (c.device == "replay") return std::make_unique<ReplayDevice>(ReplayLog::Load(c.replay_file), c.replay_loop);
   throw std::invalid_argument("device '" + c.device + "' is not available (this build has: sim, hiro, replay)");
+}
+
+/// Everything of this node that lives on DDS: its participant, its member announcement and the
+/// bridge's writers and readers. A rejoin makes a new one while the haptic loop runs on.
+struct SessionLink {
+  SessionLink(const HapticNodeConfig& config, Device& device, HapticLoop& loop, std::ostream* trace,
+              HapticBridge::Say say)
+      : participant(config.where, "haptic_node/" + config.user),
+        member(participant, config.user, msg::NODE_HAPTIC, device.name()),
+        bridge(config, device, loop, participant, trace, std::move(say)) {}
+  dds::Participant participant;
+  dds::MemberAnnouncement member;
+  HapticBridge bridge;
+};
+
+std::string Format(const char* format, auto... args) {
+  char line[240];
+  std::snprintf(line, sizeof line, format, args...);
+  return line;
 }
 
 void PrintLoopSummary(const std::string& user, const common::LoopStats& stats, std::uint64_t faults,
@@ -102,10 +122,8 @@ int HapticNode::Run() {
     WriteTraceHeader(trace);
   }
 
-  dds::Participant participant(config_.where, "haptic_node/" + config_.user);
-  dds::MemberAnnouncement member(participant, config_.user, msg::NODE_HAPTIC, device->name());
   HapticLoop loop(*device, HapticLoopConfig{config_.rate_Hz, true});
-  HapticBridge bridge(config_, *device, loop, participant, trace ? &trace : nullptr, say);
+  auto link = std::make_unique<SessionLink>(config_, *device, loop, trace ? &trace : nullptr, say);
   const bool realtime = loop.Start();
   say("joined session '" + config_.where.session + "' on domain " + std::to_string(config_.where.domain_id) +
       ": device " + device->name() + ", loop " + std::to_string(static_cast<int>(config_.rate_Hz)) + " Hz" +
@@ -115,10 +133,25 @@ int HapticNode::Run() {
   const auto start = Clock::now();
   const auto period = std::chrono::duration_cast<Clock::duration>(
       std::chrono::duration<double>(1.0 / config_.publish_Hz));
+  const auto rejoin_after = std::chrono::duration_cast<Clock::duration>(
+      std::chrono::duration<double>(config_.rejoin_after_s));
   auto next = start;
+  auto joined = start;
+  int rejoins = 0;
   while (!common::ShutdownRequested()) {
     if (config_.where.duration.count() > 0 && Clock::now() - start >= config_.where.duration) break;
-    bridge.Tick();
+    link->bridge.Tick();
+    if (config_.rejoin_after_s > 0.0 && !link->bridge.heard_world_server() && Clock::now() - joined >= rejoin_after) {
+      // Nothing from the session's world server since joining: a secured pair of participants
+      // that never finished authenticating stays so for good (Fast DDS 2.9, docs/security.md),
+      // and a new participant starts a new handshake. The haptic loop runs on meanwhile.
+      say(Format("no world from the world server %.1f s after joining: leaving and joining again with a new "
+                 "participant (rejoin %d)", config_.rejoin_after_s, rejoins + 1));
+      link.reset();
+      link = std::make_unique<SessionLink>(config_, *device, loop, trace ? &trace : nullptr, say);
+      joined = Clock::now();
+      ++rejoins;
+    }
     next += period;
     if (Clock::now() > next + 5 * period) next = Clock::now();
     std::this_thread::sleep_until(next);
@@ -126,8 +159,9 @@ int HapticNode::Run() {
   loop.Stop();
   common::LoopStats stats;
   loop.TakeStats(stats);
-  PrintLoopSummary(config_.user, stats, loop.faults(), loop.rate_limited_steps(), bridge);
-  say(participant.TrafficSummary());
+  PrintLoopSummary(config_.user, stats, loop.faults(), loop.rate_limited_steps(), link->bridge);
+  if (rejoins > 0) say("rejoined the session " + std::to_string(rejoins) + " time(s)");
+  say(link->participant.TrafficSummary());
   return 0;
 }
 
