@@ -22,6 +22,18 @@ bool TakeWithin(Reader<T>& reader, T& sample, SampleMeta& meta, std::chrono::mil
   return false;
 }
 
+// Best-effort: writes `out` until discovery has matched and one sample arrives (at most `tries`
+// writes, each followed by a wait of `wait` for the take).
+template <typename T>
+bool WriteUntilTaken(Writer<T>& writer, const T& out, Reader<T>& reader, T& in, SampleMeta& meta, int tries,
+                     std::chrono::milliseconds wait) {
+  for (int i = 0; i < tries; ++i) {
+    writer.Write(out);
+    if (TakeWithin(reader, in, meta, wait)) return true;
+  }
+  return false;
+}
+
 TEST(DdsParticipant, StreamRoundTripKeepsEveryField) {
   Participant a(201, "s1", "writer"), b(201, "s1", "reader");
   auto writer = MakeWriter<msg::DeviceState>(a, topics::kDeviceState);
@@ -33,13 +45,7 @@ TEST(DdsParticipant, StreamRoundTripKeepsEveryField) {
   out.fingertip_radius_m(0.008);
   msg::DeviceState in;
   SampleMeta meta;
-  bool got = false;
-  // Best-effort: keep writing until discovery has matched and one sample arrives.
-  for (int i = 0; i < 100 && !got; ++i) {
-    writer.Write(out);
-    got = TakeWithin(reader, in, meta, 50ms);
-  }
-  ASSERT_TRUE(got);
+  ASSERT_TRUE(WriteUntilTaken(writer, out, reader, in, meta, 100, 50ms));
   EXPECT_TRUE(meta.valid_data);
   EXPECT_EQ(std::string(in.user().c_str()), "alice");
   EXPECT_EQ(in.seq(), 42u);
@@ -57,12 +63,7 @@ TEST(DdsParticipant, AStalledDeviceStateStreamMissesItsDeadline) {
   out.user("alice");
   msg::DeviceState in;
   SampleMeta meta;
-  bool got = false;
-  for (int i = 0; i < 200 && !got; ++i) {
-    writer.Write(out);
-    got = TakeWithin(reader, in, meta, 10ms);
-  }
-  ASSERT_TRUE(got);
+  ASSERT_TRUE(WriteUntilTaken(writer, out, reader, in, meta, 200, 10ms));
   // Streaming at 100 Hz for 0.5 s: no period without a sample (at most one, where a loaded
   // machine held the writing thread back for 100 ms).
   const std::uint64_t before = reader.deadlines_missed();
