@@ -10,14 +10,6 @@
 
 namespace handshare::haptic {
 
-namespace {
-std::string Format(const char* format, auto... args) {
-  char line[200];
-  std::snprintf(line, sizeof line, format, args...);
-  return line;
-}
-}  // namespace
-
 HapticBridge::HapticBridge(const HapticNodeConfig& config, Device& device, HapticLoop& loop,
                            dds::Participant& participant, std::ostream* trace, Say say)
     : config_(config),

@@ -4,6 +4,7 @@
 /// (100 Hz by default); each stage is a short function over the bridge's state. Private to the
 /// node library: it holds DDS writers and readers.
 #include <cstdint>
+#include <cstdio>
 #include <functional>
 #include <memory>
 #include <ostream>
@@ -22,6 +23,13 @@
 #include "handshare/world/scene_models.hpp"
 
 namespace handshare::haptic {
+
+/// One printf-formatted line of the node's log (at most 239 characters).
+inline std::string Format(const char* format, auto... args) {
+  char line[240];
+  std::snprintf(line, sizeof line, format, args...);
+  return line;
+}
 
 class HapticBridge {
  public:

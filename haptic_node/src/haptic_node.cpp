@@ -52,12 +52,6 @@ struct SessionLink {
   HapticBridge bridge;
 };
 
-std::string Format(const char* format, auto... args) {
-  char line[240];
-  std::snprintf(line, sizeof line, format, args...);
-  return line;
-}
-
 void PrintLoopSummary(const std::string& user, const common::LoopStats& stats, std::uint64_t faults,
                       std::uint64_t rate_limited_steps, const HapticBridge& bridge) {
   std::printf("[haptic_node %s] loop statistics: rate %.1f Hz, steps %llu, jitter p50 %.0f us "
