@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "handshare/dds/sample_checks.hpp"
 #include "handshare/world/grasp.hpp"
 
 namespace handshare::haptic {
@@ -115,6 +116,11 @@ RemoteContacts ToRemoteContacts(const session::PeerContacts& peers, const world:
 
 bool ToContactSet(const ContactReport& report, const world::SceneModels& models, std::int32_t owned,
                   double radius_m, msg::ContactSet& out) {
+  // A fingertip far inside an object (pushed through it, or after a stall) reports a depth and
+  // an imposed displacement beyond what receivers accept (dds::CheckContactSet): they would
+  // drop the whole set, and with it the grasp and the body it carries. Both go out clamped to
+  // the accepted size, in their own direction.
+  const double max_u_m = dds::SampleBounds{}.max_displacement_m;
   bool active = false;
   for (int i = 0; i < kFingers; ++i) {
     const auto& f = report.fingers[i];
@@ -123,15 +129,18 @@ bool ToContactSet(const ContactReport& report, const world::SceneModels& models,
     active |= f.active;
     m.object_id(f.active ? IdOf(models, f.object) : std::string());
     m.surface_node(f.node);
+    const Eigen::Vector3d u_W_m(f.u_W_m[0], f.u_W_m[1], f.u_W_m[2]);
+    const double u_norm_m = u_W_m.norm();
+    const Eigen::Vector3d u_sent_W_m = u_norm_m > max_u_m ? Eigen::Vector3d(u_W_m * (max_u_m / u_norm_m)) : u_W_m;
     for (int k = 0; k < 3; ++k) {
       m.p_W_m()[k] = f.p_WC_m[k];
       m.n_W()[k] = f.n_W[k];
       m.p_WE_m()[k] = f.p_WE_m[k];
-      m.u_imposed_W_m()[k] = f.u_W_m[k];
+      m.u_imposed_W_m()[k] = u_sent_W_m[k];
       m.f_W_N()[k] = f.f_W_N[k];
     }
     m.radius_m(radius_m);
-    m.depth_m(f.depth_m);
+    m.depth_m(std::clamp(f.depth_m, -max_u_m, max_u_m));
   }
   const std::int32_t grasped = ClaimedBody(report);
   out.grasped_object_id(grasped >= 0 ? IdOf(models, grasped) : std::string());

@@ -100,6 +100,7 @@ void HapticLoop::Step(double t_s) noexcept {
   }
   const double dt_s = last_t_s_ < 0.0 ? 1.0 / config_.rate_Hz : std::max(0.0, t_s - last_t_s_);
   last_t_s_ = t_s;
+  const double world_dt_s = std::min(dt_s, config_.max_world_step_periods / config_.rate_Hz);
 
   // 1. Read and check the device: invalid, non-finite or stale data is a fault.
   device_.Read(t_s, reading_);
@@ -114,7 +115,7 @@ void HapticLoop::Step(double t_s) noexcept {
     if (device_fault) {
       renderer_->ReleaseAll();
     } else {
-      renderer_->Render(t_s, dt_s, now_ns, reading_, f_E_W_);
+      renderer_->Render(t_s, world_dt_s, now_ns, reading_, f_E_W_);
     }
   }
 

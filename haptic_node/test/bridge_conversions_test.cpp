@@ -6,9 +6,11 @@
 #include <unistd.h>
 
 #include <chrono>
+#include <cmath>
 #include <filesystem>
 #include <fstream>
 
+#include "handshare/dds/sample_checks.hpp"
 #include "handshare/scene/scene.hpp"
 
 namespace handshare::haptic {
@@ -169,6 +171,30 @@ TEST_F(BridgeConversions, TheContactSetNamesObjectsAndReportsTheSimulatedBody) {
   EXPECT_EQ(m.p_WO_m()[2], 0.3);
   EXPECT_EQ(m.v_WO_m_per_s()[0], 0.4);
   EXPECT_EQ(m.grasped_object_id().to_string(), "");
+}
+
+// A fingertip pushed 11.7 cm into the ball (the tour once sent this after a stall): every
+// receiver dropped the whole set. It goes out clamped to what receivers accept, same direction.
+TEST_F(BridgeConversions, ADepthBeyondWhatReceiversAcceptGoesOutClamped) {
+  ContactReport r;
+  r.fingers[0].active = true;
+  r.fingers[0].object = models().Find("block");
+  r.fingers[0].n_W[2] = 1.0;
+  r.fingers[0].depth_m = 0.117;
+  r.fingers[0].u_W_m[2] = -0.117;
+  r.fingers[0].u_W_m[0] = 0.05;
+  msg::ContactSet m;
+  ASSERT_TRUE(ToContactSet(r, models(), -1, 0.008, m));
+  m.session("s");
+  m.user("alice");
+  EXPECT_EQ(dds::CheckContactSet(m, "s", dds::SampleBounds{}), "");
+  EXPECT_DOUBLE_EQ(m.fingers()[0].depth_m(), 0.1);
+  const auto& u = m.fingers()[0].u_imposed_W_m();
+  EXPECT_NEAR(std::sqrt(u[0] * u[0] + u[1] * u[1] + u[2] * u[2]), 0.1, 1e-12);
+  EXPECT_NEAR(u[0] / u[2], 0.05 / -0.117, 1e-12);
+  r.fingers[0].depth_m = -0.2;  // a gap, the same
+  ASSERT_TRUE(ToContactSet(r, models(), -1, 0.008, m));
+  EXPECT_DOUBLE_EQ(m.fingers()[0].depth_m(), -0.1);
 }
 
 TEST_F(BridgeConversions, PeersReachTheRendererOnlyOnDeformables) {

@@ -102,14 +102,40 @@ TEST(HapticLoop, ThreadRunsAndHandsOffMonotonicSnapshots) {
 class ConstantRenderer final : public ForceRenderer {
  public:
   explicit ConstantRenderer(Eigen::Vector3d f) : f_(f) {}
-  void Render(double, double, std::uint64_t, const DeviceReading&, std::array<Eigen::Vector3d, kFingers>& out) noexcept override {
+  void Render(double, double dt_s, std::uint64_t, const DeviceReading&, std::array<Eigen::Vector3d, kFingers>& out) noexcept override {
     for (auto& f : out) f = f_;
     ++renders;
+    last_dt_s = dt_s;
   }
   void ReleaseAll() noexcept override { ++releases; }
   Eigen::Vector3d f_;
   int renders = 0, releases = 0;
+  double last_dt_s = 0.0;
 };
+
+// After a stall (here 100 ms between two steps) the world advances by at most
+// max_world_step_periods periods: the fingers' forces are not held on the bodies for the whole
+// stall (core/contact grasp_test: that throws a held ball). The impulse the user felt is the
+// force over the true time.
+TEST(HapticLoop, AStepAfterAStallAdvancesTheWorldByAtMostFivePeriods) {
+  FakeDevice device;
+  HapticLoopConfig config{1000.0, false};
+  config.safety.passivity = false;
+  config.stale_after_s = 1.0;
+  HapticLoop loop(device, config);
+  auto renderer = std::make_shared<ConstantRenderer>(Eigen::Vector3d(0, 0, 1.0));
+  loop.SetRenderer(renderer);
+  for (int k = 0; k < 300; ++k) loop.Step(k * 1e-3);  // up to 1 N through the rate bound
+  EXPECT_DOUBLE_EQ(renderer->last_dt_s, 1e-3);
+  HapticSnapshot before, after;
+  ASSERT_TRUE(loop.TakeSnapshot(before));
+  loop.Step(0.299 + 0.1);
+  EXPECT_DOUBLE_EQ(renderer->last_dt_s, 5e-3);
+  ASSERT_TRUE(loop.TakeSnapshot(after));
+  EXPECT_NEAR(after.impulse_E_W_Ns[0][2] - before.impulse_E_W_Ns[0][2], 1.0 * 0.1, 1e-9);
+  loop.Step(0.399 + 0.003);  // a late step below the bound is taken whole
+  EXPECT_NEAR(renderer->last_dt_s, 3e-3, 1e-12);
+}
 
 // A fault mid-contact (device lost) ramps the commanded force linearly to zero within the
 // configured ramp time, not at once and not later; it comes back through the rate bound.

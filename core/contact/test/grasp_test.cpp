@@ -23,8 +23,15 @@ struct GraspOutcome {
   bool all_in_contact = true;
 };
 
-GraspOutcome HoldBall(double g) {
+/// The ball of HoldBall closed in by the five fingertips (the scene holding it until then).
+struct Grasped {
   HapticWorld w;
+  ObjectId ball = -1;
+  std::array<Eigen::Vector3d, kFingers> tips;
+};
+
+void CloseHand(double g, Grasped& out) {
+  HapticWorld& w = out.w;
   const RigidMaterial mat{1000.0, 2.0, 1.0, 0.8};
   BodyProperties body;
   body.mass_kg = kMass;
@@ -51,6 +58,16 @@ GraspOutcome HoldBall(double g) {
     w.SetPose(ball, Eigen::Isometry3d(Eigen::Translation3d(c0)));
     w.Step(1e-3, tips);
   }
+  out.ball = ball;
+  out.tips = tips;
+}
+
+GraspOutcome HoldBall(double g) {
+  Grasped grasped;
+  CloseHand(g, grasped);
+  HapticWorld& w = grasped.w;
+  const ObjectId ball = grasped.ball;
+  const auto& tips = grasped.tips;
   // Release and hold still: 3 s to settle, then a 0.5 s window.
   GraspOutcome out;
   const Eigen::Vector3d released = w.pose(ball).translation();
@@ -108,6 +125,26 @@ TEST(Grasp, BallFallsWithoutFingersAndRestsOnTheSupport) {
   // At rest on the ground, sunk by m g / k.
   EXPECT_NEAR(w.pose(ball).translation().z(), kBall - kMass * kMarsGravity_m_per_s2 / 5000.0, 1e-6);
   EXPECT_LT(w.body_velocity_W(ball).norm(), 1e-4);
+}
+
+// A stalled haptic loop: the hand moved on while the world waited, and the next step finds the
+// thumb 5 mm deeper in the ball. Its clamped force (3.5 N) acts over that step: over the stall's
+// 100 ms it throws the 0.2 kg ball out of the hand at 0.5 m/s (the tour once lost its ball so); over the
+// most the haptic loop hands in after a stall (HapticLoop::kMaxWorldStepPeriods, 5 ms at
+// 1 kHz) the ball stays in the hand.
+double SpeedAfterASqueezeOver(double dt_s) {
+  Grasped grasped;
+  CloseHand(kMoonGravity_m_per_s2, grasped);
+  for (int k = 0; k < 500; ++k) grasped.w.Step(1e-3, grasped.tips);  // settled in the hand
+  auto tips = grasped.tips;
+  tips[0] += Eigen::Vector3d(0.005, 0, 0);  // the thumb pushes along +x
+  grasped.w.Step(dt_s, tips);
+  return grasped.w.body_velocity_W(grasped.ball).norm();
+}
+
+TEST(Grasp, AStepAfterAStallDoesNotThrowTheHeldBall) {
+  EXPECT_LT(SpeedAfterASqueezeOver(0.005), 0.1);
+  EXPECT_GT(SpeedAfterASqueezeOver(0.1), 0.3);  // why the loop bounds the step: see above
 }
 
 // A loop that stalls hands the world long steps: the body must still come to rest on the

@@ -56,6 +56,12 @@ struct HapticLoopConfig {
   ForceSafetyConfig safety{};
   /// A device reading older than this is stale: a fault [s].
   double stale_after_s = 0.05;
+  /// The most periods one step advances the haptic world by. A step that follows a stall (the
+  /// loop's schedule re-syncs after 5 late periods, common::PeriodicLoop) would otherwise hold
+  /// the fingers' forces on the bodies for the whole stall: 3.5 N on a held 0.2 kg ball over
+  /// 100 ms throws it out of the hand. The world then lags the wall clock by the stall; the
+  /// force impulse the user felt is still taken over the true time.
+  int max_world_step_periods = 5;
 };
 
 class HapticLoop {
