@@ -26,6 +26,10 @@ from session_test import DATA, Failure, Harness, check, fem_cache
 # (deformation, object poses, 60 Hz) arrived a tick earlier or later in one of the runs.
 MAX_MEAN_ABS = 2.0          # mean |difference| over all pixels and channels, of 255
 MAX_DIFFERING_SHARE = 0.01  # share of pixels whose largest channel difference exceeds 32
+# Frames whose hands are up to one device-state period (10 ms) apart also differ where a hand
+# moved in that time: at a reach's 0.3 m/s, 3 mm of a whole hand's outline. One loaded run had
+# 1.19 % there (docs/testing.md); frames of the very same states keep the 1 % bound.
+MAX_DIFFERING_SHARE_MOVED = 0.02
 MAX_MB_PER_HOUR_PER_USER = 400  # the recording's size bound stated in docs/network.md
 LIVE_FPS, REPLAY_FPS = 20, 27   # incommensurate: see where the replay spectator starts
 
@@ -145,15 +149,19 @@ def main():
               f"({exact} with the very same device states; scenes {sorted(scenes)})")
         check(len(pairs) >= 10, f"only {len(pairs)} frames of the live session and the replay pair up")
         check({"dinosaur", "microscopic"} <= scenes, f"paired frames cover only {sorted(scenes)}")
-        worst_mean, worst_share = 0.0, 0.0
-        for key, live_path, replay_path, _ in pairs:
+        worst_mean, worst_share = 0.0, {True: 0.0, False: 0.0}
+        for key, live_path, replay_path, gap in pairs:
             mean, share = compare(live_path, replay_path)
-            worst_mean, worst_share = max(worst_mean, mean), max(worst_share, share)
-            check(mean <= MAX_MEAN_ABS and share <= MAX_DIFFERING_SHARE,
-                  f"{live_path} vs {replay_path} ({key}): mean |diff| {mean:.3f}, {100 * share:.3f}% of pixels "
-                  f"differ by more than 32 (tolerance {MAX_MEAN_ABS}, {100 * MAX_DIFFERING_SHARE}%)")
+            same = gap == 0
+            max_share = MAX_DIFFERING_SHARE if same else MAX_DIFFERING_SHARE_MOVED
+            worst_mean, worst_share[same] = max(worst_mean, mean), max(worst_share[same], share)
+            check(mean <= MAX_MEAN_ABS and share <= max_share,
+                  f"{live_path} vs {replay_path} ({key}, hands {gap / 1e6:.1f} ms apart): mean |diff| {mean:.3f}, "
+                  f"{100 * share:.3f}% of pixels differ by more than 32 (tolerance {MAX_MEAN_ABS}, {100 * max_share}%)")
         print(f"frames match: worst mean |diff| {worst_mean:.3f} of 255 (tolerance {MAX_MEAN_ABS}), worst share of "
-              f"pixels off by more than 32: {100 * worst_share:.3f}% (tolerance {100 * MAX_DIFFERING_SHARE}%)")
+              f"pixels off by more than 32: {100 * worst_share[True]:.3f}% with the same device states (tolerance "
+              f"{100 * MAX_DIFFERING_SHARE}%), {100 * worst_share[False]:.3f}% with states up to 10 ms apart "
+              f"(tolerance {100 * MAX_DIFFERING_SHARE_MOVED}%)")
 
         report = subprocess.run([exe("world_server", "session_report"), recording], capture_output=True, text=True,
                                 timeout=30)
