@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """Bad network data is dropped, counted and named: a hostile second process publishes
 malformed samples (NaN and infinite numbers, a 5 m dent, wrong sizes, an unknown event kind,
-another session's samples) at ten times a haptic node's rate on every topic the nodes read,
+another session's samples, and well-formed ones in alice's name) at ten times a haptic node's rate on every topic the nodes read,
 while alice presses the triceratops' tail. No node crashes or stops; every node names and
 counts what it dropped; alice's force stays within the fingertip limit and her press goes on
 unchanged (the bad contact sets never reach her FEM solve).
@@ -65,7 +65,8 @@ def run(h, domain):
     bad = os.path.join(h.work, "bad.log")
     with open(bad, "w") as out:
         rc = subprocess.run([os.path.join(h.bin_dir, "tests", "bad_sample_publisher"), "--domain", domain,
-                             "--session", session, "--duration", "4", "--rate", "1000", "--object", "triceratops_tail"],
+                             "--session", session, "--duration", "4", "--rate", "1000", "--object", "triceratops_tail",
+                             "--forge", "alice"],
                             stdout=out, stderr=subprocess.STDOUT, timeout=60).returncode
     check(rc == 0, f"bad_sample_publisher failed:\n{open(bad).read()}")
     rounds = int(re.search(r"(\d+) rounds sent", open(bad).read()).group(1))
@@ -87,7 +88,10 @@ def run(h, domain):
                  "dropped a bad object_state sample"):
         check(text in alice, f"alice did not say '{text}':\n{alice}")
     for text in ("dropped a bad contact_set sample from 'mallory5': p_WO_m[0] is nan",
-                 "dropped a bad control_event sample from 'mallory': kind 99 is not a control event kind"):
+                 "dropped a bad control_event sample from 'mallory': kind 99 is not a control event kind",
+                 # Alice's name written by another participant: her joined participant is hers.
+                 "dropped a bad control_event sample from 'alice': user 'alice' joined from participant ",
+                 "dropped a bad contact_set sample from 'alice': user 'alice' joined from participant "):
         check(text in server, f"the server did not say '{text}':\n{server}")
     for text in ("dropped a bad device_state sample from 'mallory': p_WE_m[0][0] is inf",
                  "dropped a bad deformation sample", "dropped a bad object_state sample"):
@@ -99,6 +103,8 @@ def run(h, domain):
     # No bad sample was applied: no control event of the bad kind reached the scene logic,
     # no other world, and the server never owned or moved a ball that is not in this world.
     check("control lever" not in server, "the bad control event was applied")
+    check("control arrow_next" not in server and "scene 'microscopic'" not in server,
+          f"the arrow pressed in alice's name by another participant was applied:\n{server}")
 
     # Alice's forces: always finite and within the limit; her press holds through the flood
     # (a NaN or 5 m dent in her FEM solve would have faulted it to zero or clamped it).

@@ -18,18 +18,18 @@ import subprocess
 import sys
 import time
 
-from PIL import Image, ImageChops
+from PIL import Image, ImageChops, ImageFilter
 
 from session_test import DATA, Failure, Harness, check, fem_cache
 
 # Pixel tolerance: frames of the same device states differ only where the other streams
-# (deformation, object poses, 60 Hz) arrived a tick earlier or later in one of the runs.
+# (deformation, object poses, 60 Hz) arrived a tick earlier or later in one of the runs, and
+# by a pixel at the outlines of what moves with the frame's own time (the Daphnia's periodic
+# motion, a hand drawn where its device state puts it at the frame's instant): two loaded runs
+# had 1.19 % of pixels differ there, outlines only. A pixel differs when no pixel within one
+# of it in the other frame is within 32 of it (that run: 0.06 %).
 MAX_MEAN_ABS = 2.0          # mean |difference| over all pixels and channels, of 255
-MAX_DIFFERING_SHARE = 0.01  # share of pixels whose largest channel difference exceeds 32
-# Frames whose hands are up to one device-state period (10 ms) apart also differ where a hand
-# moved in that time: at a reach's 0.3 m/s, 3 mm of a whole hand's outline. One loaded run had
-# 1.19 % there (docs/testing.md); frames of the very same states keep the 1 % bound.
-MAX_DIFFERING_SHARE_MOVED = 0.02
+MAX_DIFFERING_SHARE = 0.01  # share of pixels off by more than 32 from the other's 3x3 neighbourhood
 MAX_MB_PER_HOUR_PER_USER = 400  # the recording's size bound stated in docs/network.md
 LIVE_FPS, REPLAY_FPS = 20, 27   # incommensurate: see where the replay spectator starts
 
@@ -56,6 +56,14 @@ def frame_times(folder):
     return rows
 
 
+def beyond_neighbourhood(a, b):
+    """Per pixel of a: how far (largest channel) it lies outside b's 3x3 neighbourhood range."""
+    low, high = b.filter(ImageFilter.MinFilter(3)), b.filter(ImageFilter.MaxFilter(3))
+    off = ImageChops.lighter(ImageChops.subtract(low, a), ImageChops.subtract(a, high))
+    r, g, bl = off.split()
+    return ImageChops.lighter(ImageChops.lighter(r, g), bl)
+
+
 def compare(a, b):
     ia, ib = Image.open(a).convert("RGB"), Image.open(b).convert("RGB")
     check(ia.size == ib.size, f"{a} and {b} differ in size")
@@ -63,7 +71,10 @@ def compare(a, b):
     hist = diff.histogram()  # 3 x 256 bins
     n = ia.size[0] * ia.size[1]
     mean = sum(i * c for k in range(3) for i, c in enumerate(hist[256 * k:256 * (k + 1)])) / (3 * n)
-    big = sum(1 for p in diff.getdata() if max(p) > 32)
+    # Either frame's pixel off from the other's neighbourhood: a missing or shifted object
+    # shows in one direction at least.
+    off = ImageChops.lighter(beyond_neighbourhood(ia, ib), beyond_neighbourhood(ib, ia))
+    big = sum(off.histogram()[33:])
     return mean, big / n
 
 
@@ -149,19 +160,17 @@ def main():
               f"({exact} with the very same device states; scenes {sorted(scenes)})")
         check(len(pairs) >= 10, f"only {len(pairs)} frames of the live session and the replay pair up")
         check({"dinosaur", "microscopic"} <= scenes, f"paired frames cover only {sorted(scenes)}")
-        worst_mean, worst_share = 0.0, {True: 0.0, False: 0.0}
+        worst_mean, worst_share = 0.0, 0.0
         for key, live_path, replay_path, gap in pairs:
             mean, share = compare(live_path, replay_path)
-            same = gap == 0
-            max_share = MAX_DIFFERING_SHARE if same else MAX_DIFFERING_SHARE_MOVED
-            worst_mean, worst_share[same] = max(worst_mean, mean), max(worst_share[same], share)
-            check(mean <= MAX_MEAN_ABS and share <= max_share,
+            worst_mean, worst_share = max(worst_mean, mean), max(worst_share, share)
+            check(mean <= MAX_MEAN_ABS and share <= MAX_DIFFERING_SHARE,
                   f"{live_path} vs {replay_path} ({key}, hands {gap / 1e6:.1f} ms apart): mean |diff| {mean:.3f}, "
-                  f"{100 * share:.3f}% of pixels differ by more than 32 (tolerance {MAX_MEAN_ABS}, {100 * max_share}%)")
+                  f"{100 * share:.3f}% of pixels differ by more than 32 from the other's 3x3 neighbourhood "
+                  f"(tolerance {MAX_MEAN_ABS}, {100 * MAX_DIFFERING_SHARE}%)")
         print(f"frames match: worst mean |diff| {worst_mean:.3f} of 255 (tolerance {MAX_MEAN_ABS}), worst share of "
-              f"pixels off by more than 32: {100 * worst_share[True]:.3f}% with the same device states (tolerance "
-              f"{100 * MAX_DIFFERING_SHARE}%), {100 * worst_share[False]:.3f}% with states up to 10 ms apart "
-              f"(tolerance {100 * MAX_DIFFERING_SHARE_MOVED}%)")
+              f"pixels off by more than 32 from the other's neighbourhood: {100 * worst_share:.3f}% (tolerance "
+              f"{100 * MAX_DIFFERING_SHARE}%)")
 
         report = subprocess.run([exe("world_server", "session_report"), recording], capture_output=True, text=True,
                                 timeout=30)

@@ -1,7 +1,7 @@
 // bad_sample_publisher: a hostile or broken participant for tests. Joins a session and
 // publishes malformed samples on every topic the nodes read (non-finite and huge numbers,
 // wrong sizes, unknown kinds, another session's ids), round after round at --rate, until
-// --duration passes. Each round's samples are described on stdout once, with their count at
+// --duration passes; with --forge USER also well-formed samples in a present user's name. Each round's samples are described on stdout once, with their count at
 // the end, so a test can compare what was sent with what the nodes dropped.
 #include <chrono>
 #include <cmath>
@@ -80,6 +80,17 @@ int Run(const common::Options& o) {
   bad_kind.user("mallory");
   bad_kind.control_id("lever");
   bad_kind.kind(static_cast<msg::ControlEventKind>(99));
+  // With --forge USER: well-formed samples in a present user's name, from this participant (a
+  // station claiming to be someone else): a press of the next-world arrow and a contact set.
+  const std::string forge = o.GetString("forge");
+  msg::ControlEvent forged_press;
+  forged_press.session(where.session);
+  forged_press.user(forge);
+  forged_press.control_id("arrow_next");
+  forged_press.kind(msg::CONTROL_PRESSED);
+  forged_press.index(-1);
+  msg::ContactSet forged_set = ContactSet(where.session, object);
+  forged_set.user(forge);
   msg::DeviceState inf_hand;
   inf_hand.session(where.session);
   inf_hand.user("mallory");
@@ -95,6 +106,10 @@ int Run(const common::Options& o) {
               "pose), 2 object_state (nan position, zero quaternion), 1 control_event (kind 99), 1 device_state "
               "(inf fingertip), 1 deformation (2 values for 3 ids), at %.0f Hz\n",
               rate_Hz);
+  if (!forge.empty()) {
+    std::printf("bad_sample_publisher: and in user '%s''s name: 1 contact_set, 1 control_event (arrow_next pressed)\n",
+                forge.c_str());
+  }
   std::fflush(stdout);
 
   const auto period = std::chrono::duration_cast<std::chrono::steady_clock::duration>(
@@ -109,6 +124,10 @@ int Run(const common::Options& o) {
     objects.Write(zero_q);
     // Reliable keep-all: one bad event per 100 rounds is enough to be seen, not a queue flood.
     if (rounds % 100 == 0) events.Write(bad_kind);
+    if (!forge.empty()) {
+      contacts.Write(forged_set);
+      if (rounds % 100 == 0) events.Write(forged_press);
+    }
     devices.Write(inf_hand);
     deformations.Write(short_field);
     ++rounds;
@@ -127,6 +146,7 @@ int main(int argc, char** argv) {
   handshare::common::DeclareSessionOptions(options);
   options.Value("object", "ID", "the object the bad contact sets and deformations name", "tail")
       .Value("rate", "HZ", "rounds per second", "1000")
+      .Value("forge", "USER", "also write well-formed samples in this user's name (\"\": none)", "")
       .Value("as", "NAME", "participant name; with --security it picks the identity (e.g. graphics_node/x: a "
                            "spectator's)", "bad_sample_publisher");
   return handshare::common::RunNodeMain(argc, argv, options, [](const handshare::common::Options& o) { return Run(o); });

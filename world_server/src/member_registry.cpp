@@ -1,5 +1,7 @@
 #include "handshare/world_server/member_registry.hpp"
 
+#include <algorithm>
+
 namespace handshare::server {
 
 std::optional<MemberEvent> MemberRegistry::OnInfo(const InstanceKey& key, const InstanceKey& writer,
@@ -48,6 +50,33 @@ std::vector<MemberEvent> MemberRegistry::OnWriterRegained(const InstanceKey& wri
     }
   }
   return events;
+}
+
+namespace {
+constexpr std::size_t kPrefixBytes = 12;  // a GUID's participant prefix; the rest is the entity
+
+bool SameParticipant(const InstanceKey& a, const InstanceKey& b) {
+  return std::equal(a.begin(), a.begin() + kPrefixBytes, b.begin());
+}
+
+std::string ParticipantName(const InstanceKey& writer) {
+  static const char* const kHex = "0123456789abcdef";
+  std::string out;
+  for (std::size_t i = 0; i < kPrefixBytes; ++i) {
+    out += kHex[writer[i] >> 4];
+    out += kHex[writer[i] & 0xf];
+  }
+  return out;
+}
+}  // namespace
+
+std::string MemberRegistry::CheckAuthor(const std::string& user, const InstanceKey& writer) const {
+  for (const auto& [key, e] : present_) {
+    if (e.member.user != user || SameParticipant(e.writer, writer)) continue;
+    return "user '" + user + "' joined from participant " + ParticipantName(e.writer) +
+           ", this sample came from participant " + ParticipantName(writer);
+  }
+  return {};
 }
 
 std::vector<Member> MemberRegistry::present() const {

@@ -83,6 +83,12 @@ void ServerSession::TakeMembers(Clock::time_point now) {
       event = members_.OnGone(meta.instance, /*disposed=*/true);  // a clean leave, said in data
     } else if (meta.valid_data && meta.instance_state == dds::InstanceState::kAlive) {
       if (!Accepted("member_info", info.user().to_string(), dds::CheckMemberInfo(info, session_))) continue;
+      if (const std::string other = members_.CheckAuthor(info.user().to_string(), meta.writer); !other.empty()) {
+        // The newest announcement names the user's participant (a restarted node's must win
+        // before the old one's lease runs out); say so, for a station that takes a name.
+        server_.Say("member " + info.user().to_string() + " announced again by another participant (" + other +
+                    "): samples in this name are taken from the new one");
+      }
       event = members_.OnInfo(meta.instance, meta.writer, ToMember(info));
     } else if (meta.instance_state != dds::InstanceState::kAlive) {
       event = members_.OnGone(meta.instance, meta.instance_state == dds::InstanceState::kDisposed);
@@ -114,6 +120,9 @@ void ServerSession::TakeControlEvents() {
   while (control_reader_.TakeNext(sample, meta)) {
     if (!meta.valid_data) continue;
     if (!Accepted("control_event", sample.user().to_string(), dds::CheckControlEvent(sample, session_))) continue;
+    if (!Accepted("control_event", sample.user().to_string(), members_.CheckAuthor(sample.user().to_string(), meta.writer))) {
+      continue;
+    }
     const auto input = ToControlInput(sample);
     if (!input) continue;  // CheckControlEvent refused every kind ToControlInput cannot map
     server_.OnControlEvent(ToControlRecord(sample, *input, common::UnixNowNs()));
@@ -141,7 +150,8 @@ void ServerSession::TakeContactSets(Clock::time_point now) {
   dds::SampleMeta meta;
   while (contact_reader_.TakeNext(set, meta)) {
     if (!meta.valid_data) continue;
-    if (Accepted("contact_set", set.user().to_string(), dds::CheckContactSet(set, session_))) {
+    if (Accepted("contact_set", set.user().to_string(), dds::CheckContactSet(set, session_)) &&
+        Accepted("contact_set", set.user().to_string(), members_.CheckAuthor(set.user().to_string(), meta.writer))) {
       objects_.OnContactSet(set, now);
     }
   }

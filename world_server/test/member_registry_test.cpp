@@ -49,6 +49,34 @@ TEST(MemberRegistry, LostWriterLosesItsMembersOnly) {
   EXPECT_TRUE(r.OnWriterLost(Key(101)).empty());
 }
 
+/// A writer of participant `p` (its first 12 bytes), entity `e`.
+InstanceKey Writer(std::uint8_t p, std::uint8_t e) {
+  InstanceKey key{};
+  key[0] = p;
+  key[11] = p;
+  key[15] = e;
+  return key;
+}
+
+TEST(MemberRegistry, OnlyTheParticipantThatAnnouncedAUserWritesInItsName) {
+  MemberRegistry r;
+  r.OnInfo(Key(1), Writer(7, 1), Member{"s/alice", "alice", "haptic", "sim", 10});
+  EXPECT_EQ(r.CheckAuthor("alice", Writer(7, 9)), "");  // her contact-set writer: same participant
+  const std::string forged = r.CheckAuthor("alice", Writer(8, 9));
+  EXPECT_EQ(forged, "user 'alice' joined from participant 070000000000000000000007, this sample came from "
+                    "participant 080000000000000000000008");
+  InstanceKey last_byte_differs = Writer(7, 9);
+  last_byte_differs[11] = 6;  // the prefix's last byte counts too
+  EXPECT_NE(r.CheckAuthor("alice", last_byte_differs), "");
+  EXPECT_EQ(r.CheckAuthor("mallory", Writer(8, 9)), "");  // not a member: nothing to compare with
+  // Alice leaves and joins again with a new participant (a rejoin): her new one writes for her.
+  ASSERT_TRUE(r.OnGone(Key(1), true));
+  EXPECT_EQ(r.CheckAuthor("alice", Writer(8, 9)), "");
+  r.OnInfo(Key(1), Writer(8, 1), Member{"s/alice", "alice", "haptic", "sim", 12});
+  EXPECT_EQ(r.CheckAuthor("alice", Writer(8, 9)), "");
+  EXPECT_NE(r.CheckAuthor("alice", Writer(7, 9)), "");  // the old participant no longer does
+}
+
 TEST(MemberRegistry, UnknownInstanceGoneIsIgnored) {
   MemberRegistry r;
   EXPECT_FALSE(r.OnGone(Key(9), true));

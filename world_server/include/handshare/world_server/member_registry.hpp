@@ -41,6 +41,13 @@ class MemberRegistry {
   /// announced and lost that way are back (kJoined), once each; a writer never lost is ignored.
   std::vector<MemberEvent> OnWriterRegained(const InstanceKey& writer);
 
+  /// Whether a sample that names `user` may have come from `writer`: "" when it may (the user
+  /// is not a present member, or its member announcement came from the same participant: the
+  /// first 12 bytes of a writer's GUID name its participant), else why not. Without DDS
+  /// security nothing stops another station from writing under a present user's name (and
+  /// pressing controls, taking bodies in it); a node's writers all live in its one participant.
+  std::string CheckAuthor(const std::string& user, const InstanceKey& writer) const;
+
   std::vector<Member> present() const;
   std::size_t joined_total() const { return joined_total_; }
 
