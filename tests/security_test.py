@@ -140,6 +140,25 @@ def station_copy(keystore, enclave, dest):
 
 
 class SecurityHarness(Harness):
+    def __init__(self, *args, **kwargs):
+        super().__init__(*args, **kwargs)
+        self.started = time.time()
+
+    def cleanup(self):
+        super().cleanup()
+        # libfaketime makes a shared-memory segment and a semaphore per process it is preloaded
+        # into first (for its children), and removes them at a normal exit only: a killed probe
+        # leaves them, and so does make_keystore.sh (one pair a call; 414 pairs had piled up here). Those of processes that are
+        # gone, made since this harness started, are removed.
+        for name in os.listdir("/dev/shm"):
+            m = re.fullmatch(r"(?:faketime_shm_|sem\.faketime_sem_)(\d+)", name)
+            path = os.path.join("/dev/shm", name)
+            try:
+                if m and not os.path.exists(f"/proc/{m.group(1)}") and os.stat(path).st_mtime >= self.started - 1:
+                    os.unlink(path)
+            except FileNotFoundError:
+                pass
+
     def tool(self, name):
         path = os.path.join(self.bin_dir, "tests", name)
         check(os.access(path, os.X_OK), f"tool not built: {path}")
