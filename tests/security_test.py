@@ -146,10 +146,10 @@ class SecurityHarness(Harness):
 
     def cleanup(self):
         super().cleanup()
-        # libfaketime makes a shared-memory segment and a semaphore per process it is preloaded
-        # into first (for its children), and removes them at a normal exit only: a killed probe
-        # leaves them, and so does make_keystore.sh (one pair a call; 414 pairs had piled up here). Those of processes that are
-        # gone, made since this harness started, are removed.
+        # libfaketime makes a shared-memory segment and a semaphore in the first process it is
+        # preloaded into (for its children) and removes them only at some exits: a killed probe
+        # leaves them, and so does each make_keystore.sh (414 pairs had piled up here). Those of
+        # processes that are gone, made since this harness started, are removed.
         for name in os.listdir("/dev/shm"):
             m = re.fullmatch(r"(?:faketime_shm_|sem\.faketime_sem_)(\d+)", name)
             path = os.path.join("/dev/shm", name)
