@@ -165,6 +165,7 @@ class SecurityHarness(Harness):
         return path
 
     def start_argv(self, label, argv, env=None):
+        self.note_domain(argv)
         log = open(os.path.join(self.work, label + ".log"), "w")
         proc = subprocess.Popen([*map(str, argv)], stdout=log, stderr=subprocess.STDOUT, env=env)
         self.procs[label] = (proc, log)

@@ -98,6 +98,12 @@ class Harness:
         self.bin_dir = bin_dir
         self.work = work
         self.procs = {}
+        self.domains = set()  # the DDS domains of the processes started: cleaned up at the end
+
+    def note_domain(self, args):
+        args = [str(a) for a in args]
+        if "--domain" in args[:-1]:
+            self.domains.add(int(args[args.index("--domain") + 1]))
 
     def exe(self, name):
         path = os.path.join(self.bin_dir, name, name)
@@ -110,6 +116,7 @@ class Harness:
         log = open(os.path.join(self.work, label + ".log"), "w")
         if "--duration" not in args:
             args = (*args, "--duration", BACKSTOP_S)
+        self.note_domain(args)
         proc = subprocess.Popen([self.exe(name), *map(str, args)], stdout=log, stderr=subprocess.STDOUT)
         self.procs[label] = (proc, log)
         return proc
@@ -157,6 +164,25 @@ class Harness:
         # Killed participants leave shared-memory segments behind; Fast DDS's tool removes
         # the ones no live process holds.
         subprocess.run(["fastdds", "shm", "clean"], stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+        remove_orphan_ports(self.domains)
+
+
+def remove_orphan_ports(domains):
+    """Fast DDS leaves a shared-memory port behind (fastrtps_portN and its mutex) when the
+    participant listening on it closes it, and `fastdds shm clean` removes only ports with a lock
+    file (fastrtps_portN_el): about 100 an hour of tests piled up in /dev/shm. The ports of a
+    domain are 7400 + 250 domain and the 249 after (the RTPS port mapping); once the test's
+    processes are gone, those of its domains without a lock file belong to nobody."""
+    names = set(os.listdir("/dev/shm"))
+    for domain in domains:
+        for port in range(7400 + 250 * domain, 7650 + 250 * domain):
+            segment = f"fastrtps_port{port}"
+            if segment in names and segment + "_el" not in names:
+                for name in (segment, f"sem.{segment}_mutex"):
+                    try:
+                        os.unlink(os.path.join("/dev/shm", name))
+                    except FileNotFoundError:
+                        pass
 
     def print_traffic(self):
         """Prints each process's exit line of samples written ("out"), taken ("in") and reported
