@@ -119,8 +119,9 @@ void ServerSession::TakeControlEvents() {
   bool applied = false;
   while (control_reader_.TakeNext(sample, meta)) {
     if (!meta.valid_data) continue;
-    if (!Accepted("control_event", sample.user().to_string(), dds::CheckControlEvent(sample, session_))) continue;
-    if (!Accepted("control_event", sample.user().to_string(), members_.CheckAuthor(sample.user().to_string(), meta.writer))) {
+    const std::string user = sample.user().to_string();
+    if (!Accepted("control_event", user, dds::CheckControlEvent(sample, session_)) ||
+        !Accepted("control_event", user, members_.CheckAuthor(user, meta.writer))) {
       continue;
     }
     const auto input = ToControlInput(sample);
@@ -150,8 +151,9 @@ void ServerSession::TakeContactSets(Clock::time_point now) {
   dds::SampleMeta meta;
   while (contact_reader_.TakeNext(set, meta)) {
     if (!meta.valid_data) continue;
-    if (Accepted("contact_set", set.user().to_string(), dds::CheckContactSet(set, session_)) &&
-        Accepted("contact_set", set.user().to_string(), members_.CheckAuthor(set.user().to_string(), meta.writer))) {
+    const std::string user = set.user().to_string();
+    if (Accepted("contact_set", user, dds::CheckContactSet(set, session_)) &&
+        Accepted("contact_set", user, members_.CheckAuthor(user, meta.writer))) {
       objects_.OnContactSet(set, now);
     }
   }
