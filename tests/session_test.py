@@ -166,6 +166,17 @@ class Harness:
         subprocess.run(["fastdds", "shm", "clean"], stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
         remove_orphan_ports(self.domains)
 
+    def print_traffic(self):
+        """Prints each process's exit line of samples written ("out"), taken ("in") and reported
+        lost per topic ("traffic: ..."); a killed process has none."""
+        print("samples per topic (out: written, in: taken, lost: reported lost by the middleware):")
+        for label in self.procs:
+            print(f"  {label}: {traffic_line(self.log(label)) or 'no traffic line (killed, or still running)'}")
+
+    def dump_logs(self):
+        for label in self.procs:
+            sys.stderr.write(f"----- {label} -----\n{self.log(label)}\n")
+
 
 def remove_orphan_ports(domains):
     """Fast DDS leaves a shared-memory port behind (fastrtps_portN and its mutex) when the
@@ -183,17 +194,6 @@ def remove_orphan_ports(domains):
                         os.unlink(os.path.join("/dev/shm", name))
                     except FileNotFoundError:
                         pass
-
-    def print_traffic(self):
-        """Prints each process's exit line of samples written ("out"), taken ("in") and reported
-        lost per topic ("traffic: ..."); a killed process has none."""
-        print("samples per topic (out: written, in: taken, lost: reported lost by the middleware):")
-        for label in self.procs:
-            print(f"  {label}: {traffic_line(self.log(label)) or 'no traffic line (killed, or still running)'}")
-
-    def dump_logs(self):
-        for label in self.procs:
-            sys.stderr.write(f"----- {label} -----\n{self.log(label)}\n")
 
 
 # --- independent checks -------------------------------------------------------------------
