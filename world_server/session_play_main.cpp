@@ -15,8 +15,12 @@ int main(int argc, char** argv) {
                            "'player' (kind world_server, device 'replay').");
   handshare::common::DeclareSessionOptions(options);
   options.Value("speed", "X", "play X times as fast as recorded", "1")
-      .Value("wait-for-readers", "N", "start the clock once N scene-state readers (spectators) matched", "0")
-      .Value("hold", "SEC", "stay this long after the last sample", "1")
+      .Value("wait-for-readers", "N", "start the clock once N spectators matched the scene-state and deformation writers", "0")
+      .Value("deliver-timeout", "SEC",
+             "after the last sample, wait at most this long for every matched reader to acknowledge the scene, "
+             "board, deformations and control events",
+             "10")
+      .Value("hold", "SEC", "then stay this long (late joiners)", "1")
       .Flag("check", "only read and deserialize every sample (no DDS); exit 0 if the recording is sound");
   // Options knows only --name arguments; FILE is the one positional argument.
   std::vector<const char*> rest{argv[0]};
@@ -53,6 +57,7 @@ int main(int argc, char** argv) {
     config.file = files[0];
     config.speed = o.GetDouble("speed", 0.01, 1000.0);
     config.wait_for_readers = static_cast<int>(o.GetInt("wait-for-readers", 0, 1000));
+    config.deliver_timeout = std::chrono::duration<double>(o.GetDouble("deliver-timeout", 0.0, 1e6));
     config.hold = std::chrono::duration<double>(o.GetDouble("hold", 0.0, 1e6));
     return handshare::server::RunPlayer(config);
   });

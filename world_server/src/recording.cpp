@@ -2,6 +2,7 @@
 
 #include <unistd.h>
 
+#include <algorithm>
 #include <condition_variable>
 #include <cstdio>
 #include <fstream>
@@ -547,6 +548,7 @@ class TopicOut {
   virtual ~TopicOut() = default;
   virtual void Publish(const std::filesystem::path& file, const RecordedSample& s) = 0;
   virtual int matched_readers() const = 0;
+  virtual bool WaitForAcknowledgments(std::chrono::nanoseconds timeout) = 0;
 };
 
 template <class T>
@@ -555,6 +557,9 @@ class Out : public TopicOut {
   Out(dds::Participant& p, const dds::topics::TopicSpec& spec)
       : writer_(dds::MakeWriter<T>(p, spec)), session_(p.session()) {}
   int matched_readers() const override { return writer_.matched_readers(); }
+  bool WaitForAcknowledgments(std::chrono::nanoseconds timeout) override {
+    return writer_.WaitForAcknowledgments(timeout);
+  }
   void Publish(const std::filesystem::path& file, const RecordedSample& s) override {
     if (s.cdr.empty()) return;
     try {
@@ -612,10 +617,14 @@ int RunPlayer(const PlayConfig& config) {
   std::fflush(stdout);
   if (config.wait_for_readers > 0) {
     const auto until = SteadyClock::now() + std::chrono::duration_cast<SteadyClock::duration>(config.wait_timeout);
-    while (outs[t::kSceneState.name]->matched_readers() < config.wait_for_readers) {
+    // Spectators read the scene and the deformations: both writers must have matched them.
+    const auto matched = [&] {
+      return std::min(outs[t::kSceneState.name]->matched_readers(), outs[t::kDeformation.name]->matched_readers());
+    };
+    while (matched() < config.wait_for_readers) {
       if (common::ShutdownRequested()) return 0;
       if (SteadyClock::now() > until) {
-        throw RecordingError("no " + std::to_string(config.wait_for_readers) + " scene-state readers matched within " +
+        throw RecordingError("no " + std::to_string(config.wait_for_readers) + " scene-state and deformation readers matched within " +
                              std::to_string(config.wait_timeout.count()) + " s (--wait-for-readers)");
       }
       std::this_thread::sleep_for(std::chrono::milliseconds(10));
@@ -645,6 +654,28 @@ int RunPlayer(const PlayConfig& config) {
   }
   std::printf("[session_play] played %lld samples\n", static_cast<long long>(played));
   std::fflush(stdout);
+  // A reader the writer matched may not have matched the writer yet: with DDS-Security each
+  // side matches when the other's crypto tokens reach it, and a lost token message is resent
+  // only later. Such a reader acknowledges nothing until then, and then gets the transient-local
+  // scene, board and deformations. Leaving before that would leave it with nothing.
+  const auto deliver_start = SteadyClock::now();
+  const auto deliver_until = deliver_start + std::chrono::duration_cast<SteadyClock::duration>(config.deliver_timeout);
+  std::vector<std::string> unacknowledged;
+  for (const auto* topic : {t::kSceneState.name, t::kMessageBoard.name, t::kDeformation.name, t::kControlEvent.name}) {
+    const auto left = std::max(SteadyClock::duration::zero(), deliver_until - SteadyClock::now());
+    if (!outs[topic]->WaitForAcknowledgments(left)) unacknowledged.emplace_back(topic);
+  }
+  const double waited = std::chrono::duration<double>(SteadyClock::now() - deliver_start).count();
+  if (unacknowledged.empty()) {
+    std::printf("[session_play] every matched reader acknowledged the reliable topics %.3f s after the last sample\n",
+                waited);
+    std::fflush(stdout);
+  } else {
+    std::string topics;
+    for (const auto& u : unacknowledged) topics += (topics.empty() ? "" : ", ") + u;
+    std::fprintf(stderr, "[session_play] warning: not every matched reader acknowledged %s within %g s (--deliver-timeout)\n",
+                 topics.c_str(), config.deliver_timeout.count());
+  }
   // The scene and the board stay transient-local for late joiners while the player holds.
   const auto until = SteadyClock::now() + std::chrono::duration_cast<SteadyClock::duration>(config.hold);
   while (!common::ShutdownRequested() && SteadyClock::now() < until) {

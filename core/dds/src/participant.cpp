@@ -175,6 +175,13 @@ class WriterImpl final : public detail::UntypedWriter {
     Check(w_->get_publication_matched_status(status), "matched status of " + topic_);
     return status.current_count;
   }
+  bool WaitForAcknowledgments(std::chrono::nanoseconds timeout) override {
+    const auto s = std::chrono::duration_cast<std::chrono::seconds>(timeout);
+    const auto ns = std::chrono::duration_cast<std::chrono::nanoseconds>(timeout - s);
+    return w_->wait_for_acknowledgments(eprosima::fastrtps::Duration_t(static_cast<std::int32_t>(s.count()),
+                                                                       static_cast<std::uint32_t>(ns.count()))) ==
+           ReturnCode_t::RETCODE_OK;
+  }
 
  private:
   std::shared_ptr<detail::ParticipantImpl> owner_;

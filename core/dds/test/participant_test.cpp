@@ -1,7 +1,11 @@
 // In-process checks of the DDS layer over real Fast DDS (loopback), one domain per test.
 #include <gtest/gtest.h>
+#include <signal.h>
+#include <sys/wait.h>
+#include <unistd.h>
 
 #include <chrono>
+#include <cstdio>
 #include <thread>
 #include <vector>
 
@@ -126,6 +130,49 @@ TEST(DdsParticipant, LateJoinerReceivesTransientLocalState) {
   ASSERT_TRUE(TakeWithin(reader, in, meta, 5000ms));
   EXPECT_EQ(in.message_id(), 7u);
   EXPECT_EQ(std::string(in.text().c_str()), "Welcome");
+}
+
+// A reader that the writer matched but that cannot answer (here: its process stopped, shorter
+// than the 1 s lease that would drop it) holds WaitForAcknowledgments until it answers; the
+// session player relies on this to stay until a secured spectator's side has matched.
+TEST(DdsParticipant, WaitForAcknowledgmentsWaitsUntilAMatchedReaderAnswers) {
+  Participant server(208, "s1", "server");
+  auto writer = MakeWriter<msg::MessageBoard>(server, topics::kMessageBoard);
+  int out[2];
+  ASSERT_EQ(pipe(out), 0);
+  const pid_t helper = fork();
+  ASSERT_GE(helper, 0);
+  if (helper == 0) {
+    dup2(out[1], STDOUT_FILENO);
+    execl(HANDSHARE_RELIABLE_READER_HELPER, HANDSHARE_RELIABLE_READER_HELPER, "208", "s1", nullptr);
+    _exit(127);
+  }
+  close(out[1]);
+  char ready[6] = {};
+  ASSERT_EQ(read(out[0], ready, 5), 5) << "the helper did not start";
+  EXPECT_STREQ(ready, "ready");
+  const auto end = std::chrono::steady_clock::now() + 10s;
+  while (writer.matched_readers() == 0 && std::chrono::steady_clock::now() < end) std::this_thread::sleep_for(10ms);
+  ASSERT_EQ(writer.matched_readers(), 1);
+  msg::MessageBoard board;
+  board.session("s1");
+  board.message_id(1);
+  writer.Write(board);
+  EXPECT_TRUE(writer.WaitForAcknowledgments(5s));
+
+  ASSERT_EQ(kill(helper, SIGSTOP), 0);
+  int status = 0;
+  ASSERT_EQ(waitpid(helper, &status, WUNTRACED), helper);
+  ASSERT_TRUE(WIFSTOPPED(status));
+  board.message_id(2);
+  writer.Write(board);
+  const bool acknowledged_while_stopped = writer.WaitForAcknowledgments(300ms);
+  ASSERT_EQ(kill(helper, SIGCONT), 0);
+  EXPECT_FALSE(acknowledged_while_stopped);
+  EXPECT_TRUE(writer.WaitForAcknowledgments(5s));
+  kill(helper, SIGTERM);
+  waitpid(helper, &status, 0);
+  close(out[0]);
 }
 
 TEST(DdsParticipant, SessionsOnOneDomainAreIsolated) {

@@ -132,9 +132,12 @@ struct PlayConfig {
   common::SessionOptions where;
   std::filesystem::path file;
   double speed = 1.0;                   ///< 2: twice as fast
-  int wait_for_readers = 0;             ///< start the clock once this many scene-state readers match
+  int wait_for_readers = 0;             ///< start the clock once this many spectators match (scene state and deformation)
   std::chrono::duration<double> wait_timeout{30.0};
-  std::chrono::duration<double> hold{1.0};  ///< stay this long after the last sample (acks, late joiners)
+  /// After the last sample, wait at most this long for every matched reader to acknowledge the
+  /// reliable topics (scene, board, deformations, control events); a warning if one did not.
+  std::chrono::duration<double> deliver_timeout{10.0};
+  std::chrono::duration<double> hold{1.0};  ///< then stay this long (late joiners)
 };
 /// session_play: republishes a recording with its original timing scaled by 1 / speed.
 int RunPlayer(const PlayConfig& config);

@@ -69,6 +69,7 @@ class UntypedWriter {
   virtual void Write(const void* sample) = 0;
   virtual void Dispose(const void* sample) = 0;
   virtual int matched_readers() const = 0;
+  virtual bool WaitForAcknowledgments(std::chrono::nanoseconds timeout) = 0;
 };
 class UntypedReader {
  public:
@@ -99,6 +100,11 @@ class Writer {
   void Dispose(const T& sample) { w_->Dispose(&sample); }
   /// Readers currently matched: writers of optional streams skip work when this is 0.
   int matched_readers() const { return w_->matched_readers(); }
+  /// Blocks until every matched reliable reader acknowledged every sample written so far, or
+  /// the timeout passes (false). A reader counts as matched here once the writer has matched
+  /// it; with DDS-Security the reader's own side may match later, and it acknowledges only
+  /// then, after the transient-local history reached it. True at once for best-effort writers.
+  bool WaitForAcknowledgments(std::chrono::nanoseconds timeout) { return w_->WaitForAcknowledgments(timeout); }
   explicit operator bool() const { return w_ != nullptr; }
 
  private:
