@@ -320,7 +320,9 @@ TetMesh ReadGmshMsh(const fs::path& path) {
       }
     } else if (t.front() == '$') {
       // Unknown section ($NodeData, $Periodic, ...): skip to its end marker.
-      const std::string end = "$End" + std::string(t.substr(1));
+      // `t` views `line`, which the loop below overwrites: copy the section's name first.
+      const std::string section(t);
+      const std::string end = "$End" + section.substr(1);
       const std::size_t start = r.line();
       bool found = false;
       while (r.Next(line)) {
@@ -329,7 +331,7 @@ TetMesh ReadGmshMsh(const fs::path& path) {
           break;
         }
       }
-      if (!found) throw InputError(r.file(), start, std::string(t), "missing " + end);
+      if (!found) throw InputError(r.file(), start, section, "missing " + end);
     } else {
       r.Fail("section", "unexpected text outside a $Section: '" + std::string(t.substr(0, 40)) + "'");
     }

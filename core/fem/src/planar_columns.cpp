@@ -16,7 +16,12 @@ namespace handshare::fem::detail {
 Isa BestIsa() noexcept {
   static const Isa isa = [] {
     if (__builtin_cpu_supports("avx512f") && __builtin_cpu_supports("avx512vl")) return Isa::kAvx512;
+#if defined(__clang__) && __clang_major__ < 16
+    // clang 14 cannot ask for f16c; every x86 processor with AVX2 has F16C.
+    if (__builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma")) {
+#else
     if (__builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma") && __builtin_cpu_supports("f16c")) {
+#endif
       return Isa::kAvx2;
     }
     return Isa::kPortable;

@@ -123,6 +123,11 @@ TEST(MeshIo, GmshErrorsNameFileLineAndField) {
   ExpectInputError([&] { ReadGmshMsh(f); }, {f + ":10", "duplicate node id 4"}, 10);
   // Not a file at all.
   ExpectInputError([&] { ReadGmshMsh(dir.path() / "missing.msh"); }, {"missing.msh", "cannot open"});
+  // An unknown section that never ends is named (its name was read from a line the search for
+  // its end had overwritten: a use after free, found by the gmsh_mesh fuzz target).
+  f = dir.Write("unended.msh", std::string(kGoodMsh) + "$NodeDataWithALongNameBeyondSmallStrings\n1\n2\n").string();
+  ExpectInputError([&] { ReadGmshMsh(f); },
+                   {f, "$NodeDataWithALongNameBeyondSmallStrings", "missing $EndNodeDataWithALongNameBeyondSmallStrings"});
 }
 
 TEST(MeshIo, TetgenErrors) {

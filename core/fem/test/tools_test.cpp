@@ -98,6 +98,8 @@ TEST(FemSolveTool, BadInputGivesNonZeroExitAndAClearMessage) {
       {R"({"E_Pa": 1e4, "nu": 0.3, "fixed_nodes": [101], "imposed": [], "force": []})", "field 'force': unknown field"},
       {R"({"E_Pa": 1e4, "nu": 0.3, "fixed_nodes": [], "imposed": []})", "no fixed nodes"},
       {R"({"E_Pa": 1e4, "nu": 0.3, "fixed_nodes": [101], "imposed": [})", "parse error"},
+      // nlohmann's out_of_range, not a parse_error (found by the load_case fuzz target).
+      {R"({"E_Pa": 1e999, "nu": 0.3, "fixed_nodes": [101], "imposed": []})", "number overflow"},
   };
   for (const auto& c : cases) {
     const auto lc = dir.Write("bad.json", c.json);

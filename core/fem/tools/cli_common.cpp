@@ -47,7 +47,7 @@ LoadCase ReadLoadCase(const std::filesystem::path& path, const TetMesh& mesh, bo
   json j;
   try {
     j = json::parse(in);
-  } catch (const json::parse_error& e) {
+  } catch (const json::exception& e) {  // parse_error, and out_of_range for a number too large
     throw InputError(file, 0, "json", e.what());
   }
   if (!j.is_object()) throw InputError(file, 0, "json", "top level must be an object");

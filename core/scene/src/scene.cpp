@@ -254,7 +254,8 @@ class Context {
   }
   // Rejects fields that are not in `allowed` (typos would otherwise be silently ignored).
   void OnlyKnown(const json& j, const std::string& path, std::initializer_list<const char*> allowed) const {
-    for (const auto& [key, value] : j.items()) {
+    for (const auto& item : j.items()) {
+      const std::string& key = item.key();  // a named variable: clang 14 cannot capture a binding
       if (std::none_of(allowed.begin(), allowed.end(), [&](const char* a) { return key == a; })) {
         std::string list;
         for (const char* a : allowed) list += std::string(list.empty() ? "" : ", ") + a;
@@ -513,7 +514,8 @@ ControlSpec ParseControl(const Context& c, const json& j, const std::string& pat
   } else {
     c.Fail(path + "type", "'" + type + "' is not one of button, arrow, lever, book");
   }
-  for (const auto& [key, value] : j.items()) {
+  for (const auto& item : j.items()) {
+    const std::string& key = item.key();  // a named variable: clang 14 cannot capture a binding
     if (std::none_of(allowed.begin(), allowed.end(), [&](const char* a) { return key == a; })) {
       c.Fail(path + key, "unknown field for a " + type);
     }

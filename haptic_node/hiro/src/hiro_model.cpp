@@ -106,7 +106,7 @@ HiroModel HiroModel::Parse(const std::string& json_text, const std::string& orig
   json root;
   try {
     root = json::parse(json_text);
-  } catch (const json::parse_error& e) {
+  } catch (const json::exception& e) {  // parse_error, and out_of_range for a number too large
     throw ConfigError(origin + ": not valid JSON: " + e.what());
   }
   const Reader r(root, origin);

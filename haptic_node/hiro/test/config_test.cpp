@@ -69,6 +69,18 @@ TEST(HiroConfig, BadJsonNamesTheFile) {
   }
 }
 
+// A number beyond double's range is nlohmann's out_of_range, not a parse_error: found by the
+// hiro_config fuzz target's sibling on load cases, and refused the same way here.
+TEST(HiroConfig, ANumberTooLargeForADoubleIsRefusedNamingTheFile) {
+  try {
+    HiroModel::Parse("{ \"format\": 1e999 }", "huge.json");
+    FAIL() << "expected ConfigError";
+  } catch (const ConfigError& e) {
+    EXPECT_NE(std::string(e.what()).find("huge.json: not valid JSON"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("number overflow"), std::string::npos) << e.what();
+  }
+}
+
 TEST(HiroConfig, ErrorsNameFileAndField) {
   struct Case {
     const char* pointer;
