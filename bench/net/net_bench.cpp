@@ -6,9 +6,12 @@
 // haptic thread).
 //
 //   net_bench --csv [--count N] [--rate HZ] [--node-count N] [--domain D] [--transports LIST]
-//             [--fifo PRIO] [--keep DIR]
+//             [--fifo PRIO] [--keep DIR] [--security KEYSTORE]
 //     --domain D (default 160): the runs use D, D+1, ... (two per transport, each on a domain
 //     of its own so none meets a participant an earlier run left in its lease).
+//     --security KEYSTORE: both ends run over DDS-Security with the keystore's identities of
+//     haptic users alice and bob (deploy/security/make_keystore.sh --session 'net_bench_*' DIR
+//     alice bob); every measure is then printed with the suffix _secured.
 //     --fifo PRIO: both ends' processes run SCHED_FIFO at PRIO (every thread, Fast DDS's receive
 //     threads included: they inherit it), to show what scheduling does to the tail.
 //     prints transport,measure,p50_us,p99_us,max_us rows (and '#' comment lines with the load,
@@ -98,7 +101,17 @@ struct Options {
   int count = 5000;       // samples measured in the contact_one_way run
   int node_count = 2000;  // bridge ticks measured in the node-shaped run
   double rate_Hz = 1000.0;
+  std::string security;   // a keystore: both ends run secured (DDS-Security), as haptic users alice and bob
 };
+
+// Secured runs print their measures with this suffix ("contact_one_way_secured"), so one CSV can
+// hold rows with and without security.
+std::string Secured(const Options& o) { return o.security.empty() ? "" : "_secured"; }
+// The ends' participant names: a secured run needs identities of the keystore (haptic users
+// alice and bob: the writer writes contact sets, the reader reads them, as two haptic nodes).
+std::string EndName(const Options& o, const char* plain, const char* user) {
+  return o.security.empty() ? std::string(plain) : std::string("haptic_node/") + user;
+}
 
 constexpr int kWarmup = 200;  // samples (or ticks) sent before the measured ones
 constexpr std::int64_t kBridgePeriodNs = 10'000'000;  // the haptic node's bridge: 100 Hz
@@ -154,7 +167,7 @@ void WaitForReader(dds::Writer<msg::ContactSet>& w) {
 // Writer: serialization timing, then count + warm-up samples at rate_Hz on absolute deadlines.
 // Rows: "ser NS", "deser NS", "w SEQ STAMP RETURNED".
 int RunWriter(const Options& o) {
-  dds::Participant p(o.domain, o.session, "net_bench_writer", o.qos);
+  dds::Participant p(o.domain, o.session, EndName(o, "net_bench_writer", "alice"), o.qos, o.security);
   auto w = dds::MakeWriter<msg::ContactSet>(p, dds::topics::kContactSet);
   msg::ContactSet s = MakeContactSet(o.session);
   std::ofstream out = OpenOut(o.out);
@@ -191,7 +204,7 @@ int RunWriter(const Options& o) {
 
 // Reader: waits on its WaitSet, takes everything. Rows: "r SEQ STAMP WOKE TAKEN".
 int RunReader(const Options& o) {
-  dds::Participant p(o.domain, o.session, "net_bench_reader", o.qos);
+  dds::Participant p(o.domain, o.session, EndName(o, "net_bench_reader", "bob"), o.qos, o.security);
   auto r = dds::MakeReader<msg::ContactSet>(p, dds::topics::kContactSet);
   std::ofstream out = OpenOut(o.out);
   const int last = o.count + kWarmup - 1;
@@ -243,7 +256,7 @@ std::int64_t OnGrid(std::int64_t t, std::int64_t period, std::int64_t phase) {
 // triple buffer; the 100 Hz bridge writes the newest as a contact set (stamp_ns = the haptic
 // step's time). Rows: "p SEQ HAPTIC_NS WRITE_NS".
 int RunNodeWriter(const Options& o) {
-  dds::Participant p(o.domain, o.session, "net_bench_node_writer", o.qos);
+  dds::Participant p(o.domain, o.session, EndName(o, "net_bench_node_writer", "alice"), o.qos, o.security);
   auto w = dds::MakeWriter<msg::ContactSet>(p, dds::topics::kContactSet);
   msg::ContactSet s = MakeContactSet(o.session);
   std::ofstream out = OpenOut(o.out);
@@ -292,7 +305,7 @@ int RunNodeWriter(const Options& o) {
 // buffer; the haptic thread notes the step at which each set first reaches it.
 // Rows: "h SEQ HAPTIC_NS BRIDGE_NS SEEN_NS".
 int RunNodeReader(const Options& o) {
-  dds::Participant p(o.domain, o.session, "net_bench_node_reader", o.qos);
+  dds::Participant p(o.domain, o.session, EndName(o, "net_bench_node_reader", "bob"), o.qos, o.security);
   auto r = dds::MakeReader<msg::ContactSet>(p, dds::topics::kContactSet);
   std::ofstream out = OpenOut(o.out);
   const int last = o.node_count + kWarmup - 1;
@@ -593,6 +606,7 @@ void MeasureHop(const Options& o, const std::string& transport, const std::strin
                        "--count", std::to_string(o.count), "--node-count", std::to_string(o.node_count), "--rate",
                        std::to_string(o.rate_Hz), "--out", out});
     if (o.fifo > 0) a.insert(a.end(), {"--fifo", std::to_string(o.fifo)});
+    if (!o.security.empty()) a.insert(a.end(), {"--security", o.security});
     return a;
   };
   const std::string rf = (dir / (transport + "_reader.txt")).string(), wf = (dir / (transport + "_writer.txt")).string();
@@ -626,12 +640,12 @@ void MeasureHop(const Options& o, const std::string& transport, const std::strin
   std::printf("# %s: %zu of %zu samples taken (keep-last 1: a sample not taken before the next one is "
               "replaced) (%lld bytes CDR each, %.0f Hz), load %s\n", transport.c_str(),
               one_way.size(), sent.size(), static_cast<long long>(bytes), o.rate_Hz, LoadAvg().c_str());
-  PrintRow(transport, "contact_one_way", one_way);
-  PrintRow(transport, "serialize", ser);
-  PrintRow(transport, "deserialize", deser);
-  PrintRow(transport, "write_call", write_call);
-  PrintRow(transport, "write_to_wake", to_wake);
-  PrintRow(transport, "wake_to_taken", to_taken);
+  PrintRow(transport, std::string("contact_one_way") + Secured(o), one_way);
+  PrintRow(transport, std::string("serialize") + Secured(o), ser);
+  PrintRow(transport, std::string("deserialize") + Secured(o), deser);
+  PrintRow(transport, std::string("write_call") + Secured(o), write_call);
+  PrintRow(transport, std::string("write_to_wake") + Secured(o), to_wake);
+  PrintRow(transport, std::string("wake_to_taken") + Secured(o), to_taken);
 }
 
 // The node-shaped path.
@@ -646,6 +660,7 @@ void MeasureNodePath(const Options& o, const std::string& transport, const std::
                        "--count", std::to_string(o.count), "--node-count", std::to_string(o.node_count), "--rate",
                        std::to_string(o.rate_Hz), "--out", out});
     if (o.fifo > 0) a.insert(a.end(), {"--fifo", std::to_string(o.fifo)});
+    if (!o.security.empty()) a.insert(a.end(), {"--security", o.security});
     return a;
   };
   const std::string rf = (dir / (transport + "_node_reader.txt")).string();
@@ -677,10 +692,10 @@ void MeasureNodePath(const Options& o, const std::string& transport, const std::
               "%s; load %s\n",
               transport.c_str(), total.size(), written.size(),
               realtime == 2 ? "SCHED_FIFO" : "NOT both SCHED_FIFO (no permission): normal priority", LoadAvg().c_str());
-  PrintRow(transport, "node_path", total);
-  PrintRow(transport, "node_sender_handoff", sender);
-  PrintRow(transport, "node_dds_and_tick", hop);
-  PrintRow(transport, "node_receiver_handoff", receiver);
+  PrintRow(transport, std::string("node_path") + Secured(o), total);
+  PrintRow(transport, std::string("node_sender_handoff") + Secured(o), sender);
+  PrintRow(transport, std::string("node_dds_and_tick") + Secured(o), hop);
+  PrintRow(transport, std::string("node_receiver_handoff") + Secured(o), receiver);
 }
 
 int RunCsv(const Options& o) {
@@ -692,8 +707,9 @@ int RunCsv(const Options& o) {
   const fs::path dir = o.keep.empty() ? fs::temp_directory_path() / ("net_bench." + std::to_string(getpid()))
                                       : fs::path(o.keep);
   fs::create_directories(dir);
-  std::printf("# net_bench: %d samples at %.0f Hz per transport, %d node-shaped bridge ticks; %s; load before %s\n",
+  std::printf("# net_bench: %d samples at %.0f Hz per transport, %d node-shaped bridge ticks; %s; %s; load before %s\n",
               o.count, o.rate_Hz, o.node_count,
+              o.security.empty() ? "no security" : ("DDS-Security with keystore " + o.security).c_str(),
               o.fifo > 0 ? ("both ends SCHED_FIFO " + std::to_string(o.fifo) + " (every thread)").c_str()
                          : "both ends at normal priority (emulated haptic threads SCHED_FIFO)",
               LoadAvg().c_str());
@@ -733,7 +749,7 @@ int RunCsv(const Options& o) {
 
 const char* kUsage =
     "usage: net_bench --csv [--count N] [--rate HZ] [--node-count N] [--domain D] [--transports shm,udp,netns]\n"
-    "                 [--fifo PRIO] [--keep DIR]\n"
+    "                 [--fifo PRIO] [--keep DIR] [--security KEYSTORE]\n"
     "       net_bench --role writer|reader|node-writer|node-reader --qos FILE --domain D --session S\n"
     "                 --out FILE [--count N] [--node-count N] [--rate HZ]\n"
     "Prints transport,measure,p50_us,p99_us,max_us rows; see the top of bench/net/net_bench.cpp.\n";
@@ -768,6 +784,8 @@ Options Parse(int argc, char** argv) {
       o.out = value();
     } else if (a == "--keep") {
       o.keep = value();
+    } else if (a == "--security") {
+      o.security = fs::absolute(value()).string();
     } else if (a == "--domain") {
       o.domain = ToInt(a, value(), 0, 232);
     } else if (a == "--fifo") {
