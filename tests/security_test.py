@@ -25,6 +25,8 @@ and count the session's endpoints they match and the samples they read:
   every_node: each node and tool runs with its own identity's grant (world server, haptic node,
       spectator, audio guide, recorder, and the player replaying the recording into another
       secured session); a bad keystore is an error naming the file.
+  encyclopedia: session.encyclopedia's whole tour, with every assertion of it, every node
+      secured with its own identity.
 
 The keystores are made with the clock set back 3 days (faketime), so that the set-back probes'
 CA, grants and CRL are already valid for them. Nodes join one at a time (docs/security.md,
@@ -47,6 +49,7 @@ import sys
 import threading
 import time
 
+import session_test
 from session_test import Failure, Harness, check, fem_cache, run_cases, wait_until
 
 HERE = os.path.dirname(os.path.abspath(__file__))
@@ -143,6 +146,24 @@ class SecurityHarness(Harness):
     def __init__(self, *args, **kwargs):
         super().__init__(*args, **kwargs)
         self.started = time.time()
+        # Set by a case that runs another test's nodes secured: every node then starts with
+        # --security KEYSTORE, and, once a world server runs, one join at a time (start returns
+        # when the server has logged one more member): nodes that start authenticating at the
+        # same instant sometimes never finish (docs/security.md, "Known problems").
+        self.keystore = None
+
+    def start(self, label, name, *args):
+        if self.keystore is None:
+            return super().start(label, name, *args)
+        joins = self._joins()
+        proc = super().start(label, name, *args, "--security", self.keystore)
+        if name != "world_server" and "world_server" in self.procs:
+            wait_until(f"{label} joined the secured session", 60, lambda: self._joins() > joins,
+                       lambda: self.log(label)[-2000:])
+        return proc
+
+    def _joins(self):
+        return self.log("world_server").count("member joined:") if "world_server" in self.procs else 0
 
     def cleanup(self):
         super().cleanup()
@@ -449,6 +470,18 @@ def case_every_node(h, domain):
           f"deformations")
 
 
+def case_encyclopedia(h, domain):
+    """The whole encyclopedia tour of session.encyclopedia (two users, one at a HIRO II, a
+    spectator, the audio guide; every assertion of that test) with every node secured, each
+    with its own identity of a keystore whose grants name the tour's sessions."""
+    ks = os.path.join(h.work, "keystore")
+    make_keystore("--session", "it-encyclopedia-*", ks, "alice", "bob")
+    h.keystore = ks
+    session_test.case_encyclopedia(h, domain)
+    for label in ("world_server", "alice", "bob", "spectator", "audio_guide"):
+        check("--security" in " ".join(h.procs[label][0].args), f"{label} did not run secured")
+
+
 def recorded(path):
     """Device-state samples in a recording so far (0 while it cannot be read)."""
     try:
@@ -653,7 +686,7 @@ def case_capture(h, domain):
 
 def main():
     cases = {"outsiders": case_outsiders, "controls": case_controls, "capture": case_capture,
-             "every_node": case_every_node}
+             "every_node": case_every_node, "encyclopedia": case_encyclopedia}
     outcome = {}
 
     def wrap(case):
