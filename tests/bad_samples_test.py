@@ -2,7 +2,8 @@
 """Bad network data is dropped, counted and named: a hostile second process publishes
 malformed samples (NaN and infinite numbers, a 5 m dent, wrong sizes, an unknown event kind,
 another session's samples, and well-formed ones in alice's name) at ten times a haptic node's rate on every topic the nodes read,
-while alice presses the triceratops' tail. No node crashes or stops; every node names and
+while alice presses the triceratops' tail and bob stands by. The world server and bob's node
+drop what comes in alice's name from another participant than hers. No node crashes or stops; every node names and
 counts what it dropped; alice's force stays within the fingertip limit and her press goes on
 unchanged (the bad contact sets never reach her FEM solve).
 
@@ -26,6 +27,11 @@ reach 1.0 0.27 0.08 0.11
 poke 1.5 0.27 0.08 0.0785
 hold 60
 """
+BOB_SCRIPT = """# bob stands by, touching nothing (bad_samples_test.py)
+start 0 0.2 0.3
+await_world
+hold 600
+"""
 
 
 def trace_rows(path):
@@ -48,6 +54,9 @@ def run(h, domain):
     script = os.path.join(h.work, "alice.hand")
     with open(script, "w") as f:
         f.write(SCRIPT)
+    bob_script = os.path.join(h.work, "bob.hand")
+    with open(bob_script, "w") as f:
+        f.write(BOB_SCRIPT)
     trace = os.path.join(h.work, "alice.csv")
     h.start("world_server", "world_server", "--domain", domain, "--session", session, "--scene", "dinosaur")
     h.start("alice", "haptic_node", "--domain", domain, "--session", session, "--user", "alice",
@@ -57,9 +66,18 @@ def run(h, domain):
     h.start("audio_guide", "audio_guide", "--domain", domain, "--session", session,
             "--out", os.path.join(h.work, "speech"))
     h.wait_for_line("alice", "scene 'dinosaur' revision", 60)
+    # bob, a second user: his node takes alice's contact sets as a peer's, so forged ones in her
+    # name would reach his solve of the tail if his node did not bind her name.
+    h.wait_for_line("world_server", "member joined: user=alice", 30)
+    h.start("bob", "haptic_node", "--domain", domain, "--session", session, "--user", "bob",
+            "--device", "sim", "--script", bob_script)
+    h.wait_for_line("bob", "scene 'dinosaur' revision", 60)
     # Her press is established when the server publishes the tail's field from her contacts.
     h.wait_for_line("world_server", "models of 'dinosaur' ready", 60)
     h.wait_for_line("world_server", "member joined: user=graphics-", 30)
+    # bob takes alice's own contact sets (from her node), and refused nothing so far.
+    h.wait_for_line("bob", "first contact set from peer 'alice'", 30)
+    check("dropped" not in h.log("bob"), f"bob dropped samples before the flood:\n{h.log('bob')}")
 
     # The flood: 1 kHz rounds, every topic, for 4 s.
     bad = os.path.join(h.work, "bad.log")
@@ -72,11 +90,11 @@ def run(h, domain):
     rounds = int(re.search(r"(\d+) rounds sent", open(bad).read()).group(1))
     # The session goes on after it: alice's node still gets its world, her press still holds.
     h.wait_for_line("alice", "dropped a bad contact_set sample from 'mallory'", 10)
-    for label in ("alice", "spectator", "audio_guide", "world_server"):
+    for label in ("alice", "bob", "spectator", "audio_guide", "world_server"):
         check(h.procs[label][0].poll() is None, f"{label} ended during the flood:\n{h.log(label)}")
-    for label in ("alice", "spectator", "audio_guide", "world_server"):
+    for label in ("alice", "bob", "spectator", "audio_guide", "world_server"):
         h.procs[label][0].send_signal(signal.SIGTERM)
-    for label in ("alice", "spectator", "audio_guide", "world_server"):
+    for label in ("alice", "bob", "spectator", "audio_guide", "world_server"):
         check(h.wait(label, 30) == 0, f"{label} did not end cleanly")
 
     # Every node named and counted what it dropped.
@@ -96,6 +114,11 @@ def run(h, domain):
     for text in ("dropped a bad device_state sample from 'mallory': p_WE_m[0][0] is inf",
                  "dropped a bad deformation sample", "dropped a bad object_state sample"):
         check(text in spectator, f"the spectator did not say '{text}':\n{spectator}")
+    # bob's node: the forged contact sets in alice's name (from the flooding participant) are
+    # dropped and named (alice's own, from her node, were taken before the flood: above).
+    bob = h.log("bob")
+    check("dropped a bad contact_set sample from 'alice': user 'alice' joined from participant " in bob,
+          f"bob did not drop the contact sets forged in alice's name:\n{bob}")
     m = re.search(r"samples dropped contact_set (\d+)", alice)
     check(m and int(m.group(1)) > 0, f"alice's summary counts no dropped contact sets:\n{alice}")
     m = re.search(r"samples dropped: .*contact_set (\d+)", server)

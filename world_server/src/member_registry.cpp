@@ -2,6 +2,8 @@
 
 #include <algorithm>
 
+#include "handshare/session/name_binding.hpp"
+
 namespace handshare::server {
 
 std::optional<MemberEvent> MemberRegistry::OnInfo(const InstanceKey& key, const InstanceKey& writer,
@@ -52,29 +54,10 @@ std::vector<MemberEvent> MemberRegistry::OnWriterRegained(const InstanceKey& wri
   return events;
 }
 
-namespace {
-constexpr std::size_t kPrefixBytes = 12;  // a GUID's participant prefix; the rest is the entity
-
-bool SameParticipant(const InstanceKey& a, const InstanceKey& b) {
-  return std::equal(a.begin(), a.begin() + kPrefixBytes, b.begin());
-}
-
-std::string ParticipantName(const InstanceKey& writer) {
-  static const char* const kHex = "0123456789abcdef";
-  std::string out;
-  for (std::size_t i = 0; i < kPrefixBytes; ++i) {
-    out += kHex[writer[i] >> 4];
-    out += kHex[writer[i] & 0xf];
-  }
-  return out;
-}
-}  // namespace
-
 std::string MemberRegistry::CheckAuthor(const std::string& user, const InstanceKey& writer) const {
   for (const auto& [key, e] : present_) {
-    if (e.member.user != user || SameParticipant(e.writer, writer)) continue;
-    return "user '" + user + "' joined from participant " + ParticipantName(e.writer) +
-           ", this sample came from participant " + ParticipantName(writer);
+    if (e.member.user != user || session::SameParticipant(e.writer, writer)) continue;
+    return session::AuthorMismatch(user, e.writer, writer);
   }
   return {};
 }

@@ -1,0 +1,46 @@
+#pragma once
+/// Who may write in a user's name: the participant that announced the user (its MemberInfo on
+/// handshare/member_info). DDS-Security's grants are per topic, not per instance, so any
+/// haptic user may write contact sets and control events with any user name; a node that
+/// binds each present user's name to the participant that announced it can drop samples in
+/// that name from every other participant (docs/security.md, "What is protected and what is
+/// not"). A name nobody present has announced is not bound (it is anybody's).
+#include <array>
+#include <cstdint>
+#include <map>
+#include <string>
+
+namespace handshare::session {
+
+/// A DDS GUID as SampleMeta gives it: 12 bytes of participant prefix, then the entity.
+using Guid = std::array<std::uint8_t, 16>;
+
+/// Whether two endpoints' GUIDs belong to the same participant.
+bool SameParticipant(const Guid& a, const Guid& b);
+/// The participant prefix in hex (24 characters), for messages.
+std::string ParticipantOf(const Guid& endpoint);
+/// Why a sample in `user`'s name from `writer` is refused, the user having joined from
+/// `announced`: "user 'alice' joined from participant X, this sample came from participant Y".
+std::string AuthorMismatch(const std::string& user, const Guid& announced, const Guid& writer);
+
+class NameBinding {
+ public:
+  /// A live member sample: member `instance` (its key hash) is `user`, announced by `writer`.
+  void OnMember(const Guid& instance, const std::string& user, const Guid& writer);
+  /// Member `instance` left (disposed) or has no writer any more.
+  void OnMemberGone(const Guid& instance);
+  /// A member_info writer went away (killed or lost): the members it announced are gone.
+  void OnWriterLost(const Guid& writer);
+  /// Empty if `writer` may write in `user`'s name, else why not (AuthorMismatch).
+  std::string Check(const std::string& user, const Guid& writer) const;
+  std::size_t size() const { return members_.size(); }
+
+ private:
+  struct Member {
+    std::string user;
+    Guid writer{};
+  };
+  std::map<Guid, Member> members_;
+};
+
+}  // namespace handshare::session

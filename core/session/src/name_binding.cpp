@@ -1,0 +1,48 @@
+#include "handshare/session/name_binding.hpp"
+
+#include <algorithm>
+#include <iterator>
+
+namespace handshare::session {
+
+namespace {
+constexpr std::size_t kPrefixBytes = 12;  // a GUID's participant prefix; the rest is the entity
+}  // namespace
+
+bool SameParticipant(const Guid& a, const Guid& b) {
+  return std::equal(a.begin(), a.begin() + kPrefixBytes, b.begin());
+}
+
+std::string ParticipantOf(const Guid& endpoint) {
+  static const char* const kHex = "0123456789abcdef";
+  std::string out;
+  for (std::size_t i = 0; i < kPrefixBytes; ++i) {
+    out += kHex[endpoint[i] >> 4];
+    out += kHex[endpoint[i] & 0xf];
+  }
+  return out;
+}
+
+std::string AuthorMismatch(const std::string& user, const Guid& announced, const Guid& writer) {
+  return "user '" + user + "' joined from participant " + ParticipantOf(announced) +
+         ", this sample came from participant " + ParticipantOf(writer);
+}
+
+void NameBinding::OnMember(const Guid& instance, const std::string& user, const Guid& writer) {
+  members_[instance] = Member{user, writer};
+}
+
+void NameBinding::OnMemberGone(const Guid& instance) { members_.erase(instance); }
+
+void NameBinding::OnWriterLost(const Guid& writer) {
+  std::erase_if(members_, [&](const auto& m) { return m.second.writer == writer; });
+}
+
+std::string NameBinding::Check(const std::string& user, const Guid& writer) const {
+  for (const auto& [instance, m] : members_) {
+    if (m.user == user && !SameParticipant(m.writer, writer)) return AuthorMismatch(user, m.writer, writer);
+  }
+  return {};
+}
+
+}  // namespace handshare::session

@@ -1,0 +1,56 @@
+// NameBinding: a present user's name belongs to the participant that announced it.
+#include "handshare/session/name_binding.hpp"
+
+#include <gtest/gtest.h>
+
+namespace handshare::session {
+namespace {
+
+// An endpoint of participant `participant` (its 12-byte prefix) with entity `entity`.
+Guid Endpoint(std::uint8_t participant, std::uint8_t entity) {
+  Guid g{};
+  for (int i = 0; i < 12; ++i) g[i] = static_cast<std::uint8_t>(participant + i);
+  g[15] = entity;
+  return g;
+}
+Guid Instance(std::uint8_t n) {
+  Guid g{};
+  g[0] = n;
+  return g;
+}
+
+TEST(NameBinding, OnlyTheAnnouncingParticipantWritesInAPresentUsersName) {
+  NameBinding b;
+  b.OnMember(Instance(1), "alice", Endpoint(7, 1));  // alice's member writer
+  EXPECT_EQ(b.Check("alice", Endpoint(7, 9)), "");   // her contact-set writer: same participant
+  const std::string forged = b.Check("alice", Endpoint(8, 9));
+  EXPECT_NE(forged.find("user 'alice' joined from participant 0708090a0b0c0d0e0f101112"), std::string::npos) << forged;
+  EXPECT_NE(forged.find("this sample came from participant 08090a0b0c0d0e0f10111213"), std::string::npos) << forged;
+  Guid last_byte_differs = Endpoint(7, 9);
+  last_byte_differs[11] ^= 1;  // the prefix's last byte: another participant
+  EXPECT_NE(b.Check("alice", last_byte_differs), "");
+  EXPECT_EQ(b.Check("bob", Endpoint(8, 9)), "");  // not announced: anybody's
+}
+
+TEST(NameBinding, ANameIsFreeAgainOnceItsMemberLeftOrItsWriterWasLost) {
+  NameBinding b;
+  b.OnMember(Instance(1), "alice", Endpoint(7, 1));
+  b.OnMember(Instance(2), "bob", Endpoint(9, 1));
+  b.OnMemberGone(Instance(1));
+  EXPECT_EQ(b.Check("alice", Endpoint(8, 9)), "");
+  EXPECT_NE(b.Check("bob", Endpoint(8, 9)), "");
+  b.OnWriterLost(Endpoint(9, 1));
+  EXPECT_EQ(b.Check("bob", Endpoint(8, 9)), "");
+  EXPECT_EQ(b.size(), 0u);
+}
+
+TEST(NameBinding, ANewAnnouncementOfAMemberMovesItsName) {
+  NameBinding b;
+  b.OnMember(Instance(1), "alice", Endpoint(7, 1));
+  b.OnMember(Instance(1), "alice", Endpoint(8, 1));  // the same member, announced anew elsewhere
+  EXPECT_EQ(b.Check("alice", Endpoint(8, 9)), "");
+  EXPECT_NE(b.Check("alice", Endpoint(7, 9)), "");
+}
+
+}  // namespace
+}  // namespace handshare::session
