@@ -57,7 +57,7 @@ role_subscribe() {
   case "$1" in
     world_server) echo "$T_MEMBER $T_CONTACT $T_EVENT" ;;
     haptic) echo "$T_MEMBER $T_SCENE $T_CONTACT $T_OBJECT" ;;
-    spectator) echo "$T_SCENE $T_BOARD $T_DEVICE $T_OBJECT $T_DEFORM" ;;
+    spectator) echo "$T_MEMBER $T_SCENE $T_BOARD $T_DEVICE $T_OBJECT $T_DEFORM" ;;
     audio_guide) echo "$T_BOARD" ;;
     recorder) echo "$ALL_TOPICS" ;;
     player) echo "" ;;

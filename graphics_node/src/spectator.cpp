@@ -18,6 +18,7 @@
 #include "handshare/common/shutdown.hpp"
 #include "handshare/dds/membership.hpp"
 #include "handshare/dds/messages.hpp"
+#include "handshare/dds/name_binding.hpp"
 #include "handshare/dds/sample_checks.hpp"
 #include "handshare/graphics/scene_replica.hpp"
 #include "handshare/render/image.hpp"
@@ -52,6 +53,7 @@ class WorldView {
         board_reader_(dds::MakeReader<msg::MessageBoard>(p, dds::topics::kMessageBoard)),
         deformation_reader_(dds::MakeReader<msg::Deformation>(p, dds::topics::kDeformation)),
         object_reader_(dds::MakeReader<msg::ObjectState>(p, dds::topics::kObjectState)),
+        member_reader_(dds::NameBinding::MakeMemberReader(p, [this](const std::string& line) { Say(line); })),
         world_(assets_dir, std::cerr, "[graphics_node " + name + "] ") {}
 
   void Update() {
@@ -92,9 +94,14 @@ class WorldView {
         }
       }
     }
+    // A hand in a present user's name from another participant is not drawn (forged).
+    names_.Follow(member_reader_);
     msg::DeviceState state;
     while (device_reader_.TakeNext(state, meta)) {
-      if (meta.valid_data && Accept("device_state", state.user().to_string(), dds::CheckDeviceState(state, session_))) {
+      if (!meta.valid_data) continue;
+      std::string bad = dds::CheckDeviceState(state, session_);
+      if (bad.empty()) bad = names_.Check(state.user().to_string(), meta.writer);
+      if (Accept("device_state", state.user().to_string(), bad)) {
         hands_[state.user().to_string()] = UserHand{state, Clock::now()};
       }
     }
@@ -176,9 +183,9 @@ class WorldView {
 
   // True when `reason` is empty; else the sample is dropped, counted and (rate-limited) named.
   bool Accept(std::string_view topic, std::string_view sender, const std::string& reason) {
-    return dropped_.Accept(topic, sender, reason,
-                           [this](const std::string& line) { std::fprintf(stderr, "%s%s\n", prefix_.c_str(), line.c_str()); });
+    return dropped_.Accept(topic, sender, reason, [this](const std::string& line) { Say(line); });
   }
+  void Say(const std::string& line) const { std::fprintf(stderr, "%s%s\n", prefix_.c_str(), line.c_str()); }
 
   std::string session_;
   Clock::time_point joined_;
@@ -193,6 +200,8 @@ class WorldView {
   dds::Reader<msg::MessageBoard> board_reader_;
   dds::Reader<msg::Deformation> deformation_reader_;
   dds::Reader<msg::ObjectState> object_reader_;
+  dds::Reader<msg::MemberInfo> member_reader_;
+  dds::NameBinding names_;  // present users and the participants that announced them
   msg::Deformation deformation_;  // reused: a sample holds up to 16k values
   SceneReplica world_;
   std::map<std::string, UserHand> hands_;

@@ -23,7 +23,7 @@ HapticBridge::HapticBridge(const HapticNodeConfig& config, Device& device, Hapti
       event_writer_(dds::MakeWriter<msg::ControlEvent>(participant, dds::topics::kControlEvent)),
       scene_reader_(dds::MakeReader<msg::SceneState>(participant, dds::topics::kSceneState)),
       contact_reader_(dds::MakeReader<msg::ContactSet>(participant, dds::topics::kContactSet)),
-      member_reader_(MemberReader(participant, say_)),
+      member_reader_(dds::NameBinding::MakeMemberReader(participant, say_)),
       object_reader_(dds::MakeReader<msg::ObjectState>(participant, dds::topics::kObjectState)),
       deadband_(session::DeadbandConfig{.weber = config.deadband_weber}),
       next_stats_(Clock::now() + std::chrono::seconds(1)) {
@@ -116,36 +116,8 @@ void HapticBridge::ForwardControlEvents() {
   }
 }
 
-dds::Reader<msg::MemberInfo> HapticBridge::MemberReader(dds::Participant& participant, const Say& say) {
-  try {
-    return dds::MakeReader<msg::MemberInfo>(participant, dds::topics::kMemberInfo);
-  } catch (const dds::DdsError& e) {
-    // A keystore made before haptic users were granted member_info: join all the same.
-    say(std::string("cannot read the session's members (") + e.what() +
-        "): peers' names are not bound to their participants; make the keystore again");
-    return {};
-  }
-}
-
-void HapticBridge::FollowMembers() {
-  if (!member_reader_) return;
-  msg::MemberInfo info;
-  dds::SampleMeta meta;
-  while (member_reader_.TakeNext(info, meta)) {
-    if (meta.valid_data && meta.instance_state == dds::InstanceState::kAlive && !info.leaving()) {
-      names_.OnMember(meta.instance, info.user().to_string(), meta.writer);
-    } else {
-      names_.OnMemberGone(meta.instance);
-    }
-  }
-  dds::WriterChange change;
-  while (member_reader_.TakeWriterChange(change)) {
-    if (!change.alive) names_.OnWriterLost(change.writer);
-  }
-}
-
 void HapticBridge::ReceivePeers() {
-  FollowMembers();
+  names_.Follow(member_reader_);
   // A peer touching something sends its contact set at its publish rate; one silent for
   // longer has gone (or stopped touching without a last sample): its contacts fade out.
   const auto now = Clock::now();

@@ -19,7 +19,7 @@
 #include "handshare/haptic/haptic_node.hpp"
 #include "handshare/haptic/scene_renderer.hpp"
 #include "handshare/session/contact_deadband.hpp"
-#include "handshare/session/name_binding.hpp"
+#include "handshare/dds/name_binding.hpp"
 #include "handshare/session/peer_contacts.hpp"
 #include "handshare/dds/sample_checks.hpp"
 #include "handshare/world/scene_models.hpp"
@@ -72,9 +72,6 @@ class HapticBridge {
   void ForwardControlEvents();
   /// The other users' contact sets, on this world's deformables.
   void ReceivePeers();
-  // Takes member announcements and lost member writers into names_.
-  void FollowMembers();
-  static dds::Reader<msg::MemberInfo> MemberReader(dds::Participant& participant, const Say& say);
   /// Rigid bodies another process simulates: this hand follows their published states.
   void FollowPeerBodies();
   /// The newest haptic snapshot, to viewers (and the trace).
@@ -106,7 +103,7 @@ class HapticBridge {
   // Present users and the participants that announced them: a contact set in a present
   // peer's name from another participant is dropped (session/name_binding.hpp).
   dds::Reader<msg::MemberInfo> member_reader_;
-  session::NameBinding names_;
+  dds::NameBinding names_;
   std::set<std::string> peers_heard_;  // peers whose contact sets were taken (each named once)
   dds::Reader<msg::ObjectState> object_reader_;
 

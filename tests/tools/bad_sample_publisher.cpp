@@ -81,7 +81,7 @@ int Run(const common::Options& o) {
   bad_kind.control_id("lever");
   bad_kind.kind(static_cast<msg::ControlEventKind>(99));
   // With --forge USER: well-formed samples in a present user's name, from this participant (a
-  // station claiming to be someone else): a press of the next-world arrow and a contact set.
+  // station claiming to be someone else): a press of the next-world arrow, a contact set and a hand.
   const std::string forge = o.GetString("forge");
   msg::ControlEvent forged_press;
   forged_press.session(where.session);
@@ -91,6 +91,11 @@ int Run(const common::Options& o) {
   forged_press.index(-1);
   msg::ContactSet forged_set = ContactSet(where.session, object);
   forged_set.user(forge);
+  msg::DeviceState forged_hand;  // a plausible hand, 10 cm above the origin
+  forged_hand.session(where.session);
+  forged_hand.user(forge);
+  forged_hand.q_WH_wxyz({1.0, 0.0, 0.0, 0.0});
+  for (std::size_t i = 0; i < forged_hand.p_WE_m().size(); ++i) forged_hand.p_WE_m()[i] = {0.01 * i, 0.0, 0.1};
   msg::DeviceState inf_hand;
   inf_hand.session(where.session);
   inf_hand.user("mallory");
@@ -107,7 +112,8 @@ int Run(const common::Options& o) {
               "(inf fingertip), 1 deformation (2 values for 3 ids), at %.0f Hz\n",
               rate_Hz);
   if (!forge.empty()) {
-    std::printf("bad_sample_publisher: and in user '%s''s name: 1 contact_set, 1 control_event (arrow_next pressed)\n",
+    std::printf("bad_sample_publisher: and in user '%s''s name: 1 contact_set, 1 device_state, 1 control_event "
+                "(arrow_next pressed)\n",
                 forge.c_str());
   }
   std::fflush(stdout);
@@ -126,6 +132,7 @@ int Run(const common::Options& o) {
     if (rounds % 100 == 0) events.Write(bad_kind);
     if (!forge.empty()) {
       contacts.Write(forged_set);
+      devices.Write(forged_hand);
       if (rounds % 100 == 0) events.Write(forged_press);
     }
     devices.Write(inf_hand);

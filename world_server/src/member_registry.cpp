@@ -2,7 +2,7 @@
 
 #include <algorithm>
 
-#include "handshare/session/name_binding.hpp"
+#include "handshare/dds/name_binding.hpp"
 
 namespace handshare::server {
 
@@ -56,8 +56,8 @@ std::vector<MemberEvent> MemberRegistry::OnWriterRegained(const InstanceKey& wri
 
 std::string MemberRegistry::CheckAuthor(const std::string& user, const InstanceKey& writer) const {
   for (const auto& [key, e] : present_) {
-    if (e.member.user != user || session::SameParticipant(e.writer, writer)) continue;
-    return session::AuthorMismatch(user, e.writer, writer);
+    if (e.member.user != user || dds::SameParticipant(e.writer, writer)) continue;
+    return dds::AuthorMismatch(user, e.writer, writer);
   }
   return {};
 }

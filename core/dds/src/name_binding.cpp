@@ -1,9 +1,9 @@
-#include "handshare/session/name_binding.hpp"
+#include "handshare/dds/name_binding.hpp"
 
 #include <algorithm>
 #include <iterator>
 
-namespace handshare::session {
+namespace handshare::dds {
 
 namespace {
 constexpr std::size_t kPrefixBytes = 12;  // a GUID's participant prefix; the rest is the entity
@@ -45,4 +45,32 @@ std::string NameBinding::Check(const std::string& user, const Guid& writer) cons
   return {};
 }
 
-}  // namespace handshare::session
+Reader<msg::MemberInfo> NameBinding::MakeMemberReader(Participant& participant,
+                                                           const std::function<void(const std::string&)>& say) {
+  try {
+    return MakeReader<msg::MemberInfo>(participant, topics::kMemberInfo);
+  } catch (const DdsError& e) {
+    say(std::string("cannot read the session's members (") + e.what() +
+        "): names are not bound to their participants; make the keystore again");
+    return {};
+  }
+}
+
+void NameBinding::Follow(Reader<msg::MemberInfo>& reader) {
+  if (!reader) return;
+  msg::MemberInfo info;
+  SampleMeta meta;
+  while (reader.TakeNext(info, meta)) {
+    if (meta.valid_data && meta.instance_state == InstanceState::kAlive && !info.leaving()) {
+      OnMember(meta.instance, info.user().to_string(), meta.writer);
+    } else {
+      OnMemberGone(meta.instance);
+    }
+  }
+  WriterChange change;
+  while (reader.TakeWriterChange(change)) {
+    if (!change.alive) OnWriterLost(change.writer);
+  }
+}
+
+}  // namespace handshare::dds

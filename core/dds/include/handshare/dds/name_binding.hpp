@@ -7,10 +7,13 @@
 /// not"). A name nobody present has announced is not bound (it is anybody's).
 #include <array>
 #include <cstdint>
+#include <functional>
 #include <map>
 #include <string>
 
-namespace handshare::session {
+#include "handshare/dds/messages.hpp"
+
+namespace handshare::dds {
 
 /// A DDS GUID as SampleMeta gives it: 12 bytes of participant prefix, then the entity.
 using Guid = std::array<std::uint8_t, 16>;
@@ -33,6 +36,14 @@ class NameBinding {
   void OnWriterLost(const Guid& writer);
   /// Empty if `writer` may write in `user`'s name, else why not (AuthorMismatch).
   std::string Check(const std::string& user, const Guid& writer) const;
+
+  /// A member_info reader for a node that binds names. Under DDS-Security a keystore made
+  /// before its role was granted member_info refuses the reader: then `say` is told, and the
+  /// reader is empty (the node joins, its peers' names unbound).
+  static Reader<msg::MemberInfo> MakeMemberReader(Participant& participant,
+                                                       const std::function<void(const std::string&)>& say);
+  /// Takes every member sample and lost member writer of `reader` (empty: nothing).
+  void Follow(Reader<msg::MemberInfo>& reader);
   std::size_t size() const { return members_.size(); }
 
  private:
@@ -43,4 +54,4 @@ class NameBinding {
   std::map<Guid, Member> members_;
 };
 
-}  // namespace handshare::session
+}  // namespace handshare::dds

@@ -1,9 +1,9 @@
 // NameBinding: a present user's name belongs to the participant that announced it.
-#include "handshare/session/name_binding.hpp"
+#include "handshare/dds/name_binding.hpp"
 
 #include <gtest/gtest.h>
 
-namespace handshare::session {
+namespace handshare::dds {
 namespace {
 
 // An endpoint of participant `participant` (its 12-byte prefix) with entity `entity`.
@@ -53,4 +53,4 @@ TEST(NameBinding, ANewAnnouncementOfAMemberMovesItsName) {
 }
 
 }  // namespace
-}  // namespace handshare::session
+}  // namespace handshare::dds
