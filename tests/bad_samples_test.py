@@ -1,7 +1,8 @@
 #!/usr/bin/env python3
 """Bad network data is dropped, counted and named: a hostile second process publishes
 malformed samples (NaN and infinite numbers, a 5 m dent, wrong sizes, an unknown event kind,
-another session's samples, and well-formed ones in alice's name) at ten times a haptic node's rate on every topic the nodes read,
+another session's samples, a scene named outside the scenes folder, a board without a language,
+a member of no known kind, and well-formed ones in alice's name) at ten times a haptic node's rate on every topic the nodes read,
 while alice presses the triceratops' tail and bob stands by. The world server and bob's node
 drop what comes in alice's name from another participant than hers. No node crashes or stops; every node names and
 counts what it dropped; alice's force stays within the fingertip limit and her press goes on
@@ -111,6 +112,14 @@ def run(h, domain):
                  "dropped a bad control_event sample from 'alice': user 'alice' joined from participant ",
                  "dropped a bad contact_set sample from 'alice': user 'alice' joined from participant "):
         check(text in server, f"the server did not say '{text}':\n{server}")
+    # State only the world server writes, written by another participant, malformed.
+    for label, text in (("alice", "dropped a bad scene_state sample from 'participant "),
+                        ("bob", "is not a plain name"),
+                        ("spectator", "scene '../../../etc/passwd' is not a plain name"),
+                        ("spectator", "dropped a bad message_board sample from 'participant "),
+                        ("audio_guide", "language is empty"),
+                        ("world_server", "dropped a bad member_info sample from 'mallory': kind 99 is not a node kind")):
+        check(text in h.log(label), f"{label} did not say '{text}':\n{h.log(label)}")
     for text in ("dropped a bad device_state sample from 'mallory': p_WE_m[0][0] is inf",
                  # A hand in alice's name from another participant: not drawn.
                  "dropped a bad device_state sample from 'alice': user 'alice' joined from participant ",

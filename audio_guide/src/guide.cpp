@@ -9,6 +9,7 @@
 #include "handshare/common/shutdown.hpp"
 #include "handshare/dds/membership.hpp"
 #include "handshare/dds/messages.hpp"
+#include "handshare/dds/name_binding.hpp"
 #include "handshare/dds/sample_checks.hpp"
 #include "handshare/speech/audio_clip.hpp"
 #include "handshare/speech/playback.hpp"
@@ -42,7 +43,7 @@ int Guide::Run() {
     }
     if (!meta.valid_data || board.message_id() == last_id) continue;  // already spoken
     const std::string bad = dds::CheckMessageBoard(board, config_.where.session);
-    if (!dropped.Accept("message_board", "world_server", bad, [&](const std::string& line) {
+    if (!dropped.Accept("message_board", "participant " + dds::ParticipantOf(meta.writer), bad, [&](const std::string& line) {
           std::fprintf(stderr, "[audio_guide %s] %s\n", name.c_str(), line.c_str());
         })) {
       continue;

@@ -60,7 +60,7 @@ class WorldView {
     dds::SampleMeta meta;
     msg::SceneState scene;
     while (scene_reader_.TakeNext(scene, meta)) {
-      if (meta.valid_data && Accept("scene_state", "world_server", dds::CheckSceneState(scene, session_))) {
+      if (meta.valid_data && Accept("scene_state", "participant " + dds::ParticipantOf(meta.writer), dds::CheckSceneState(scene, session_))) {
         if (scene.scene().to_string() != scene_name_) first_seen_.clear();  // poses, fields: per scene
         world_.OnSceneState(scene);
         scene_name_ = scene.scene().to_string();
@@ -73,7 +73,7 @@ class WorldView {
     // and after this round's scene state, so they apply to the scene they were sent for.
     if (world_.has_scene()) {
       while (deformation_reader_.TakeNext(deformation_, meta)) {
-        if (meta.valid_data && Accept("deformation", "world_server", dds::CheckDeformation(deformation_, session_))) {
+        if (meta.valid_data && Accept("deformation", "participant " + dds::ParticipantOf(meta.writer), dds::CheckDeformation(deformation_, session_))) {
           world_.OnDeformation(deformation_);
           const std::string id = deformation_.object_id().to_string();
           if (world_.deformation(id) != nullptr && first_seen_.insert("deformation " + id).second) {
@@ -107,7 +107,7 @@ class WorldView {
     }
     msg::MessageBoard board;
     while (board_reader_.TakeNext(board, meta)) {
-      if (meta.valid_data && Accept("message_board", "world_server", dds::CheckMessageBoard(board, session_))) {
+      if (meta.valid_data && Accept("message_board", "participant " + dds::ParticipantOf(meta.writer), dds::CheckMessageBoard(board, session_))) {
         caption_ = board.text().to_string();
         board_id_ = board.message_id();
         Arrived("message board #" + std::to_string(board_id_));

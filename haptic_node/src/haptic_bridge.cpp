@@ -62,7 +62,7 @@ void HapticBridge::ApplySceneChange() {
   while (scene_reader_.TakeNext(state, meta)) {
     if (!meta.valid_data || state.revision() == scene_revision_) continue;
     const std::string bad = dds::CheckSceneState(state, config_.where.session);
-    if (!dropped_.Accept("scene_state", "world_server", bad, say_)) continue;
+    if (!dropped_.Accept("scene_state", "participant " + dds::ParticipantOf(meta.writer), bad, say_)) continue;
     scene_revision_ = state.revision();
     try {
       AdoptScene(state);

@@ -101,7 +101,7 @@ class HapticBridge {
   dds::Reader<msg::SceneState> scene_reader_;
   dds::Reader<msg::ContactSet> contact_reader_;
   // Present users and the participants that announced them: a contact set in a present
-  // peer's name from another participant is dropped (session/name_binding.hpp).
+  // peer's name from another participant is dropped (dds/name_binding.hpp).
   dds::Reader<msg::MemberInfo> member_reader_;
   dds::NameBinding names_;
   std::set<std::string> peers_heard_;  // peers whose contact sets were taken (each named once)

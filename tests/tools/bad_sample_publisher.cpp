@@ -49,6 +49,9 @@ int Run(const common::Options& o) {
   auto events = dds::MakeWriter<msg::ControlEvent>(participant, dds::topics::kControlEvent);
   auto devices = dds::MakeWriter<msg::DeviceState>(participant, dds::topics::kDeviceState);
   auto deformations = dds::MakeWriter<msg::Deformation>(participant, dds::topics::kDeformation);
+  auto scenes = dds::MakeWriter<msg::SceneState>(participant, dds::topics::kSceneState);
+  auto boards = dds::MakeWriter<msg::MessageBoard>(participant, dds::topics::kMessageBoard);
+  auto members = dds::MakeWriter<msg::MemberInfo>(participant, dds::topics::kMemberInfo);
 
   // The round: one sample of each kind of damage.
   msg::ContactSet nan_u = ContactSet(where.session, object);
@@ -107,9 +110,24 @@ int Run(const common::Options& o) {
   short_field.surface_node_count(10);
   short_field.node_ids({1, 2, 3});
   short_field.u_W_m({0.f, 0.f});  // 2 values for 3 ids
+  // Written once per 100 rounds (reliable state: a few are enough to be seen).
+  msg::SceneState smuggled;  // a scene name that reaches outside the scenes folder
+  smuggled.session(where.session);
+  smuggled.scene("../../../etc/passwd");
+  smuggled.gravity_W_m_per_s2({0.0, 0.0, -9.81});
+  msg::MessageBoard unlabelled;  // no language: no voice to speak it with
+  unlabelled.session(where.session);
+  unlabelled.message_id(99);
+  unlabelled.text("mallory was here");
+  msg::MemberInfo odd_member;  // a node kind that does not exist
+  odd_member.member_id(where.session + "/mallory");
+  odd_member.session(where.session);
+  odd_member.user("mallory");
+  odd_member.kind(static_cast<msg::NodeKind>(99));
   std::printf("bad_sample_publisher: per round 5 contact_set (nan u, 5 m u, inf f, another session, nan body "
               "pose), 2 object_state (nan position, zero quaternion), 1 control_event (kind 99), 1 device_state "
-              "(inf fingertip), 1 deformation (2 values for 3 ids), at %.0f Hz\n",
+              "(inf fingertip), 1 deformation (2 values for 3 ids), at %.0f Hz; every 100 rounds 1 scene_state "
+              "(scene '../../../etc/passwd'), 1 message_board (no language), 1 member_info (kind 99)\n",
               rate_Hz);
   if (!forge.empty()) {
     std::printf("bad_sample_publisher: and in user '%s''s name: 1 contact_set, 1 device_state, 1 control_event "
@@ -129,7 +147,12 @@ int Run(const common::Options& o) {
     objects.Write(nan_pose);
     objects.Write(zero_q);
     // Reliable keep-all: one bad event per 100 rounds is enough to be seen, not a queue flood.
-    if (rounds % 100 == 0) events.Write(bad_kind);
+    if (rounds % 100 == 0) {
+      events.Write(bad_kind);
+      scenes.Write(smuggled);
+      boards.Write(unlabelled);
+      members.Write(odd_member);
+    }
     if (!forge.empty()) {
       contacts.Write(forged_set);
       devices.Write(forged_hand);
