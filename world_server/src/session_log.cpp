@@ -317,6 +317,20 @@ SessionLog::~SessionLog() {
   }
   impl_->wake.notify_all();
   impl_->writer.join();
+  // A finished log is one file: leaving WAL mode checkpoints and removes the -wal and -shm
+  // files, which a reader that opens the log later read-only (session_report) could not remove.
+  // With another connection open (a live report) the mode stays WAL; nothing is lost either way,
+  // and the next server to open the log switches it back to WAL.
+  if (impl_->error.empty()) {
+    for (auto* statement : {&impl_->member, &impl_->scene, &impl_->control, &impl_->owner, &impl_->end, &impl_->seen,
+                            &impl_->state, &impl_->pose, &impl_->forget}) {
+      statement->reset();  // finalized before the mode changes
+    }
+    try {
+      impl_->db.QueryText("PRAGMA journal_mode=DELETE", "leaving WAL journal mode");
+    } catch (const SessionLogError&) {
+    }
+  }
 }
 
 void SessionLog::OnMember(MemberChange change, const Member& member, std::uint64_t unix_ns) {

@@ -96,6 +96,37 @@ TEST(SessionLog, CreatesAVersionedWalLogAndRecordsEveryKindOfRow) {
   EXPECT_EQ(raw.Text("SELECT count(*) FROM sessions WHERE ended_unix_ns IS NOT NULL"), "1");
 }
 
+// A log whose server ended is one file (no -wal, -shm left for a read-only reader to trip
+// over), and the next server switches it back to WAL.
+TEST(SessionLog, AFinishedLogIsOneFileAndWalAgainWhenReopened) {
+  TempDir dir;
+  const auto file = dir / "session.db";
+  const auto wal = dir / "session.db-wal", shm = dir / "session.db-shm";
+  {
+    SessionLog log(file, Start("one"));
+    log.OnSceneChange("start_menu", "Start", kT0);
+    log.Flush();
+    EXPECT_TRUE(std::filesystem::exists(wal));
+  }
+  EXPECT_FALSE(std::filesystem::exists(wal));
+  EXPECT_FALSE(std::filesystem::exists(shm));
+  {
+    RawDb raw(file, SQLITE_OPEN_READONLY);
+    EXPECT_EQ(raw.Text("PRAGMA journal_mode"), "delete");
+    EXPECT_EQ(raw.Text("SELECT scene FROM scene_changes"), "start_menu");
+  }
+  EXPECT_FALSE(std::filesystem::exists(shm));  // a read-only reader of a finished log leaves nothing
+  {
+    SessionLog second(file, Start("two", kT0 + 100 * kSecond));
+    RawDb raw(file, SQLITE_OPEN_READONLY);  // open while the server ends: the mode stays WAL
+    EXPECT_EQ(raw.Text("PRAGMA journal_mode"), "wal");
+    second.OnSceneChange("dinosaur", "Dinosaur", kT0 + 101 * kSecond);
+  }
+  RawDb raw(file, SQLITE_OPEN_READONLY);
+  EXPECT_EQ(raw.Text("SELECT group_concat(scene, ',') FROM (SELECT scene FROM scene_changes ORDER BY id)"),
+            "start_menu,dinosaur");
+}
+
 TEST(SessionLog, ReopeningAppendsANewSession) {
   TempDir dir;
   const auto file = dir / "log.sqlite";
