@@ -13,11 +13,8 @@ Guid Endpoint(std::uint8_t participant, std::uint8_t entity) {
   g[15] = entity;
   return g;
 }
-Guid Instance(std::uint8_t n) {
-  Guid g{};
-  g[0] = n;
-  return g;
-}
+// A member (its key hash): any 16 bytes that tell members apart.
+Guid Instance(std::uint8_t n) { return Endpoint(static_cast<std::uint8_t>(100 + n), 0); }
 
 TEST(NameBinding, OnlyTheAnnouncingParticipantWritesInAPresentUsersName) {
   NameBinding b;
