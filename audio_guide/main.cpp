@@ -8,13 +8,17 @@ int main(int argc, char** argv) {
   handshare::common::DeclareSessionOptions(options);
   options.Value("name", "NAME", "member name (default audio-<pid>)", "")
       .Value("out", "DIR", "write one WAV (and a .txt) per message here instead of playing", "")
-      .Value("alsa-device", "PCM", "ALSA device to play on", "default");
+      .Value("alsa-device", "PCM", "ALSA device to play on", "default")
+      .Value("rejoin-after", "SEC",
+             "join again with a new participant when no board came from the world server this long after "
+             "joining (a secured join whose handshake never finished; 0: never)", "15");
   return handshare::common::RunNodeMain(argc, argv, options, [](const auto& o) {
     handshare::audio_guide::GuideConfig c;
     c.where = handshare::common::ReadSessionOptions(o);
     c.name = o.GetString("name");
     c.out_dir = o.GetString("out");
     c.alsa_device = o.GetString("alsa-device");
+    c.rejoin_after_s = o.GetDouble("rejoin-after", 0.0, 3600.0);
     return handshare::audio_guide::Guide(c).Run();
   });
 }

@@ -16,6 +16,9 @@ int main(int argc, char** argv) {
       .Value("width", "PX", "image or window width", "640")
       .Value("height", "PX", "image or window height", "480")
       .Value("fps", "HZ", "frames per second", "30")
+      .Value("rejoin-after", "SEC",
+             "join again with a new participant when no scene came from the world server this long after "
+             "joining (a secured join whose handshake never finished; 0: never)", "15")
       .Value("stereo", "MODE", "mono, side-by-side or anaglyph", "mono")
       .Flag("fullscreen", "window: full screen on the primary monitor (large screen)")
       .Value("assets", "DIR", "folder that the scene's mesh paths are relative to",
@@ -34,6 +37,7 @@ int main(int argc, char** argv) {
     c.width_px = static_cast<int>(o.GetInt("width", 16, 8192));
     c.height_px = static_cast<int>(o.GetInt("height", 16, 8192));
     c.fps = o.GetDouble("fps", 0.1, 240.0);
+    c.rejoin_after = std::chrono::duration<double>(o.GetDouble("rejoin-after", 0.0, 3600.0));
     c.fullscreen = o.FlagSet("fullscreen");
     c.assets_dir = o.GetString("assets");
     c.deformation_out = o.GetString("deformation-out");

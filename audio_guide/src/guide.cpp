@@ -5,6 +5,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <memory>
 
 #include "handshare/common/shutdown.hpp"
 #include "handshare/dds/membership.hpp"
@@ -25,20 +26,45 @@ int Guide::Run() {
   if (!config_.out_dir.empty()) std::filesystem::create_directories(config_.out_dir);
   speech::SpeechSynthesizer synthesizer;  // fails early if eSpeak NG data is missing
 
-  dds::Participant participant(config_.where, "audio_guide/" + name);  // the role picks its identity
-  dds::MemberAnnouncement member(participant, name, msg::NODE_AUDIO_GUIDE);
-  auto board_reader = dds::MakeReader<msg::MessageBoard>(participant, dds::topics::kMessageBoard);
+  // Everything of the guide that lives on DDS; a rejoin makes a new one.
+  struct Link {
+    Link(const common::SessionOptions& where, const std::string& name)
+        : participant(where, "audio_guide/" + name),  // the role picks its identity
+          member(participant, name, msg::NODE_AUDIO_GUIDE),
+          board_reader(dds::MakeReader<msg::MessageBoard>(participant, dds::topics::kMessageBoard)) {}
+    dds::Participant participant;
+    dds::MemberAnnouncement member;
+    dds::Reader<msg::MessageBoard> board_reader;
+  };
+  auto link = std::make_unique<Link>(config_.where, name);
+  auto joined = Clock::now();
+  int rejoins = 0;
 
   const auto start = Clock::now();
   std::uint32_t last_id = 0;
+  bool heard = false;  // a board from the world server came since joining
   int spoken = 0;
   msg::MessageBoard board;
   dds::SampleMeta meta;
   dds::DroppedSamples dropped;
   while (!common::ShutdownRequested()) {
     if (config_.where.duration.count() > 0 && Clock::now() - start >= config_.where.duration) break;
-    if (!board_reader.TakeNext(board, meta)) {
-      board_reader.WaitForData(std::chrono::milliseconds(50));
+    if (!link->board_reader.TakeNext(board, meta)) {
+      // No board from the world server since joining: a secured pair of participants that
+      // never finished authenticating stays so for good (Fast DDS 2.9, docs/security.md), and
+      // a new participant starts a new handshake with everyone.
+      if (config_.rejoin_after_s > 0.0 && !heard &&
+          Clock::now() - joined >= std::chrono::duration<double>(config_.rejoin_after_s)) {
+        std::fprintf(stderr, "[audio_guide %s] no board from the world server %.1f s after joining: leaving and "
+                     "joining again with a new participant (rejoin %d)\n", name.c_str(), config_.rejoin_after_s,
+                     rejoins + 1);
+        link.reset();
+        link = std::make_unique<Link>(config_.where, name);
+        joined = Clock::now();
+        ++rejoins;
+        continue;
+      }
+      link->board_reader.WaitForData(std::chrono::milliseconds(50));
       continue;
     }
     if (!meta.valid_data || board.message_id() == last_id) continue;  // already spoken
@@ -49,6 +75,7 @@ int Guide::Run() {
       continue;
     }
     last_id = board.message_id();
+    heard = true;
     // When it arrived, counted from joining (the reader exists): a late joiner's figure.
     std::printf("[audio_guide %s] message board #%u received %.3f s after joining\n", name.c_str(), last_id,
                 std::chrono::duration<double>(Clock::now() - start).count());
@@ -76,7 +103,8 @@ int Guide::Run() {
     std::fflush(stdout);
   }
   std::printf("[audio_guide %s] spoke %d messages\n", name.c_str(), spoken);
-  std::printf("[audio_guide %s] %s\n", name.c_str(), participant.TrafficSummary().c_str());
+  if (rejoins > 0) std::printf("[audio_guide %s] rejoined the session %d time(s)\n", name.c_str(), rejoins);
+  std::printf("[audio_guide %s] %s\n", name.c_str(), link->participant.TrafficSummary().c_str());
   return 0;
 }
 

@@ -208,6 +208,20 @@ class WorldView {
   std::string caption_;
 };
 
+/// Everything of a spectator that lives on DDS: its participant, what it reads and its member
+/// announcement. A rejoin makes a new one.
+struct SpectatorLink {
+  SpectatorLink(const common::SessionOptions& where, const std::filesystem::path& assets_dir, const std::string& name)
+      : participant(where, "graphics_node/" + name),  // the role picks its identity
+        world(participant, assets_dir, name, where.session),
+        member(participant, name, msg::NODE_GRAPHICS) {}
+  dds::Participant participant;
+  // The readers first: the server re-sends body poses (best-effort) when it sees the member
+  // join, and a reader created after the announcement could miss them.
+  WorldView world;
+  dds::MemberAnnouncement member;
+};
+
 // One line on what the shared world received, for the node's log.
 void PrintWorldSummary(const std::string& name, const SceneReplica& world, const dds::DroppedSamples& dropped,
                        std::uint64_t device_deadlines_missed) {
@@ -321,17 +335,33 @@ int Spectator::Run() {
     window_renderer.emplace(options);
   }
 
-  dds::Participant participant(config_.where, "graphics_node/" + name);  // the role picks its identity
-  // The readers first: the server re-sends body poses (best-effort) when it sees the member
-  // join, and a reader created after the announcement could miss them.
-  WorldView world(participant, assets_dir, name, config_.where.session);
-  dds::MemberAnnouncement member(participant, name, msg::NODE_GRAPHICS);
+  auto link = std::make_unique<SpectatorLink>(config_.where, assets_dir, name);
+  auto joined = Clock::now();
+  int rejoins = 0;
+  // Nothing from the world server since joining: a secured pair of participants that never
+  // finished authenticating stays so for good (Fast DDS 2.9, docs/security.md), and a new
+  // participant starts a new handshake with everyone.
+  const auto rejoin_if_unheard = [&] {
+    if (config_.rejoin_after.count() <= 0.0 || link->world.has_scene() ||
+        Clock::now() - joined < config_.rejoin_after) {
+      return;
+    }
+    std::fprintf(stderr, "[graphics_node %s] no scene from the world server %.1f s after joining: leaving and "
+                 "joining again with a new participant (rejoin %d)\n", name.c_str(), config_.rejoin_after.count(),
+                 rejoins + 1);
+    link.reset();
+    link = std::make_unique<SpectatorLink>(config_.where, assets_dir, name);
+    joined = Clock::now();
+    ++rejoins;
+  };
   // When the frames are written or the window closes: what the spectator received, for a
   // comparison with an oracle.
   const auto finish = [&] {
+    WorldView& world = link->world;
     world.Update();  // what arrived since the last frame counts too (a stop between frames)
     PrintWorldSummary(name, world.world(), world.dropped(), world.device_deadlines_missed());
-    std::printf("[graphics_node %s] %s\n", name.c_str(), participant.TrafficSummary().c_str());
+    if (rejoins > 0) std::printf("[graphics_node %s] rejoined the session %d time(s)\n", name.c_str(), rejoins);
+    std::printf("[graphics_node %s] %s\n", name.c_str(), link->participant.TrafficSummary().c_str());
     std::fflush(stdout);
     if (!config_.deformation_out.empty()) world.world().WriteDeformationJson(config_.deformation_out);
     if (!config_.state_out.empty()) world.WriteStateJson(config_.state_out);
@@ -344,14 +374,17 @@ int Spectator::Run() {
     render::OffscreenRenderer& renderer = *offscreen;
     // Late joiner: the scene arrives transient-local within discovery time; do not draw an
     // empty world unless it never comes.
-    while (!world.has_scene() && Clock::now() - start < config_.wait_for_scene && !common::ShutdownRequested()) {
-      world.Update();
+    while (!link->world.has_scene() && Clock::now() - start < config_.wait_for_scene && !common::ShutdownRequested()) {
+      link->world.Update();
+      rejoin_if_unheard();
       std::this_thread::sleep_for(std::chrono::milliseconds(10));
     }
-    if (!world.has_scene()) std::fprintf(stderr, "[graphics_node %s] no scene state received; drawing hands only\n", name.c_str());
+    if (!link->world.has_scene()) std::fprintf(stderr, "[graphics_node %s] no scene state received; drawing hands only\n", name.c_str());
     auto next = Clock::now();
     int written = 0;
     for (; written < config_.frames && !common::ShutdownRequested(); ++written) {
+      rejoin_if_unheard();
+      WorldView& world = link->world;
       world.Update();
       const render::ImageRgb8 image = renderer.Render(world.Build(), camera, ToRender(config_.stereo));
       char file[32];
@@ -385,8 +418,9 @@ int Spectator::Run() {
   auto next = Clock::now();
   while (!window.ShouldClose() && !common::ShutdownRequested()) {
     if (config_.where.duration.count() > 0 && Clock::now() - start >= config_.where.duration) break;
-    world.Update();
-    window.Render(world.Build(), camera);
+    rejoin_if_unheard();
+    link->world.Update();
+    window.Render(link->world.Build(), camera);
     next += period;
     std::this_thread::sleep_until(next);
   }

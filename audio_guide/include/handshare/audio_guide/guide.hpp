@@ -13,6 +13,7 @@ struct GuideConfig {
   std::string name;                              // member name; "" = audio-<pid>
   std::string out_dir;                           // "" = play on alsa_device
   std::string alsa_device = "default";
+  double rejoin_after_s = 15.0;                  // no board from the world server this long after joining: join again; 0: never
 };
 
 class Guide {
