@@ -7,6 +7,7 @@
 #include <fstream>
 #include <memory>
 
+#include "handshare/common/rejoin_clock.hpp"
 #include "handshare/common/shutdown.hpp"
 #include "handshare/dds/membership.hpp"
 #include "handshare/dds/messages.hpp"
@@ -37,8 +38,7 @@ int Guide::Run() {
     dds::Reader<msg::MessageBoard> board_reader;
   };
   auto link = std::make_unique<Link>(config_.where, name);
-  auto joined = Clock::now();
-  int rejoins = 0;
+  common::RejoinClock rejoin(std::chrono::duration<double>(config_.rejoin_after_s));
 
   const auto start = Clock::now();
   std::uint32_t last_id = 0;
@@ -50,18 +50,10 @@ int Guide::Run() {
   while (!common::ShutdownRequested()) {
     if (config_.where.duration.count() > 0 && Clock::now() - start >= config_.where.duration) break;
     if (!link->board_reader.TakeNext(board, meta)) {
-      // No board from the world server since joining: a secured pair of participants that
-      // never finished authenticating stays so for good (Fast DDS 2.9, docs/security.md), and
-      // a new participant starts a new handshake with everyone.
-      if (config_.rejoin_after_s > 0.0 && !heard &&
-          Clock::now() - joined >= std::chrono::duration<double>(config_.rejoin_after_s)) {
-        std::fprintf(stderr, "[audio_guide %s] no board from the world server %.1f s after joining: leaving and "
-                     "joining again with a new participant (rejoin %d)\n", name.c_str(), config_.rejoin_after_s,
-                     rejoins + 1);
+      if (rejoin.Due(heard)) {
+        std::fprintf(stderr, "[audio_guide %s] %s\n", name.c_str(), rejoin.Message("board").c_str());
         link.reset();
         link = std::make_unique<Link>(config_.where, name);
-        joined = Clock::now();
-        ++rejoins;
         continue;
       }
       link->board_reader.WaitForData(std::chrono::milliseconds(50));
@@ -103,7 +95,9 @@ int Guide::Run() {
     std::fflush(stdout);
   }
   std::printf("[audio_guide %s] spoke %d messages\n", name.c_str(), spoken);
-  if (rejoins > 0) std::printf("[audio_guide %s] rejoined the session %d time(s)\n", name.c_str(), rejoins);
+  if (rejoin.rejoins() > 0) {
+    std::printf("[audio_guide %s] rejoined the session %d time(s)\n", name.c_str(), rejoin.rejoins());
+  }
   std::printf("[audio_guide %s] %s\n", name.c_str(), link->participant.TrafficSummary().c_str());
   return 0;
 }

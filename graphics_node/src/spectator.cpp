@@ -15,6 +15,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "handshare/common/rejoin_clock.hpp"
 #include "handshare/common/shutdown.hpp"
 #include "handshare/dds/membership.hpp"
 #include "handshare/dds/messages.hpp"
@@ -336,23 +337,12 @@ int Spectator::Run() {
   }
 
   auto link = std::make_unique<SpectatorLink>(config_.where, assets_dir, name);
-  auto joined = Clock::now();
-  int rejoins = 0;
-  // Nothing from the world server since joining: a secured pair of participants that never
-  // finished authenticating stays so for good (Fast DDS 2.9, docs/security.md), and a new
-  // participant starts a new handshake with everyone.
+  common::RejoinClock rejoin(config_.rejoin_after);
   const auto rejoin_if_unheard = [&] {
-    if (config_.rejoin_after.count() <= 0.0 || link->world.has_scene() ||
-        Clock::now() - joined < config_.rejoin_after) {
-      return;
-    }
-    std::fprintf(stderr, "[graphics_node %s] no scene from the world server %.1f s after joining: leaving and "
-                 "joining again with a new participant (rejoin %d)\n", name.c_str(), config_.rejoin_after.count(),
-                 rejoins + 1);
+    if (!rejoin.Due(link->world.has_scene())) return;
+    std::fprintf(stderr, "[graphics_node %s] %s\n", name.c_str(), rejoin.Message("scene").c_str());
     link.reset();
     link = std::make_unique<SpectatorLink>(config_.where, assets_dir, name);
-    joined = Clock::now();
-    ++rejoins;
   };
   // When the frames are written or the window closes: what the spectator received, for a
   // comparison with an oracle.
@@ -360,7 +350,9 @@ int Spectator::Run() {
     WorldView& world = link->world;
     world.Update();  // what arrived since the last frame counts too (a stop between frames)
     PrintWorldSummary(name, world.world(), world.dropped(), world.device_deadlines_missed());
-    if (rejoins > 0) std::printf("[graphics_node %s] rejoined the session %d time(s)\n", name.c_str(), rejoins);
+    if (rejoin.rejoins() > 0) {
+      std::printf("[graphics_node %s] rejoined the session %d time(s)\n", name.c_str(), rejoin.rejoins());
+    }
     std::printf("[graphics_node %s] %s\n", name.c_str(), link->participant.TrafficSummary().c_str());
     std::fflush(stdout);
     if (!config_.deformation_out.empty()) world.world().WriteDeformationJson(config_.deformation_out);

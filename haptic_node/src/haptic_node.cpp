@@ -10,6 +10,7 @@
 #include <thread>
 
 #include "haptic_bridge.hpp"
+#include "handshare/common/rejoin_clock.hpp"
 #include "handshare/common/shutdown.hpp"
 #include "handshare/dds/membership.hpp"
 #include "handshare/haptic/haptic_loop.hpp"
@@ -127,24 +128,16 @@ int HapticNode::Run() {
   const auto start = Clock::now();
   const auto period = std::chrono::duration_cast<Clock::duration>(
       std::chrono::duration<double>(1.0 / config_.publish_Hz));
-  const auto rejoin_after = std::chrono::duration_cast<Clock::duration>(
-      std::chrono::duration<double>(config_.rejoin_after_s));
+  common::RejoinClock rejoin(std::chrono::duration<double>(config_.rejoin_after_s));
   auto next = start;
-  auto joined = start;
-  int rejoins = 0;
   while (!common::ShutdownRequested()) {
     if (config_.where.duration.count() > 0 && Clock::now() - start >= config_.where.duration) break;
     link->bridge.Tick();
-    if (config_.rejoin_after_s > 0.0 && !link->bridge.heard_world_server() && Clock::now() - joined >= rejoin_after) {
-      // Nothing from the session's world server since joining: a secured pair of participants
-      // that never finished authenticating stays so for good (Fast DDS 2.9, docs/security.md),
-      // and a new participant starts a new handshake. The haptic loop runs on meanwhile.
-      say(Format("no world from the world server %.1f s after joining: leaving and joining again with a new "
-                 "participant (rejoin %d)", config_.rejoin_after_s, rejoins + 1));
+    if (rejoin.Due(link->bridge.heard_world_server())) {
+      // The haptic loop runs on meanwhile.
+      say(rejoin.Message("world"));
       link.reset();
       link = std::make_unique<SessionLink>(config_, *device, loop, trace ? &trace : nullptr, say);
-      joined = Clock::now();
-      ++rejoins;
     }
     next += period;
     if (Clock::now() > next + 5 * period) next = Clock::now();
@@ -154,7 +147,7 @@ int HapticNode::Run() {
   common::LoopStats stats;
   loop.TakeStats(stats);
   PrintLoopSummary(config_.user, stats, loop.faults(), loop.rate_limited_steps(), link->bridge);
-  if (rejoins > 0) say("rejoined the session " + std::to_string(rejoins) + " time(s)");
+  if (rejoin.rejoins() > 0) say("rejoined the session " + std::to_string(rejoin.rejoins()) + " time(s)");
   say(link->participant.TrafficSummary());
   return 0;
 }

@@ -1,7 +1,6 @@
 #include "handshare/dds/name_binding.hpp"
 
 #include <algorithm>
-#include <iterator>
 
 namespace handshare::dds {
 

@@ -1,0 +1,44 @@
+#pragma once
+/// When a node that has heard nothing from the world server since joining should join again
+/// with a new participant: a secured pair of participants that never finished authenticating
+/// stays so for good (Fast DDS 2.9, docs/security.md), and a new participant starts a new
+/// handshake with everyone. Shared by the haptic node, the spectator and the audio guide.
+#include <chrono>
+#include <cstdio>
+#include <string>
+#include <string_view>
+
+namespace handshare::common {
+
+class RejoinClock {
+ public:
+  using Clock = std::chrono::steady_clock;
+  /// after: how long a node may go unheard after joining; 0 or less: never rejoin.
+  explicit RejoinClock(std::chrono::duration<double> after) : after_(after), joined_(Clock::now()) {}
+
+  /// True when `after` has passed since (re)joining and the server was not `heard`: then a
+  /// rejoin is counted and the clock starts again (the caller makes the new participant).
+  bool Due(bool heard) {
+    if (after_.count() <= 0.0 || heard || Clock::now() - joined_ < after_) return false;
+    ++rejoins_;
+    joined_ = Clock::now();
+    return true;
+  }
+  /// The log line of the rejoin Due just counted; `what` is what the node waits for ("world").
+  std::string Message(std::string_view what) const {
+    char line[200];
+    std::snprintf(line, sizeof(line),
+                  "no %.*s from the world server %.1f s after joining: leaving and joining again with a new "
+                  "participant (rejoin %d)",
+                  static_cast<int>(what.size()), what.data(), after_.count(), rejoins_);
+    return line;
+  }
+  int rejoins() const { return rejoins_; }
+
+ private:
+  std::chrono::duration<double> after_;
+  Clock::time_point joined_;
+  int rejoins_ = 0;
+};
+
+}  // namespace handshare::common
