@@ -21,6 +21,10 @@ int main(int argc, char** argv) {
       .Value("deadband", "FRACTION",
              "Weber fraction of the contact-set deadband: a set goes out when a force or imposed "
              "displacement changed by more than this share (0: every bridge tick)", "0.1")
+      .Value("streams", "MODE",
+             "paced: device states at the fastest viewer's frame rate, contact sets at the world server's tick "
+             "unless a peer touches the same object; full: both at the publish rate",
+             "paced")
       .Value("trace", "FILE", "write every published device state to a CSV file", "")
       .Value("rejoin-after", "SEC",
              "join again with a new participant when no world server was heard this long after joining "
@@ -46,6 +50,11 @@ int main(int argc, char** argv) {
     c.publish_Hz = o.GetDouble("publish-rate", 1.0, 1000.0);
     c.deadband_weber = o.GetDouble("deadband", 0.0, 0.5);
     c.trace_file = o.GetString("trace");
+    const std::string streams = o.GetString("streams");
+    if (streams != "paced" && streams != "full") {
+      throw handshare::common::OptionError("option --streams: '" + streams + "' is not paced or full");
+    }
+    c.paced_streams = streams == "paced";
     c.rejoin_after_s = o.GetDouble("rejoin-after", 0.0, 3600.0);
     return handshare::haptic::HapticNode(c).Run();
   });

@@ -212,10 +212,12 @@ class WorldView {
 /// Everything of a spectator that lives on DDS: its participant, what it reads and its member
 /// announcement. A rejoin makes a new one.
 struct SpectatorLink {
-  SpectatorLink(const common::SessionOptions& where, const std::filesystem::path& assets_dir, const std::string& name)
+  /// fps: the frame rate, announced so that haptic nodes send device states no faster.
+  SpectatorLink(const common::SessionOptions& where, const std::filesystem::path& assets_dir, const std::string& name,
+                double fps)
       : participant(where, "graphics_node/" + name),  // the role picks its identity
         world(participant, assets_dir, name, where.session),
-        member(participant, name, msg::NODE_GRAPHICS) {}
+        member(participant, name, msg::NODE_GRAPHICS, "", fps) {}
   dds::Participant participant;
   // The readers first: the server re-sends body poses (best-effort) when it sees the member
   // join, and a reader created after the announcement could miss them.
@@ -336,13 +338,13 @@ int Spectator::Run() {
     window_renderer.emplace(options);
   }
 
-  auto link = std::make_unique<SpectatorLink>(config_.where, assets_dir, name);
+  auto link = std::make_unique<SpectatorLink>(config_.where, assets_dir, name, config_.fps);
   common::RejoinClock rejoin(config_.rejoin_after);
   const auto rejoin_if_unheard = [&] {
     if (!rejoin.Due(link->world.has_scene())) return;
     std::fprintf(stderr, "[graphics_node %s] %s\n", name.c_str(), rejoin.Message("scene").c_str());
     link.reset();
-    link = std::make_unique<SpectatorLink>(config_.where, assets_dir, name);
+    link = std::make_unique<SpectatorLink>(config_.where, assets_dir, name, config_.fps);
   };
   // When the frames are written or the window closes: what the spectator received, for a
   // comparison with an oracle.

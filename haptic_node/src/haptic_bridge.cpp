@@ -26,6 +26,8 @@ HapticBridge::HapticBridge(const HapticNodeConfig& config, Device& device, Hapti
       member_reader_(dds::NameBinding::MakeMemberReader(participant, say_)),
       object_reader_(dds::MakeReader<msg::ObjectState>(participant, dds::topics::kObjectState)),
       deadband_(session::DeadbandConfig{.weber = config.deadband_weber}),
+      state_pacer_(config.publish_Hz),
+      contact_pacer_(config.publish_Hz),
       next_stats_(Clock::now() + std::chrono::seconds(1)) {
   models_options_.cache_dir =
       config_.cache_dir.empty() ? world::DefaultCacheDir() : std::filesystem::path(config_.cache_dir);
@@ -40,6 +42,10 @@ HapticBridge::HapticBridge(const HapticNodeConfig& config, Device& device, Hapti
 }
 
 void HapticBridge::Tick() {
+  const std::uint64_t start_ns = common::SteadyNowNs();
+  if (last_tick_ns_ != 0) tick_interval_.Record(1e-3 * static_cast<double>(start_ns - last_tick_ns_));
+  last_tick_ns_ = start_ns;
+  ++ticks_;
   ApplySceneChange();
   loop_.CollectRetired();
   if (renderer_) {
@@ -64,6 +70,7 @@ void HapticBridge::ApplySceneChange() {
     const std::string bad = dds::CheckSceneState(state, config_.where.session);
     if (!dropped_.Accept("scene_state", "participant " + dds::ParticipantOf(meta.writer), bad, say_)) continue;
     scene_revision_ = state.revision();
+    server_tick_Hz_ = state.tick_Hz();
     try {
       AdoptScene(state);
     } catch (const std::exception& e) {
@@ -95,6 +102,7 @@ void HapticBridge::AdoptScene(const msg::SceneState& state) {
   if (!same_world) bodies_.clear();
   peers_.Clear();
   deadband_.Reset();
+  contact_pacer_.Reset();
   renderer_ = next;
   have_report_ = false;
   loop_.SetRenderer(renderer_);
@@ -174,8 +182,14 @@ void HapticBridge::PublishDeviceState() {
   HapticSnapshot snapshot;
   if (!loop_.TakeSnapshot(snapshot)) return;
   ToDeviceState(snapshot, state_msg_);
-  // Skip what nobody needs: no viewer matched, nothing sent (the trace still records).
-  if (state_writer_.matched_readers() > 0) {
+  // Skip what nobody needs: no viewer matched, nothing sent (the trace still records); with
+  // viewers, no faster than the fastest of them draws.
+  const int readers = state_writer_.matched_readers();
+  const dds::Viewers viewers = names_.viewers();
+  const double rate_Hz = config_.paced_streams
+                             ? session::DeviceStateRate(readers, viewers.count, viewers.fastest_Hz, config_.publish_Hz)
+                             : (readers > 0 ? config_.publish_Hz : 0.0);
+  if (state_pacer_.Due(common::SteadyNowNs(), rate_Hz)) {
     state_writer_.Write(state_msg_);
     ++device_states_published_;
   }
@@ -188,10 +202,23 @@ void HapticBridge::PublishContactSet() {
   const bool active =
       ToContactSet(report_, renderer_->models(), owned, models_options_.fingertip_radius_m, contacts_msg_);
   const std::uint64_t now_ns = common::SteadyNowNs();
-  if ((active || last_sent_active_) && contact_writer_.matched_readers() > 0 && deadband_.Offer(contacts_msg_, now_ns)) {
+  if (!(active || last_sent_active_) || contact_writer_.matched_readers() == 0) {
+    last_sent_active_ = active;
+    return;
+  }
+  // Full rate while a peer's loop solves an object with this hand's contacts; else the world
+  // server's tick. A tick that is not due leaves the set for the next due one (the end of a
+  // touch included: last_sent_active_ keeps it owed).
+  const bool shared = session::SharesObjectWithPeer(contacts_msg_, peers_, Clock::now());
+  const double rate_Hz =
+      config_.paced_streams ? session::ContactSetRate(shared, server_tick_Hz_, config_.publish_Hz) : config_.publish_Hz;
+  if (!contact_pacer_.Due(now_ns, rate_Hz)) return;
+  if (deadband_.Offer(contacts_msg_, now_ns)) {
     contacts_msg_.stamp_ns(now_ns);
     contacts_msg_.seq(contacts_msg_.seq() + 1);
     contact_writer_.Write(contacts_msg_);
+    ++contact_sets_sent_;
+    if (shared) ++contact_sets_shared_;
     if (report_.step_ns != 0 && report_.step_ns <= contacts_msg_.stamp_ns()) {
       report_age_.Record(1e-3 * static_cast<double>(contacts_msg_.stamp_ns() - report_.step_ns));
     }

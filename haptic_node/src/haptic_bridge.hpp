@@ -21,6 +21,7 @@
 #include "handshare/session/contact_deadband.hpp"
 #include "handshare/dds/name_binding.hpp"
 #include "handshare/session/peer_contacts.hpp"
+#include "handshare/session/stream_rates.hpp"
 #include "handshare/dds/sample_checks.hpp"
 #include "handshare/world/scene_models.hpp"
 
@@ -62,6 +63,12 @@ class HapticBridge {
   const common::LatencyHistogram& contact_report_age() const { return report_age_; }
   /// What the contact-set deadband let through (offered: sets a peer could read).
   const session::ContactSetDeadband& deadband() const { return deadband_; }
+  /// Contact sets written, and how many of them at the full rate (a peer shared an object).
+  std::uint64_t contact_sets_sent() const { return contact_sets_sent_; }
+  std::uint64_t contact_sets_shared() const { return contact_sets_shared_; }
+  /// The bridge's own rate: ticks, and the time from one tick's start to the next's.
+  std::uint64_t ticks() const { return ticks_; }
+  const common::LatencyHistogram& tick_interval() const { return tick_interval_; }
 
  private:
   // ---- the stages of a tick ----
@@ -74,10 +81,11 @@ class HapticBridge {
   void ReceivePeers();
   /// Rigid bodies another process simulates: this hand follows their published states.
   void FollowPeerBodies();
-  /// The newest haptic snapshot, to viewers (and the trace).
+  /// The newest haptic snapshot, to viewers (and the trace), at the fastest viewer's frame rate.
   void PublishDeviceState();
   /// This hand's contacts: while touching, grasping or simulating, and once more at the end,
-  /// each when it differs perceptibly from the last one sent or a keepalive is due.
+  /// each when it differs perceptibly from the last one sent or a keepalive is due; at the
+  /// bridge's rate while a peer touches the same object, else at the world server's tick.
   void PublishContactSet();
   /// The loop statistics, once a second.
   void PublishStatistics();
@@ -109,6 +117,7 @@ class HapticBridge {
 
   std::shared_ptr<SceneRenderer> renderer_;  ///< the bridge's handle; the loop holds its own
   std::uint32_t scene_revision_ = 0;
+  double server_tick_Hz_ = 0.0;  ///< how often the world server reads contact sets (0: not said)
   common::SessionClock session_clock_;
   ContactReport report_;
   bool have_report_ = false;
@@ -120,6 +129,13 @@ class HapticBridge {
   msg::LoopStatistics stats_msg_;
   msg::ContactSet contacts_msg_;
   session::ContactSetDeadband deadband_;
+  session::StreamPacer state_pacer_;
+  session::StreamPacer contact_pacer_;
+  std::uint64_t contact_sets_sent_ = 0;
+  std::uint64_t contact_sets_shared_ = 0;
+  std::uint64_t ticks_ = 0;
+  std::uint64_t last_tick_ns_ = 0;
+  common::LatencyHistogram tick_interval_;
   Clock::time_point next_stats_;
   std::uint64_t device_states_published_ = 0;
   std::uint64_t control_events_sent_ = 0;

@@ -96,6 +96,21 @@ void PrintLoopSummary(const std::string& user, const common::LoopStats& stats, s
   std::fflush(stdout);
 }
 
+void PrintBridgeSummary(const HapticNodeConfig& config, const HapticBridge& bridge) {
+  // The bridge's own rate (does it hold its period under load?) and what it sent.
+  const auto& interval = bridge.tick_interval();
+  const double seconds = 1e-6 * interval.mean_us() * static_cast<double>(interval.count());
+  std::printf("[haptic_node %s] bridge: %llu ticks, %.1f Hz of %.0f, interval p50 %.2f ms p99 %.2f ms max %.2f ms; "
+              "streams %s: device states %llu, contact sets %llu (%llu at the full rate: a peer on the same object)\n",
+              config.user.c_str(), static_cast<unsigned long long>(bridge.ticks()),
+              seconds > 0.0 ? static_cast<double>(interval.count()) / seconds : 0.0, config.publish_Hz,
+              1e-3 * interval.Quantile(0.5), 1e-3 * interval.Quantile(0.99), 1e-3 * interval.max_us(),
+              config.paced_streams ? "paced" : "full", static_cast<unsigned long long>(bridge.device_states_published()),
+              static_cast<unsigned long long>(bridge.contact_sets_sent()),
+              static_cast<unsigned long long>(bridge.contact_sets_shared()));
+  std::fflush(stdout);
+}
+
 }  // namespace
 
 HapticNode::HapticNode(HapticNodeConfig config) : config_(std::move(config)) {}
@@ -147,6 +162,7 @@ int HapticNode::Run() {
   common::LoopStats stats;
   loop.TakeStats(stats);
   PrintLoopSummary(config_.user, stats, loop.faults(), loop.rate_limited_steps(), link->bridge);
+  PrintBridgeSummary(config_, link->bridge);
   if (rejoin.rejoins() > 0) say("rejoined the session " + std::to_string(rejoin.rejoins()) + " time(s)");
   say(link->participant.TrafficSummary());
   return 0;

@@ -8,8 +8,9 @@
 namespace handshare::server {
 
 msg::SceneState ToSceneState(const scene::Scene& s, const std::string& session, std::uint32_t revision,
-                             std::uint64_t session_epoch_unix_ns) {
+                             std::uint64_t session_epoch_unix_ns, double tick_Hz) {
   msg::SceneState out;
+  out.tick_Hz(static_cast<float>(tick_Hz));
   out.session(session);
   out.scene(s.name);
   out.revision(revision);

@@ -16,9 +16,9 @@
 namespace handshare::server {
 
 /// The scene state every node builds its world from: revision `revision` of `scene`, with the
-/// session clock's origin.
+/// session clock's origin and the server's tick rate (how often it reads contact sets).
 msg::SceneState ToSceneState(const scene::Scene& s, const std::string& session, std::uint32_t revision,
-                             std::uint64_t session_epoch_unix_ns);
+                             std::uint64_t session_epoch_unix_ns, double tick_Hz = 0.0);
 
 /// A member as announced.
 Member ToMember(const msg::MemberInfo& info);

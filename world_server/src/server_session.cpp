@@ -33,6 +33,7 @@ ServerSession::ServerSession(WorldServer& server, const WorldServerConfig& confi
                              scene::Scene scene, const ResumePoint* resume)
     : server_(server),
       session_(config.where.session),
+      tick_Hz_(config.tick_Hz),
       clock_(resume ? common::SessionClock::FromEpoch(resume->state.epoch_unix_ns) : common::SessionClock()),
       scene_(ResumedScene(std::move(scene), resume)),
       objects_(config.where.session, AuthorityOptions(config), clock_),
@@ -172,7 +173,7 @@ void ServerSession::StepObjects(Clock::time_point now, double dt_s) {
 }
 
 void ServerSession::PublishScene() {
-  scene_writer_.Write(ToSceneState(scene_, session_, ++revision_, clock_.EpochUnixNs()));
+  scene_writer_.Write(ToSceneState(scene_, session_, ++revision_, clock_.EpochUnixNs(), tick_Hz_));
   LogState();
 }
 

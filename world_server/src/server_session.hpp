@@ -65,6 +65,7 @@ class ServerSession {
 
   WorldServer& server_;
   std::string session_;
+  double tick_Hz_;  // announced in the scene state: how often contact sets are read
   common::SessionClock clock_;
   scene::Scene scene_;
   std::uint32_t revision_ = 0;

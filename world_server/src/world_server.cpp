@@ -10,6 +10,7 @@
 #include <thread>
 
 #include "handshare/common/clock.hpp"
+#include "handshare/common/latency_histogram.hpp"
 #include "handshare/common/shutdown.hpp"
 #include "handshare/dds/membership.hpp"
 #include "handshare/dds/messages.hpp"
@@ -113,14 +114,18 @@ int WorldServer::Run() {
   const auto period = std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(1.0 / config_.tick_Hz));
   auto next = Clock::now();
   Clock::time_point last_tick{};
+  common::LatencyHistogram tick_work;      // one tick's stages, start to end
+  common::LatencyHistogram tick_interval;  // one tick's start to the next's (period 1 / tick_Hz)
   while (!common::ShutdownRequested()) {
     if (config_.where.duration.count() > 0 && Clock::now() - start_ >= config_.where.duration) break;
     const auto now = Clock::now();
     const double dt_s = last_tick == Clock::time_point{} ? 1.0 / config_.tick_Hz
                                                          : std::chrono::duration<double>(now - last_tick).count();
+    if (last_tick != Clock::time_point{}) tick_interval.Record(1e6 * dt_s);
     last_tick = now;
     session.Tick(now, std::min(dt_s, 0.1));
     CheckLog();
+    tick_work.Record(std::chrono::duration<double, std::micro>(Clock::now() - now).count());
     next += period;
     if (Clock::now() > next + 5 * period) next = Clock::now();
     std::this_thread::sleep_until(next);
@@ -129,6 +134,13 @@ int WorldServer::Run() {
       std::to_string(session.members().present().size()) + " still present, " +
       std::to_string(session.deformations_sent()) + " deformation samples sent, samples dropped: " +
       session.dropped().Summary());
+  char line[240];
+  std::snprintf(line, sizeof line,
+                "ticks: %llu at %.0f Hz, work p50 %.0f us p99 %.0f us max %.0f us, interval p99 %.1f ms max %.1f ms",
+                static_cast<unsigned long long>(tick_work.count()), config_.tick_Hz, tick_work.Quantile(0.5),
+                tick_work.Quantile(0.99), tick_work.max_us(), 1e-3 * tick_interval.Quantile(0.99),
+                1e-3 * tick_interval.max_us());
+  Say(line);
   Say(participant.TrafficSummary());
   CloseLog();
   return log_failed_ ? 1 : 0;

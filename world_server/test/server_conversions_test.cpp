@@ -20,8 +20,9 @@ TEST(ServerConversions, TheSceneStateCarriesTheWorldItsRevisionAndTheSessionCloc
   ball.half_extent_m = Eigen::Vector3d(0.04, 0.04, 0.04);
   ball.mass_kg = 0.2;
   s.objects.push_back(ball);
-  const msg::SceneState m = ToSceneState(s, "museum", 7, 1'700'000'000'000'000'000ULL);
+  const msg::SceneState m = ToSceneState(s, "museum", 7, 1'700'000'000'000'000'000ULL, 60.0);
   EXPECT_EQ(m.session().to_string(), "museum");
+  EXPECT_EQ(m.tick_Hz(), 60.0f);  // haptic nodes pace solo contact sets to it
   EXPECT_EQ(m.scene().to_string(), "solar_system");
   EXPECT_EQ(m.revision(), 7u);
   EXPECT_EQ(m.session_epoch_unix_ns(), 1'700'000'000'000'000'000ULL);

@@ -8,7 +8,7 @@
 namespace handshare::dds {
 
 MemberAnnouncement::MemberAnnouncement(Participant& participant, const std::string& user,
-                                       msg::NodeKind kind, const std::string& device)
+                                       msg::NodeKind kind, const std::string& device, double view_Hz)
     : writer_(MakeWriter<msg::MemberInfo>(participant, topics::kMemberInfo)) {
   if (user.empty() || user.size() > 40) {
     throw DdsError("member name '" + user + "' must have 1..40 characters");
@@ -20,6 +20,7 @@ MemberAnnouncement::MemberAnnouncement(Participant& participant, const std::stri
   info_.user(user);
   info_.kind(kind);
   info_.device(device);
+  info_.view_Hz(static_cast<float>(view_Hz));
   info_.host(host);
   info_.pid(static_cast<std::int32_t>(getpid()));
   info_.joined_unix_ns(static_cast<std::uint64_t>(

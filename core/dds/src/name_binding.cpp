@@ -27,8 +27,19 @@ std::string AuthorMismatch(const std::string& user, const Guid& announced, const
          ", this sample came from participant " + ParticipantOf(writer);
 }
 
-void NameBinding::OnMember(const Guid& instance, const std::string& user, const Guid& writer) {
-  members_[instance] = Member{user, writer};
+void NameBinding::OnMember(const Guid& instance, const std::string& user, const Guid& writer, msg::NodeKind kind,
+                           double view_Hz) {
+  members_[instance] = Member{user, writer, kind, view_Hz};
+}
+
+Viewers NameBinding::viewers() const {
+  Viewers v;
+  for (const auto& [instance, m] : members_) {
+    if (m.kind != msg::NODE_GRAPHICS) continue;
+    ++v.count;
+    v.fastest_Hz = std::max(v.fastest_Hz, m.view_Hz);
+  }
+  return v;
 }
 
 void NameBinding::OnMemberGone(const Guid& instance) { members_.erase(instance); }
@@ -61,7 +72,7 @@ void NameBinding::Follow(Reader<msg::MemberInfo>& reader) {
   SampleMeta meta;
   while (reader.TakeNext(info, meta)) {
     if (meta.valid_data && meta.instance_state == InstanceState::kAlive && !info.leaving()) {
-      OnMember(meta.instance, info.user().to_string(), meta.writer);
+      OnMember(meta.instance, info.user().to_string(), meta.writer, info.kind(), info.view_Hz());
     } else {
       OnMemberGone(meta.instance);
     }

@@ -18,6 +18,8 @@
 #include <fastdds/dds/subscriber/Subscriber.hpp>
 #include <fastdds/dds/topic/Topic.hpp>
 #include <fastdds/dds/topic/TypeSupport.hpp>
+
+#include <cstdio>
 #include <fastdds/rtps/flowcontrol/FlowControllerDescriptor.hpp>
 
 #include <cstdlib>
@@ -98,6 +100,7 @@ namespace detail {
 // One topic's counters, shared by the participant and its endpoints on that topic.
 struct TrafficCounters {
   std::atomic<std::uint64_t> written{0};
+  std::atomic<std::uint64_t> written_bytes{0};  // serialized payload (CDR with its header)
   std::atomic<std::uint64_t> taken{0};
   std::atomic<std::uint64_t> lost_by_gone_readers{0};  // readers deleted: their last lost count
 };
@@ -157,11 +160,18 @@ namespace {
 class WriterImpl final : public detail::UntypedWriter {
  public:
   WriterImpl(std::shared_ptr<detail::ParticipantImpl> owner, fdds::DataWriter* w, std::string topic)
-      : owner_(std::move(owner)), w_(w), topic_(std::move(topic)), counters_(owner_->CountersFor(topic_)) {}
+      : owner_(std::move(owner)),
+        w_(w),
+        topic_(std::move(topic)),
+        counters_(owner_->CountersFor(topic_)),
+        type_(w_->get_type()) {}
   ~WriterImpl() override { owner_->publisher->delete_datawriter(w_); }
   void Write(const void* sample) override {
     if (!w_->write(const_cast<void*>(sample))) throw DdsError("DDS: write on " + topic_ + " failed");
     counters_->written.fetch_add(1, std::memory_order_relaxed);
+    // The payload each matched reader is sent (RTPS, UDP and IP headers come on top).
+    counters_->written_bytes.fetch_add(type_.get_serialized_size_provider(const_cast<void*>(sample))(),
+                                       std::memory_order_relaxed);
   }
   void Dispose(const void* sample) override {
     Check(w_->dispose(const_cast<void*>(sample), fdds::HANDLE_NIL), "dispose on " + topic_);
@@ -188,6 +198,7 @@ class WriterImpl final : public detail::UntypedWriter {
   fdds::DataWriter* w_;
   std::string topic_;
   std::shared_ptr<detail::TrafficCounters> counters_;
+  fdds::TypeSupport type_;
 };
 
 // Writers that went away (unmatched: killed, lost, or deleted) or lost liveliness, and writers
@@ -423,6 +434,7 @@ std::vector<TopicTraffic> Participant::Traffic() const {
     TopicTraffic t;
     t.topic = topic;
     t.written = c->written.load(std::memory_order_relaxed);
+    t.written_bytes = c->written_bytes.load(std::memory_order_relaxed);
     t.taken = c->taken.load(std::memory_order_relaxed);
     t.lost = c->lost_by_gone_readers.load() + live_lost[topic];
     out.push_back(std::move(t));
@@ -438,7 +450,11 @@ std::string Participant::TrafficSummary() const {
     std::string name = t.topic;
     if (name.rfind("handshare/", 0) == 0) name.erase(0, 10);
     line += sep + name;
-    if (t.written > 0) line += " out " + std::to_string(t.written);
+    if (t.written > 0) {
+      char kb[32];
+      std::snprintf(kb, sizeof kb, " (%.1f kB)", 1e-3 * static_cast<double>(t.written_bytes));
+      line += " out " + std::to_string(t.written) + kb;
+    }
     if (t.taken > 0 || t.lost > 0) line += " in " + std::to_string(t.taken);
     if (t.lost > 0) line += " lost " + std::to_string(t.lost);
     sep = "; ";

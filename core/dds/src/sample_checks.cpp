@@ -111,6 +111,7 @@ std::string CheckSceneState(const msg::SceneState& s, std::string_view session, 
   if (c.ok() && name.find_first_of("/\\") != std::string::npos) c.Fail("scene '" + name + "' is not a plain name");
   if (c.ok() && name.find("..") != std::string::npos) c.Fail("scene '" + name + "' is not a plain name");
   c.Vector("gravity_W_m_per_s2", s.gravity_W_m_per_s2(), 3, b.max_gravity_m_per_s2);
+  c.Range("tick_Hz", s.tick_Hz(), 0.0, b.max_rate_Hz);
   return c.reason();
 }
 
@@ -175,6 +176,7 @@ std::string CheckMemberInfo(const msg::MemberInfo& s, std::string_view session) 
   if (c.ok() && (kind < static_cast<int>(msg::NODE_WORLD_SERVER) || kind > static_cast<int>(msg::NODE_AUDIO_GUIDE))) {
     c.Fail("kind " + std::to_string(kind) + " is not a node kind");
   }
+  c.Range("view_Hz", s.view_Hz(), 0.0, SampleBounds{}.max_rate_Hz);
   return c.reason();
 }
 

@@ -41,6 +41,19 @@ TEST(NameBinding, ANameIsFreeAgainOnceItsMemberLeftOrItsWriterWasLost) {
   EXPECT_EQ(b.size(), 0u);
 }
 
+TEST(NameBinding, ThePresentViewersAndTheFastestFrameRate) {
+  NameBinding b;
+  b.OnMember(Instance(1), "alice", Endpoint(7, 1), msg::NODE_HAPTIC);
+  EXPECT_EQ(b.viewers().count, 0);
+  b.OnMember(Instance(2), "screen", Endpoint(8, 1), msg::NODE_GRAPHICS, 2.0);
+  b.OnMember(Instance(3), "wall", Endpoint(9, 1), msg::NODE_GRAPHICS, 60.0);
+  EXPECT_EQ(b.viewers().count, 2);
+  EXPECT_DOUBLE_EQ(b.viewers().fastest_Hz, 60.0);
+  b.OnWriterLost(Endpoint(9, 1));  // the wall screen was killed: the slower one sets the rate
+  EXPECT_EQ(b.viewers().count, 1);
+  EXPECT_DOUBLE_EQ(b.viewers().fastest_Hz, 2.0);
+}
+
 TEST(NameBinding, ANewAnnouncementOfAMemberMovesItsName) {
   NameBinding b;
   b.OnMember(Instance(1), "alice", Endpoint(7, 1));

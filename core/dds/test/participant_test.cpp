@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "handshare/dds/messages.hpp"
+#include "handshare/dds/serialization.hpp"
 
 namespace handshare::dds {
 namespace {
@@ -234,11 +235,14 @@ TEST(DdsParticipant, TrafficCountsWrittenAndTakenSamplesPerTopic) {
   const TopicTraffic out = find(a.Traffic(), std::string(topics::kControlEvent.name));
   const TopicTraffic got = find(b.Traffic(), std::string(topics::kControlEvent.name));
   EXPECT_EQ(out.written, 7u);
+  EXPECT_EQ(out.written_bytes, 7u * Serialize(event).size());  // the CDR payload, header included
   EXPECT_EQ(out.taken, 0u);
   EXPECT_EQ(got.written, 0u);
   EXPECT_EQ(got.taken, 7u);
   EXPECT_EQ(got.lost, 0u);
-  EXPECT_EQ(a.TrafficSummary(), "traffic: control_event out 7");
+  char summary[64];
+  std::snprintf(summary, sizeof summary, "traffic: control_event out 7 (%.1f kB)", 7e-3 * static_cast<double>(Serialize(event).size()));
+  EXPECT_EQ(a.TrafficSummary(), summary);
   EXPECT_EQ(b.TrafficSummary(), "traffic: control_event in 7");
   Participant idle(205, "s2", "idle");
   EXPECT_EQ(idle.TrafficSummary(), "traffic: none");

@@ -98,6 +98,9 @@ TEST(SampleChecks, SceneStatesNameAPlainWorldWithFiniteGravity) {
   s.scene("dinosaur");
   s.gravity_W_m_per_s2({0.0, 0.0, kNan});
   EXPECT_EQ(CheckSceneState(s, "museum"), "gravity_W_m_per_s2[2] is nan");
+  s.gravity_W_m_per_s2({0.0, 0.0, -9.81});
+  s.tick_Hz(std::numeric_limits<float>::infinity());
+  EXPECT_EQ(CheckSceneState(s, "museum"), "tick_Hz is inf (expected 0 to 10000)");
 }
 
 TEST(SampleChecks, ControlEventsOfUnknownKindOrIndexAreRefused) {
@@ -154,6 +157,11 @@ TEST(SampleChecks, DeviceStatesBoardsAndMembers) {
   EXPECT_EQ(CheckMemberInfo(m, "museum"), "");
   m.kind(static_cast<msg::NodeKind>(12));
   EXPECT_EQ(CheckMemberInfo(m, "museum"), "kind 12 is not a node kind");
+  m.kind(msg::NODE_GRAPHICS);
+  m.view_Hz(30.0f);
+  EXPECT_EQ(CheckMemberInfo(m, "museum"), "");
+  m.view_Hz(-1.0f);
+  EXPECT_EQ(CheckMemberInfo(m, "museum"), "view_Hz is -1 (expected 0 to 10000)");
 }
 
 TEST(DroppedSamples, CountsPerTopicAndPrintsAFloodOncePerThousand) {

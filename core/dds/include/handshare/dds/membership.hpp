@@ -13,8 +13,9 @@ class MemberAnnouncement {
   /// @param user    user name (haptic nodes) or node name (others); unique in the session.
   /// @param kind    what the node is.
   /// @param device  "sim", "hiro", "replay" for haptic nodes, "" otherwise.
+  /// @param view_Hz graphics nodes: how often they read device states (their frame rate).
   MemberAnnouncement(Participant& participant, const std::string& user, msg::NodeKind kind,
-                     const std::string& device = "");
+                     const std::string& device = "", double view_Hz = 0.0);
   /// Disposes the member entry: a clean leave.
   ~MemberAnnouncement();
   MemberAnnouncement(const MemberAnnouncement&) = delete;

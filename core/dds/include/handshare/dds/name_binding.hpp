@@ -26,10 +26,18 @@ std::string ParticipantOf(const Guid& endpoint);
 /// `announced`: "user 'alice' joined from participant X, this sample came from participant Y".
 std::string AuthorMismatch(const std::string& user, const Guid& announced, const Guid& writer);
 
+/// The graphics nodes present and the fastest frame rate among them (MemberInfo::view_Hz).
+struct Viewers {
+  int count = 0;
+  double fastest_Hz = 0.0;
+};
+
 class NameBinding {
  public:
-  /// A live member sample: member `instance` (its key hash) is `user`, announced by `writer`.
-  void OnMember(const Guid& instance, const std::string& user, const Guid& writer);
+  /// A live member sample: member `instance` (its key hash) is `user`, announced by `writer`;
+  /// a graphics node gives its frame rate (view_Hz), other nodes 0.
+  void OnMember(const Guid& instance, const std::string& user, const Guid& writer, msg::NodeKind kind = msg::NODE_HAPTIC,
+                double view_Hz = 0.0);
   /// Member `instance` left (disposed) or has no writer any more.
   void OnMemberGone(const Guid& instance);
   /// A member_info writer went away (killed or lost): the members it announced are gone.
@@ -45,11 +53,16 @@ class NameBinding {
   /// Takes every member sample and lost member writer of `reader` (empty: nothing).
   void Follow(Reader<msg::MemberInfo>& reader);
   std::size_t size() const { return members_.size(); }
+  /// The present graphics nodes, for a writer of device states that sends only as often as
+  /// the fastest of them draws.
+  Viewers viewers() const;
 
  private:
   struct Member {
     std::string user;
     Guid writer{};
+    msg::NodeKind kind = msg::NODE_HAPTIC;
+    double view_Hz = 0.0;
   };
   std::map<Guid, Member> members_;
 };

@@ -54,6 +54,7 @@ struct WriterChange {
 struct TopicTraffic {
   std::string topic;
   std::uint64_t written = 0;
+  std::uint64_t written_bytes = 0;  ///< serialized payload of the samples written (CDR, its 4-byte header included)
   std::uint64_t taken = 0;
   std::uint64_t lost = 0;
 };

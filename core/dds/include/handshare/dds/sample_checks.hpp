@@ -30,6 +30,7 @@ struct SampleBounds {
   double max_angular_speed_rad_per_s = 1000.0;
   double max_fingertip_radius_m = 0.05;
   double max_gravity_m_per_s2 = 100.0;
+  double max_rate_Hz = 10000.0;           ///< a reader's announced rate (view_Hz, tick_Hz)
 };
 
 /// "" when the sample may be applied, else what is wrong with it and where.
