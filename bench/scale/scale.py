@@ -11,9 +11,10 @@ along x.
 
 Per process: CPU (user + system time over the measured window, % of one core), resident
 memory; per haptic user: its loop's rate, p99 jitter, overruns and worst step (its exit line),
-its bridge's rate and p99 tick interval, what it sent; the world server's tick work and interval
-p99; per process the reliable samples the middleware reports lost on the way in (member_info,
-scene_state, message_board, control_event, deformation: target 0) and the bytes written.
+its bridge's rate and p99 tick interval; the world server's tick work and interval p99; per
+process the reliable samples the middleware reports lost on the way in (member_info,
+scene_state, message_board, control_event, deformation: target 0) and the payload bytes it
+wrote per second (all topics; device states and contact sets apart), over its whole run.
 
 usage: scale.py --bin-dir BUILD [--users 8] [--spectators 8] [--seconds 60] [--fps 5]
                 [--streams paced|full] [--sweep 2,4,6,8,...] [--domain 215] [--work DIR]
@@ -163,12 +164,13 @@ def run_session(bin_dir, work, domain, users=8, spectators=8, seconds=60.0, fps=
         commands[f"screen{k + 1}"] = [exe("graphics_node", "graphics_node"), *common, "--name", f"screen{k + 1}",
                                       "--headless", "--fps", str(fps), "--frames", str(int((seconds + 300) * fps)),
                                       "--out", os.path.join(work, f"screen{k + 1}")]
-    procs, logs = {}, {}
+    procs, logs, started, ended = {}, {}, {}, {}
     paths = {label: os.path.join(work, label + ".log") for label in commands}
     try:
         for label, argv in commands.items():
             logs[label] = open(paths[label], "w")
             procs[label] = subprocess.Popen(argv, stdout=logs[label], stderr=subprocess.STDOUT, env=env)
+            started[label] = time.monotonic()
             if label == "world_server":
                 wait_for(paths[label], r"scene 'commons'", 60, procs)
         # Every user has its world and has begun its script; every screen has the world.
@@ -202,6 +204,7 @@ def run_session(bin_dir, work, domain, users=8, spectators=8, seconds=60.0, fps=
             except subprocess.TimeoutExpired:
                 procs[label].kill()
                 procs[label].wait()
+            ended[label] = time.monotonic()
             logs[label].close()
     text = {label: open(paths[label]).read() for label in commands}
     rows = []
@@ -209,12 +212,17 @@ def run_session(bin_dir, work, domain, users=8, spectators=8, seconds=60.0, fps=
         kind = ("world_server" if label == "world_server" else "audio_guide" if label == "audio_guide"
                 else "haptic" if label.startswith("user") else "spectator")
         traffic = parse_traffic(text[label])
+        run_s = ended[label] - started[label]  # what the traffic counts cover (joining to the end)
+        kB_s = lambda topics: sum(t["kB"] for topic, t in traffic.items() if topic in topics) / run_s  # noqa: E731
         row = {"node": label, "kind": kind, "exit": procs[label].returncode,
                "cpu_pct": 100.0 * (cpu1[label] - cpu0[label]) / window if cpu1[label] is not None else None,
                "rss_mb": rss[label],
                "reliable_lost": sum(t["lost"] for topic, t in traffic.items() if topic in RELIABLE),
                "best_effort_lost": sum(t["lost"] for topic, t in traffic.items() if topic not in RELIABLE),
-               "out_kB": sum(t["kB"] for t in traffic.values()),
+               "out_kB_per_s": sum(t["kB"] for t in traffic.values()) / run_s,
+               "device_kB_per_s": kB_s(("device_state",)),
+               "contact_kB_per_s": kB_s(("contact_set",)),
+               "run_s": run_s,
                "traffic": traffic}
         if kind == "haptic":
             row.update(parse_haptic(text[label]))
@@ -226,7 +234,7 @@ def run_session(bin_dir, work, domain, users=8, spectators=8, seconds=60.0, fps=
 
 COLUMNS = ["users", "spectators", "node", "kind", "cpu_pct", "rss_mb", "loop_Hz", "jitter_p99_us", "jitter_max_us",
            "overruns", "step_p99_us", "bridge_Hz", "bridge_p99_ms", "tick_work_p99_us", "tick_interval_p99_ms",
-           "reliable_lost", "out_kB", "load"]
+           "reliable_lost", "out_kB_per_s", "device_kB_per_s", "contact_kB_per_s", "load"]
 
 
 def fmt(v):
@@ -253,7 +261,9 @@ def summary_row(users, spectators, result):
             "tick_work_p99_us": server.get("tick_work_p99_us"),
             "tick_interval_p99_ms": server.get("tick_interval_p99_ms"),
             "reliable_lost": sum(r["reliable_lost"] for r in rows),
-            "out_kB": sum(r["out_kB"] for r in rows),
+            "out_kB_per_s": sum(r["out_kB_per_s"] for r in rows),
+            "device_kB_per_s": sum(r["device_kB_per_s"] for r in rows),
+            "contact_kB_per_s": sum(r["contact_kB_per_s"] for r in rows),
             "load": "->".join(result["load"])}
 
 
