@@ -17,10 +17,10 @@ scene_state, message_board, control_event, deformation: target 0) and the payloa
 wrote per second (all topics; device states and contact sets apart), over its whole run.
 
 usage: scale.py --bin-dir BUILD [--users 8] [--spectators 8] [--seconds 60] [--fps 5]
-                [--streams paced|full] [--sweep 2,4,6,8,...] [--domain 215] [--work DIR]
+                [--streams paced|full] [--sweep 2,4,6,8,... [--sweep-spectators K]] [--domain 215] [--work DIR]
                 [--csv FILE] [--png FILE]
---sweep runs one session per user count (spectators = users, as in the point's 8 + 8) and
-writes one summary row per session; otherwise one session, a row per process. A bench: it
+--sweep runs one session per user count (with as many spectators, as in the point's 8 + 8, or
+--sweep-spectators K of them) and writes one summary row per session; otherwise one session, a row per process. A bench: it
 asserts nothing (tests/scale_test.py runs one session and checks what must hold).
 """
 import argparse
@@ -232,7 +232,7 @@ def run_session(bin_dir, work, domain, users=8, spectators=8, seconds=60.0, fps=
     return {"rows": rows, "window_s": window, "logs": text, "load": (load_before, load_after), "session": session}
 
 
-COLUMNS = ["users", "spectators", "node", "kind", "cpu_pct", "rss_mb", "loop_Hz", "jitter_p99_us", "jitter_max_us",
+COLUMNS = ["users", "spectators", "node", "kind", "cpu_pct", "server_cpu_pct", "haptic_cpu_pct", "spectator_cpu_pct", "rss_mb", "loop_Hz", "jitter_p99_us", "jitter_max_us",
            "overruns", "step_p99_us", "bridge_Hz", "bridge_p99_ms", "tick_work_p99_us", "tick_interval_p99_ms",
            "reliable_lost", "out_kB_per_s", "device_kB_per_s", "contact_kB_per_s", "load"]
 
@@ -248,8 +248,12 @@ def summary_row(users, spectators, result):
     rows = result["rows"]
     haptic = [r for r in rows if r["kind"] == "haptic" and "loop_Hz" in r]
     server = next(r for r in rows if r["kind"] == "world_server")
+    mean = lambda values: sum(values) / len(values) if values else None  # noqa: E731
     return {"users": users, "spectators": spectators, "node": "all", "kind": "summary",
             "cpu_pct": sum(r["cpu_pct"] or 0.0 for r in rows),
+            "server_cpu_pct": server["cpu_pct"],
+            "haptic_cpu_pct": mean([r["cpu_pct"] or 0.0 for r in haptic]),
+            "spectator_cpu_pct": mean([r["cpu_pct"] or 0.0 for r in rows if r["kind"] == "spectator"]),
             "rss_mb": sum(r["rss_mb"] or 0.0 for r in rows),
             "loop_Hz": min((r["loop_Hz"] for r in haptic), default=None),
             "jitter_p99_us": max((r["jitter_p99_us"] for r in haptic), default=None),
@@ -276,6 +280,7 @@ def main():
     ap.add_argument("--fps", type=float, default=5.0)
     ap.add_argument("--streams", choices=("paced", "full"), default="paced")
     ap.add_argument("--sweep", default="")
+    ap.add_argument("--sweep-spectators", type=int, default=-1)
     ap.add_argument("--domain", type=int, default=215)
     ap.add_argument("--work", default="/tmp/handshare-scale")
     ap.add_argument("--csv", default="")
@@ -284,9 +289,10 @@ def main():
     out_rows = []
     if a.sweep:
         for users in [int(u) for u in a.sweep.split(",")]:
-            result = run_session(a.bin_dir, os.path.join(a.work, f"u{users}"), a.domain, users, users, a.seconds, a.fps,
+            screens = users if a.sweep_spectators < 0 else a.sweep_spectators
+            result = run_session(a.bin_dir, os.path.join(a.work, f"u{users}"), a.domain, users, screens, a.seconds, a.fps,
                                  a.streams)
-            row = summary_row(users, users, result)
+            row = summary_row(users, screens, result)
             out_rows.append(row)
             print(", ".join(f"{c} {fmt(row.get(c))}" for c in COLUMNS), flush=True)
     else:
@@ -309,7 +315,9 @@ def main():
         ax1.plot(n, [r["jitter_p99_us"] for r in out_rows], marker="o", label="worst loop's jitter p99 (us)")
         ax1.plot(n, [r["jitter_max_us"] / 10.0 for r in out_rows], marker="s", label="worst loop's jitter max / 10 (us)")
         ax1.plot(n, [r["overruns"] for r in out_rows], marker="^", label="most overruns of one loop")
-        ax1.set_xlabel(f"haptic users (and as many spectators at {a.fps:g} fps)")
+        screens = "as many spectators" if a.sweep_spectators < 0 else (
+            f"{a.sweep_spectators} spectator" + ("" if a.sweep_spectators == 1 else "s"))
+        ax1.set_xlabel(f"haptic users ({screens} at {a.fps:g} fps)")
         ax1.set_title(f"haptic loops, {a.seconds:g} s")
         ax1.legend(fontsize=8)
         ax2.plot(n, [r["cpu_pct"] for r in out_rows], marker="o", label="CPU, all processes (% of one core)")
