@@ -114,6 +114,8 @@ def run(h, domain):
         check(text in server, f"the server did not say '{text}':\n{server}")
     # State only the world server writes, written by another participant, malformed.
     for label, text in (("alice", "dropped a bad scene_state sample from 'participant "),
+                        ("alice", "dropped a bad control_state sample from 'participant "),
+                        ("bob", "index is 5000 (expected -1 to 1000)"),
                         ("bob", "is not a plain name"),
                         ("spectator", "scene '../../../etc/passwd' is not a plain name"),
                         ("spectator", "dropped a bad message_board sample from 'participant "),

@@ -938,7 +938,50 @@ def case_rejoin(h, domain):
           f"through them (trace rows {len(rows)}, largest gap {1e3 * max(gaps):.0f} ms)")
 
 
-CASES = {"shared_session": case_shared_session, "encyclopedia": case_encyclopedia, "killed_member": case_killed_member,
+def case_lever_round_trip(h, domain):
+    """Controls keep their state for everyone (the world server's control states): on the Moon,
+    the lever to Mars and back. Mars' gravity comes as a new revision of the same world, which
+    every haptic node rebuilds; the lever must come back in Mars' detent, so that pushing it
+    back reaches the Moon's detent and the Moon's gravity. The held weight of the ball after the
+    round trip is m g(Moon) within 1 %, as before it (before control states it was Mars': the
+    rebuilt lever was already in the Moon's detent, and the push back did nothing)."""
+    session = f"it-lever-{os.getpid()}"
+    trace = os.path.join(h.work, "alice.csv")
+    state_file = os.path.join(h.work, "spectator_state.json")
+    h.start("world_server", "world_server", "--domain", domain, "--session", session, "--scene", "solar_system")
+    h.wait_for_line("world_server", "message board #1", 30)
+    # A screen draws the lever where the server's control state says (its state file at exit).
+    h.start("spectator", "graphics_node", "--domain", domain, "--session", session, "--headless",
+            "--frames", 100000, "--fps", 2, "--out", os.path.join(h.work, "frames"), "--state-out", state_file)
+    h.start("alice", "haptic_node", "--domain", domain, "--session", session, "--user", "alice",
+            "--script", os.path.join(DATA, "lever_alice.hand"), "--trace", trace)
+    h.wait_for_line("alice", "hand script starts at loop time", 60)
+    # Two lever moves (Mars, then the Moon), each a new revision of the world at alice's node.
+    h.wait_for_line("alice", "revision 2: 3 objects, 3 controls, gravity -3.71", 90)
+    h.wait_for_line("spectator", "control 'lever_planet' of 'solar_system' at index 1 (by alice)", 60)
+    check(h.stop("spectator", 20) == 0, "the spectator did not end cleanly")
+    shown = read_json(state_file)
+    check(shown["controls"].get("lever_planet") == {"index": 1, "engaged": False},
+          f"the spectator should show the lever in Mars' detent: {shown['controls']}")
+    h.wait_for_line("alice", "revision 3: 3 objects, 3 controls, gravity -1.62", 90)
+    moves = re.findall(r"control lever_planet by alice: gravity (-?[\d.]+)", h.log("world_server"))
+    check(moves == ["-3.71", "-1.62"], f"the lever should have set Mars' gravity, then the Moon's: {moves}")
+    with open(os.path.join(HERE, "..", "assets", "scenes", "solar_system.json")) as f:
+        ball = [o for o in json.load(f)["objects"] if o["id"] == "ball"][0]
+    # The script ends holding the ball still for 4 s: two holds in the trace.
+    holds = wait_until("two holds of the ball in alice's trace", 90,
+                       lambda: (lambda hs: hs if len(hs) >= 2 else None)(held_weights(trace, 0.5 * ball["mass_kg"] * 1.62)))
+    check(len(holds) == 2, f"alice's trace should hold the ball still twice (Moon, Moon after Mars): {holds}")
+    expected = ball["mass_kg"] * 1.62
+    for (t0, t1, measured), name in zip(holds, ("Moon", "Moon after Mars")):
+        print(f"{name}: held weight {measured:.4f} N over [{t0:.2f}, {t1:.2f}] s, m g(Moon) = {expected:.4f} N")
+        check(abs(measured - expected) <= 0.01 * expected,
+              f"{name}: held weight {measured:.4f} N, expected m g(Moon) = {expected:.4f} N within 1%")
+    check(h.stop("alice", 30) == 0, "alice's haptic node failed")
+    check(h.stop("world_server", 30) == 0, "world_server failed")
+
+
+CASES = {"shared_session": case_shared_session, "lever_round_trip": case_lever_round_trip, "encyclopedia": case_encyclopedia, "killed_member": case_killed_member,
          "vanished_member": case_vanished_member,
          "signals": case_signals, "bad_input": case_bad_input, "rejoin": case_rejoin}
 

@@ -39,14 +39,15 @@ T_CONTACT=handshare/contact_set
 T_OBJECT=handshare/object_state
 T_DEFORM=handshare/deformation
 T_EVENT=handshare/control_event
+T_CONTROL=handshare/control_state
 T_STATS=handshare/loop_statistics
-ALL_TOPICS="$T_MEMBER $T_SCENE $T_BOARD $T_DEVICE $T_CONTACT $T_OBJECT $T_DEFORM $T_EVENT $T_STATS"
+ALL_TOPICS="$T_MEMBER $T_SCENE $T_BOARD $T_DEVICE $T_CONTACT $T_OBJECT $T_DEFORM $T_EVENT $T_STATS $T_CONTROL"
 
 # Least privilege, from who creates which writer and reader (grep MakeWriter / MakeReader):
 # publish topics | subscribe topics of each role.
 role_publish() {
   case "$1" in
-    world_server) echo "$T_SCENE $T_BOARD $T_OBJECT $T_DEFORM" ;;
+    world_server) echo "$T_SCENE $T_BOARD $T_OBJECT $T_DEFORM $T_CONTROL" ;;
     haptic) echo "$T_MEMBER $T_DEVICE $T_CONTACT $T_EVENT $T_STATS" ;;
     spectator | audio_guide) echo "$T_MEMBER" ;;
     recorder) echo "" ;;
@@ -56,8 +57,8 @@ role_publish() {
 role_subscribe() {
   case "$1" in
     world_server) echo "$T_MEMBER $T_CONTACT $T_EVENT" ;;
-    haptic) echo "$T_MEMBER $T_SCENE $T_CONTACT $T_OBJECT" ;;
-    spectator) echo "$T_MEMBER $T_SCENE $T_BOARD $T_DEVICE $T_OBJECT $T_DEFORM" ;;
+    haptic) echo "$T_MEMBER $T_SCENE $T_CONTACT $T_OBJECT $T_CONTROL" ;;
+    spectator) echo "$T_MEMBER $T_SCENE $T_BOARD $T_DEVICE $T_OBJECT $T_DEFORM $T_CONTROL" ;;
     audio_guide) echo "$T_BOARD" ;;
     recorder) echo "$ALL_TOPICS" ;;
     player) echo "" ;;

@@ -1,5 +1,7 @@
 #include "handshare/graphics/scene_replica.hpp"
 
+#include "handshare/scene/scene.hpp"
+
 #include <cmath>
 #include <fstream>
 #include <stdexcept>
@@ -35,7 +37,31 @@ render::Rgb RgbOf(const msg::SceneObject& o) { return {o.rgb()[0], o.rgb()[1], o
 }  // namespace
 
 SceneReplica::SceneReplica(std::filesystem::path assets_dir, std::ostream& errors, std::string prefix)
-    : errors_(errors), prefix_(std::move(prefix)), meshes_(std::move(assets_dir)) {}
+    : errors_(errors), prefix_(std::move(prefix)), scenes_dir_(assets_dir / "scenes"), meshes_(std::move(assets_dir)) {}
+
+void SceneReplica::OnControlState(const msg::ControlState& state) {
+  control_states_[state.control_id().to_string()] = {state.scene().to_string(), state.index(), state.engaged()};
+}
+
+std::optional<std::pair<std::int32_t, bool>> SceneReplica::control_state(const std::string& control_id) const {
+  const auto it = control_states_.find(control_id);
+  if (it == control_states_.end() || it->second.scene != scene_) return std::nullopt;
+  return std::pair{it->second.index, it->second.engaged};
+}
+
+Eigen::Isometry3d SceneReplica::DrawnPose(const std::string& id, const Eigen::Isometry3d& X_WO) const {
+  const auto g = control_geometry_.find(id);
+  const auto state = control_state(id);
+  if (g == control_geometry_.end() || !state) return X_WO;
+  const auto [index, engaged] = *state;
+  if (g->second.lever && index >= 0 && index < std::max(1, g->second.detents)) {
+    // The handle turns about the hinge axis x of C, from z towards -y as the angle grows.
+    const double angle = g->second.min_angle_rad + index * g->second.spacing_rad;
+    return X_WO * Eigen::AngleAxisd(angle, Eigen::Vector3d::UnitX());
+  }
+  if (g->second.push && engaged) return X_WO * Eigen::Translation3d(0.0, 0.0, -g->second.travel_m);
+  return X_WO;
+}
 
 void SceneReplica::OnSceneState(const msg::SceneState& state) {
   const std::string scene = state.scene().to_string();
@@ -48,6 +74,28 @@ void SceneReplica::OnSceneState(const msg::SceneState& state) {
     objects_.clear();
     reported_.clear();
     if (has_scene_) ++stats_.scene_changes;
+    // The controls' geometry, for drawing them in their state (the meshes are not loaded
+    // again). No file of that name (a scene these assets do not have): its controls at rest.
+    control_geometry_.clear();
+    std::error_code ec;
+    if (std::filesystem::exists(scenes_dir_ / (scene + ".json"), ec)) {
+      try {
+        const scene::Scene file = scene::LoadSceneByName(scene, scenes_dir_, scene::LoadOptions{.load_meshes = false});
+        for (const auto& c : file.controls) {
+          ControlGeometry g;
+          g.lever = c.type == scene::ControlType::kLever;
+          g.push = c.type == scene::ControlType::kButton || c.type == scene::ControlType::kArrow;
+          g.min_angle_rad = c.lever.min_angle_rad;
+          g.detents = c.lever.detents;
+          g.spacing_rad = (c.lever.max_angle_rad - c.lever.min_angle_rad) / std::max(1, c.lever.detents - 1);
+          g.travel_m = c.push.travel_m;
+          control_geometry_[c.id] = g;
+        }
+      } catch (const std::exception& e) {
+        errors_ << prefix_ << "cannot read the controls of scene '" << scene << "' (drawn at rest): " << e.what()
+                << "\n";
+      }
+    }
   }
   has_scene_ = true;
   scene_ = scene;
@@ -148,7 +196,7 @@ DeformationStats SceneReplica::deformation_stats() const {
 void SceneReplica::AddObjects(render::SceneView& view) const {
   for (const std::string& id : order_) {
     const Object& o = objects_.at(id);
-    const Eigen::Isometry3d& X_WO = o.X_WO();
+    const Eigen::Isometry3d X_WO = DrawnPose(id, o.X_WO());
     const auto& h = o.spec.half_extent_m();
     if (o.mesh) {
       render::TriangleMesh mesh = *o.mesh;

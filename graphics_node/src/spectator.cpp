@@ -55,6 +55,7 @@ class WorldView {
         deformation_reader_(dds::MakeReader<msg::Deformation>(p, dds::topics::kDeformation)),
         object_reader_(dds::MakeReader<msg::ObjectState>(p, dds::topics::kObjectState)),
         member_reader_(dds::NameBinding::MakeMemberReader(p, [this](const std::string& line) { Say(line); })),
+        control_reader_(MakeControlReader(p)),
         world_(assets_dir, std::cerr, "[graphics_node " + name + "] ") {}
 
   void Update() {
@@ -106,6 +107,16 @@ class WorldView {
         hands_[state.user().to_string()] = UserHand{state, Clock::now()};
       }
     }
+    msg::ControlState control;
+    while (control_reader_ && control_reader_.TakeNext(control, meta)) {
+      if (meta.valid_data && Accept("control_state", "participant " + dds::ParticipantOf(meta.writer),
+                                    dds::CheckControlState(control, session_))) {
+        world_.OnControlState(control);
+        Arrived("control '" + control.control_id().to_string() + "' of '" + control.scene().to_string() +
+                "' at index " + std::to_string(control.index()) + (control.engaged() ? ", engaged" : "") +
+                (control.user().to_string().empty() ? "" : " (by " + control.user().to_string() + ")"));
+      }
+    }
     msg::MessageBoard board;
     while (board_reader_.TakeNext(board, meta)) {
       if (meta.valid_data && Accept("message_board", "participant " + dds::ParticipantOf(meta.writer), dds::CheckMessageBoard(board, session_))) {
@@ -139,10 +150,15 @@ class WorldView {
                      {"q_WO_wxyz", {q.w(), q.x(), q.y(), q.z()}},
                      {"from", world_.pose_received(id) ? "object_state" : "scene_state"}};
     }
+    nlohmann::ordered_json controls = nlohmann::ordered_json::object();
+    for (const std::string& id : world_.object_ids()) {
+      if (const auto state = world_.control_state(id)) controls[id] = {{"index", state->first}, {"engaged", state->second}};
+    }
     const nlohmann::ordered_json out = {{"scene", scene_name_},
                                         {"revision", scene_revision_},
                                         {"board", {{"message_id", board_id_}, {"text", caption_}}},
-                                        {"objects", std::move(objects)}};
+                                        {"objects", std::move(objects)},
+                                        {"controls", std::move(controls)}};
     std::filesystem::path tmp = file;
     tmp += ".tmp";
     {
@@ -187,6 +203,17 @@ class WorldView {
     return dropped_.Accept(topic, sender, reason, [this](const std::string& line) { Say(line); });
   }
   void Say(const std::string& line) const { std::fprintf(stderr, "%s%s\n", prefix_.c_str(), line.c_str()); }
+  /// Under DDS-Security a keystore made before control states existed refuses the reader: the
+  /// spectator draws controls at rest, and says so.
+  dds::Reader<msg::ControlState> MakeControlReader(dds::Participant& p) {
+    try {
+      return dds::MakeReader<msg::ControlState>(p, dds::topics::kControlState);
+    } catch (const dds::DdsError& e) {
+      Say(std::string("cannot read the session's control states (") + e.what() +
+          "): controls are drawn at rest; make the keystore again");
+      return {};
+    }
+  }
 
   std::string session_;
   Clock::time_point joined_;
@@ -202,6 +229,7 @@ class WorldView {
   dds::Reader<msg::Deformation> deformation_reader_;
   dds::Reader<msg::ObjectState> object_reader_;
   dds::Reader<msg::MemberInfo> member_reader_;
+  dds::Reader<msg::ControlState> control_reader_;  // empty: a keystore without the grant
   dds::NameBinding names_;  // present users and the participants that announced them
   msg::Deformation deformation_;  // reused: a sample holds up to 16k values
   SceneReplica world_;

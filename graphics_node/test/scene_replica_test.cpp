@@ -5,6 +5,7 @@
 #include <cmath>
 #include <fstream>
 #include <limits>
+#include <map>
 #include <set>
 #include <sstream>
 
@@ -64,6 +65,57 @@ TEST(SceneReplica, MeshObjectIsTheFilesMeshAtItsPose) {
     for (int k = 0; k < 3; ++k) ASSERT_EQ(drawn.triangles[t][k], static_cast<std::uint32_t>(tail.triangles[t][k]));
   }
   EXPECT_FLOAT_EQ(drawn.rgb.g, 0.45F);
+}
+
+// The world server's control states: the solar system's lever drawn in Mars' detent (turned
+// 0.6 rad about its hinge axis x), a pressed arrow down by its travel; states of another world,
+// or of a world left, are not drawn.
+TEST(SceneReplica, ControlsAreDrawnWhereTheirStateLeftThem) {
+  std::ostringstream errors;
+  SceneReplica world(kAssets, errors);
+  const scene::Scene solar = scene::LoadSceneByName("solar_system", kAssets / "scenes");
+  std::vector<msg::SceneObject> objects;
+  std::map<std::string, Eigen::Isometry3d> at_rest;
+  for (const auto& c : solar.controls) {
+    Eigen::Isometry3d X = Eigen::Isometry3d::Identity();
+    X.linear() = c.q_WC.toRotationMatrix();
+    X.translation() = c.p_WC_m;
+    at_rest[c.id] = X;
+    objects.push_back(Object(c.id, "box", "", X, {}));
+  }
+  world.OnSceneState(Scene("solar_system", 1, objects));
+  const auto drawn = [&](const std::string& id) {
+    render::SceneView view;
+    world.AddObjects(view);
+    for (std::size_t i = 0; i < objects.size(); ++i) {
+      if (objects[i].object_id().to_string() == id) {
+        return Eigen::Isometry3d(Eigen::Translation3d(view.boxes[i].p_W) * view.boxes[i].q_WB);
+      }
+    }
+    return Eigen::Isometry3d::Identity();
+  };
+  EXPECT_TRUE(drawn("lever_planet").isApprox(at_rest["lever_planet"], 1e-12));  // no state yet
+  msg::ControlState lever;
+  lever.control_id("lever_planet");
+  lever.scene("solar_system");
+  lever.index(1);
+  world.OnControlState(lever);
+  const Eigen::Isometry3d expected = at_rest["lever_planet"] * Eigen::AngleAxisd(0.6, Eigen::Vector3d::UnitX());
+  EXPECT_TRUE(drawn("lever_planet").isApprox(expected, 1e-9));
+  msg::ControlState arrow;
+  arrow.control_id("arrow_next");
+  arrow.scene("solar_system");
+  arrow.engaged(true);
+  world.OnControlState(arrow);
+  const double travel = solar.controls[2].push.travel_m;
+  ASSERT_EQ(solar.controls[2].id, "arrow_next");
+  EXPECT_TRUE(drawn("arrow_next").isApprox(at_rest["arrow_next"] * Eigen::Translation3d(0, 0, -travel), 1e-12));
+  // A state of another world's control of the same id is not this world's.
+  arrow.scene("dinosaur");
+  arrow.engaged(false);
+  world.OnControlState(arrow);
+  EXPECT_TRUE(drawn("arrow_next").isApprox(at_rest["arrow_next"], 1e-12));
+  EXPECT_EQ(errors.str(), "");
 }
 
 TEST(SceneReplica, EachMeshFileIsLoadedOnce) {

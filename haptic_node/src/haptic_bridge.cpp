@@ -10,6 +10,20 @@
 
 namespace handshare::haptic {
 
+namespace {
+/// Under DDS-Security a keystore made before control states existed refuses the reader: the
+/// node joins without them (controls start at rest in every world), and says so.
+dds::Reader<msg::ControlState> MakeControlStateReader(dds::Participant& participant, const HapticBridge::Say& say) {
+  try {
+    return dds::MakeReader<msg::ControlState>(participant, dds::topics::kControlState);
+  } catch (const dds::DdsError& e) {
+    say(std::string("cannot read the session's control states (") + e.what() +
+        "): controls start at rest in every world; make the keystore again");
+    return {};
+  }
+}
+}  // namespace
+
 HapticBridge::HapticBridge(const HapticNodeConfig& config, Device& device, HapticLoop& loop,
                            dds::Participant& participant, std::ostream* trace, Say say)
     : config_(config),
@@ -25,6 +39,7 @@ HapticBridge::HapticBridge(const HapticNodeConfig& config, Device& device, Hapti
       contact_reader_(dds::MakeReader<msg::ContactSet>(participant, dds::topics::kContactSet)),
       member_reader_(dds::NameBinding::MakeMemberReader(participant, say_)),
       object_reader_(dds::MakeReader<msg::ObjectState>(participant, dds::topics::kObjectState)),
+      control_reader_(MakeControlStateReader(participant, say_)),
       deadband_(session::DeadbandConfig{.weber = config.deadband_weber}),
       state_pacer_(config.publish_Hz),
       contact_pacer_(config.publish_Hz),
@@ -41,11 +56,29 @@ HapticBridge::HapticBridge(const HapticNodeConfig& config, Device& device, Hapti
   stats_msg_.session(config_.where.session);
 }
 
+void HapticBridge::FollowControlStates() {
+  if (!control_reader_) return;
+  msg::ControlState state;
+  dds::SampleMeta meta;
+  while (control_reader_.TakeNext(state, meta)) {
+    if (!meta.valid_data) continue;
+    const std::string bad = dds::CheckControlState(state, config_.where.session);
+    if (!dropped_.Accept("control_state", "participant " + dds::ParticipantOf(meta.writer), bad, say_)) continue;
+    const std::string id = state.control_id().to_string();
+    if (renderer_ && state.scene().to_string() == renderer_->scene().name &&
+        !renderer_->SetControlState(id, state.index(), state.engaged())) {
+      say_("control state of '" + id + "' not handed to the haptic loop: its queue is full");
+    }
+    control_states_[id] = state;
+  }
+}
+
 void HapticBridge::Tick() {
   const std::uint64_t start_ns = common::SteadyNowNs();
   if (last_tick_ns_ != 0) tick_interval_.Record(1e-3 * static_cast<double>(start_ns - last_tick_ns_));
   last_tick_ns_ = start_ns;
   ++ticks_;
+  FollowControlStates();
   ApplySceneChange();
   loop_.CollectRetired();
   if (renderer_) {
@@ -100,6 +133,10 @@ void HapticBridge::AdoptScene(const msg::SceneState& state) {
     }
   }
   if (!same_world) bodies_.clear();
+  // Controls where the session left them (a new revision of this world keeps its lever's detent).
+  for (const auto& [id, control] : control_states_) {
+    if (control.scene().to_string() == scene.name) next->PlaceControl(id, control.index(), control.engaged());
+  }
   peers_.Clear();
   deadband_.Reset();
   contact_pacer_.Reset();

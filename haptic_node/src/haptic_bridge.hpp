@@ -6,6 +6,7 @@
 #include <cstdint>
 #include <cstdio>
 #include <functional>
+#include <map>
 #include <memory>
 #include <ostream>
 #include <set>
@@ -75,6 +76,9 @@ class HapticBridge {
   /// A new scene revision (another world, or the same world with new gravity) gets a new
   /// renderer, handed to the haptic loop; dynamic bodies keep their poses in the same world.
   void ApplySceneChange();
+  /// The world server's control states: kept per control, and handed to the renderer of
+  /// their world (another user moved a control; a rebuilt world starts from them).
+  void FollowControlStates();
   /// The renderer's control events, to the world server (reliably).
   void ForwardControlEvents();
   /// The other users' contact sets, on this world's deformables.
@@ -114,6 +118,8 @@ class HapticBridge {
   dds::NameBinding names_;
   std::set<std::string> peers_heard_;  // peers whose contact sets were taken (each named once)
   dds::Reader<msg::ObjectState> object_reader_;
+  dds::Reader<msg::ControlState> control_reader_;  // empty: a keystore without the grant
+  std::map<std::string, msg::ControlState> control_states_;  // by control id, newest
 
   std::shared_ptr<SceneRenderer> renderer_;  ///< the bridge's handle; the loop holds its own
   std::uint32_t scene_revision_ = 0;

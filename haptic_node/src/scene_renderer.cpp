@@ -1,5 +1,8 @@
 #include "handshare/haptic/scene_renderer.hpp"
 
+#include <algorithm>
+#include <string_view>
+
 #include "handshare/common/clock.hpp"
 
 namespace handshare::haptic {
@@ -21,10 +24,24 @@ SceneRenderer::SceneRenderer(const scene::Scene& scene, const world::SceneModels
   // A hand on a control when this world appears (it pressed the arrow that brought it here, at
   // the same place) must leave before it can actuate it.
   controls_.SetGuardFirstVisits(true);
+  pending_controls_.resize(controls_.size());
   for (std::size_t i = 0; i < scene_.objects.size(); ++i) {
     const auto id = models_.Find(scene_.objects[i].id);
     if (id >= 0 && scene_.objects[i].motion.active()) moving_.emplace_back(id, i);
   }
+}
+
+void SceneRenderer::PlaceControl(const std::string& id, std::int32_t index, bool engaged) {
+  if (controls::Control* c = controls_.Find(id)) c->ApplyState(index, engaged);
+}
+
+bool SceneRenderer::SetControlState(const std::string& id, std::int32_t index, bool engaged) noexcept {
+  ControlCommand command;
+  const std::size_t n = std::min(id.size(), command.id.size() - 1);
+  std::copy_n(id.data(), n, command.id.data());
+  command.index = index;
+  command.engaged = engaged;
+  return control_in_.Push(command);
 }
 
 const std::string& SceneRenderer::IdOf(std::int32_t object) const noexcept {
@@ -91,7 +108,22 @@ void SceneRenderer::Render(double /*t_s*/, double dt_s, std::uint64_t now_ns, co
   }
   // 3. Contacts: rigid, dynamic and deformable objects, all hands on a deformable together.
   world.Step(dt_s, reading.p_WE, {remote_contacts_.data(), static_cast<std::size_t>(n_remote)});
-  // 4. Controls: their own force profiles and events.
+  // 4. Controls: where the session left them (a state from the world server waits while this
+  // hand is at the control), then their own force profiles and events.
+  ControlCommand command;
+  while (control_in_.Pop(command)) {
+    for (std::size_t i = 0; i < controls_.size(); ++i) {
+      if (controls_[i].id() == std::string_view(command.id.data())) {
+        pending_controls_[i] = PendingControl{true, command.index, command.engaged};
+      }
+    }
+  }
+  for (std::size_t i = 0; i < controls_.size(); ++i) {
+    if (pending_controls_[i].pending && !controls_[i].touched()) {
+      controls_[i].ApplyState(pending_controls_[i].index, pending_controls_[i].engaged);
+      pending_controls_[i].pending = false;
+    }
+  }
   event_buffer_.Clear();
   controls_.Step(dt_s, reading.p_WE, fingertip_radius_m_, f_controls_, event_buffer_);
   for (const auto& e : event_buffer_) {

@@ -52,6 +52,7 @@ int Run(const common::Options& o) {
   auto scenes = dds::MakeWriter<msg::SceneState>(participant, dds::topics::kSceneState);
   auto boards = dds::MakeWriter<msg::MessageBoard>(participant, dds::topics::kMessageBoard);
   auto members = dds::MakeWriter<msg::MemberInfo>(participant, dds::topics::kMemberInfo);
+  auto control_states = dds::MakeWriter<msg::ControlState>(participant, dds::topics::kControlState);
 
   // The round: one sample of each kind of damage.
   msg::ContactSet nan_u = ContactSet(where.session, object);
@@ -124,10 +125,16 @@ int Run(const common::Options& o) {
   odd_member.session(where.session);
   odd_member.user("mallory");
   odd_member.kind(static_cast<msg::NodeKind>(99));
+  msg::ControlState wild_lever;  // a detent no control has
+  wild_lever.control_id("lever_planet");
+  wild_lever.session(where.session);
+  wild_lever.scene("solar_system");
+  wild_lever.index(5000);
   std::printf("bad_sample_publisher: per round 5 contact_set (nan u, 5 m u, inf f, another session, nan body "
               "pose), 2 object_state (nan position, zero quaternion), 1 control_event (kind 99), 1 device_state "
               "(inf fingertip), 1 deformation (2 values for 3 ids), at %.0f Hz; every 100 rounds 1 scene_state "
-              "(scene '../../../etc/passwd'), 1 message_board (no language), 1 member_info (kind 99)\n",
+              "(scene '../../../etc/passwd'), 1 message_board (no language), 1 member_info (kind 99), 1 control_state "
+              "(index 5000)\n",
               rate_Hz);
   if (!forge.empty()) {
     std::printf("bad_sample_publisher: and in user '%s''s name: 1 contact_set, 1 device_state, 1 control_event "
@@ -152,6 +159,7 @@ int Run(const common::Options& o) {
       scenes.Write(smuggled);
       boards.Write(unlabelled);
       members.Write(odd_member);
+      control_states.Write(wild_lever);
     }
     if (!forge.empty()) {
       contacts.Write(forged_set);

@@ -1,5 +1,6 @@
 #include "handshare/world_server/control_actions.hpp"
 
+#include <algorithm>
 #include <cstdio>
 
 namespace handshare::server {
@@ -71,6 +72,40 @@ ControlOutcome ApplyControlAction(scene::Scene& scene, const ControlInput& input
   }
   if (!action.messages.empty()) out.boards.push_back(action.messages);
   return out;
+}
+
+std::vector<ControlStateRecord> InitialControlStates(const scene::Scene& scene) {
+  std::vector<ControlStateRecord> out;
+  for (const auto& c : scene.controls) {
+    ControlStateRecord r;
+    r.control_id = c.id;
+    r.scene = scene.name;
+    r.index = c.type == scene::ControlType::kLever ? 0 : -1;
+    out.push_back(std::move(r));
+  }
+  return out;
+}
+
+const ControlStateRecord* UpdateControlState(std::vector<ControlStateRecord>& states, const ControlInput& input) {
+  auto it = std::find_if(states.begin(), states.end(), [&](const auto& r) { return r.control_id == input.control_id; });
+  if (it == states.end()) return nullptr;
+  ControlStateRecord next = *it;
+  switch (input.kind) {
+    case controls::EventKind::kPressed: next.engaged = true; break;
+    case controls::EventKind::kReleased: next.engaged = false; break;
+    case controls::EventKind::kMoved: next.index = input.index; break;
+    case controls::EventKind::kOpened:
+      next.engaged = true;
+      next.index = 0;
+      break;
+    case controls::EventKind::kPageTurned: next.index = input.index; break;
+    case controls::EventKind::kMissed: return nullptr;
+  }
+  if (next.index == it->index && next.engaged == it->engaged) return nullptr;
+  next.user = input.user;
+  ++next.changes;
+  *it = std::move(next);
+  return &*it;
 }
 
 }  // namespace handshare::server

@@ -241,7 +241,8 @@ const std::vector<std::string>& RecordedTopics() {
   namespace t = dds::topics;
   static const std::vector<std::string> names{t::kMemberInfo.name, t::kSceneState.name,  t::kMessageBoard.name,
                                               t::kDeviceState.name, t::kContactSet.name, t::kObjectState.name,
-                                              t::kDeformation.name, t::kControlEvent.name, t::kLoopStatistics.name};
+                                              t::kDeformation.name, t::kControlEvent.name, t::kLoopStatistics.name,
+                                              t::kControlState.name};
   return names;
 }
 
@@ -340,6 +341,7 @@ bool WithSample(const RecordedSample& s, F&& f) {
   if (s.topic == t::kDeformation.name) return as(msg::Deformation{});
   if (s.topic == t::kControlEvent.name) return as(msg::ControlEvent{});
   if (s.topic == t::kLoopStatistics.name) return as(msg::LoopStatistics{});
+  if (s.topic == t::kControlState.name) return as(msg::ControlState{});
   return false;
 }
 
@@ -506,6 +508,7 @@ int RunRecorder(const RecordConfig& config) {
   taps.push_back(std::make_unique<Tap<msg::ContactSet>>(participant, t::kContactSet));
   taps.push_back(std::make_unique<Tap<msg::ObjectState>>(participant, t::kObjectState));
   taps.push_back(std::make_unique<Tap<msg::Deformation>>(participant, t::kDeformation));
+  taps.push_back(std::make_unique<Tap<msg::ControlState>>(participant, t::kControlState));
   taps.push_back(std::make_unique<Tap<msg::ControlEvent>>(
       participant, t::kControlEvent, [&](const msg::ControlEvent& e, const dds::SampleMeta& meta, std::int64_t unix_ns) {
         if (!meta.valid_data) return;
@@ -610,6 +613,7 @@ int RunPlayer(const PlayConfig& config) {
   outs[t::kDeformation.name] = std::make_unique<Out<msg::Deformation>>(participant, t::kDeformation);
   outs[t::kControlEvent.name] = std::make_unique<Out<msg::ControlEvent>>(participant, t::kControlEvent);
   outs[t::kLoopStatistics.name] = std::make_unique<Out<msg::LoopStatistics>>(participant, t::kLoopStatistics);
+  outs[t::kControlState.name] = std::make_unique<Out<msg::ControlState>>(participant, t::kControlState);
 
   std::printf("[session_play] playing %s (session '%s', %lld samples) into session '%s' on domain %d at speed %g\n",
               config.file.c_str(), info.session.c_str(), static_cast<long long>(info.samples), where.session.c_str(),

@@ -79,4 +79,16 @@ msg::Deformation ToDeformation(const std::string& object_id, const std::string& 
   return d;
 }
 
+msg::ControlState ToControlState(const ControlStateRecord& r, const std::string& session) {
+  msg::ControlState out;
+  out.control_id(r.control_id);
+  out.session(session);
+  out.scene(r.scene);
+  out.changes(r.changes);
+  out.index(r.index);
+  out.engaged(r.engaged);
+  out.user(r.user);
+  return out;
+}
+
 }  // namespace handshare::server

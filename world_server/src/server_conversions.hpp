@@ -31,6 +31,9 @@ std::optional<ControlInput> ToControlInput(const msg::ControlEvent& e);
 ControlRecord ToControlRecord(const msg::ControlEvent& e, const ControlInput& input, std::uint64_t unix_ns);
 
 /// The board sample of message number message_id.
+/// A control's state as published on handshare/control_state.
+msg::ControlState ToControlState(const ControlStateRecord& r, const std::string& session);
+
 msg::MessageBoard ToMessageBoard(const scene::Message& m, const std::string& session, std::uint32_t message_id);
 
 /// One deformation sample of object_id.

@@ -39,6 +39,7 @@ ServerSession::ServerSession(WorldServer& server, const WorldServerConfig& confi
       objects_(config.where.session, AuthorityOptions(config), clock_),
       scene_writer_(dds::MakeWriter<msg::SceneState>(participant, dds::topics::kSceneState)),
       board_writer_(dds::MakeWriter<msg::MessageBoard>(participant, dds::topics::kMessageBoard)),
+      control_state_writer_(dds::MakeWriter<msg::ControlState>(participant, dds::topics::kControlState)),
       object_writer_(dds::MakeWriter<msg::ObjectState>(participant, dds::topics::kObjectState)),
       deformation_writer_(dds::MakeWriter<msg::Deformation>(participant, dds::topics::kDeformation)),
       member_reader_(dds::MakeReader<msg::MemberInfo>(participant, dds::topics::kMemberInfo)),
@@ -64,6 +65,7 @@ ServerSession::ServerSession(WorldServer& server, const WorldServerConfig& confi
               scene_.name + "' (" + std::to_string(scene_.objects.size()) + " objects)");
   server_.OnSceneChange(scene_.name, scene_.title);
   objects_.SetScene(scene_);
+  ResetControlStates();
   ShowMessage(resume != nullptr && !resume->state.board.empty() ? resume->state.board : scene_.messages);
 }
 
@@ -128,8 +130,13 @@ void ServerSession::TakeControlEvents() {
     const auto input = ToControlInput(sample);
     if (!input) continue;  // CheckControlEvent refused every kind ToControlInput cannot map
     server_.OnControlEvent(ToControlRecord(sample, *input, common::UnixNowNs()));
+    // Where the event left its control, before its action (which may leave the world).
+    if (const ControlStateRecord* changed = UpdateControlState(control_states_, *input)) {
+      control_state_writer_.Write(ToControlState(*changed, session_));
+    }
     const ControlOutcome outcome = ApplyControlAction(scene_, *input, LoadWorld);
     if (outcome.world_changed) {
+      ResetControlStates();
       pose_logged_.clear();
       if (SessionLog* log = server_.session_log()) log->ForgetObjectPoses();
     }
@@ -170,6 +177,11 @@ void ServerSession::StepObjects(Clock::time_point now, double dt_s) {
     deformation_writer_.Write(ToDeformation(object_id, session_, sample));
     ++deformations_sent_;
   }
+}
+
+void ServerSession::ResetControlStates() {
+  control_states_ = InitialControlStates(scene_);
+  for (const auto& r : control_states_) control_state_writer_.Write(ToControlState(r, session_));
 }
 
 void ServerSession::PublishScene() {

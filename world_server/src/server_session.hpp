@@ -12,6 +12,7 @@
 #include "handshare/dds/messages.hpp"
 #include "handshare/scene/scene.hpp"
 #include "handshare/dds/sample_checks.hpp"
+#include "handshare/world_server/control_actions.hpp"
 #include "handshare/world_server/member_registry.hpp"
 #include "handshare/world_server/object_authority.hpp"
 #include "handshare/world_server/world_server.hpp"
@@ -62,6 +63,8 @@ class ServerSession {
   /// Shows one board message (the board shows English for now; every scene file also holds
   /// Japanese). Transient-local keeps the newest for late joiners.
   void ShowMessage(const std::vector<scene::Message>& messages);
+  /// Every control of the current world at rest (a new world, or the session's start).
+  void ResetControlStates();
 
   WorldServer& server_;
   std::string session_;
@@ -71,12 +74,14 @@ class ServerSession {
   std::uint32_t revision_ = 0;
   std::uint32_t message_id_ = 0;
   std::vector<scene::Message> board_;                  // the board's message, every language
+  std::vector<ControlStateRecord> control_states_;     // the current world's controls, as events left them
   std::map<std::string, Clock::time_point> pose_logged_;  // body -> when its pose was last logged
   ObjectAuthority objects_;
   MemberRegistry members_;
 
   dds::Writer<msg::SceneState> scene_writer_;
   dds::Writer<msg::MessageBoard> board_writer_;
+  dds::Writer<msg::ControlState> control_state_writer_;
   dds::Writer<msg::ObjectState> object_writer_;
   dds::Writer<msg::Deformation> deformation_writer_;
   dds::Reader<msg::MemberInfo> member_reader_;

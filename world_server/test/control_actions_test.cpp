@@ -221,3 +221,50 @@ TEST_F(ControlActions, TheShippedStartMenuBookTakesItsPageActions) {
 
 }  // namespace
 }  // namespace handshare::server
+
+namespace handshare::server {
+namespace {
+
+// Where the events leave each control, as the server publishes it (handshare/control_state).
+TEST_F(ControlActions, ControlStatesStartAtRestAndFollowTheEvents) {
+  std::vector<ControlStateRecord> moon = InitialControlStates(worlds_["solar_system"]);
+  ASSERT_EQ(moon.size(), 2u);
+  EXPECT_EQ(moon[0].control_id, "lever");
+  EXPECT_EQ(moon[0].scene, "solar_system");
+  EXPECT_EQ(moon[0].index, 0);  // a lever rests in detent 0
+  EXPECT_EQ(moon[1].index, -1);
+  EXPECT_FALSE(moon[1].engaged);
+
+  // The lever into Mars' detent, and back: each a change; a repeat of the same detent is none.
+  const ControlStateRecord* r = UpdateControlState(moon, {"lever", EventKind::kMoved, 1, "alice"});
+  ASSERT_NE(r, nullptr);
+  EXPECT_EQ(r->index, 1);
+  EXPECT_EQ(r->user, "alice");
+  EXPECT_EQ(r->changes, 1u);
+  EXPECT_EQ(UpdateControlState(moon, {"lever", EventKind::kMoved, 1, "bob"}), nullptr);
+  r = UpdateControlState(moon, {"lever", EventKind::kMoved, 0, "bob"});
+  ASSERT_NE(r, nullptr);
+  EXPECT_EQ(r->index, 0);
+  EXPECT_EQ(r->changes, 2u);
+
+  // An arrow is pressed, then released; a miss changes nothing; an unknown control is ignored.
+  EXPECT_TRUE(UpdateControlState(moon, {"arrow_home", EventKind::kPressed, -1, "bob"})->engaged);
+  EXPECT_EQ(UpdateControlState(moon, {"arrow_home", EventKind::kMissed, -1, "bob"}), nullptr);
+  EXPECT_FALSE(UpdateControlState(moon, {"arrow_home", EventKind::kReleased, -1, "bob"})->engaged);
+  EXPECT_EQ(UpdateControlState(moon, {"button_dino", EventKind::kPressed, -1, "bob"}), nullptr);
+}
+
+TEST_F(ControlActions, ABookOpensAtItsFirstPageAndTurns) {
+  std::vector<ControlStateRecord> menu = InitialControlStates(menu_);
+  const ControlStateRecord* r = UpdateControlState(menu, {"book_solar", EventKind::kOpened, 0, "alice"});
+  ASSERT_NE(r, nullptr);
+  EXPECT_TRUE(r->engaged);
+  EXPECT_EQ(r->index, 0);
+  r = UpdateControlState(menu, {"book_solar", EventKind::kPageTurned, 2, "alice"});
+  ASSERT_NE(r, nullptr);
+  EXPECT_EQ(r->index, 2);
+  EXPECT_TRUE(r->engaged);
+}
+
+}  // namespace
+}  // namespace handshare::server

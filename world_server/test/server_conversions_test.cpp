@@ -3,6 +3,8 @@
 
 #include <gtest/gtest.h>
 
+#include "handshare/dds/sample_checks.hpp"
+
 #include <limits>
 
 namespace handshare::server {
@@ -33,6 +35,24 @@ TEST(ServerConversions, TheSceneStateCarriesTheWorldItsRevisionAndTheSessionCloc
   EXPECT_EQ(m.objects()[0].shape().to_string(), "sphere");
   EXPECT_EQ(m.objects()[0].p_WO_m()[1], 0.2);
   EXPECT_EQ(m.objects()[0].mass_kg(), 0.2);
+}
+
+TEST(ServerConversions, AControlStateRecordBecomesASample) {
+  ControlStateRecord r;
+  r.control_id = "lever_planet";
+  r.scene = "solar_system";
+  r.index = 1;
+  r.user = "alice";
+  r.changes = 3;
+  const msg::ControlState m = ToControlState(r, "museum");
+  EXPECT_EQ(m.control_id().to_string(), "lever_planet");
+  EXPECT_EQ(m.session().to_string(), "museum");
+  EXPECT_EQ(m.scene().to_string(), "solar_system");
+  EXPECT_EQ(m.index(), 1);
+  EXPECT_FALSE(m.engaged());
+  EXPECT_EQ(m.user().to_string(), "alice");
+  EXPECT_EQ(m.changes(), 3u);
+  EXPECT_EQ(dds::CheckControlState(m, "museum"), "");
 }
 
 TEST(ServerConversions, AControlEventBecomesAnInputAndALogRow) {

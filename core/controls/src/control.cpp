@@ -92,6 +92,13 @@ void Control::Emit(EventBuffer& events, EventKind kind, int tip, double value, d
 // Miss detection, per hand: a visit starts when any fingertip of the hand comes within
 // approach_margin_m of the control's box, and ends when all of them are farther than that
 // (plus hysteresis). A visit that ends without an actuation by that hand is one miss.
+bool Control::touched() const noexcept {
+  for (const Visit& v : visits_) {
+    if (v.inside) return true;
+  }
+  return false;
+}
+
 void Control::TrackApproach(const Fingers& fingers, EventBuffer& events) noexcept {
   const Eigen::AlignedBox3d box = Bounds_C();
   const Eigen::Vector3d target = Target_C();

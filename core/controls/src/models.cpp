@@ -83,6 +83,13 @@ Lever::Lever(const scene::ControlSpec& spec) : Control(spec) {
   angle_rad_ = l.min_angle_rad;
 }
 
+void Lever::ApplyState(std::int32_t index, bool /*engaged*/) noexcept {
+  const auto& l = spec_.lever;
+  if (index < 0 || index >= std::max(1, l.detents)) return;
+  angle_rad_ = std::clamp(l.min_angle_rad + index * spacing_rad_, l.min_angle_rad, l.max_angle_rad);
+  detent_ = index;
+}
+
 double Lever::DetentTorque_N_m(double angle_rad) const noexcept {
   const auto& l = spec_.lever;
   if (l.detents < 2 || spacing_rad_ <= 0.0) return 0.0;
@@ -204,6 +211,12 @@ Eigen::Vector3d Lever::Target_C() const noexcept {
 // Book
 
 Book::Book(const scene::ControlSpec& spec) : Control(spec) {}
+
+void Book::ApplyState(std::int32_t index, bool engaged) noexcept {
+  open_ = engaged;
+  page_ = engaged ? std::max(0, index) : 0;
+  cover_angle_rad_ = engaged ? std::numbers::pi : 0.0;
+}
 
 void Book::StepModel(double, const Fingers& fingers, std::span<Eigen::Vector3d> f_E_C,
                      EventBuffer& events) noexcept {

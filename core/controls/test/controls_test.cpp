@@ -225,6 +225,36 @@ TEST(Lever, PushedFromItsSideItSnapsIntoTheNextDetent) {
   EXPECT_EQ(rec.Count(EventKind::kMoved), 1);
 }
 
+// The session's state (another user moved it, or the world was rebuilt): the lever is put into
+// that detent without an event, stays there, and is pushed on from there.
+TEST(Lever, AppliedStateIsADetentItRestsInWithoutAnEvent) {
+  const scene::ControlSpec spec = Spec(scene::ControlType::kLever);
+  Lever lever(spec);
+  Recorder rec;
+  lever.ApplyState(1, false);
+  EXPECT_EQ(lever.detent(), 1);
+  EXPECT_DOUBLE_EQ(lever.angle_rad(), spec.lever.max_angle_rad);
+  for (int i = 0; i < 500; ++i) rec.Step(lever, OneFinger(kFar));
+  EXPECT_NEAR(lever.angle_rad(), spec.lever.max_angle_rad, 1e-9);
+  EXPECT_EQ(rec.all.size(), 0u);
+  lever.ApplyState(7, false);  // a detent it does not have: ignored
+  EXPECT_EQ(lever.detent(), 1);
+  lever.ApplyState(0, false);
+  EXPECT_EQ(lever.detent(), 0);
+  EXPECT_DOUBLE_EQ(lever.angle_rad(), spec.lever.min_angle_rad);
+}
+
+TEST(Book, AppliedStateOpensItAtAPageOrShutsIt) {
+  Book book(Spec(scene::ControlType::kBook));
+  book.ApplyState(2, true);
+  EXPECT_TRUE(book.open());
+  EXPECT_EQ(book.page(), 2);
+  EXPECT_DOUBLE_EQ(book.cover_angle_rad(), std::numbers::pi);
+  book.ApplyState(-1, false);
+  EXPECT_FALSE(book.open());
+  EXPECT_DOUBLE_EQ(book.cover_angle_rad(), 0.0);
+}
+
 TEST(Lever, PushedFromTheWrongSideItDoesNotMove) {
   const scene::ControlSpec spec = Spec(scene::ControlType::kLever);
   Lever lever(spec);

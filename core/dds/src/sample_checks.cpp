@@ -115,6 +115,15 @@ std::string CheckSceneState(const msg::SceneState& s, std::string_view session, 
   return c.reason();
 }
 
+std::string CheckControlState(const msg::ControlState& s, std::string_view session) {
+  Checker c;
+  c.Session(s.session().to_string(), session);
+  c.NonEmpty("control_id", s.control_id().to_string());
+  c.NonEmpty("scene", s.scene().to_string());
+  c.Range("index", s.index(), -1.0, 1000.0);
+  return c.reason();
+}
+
 std::string CheckControlEvent(const msg::ControlEvent& s, std::string_view session) {
   Checker c;
   c.Session(s.session().to_string(), session);

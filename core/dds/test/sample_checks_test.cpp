@@ -164,6 +164,21 @@ TEST(SampleChecks, DeviceStatesBoardsAndMembers) {
   EXPECT_EQ(CheckMemberInfo(m, "museum"), "view_Hz is -1 (expected 0 to 10000)");
 }
 
+TEST(SampleChecks, ControlStatesNameAControlOfAWorldAndAPlausibleIndex) {
+  msg::ControlState s;
+  s.session("museum");
+  s.control_id("lever_planet");
+  s.scene("solar_system");
+  s.index(1);
+  EXPECT_EQ(CheckControlState(s, "museum"), "");
+  EXPECT_NE(CheckControlState(s, "lab"), "");
+  s.index(-7);
+  EXPECT_EQ(CheckControlState(s, "museum"), "index is -7 (expected -1 to 1000)");
+  s.index(0);
+  s.control_id("");
+  EXPECT_EQ(CheckControlState(s, "museum"), "control_id is empty");
+}
+
 TEST(DroppedSamples, CountsPerTopicAndPrintsAFloodOncePerThousand) {
   DroppedSamples d;
   EXPECT_EQ(d.Summary(), "none");

@@ -61,6 +61,13 @@ class SceneReplica {
   /// and counted, for objects not in the current scene and for non-finite poses or a zero
   /// quaternion (the last good pose stays).
   void OnObjectState(const msg::ObjectState& state);
+  /// A ControlState sample (the world server's): the control is drawn where it left it, a
+  /// lever turned into its detent, a pressed button or arrow down by its travel, while its
+  /// world is the scene. The control's geometry comes from the scene file of that name in the
+  /// assets' scenes folder (a scene that cannot be read: its controls are drawn at rest).
+  void OnControlState(const msg::ControlState& state);
+  /// The newest control state of `control_id` in the current scene: (index, engaged).
+  std::optional<std::pair<std::int32_t, bool>> control_state(const std::string& control_id) const;
 
   bool has_scene() const { return has_scene_; }
   const std::string& scene() const { return scene_; }
@@ -100,8 +107,28 @@ class SceneReplica {
     const Eigen::Isometry3d& X_WO() const { return X_WO_state ? *X_WO_state : X_WO_scene; }
   };
 
+  /// What drawing a control in its state needs of its scene entry.
+  struct ControlGeometry {
+    bool lever = false;
+    bool push = false;  // button or arrow
+    double min_angle_rad = 0.0;
+    double spacing_rad = 0.0;
+    std::int32_t detents = 0;
+    double travel_m = 0.0;
+  };
+  struct ControlDrawn {
+    std::string scene;
+    std::int32_t index = -1;
+    bool engaged = false;
+  };
+  /// X_WO of object `id` as drawn: a control turned or pressed as its state says.
+  Eigen::Isometry3d DrawnPose(const std::string& id, const Eigen::Isometry3d& X_WO) const;
+
   std::ostream& errors_;
   std::string prefix_;
+  std::filesystem::path scenes_dir_;
+  std::map<std::string, ControlGeometry> control_geometry_;  // the current scene's controls
+  std::map<std::string, ControlDrawn> control_states_;        // newest per control id
   MeshCache meshes_;
   bool has_scene_ = false;
   std::string scene_;

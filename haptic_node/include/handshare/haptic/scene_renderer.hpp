@@ -9,6 +9,7 @@
 #include <cstdint>
 #include <memory>
 #include <string>
+#include <vector>
 
 #include "handshare/common/session_clock.hpp"
 #include "handshare/common/spsc_queue.hpp"
@@ -100,6 +101,12 @@ class SceneRenderer final : public ForceRenderer {
   /// Places a dynamic body before the renderer is handed to the loop (carry-over of poses
   /// across a rebuild). Not thread-safe: call before SetRenderer.
   void PlaceBody(const std::string& id, const Eigen::Isometry3d& X_WO);
+  /// Puts control `id` where the session left it (the world server's control state): at
+  /// once, before the renderer is handed to the loop. Not thread-safe: call before SetRenderer.
+  void PlaceControl(const std::string& id, std::int32_t index, bool engaged);
+  /// The same while the loop runs: applied by the haptic thread at its next step, or, while a
+  /// fingertip of this hand is at the control, once it has left. False if the queue is full.
+  bool SetControlState(const std::string& id, std::int32_t index, bool engaged) noexcept;
   std::uint64_t dropped_events() const noexcept { return dropped_events_.load(std::memory_order_relaxed); }
 
  private:
@@ -120,6 +127,18 @@ class SceneRenderer final : public ForceRenderer {
   common::TripleBuffer<FollowedBodies> followed_in_;
   common::TripleBuffer<ContactReport> reports_;
   common::SpscQueue<controls::ControlEvent, 256> events_;
+  struct ControlCommand {
+    std::array<char, 32> id{};  ///< NUL-terminated
+    std::int32_t index = -1;
+    bool engaged = false;
+  };
+  common::SpscQueue<ControlCommand, 64> control_in_;
+  struct PendingControl {
+    bool pending = false;
+    std::int32_t index = -1;
+    bool engaged = false;
+  };
+  std::vector<PendingControl> pending_controls_;  // by control, sized at construction
   std::atomic<std::uint64_t> dropped_events_{0};
   std::uint64_t seq_ = 0;
   std::uint64_t peer_stamp_ns_ = 0;  // the newest peer set used, and the step that first used it

@@ -40,6 +40,28 @@ struct ControlOutcome {
   std::vector<std::string> notes;        ///< lines for the server's log (errors included)
 };
 
+/// What the server knows of one control of the current world: where the control events it
+/// applied left it. Published on handshare/control_state so that every haptic node builds the
+/// control there (also when a new revision of the same world rebuilds it: the lever that set
+/// Mars' gravity stays in Mars' detent) and every screen can show it.
+struct ControlStateRecord {
+  std::string control_id;
+  std::string scene;         ///< the world it belongs to
+  std::int32_t index = -1;   ///< lever: detent (0 at rest); book: page (-1 shut); else -1
+  bool engaged = false;      ///< button, arrow: pressed; book: open
+  std::string user;          ///< who changed it last ("" = nobody since the world appeared)
+  std::uint32_t changes = 0; ///< how many events changed it
+};
+
+/// The controls of `scene` as the world appears: levers in detent 0, books shut, buttons up.
+std::vector<ControlStateRecord> InitialControlStates(const scene::Scene& scene);
+
+/// Applies `input` to the record of its control in `states` (events of controls not there, of
+/// a world already left, change nothing; so do misses). Returns the record it changed, or
+/// nullptr. Apply it before the event's action: an action that changes the world replaces the
+/// states with the new world's (InitialControlStates).
+const ControlStateRecord* UpdateControlState(std::vector<ControlStateRecord>& states, const ControlInput& input);
+
 /// Loads a world by name (LoadWorld in the server; tests pass their own).
 using SceneLoader = std::function<scene::Scene(const std::string& name)>;
 /// The server's loader: scene::LoadSceneByName from the assets' scenes folder.

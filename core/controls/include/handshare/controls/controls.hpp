@@ -132,6 +132,17 @@ class Control {
   /// appeared) does not actuate it until it has left; the arrow of the next world, at the place
   /// of the arrow just pressed, is then not pressed by the same push. Off by default.
   void SetGuardFirstVisits(bool on) noexcept { guard_first_visits_ = on; }
+  /// Puts the control where the session's last actuation left it (the world server's control
+  /// state: another user moved it, or this world was rebuilt): a lever into detent `index`, a
+  /// book open (`engaged`) at page `index` or shut. Buttons and arrows spring back by
+  /// themselves: nothing. Silently ignores an index the control does not have.
+  virtual void ApplyState(std::int32_t index, bool engaged) noexcept {
+    (void)index;
+    (void)engaged;
+  }
+  /// Whether a fingertip of any hand is in the control's approach zone (a local user is at
+  /// it: a state from elsewhere waits until the hand has left).
+  bool touched() const noexcept;
 
  protected:
   /// Fingertips in C, valid ones only flagged in `present`.
@@ -220,6 +231,8 @@ class Lever final : public Control {
   double angle_rad() const noexcept { return angle_rad_; }
   int detent() const noexcept { return detent_; }
   double DetentTorque_N_m(double angle_rad) const noexcept;
+  /// Into detent `index` (0 .. detents - 1), without an event (the move was reported elsewhere).
+  void ApplyState(std::int32_t index, bool engaged) noexcept override;
 
  private:
   void StepModel(double dt_s, const Fingers& fingers, std::span<Eigen::Vector3d> f_E_C,
@@ -245,6 +258,8 @@ class Book final : public Control {
   explicit Book(const scene::ControlSpec& spec);
   bool open() const noexcept { return open_; }
   int page() const noexcept { return page_; }
+  /// Open at page `index` (engaged), or shut; without an event.
+  void ApplyState(std::int32_t index, bool engaged) noexcept override;
   double cover_angle_rad() const noexcept { return cover_angle_rad_; }
 
  private:
