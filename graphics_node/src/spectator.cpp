@@ -55,7 +55,8 @@ class WorldView {
         deformation_reader_(dds::MakeReader<msg::Deformation>(p, dds::topics::kDeformation)),
         object_reader_(dds::MakeReader<msg::ObjectState>(p, dds::topics::kObjectState)),
         member_reader_(dds::NameBinding::MakeMemberReader(p, [this](const std::string& line) { Say(line); })),
-        control_reader_(MakeControlReader(p)),
+        control_reader_(dds::MakeReaderIfGranted<msg::ControlState>(
+            p, dds::topics::kControlState, [this](const std::string& line) { Say(line); }, "controls are drawn at rest")),
         world_(assets_dir, std::cerr, "[graphics_node " + name + "] ") {}
 
   void Update() {
@@ -203,18 +204,6 @@ class WorldView {
     return dropped_.Accept(topic, sender, reason, [this](const std::string& line) { Say(line); });
   }
   void Say(const std::string& line) const { std::fprintf(stderr, "%s%s\n", prefix_.c_str(), line.c_str()); }
-  /// Under DDS-Security a keystore made before control states existed refuses the reader: the
-  /// spectator draws controls at rest, and says so.
-  dds::Reader<msg::ControlState> MakeControlReader(dds::Participant& p) {
-    try {
-      return dds::MakeReader<msg::ControlState>(p, dds::topics::kControlState);
-    } catch (const dds::DdsError& e) {
-      Say(std::string("cannot read the session's control states (") + e.what() +
-          "): controls are drawn at rest; make the keystore again");
-      return {};
-    }
-  }
-
   std::string session_;
   Clock::time_point joined_;
   std::string prefix_;

@@ -10,20 +10,6 @@
 
 namespace handshare::haptic {
 
-namespace {
-/// Under DDS-Security a keystore made before control states existed refuses the reader: the
-/// node joins without them (controls start at rest in every world), and says so.
-dds::Reader<msg::ControlState> MakeControlStateReader(dds::Participant& participant, const HapticBridge::Say& say) {
-  try {
-    return dds::MakeReader<msg::ControlState>(participant, dds::topics::kControlState);
-  } catch (const dds::DdsError& e) {
-    say(std::string("cannot read the session's control states (") + e.what() +
-        "): controls start at rest in every world; make the keystore again");
-    return {};
-  }
-}
-}  // namespace
-
 HapticBridge::HapticBridge(const HapticNodeConfig& config, Device& device, HapticLoop& loop,
                            dds::Participant& participant, std::ostream* trace, Say say)
     : config_(config),
@@ -39,7 +25,8 @@ HapticBridge::HapticBridge(const HapticNodeConfig& config, Device& device, Hapti
       contact_reader_(dds::MakeReader<msg::ContactSet>(participant, dds::topics::kContactSet)),
       member_reader_(dds::NameBinding::MakeMemberReader(participant, say_)),
       object_reader_(dds::MakeReader<msg::ObjectState>(participant, dds::topics::kObjectState)),
-      control_reader_(MakeControlStateReader(participant, say_)),
+      control_reader_(dds::MakeReaderIfGranted<msg::ControlState>(participant, dds::topics::kControlState, say_,
+                                                                  "controls start at rest in every world")),
       deadband_(session::DeadbandConfig{.weber = config.deadband_weber}),
       state_pacer_(config.publish_Hz),
       contact_pacer_(config.publish_Hz),

@@ -57,13 +57,8 @@ std::string NameBinding::Check(const std::string& user, const Guid& writer) cons
 
 Reader<msg::MemberInfo> NameBinding::MakeMemberReader(Participant& participant,
                                                            const std::function<void(const std::string&)>& say) {
-  try {
-    return MakeReader<msg::MemberInfo>(participant, topics::kMemberInfo);
-  } catch (const DdsError& e) {
-    say(std::string("cannot read the session's members (") + e.what() +
-        "): names are not bound to their participants; make the keystore again");
-    return {};
-  }
+  return MakeReaderIfGranted<msg::MemberInfo>(participant, topics::kMemberInfo, say,
+                                              "names are not bound to their participants");
 }
 
 void NameBinding::Follow(Reader<msg::MemberInfo>& reader) {

@@ -3,6 +3,9 @@
 /// Node libraries include this; they never include Fast DDS headers themselves.
 #include <handshare/idl/handshare.h>
 
+#include <functional>
+#include <string>
+
 #include "handshare/common/hand.hpp"
 #include "handshare/dds/participant.hpp"
 #include "handshare/dds/topics.hpp"
@@ -40,6 +43,19 @@ Writer<T> MakeWriter(Participant& p, const topics::TopicSpec& spec) {
 template <class T>
 Reader<T> MakeReader(Participant& p, const topics::TopicSpec& spec) {
   return p.CreateReader<T>(spec.name, spec.reader_profile);
+}
+/// The same for a topic a node can do without: under DDS-Security a keystore made before its
+/// role was granted the topic refuses the reader. Then `say` is told why and what the node
+/// does without it (`without`), and the reader is empty (test it with operator bool).
+template <class T>
+Reader<T> MakeReaderIfGranted(Participant& p, const topics::TopicSpec& spec,
+                              const std::function<void(const std::string&)>& say, const std::string& without) {
+  try {
+    return MakeReader<T>(p, spec);
+  } catch (const DdsError& e) {
+    say(std::string("cannot read ") + spec.name + " (" + e.what() + "): " + without + "; make the keystore again");
+    return {};
+  }
 }
 
 }  // namespace handshare::dds
