@@ -115,10 +115,8 @@ def prepare(bin_dir, cache, scenes):
         raise Failure(f"world_prepare failed: {r.stdout}{r.stderr}")
 
 
-HAND_OPTIONS = []  # extra haptic_node options (--deadband)
-
-
-def run_tour(p, domain, session, work):
+def run_tour(p, domain, session, work, hand_options):
+    """hand_options: extra haptic_node options (--deadband)."""
     rec = os.path.join(work, "tour.db")
     p.start("record", "world_server/session_record", "--domain", domain, "--session", session, "--out", rec)
     p.wait_for_line("record", "recording session", 15)
@@ -130,7 +128,7 @@ def run_tour(p, domain, session, work):
     for user in ("alice", "bob"):
         p.start(user, "haptic_node/haptic_node", "--domain", domain, "--session", session, "--user", user,
                 "--device", "sim", "--script", os.path.join(TOUR_SCRIPTS, f"tour_{user}.hand"), "--duration", 50,
-                *HAND_OPTIONS)
+                *hand_options)
     for user in ("alice", "bob"):
         if p.wait(user, 120) != 0:
             raise Failure(f"{user}'s haptic node failed:\n{p.log(user)}")
@@ -148,7 +146,7 @@ def peer_age_lines(p):
             if "contact sets:" in line or "contact deadband:" in line]
 
 
-def run_press(p, domain, session, work):
+def run_press(p, domain, session, work, hand_options):
     rec = os.path.join(work, "press.db")
     p.start("world_server", "world_server/world_server", "--domain", domain, "--session", session,
             "--scene", "dinosaur", "--duration", 80)
@@ -160,7 +158,7 @@ def run_press(p, domain, session, work):
     for user in ("alice", "bob"):
         p.start(user, "haptic_node/haptic_node", "--domain", domain, "--session", session, "--user", user,
                 "--device", "sim", "--script", os.path.join(HERE, f"press_{user}.hand"), "--duration", 25,
-                *HAND_OPTIONS)
+                *hand_options)
     for user in ("alice", "bob"):
         if p.wait(user, 90) != 0:
             raise Failure(f"{user}'s haptic node failed:\n{p.log(user)}")
@@ -244,8 +242,7 @@ def main(argv=None):
     ap.add_argument("--deadband", type=float, help="the haptic nodes' contact-set deadband (Weber fraction)")
     ap.add_argument("--csv", help="also write the rows to this file")
     args = ap.parse_args(argv)
-    if args.deadband is not None:
-        HAND_OPTIONS[:] = ["--deadband", args.deadband]
+    hand_options = [] if args.deadband is None else ["--deadband", args.deadband]
     cases = args.cases.split(",")
     for c in cases:
         if c not in ("tour", "press"):
@@ -266,7 +263,7 @@ def main(argv=None):
             session = f"net-bandwidth-{case}-{os.getpid()}"
             load_before = loadavg()
             with Procs(args.bin_dir, work, case) as p:
-                rec, notes = (run_tour if case == "tour" else run_press)(p, args.domain, session, work)
+                rec, notes = (run_tour if case == "tour" else run_press)(p, args.domain, session, work, hand_options)
             seconds, rows = analyse(case, rec)
             deadband = "node default" if args.deadband is None else f"{args.deadband:g}"
             lines.append(f"# {case}: {seconds:.1f} s window; deadband {deadband}; load before {load_before}, "
