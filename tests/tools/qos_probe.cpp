@@ -184,6 +184,19 @@ double Quantile(std::vector<double> v, double q) {
   return v[std::min(k, v.size() - 1)];
 }
 
+/// Takes `reader`'s samples until `stop()`, handing each one with data to `on_sample`.
+template <class T, class Stop, class OnSample>
+void Drain(dds::Reader<T>& reader, Stop stop, OnSample on_sample) {
+  T sample;
+  dds::SampleMeta meta;
+  while (!stop()) {
+    reader.WaitForData(std::chrono::milliseconds(50));
+    while (reader.TakeNext(sample, meta)) {
+      if (meta.valid_data) on_sample(sample, meta);
+    }
+  }
+}
+
 int Subscribe(const common::Options& o, const common::SessionOptions& where, const std::string& which) {
   const auto count = static_cast<std::uint32_t>(o.GetInt("count", 1, 10000000));
   const double within_ms = o.GetDouble("within-ms", 0.0, 100000.0);
@@ -199,57 +212,36 @@ int Subscribe(const common::Options& o, const common::SessionOptions& where, con
     auto events = dds::MakeReader<msg::ControlEvent>(participant, dds::topics::kControlEvent);
     std::printf("ready\n");
     std::fflush(stdout);
-    msg::ControlEvent e;
-    dds::SampleMeta meta;
-    while (!until()) {
-      events.WaitForData(std::chrono::milliseconds(50));
-      while (events.TakeNext(e, meta)) {
-        if (meta.valid_data) r.Add(e.index(), 1e-6 * static_cast<double>(SteadyNs() - static_cast<std::int64_t>(e.stamp_ns())));
-      }
-    }
+    Drain(events, until, [&](const msg::ControlEvent& e, const dds::SampleMeta&) {
+      r.Add(e.index(), 1e-6 * static_cast<double>(SteadyNs() - static_cast<std::int64_t>(e.stamp_ns())));
+    });
   } else if (which == "field") {
     auto reader = dds::MakeReader<msg::Deformation>(participant, dds::topics::kDeformation);
     std::printf("ready\n");
     std::fflush(stdout);
-    msg::Deformation d;
-    dds::SampleMeta meta;
-    while (!until()) {
-      reader.WaitForData(std::chrono::milliseconds(50));
-      while (reader.TakeNext(d, meta)) {
-        if (!meta.valid_data) continue;
-        const double ms = 1e-6 * static_cast<double>(WallNs() - meta.source_timestamp_ns);
-        // A sample is whole or not delivered at all; check it anyway (a torn field is a bug).
-        if (d.node_ids().size() != d.surface_node_count() || d.u_W_m().size() != 3 * d.node_ids().size()) {
-          std::printf("torn field: revision %u, %zu ids of %u\n", d.revision(), d.node_ids().size(),
-                      d.surface_node_count());
-          continue;
-        }
-        r.Add(d.revision(), ms);
+    Drain(reader, until, [&](const msg::Deformation& d, const dds::SampleMeta& meta) {
+      const double ms = 1e-6 * static_cast<double>(WallNs() - meta.source_timestamp_ns);
+      // A sample is whole or not delivered at all; check it anyway (a torn field is a bug).
+      if (d.node_ids().size() != d.surface_node_count() || d.u_W_m().size() != 3 * d.node_ids().size()) {
+        std::printf("torn field: revision %u, %zu ids of %u\n", d.revision(), d.node_ids().size(),
+                    d.surface_node_count());
+        return;
       }
-    }
+      r.Add(d.revision(), ms);
+    });
   } else {
     auto contacts = dds::MakeReader<msg::ContactSet>(participant, dds::topics::kContactSet);
     auto reader = dds::MakeReader<msg::Deformation>(participant, dds::topics::kDeformation);
     std::atomic<bool> done{false};
     // Fields are read (they are only sent to a matched reader) on their own thread.
     std::thread field_thread([&] {
-      msg::Deformation d;
-      dds::SampleMeta meta;
-      while (!done) {
-        reader.WaitForData(std::chrono::milliseconds(50));
-        while (reader.TakeNext(d, meta)) ++fields;
-      }
+      Drain(reader, [&] { return done.load(); }, [&](const msg::Deformation&, const dds::SampleMeta&) { ++fields; });
     });
     std::printf("ready\n");
     std::fflush(stdout);
-    msg::ContactSet c;
-    dds::SampleMeta meta;
-    while (!until()) {
-      contacts.WaitForData(std::chrono::milliseconds(50));
-      while (contacts.TakeNext(c, meta)) {
-        if (meta.valid_data) r.Add(c.seq(), 1e-6 * static_cast<double>(SteadyNs() - static_cast<std::int64_t>(c.stamp_ns())));
-      }
-    }
+    Drain(contacts, until, [&](const msg::ContactSet& c, const dds::SampleMeta&) {
+      r.Add(c.seq(), 1e-6 * static_cast<double>(SteadyNs() - static_cast<std::int64_t>(c.stamp_ns())));
+    });
     done = true;
     field_thread.join();
   }
