@@ -74,13 +74,14 @@ ControlOutcome ApplyControlAction(scene::Scene& scene, const ControlInput& input
   return out;
 }
 
-std::vector<ControlStateRecord> InitialControlStates(const scene::Scene& scene) {
+std::vector<ControlStateRecord> InitialControlStates(const scene::Scene& scene, bool known) {
   std::vector<ControlStateRecord> out;
   for (const auto& c : scene.controls) {
     ControlStateRecord r;
     r.control_id = c.id;
     r.scene = scene.name;
     r.index = c.type == scene::ControlType::kLever ? 0 : -1;
+    r.known = known;
     out.push_back(std::move(r));
   }
   return out;
@@ -101,7 +102,8 @@ const ControlStateRecord* UpdateControlState(std::vector<ControlStateRecord>& st
     case controls::EventKind::kPageTurned: next.index = input.index; break;
     case controls::EventKind::kMissed: return nullptr;
   }
-  if (next.index == it->index && next.engaged == it->engaged) return nullptr;
+  if (it->known && next.index == it->index && next.engaged == it->engaged) return nullptr;
+  next.known = true;
   next.user = input.user;
   ++next.changes;
   *it = std::move(next);

@@ -65,7 +65,7 @@ ServerSession::ServerSession(WorldServer& server, const WorldServerConfig& confi
               scene_.name + "' (" + std::to_string(scene_.objects.size()) + " objects)");
   server_.OnSceneChange(scene_.name, scene_.title);
   objects_.SetScene(scene_);
-  ResetControlStates();
+  ResetControlStates(resume != nullptr);
   ShowMessage(resume != nullptr && !resume->state.board.empty() ? resume->state.board : scene_.messages);
 }
 
@@ -179,8 +179,9 @@ void ServerSession::StepObjects(Clock::time_point now, double dt_s) {
   }
 }
 
-void ServerSession::ResetControlStates() {
-  control_states_ = InitialControlStates(scene_);
+void ServerSession::ResetControlStates(bool resumed) {
+  control_states_ = InitialControlStates(scene_, /*known=*/!resumed);
+  if (resumed) return;
   for (const auto& r : control_states_) control_state_writer_.Write(ToControlState(r, session_));
 }
 

@@ -63,8 +63,10 @@ class ServerSession {
   /// Shows one board message (the board shows English for now; every scene file also holds
   /// Japanese). Transient-local keeps the newest for late joiners.
   void ShowMessage(const std::vector<scene::Message>& messages);
-  /// Every control of the current world at rest (a new world, or the session's start).
-  void ResetControlStates();
+  /// Every control of the current world at rest, published (a new world, or the session's
+  /// start); or, resuming a killed server's session, unknown and not published (the nodes keep
+  /// what that server published until an event changes a control).
+  void ResetControlStates(bool resumed = false);
 
   WorldServer& server_;
   std::string session_;

@@ -254,6 +254,20 @@ TEST_F(ControlActions, ControlStatesStartAtRestAndFollowTheEvents) {
   EXPECT_EQ(UpdateControlState(moon, {"button_dino", EventKind::kPressed, -1, "bob"}), nullptr);
 }
 
+// A server that resumed a killed one's session does not know where the controls are: the first
+// event of each is published whatever it says (the lever pushed back to detent 0, which this
+// server would have taken for no change), and counts as known from then on.
+TEST_F(ControlActions, AfterAResumeTheFirstEventOfAControlIsAlwaysAChange) {
+  std::vector<ControlStateRecord> moon = InitialControlStates(worlds_["solar_system"], /*known=*/false);
+  EXPECT_FALSE(moon[0].known);
+  const ControlStateRecord* r = UpdateControlState(moon, {"lever", EventKind::kMoved, 0, "alice"});
+  ASSERT_NE(r, nullptr);
+  EXPECT_EQ(r->index, 0);
+  EXPECT_TRUE(r->known);
+  EXPECT_EQ(UpdateControlState(moon, {"lever", EventKind::kMoved, 0, "alice"}), nullptr);
+  EXPECT_EQ(UpdateControlState(moon, {"lever", EventKind::kMissed, -1, "alice"}), nullptr);
+}
+
 TEST_F(ControlActions, ABookOpensAtItsFirstPageAndTurns) {
   std::vector<ControlStateRecord> menu = InitialControlStates(menu_);
   const ControlStateRecord* r = UpdateControlState(menu, {"book_solar", EventKind::kOpened, 0, "alice"});

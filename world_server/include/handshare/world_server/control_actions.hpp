@@ -51,10 +51,15 @@ struct ControlStateRecord {
   bool engaged = false;      ///< button, arrow: pressed; book: open
   std::string user;          ///< who changed it last ("" = nobody since the world appeared)
   std::uint32_t changes = 0; ///< how many events changed it
+  /// false: where the control is is not known here (a server that resumed a killed one's
+  /// session: the nodes still hold its last published states); nothing is published for it
+  /// until an event, which is then published whatever it says.
+  bool known = true;
 };
 
-/// The controls of `scene` as the world appears: levers in detent 0, books shut, buttons up.
-std::vector<ControlStateRecord> InitialControlStates(const scene::Scene& scene);
+/// The controls of `scene` as the world appears: levers in detent 0, books shut, buttons up
+/// (known = false: the same records, their state unknown).
+std::vector<ControlStateRecord> InitialControlStates(const scene::Scene& scene, bool known = true);
 
 /// Applies `input` to the record of its control in `states` (events of controls not there, of
 /// a world already left, change nothing; so do misses). Returns the record it changed, or
