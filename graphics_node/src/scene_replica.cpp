@@ -54,12 +54,12 @@ Eigen::Isometry3d SceneReplica::DrawnPose(const std::string& id, const Eigen::Is
   const auto state = control_state(id);
   if (g == control_geometry_.end() || !state) return X_WO;
   const auto [index, engaged] = *state;
-  if (g->second.lever && index >= 0 && index < std::max(1, g->second.detents)) {
+  const auto& angles = g->second.detent_angles_rad;
+  if (index >= 0 && static_cast<std::size_t>(index) < angles.size()) {
     // The handle turns about the hinge axis x of C, from z towards -y as the angle grows.
-    const double angle = g->second.min_angle_rad + index * g->second.spacing_rad;
-    return X_WO * Eigen::AngleAxisd(angle, Eigen::Vector3d::UnitX());
+    return X_WO * Eigen::AngleAxisd(angles[static_cast<std::size_t>(index)], Eigen::Vector3d::UnitX());
   }
-  if (g->second.push && engaged) return X_WO * Eigen::Translation3d(0.0, 0.0, -g->second.travel_m);
+  if (engaged) return X_WO * Eigen::Translation3d(0.0, 0.0, -g->second.travel_m);
   return X_WO;
 }
 
@@ -83,13 +83,12 @@ void SceneReplica::OnSceneState(const msg::SceneState& state) {
         const scene::Scene file = scene::LoadSceneByName(scene, scenes_dir_, scene::LoadOptions{.load_meshes = false});
         for (const auto& c : file.controls) {
           ControlGeometry g;
-          g.lever = c.type == scene::ControlType::kLever;
-          g.push = c.type == scene::ControlType::kButton || c.type == scene::ControlType::kArrow;
-          g.min_angle_rad = c.lever.min_angle_rad;
-          g.detents = c.lever.detents;
-          g.spacing_rad = (c.lever.max_angle_rad - c.lever.min_angle_rad) / std::max(1, c.lever.detents - 1);
-          g.travel_m = c.push.travel_m;
-          control_geometry_[c.id] = g;
+          if (c.type == scene::ControlType::kLever) {
+            for (int k = 0; k < c.lever.detents; ++k) g.detent_angles_rad.push_back(c.lever.detent_angle_rad(k));
+          } else if (c.type == scene::ControlType::kButton || c.type == scene::ControlType::kArrow) {
+            g.travel_m = c.push.travel_m;
+          }
+          control_geometry_[c.id] = std::move(g);
         }
       } catch (const std::exception& e) {
         errors_ << prefix_ << "cannot read the controls of scene '" << scene << "' (drawn at rest): " << e.what()

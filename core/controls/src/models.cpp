@@ -79,14 +79,14 @@ Eigen::AlignedBox3d PushControl::Bounds_C() const noexcept {
 
 Lever::Lever(const scene::ControlSpec& spec) : Control(spec) {
   const auto& l = spec.lever;
-  spacing_rad_ = (l.max_angle_rad - l.min_angle_rad) / std::max(1, l.detents - 1);
+  spacing_rad_ = l.spacing_rad();
   angle_rad_ = l.min_angle_rad;
 }
 
 void Lever::ApplyState(std::int32_t index, bool /*engaged*/) noexcept {
   const auto& l = spec_.lever;
   if (index < 0 || index >= std::max(1, l.detents)) return;
-  angle_rad_ = std::clamp(l.min_angle_rad + index * spacing_rad_, l.min_angle_rad, l.max_angle_rad);
+  angle_rad_ = std::clamp(l.detent_angle_rad(index), l.min_angle_rad, l.max_angle_rad);
   detent_ = index;
 }
 

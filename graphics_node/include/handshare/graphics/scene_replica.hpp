@@ -109,12 +109,8 @@ class SceneReplica {
 
   /// What drawing a control in its state needs of its scene entry.
   struct ControlGeometry {
-    bool lever = false;
-    bool push = false;  // button or arrow
-    double min_angle_rad = 0.0;
-    double spacing_rad = 0.0;
-    std::int32_t detents = 0;
-    double travel_m = 0.0;
+    std::vector<double> detent_angles_rad;  // a lever's detents (empty: not a lever)
+    double travel_m = 0.0;                  // a button's or arrow's travel (0: not one)
   };
   struct ControlDrawn {
     std::string scene;

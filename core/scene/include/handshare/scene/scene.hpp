@@ -192,6 +192,10 @@ struct ControlSpec {
     double detent_torque_N_m = 0.06;
     double settle_rate_rad_per_s = 3.0;
     double stop_stiffness_N_per_m = 3000.0;
+    /// The angle between two neighbouring detents (both end stops are detents).
+    double spacing_rad() const { return (max_angle_rad - min_angle_rad) / (detents > 1 ? detents - 1 : 1); }
+    /// The angle of detent k (0 .. detents - 1).
+    double detent_angle_rad(int k) const { return min_angle_rad + k * spacing_rad(); }
   } lever;
   struct Book {  ///< lies on its back cover, spine along y of C at x = -size.x/2
     int pages = 6;
