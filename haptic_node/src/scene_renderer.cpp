@@ -1,7 +1,6 @@
 #include "handshare/haptic/scene_renderer.hpp"
 
 #include <algorithm>
-#include <string_view>
 
 #include "handshare/common/clock.hpp"
 
@@ -24,7 +23,6 @@ SceneRenderer::SceneRenderer(const scene::Scene& scene, const world::SceneModels
   // A hand on a control when this world appears (it pressed the arrow that brought it here, at
   // the same place) must leave before it can actuate it.
   controls_.SetGuardFirstVisits(true);
-  pending_controls_.resize(controls_.size());
   for (std::size_t i = 0; i < scene_.objects.size(); ++i) {
     const auto id = models_.Find(scene_.objects[i].id);
     if (id >= 0 && scene_.objects[i].motion.active()) moving_.emplace_back(id, i);
@@ -112,17 +110,7 @@ void SceneRenderer::Render(double /*t_s*/, double dt_s, std::uint64_t now_ns, co
   // hand is at the control), then their own force profiles and events.
   ControlCommand command;
   while (control_in_.Pop(command)) {
-    for (std::size_t i = 0; i < controls_.size(); ++i) {
-      if (controls_[i].id() == std::string_view(command.id.data())) {
-        pending_controls_[i] = PendingControl{true, command.index, command.engaged};
-      }
-    }
-  }
-  for (std::size_t i = 0; i < controls_.size(); ++i) {
-    if (pending_controls_[i].pending && !controls_[i].touched()) {
-      controls_[i].ApplyState(pending_controls_[i].index, pending_controls_[i].engaged);
-      pending_controls_[i].pending = false;
-    }
+    if (controls::Control* c = controls_.Find(command.id.data())) c->RequestState(command.index, command.engaged);
   }
   event_buffer_.Clear();
   controls_.Step(dt_s, reading.p_WE, fingertip_radius_m_, f_controls_, event_buffer_);

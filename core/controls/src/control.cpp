@@ -40,6 +40,10 @@ Control::Control(const scene::ControlSpec& spec) : spec_(spec) {
 
 void Control::Step(double dt_s, std::span<const Eigen::Vector3d> p_WE, double fingertip_radius_m,
                    std::span<Eigen::Vector3d> f_E_W, EventBuffer& events) noexcept {
+  if (requested_.waiting && !touched()) {
+    ApplyState(requested_.index, requested_.engaged);
+    requested_.waiting = false;
+  }
   const std::size_t n = std::min({p_WE.size(), f_E_W.size(), static_cast<std::size_t>(kMaxFingertips)});
   for (std::size_t i = 0; i < n; ++i) {
     present_[i] = Finite(p_WE[i]);

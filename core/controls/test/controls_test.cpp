@@ -244,6 +244,28 @@ TEST(Lever, AppliedStateIsADetentItRestsInWithoutAnEvent) {
   EXPECT_DOUBLE_EQ(lever.angle_rad(), spec.lever.min_angle_rad);
 }
 
+// A state from elsewhere (another user moved the lever) waits while a hand is at the control,
+// and is applied at the first step after the hand has left; a newer request replaces it.
+TEST(Lever, ARequestedStateWaitsUntilNoHandIsAtIt) {
+  const scene::ControlSpec spec = Spec(scene::ControlType::kLever);
+  Lever lever(spec);
+  Recorder rec;
+  const Eigen::Vector3d beside(0.0, 0.02, 0.05);  // in the approach zone, 6 mm off the handle
+  rec.Step(lever, OneFinger(beside));
+  ASSERT_TRUE(lever.touched());
+  lever.RequestState(0, false);
+  lever.RequestState(1, false);  // the newer one counts
+  for (int i = 0; i < 100; ++i) rec.Step(lever, OneFinger(beside));
+  EXPECT_EQ(lever.detent(), 0);
+  rec.Step(lever, OneFinger(kFar));  // the hand leaves during this step
+  EXPECT_FALSE(lever.touched());
+  EXPECT_EQ(lever.detent(), 0);
+  rec.Step(lever, OneFinger(kFar));
+  EXPECT_EQ(lever.detent(), 1);
+  EXPECT_DOUBLE_EQ(lever.angle_rad(), spec.lever.max_angle_rad);
+  EXPECT_EQ(rec.Count(EventKind::kMoved), 0);  // the move was another user's: no event here
+}
+
 TEST(Book, AppliedStateOpensItAtAPageOrShutsIt) {
   Book book(Spec(scene::ControlType::kBook));
   book.ApplyState(2, true);

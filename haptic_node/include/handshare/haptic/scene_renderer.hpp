@@ -133,12 +133,6 @@ class SceneRenderer final : public ForceRenderer {
     bool engaged = false;
   };
   common::SpscQueue<ControlCommand, 64> control_in_;
-  struct PendingControl {
-    bool pending = false;
-    std::int32_t index = -1;
-    bool engaged = false;
-  };
-  std::vector<PendingControl> pending_controls_;  // by control, sized at construction
   std::atomic<std::uint64_t> dropped_events_{0};
   std::uint64_t seq_ = 0;
   std::uint64_t peer_stamp_ns_ = 0;  // the newest peer set used, and the step that first used it

@@ -140,8 +140,11 @@ class Control {
     (void)index;
     (void)engaged;
   }
-  /// Whether a fingertip of any hand is in the control's approach zone (a local user is at
-  /// it: a state from elsewhere waits until the hand has left).
+  /// The same from elsewhere while the haptic loop steps the control (another user moved it):
+  /// applied at the start of the next Step() in which no fingertip is in the approach zone, so
+  /// a hand at the control is not overridden; a newer request replaces a waiting one.
+  void RequestState(std::int32_t index, bool engaged) noexcept { requested_ = {true, index, engaged}; }
+  /// Whether a fingertip of any hand is in the control's approach zone.
   bool touched() const noexcept;
 
  protected:
@@ -170,6 +173,11 @@ class Control {
 
  private:
   bool guard_first_visits_ = false;
+  struct Requested {
+    bool waiting = false;
+    std::int32_t index = -1;
+    bool engaged = false;
+  } requested_;
   void TrackApproach(const Fingers& fingers, EventBuffer& events) noexcept;
 
   struct Visit {
