@@ -2,8 +2,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <string>
-#include <vector>
 
 namespace handshare::session {
 
@@ -19,28 +17,25 @@ double ContactSetRate(bool shared, double server_tick_Hz, double full_Hz) {
 }
 
 namespace {
-/// Every object a set touches with an active finger or claims.
-std::vector<std::string> ObjectsOf(const msg::ContactSet& set) {
-  std::vector<std::string> out;
+/// Calls fn(object id) for every object `set` touches with an active finger or claims (grasps,
+/// simulates) until fn returns true; returns whether it did.
+template <class Fn>
+bool AnyObjectOf(const msg::ContactSet& set, Fn&& fn) {
   for (const auto& f : set.fingers()) {
-    if (f.active() && !f.object_id().to_string().empty()) out.push_back(f.object_id().to_string());
+    if (f.active() && f.object_id().size() > 0 && fn(f.object_id())) return true;
   }
-  if (!set.grasped_object_id().to_string().empty()) out.push_back(set.grasped_object_id().to_string());
-  if (set.simulating() && !set.simulated_object_id().to_string().empty()) {
-    out.push_back(set.simulated_object_id().to_string());
-  }
-  return out;
+  if (set.grasped_object_id().size() > 0 && fn(set.grasped_object_id())) return true;
+  return set.simulating() && set.simulated_object_id().size() > 0 && fn(set.simulated_object_id());
 }
 }  // namespace
 
 bool SharesObjectWithPeer(const msg::ContactSet& own, const PeerContacts& peers, PeerContacts::Clock::time_point now) {
-  const std::vector<std::string> mine = ObjectsOf(own);
-  if (mine.empty()) return false;
   for (const auto& [user, entry] : peers.sets()) {
-    if (user == own.user().to_string() || peers.Weight(now - entry.received) <= 0.0) continue;
-    for (const std::string& object : ObjectsOf(entry.set)) {
-      if (std::find(mine.begin(), mine.end(), object) != mine.end()) return true;
-    }
+    if (own.user() == user || peers.Weight(now - entry.received) <= 0.0) continue;
+    const bool shared = AnyObjectOf(entry.set, [&](const auto& theirs) {
+      return AnyObjectOf(own, [&](const auto& mine) { return mine == theirs; });
+    });
+    if (shared) return true;
   }
   return false;
 }
