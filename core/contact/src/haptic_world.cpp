@@ -55,6 +55,8 @@ struct HapticWorld::Object {
   std::vector<fem::ContactInput> inputs;
   std::int32_t num_inputs = 0;
   std::int32_t max_patch = 0;
+  double mu_static = 0.0, mu_kinetic = 0.0;
+  std::array<fem::FrictionPatch, kFingers> friction{};  // this step's patches of the local fingers
 };
 
 namespace {
@@ -183,6 +185,10 @@ ObjectId HapticWorld::AddDeformable(const DeformableDesc& d) {
   if (!d.mesh || !d.compliance) throw std::invalid_argument("AddDeformable: null mesh or compliance");
   if (!FiniteIsometry(d.X_WO)) throw std::invalid_argument("AddDeformable: X_WO is not a finite rigid pose");
   if (d.max_patch_nodes < 1) throw std::invalid_argument("AddDeformable: max_patch_nodes must be >= 1");
+  if (!(d.mu_static >= 0.0) || !(d.mu_kinetic >= 0.0) || !(d.mu_kinetic <= d.mu_static) ||
+      !std::isfinite(d.mu_static)) {
+    throw std::invalid_argument("AddDeformable: need 0 <= mu_kinetic <= mu_static, all finite");
+  }
   auto o = std::make_unique<Object>();
   o->kind = ObjectKind::kDeformable;
   o->tet = d.mesh;
@@ -195,11 +201,14 @@ ObjectId HapticWorld::AddDeformable(const DeformableDesc& d) {
   o->collider = std::make_unique<MeshCollider>(std::move(tri), config_.max_candidates);
   o->patches = std::make_unique<fem::ContactPatchFinder>(*d.mesh, surface, *d.compliance);
   o->max_patch = d.max_patch_nodes;
+  o->mu_static = d.mu_static;
+  o->mu_kinetic = d.mu_kinetic;
   const std::int32_t max_contacts = config_.max_hands * kFingers * d.max_patch_nodes;
   fem::ContactSolverOptions so;
   so.max_contacts = max_contacts;
   so.push_only = true;
   so.regularization_m_per_N = d.regularization_m_per_N;
+  so.max_friction_patches = kFingers;
   o->solver = std::make_unique<fem::ContactSolver>(d.compliance, so);
   o->inputs.assign(static_cast<std::size_t>(max_contacts), fem::ContactInput{});
   objects_.push_back(std::move(o));
@@ -365,6 +374,7 @@ StepReport HapticWorld::Step(double dt_s, std::span<const Eigen::Vector3d> p_WE,
       res.patch_nodes = 0;
       res.u_W_m.setZero();
       if (o.kind == ObjectKind::kDeformable) {
+        res.sticking = fo.friction_patch >= 0 && !fo.slipped;  // the patch's Coulomb state
         res.u_W_m = -fo.contact.depth_m * res.n_W;
         res.patch_nodes = fo.patch_count;
         double best_d = std::numeric_limits<double>::infinity();
@@ -444,15 +454,43 @@ void HapticWorld::StepDeformable(Object& o, std::span<const RemoteContact> remot
     truncated = pr.truncated;
     m += pr.count;
   };
-  // Local fingers: the patch under each proxy, pressed to the proxy's depth.
+  // Local fingers: the patch under each proxy, pressed to the proxy's depth. With friction the
+  // fingertip holds the material point it first pressed (its anchor): the patch is centred there
+  // and slides with the fingertip by the tangential offset (the stick) while the cone holds it;
+  // the solve says where it slipped to, and the anchor follows.
+  const bool friction = o.mu_static > 0.0;  // mu_kinetic <= mu_static
+  std::int16_t num_friction = 0;
   for (int i = 0; i < kFingers; ++i) {
     FingerObject& fo = fo_[static_cast<std::size_t>(i) * num_obj + k];
     fo.patch_begin = m;
     fo.patch_count = 0;
-    if (!fo.contact.touching) continue;
+    fo.friction_patch = -1;
+    if (!fo.contact.touching) {
+      fo.anchored = false;
+      fo.slipped = false;
+      continue;
+    }
+    const Eigen::Vector3d& p = fo.contact.p_O_m;
+    const Eigen::Vector3d& n = fo.contact.n_O;
+    Eigen::Vector3d stick = Eigen::Vector3d::Zero();
+    if (friction) {
+      if (!fo.anchored) {
+        fo.anchor_O_m = p;
+        fo.slide_O_m.setZero();
+        fo.anchored = true;
+        fo.slipped = false;
+      }
+      const Eigen::Vector3d d = p - fo.anchor_O_m;
+      stick = d - d.dot(n) * n;
+    }
     bool trunc = false;
-    add_patch(fo.contact.p_O_m, fo.contact.n_O, fo.contact.depth_m, fo.patch_count, trunc);
+    add_patch(p - stick, n, fo.contact.depth_m, fo.patch_count, trunc);
     fo.contact.truncated = fo.contact.truncated || trunc;
+    if (!friction || fo.patch_count == 0) continue;
+    for (std::int32_t q = 0; q < fo.patch_count; ++q) o.inputs[static_cast<std::size_t>(fo.patch_begin + q)].patch = num_friction;
+    o.friction[static_cast<std::size_t>(num_friction)] = {n, stick, o.mu_static, o.mu_kinetic, fo.slipped,
+                                                          stick - fo.slide_O_m};
+    fo.friction_patch = num_friction++;
   }
   // Remote fingers: the same patch rebuilt from their contact point and imposed displacement.
   const Eigen::Isometry3d X_OW = o.X_WO.inverse();
@@ -468,7 +506,9 @@ void HapticWorld::StepDeformable(Object& o, std::span<const RemoteContact> remot
     add_patch(X_OW * rc.p_WC_m, -(X_OW.linear() * rc.u_W_m) / depth, depth, count, trunc);
   }
   o.num_inputs = m;
-  const fem::StepStatus st = o.solver->Solve(std::span<const fem::ContactInput>(o.inputs.data(), static_cast<std::size_t>(m)));
+  const fem::StepStatus st = o.solver->Solve(
+      std::span<const fem::ContactInput>(o.inputs.data(), static_cast<std::size_t>(m)),
+      std::span<const fem::FrictionPatch>(o.friction.data(), static_cast<std::size_t>(num_friction)));
   const bool failed = st == fem::StepStatus::kInvalidInput || st == fem::StepStatus::kNumericalFailure;
   if (failed) ++report.solver_faults;
   const auto forces = o.solver->forces_N();
@@ -478,6 +518,12 @@ void HapticWorld::StepDeformable(Object& o, std::span<const RemoteContact> remot
     Eigen::Vector3d f_obj = Eigen::Vector3d::Zero();
     for (std::int32_t q = 0; q < fo.patch_count; ++q) f_obj += forces[static_cast<std::size_t>(fo.patch_begin + q)];
     fo.f_W_N = -(o.X_WO.linear() * f_obj);  // the fingertip feels minus the force on the object
+    if (fo.friction_patch >= 0) {
+      const fem::FrictionPatchState& ps = o.solver->patch_states()[static_cast<std::size_t>(fo.friction_patch)];
+      fo.slipped = ps.slipping;
+      fo.slide_O_m = ps.slide_m;
+      fo.anchor_O_m = fo.contact.p_O_m - ps.slide_m;
+    }
   }
 }
 

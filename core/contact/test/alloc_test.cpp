@@ -13,7 +13,7 @@ namespace {
 
 TEST(RealTime, StepDoesNotAllocate) {
   // Every kind of object: a static bumpy mesh, a thin plate, a dynamic ball on a support, and a
-  // deformable block with a remote hand on it.
+  // deformable block with friction and a remote hand on it.
   HapticWorld w;
   w.AddStatic(Shape::Mesh(std::make_shared<TriMesh>(MakeBumpySphere(0.05, 0.003, 3))), RigidMaterial{},
               Eigen::Isometry3d(Eigen::Translation3d(0, 0, 0)));
@@ -27,6 +27,8 @@ TEST(RealTime, StepDoesNotAllocate) {
   d.mesh = mesh;
   d.compliance = C;
   d.X_WO = Eigen::Translation3d(0.6, 0, 0) * Eigen::Isometry3d::Identity();
+  d.mu_static = 0.6;  // friction on: its patches, anchors and slips must not allocate either
+  d.mu_kinetic = 0.5;
   const ObjectId block = w.AddDeformable(d);
   w.SetSupport(SupportPlane{});
   w.Init();

@@ -1,5 +1,7 @@
 #include "handshare/fem/contact_solver.hpp"
 
+#include <Eigen/Geometry>
+
 #include <algorithm>
 #include <cstring>
 #include <cmath>
@@ -61,6 +63,10 @@ ContactSolver::ContactSolver(std::shared_ptr<const Compliance> compliance,
   if (options_.max_active_set_iterations < 0) {
     throw InputError("", 0, "max_active_set_iterations", "must be >= 0");
   }
+  if (options_.max_friction_patches < 0 || options_.max_friction_patches > 1024) {
+    throw InputError("", 0, "max_friction_patches",
+                     "must be in 0..1024, got " + std::to_string(options_.max_friction_patches));
+  }
   eps_m_per_N_ = options_.regularization_m_per_N;
   if (options_.coupling_stiffness_N_per_m > 0.0) eps_m_per_N_ += 1.0 / options_.coupling_stiffness_N_per_m;
 
@@ -100,6 +106,19 @@ ContactSolver::ContactSolver(std::shared_ptr<const Compliance> compliance,
   violates_.assign(M, 0);
   prev_slot_.assign(M, -1);
   prev_active_.assign(M, 0);
+  const auto P = static_cast<std::size_t>(options_.max_friction_patches);
+  patch_of_.assign(M, -1);
+  releases_.assign(M, 0);
+  slip_force_.assign(P, Eigen::Vector2d::Zero());
+  patch_in_.assign(P, FrictionPatch{});
+  tangent_.assign(P, Eigen::Matrix<double, 3, 2>::Zero());
+  slip_dir_.assign(P, Eigen::Vector2d::Zero());
+  patch_state_.assign(P, FrictionPatchState{});
+  slipping_list_.assign(P, -1);
+  Z_.assign(3 * M * 2 * P, 0.0);
+  slip_M_.assign(4 * P * P, 0.0);
+  slip_rhs_.assign(2 * P, 0.0);
+  slip_piv_.assign(2 * P, 0);
 }
 
 void ContactSolver::ZeroOutputs() noexcept {
@@ -108,6 +127,10 @@ void ContactSolver::ZeroOutputs() noexcept {
   for (std::int32_t j = 0; j < num_unique_; ++j) {
     f_N_[j].setZero();
     active_[j] = 0;
+  }
+  for (std::int32_t p = 0; p < num_patches_; ++p) {
+    patch_state_[p].force_N.setZero();
+    patch_state_[p].slipping = false;
   }
 }
 
@@ -123,7 +146,8 @@ std::int32_t ContactSolver::num_active() const noexcept {
   return n;
 }
 
-StepStatus ContactSolver::Solve(std::span<const ContactInput> contacts) noexcept {
+StepStatus ContactSolver::Solve(std::span<const ContactInput> contacts,
+                                std::span<const FrictionPatch> patches) noexcept {
   const Compliance& C = *compliance_;
   const std::int32_t M = options_.max_contacts;
   const bool overflow = contacts.size() > static_cast<std::size_t>(M);
@@ -132,7 +156,29 @@ StepStatus ContactSolver::Solve(std::span<const ContactInput> contacts) noexcept
   num_loads_ = 0;
   iterations_ = 0;
   bool rejected = overflow;
-  bool invalid = false;
+  bool invalid = patches.size() > static_cast<std::size_t>(options_.max_friction_patches);
+  num_patches_ = invalid ? 0 : static_cast<std::int32_t>(patches.size());
+  // The patches: a unit normal, a finite stick, 0 <= mu; the tangent basis of each.
+  for (std::int32_t p = 0; p < num_patches_; ++p) {
+    const FrictionPatch& in = patches[static_cast<std::size_t>(p)];
+    const double nn = in.n_out.norm();
+    const bool ok = in.n_out.allFinite() && nn > 0.5 && nn < 2.0 && in.slide_m.allFinite() &&
+                    in.motion_m.allFinite() &&
+                    std::isfinite(in.mu_static) && in.mu_static >= 0.0 &&
+                    std::isfinite(in.mu_kinetic) && in.mu_kinetic >= 0.0;
+    if (!ok) {
+      invalid = true;
+      continue;
+    }
+    FrictionPatch& q = patch_in_[p];
+    q = in;
+    q.n_out = in.n_out / nn;
+    const Eigen::Vector3d t1 = q.n_out.unitOrthogonal();
+    tangent_[p].col(0) = t1;
+    tangent_[p].col(1) = q.n_out.cross(t1);
+    q.slide_m = tangent_[p] * (tangent_[p].transpose() * in.slide_m);  // its tangential part
+    patch_state_[p] = FrictionPatchState{false, q.slide_m, Eigen::Vector3d::Zero()};
+  }
 
   // Stage 1: validate and merge repeated nodes (m is small: O(m^2) search).
   for (std::int32_t i = 0; i < num_inputs_; ++i) {
@@ -155,6 +201,11 @@ StepStatus ContactSolver::Solve(std::span<const ContactInput> contacts) noexcept
       rejected = true;
       continue;
     }
+    if (c.patch >= num_patches_ || c.patch < -1) {
+      invalid = true;
+      states_[i] = ContactState::kRejectedInvalid;
+      continue;
+    }
     const bool needs_normal = c.mode == ContactMode::kNormalOnly || options_.push_only;
     const double nn = c.n_out.norm();
     if (needs_normal && !(nn > 0.5 && nn < 2.0)) {  // must be (about) unit length
@@ -167,9 +218,10 @@ StepStatus ContactSolver::Solve(std::span<const ContactInput> contacts) noexcept
     if (multiplicity_[j] == 1) {
       n_[j].setZero();
       mode_[j] = c.mode;
+      patch_of_[j] = c.patch;
     }
     if (nn > 0.0) n_[j] += c.n_out / nn;
-    if (c.mode == ContactMode::kFull3d) mode_[j] = ContactMode::kFull3d;
+    if (c.mode == ContactMode::kFull3d || patch_of_[j] >= 0) mode_[j] = ContactMode::kFull3d;
     unique_of_input_[i] = j;
     states_[i] = ContactState::kActive;
   }
@@ -209,8 +261,22 @@ StepStatus ContactSolver::Solve(std::span<const ContactInput> contacts) noexcept
   //     node the surface pushes into the tip is re-engaged (frictionless).
   StepStatus status = StepStatus::kOk;
   bool all_normal = options_.push_only;
-  for (std::int32_t j = 0; j < num_unique_; ++j) all_normal = all_normal && mode_[j] == ContactMode::kNormalOnly;
-  if (!all_normal) {
+  bool patched = false;
+  for (std::int32_t j = 0; j < num_unique_; ++j) {
+    all_normal = all_normal && mode_[j] == ContactMode::kNormalOnly;
+    patched = patched || patch_of_[j] >= 0;
+  }
+  if (patched) {
+    // Fingertip patches with friction: their own iteration (SolveWithPatches).
+    all_normal = false;
+    table_valid_ = false;
+    detail::GatherBlocks(C, slot_.data(), num_unique_, Ccc_.data(), 3 * M);
+    if (!SolveWithPatches(status)) {
+      ZeroOutputs();
+      num_prev_ = 0;
+      return StepStatus::kNumericalFailure;
+    }
+  } else if (!all_normal) {
     table_valid_ = false;
     detail::GatherBlocks(C, slot_.data(), num_unique_, Ccc_.data(), 3 * M);
   } else {
@@ -223,7 +289,7 @@ StepStatus ContactSolver::Solve(std::span<const ContactInput> contacts) noexcept
     }
   }
   BlockPivoting pivoting(num_unique_);
-  while (!all_normal) {
+  while (!all_normal && !patched) {
     if (!SolveActiveSet()) {
       ZeroOutputs();
       num_prev_ = 0;
@@ -289,7 +355,8 @@ StepStatus ContactSolver::Solve(std::span<const ContactInput> contacts) noexcept
     if (j < 0) continue;
     if (active_[j]) {
       forces_N_[i] = f_N_[j] / static_cast<double>(multiplicity_[j]);
-      states_[i] = slipping_[j] ? ContactState::kSlipping : ContactState::kActive;
+      const bool slips = slipping_[j] || (patch_of_[j] >= 0 && patch_state_[patch_of_[j]].slipping);
+      states_[i] = slips ? ContactState::kSlipping : ContactState::kActive;
     } else {
       forces_N_[i].setZero();
       states_[i] = ContactState::kReleased;
@@ -498,7 +565,7 @@ bool ContactSolver::SolveNormalPushOnly(StepStatus& status) noexcept {
   return true;
 }
 
-bool ContactSolver::SolveActiveSet() noexcept {
+int ContactSolver::AssembleHeld(bool fill_matrix) noexcept {
   // Rows of G: 3 per sticking contact, 1 per frictionless one (n^T).
   const int ld = 3 * options_.max_contacts;
   int r = 0;
@@ -511,16 +578,10 @@ bool ContactSolver::SolveActiveSet() noexcept {
     row_of_[j] = r;
     r += mode_[j] == ContactMode::kFull3d ? 3 : 1;
   }
-  if (r == 0) return true;
-  // A = G C_cc G^T (lower triangle is enough for the Cholesky, fill it all: m is small). With
-  // every contact held and sticking (r = 3 u) that is C_cc as gathered, which the small solver
-  // reads in place.
-  const bool small = r <= detail::kSmallSpdMax;
-  const bool in_place = small && r == 3 * num_unique_;
   for (std::int32_t j = 0; j < num_unique_; ++j) {
     if (!active_[j]) continue;
     const bool fj = mode_[j] == ContactMode::kFull3d;
-    for (std::int32_t i = 0; i < num_unique_ && !in_place; ++i) {
+    for (std::int32_t i = 0; i < num_unique_ && fill_matrix; ++i) {
       if (!active_[i]) continue;
       const bool fi = mode_[i] == ContactMode::kFull3d;
       Eigen::Map<const Eigen::Matrix3d, 0, Eigen::OuterStride<>> Cij(
@@ -545,6 +606,27 @@ bool ContactSolver::SolveActiveSet() noexcept {
       rhs_[row_of_[j]] = n_[j].dot(d_m_[j]);
     }
   }
+  return r;
+}
+
+bool ContactSolver::SolveActiveSet() noexcept {
+  const int ld = 3 * options_.max_contacts;
+  std::int32_t held = 0, held_3d = 0;
+  for (std::int32_t j = 0; j < num_unique_; ++j) {
+    held += active_[j] ? 1 : 0;
+    held_3d += active_[j] && mode_[j] == ContactMode::kFull3d ? 1 : 0;
+  }
+  const int rows = 3 * held_3d + (held - held_3d);
+  if (rows == 0) {
+    for (std::int32_t j = 0; j < num_unique_; ++j) f_N_[j].setZero();
+    return true;
+  }
+  // A = G C_cc G^T (lower triangle is enough for the Cholesky, fill it all: m is small). With
+  // every contact held and sticking (r = 3 u) that is C_cc as gathered, which the small solver
+  // reads in place.
+  const bool small = rows <= detail::kSmallSpdMax;
+  const bool in_place = small && rows == 3 * num_unique_;
+  const int r = AssembleHeld(!in_place);
   if (small) {
     const double* A = in_place ? Ccc_.data() : A_.data();
     if (!detail::SmallSpdSolve(A, r, ld, eps_m_per_N_, rhs_.data(), detail::BestIsa())) return false;
@@ -565,6 +647,250 @@ bool ContactSolver::SolveActiveSet() noexcept {
     }
     if (!f_N_[j].allFinite()) return false;
   }
+  return true;
+}
+
+bool ContactSolver::SolvePatchedSystem() noexcept {
+  // Held rows as in SolveActiveSet; a sticking patch's nodes are held at d* + its slide. A
+  // slipping patch's slide s (2 tangent coordinates) is unknown: with A y = b0 + B s
+  // (B puts the tangent basis T into the rows of the patch's held nodes), y = z0 + Z s with
+  // z0 = A^-1 b0 and Z = A^-1 B, and its two cone equations
+  //   Phi y = sum_j (T^T + mu_k e n^T) f_j = F_t - mu_k F_n e = 0   (F_n = -n . sum f_j)
+  // give the 2P x 2P system (Phi Z) s = -Phi z0. The columns of Z share A's factor.
+  const int ld = 3 * options_.max_contacts;
+  const int r = AssembleHeld(true);
+  for (std::int32_t j = 0; j < num_unique_; ++j) {
+    const std::int32_t p = patch_of_[j];
+    if (!active_[j] || p < 0 || mode_[j] != ContactMode::kFull3d || patch_state_[p].slipping) continue;
+    for (int c = 0; c < 3; ++c) rhs_[row_of_[j] + c] += patch_in_[p].slide_m[c];
+  }
+  if (r == 0) return true;
+  if (eps_m_per_N_ > 0.0) {
+    for (int k = 0; k < r; ++k) A_[static_cast<std::ptrdiff_t>(k) * ld + k] += eps_m_per_N_;
+  }
+  if (!detail::CholeskyInPlace(A_.data(), r, ld)) return false;
+  detail::CholeskySolveInPlace(A_.data(), r, ld, rhs_.data());
+  // The slipping patches that hold a node in 3-D (a patch whose nodes all went frictionless
+  // has no tangential force and no slide to find).
+  auto sticks = [&](std::int32_t j, std::int32_t p) {
+    return active_[j] && patch_of_[j] == p && mode_[j] == ContactMode::kFull3d;
+  };
+  std::int32_t ns = 0;
+  for (std::int32_t p = 0; p < num_patches_; ++p) {
+    if (!patch_state_[p].slipping) continue;
+    bool holds = false;
+    for (std::int32_t j = 0; j < num_unique_ && !holds; ++j) holds = sticks(j, p);
+    if (holds) slipping_list_[ns++] = p;
+  }
+  if (ns > 0) {
+    const int n2 = 2 * ns;
+    for (std::int32_t a = 0; a < ns; ++a) {
+      const std::int32_t p = slipping_list_[a];
+      for (int c = 0; c < 2; ++c) {
+        double* z = Z_.data() + static_cast<std::ptrdiff_t>(2 * a + c) * ld;
+        std::fill(z, z + r, 0.0);
+        for (std::int32_t j = 0; j < num_unique_; ++j) {
+          if (!sticks(j, p)) continue;
+          for (int k = 0; k < 3; ++k) z[row_of_[j] + k] = tangent_[p](k, c);
+        }
+        detail::CholeskySolveInPlace(A_.data(), r, ld, z);
+      }
+    }
+    // Phi_a applied to a row vector v (the patch's held nodes' rows). With given forces the
+    // equations are T^T F = g instead (symmetric: Phi Z = B^T A^-1 B).
+    auto phi = [&](std::int32_t a, int k, const double* v) {
+      const std::int32_t p = slipping_list_[a];
+      const double mu = given_force_ ? 0.0 : patch_in_[p].mu_kinetic;
+      const Eigen::Vector3d w = tangent_[p].col(k) + mu * slip_dir_[p][k] * patch_in_[p].n_out;
+      double s = 0.0;
+      for (std::int32_t j = 0; j < num_unique_; ++j) {
+        if (!active_[j] || patch_of_[j] != p) continue;
+        const double* vj = v + row_of_[j];
+        if (mode_[j] == ContactMode::kFull3d) {
+          s += w[0] * vj[0] + w[1] * vj[1] + w[2] * vj[2];
+        } else {
+          s += w.dot(n_[j]) * vj[0];  // a frictionless patch node: f = lambda n
+        }
+      }
+      return s;
+    };
+    for (std::int32_t a = 0; a < ns; ++a) {
+      for (int k = 0; k < 2; ++k) {
+        const int row = 2 * a + k;
+        slip_rhs_[row] = (given_force_ ? slip_force_[slipping_list_[a]][k] : 0.0) - phi(a, k, rhs_.data());
+        for (int col = 0; col < n2; ++col) {
+          slip_M_[static_cast<std::ptrdiff_t>(col) * n2 + row] =
+              phi(a, k, Z_.data() + static_cast<std::ptrdiff_t>(col) * ld);
+        }
+      }
+    }
+    if (!detail::LuInPlace(slip_M_.data(), n2, n2, slip_piv_.data())) return false;
+    detail::LuSolveInPlace(slip_M_.data(), n2, n2, slip_piv_.data(), slip_rhs_.data());
+    for (int col = 0; col < n2; ++col) {
+      const double s = slip_rhs_[col];
+      if (!std::isfinite(s)) return false;
+      const double* z = Z_.data() + static_cast<std::ptrdiff_t>(col) * ld;
+      for (int k = 0; k < r; ++k) rhs_[k] += s * z[k];
+    }
+    for (std::int32_t a = 0; a < ns; ++a) {
+      const std::int32_t p = slipping_list_[a];
+      patch_state_[p].slide_m = tangent_[p] * Eigen::Vector2d(slip_rhs_[2 * a], slip_rhs_[2 * a + 1]);
+    }
+  }
+  for (std::int32_t j = 0; j < num_unique_; ++j) {
+    if (!active_[j]) continue;
+    const int k = row_of_[j];
+    if (mode_[j] == ContactMode::kFull3d) {
+      f_N_[j] = Eigen::Vector3d(rhs_[k], rhs_[k + 1], rhs_[k + 2]);
+    } else {
+      f_N_[j] = rhs_[k] * n_[j];
+    }
+    if (!f_N_[j].allFinite()) return false;
+  }
+  return true;
+}
+
+bool ContactSolver::SolveWithPatches(StepStatus& status) noexcept {
+  // Like the general path's iteration, with one more kind of change: a sticking patch whose
+  // force leaves its cone starts to slip, in the direction e of that force (and never sticks
+  // again within this call). Patch nodes are held in 3-D; with push_only one that pulls is
+  // released and a released one the surface pushes into the tip is held again (at the patch's
+  // slide). Other contacts behave as on the general path.
+  //
+  // A slipping patch's cone equation F_t = mu_k F_n e ties its tangential force to its normal
+  // force in a fixed direction (non-associated friction): the held-set problem is no longer
+  // symmetric, and pivoting on it can cycle (a node pulls while held and is pressed into the
+  // tip while released). When a node comes back a second time, the slipping patches switch to
+  // a given tangential force g = mu_k F_n e from the last iterate: for a given g the held set is
+  // the solution of a convex problem (pivoting settles it), and g is updated from the new F_n
+  // until it no longer changes (a fixed point; the answer satisfies the same equations).
+  for (std::int32_t j = 0; j < num_unique_; ++j) {
+    active_[j] = 1;
+    releases_[j] = 0;
+  }
+  given_force_ = false;
+  BlockPivoting pivoting(num_unique_);
+  std::int32_t pivots = 0, updates = 0;
+  constexpr double kTol = 1e-9;
+  constexpr std::int32_t kMaxForceUpdates = 100;
+  auto patch_forces = [&] {
+    for (std::int32_t p = 0; p < num_patches_; ++p) patch_state_[p].force_N.setZero();
+    for (std::int32_t j = 0; j < num_unique_; ++j) {
+      if (active_[j] && patch_of_[j] >= 0) patch_state_[patch_of_[j]].force_N += f_N_[j];
+    }
+  };
+  // The tangential force a slipping patch's cone asks for at its current normal force.
+  auto cone_force = [&](std::int32_t p) -> Eigen::Vector2d {
+    const double f_n = -patch_in_[p].n_out.dot(patch_state_[p].force_N);
+    return patch_in_[p].mu_kinetic * std::max(f_n, 0.0) * slip_dir_[p];
+  };
+  while (true) {
+    if (!SolvePatchedSystem()) return false;
+    double f_scale = 0.0, d_scale = 0.0;
+    for (std::int32_t j = 0; j < num_unique_; ++j) {
+      f_scale = std::max(f_scale, f_N_[j].norm());
+      d_scale = std::max(d_scale, d_m_[j].norm());
+    }
+    for (std::int32_t p = 0; p < num_patches_; ++p) {
+      d_scale = std::max(d_scale, patch_in_[p].slide_m.norm());
+    }
+    if (f_scale == 0.0) f_scale = 1.0;
+    if (d_scale == 0.0) d_scale = 1.0;
+    patch_forces();
+    bool newly_slipping = false;
+    for (std::int32_t p = 0; p < num_patches_; ++p) {
+      FrictionPatchState& st = patch_state_[p];
+      if (st.slipping) continue;
+      const FrictionPatch& in = patch_in_[p];
+      const double f_n = -in.n_out.dot(st.force_N);
+      const Eigen::Vector2d f_t = tangent_[p].transpose() * st.force_N;
+      const double mu = in.slipped_before ? in.mu_kinetic : in.mu_static;
+      if (f_t.norm() <= mu * std::max(f_n, 0.0) + kTol * f_scale) continue;
+      st.slipping = true;
+      // The way it slides: the fingertip's motion along the surface, else the trial force's.
+      const Eigen::Vector2d moved = tangent_[p].transpose() * in.motion_m;
+      slip_dir_[p] = moved.norm() > 1e-12 ? Eigen::Vector2d(moved.normalized()) : Eigen::Vector2d(f_t / f_t.norm());
+      slip_force_[p] = cone_force(p);
+      newly_slipping = true;
+    }
+    if (newly_slipping) {
+      ++iterations_;
+      continue;  // at most one re-solve per patch: slipping does not revert
+    }
+    std::int32_t violations = 0;
+    bool slipped = false;
+    if (options_.push_only) {
+      ComputeContactDisplacements();
+      auto target = [&](std::int32_t j) {
+        const std::int32_t p = patch_of_[j];
+        return p >= 0 ? Eigen::Vector3d(d_m_[j] + patch_state_[p].slide_m) : d_m_[j];
+      };
+      for (std::int32_t j = 0; j < num_unique_; ++j) {
+        const bool v = active_[j] ? f_N_[j].dot(n_[j]) / f_scale > kTol
+                                  : (u_c_m_[j] - target(j)).dot(n_[j]) / d_scale > kTol;
+        violates_[j] = v ? 1 : 0;
+        violations += v ? 1 : 0;
+        // A sticking contact that pulls slips first, patch node or not (as on the general path:
+        // friction needs pressure): it keeps its normal constraint only, for the rest of the call.
+        if (v && active_[j] && mode_[j] == ContactMode::kFull3d) {
+          mode_[j] = ContactMode::kNormalOnly;
+          slipping_[j] = 1;
+          slipped = true;
+        }
+      }
+    }
+    if (violations > 0) {
+      if (pivots >= options_.max_active_set_iterations) {
+        status = StepStatus::kNotConverged;
+        break;
+      }
+      ++pivots;
+      ++iterations_;
+      if (slipped) continue;
+      const bool block = pivoting.Block(violations);
+      for (std::int32_t j = 0; j < num_unique_; ++j) {
+        if (!violates_[j]) continue;
+        if (active_[j]) {
+          active_[j] = 0;
+          if (releases_[j] < 255) ++releases_[j];
+        } else {
+          active_[j] = 1;
+          if (mode_[j] == ContactMode::kFull3d) {  // re-engages frictionless
+            mode_[j] = ContactMode::kNormalOnly;
+            slipping_[j] = 1;
+          }
+          if (releases_[j] >= 2 && !given_force_) {  // came back twice: switch (see above)
+            given_force_ = true;
+            for (std::int32_t p = 0; p < num_patches_; ++p) {
+              if (patch_state_[p].slipping) slip_force_[p] = cone_force(p);
+            }
+            pivoting = BlockPivoting(num_unique_);
+            pivots = 0;
+          }
+        }
+        if (!block) break;  // least index
+      }
+      continue;
+    }
+    if (!given_force_) break;
+    // The held set is settled for the given forces: update them from the new normal forces.
+    double change = 0.0;
+    for (std::int32_t p = 0; p < num_patches_; ++p) {
+      if (!patch_state_[p].slipping) continue;
+      const Eigen::Vector2d g = cone_force(p);
+      change = std::max(change, (g - slip_force_[p]).norm());
+      slip_force_[p] = g;
+    }
+    if (change <= kTol * f_scale) break;
+    if (++updates > kMaxForceUpdates) {
+      status = StepStatus::kNotConverged;
+      break;
+    }
+    ++iterations_;
+    pivoting = BlockPivoting(num_unique_);
+    pivots = 0;
+  }
+  patch_forces();
   return true;
 }
 

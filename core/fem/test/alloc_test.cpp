@@ -125,6 +125,8 @@ TEST(NoAllocation, SolversAndPatchQueries) {
                                   {top[20], {0, 1e-4, -5e-4}, Eigen::Vector3d::UnitZ(), ContactMode::kNormalOnly}};
   std::vector<ContactInput> nan_in = in;
   nan_in[1].u_m.y() = std::nan("");
+  const FrictionPatch friction{Eigen::Vector3d::UnitZ(), Eigen::Vector3d(3e-3, 0, 0), 0.5, 0.4, false};
+  bool slipped = false;
 
   long n = 0;
   {
@@ -150,6 +152,11 @@ TEST(NoAllocation, SolversAndPatchQueries) {
       const PatchResult r = finder.Sphere(b.mesh.positions_m()[top[17]], Eigen::Vector3d::UnitZ(), 0.01, 1e-3,
                                           ContactMode::kNormalOnly, patch);
       push.Solve(std::span(patch.data(), static_cast<std::size_t>(r.count)));
+      // The same patch with friction, dragged far enough to slip.
+      for (int q = 0; q < r.count; ++q) patch[static_cast<std::size_t>(q)].patch = 0;
+      push.Solve(std::span(patch.data(), static_cast<std::size_t>(r.count)), std::span(&friction, 1));
+      slipped = slipped || push.patch_states()[0].slipping;
+      for (int q = 0; q < r.count; ++q) patch[static_cast<std::size_t>(q)].patch = -1;
       finder.FlatPunch(b.mesh.positions_m()[top[17]], Eigen::Vector3d::UnitZ(), 0.006, 1e-3,
                        ContactMode::kFull3d, std::span(patch.data(), 3));  // truncates
     }
@@ -158,6 +165,7 @@ TEST(NoAllocation, SolversAndPatchQueries) {
   EXPECT_EQ(n, 0) << "heap allocations in the real-time path";
   // The calls did real work (the test is not vacuous).
   EXPECT_GT(plain.num_unique(), 0);
+  EXPECT_TRUE(slipped);
   EXPECT_GT(compressed.num_unique(), 0);
   EXPECT_GT(compressed16.num_unique(), 0);
   EXPECT_GT(half_stats.half_blocks, 0) << "the float16 store has no float16 factors";

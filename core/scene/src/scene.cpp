@@ -426,10 +426,14 @@ SceneObject ParseObject(const Context& c, const json& j, const std::string& path
   }
   if (o.kind == ObjectKind::kDeformable) {
     const json& m = c.Object(c.Require(j, "material", path), path + "material");
-    c.OnlyKnown(m, mpath, {"E_Pa", "nu", "density_kg_per_m3", "note"});
-    o.deformable.E_Pa = c.Number(c.Require(m, "E_Pa", mpath), mpath + "E_Pa", 100.0, 1e12);
-    o.deformable.nu = c.Number(c.Require(m, "nu", mpath), mpath + "nu", 0.0, 0.499);
-    o.deformable.density_kg_per_m3 = c.Number(m, "density_kg_per_m3", mpath, 1.0, 1e5, 1000.0);
+    c.OnlyKnown(m, mpath, {"E_Pa", "nu", "density_kg_per_m3", "mu_static", "mu_kinetic", "note"});
+    DeformableMaterial& d = o.deformable;
+    d.E_Pa = c.Number(c.Require(m, "E_Pa", mpath), mpath + "E_Pa", 100.0, 1e12);
+    d.nu = c.Number(c.Require(m, "nu", mpath), mpath + "nu", 0.0, 0.499);
+    d.density_kg_per_m3 = c.Number(m, "density_kg_per_m3", mpath, 1.0, 1e5, 1000.0);
+    d.mu_static = c.Number(m, "mu_static", mpath, 0.0, 5.0, 0.0);
+    d.mu_kinetic = c.Number(m, "mu_kinetic", mpath, 0.0, 5.0, d.mu_static);
+    if (d.mu_kinetic > d.mu_static) c.Fail(mpath + "mu_kinetic", "larger than mu_static");
 
     const std::string fpath = path + "fixed.";
     const json& f = c.Object(c.Require(j, "fixed", path), path + "fixed");

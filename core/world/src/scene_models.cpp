@@ -78,6 +78,8 @@ SceneModels BuildSceneModels(const scene::Scene& scene, const SceneModelsOptions
         desc.mesh = prepared.mesh;
         desc.compliance = prepared.compliance;
         desc.X_WO = o.X_WO();
+        desc.mu_static = o.deformable.mu_static;
+        desc.mu_kinetic = o.deformable.mu_kinetic;
         id = w.AddDeformable(desc);
         out.deformables.push_back(std::move(prepared));
         break;

@@ -103,6 +103,11 @@ struct DeformableDesc {
   Eigen::Isometry3d X_WO = Eigen::Isometry3d::Identity();
   std::int32_t max_patch_nodes = 16;  ///< per fingertip (closest kept); the solve is O(m^3).
   double regularization_m_per_N = 0.0;  ///< fem::ContactSolverOptions (0 = exact).
+  /// Coulomb friction of a fingertip on the surface (fem::FrictionPatch): a fingertip patch
+  /// sticks to the material it pressed while |F_t| <= mu_static F_n and drags it along, and
+  /// slips with |F_t| = mu_kinetic F_n. Both 0: frictionless (the normal-only solve).
+  double mu_static = 0.0;
+  double mu_kinetic = 0.0;
 };
 
 struct WorldConfig {
@@ -238,6 +243,13 @@ class HapticWorld {
     ProxyContact contact;
     Eigen::Vector3d f_W_N = Eigen::Vector3d::Zero();
     std::int32_t patch_begin = 0, patch_count = 0;
+    // Friction on a deformable: the material point the fingertip holds (frame O, on the
+    // undeformed surface), whether it holds one, and whether it slipped in the last step.
+    Eigen::Vector3d anchor_O_m = Eigen::Vector3d::Zero();
+    Eigen::Vector3d slide_O_m = Eigen::Vector3d::Zero();  // the stick the last step held
+    bool anchored = false;
+    bool slipped = false;
+    std::int16_t friction_patch = -1;  // this step's patch index in the solve, -1: none
   };
   std::vector<FingerObject> fo_;  // [finger * num_objects + object]
   std::array<FingerResult, kFingers> results_{};

@@ -8,6 +8,15 @@
 /// components (sticking contact) or the normal one (frictionless). This is the exact static FEM
 /// solution with the touched nodes held at d* (Schur complement identity). The force path costs
 /// O(m^3) for m contacts, independent of the mesh size; the surface field costs O(N m).
+///
+/// Coulomb friction of a fingertip patch (FrictionPatch): the patch's held nodes are imposed in
+/// full 3-D (the paper's elementary displacements) and slide together by one tangential
+/// displacement s, the patch's stick. While the tangential force on the patch stays inside the
+/// cone |F_t| <= mu F_n the patch sticks (s as given); outside it the patch slips: s becomes
+/// two unknowns and two equations put the force on the cone, F_t = mu_k F_n e, in the direction
+/// e the fingertip slides (or, at rest, that of the sticking trial force). Both states are
+/// linear solves on C_cc, so each is the exact static FEM solution for its displacements;
+/// docs/fem.md ("Friction") gives the equations.
 /// Solve() and the displacement queries are noexcept and do not allocate: everything is sized by
 /// the constructor for ContactSolverOptions::max_contacts.
 
@@ -36,13 +45,42 @@ struct ContactInput {
   Eigen::Vector3d n_out = Eigen::Vector3d::Zero();         ///< unit outward normal (push-only,
                                                            ///< kNormalOnly); zero = none.
   ContactMode mode = ContactMode::kFull3d;
+  /// Index of the FrictionPatch this node belongs to (Solve()'s `patches`), or -1 for none. A
+  /// patch node is held in full 3-D at u_m plus the patch's slide (mode is ignored); u_m is then
+  /// the normal part only. A node touched by several inputs takes the first input's patch.
+  std::int16_t patch = -1;
+};
+
+/// One fingertip patch with Coulomb friction: the nodes whose ContactInput::patch names it.
+struct FrictionPatch {
+  Eigen::Vector3d n_out = Eigen::Vector3d::Zero();    ///< unit outward normal (the cone's axis).
+  Eigen::Vector3d slide_m = Eigen::Vector3d::Zero();  ///< the stick: tangential displacement the
+                                                      ///< patch's nodes take while it sticks [m]
+                                                      ///< (its normal part is ignored).
+  double mu_static = 0.0;    ///< the patch sticks while |F_t| <= mu_static F_n ...
+  double mu_kinetic = 0.0;   ///< ... and slips with |F_t| = mu_kinetic F_n.
+  bool slipped_before = false;  ///< slipping in the previous step: it sticks again only once
+                                ///< |F_t| <= mu_kinetic F_n.
+  /// How the fingertip moved along the surface since the last step (the stick minus the last
+  /// slide) [m]: a slip goes this way (kinetic friction opposes the sliding). Zero (a fingertip
+  /// at rest): the way of the sticking trial force (the radial return).
+  Eigen::Vector3d motion_m = Eigen::Vector3d::Zero();
+};
+
+/// What became of a FrictionPatch in the last Solve().
+struct FrictionPatchState {
+  bool slipping = false;                              ///< slid to the cone's surface.
+  Eigen::Vector3d slide_m = Eigen::Vector3d::Zero();  ///< the tangential displacement held: the
+                                                      ///< given stick, or where it slipped to.
+  Eigen::Vector3d force_N = Eigen::Vector3d::Zero();  ///< sum of its nodes' forces on the object.
 };
 
 /// What became of one input contact.
 enum class ContactState : std::uint8_t {
   kActive,               ///< held as requested; carries force.
   kSlipping,             ///< push-only: a sticking contact that would pull cannot hold
-                         ///< friction, so it slips (held along n_out only).
+                         ///< friction, so it slips (held along n_out only); or a node of a
+                         ///< FrictionPatch that slips (held in 3-D at the slid position).
   kReleased,             ///< push-only: would pull, so released (zero force).
   kRejectedFixed,        ///< the node is fixed: ignored (zero force).
   kRejectedUnknownNode,  ///< not a compliance node (interior, out of range): ignored.
@@ -79,6 +117,8 @@ struct ContactSolverOptions {
   bool push_only = false;
   /// Cap on active-set changes per Solve() when push_only.
   std::int32_t max_active_set_iterations = 64;
+  /// Most FrictionPatches one Solve() accepts; sizes the buffers of the friction solve.
+  std::int32_t max_friction_patches = 16;
 };
 
 /// The real-time contact solver. Not thread-safe; one per haptic thread and object.
@@ -95,7 +135,18 @@ class ContactSolver {
   /// problem on n_i^T C_ij n_j, started from the previous call's held set and with the blocks
   /// of nodes touched in consecutive calls kept from it: faster, same answer (the problem has
   /// one solution), so the result does not depend on the call history.
-  StepStatus Solve(std::span<const ContactInput> contacts) noexcept;
+  StepStatus Solve(std::span<const ContactInput> contacts) noexcept { return Solve(contacts, {}); }
+  /// The same with Coulomb friction on the patches that contacts name (see FrictionPatch): a
+  /// stick whose force leaves the cone slips; slipping never reverts within one call, so the
+  /// patches add at most patches.size() re-solves to the push-only iterations. A contact that
+  /// names a patch out of range, or a patch with a bad normal, slide or mu, is invalid input.
+  /// Real-time: noexcept, no allocation.
+  StepStatus Solve(std::span<const ContactInput> contacts,
+                   std::span<const FrictionPatch> patches) noexcept;
+  /// The patches of the last Solve(), same order as given.
+  std::span<const FrictionPatchState> patch_states() const noexcept {
+    return {patch_state_.data(), static_cast<std::size_t>(num_patches_)};
+  }
 
   /// Force on the object at each input contact [N] (push: along -n_out), same order as the
   /// inputs of the last Solve().
@@ -134,6 +185,15 @@ class ContactSolver {
 
  private:
   bool SolveActiveSet() noexcept;
+  // Fills rhs_ = G d* and row_of_ for the held contacts and, with fill_matrix, A_ = G C_cc G^T
+  // (all of it); returns the row count.
+  int AssembleHeld(bool fill_matrix) noexcept;
+  // Push-only or not, with the friction patches (every patch node held in 3-D). Returns false on
+  // a numerical failure.
+  bool SolveWithPatches(StepStatus& status) noexcept;
+  // One linear solve of SolveWithPatches at the current held set and patch states: f_N_, and
+  // the slipping patches' slides. Returns false on a numerical failure.
+  bool SolvePatchedSystem() noexcept;
   void ComputeContactDisplacements() noexcept;
   // Push-only with every contact frictionless: the scalar problem on S = N^T C_cc N, warm
   // started from the previous Solve()'s active set. Returns false on a numerical failure.
@@ -201,6 +261,23 @@ class ContactSolver {
   std::int32_t num_free_ = 0;
   bool table_valid_ = false;
   std::int32_t num_prev_ = 0;
+  // Friction patches: per distinct node its patch (-1: none); per patch the input, its tangent
+  // basis (3x2), the direction it slips in (tangent coordinates) and the result; the slipping
+  // patches' response columns Z = A^-1 B (3M x 2P, ld 3M) and their 2P x 2P system.
+  std::vector<std::int16_t> patch_of_;
+  std::vector<std::uint8_t> releases_;  // per distinct node: times released in this Solve()
+  std::vector<FrictionPatch> patch_in_;
+  std::vector<Eigen::Matrix<double, 3, 2>> tangent_;
+  std::vector<Eigen::Vector2d> slip_dir_;
+  std::vector<Eigen::Vector2d> slip_force_;  // the given tangential force (given_force_)
+  bool given_force_ = false;
+  std::vector<FrictionPatchState> patch_state_;
+  std::vector<std::int32_t> slipping_list_;
+  std::vector<double> Z_;
+  std::vector<double> slip_M_;
+  std::vector<double> slip_rhs_;
+  std::vector<std::int32_t> slip_piv_;
+  std::int32_t num_patches_ = 0;
   mutable SurfaceField field_;
 };
 

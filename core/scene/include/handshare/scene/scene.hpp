@@ -18,7 +18,8 @@
 ///           absolute; OBJ, STL or PLY read with assimp; mesh_scale: number or [3], default 1
 ///     position_m [3] (required), orientation_wxyz [4] (unit), mass_kg, rgb [3] in 0..1
 ///     material: rigid      {stiffness_N_per_m, damping_N_s_per_m, mu_static, mu_kinetic}
-///               deformable {E_Pa, nu, density_kg_per_m3}   (required for deformables)
+///               deformable {E_Pa, nu, density_kg_per_m3, mu_static, mu_kinetic}
+///               (required for deformables; mu: fingertip friction, default 0 = frictionless)
 ///     fixed (deformables, required): {below_m} | {plane_point_m [3], plane_normal [3]} |
 ///           {nodes [indices]}: nodes of the tetrahedral mesh held fixed, in frame O
 ///     motion: {direction [3], amplitude_m, period_s, phase_rad}: p_WO(t) = position_m +
@@ -83,6 +84,9 @@ struct DeformableMaterial {
   double E_Pa = 0.0;
   double nu = 0.45;
   double density_kg_per_m3 = 1000.0;
+  /// Coulomb friction of a fingertip on the skin (contact::DeformableDesc): 0 = frictionless.
+  double mu_static = 0.0;
+  double mu_kinetic = 0.0;
 };
 
 /// Which nodes of a deformable's tetrahedral mesh are fixed (Dirichlet boundary).
