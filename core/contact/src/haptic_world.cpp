@@ -56,7 +56,7 @@ struct HapticWorld::Object {
   std::int32_t num_inputs = 0;
   std::int32_t max_patch = 0;
   double mu_static = 0.0, mu_kinetic = 0.0;
-  std::array<fem::FrictionPatch, kFingers> friction{};  // this step's patches of the local fingers
+  std::vector<fem::FrictionPatch> friction;  // this step's patches (local fingers, then peers')
 };
 
 namespace {
@@ -208,9 +208,10 @@ ObjectId HapticWorld::AddDeformable(const DeformableDesc& d) {
   so.max_contacts = max_contacts;
   so.push_only = true;
   so.regularization_m_per_N = d.regularization_m_per_N;
-  so.max_friction_patches = kFingers;
+  so.max_friction_patches = config_.max_hands * kFingers;
   o->solver = std::make_unique<fem::ContactSolver>(d.compliance, so);
   o->inputs.assign(static_cast<std::size_t>(max_contacts), fem::ContactInput{});
+  o->friction.assign(static_cast<std::size_t>(so.max_friction_patches), fem::FrictionPatch{});
   objects_.push_back(std::move(o));
   return static_cast<ObjectId>(objects_.size() - 1);
 }
@@ -376,6 +377,7 @@ StepReport HapticWorld::Step(double dt_s, std::span<const Eigen::Vector3d> p_WE,
       if (o.kind == ObjectKind::kDeformable) {
         res.sticking = fo.friction_patch >= 0 && !fo.slipped;  // the patch's Coulomb state
         res.u_W_m = -fo.contact.depth_m * res.n_W;
+        if (fo.friction_patch >= 0) res.u_W_m += o.X_WO.linear() * fo.slide_O_m;  // and its stick
         res.patch_nodes = fo.patch_count;
         double best_d = std::numeric_limits<double>::infinity();
         const auto& P = o.tet->positions_m();
@@ -492,18 +494,35 @@ void HapticWorld::StepDeformable(Object& o, std::span<const RemoteContact> remot
                                                           stick - fo.slide_O_m};
     fo.friction_patch = num_friction++;
   }
-  // Remote fingers: the same patch rebuilt from their contact point and imposed displacement.
+  // Remote fingers: the same patch rebuilt from their contact point, normal and imposed
+  // displacement. A peer's stick (the part of u along the surface) is held as it sent it: its
+  // own solve decided whether it sticks or slips, so here the cone never lets it go.
   const Eigen::Isometry3d X_OW = o.X_WO.inverse();
+  constexpr double kHeldAsSent = 1e6;
   for (const RemoteContact& rc : remote) {
     if (rc.object < 0 || rc.object >= num_objects() || objects_[static_cast<std::size_t>(rc.object)].get() != &o) continue;
-    const double depth = rc.u_W_m.norm();
-    if (!rc.p_WC_m.allFinite() || !rc.u_W_m.allFinite() || !(depth > 0.0)) {
+    if (!rc.p_WC_m.allFinite() || !rc.u_W_m.allFinite() || !rc.n_W.allFinite() || !(rc.u_W_m.norm() > 0.0)) {
       ++report.remote_rejected;
       continue;
     }
+    const double nn = rc.n_W.norm();
+    const Eigen::Vector3d n_W = (nn > 0.5 && nn < 2.0) ? Eigen::Vector3d(rc.n_W / nn) : Eigen::Vector3d(-rc.u_W_m / rc.u_W_m.norm());
+    const double depth = -rc.u_W_m.dot(n_W);
+    if (!(depth > 0.0)) {
+      ++report.remote_rejected;  // pulls the surface out: not a press
+      continue;
+    }
+    const Eigen::Vector3d stick_O = X_OW.linear() * (rc.u_W_m + depth * n_W);
+    const Eigen::Vector3d n_O = X_OW.linear() * n_W;
+    const bool sticks = stick_O.norm() > 1e-12 && num_friction < static_cast<std::int16_t>(o.friction.size());
     std::int32_t count = 0;
     bool trunc = false;
-    add_patch(X_OW * rc.p_WC_m, -(X_OW.linear() * rc.u_W_m) / depth, depth, count, trunc);
+    const std::int32_t begin = m;
+    add_patch(X_OW * rc.p_WC_m - (sticks ? stick_O : Eigen::Vector3d::Zero()), n_O, depth, count, trunc);
+    if (!sticks || count == 0) continue;
+    for (std::int32_t q = 0; q < count; ++q) o.inputs[static_cast<std::size_t>(begin + q)].patch = num_friction;
+    o.friction[static_cast<std::size_t>(num_friction++)] = {n_O, stick_O, kHeldAsSent, kHeldAsSent, false,
+                                                            Eigen::Vector3d::Zero()};
   }
   o.num_inputs = m;
   const fem::StepStatus st = o.solver->Solve(

@@ -172,6 +172,54 @@ TEST(DeformableFriction, FrictionlessStrokeDragsNothingAndLiftingForgetsTheAncho
   EXPECT_LT((f->fingers()[1].f_E_W_N - fresh->fingers()[1].f_E_W_N).norm(), 1e-12);
 }
 
+// A peer's fingertip arrives as a RemoteContact (its contact point, normal and imposed
+// displacement: the indentation plus its stick). The station that receives it holds the same
+// patch at the same stick, so its loads on the object are the ones the stroking station solved:
+// exactly while the stroke sticks; while it slips, the stroking station's patch was found
+// around the anchor before the slip and the peer's around the one after it, a node spacing
+// apart at most. A peer that sends no normal (an older node) is imposed along -u, no stick.
+TEST(DeformableFriction, APeersStickIsHeldWhereItIsSolved) {
+  const Block& b = TheBlock();
+  auto a = MakeWorld(b, 0.6, 0.5);
+  auto peer = MakeWorld(b, 0.6, 0.5);
+  std::array<Eigen::Vector3d, kFingers> far;
+  for (int i = 0; i < kFingers; ++i) far[static_cast<std::size_t>(i)] = Eigen::Vector3d(5.0, 5.0, 5.0 + i);
+  auto load_sum = [](const HapticWorld& w) {
+    Eigen::Vector3d f = Eigen::Vector3d::Zero();
+    for (const fem::NodeLoad& l : w.held_loads(0)) f += l.f_N;
+    return f;
+  };
+  Eigen::Vector3d p = Press(*a, b, 0.02, 0.03, 0.002);
+  int sticking_steps = 0, slipping_steps = 0;
+  double worst_slip = 0.0;
+  for (int k = 1; k <= 300; ++k) {
+    p.x() += 20e-6;
+    const FingerResult r = StepAt(*a, p);
+    const RemoteContact rc{1, 1, 0, r.p_WC_m, r.u_W_m, r.f_E_W_N, r.n_W};
+    peer->Step(1e-3, far, std::span(&rc, 1));
+    const Eigen::Vector3d fa = load_sum(*a), fp = load_sum(*peer);
+    if (r.sticking) {
+      ++sticking_steps;
+      EXPECT_LT((fp - fa).norm(), 1e-9 * fa.norm()) << k;
+    } else {
+      ++slipping_steps;
+      worst_slip = std::max(worst_slip, (fp - fa).norm() / fa.norm());
+    }
+  }
+  RecordProperty("slipping_load_difference", std::to_string(worst_slip));
+  EXPECT_GT(sticking_steps, 10);
+  EXPECT_GT(slipping_steps, 100);
+  EXPECT_LT(worst_slip, 0.1);
+  // The stick really crossed: the peer's loads drag +x as the stroking station's do.
+  EXPECT_GT(load_sum(*peer).x(), 0.4 * -load_sum(*peer).z());
+  // Without a normal the same contact is a frictionless press along -u (as before there was
+  // friction): no stick is held.
+  const FingerResult r = a->fingers()[1];
+  const RemoteContact old{1, 1, 0, r.p_WC_m, -r.depth_m * r.n_W, r.f_E_W_N, Eigen::Vector3d::Zero()};
+  peer->Step(1e-3, far, std::span(&old, 1));
+  EXPECT_LT(std::abs(load_sum(*peer).x()), 1e-9 * load_sum(*peer).norm());
+}
+
 TEST(DeformableFriction, BadMuIsRefused) {
   const Block& b = TheBlock();
   HapticWorld w(WorldConfig{});

@@ -15,6 +15,8 @@
 #include <sstream>
 #include <string>
 
+#include "handshare/fem/compliance.hpp"
+#include "handshare/fem/contact_solver.hpp"
 #include "handshare/fem/mesh_io.hpp"
 #include "handshare/fem/static_solver.hpp"
 #include "test_util.hpp"
@@ -90,9 +92,20 @@ std::map<std::string, std::map<std::int64_t, Eigen::Vector3d>> ReadDat(const std
   return tables;
 }
 
+// Runs ccx on the case in a scratch folder; returns the tables of job.dat.
+std::map<std::string, std::map<std::int64_t, Eigen::Vector3d>> RunCcx(const TetMesh& mesh, const CcxCase& c,
+                                                                   const test::TempDir& dir) {
+  WriteInp(dir.path() / "job.inp", mesh, c);
+  const std::string cmd = "cd '" + dir.path().string() + "' && OMP_NUM_THREADS=1 ccx -i job > ccx.log 2>&1";
+  EXPECT_EQ(std::system(cmd.c_str()), 0) << "ccx failed, see " << dir.path() / "ccx.log";
+  auto tables = ReadDat(dir.path() / "job.dat");
+  EXPECT_EQ(tables["U"].size(), static_cast<std::size_t>(mesh.num_nodes()));
+  return tables;
+}
+
 double CompareToCcx(const TetMesh& mesh, const CcxCase& c, std::string* detail) {
   test::TempDir dir;
-  WriteInp(dir.path() / "job.inp", mesh, c);
+  auto tables = RunCcx(mesh, c, dir);
   // Our solver on the mesh as written (12 digits) and re-read.
   const TetMesh ours_mesh = ReadAbaqusInp(dir.path() / "job.inp");
   EXPECT_EQ(ours_mesh.num_nodes(), mesh.num_nodes());
@@ -104,10 +117,6 @@ double CompareToCcx(const TetMesh& mesh, const CcxCase& c, std::string* detail) 
   const Material m{std::stod(G12(c.material.E_Pa)), std::stod(G12(c.material.nu))};
   const StaticSolution s = SolveStatic(ours_mesh, m, p);
 
-  const std::string cmd = "cd '" + dir.path().string() + "' && OMP_NUM_THREADS=1 ccx -i job > ccx.log 2>&1";
-  EXPECT_EQ(std::system(cmd.c_str()), 0) << "ccx failed, see " << dir.path() / "ccx.log";
-  auto tables = ReadDat(dir.path() / "job.dat");
-  EXPECT_EQ(tables["U"].size(), static_cast<std::size_t>(mesh.num_nodes()));
   std::vector<Eigen::Vector3d> a, b, ra, rb;
   for (std::int32_t v = 0; v < ours_mesh.num_nodes(); ++v) {
     a.push_back(s.u_m[v]);
@@ -155,6 +164,58 @@ TEST(CalculiX, ImposedFingertipDisplacementsAgree) {
   std::string detail;
   EXPECT_LT(CompareToCcx(mesh, c, &detail), 1e-5) << detail;
   RecordProperty("detail", detail);
+}
+
+// A fingertip patch with friction, dragged sideways (the real-time compliance solver with its
+// FrictionPatch, sticking, then slipping), against ccx with the displacements it held imposed:
+// the patch's nodal forces and the surface field agree. Float64 compliance, so the bound is
+// ccx's printed precision, as above.
+TEST(CalculiX, FrictionPatchDraggedSidewaysAgrees) {
+  if (!HaveCcx()) GTEST_SKIP() << "ccx not installed (Debian package calculix-ccx)";
+  const TetMesh mesh = DistortedBlock();
+  const Material mat{12345.6789, 0.3};  // 12 digits: what ccx reads
+  const auto fixed = NodesOnPlane(mesh, 2, 0.0);
+  auto C = std::make_shared<const Compliance>(Compliance::Precompute(mesh, mat, fixed, {}));
+  // The top nodes within 5 mm of (10, 11) mm, pressed by a paraboloid (R = 20 mm, 0.4 mm deep).
+  std::vector<ContactInput> in;
+  for (std::int32_t v : NodesOnPlane(mesh, 2, 0.01)) {
+    const Eigen::Vector3d& x = mesh.positions_m()[v];
+    const double r = std::hypot(x.x() - 0.010, x.y() - 0.011), w = 4e-4 - r * r / 0.04;
+    if (r < 0.005 && w > 0.0) in.push_back({v, {0, 0, -w}, Eigen::Vector3d::UnitZ(), ContactMode::kNormalOnly, 0});
+  }
+  ASSERT_GE(in.size(), 3u);
+  ContactSolver solver(C, {.max_contacts = 32, .push_only = true});
+  for (double mu : {5.0, 0.3}) {  // sticks, then slips
+    const FrictionPatch patch{Eigen::Vector3d::UnitZ(), Eigen::Vector3d(3e-4, -1e-4, 0), mu, mu, false};
+    ASSERT_EQ(solver.Solve(in, std::span(&patch, 1)), StepStatus::kOk);
+    EXPECT_EQ(solver.patch_states()[0].slipping, mu < 1.0);
+    CcxCase c;
+    c.material = mat;
+    c.fixed = fixed;
+    std::vector<Eigen::Vector3d> ours_f;
+    for (std::size_t i = 0; i < in.size(); ++i) {
+      if (solver.states()[i] == ContactState::kReleased) continue;
+      c.imposed.push_back({in[i].node, in[i].u_m + solver.patch_states()[0].slide_m});
+      ours_f.push_back(solver.forces_N()[i]);
+    }
+    test::TempDir dir;
+    auto tables = RunCcx(mesh, c, dir);
+    std::vector<Eigen::Vector3d> ccx_f, ours_u, ccx_u;
+    for (const auto& iv : c.imposed) ccx_f.push_back(tables["RF"][mesh.node_ids()[iv.node]]);
+    std::vector<Eigen::Vector3d> field(static_cast<std::size_t>(C->num_nodes()));
+    ASSERT_TRUE(solver.SurfaceDisplacements(field));
+    for (std::int32_t k = 0; k < C->num_nodes(); ++k) {
+      ours_u.push_back(field[static_cast<std::size_t>(k)]);
+      ccx_u.push_back(tables["U"][mesh.node_ids()[C->nodes()[k]]]);
+    }
+    const double ef = test::RelError(ours_f, ccx_f), eu = test::RelError(ours_u, ccx_u);
+    RecordProperty(mu < 1.0 ? "slipping" : "sticking", "force rel. error " + test::Sci(ef) + ", field " + test::Sci(eu));
+    EXPECT_LT(ef, 1e-5) << "mu " << mu;
+    EXPECT_LT(eu, 1e-5) << "mu " << mu;
+    // The drag is real: a tangential force of a good fraction of the normal one.
+    const Eigen::Vector3d F = solver.patch_states()[0].force_N;
+    EXPECT_GT(F.head<2>().norm(), 0.1 * -F.z()) << "mu " << mu;
+  }
 }
 
 TEST(CalculiX, NodalForcesAgreeNearIncompressible) {

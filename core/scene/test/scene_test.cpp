@@ -328,6 +328,29 @@ TEST(Scene, DeformablesNeedAUsableFixedRule) {
   EXPECT_NE(bad_nu.find("objects[0].material.nu': value 0.5 outside"), std::string::npos) << bad_nu;
 }
 
+// Fingertip friction on a deformable's skin: given, it is read; absent, it is 0 (frictionless);
+// mu_kinetic defaults to mu_static and may not exceed it.
+TEST(Scene, DeformableFrictionIsReadAndChecked) {
+  const std::string head = std::string(R"({"name": "x", )") + kMsg + R"(, "objects": [)";
+  auto object = [&](const std::string& material) {
+    return head + R"({"id": "t", "kind": "deformable", "shape": "sphere", "radius_m": 0.05,
+      "position_m": [0,0,0], "material": {"E_Pa": 30000, "nu": 0.45)" + material + R"(},
+      "fixed": {"nodes": [0]}}]})";
+  };
+  const Scene given = LoadScene(WriteTemp("mu", object(R"(, "mu_static": 0.8, "mu_kinetic": 0.6)")));
+  EXPECT_EQ(given.objects[0].deformable.mu_static, 0.8);
+  EXPECT_EQ(given.objects[0].deformable.mu_kinetic, 0.6);
+  const Scene absent = LoadScene(WriteTemp("nomu", object("")));
+  EXPECT_EQ(absent.objects[0].deformable.mu_static, 0.0);
+  EXPECT_EQ(absent.objects[0].deformable.mu_kinetic, 0.0);
+  const Scene static_only = LoadScene(WriteTemp("mus", object(R"(, "mu_static": 0.7)")));
+  EXPECT_EQ(static_only.objects[0].deformable.mu_kinetic, 0.7);
+  const std::string above = ErrorOf("muk", object(R"(, "mu_static": 0.5, "mu_kinetic": 0.6)"));
+  EXPECT_NE(above.find("objects[0].material.mu_kinetic': larger than mu_static"), std::string::npos) << above;
+  const std::string negative = ErrorOf("mun", object(R"(, "mu_static": -0.1)"));
+  EXPECT_NE(negative.find("objects[0].material.mu_static'"), std::string::npos) << negative;
+}
+
 TEST(Scene, UnknownSceneListsAvailable) {
   try {
     LoadSceneByName("atlantis", kScenes);

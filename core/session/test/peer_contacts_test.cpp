@@ -17,6 +17,7 @@ msg::ContactSet Set(const std::string& user, const std::string& object, double u
   s.fingers()[1].object_id(object);
   s.fingers()[1].p_W_m({0.01, 0.02, 0.03});
   s.fingers()[1].u_imposed_W_m({0.0, 0.0, u_z});
+  s.fingers()[1].n_W({0.0, 0.6, 0.8});
   s.fingers()[1].f_W_N({0.0, 0.0, f_z});
   s.fingers()[3].active(false);
   s.fingers()[3].object_id(object);
@@ -26,6 +27,7 @@ msg::ContactSet Set(const std::string& user, const std::string& object, double u
 struct Seen {
   std::int32_t object, finger, hand;
   double u_z, f_z, weight;
+  Eigen::Vector3d n_W;
 };
 
 // The contacts as a solve at `now` takes them: faded by their age (contact::ToRemoteContact).
@@ -34,7 +36,7 @@ std::vector<Seen> Collect(const PeerContacts& peers, const world::SceneModels& m
   const std::uint64_t now_ns = PeerContacts::SteadyNs(now);
   peers.ForEach(models, now, [&](const PeerContact& c, const msg::ContactSet&) {
     const contact::RemoteContact r = contact::ToRemoteContact(c, peers.fade(), now_ns);
-    out.push_back({c.object, c.finger, c.hand, r.u_W_m.z(), r.f_E_W_N.z(), peers.fade().WeightAt(now_ns, c.received_ns)});
+    out.push_back({c.object, c.finger, c.hand, r.u_W_m.z(), r.f_E_W_N.z(), peers.fade().WeightAt(now_ns, c.received_ns), r.n_W});
   });
   return out;
 }
@@ -58,6 +60,7 @@ TEST_F(PeerContactsTest, ActiveFingersOnKnownObjectsOnly) {
   EXPECT_EQ(seen[0].object, models_->Find("ball"));
   EXPECT_EQ(seen[0].finger, 1);
   EXPECT_DOUBLE_EQ(seen[0].u_z, -0.002);
+  EXPECT_EQ(seen[0].n_W, Eigen::Vector3d(0.0, 0.6, 0.8));  // the normal crosses the DDS boundary
   EXPECT_DOUBLE_EQ(seen[0].f_z, 1.5);  // the peer's fingertip feels minus the force on the object
   EXPECT_DOUBLE_EQ(seen[0].weight, 1.0);
 }
@@ -136,6 +139,7 @@ TEST(ToRemoteContact, CarriesEveryFieldFadedByItsAgeAtTheStep) {
     c.p_WC_m[k] = 0.1 * (k + 1);
     c.u_W_m[k] = -0.001 * (k + 1);
     c.f_E_W_N[k] = 1.5 * (k + 1);
+    c.n_W[k] = 0.6 * k;
   }
   const contact::PeerFade fade{200'000'000, 500'000'000};
   const contact::RemoteContact r = ToRemoteContact(c, fade, c.received_ns + 200'000'000);
@@ -145,11 +149,13 @@ TEST(ToRemoteContact, CarriesEveryFieldFadedByItsAgeAtTheStep) {
   EXPECT_EQ(r.p_WC_m, Eigen::Vector3d(0.1, 0.2, 0.30000000000000004));
   EXPECT_EQ(r.u_W_m, Eigen::Vector3d(-0.001, -0.002, -0.003));
   EXPECT_EQ(r.f_E_W_N, Eigen::Vector3d(1.5, 3.0, 4.5));
+  EXPECT_EQ(r.n_W, Eigen::Vector3d(0.0, 0.6, 1.2));
   // Half-way through the fade: u and f halved, the point kept.
   const contact::RemoteContact half = ToRemoteContact(c, fade, c.received_ns + 350'000'000);
   EXPECT_EQ(half.p_WC_m, r.p_WC_m);
   EXPECT_TRUE(half.u_W_m.isApprox(0.5 * r.u_W_m, 1e-12));
   EXPECT_TRUE(half.f_E_W_N.isApprox(0.5 * r.f_E_W_N, 1e-12));
+  EXPECT_EQ(half.n_W, r.n_W);  // a direction: not faded
   // A step stamped before the set arrived (the hand-over raced the step's clock read): fresh.
   EXPECT_EQ(fade.WeightAt(c.received_ns - 1000, c.received_ns), 1.0);
   EXPECT_EQ(fade.WeightAt(c.received_ns + 500'000'000, c.received_ns), 0.0);

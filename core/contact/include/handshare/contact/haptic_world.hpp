@@ -126,9 +126,12 @@ struct RemoteContact {
   std::int32_t finger = 0;
   ObjectId object = -1;
   Eigen::Vector3d p_WC_m = Eigen::Vector3d::Zero();  ///< contact point on the undeformed surface.
-  Eigen::Vector3d u_W_m = Eigen::Vector3d::Zero();   ///< imposed displacement (-depth * normal).
+  Eigen::Vector3d u_W_m = Eigen::Vector3d::Zero();   ///< imposed displacement: -depth * normal,
+                                                     ///< plus the fingertip's stick (friction).
   Eigen::Vector3d f_E_W_N = Eigen::Vector3d::Zero(); ///< force on the remote fingertip (dynamic
                                                      ///< bodies: the body gets minus this).
+  Eigen::Vector3d n_W = Eigen::Vector3d::Zero();     ///< outward normal at p_WC_m; zero (unknown):
+                                                     ///< -u / |u|, no stick.
 };
 
 /// What one local finger feels and touches this step. Plain data, trivially copyable.
@@ -138,7 +141,8 @@ struct FingerResult {
   Eigen::Vector3d e_PE_W_m = Eigen::Vector3d::Zero(); ///< penetration vector, proxy -> fingertip.
   Eigen::Vector3d p_WC_m = Eigen::Vector3d::Zero();   ///< contact point on the surface.
   Eigen::Vector3d n_W = Eigen::Vector3d::Zero();      ///< outward unit normal there.
-  Eigen::Vector3d u_W_m = Eigen::Vector3d::Zero();    ///< deformable: imposed displacement.
+  Eigen::Vector3d u_W_m = Eigen::Vector3d::Zero();    ///< deformable: imposed displacement (the
+                                                      ///< indentation -depth n_W plus the stick).
   double depth_m = 0.0;                 ///< penetration along n.
   ObjectId object = -1;                 ///< main object (largest force), -1 if none.
   std::int32_t main_node = -1;          ///< deformable: patch node nearest the contact point.

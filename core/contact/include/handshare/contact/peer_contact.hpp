@@ -42,7 +42,9 @@ struct PeerContact {
   std::int32_t finger = 0;
   std::int32_t object = -1;     ///< object index of the local models (world::SceneModels)
   double p_WC_m[3] = {};        ///< contact point on the undeformed surface [m], in W
-  double u_W_m[3] = {};         ///< imposed displacement (deformables) [m], in W, not faded
+  double u_W_m[3] = {};         ///< imposed displacement (deformables) [m], in W, not faded:
+                                ///< the indentation along -n_W plus the fingertip's stick
+  double n_W[3] = {};           ///< outward surface normal at the contact point (zero: unknown)
   double f_E_W_N[3] = {};       ///< force on the peer's fingertip [N], in W, not faded
   std::uint64_t received_ns = 0;  ///< when its set arrived here (steady clock, common::SteadyNowNs) [ns]
 };
@@ -58,6 +60,7 @@ inline RemoteContact ToRemoteContact(const PeerContact& c, const PeerFade& fade,
   r.object = c.object;
   r.p_WC_m = Eigen::Vector3d(c.p_WC_m[0], c.p_WC_m[1], c.p_WC_m[2]);
   r.u_W_m = w * Eigen::Vector3d(c.u_W_m[0], c.u_W_m[1], c.u_W_m[2]);
+  r.n_W = Eigen::Vector3d(c.n_W[0], c.n_W[1], c.n_W[2]);
   r.f_E_W_N = w * Eigen::Vector3d(c.f_E_W_N[0], c.f_E_W_N[1], c.f_E_W_N[2]);
   return r;
 }

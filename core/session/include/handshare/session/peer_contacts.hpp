@@ -68,6 +68,7 @@ class PeerContacts {
         for (int k = 0; k < 3; ++k) {
           c.p_WC_m[k] = f.p_W_m()[k];
           c.u_W_m[k] = f.u_imposed_W_m()[k];
+          c.n_W[k] = f.n_W()[k];
           c.f_E_W_N[k] = -f.f_W_N()[k];
         }
         fn(c, entry.set);
