@@ -609,6 +609,20 @@ int ContactSolver::AssembleHeld(bool fill_matrix) noexcept {
   return r;
 }
 
+bool ContactSolver::ForcesFromRows() noexcept {
+  for (std::int32_t j = 0; j < num_unique_; ++j) {
+    if (!active_[j]) continue;
+    const int k = row_of_[j];
+    if (mode_[j] == ContactMode::kFull3d) {
+      f_N_[j] = Eigen::Vector3d(rhs_[k], rhs_[k + 1], rhs_[k + 2]);
+    } else {
+      f_N_[j] = rhs_[k] * n_[j];
+    }
+    if (!f_N_[j].allFinite()) return false;
+  }
+  return true;
+}
+
 bool ContactSolver::SolveActiveSet() noexcept {
   const int ld = 3 * options_.max_contacts;
   std::int32_t held = 0, held_3d = 0;
@@ -637,17 +651,7 @@ bool ContactSolver::SolveActiveSet() noexcept {
     if (!detail::CholeskyInPlace(A_.data(), r, ld)) return false;
     detail::CholeskySolveInPlace(A_.data(), r, ld, rhs_.data());
   }
-  for (std::int32_t j = 0; j < num_unique_; ++j) {
-    if (!active_[j]) continue;
-    const int k = row_of_[j];
-    if (mode_[j] == ContactMode::kFull3d) {
-      f_N_[j] = Eigen::Vector3d(rhs_[k], rhs_[k + 1], rhs_[k + 2]);
-    } else {
-      f_N_[j] = rhs_[k] * n_[j];
-    }
-    if (!f_N_[j].allFinite()) return false;
-  }
-  return true;
+  return ForcesFromRows();
 }
 
 bool ContactSolver::SolvePatchedSystem() noexcept {
@@ -737,17 +741,7 @@ bool ContactSolver::SolvePatchedSystem() noexcept {
       patch_state_[p].slide_m = tangent_[p] * Eigen::Vector2d(slip_rhs_[2 * a], slip_rhs_[2 * a + 1]);
     }
   }
-  for (std::int32_t j = 0; j < num_unique_; ++j) {
-    if (!active_[j]) continue;
-    const int k = row_of_[j];
-    if (mode_[j] == ContactMode::kFull3d) {
-      f_N_[j] = Eigen::Vector3d(rhs_[k], rhs_[k + 1], rhs_[k + 2]);
-    } else {
-      f_N_[j] = rhs_[k] * n_[j];
-    }
-    if (!f_N_[j].allFinite()) return false;
-  }
-  return true;
+  return ForcesFromRows();
 }
 
 bool ContactSolver::SolveWithPatches(StepStatus& status) noexcept {

@@ -188,6 +188,8 @@ class ContactSolver {
   // Fills rhs_ = G d* and row_of_ for the held contacts and, with fill_matrix, A_ = G C_cc G^T
   // (all of it); returns the row count.
   int AssembleHeld(bool fill_matrix) noexcept;
+  // f_N_ of the held contacts from the solved rows in rhs_; false if one is not finite.
+  bool ForcesFromRows() noexcept;
   // Push-only or not, with the friction patches (every patch node held in 3-D). Returns false on
   // a numerical failure.
   bool SolveWithPatches(StepStatus& status) noexcept;
