@@ -12,27 +12,20 @@
 #include "handshare/contact/haptic_world.hpp"
 #include "handshare/fem/compliance.hpp"
 #include "handshare/fem/mesh.hpp"
+#include "test_util.hpp"
 
 namespace handshare::contact {
 namespace {
 
 constexpr double kR = 0.008;
 
-struct Block {
-  std::shared_ptr<fem::TetMesh> mesh;
-  std::shared_ptr<const fem::Compliance> C;
+// The contact tests' soft block, frame O = W.
+struct Block : test::SoftBlock {
   double top = 0.03;
 };
 
-// A 6 x 6 x 3 cm block, 4 mm cells, bottom fixed, E = 20 kPa, frame O = W.
 const Block& TheBlock() {
-  static const Block b = [] {
-    Block s;
-    s.mesh = std::make_shared<fem::TetMesh>(fem::MakeBoxMesh({0.06, 0.06, 0.03}, {15, 15, 6}));
-    const auto fixed = fem::NodesOnPlane(*s.mesh, 2, 0.0);
-    s.C = std::make_shared<const fem::Compliance>(fem::Compliance::Precompute(*s.mesh, fem::Material{2e4, 0.3}, fixed));
-    return s;
-  }();
+  static const Block b{test::MakeSoftBlock()};
   return b;
 }
 

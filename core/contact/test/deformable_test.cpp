@@ -31,10 +31,9 @@ struct Block {
 const Block& TheBlock() {
   static const Block b = [] {
     Block s;
-    s.mesh = std::make_shared<fem::TetMesh>(fem::MakeBoxMesh({0.06, 0.06, 0.03}, {15, 15, 6}));
-    const auto fixed = fem::NodesOnPlane(*s.mesh, 2, 0.0);
-    s.C = std::make_shared<const fem::Compliance>(
-        fem::Compliance::Precompute(*s.mesh, fem::Material{2e4, 0.3}, fixed));
+    const test::SoftBlock soft = test::MakeSoftBlock();
+    s.mesh = soft.mesh;
+    s.C = soft.C;
     s.surface = fem::ExtractSurface(*s.mesh);
     s.X_WO = Eigen::Translation3d(0.1, -0.05, 0.2) * Eigen::AngleAxisd(0.3, Eigen::Vector3d::UnitZ());
     return s;

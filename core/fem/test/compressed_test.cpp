@@ -27,17 +27,10 @@ constexpr Material kMat{1e4, 0.3};
 
 // A wide thin block (bottom fixed): 750 free surface nodes, far apart enough for clusters of
 // 16 nodes to have well-separated (compressible) partners.
-struct Model {
-  test::Block block;
-  std::shared_ptr<const Compliance> c64;
-};
+using Model = test::BlockModel;
 
 const Model& WideModel() {
-  static const Model m = [] {
-    Model r{test::MakeFixedBottomBox({0.12, 0.12, 0.015}, {16, 16, 2}), nullptr};
-    r.c64 = std::make_shared<Compliance>(Compliance::Precompute(r.block.mesh, kMat, r.block.fixed, {}));
-    return r;
-  }();
+  static const Model m = test::MakeBlockModel(test::MakeFixedBottomBox({0.12, 0.12, 0.015}, {16, 16, 2}), kMat);
   return m;
 }
 

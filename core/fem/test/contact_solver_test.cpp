@@ -431,11 +431,7 @@ TEST(ContactSolver, SliverElementsMatchDirect) {
 // by the largest absolute row sum of K (Gershgorin). float32 storage perturbs C by ~1e-7: 1% slack.
 TEST(ContactSolver, MillionRandomStepsStayFiniteAndBounded) {
   const Model& m = BoxModel();
-  const auto K = AssembleStiffness(m.block.mesh, kMat);
-  Eigen::VectorXd row_sum = Eigen::VectorXd::Zero(K.rows());
-  for (int k = 0; k < K.outerSize(); ++k)
-    for (Eigen::SparseMatrix<double>::InnerIterator it(K, k); it; ++it) row_sum[it.row()] += std::abs(it.value());
-  const double lambda_bound = row_sum.maxCoeff() * 1.01;
+  const double lambda_bound = test::StiffnessEigenBound(m.block.mesh, kMat);
 
   ContactSolver sticking(m.c32, {.max_contacts = 5});
   ContactSolver pushing(m.c32, {.max_contacts = 5, .regularization_m_per_N = 1e-6, .push_only = true});

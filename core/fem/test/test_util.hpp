@@ -2,18 +2,22 @@
 // Helpers shared by the FEM tests: procedural meshes, temporary files, error norms, the direct
 // reference solve of a contact set.
 
+#include <cmath>
 #include <cstdint>
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
+#include <memory>
 #include <fstream>
 #include <random>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include <Eigen/Core>
 
 #include "handshare/fem/assembly.hpp"
+#include "handshare/fem/compliance.hpp"
 #include "handshare/fem/contact_solver.hpp"
 #include "handshare/fem/mesh.hpp"
 #include "handshare/fem/static_solver.hpp"
@@ -137,6 +141,28 @@ inline std::vector<ContactInput> RandomContacts(const Compliance& c, int m, std:
     out.push_back(ci);
   }
   return out;
+}
+
+// A block and its float64 compliance.
+struct BlockModel {
+  Block block;
+  std::shared_ptr<const Compliance> c64;
+};
+
+inline BlockModel MakeBlockModel(Block b, const Material& m) {
+  BlockModel r{std::move(b), nullptr};
+  r.c64 = std::make_shared<Compliance>(Compliance::Precompute(r.block.mesh, m, r.block.fixed, {}));
+  return r;
+}
+
+// An upper bound on the largest eigenvalue of the mesh's stiffness matrix (Gershgorin, +1%): no
+// contact solve can ask more force per metre of imposed displacement.
+inline double StiffnessEigenBound(const TetMesh& mesh, const Material& m) {
+  const auto K = AssembleStiffness(mesh, m);
+  Eigen::VectorXd row_sum = Eigen::VectorXd::Zero(K.rows());
+  for (int k = 0; k < K.outerSize(); ++k)
+    for (Eigen::SparseMatrix<double>::InnerIterator it(K, k); it; ++it) row_sum[it.row()] += std::abs(it.value());
+  return row_sum.maxCoeff() * 1.01;
 }
 
 }  // namespace handshare::fem::test
