@@ -14,6 +14,8 @@
 //                          clamped along one edge; float32 compliance (1.85 GB)
 //   deformable_10k_patch6  the same with at most 6 patch nodes per fingertip
 //   deformable_10k_2hands  the same plus a remote hand's 5 contacts in the same solve
+//   deformable_2k_friction deformable_2k with fingertip friction (mu 0.8 static, 0.6 kinetic):
+//                          every patch held in 3-D (docs/fem.md, "Friction")
 // Fingertips: radius 8 mm; each follows its own circle over the object and presses 0..3 mm in and
 // out (a few percent of the steps are free), at up to about 0.1 m/s.
 #include <benchmark/benchmark.h>
@@ -147,7 +149,8 @@ std::unique_ptr<Scenario> MakeBall() {
   return s;
 }
 
-std::unique_ptr<Scenario> MakeDeformable(const std::string& name, bool plate, int max_patch, bool two_hands) {
+std::unique_ptr<Scenario> MakeDeformable(const std::string& name, bool plate, int max_patch, bool two_hands,
+                                         double mu_static = 0.0, double mu_kinetic = 0.0) {
   auto s = std::make_unique<Scenario>();
   s->name = name;
   WorldConfig cfg;
@@ -175,6 +178,8 @@ std::unique_ptr<Scenario> MakeDeformable(const std::string& name, bool plate, in
   d.mesh = mesh;
   d.compliance = C;
   d.max_patch_nodes = max_patch;
+  d.mu_static = mu_static;
+  d.mu_kinetic = mu_kinetic;
   s->world->AddDeformable(d);
   s->world->Init();
   s->tips = [L, top](int k) { return FlatTips(k, 0.0, 0.0, L, top); };
@@ -195,11 +200,12 @@ std::unique_ptr<Scenario> Make(const std::string& name) {
   if (name == "deformable_10k") return MakeDeformable(name, true, 16, false);
   if (name == "deformable_10k_patch6") return MakeDeformable(name, true, 6, false);
   if (name == "deformable_10k_2hands") return MakeDeformable(name, true, 16, true);
+  if (name == "deformable_2k_friction") return MakeDeformable(name, false, 16, false, 0.8, 0.6);
   return nullptr;
 }
 
 const char* kNames[] = {"rigid_mesh_20k", "dynamic_ball_grasp", "deformable_2k", "deformable_10k",
-                        "deformable_10k_patch6", "deformable_10k_2hands"};
+                        "deformable_10k_patch6", "deformable_10k_2hands", "deformable_2k_friction"};
 
 struct Stats {
   double p50_us, p99_us, max_us, contact_fraction, mean_patch;
