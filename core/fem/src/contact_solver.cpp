@@ -266,19 +266,15 @@ StepStatus ContactSolver::Solve(std::span<const ContactInput> contacts,
     all_normal = all_normal && mode_[j] == ContactMode::kNormalOnly;
     patched = patched || patch_of_[j] >= 0;
   }
-  if (patched) {
-    // Fingertip patches with friction: their own iteration (SolveWithPatches).
-    all_normal = false;
+  if (!all_normal) {  // patch nodes are held in 3-D, so patched implies this
     table_valid_ = false;
     detail::GatherBlocks(C, slot_.data(), num_unique_, Ccc_.data(), 3 * M);
-    if (!SolveWithPatches(status)) {
+    // Fingertip patches with friction: their own iteration (SolveWithPatches).
+    if (patched && !SolveWithPatches(status)) {
       ZeroOutputs();
       num_prev_ = 0;
       return StepStatus::kNumericalFailure;
     }
-  } else if (!all_normal) {
-    table_valid_ = false;
-    detail::GatherBlocks(C, slot_.data(), num_unique_, Ccc_.data(), 3 * M);
   } else {
     // Every fingertip patch of the haptic world: the scalar problem, warm started.
     if (!SolveNormalPushOnly(status)) {
