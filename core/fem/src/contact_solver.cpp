@@ -1,5 +1,6 @@
 #include "handshare/fem/contact_solver.hpp"
 
+#include <Eigen/Cholesky>
 #include <Eigen/Geometry>
 
 #include <algorithm>
@@ -43,6 +44,34 @@ class BlockPivoting {
   std::int32_t best_violations_;
   int grace_ = 3;
 };
+
+// The held systems of the 3-D paths (3 rows per node held in 3-D: 40-60 rows for five fingertip
+// patches) are factored and solved with Eigen's blocked, vectorised kernels in place in the
+// caller's buffer (column-major, leading dimension ld): the scalar loops of dense_small.hpp read
+// the factor's rows with stride ld and were most of a friction step. Eigen's work space for
+// these sizes is on the stack (EIGEN_STACK_ALLOCATION_LIMIT), so the step stays off the heap.
+using StridedMatrix = Eigen::Map<Eigen::MatrixXd, 0, Eigen::OuterStride<>>;
+
+// A = L L^T in the lower triangle of the leading n x n block; false unless positive definite
+// with a finite factor.
+bool FactorSpd(double* A, int n, int ld) noexcept {
+  StridedMatrix m(A, n, n, Eigen::OuterStride<>(ld));
+  const Eigen::LLT<Eigen::Ref<Eigen::MatrixXd, 0, Eigen::OuterStride<>>> llt(m);
+  if (llt.info() != Eigen::Success) return false;
+  for (int k = 0; k < n; ++k) {
+    const double d = A[static_cast<std::ptrdiff_t>(k) * ld + k];
+    if (!(d > 0.0) || !std::isfinite(d)) return false;
+  }
+  return true;
+}
+
+// B = (L L^T)^-1 B for the nrhs columns of B (leading dimension ldb), L from FactorSpd.
+void SolveFactored(const double* L, int n, int ld, double* B, int nrhs, int ldb) noexcept {
+  const Eigen::Map<const Eigen::MatrixXd, 0, Eigen::OuterStride<>> l(L, n, n, Eigen::OuterStride<>(ld));
+  StridedMatrix b(B, n, nrhs, Eigen::OuterStride<>(ldb));
+  l.triangularView<Eigen::Lower>().solveInPlace(b);
+  l.triangularView<Eigen::Lower>().transpose().solveInPlace(b);
+}
 
 }  // namespace
 
@@ -110,6 +139,7 @@ ContactSolver::ContactSolver(std::shared_ptr<const Compliance> compliance,
   patch_of_.assign(M, -1);
   releases_.assign(M, 0);
   slip_force_.assign(P, Eigen::Vector2d::Zero());
+  warm_slip_.assign(P, 0);
   patch_in_.assign(P, FrictionPatch{});
   tangent_.assign(P, Eigen::Matrix<double, 3, 2>::Zero());
   slip_dir_.assign(P, Eigen::Vector2d::Zero());
@@ -644,13 +674,13 @@ bool ContactSolver::SolveActiveSet() noexcept {
     if (eps_m_per_N_ > 0.0) {
       for (int k = 0; k < r; ++k) A_[static_cast<std::ptrdiff_t>(k) * ld + k] += eps_m_per_N_;
     }
-    if (!detail::CholeskyInPlace(A_.data(), r, ld)) return false;
-    detail::CholeskySolveInPlace(A_.data(), r, ld, rhs_.data());
+    if (!FactorSpd(A_.data(), r, ld)) return false;
+    SolveFactored(A_.data(), r, ld, rhs_.data(), 1, ld);
   }
   return ForcesFromRows();
 }
 
-bool ContactSolver::SolvePatchedSystem() noexcept {
+bool ContactSolver::SolvePatchedSystem(bool refactor) noexcept {
   // Held rows as in SolveActiveSet; a sticking patch's nodes are held at d* + its slide. A
   // slipping patch's slide s (2 tangent coordinates) is unknown: with A y = b0 + B s
   // (B puts the tangent basis T into the rows of the patch's held nodes), y = z0 + Z s with
@@ -658,18 +688,21 @@ bool ContactSolver::SolvePatchedSystem() noexcept {
   //   Phi y = sum_j (T^T + mu_k e n^T) f_j = F_t - mu_k F_n e = 0   (F_n = -n . sum f_j)
   // give the 2P x 2P system (Phi Z) s = -Phi z0. The columns of Z share A's factor.
   const int ld = 3 * options_.max_contacts;
-  const int r = AssembleHeld(true);
+  const int r = AssembleHeld(refactor);
+  num_slipping_ = 0;
   for (std::int32_t j = 0; j < num_unique_; ++j) {
     const std::int32_t p = patch_of_[j];
     if (!active_[j] || p < 0 || mode_[j] != ContactMode::kFull3d || patch_state_[p].slipping) continue;
     for (int c = 0; c < 3; ++c) rhs_[row_of_[j] + c] += patch_in_[p].slide_m[c];
   }
   if (r == 0) return true;
-  if (eps_m_per_N_ > 0.0) {
-    for (int k = 0; k < r; ++k) A_[static_cast<std::ptrdiff_t>(k) * ld + k] += eps_m_per_N_;
+  if (refactor) {
+    if (eps_m_per_N_ > 0.0) {
+      for (int k = 0; k < r; ++k) A_[static_cast<std::ptrdiff_t>(k) * ld + k] += eps_m_per_N_;
+    }
+    if (!FactorSpd(A_.data(), r, ld)) return false;
   }
-  if (!detail::CholeskyInPlace(A_.data(), r, ld)) return false;
-  detail::CholeskySolveInPlace(A_.data(), r, ld, rhs_.data());
+  SolveFactored(A_.data(), r, ld, rhs_.data(), 1, ld);
   // The slipping patches that hold a node in 3-D (a patch whose nodes all went frictionless
   // has no tangential force and no slide to find).
   auto sticks = [&](std::int32_t j, std::int32_t p) {
@@ -682,6 +715,7 @@ bool ContactSolver::SolvePatchedSystem() noexcept {
     for (std::int32_t j = 0; j < num_unique_ && !holds; ++j) holds = sticks(j, p);
     if (holds) slipping_list_[ns++] = p;
   }
+  num_slipping_ = ns;
   if (ns > 0) {
     const int n2 = 2 * ns;
     for (std::int32_t a = 0; a < ns; ++a) {
@@ -693,9 +727,9 @@ bool ContactSolver::SolvePatchedSystem() noexcept {
           if (!sticks(j, p)) continue;
           for (int k = 0; k < 3; ++k) z[row_of_[j] + k] = tangent_[p](k, c);
         }
-        detail::CholeskySolveInPlace(A_.data(), r, ld, z);
       }
     }
+    SolveFactored(A_.data(), r, ld, Z_.data(), n2, ld);
     // Phi_a applied to a row vector v (the patch's held nodes' rows). With given forces the
     // equations are T^T F = g instead (symmetric: Phi Z = B^T A^-1 B).
     auto phi = [&](std::int32_t a, int k, const double* v) {
@@ -740,10 +774,33 @@ bool ContactSolver::SolvePatchedSystem() noexcept {
   return ForcesFromRows();
 }
 
+bool ContactSolver::WouldStick(std::int32_t a) const noexcept {
+  // Held at its stick instead of its slide s_a, the patch's rows would be y + Z_a (T^T stick -
+  // s_a) with everything else as solved (the system is linear in the slides).
+  const int ld = 3 * options_.max_contacts;
+  const std::int32_t p = slipping_list_[a];
+  const FrictionPatch& in = patch_in_[p];
+  const Eigen::Vector2d delta =
+      tangent_[p].transpose() * in.slide_m - Eigen::Vector2d(slip_rhs_[2 * a], slip_rhs_[2 * a + 1]);
+  const double* z0 = Z_.data() + static_cast<std::ptrdiff_t>(2 * a) * ld;
+  const double* z1 = z0 + ld;
+  Eigen::Vector3d force = Eigen::Vector3d::Zero();
+  for (std::int32_t j = 0; j < num_unique_; ++j) {
+    if (!active_[j] || patch_of_[j] != p) continue;
+    const int k = row_of_[j];
+    auto row = [&](int c) { return rhs_[k + c] + z0[k + c] * delta[0] + z1[k + c] * delta[1]; };
+    force += mode_[j] == ContactMode::kFull3d ? Eigen::Vector3d(row(0), row(1), row(2))
+                                              : Eigen::Vector3d(row(0) * n_[j]);
+  }
+  const double f_n = -in.n_out.dot(force);
+  const Eigen::Vector2d f_t = tangent_[p].transpose() * force;
+  return f_t.norm() <= in.mu_kinetic * std::max(f_n, 0.0);
+}
+
 bool ContactSolver::SolveWithPatches(StepStatus& status) noexcept {
   // Like the general path's iteration, with one more kind of change: a sticking patch whose
   // force leaves its cone starts to slip, in the direction e of that force (and never sticks
-  // again within this call). Patch nodes are held in 3-D; with push_only one that pulls is
+  // again within this call; a patch the warm start below made slip is checked once). Patch nodes are held in 3-D; with push_only one that pulls is
   // released and a released one the surface pushes into the tip is held again (at the patch's
   // slide). Other contacts behave as on the general path.
   //
@@ -758,7 +815,19 @@ bool ContactSolver::SolveWithPatches(StepStatus& status) noexcept {
     active_[j] = 1;
     releases_[j] = 0;
   }
+  // A patch that slipped in the previous step and whose fingertip still moves along the surface
+  // starts slipping, that way: after the first solve WouldStick() checks it against sticking,
+  // which the same factor answers, and it sticks if that is inside its cone.
+  for (std::int32_t p = 0; p < num_patches_; ++p) {
+    const FrictionPatch& in = patch_in_[p];
+    const Eigen::Vector2d moved = tangent_[p].transpose() * in.motion_m;
+    warm_slip_[p] = in.slipped_before && moved.norm() > 1e-12 ? 1 : 0;
+    if (!warm_slip_[p]) continue;
+    patch_state_[p].slipping = true;
+    slip_dir_[p] = moved.normalized();
+  }
   given_force_ = false;
+  bool refactor = true;
   BlockPivoting pivoting(num_unique_);
   std::int32_t pivots = 0, updates = 0;
   constexpr double kTol = 1e-9;
@@ -775,7 +844,8 @@ bool ContactSolver::SolveWithPatches(StepStatus& status) noexcept {
     return patch_in_[p].mu_kinetic * std::max(f_n, 0.0) * slip_dir_[p];
   };
   while (true) {
-    if (!SolvePatchedSystem()) return false;
+    if (!SolvePatchedSystem(refactor)) return false;
+    refactor = false;
     double f_scale = 0.0, d_scale = 0.0;
     for (std::int32_t j = 0; j < num_unique_; ++j) {
       f_scale = std::max(f_scale, f_N_[j].norm());
@@ -787,6 +857,21 @@ bool ContactSolver::SolveWithPatches(StepStatus& status) noexcept {
     if (f_scale == 0.0) f_scale = 1.0;
     if (d_scale == 0.0) d_scale = 1.0;
     patch_forces();
+    bool sticks_again = false;
+    for (std::int32_t p = 0; p < num_patches_; ++p) {
+      if (!warm_slip_[p]) continue;
+      warm_slip_[p] = 0;
+      std::int32_t a = 0;  // its index in the last solve's slipping list (absent: holds no node in 3-D)
+      while (a < num_slipping_ && slipping_list_[a] != p) ++a;
+      if (a == num_slipping_ || !WouldStick(a)) continue;
+      patch_state_[p].slipping = false;
+      patch_state_[p].slide_m = patch_in_[p].slide_m;
+      sticks_again = true;
+    }
+    if (sticks_again) {
+      ++iterations_;
+      continue;
+    }
     bool newly_slipping = false;
     for (std::int32_t p = 0; p < num_patches_; ++p) {
       FrictionPatchState& st = patch_state_[p];
@@ -836,6 +921,7 @@ bool ContactSolver::SolveWithPatches(StepStatus& status) noexcept {
       }
       ++pivots;
       ++iterations_;
+      refactor = true;  // nodes change held set or mode below (or did above: slipped)
       if (slipped) continue;
       const bool block = pivoting.Block(violations);
       for (std::int32_t j = 0; j < num_unique_; ++j) {

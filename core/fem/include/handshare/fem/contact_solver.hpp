@@ -194,8 +194,13 @@ class ContactSolver {
   // a numerical failure.
   bool SolveWithPatches(StepStatus& status) noexcept;
   // One linear solve of SolveWithPatches at the current held set and patch states: f_N_, and
-  // the slipping patches' slides. Returns false on a numerical failure.
-  bool SolvePatchedSystem() noexcept;
+  // the slipping patches' slides. refactor: the held set or a node's mode changed since the
+  // last call (else A_ still holds the factor of G C_cc G^T). Returns false on a numerical
+  // failure.
+  bool SolvePatchedSystem(bool refactor) noexcept;
+  // For a patch the warm start made slip (list index a of the last SolvePatchedSystem): true if
+  // held at its stick instead it would be inside its cone (the forces from z0 + Z s, no solve).
+  bool WouldStick(std::int32_t a) const noexcept;
   void ComputeContactDisplacements() noexcept;
   // Push-only with every contact frictionless: the scalar problem on S = N^T C_cc N, warm
   // started from the previous Solve()'s active set. Returns false on a numerical failure.
@@ -272,9 +277,11 @@ class ContactSolver {
   std::vector<Eigen::Matrix<double, 3, 2>> tangent_;
   std::vector<Eigen::Vector2d> slip_dir_;
   std::vector<Eigen::Vector2d> slip_force_;  // the given tangential force (given_force_)
+  std::vector<std::uint8_t> warm_slip_;      // slipping by the warm start, not yet checked
   bool given_force_ = false;
   std::vector<FrictionPatchState> patch_state_;
   std::vector<std::int32_t> slipping_list_;
+  std::int32_t num_slipping_ = 0;  // in slipping_list_, as the last SolvePatchedSystem left it
   std::vector<double> Z_;
   std::vector<double> slip_M_;
   std::vector<double> slip_rhs_;
