@@ -2,7 +2,8 @@
 # Runs the whole cross-process suite (ctest -L integration) N times in a row while other
 # processes keep every core busy, to show that the tests wait on events, not on luck with
 # timing. Prints PASS/FAIL per run (with the failing tests) and a total; exits 0 only if every
-# run passed. The load runs at normal priority, like another engineer's build.
+# run passed. The load runs at normal priority, like another engineer's build. A failing run's
+# work folders (those its output names) are copied beside its log: the next run reuses them.
 #
 # usage: tests/repeat_suite.sh [N] [BUILD_DIR]   (defaults: 20, build)
 #   LOAD_PROCS=k   busy loops to start (default: the number of cores)
@@ -14,6 +15,7 @@ build="${2:-build}"
 load_procs="${LOAD_PROCS:-$(nproc)}"
 log_dir="${LOG_DIR:-$build/repeat_suite}"
 mkdir -p "$log_dir"
+work_root="$(realpath "$build")/tests/work"
 
 load_pids=()
 stop_load() {
@@ -40,6 +42,13 @@ for ((run = 1; run <= runs; ++run)); do
   else
     failed=$(grep -E '^\s+[0-9]+ - ' "$log" | sed -E 's/^\s+[0-9]+ - //' | tr '\n' ' ')
     echo "run $run: FAIL ($(( $(date +%s) - start )) s): ${failed:-see $log} (log: $log)"
+    # The next run reuses the work folders: keep the ones the failure output names (frames,
+    # node logs, recordings) before they are overwritten.
+    keep="$log_dir/run_${run}_work"
+    grep -oE "$work_root/[A-Za-z0-9_.-]+" "$log" | sort -u | grep -v '/fem_cache$' | while read -r dir; do
+      [ -d "$dir" ] && mkdir -p "$keep" && cp -a "$dir" "$keep/"
+    done
+    [ -d "$keep" ] && echo "run $run: kept $(ls "$keep" | tr '\n' ' ')in $keep"
   fi
 done
 echo "repeat_suite: $passed of $runs runs passed"
