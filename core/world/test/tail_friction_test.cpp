@@ -96,5 +96,59 @@ TEST(TailFriction, AFingerStrokingTheTailDragsWithMuTimesTheNormalForce) {
   EXPECT_LT(worst, 0.05);
 }
 
+
+// Known bug, kept as its reproduction (disabled: it fails today; run it with
+// --gtest_also_run_disabled_tests). A fingertip pressed 4 mm into the sloping top of the tail
+// and then held still should come to rest: its patch either sticks, or slips once to its
+// cone and sticks there. Measured on 2026-11-26: it never does. Its stick creeps about 0.7 mm
+// a step in one direction and jumps back (a sawtooth of a few steps), slipping every step, for
+// as long as it is held; so two users holding the tail still never give the world server a
+// still field (why the scenes stay frictionless, docs/scenes.md).
+TEST(TailFriction, DISABLED_AFingertipHeldStillOnTheTailComesToRest) {
+  scene::Scene s = scene::LoadScene(std::filesystem::path(HANDSHARE_SOURCE_ASSETS) / "scenes" / "dinosaur.json");
+  std::erase_if(s.objects, [](const scene::SceneObject& o) { return o.id != "triceratops_tail"; });
+  ASSERT_EQ(s.objects.size(), 1u);
+  s.objects[0].deformable.mu_static = 0.8;
+  s.objects[0].deformable.mu_kinetic = 0.6;
+  SceneModelsOptions options;
+  const char* cache = std::getenv("HANDSHARE_CACHE");
+  options.cache_dir = cache != nullptr ? std::filesystem::path(cache)
+                                       : std::filesystem::temp_directory_path() / "handshare_tail_friction_cache";
+  SceneModels sw = BuildSceneModels(s, options);
+  const PreparedDeformable& tail = sw.deformables[0];
+  const Eigen::Isometry3d X_WO = s.objects[0].X_WO();
+  double x_min = 0.0;
+  for (const auto& p : tail.mesh->positions_m()) x_min = std::min(x_min, p.x());
+  // Above the highest surface node near 35% of the way to the tail's tip.
+  Eigen::Vector3d tip_O = Eigen::Vector3d::Zero();
+  double z_top = -std::numeric_limits<double>::infinity();
+  for (std::int32_t v : tail.surface->nodes) {
+    const Eigen::Vector3d& p = tail.mesh->positions_m()[static_cast<std::size_t>(v)];
+    if (std::abs(p.x() - 0.35 * x_min) < 0.004 && p.z() > z_top) {
+      z_top = p.z();
+      tip_O = p;
+    }
+  }
+  ASSERT_TRUE(std::isfinite(z_top));
+  tip_O.z() += sw.world->config().fingertip_radius_m + 0.003;
+  std::array<Eigen::Vector3d, 5> tips;
+  for (auto& p : tips) p = Eigen::Vector3d(5, 5, 5);
+  // Down 7 mm in 100 steps (4 mm into the tail), then held still for 2 s.
+  Eigen::Vector3d u_prev = Eigen::Vector3d::Zero();
+  double largest_late_change_m = 0.0;
+  for (int k = 0; k < 2100; ++k) {
+    if (k < 100) tip_O.z() -= 0.007 / 100;
+    tips[1] = X_WO * tip_O;
+    sw.world->Step(1e-3, tips);
+    const contact::FingerResult& r = sw.world->fingers()[1];
+    ASSERT_TRUE(k < 100 || r.in_contact) << k;
+    if (k >= 1100) largest_late_change_m = std::max(largest_late_change_m, (r.u_W_m - u_prev).norm());
+    u_prev = r.u_W_m;
+  }
+  RecordProperty("largest_change_per_step_in_the_last_second_um", std::to_string(1e6 * largest_late_change_m));
+  // At rest after a second of holding: the imposed displacement no longer changes (1 um a step).
+  EXPECT_LT(largest_late_change_m, 1e-6);
+}
+
 }  // namespace
 }  // namespace handshare::world
