@@ -4,6 +4,7 @@
 #include <Eigen/Geometry>
 
 #include <algorithm>
+#include <array>
 #include <cstring>
 #include <cmath>
 #include <limits>
@@ -828,6 +829,11 @@ bool ContactSolver::SolveWithPatches(StepStatus& status) noexcept {
   }
   given_force_ = false;
   bool refactor = true;
+  // Per patch: slipping under a fingertip at rest, its direction taken from its slide.
+  std::array<std::uint8_t, 1024> from_slide{};  // max_friction_patches <= 1024
+  std::int32_t direction_rounds = 0;  // since the held set last changed (converges in about 6)
+  constexpr std::int32_t kMaxDirectionRounds = 16;
+  constexpr double kRestMotion_m = 1e-6;  // 1 mm/s at 1 kHz; a stroke is 10-100 um a step
   BlockPivoting pivoting(num_unique_);
   std::int32_t pivots = 0, updates = 0;
   constexpr double kTol = 1e-9;
@@ -857,6 +863,29 @@ bool ContactSolver::SolveWithPatches(StepStatus& status) noexcept {
     if (f_scale == 0.0) f_scale = 1.0;
     if (d_scale == 0.0) d_scale = 1.0;
     patch_forces();
+    // A slipping patch under a fingertip at rest: kinetic friction opposes the sliding, so its
+    // force runs along the way the fingertip slid over the material, stick - s (tangent
+    // coordinates). Holding the trial force's direction instead needs large sideways slides
+    // where the patch's tangential stiffness is anisotropic, and a held fingertip crept: its
+    // patch changed nodes with every slide and slipped again (docs/fem.md). A few rounds with
+    // the same factor: only the cone equations change.
+    bool turned = false;
+    for (std::int32_t a = 0; a < num_slipping_ && !given_force_; ++a) {
+      const std::int32_t p = slipping_list_[a];
+      if (!from_slide[static_cast<std::size_t>(p)]) continue;
+      const Eigen::Vector2d slid =
+          tangent_[p].transpose() * patch_in_[p].slide_m - Eigen::Vector2d(slip_rhs_[2 * a], slip_rhs_[2 * a + 1]);
+      if (!(slid.norm() > 1e-12)) continue;
+      const Eigen::Vector2d e = slid.normalized();
+      if ((e - slip_dir_[p]).norm() <= 1e-6) continue;
+      slip_dir_[p] = e;
+      turned = true;
+    }
+    if (turned && direction_rounds < kMaxDirectionRounds) {
+      ++direction_rounds;
+      ++iterations_;
+      continue;
+    }
     bool sticks_again = false;
     for (std::int32_t p = 0; p < num_patches_; ++p) {
       if (!warm_slip_[p]) continue;
@@ -882,9 +911,12 @@ bool ContactSolver::SolveWithPatches(StepStatus& status) noexcept {
       const double mu = in.slipped_before ? in.mu_kinetic : in.mu_static;
       if (f_t.norm() <= mu * std::max(f_n, 0.0) + kTol * f_scale) continue;
       st.slipping = true;
-      // The way it slides: the fingertip's motion along the surface, else the trial force's.
+      // The way it slides: the fingertip's motion along the surface; a fingertip at rest (less
+      // than kRestMotion_m this step) starts from the trial force's and then follows the slide.
       const Eigen::Vector2d moved = tangent_[p].transpose() * in.motion_m;
-      slip_dir_[p] = moved.norm() > 1e-12 ? Eigen::Vector2d(moved.normalized()) : Eigen::Vector2d(f_t / f_t.norm());
+      const bool moving = moved.norm() > kRestMotion_m;
+      slip_dir_[p] = moving ? Eigen::Vector2d(moved.normalized()) : Eigen::Vector2d(f_t / f_t.norm());
+      from_slide[static_cast<std::size_t>(p)] = moving ? 0 : 1;
       slip_force_[p] = cone_force(p);
       newly_slipping = true;
     }
@@ -922,6 +954,7 @@ bool ContactSolver::SolveWithPatches(StepStatus& status) noexcept {
       ++pivots;
       ++iterations_;
       refactor = true;  // nodes change held set or mode below (or did above: slipped)
+      direction_rounds = 0;  // a new held set: the directions settle again
       if (slipped) continue;
       const bool block = pivoting.Block(violations);
       for (std::int32_t j = 0; j < num_unique_; ++j) {

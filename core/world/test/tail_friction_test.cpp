@@ -97,14 +97,12 @@ TEST(TailFriction, AFingerStrokingTheTailDragsWithMuTimesTheNormalForce) {
 }
 
 
-// Known bug, kept as its reproduction (disabled: it fails today; run it with
-// --gtest_also_run_disabled_tests). A fingertip pressed 4 mm into the sloping top of the tail
-// and then held still should come to rest: its patch either sticks, or slips once to its
-// cone and sticks there. Measured on 2026-11-26: it never does. Its stick creeps about 0.7 mm
-// a step in one direction and jumps back (a sawtooth of a few steps), slipping every step, for
-// as long as it is held; so two users holding the tail still never give the world server a
-// still field (why the scenes stay frictionless, docs/scenes.md).
-TEST(TailFriction, DISABLED_AFingertipHeldStillOnTheTailComesToRest) {
+// A fingertip pressed 4 mm into the sloping top of the tail and then held still comes to rest:
+// its patch slips to its cone and sticks there. Before a slipping patch under a fingertip at
+// rest took its direction from its slide (kinetic friction opposes the sliding), it kept the
+// trial force's direction and never came to rest: its stick crept about 0.7 mm a step and
+// jumped back, 1.35 mm in one step within the last second of holding (docs/fem.md).
+TEST(TailFriction, AFingertipHeldStillOnTheTailComesToRest) {
   scene::Scene s = scene::LoadScene(std::filesystem::path(HANDSHARE_SOURCE_ASSETS) / "scenes" / "dinosaur.json");
   std::erase_if(s.objects, [](const scene::SceneObject& o) { return o.id != "triceratops_tail"; });
   ASSERT_EQ(s.objects.size(), 1u);
