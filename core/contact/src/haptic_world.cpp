@@ -487,6 +487,16 @@ void HapticWorld::StepDeformable(Object& o, std::span<const RemoteContact> remot
     }
     bool trunc = false;
     add_patch(p - stick, n, fo.contact.depth_m, fo.patch_count, trunc);
+    if (friction && fo.patch_count == 0 && stick.squaredNorm() > 0.0) {
+      // No node under the anchor (a slide left it off the fingertip's footprint): without a
+      // patch the anchor would never move again and the fingertip would feel nothing while it
+      // presses. It holds the material under it now instead.
+      fo.anchor_O_m = p;
+      fo.slide_O_m.setZero();
+      fo.slipped = false;
+      stick.setZero();
+      add_patch(p, n, fo.contact.depth_m, fo.patch_count, trunc);
+    }
     fo.contact.truncated = fo.contact.truncated || trunc;
     if (!friction || fo.patch_count == 0) continue;
     for (std::int32_t q = 0; q < fo.patch_count; ++q) o.inputs[static_cast<std::size_t>(fo.patch_begin + q)].patch = num_friction;

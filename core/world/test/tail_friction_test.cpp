@@ -148,5 +148,98 @@ TEST(TailFriction, AFingertipHeldStillOnTheTailComesToRest) {
   EXPECT_LT(largest_late_change_m, 1e-6);
 }
 
+
+// Two worlds, as two haptic nodes on one tail, each with one fingertip held still in it,
+// exchange their contacts every step (what their contact sets carry).
+struct TwoHandsResult {
+  double alice_force_N = 0.0;
+  double alice_largest_late_change_m = 0.0;
+};
+
+TwoHandsResult HoldTheTailWithTwoHands(double mu_static, double mu_kinetic) {
+  scene::Scene s = scene::LoadScene(std::filesystem::path(HANDSHARE_SOURCE_ASSETS) / "scenes" / "dinosaur.json");
+  std::erase_if(s.objects, [](const scene::SceneObject& o) { return o.id != "triceratops_tail"; });
+  s.objects[0].deformable.mu_static = mu_static;
+  s.objects[0].deformable.mu_kinetic = mu_kinetic;
+  SceneModelsOptions options;
+  const char* cache = std::getenv("HANDSHARE_CACHE");
+  options.cache_dir = cache != nullptr ? std::filesystem::path(cache)
+                                       : std::filesystem::temp_directory_path() / "handshare_tail_friction_cache";
+  SceneModels alice = BuildSceneModels(s, options);
+  SceneModels bob = BuildSceneModels(s, options);
+  const PreparedDeformable& tail = alice.deformables[0];
+  const Eigen::Isometry3d X_WO = s.objects[0].X_WO();
+  double x_min = 0.0;
+  for (const auto& p : tail.mesh->positions_m()) x_min = std::min(x_min, p.x());
+  auto above_top = [&](double x0) {  // above the highest surface node near x0
+    double z_top = -std::numeric_limits<double>::infinity();
+    Eigen::Vector3d at = Eigen::Vector3d::Zero();
+    for (std::int32_t v : tail.surface->nodes) {
+      const Eigen::Vector3d& p = tail.mesh->positions_m()[static_cast<std::size_t>(v)];
+      if (std::abs(p.x() - x0) < 0.004 && p.z() > z_top) {
+        z_top = p.z();
+        at = p;
+      }
+    }
+    at.z() += alice.world->config().fingertip_radius_m + 0.003;
+    return at;
+  };
+  Eigen::Vector3d tip_a = above_top(0.35 * x_min), tip_b = above_top(0.55 * x_min);
+  std::array<Eigen::Vector3d, 5> tips_a, tips_b;
+  tips_a.fill(Eigen::Vector3d(5, 5, 5));
+  tips_b.fill(Eigen::Vector3d(5, 5, 5));
+  auto sent = [](const contact::FingerResult& r) {
+    std::vector<contact::RemoteContact> v;
+    if (r.in_contact) v.push_back({1, 1, r.object, r.p_WC_m, r.u_W_m, r.f_E_W_N, r.n_W});
+    return v;
+  };
+  std::vector<contact::RemoteContact> from_alice, from_bob;
+  TwoHandsResult out;
+  Eigen::Vector3d u_prev = Eigen::Vector3d::Zero();
+  for (int k = 0; k < 2100; ++k) {  // down 7 mm in 100 steps (4 mm in), then held for 2 s
+    if (k < 100) {
+      tip_a.z() -= 0.007 / 100;
+      tip_b.z() -= 0.007 / 100;
+    }
+    tips_a[1] = X_WO * tip_a;
+    tips_b[1] = X_WO * tip_b;
+    alice.world->Step(1e-3, tips_a, from_bob);
+    bob.world->Step(1e-3, tips_b, from_alice);
+    const contact::FingerResult& a = alice.world->fingers()[1];
+    from_alice = sent(a);
+    from_bob = sent(bob.world->fingers()[1]);
+    if (k >= 1100) out.alice_largest_late_change_m = std::max(out.alice_largest_late_change_m, (a.u_W_m - u_prev).norm());
+    u_prev = a.u_W_m;
+    out.alice_force_N = a.f_E_W_N.norm();
+  }
+  return out;
+}
+
+// With friction each fingertip still feels its press. Before a fingertip re-anchored where its
+// anchor had no node under it, alice's slid off her footprint in the first steps, her patch
+// came out empty from then on and she felt 0 N at 4 mm deep (1.34 N without friction).
+TEST(TailFriction, TwoHandsHeldStillOnTheTailBothFeelTheirPress) {
+  const TwoHandsResult frictionless = HoldTheTailWithTwoHands(0.0, 0.0);
+  const TwoHandsResult friction = HoldTheTailWithTwoHands(0.8, 0.6);
+  RecordProperty("alice_force_frictionless_N", std::to_string(frictionless.alice_force_N));
+  RecordProperty("alice_force_friction_N", std::to_string(friction.alice_force_N));
+  ASSERT_GT(frictionless.alice_force_N, 1.0);
+  EXPECT_LT(frictionless.alice_largest_late_change_m, 1e-6);
+  // Friction changes the force's direction a little, not whether the fingertip is pushed back.
+  EXPECT_GT(friction.alice_force_N, 0.7 * frictionless.alice_force_N);
+}
+
+// Known bug, kept as its reproduction (disabled: it fails today; run it with
+// --gtest_also_run_disabled_tests). The same two hands held still do not come to rest with
+// friction: alice's stick is about 3.5 mm sideways and jumps by about 1 mm in some steps
+// of the last second (0 without friction). So the three cross-process cases where two users
+// hold the tail never see it still, and the scenes stay frictionless (docs/scenes.md).
+TEST(TailFriction, DISABLED_TwoHandsHeldStillOnTheTailComeToRest) {
+  const TwoHandsResult friction = HoldTheTailWithTwoHands(0.8, 0.6);
+  RecordProperty("alice_largest_change_per_step_in_the_last_second_um",
+                 std::to_string(1e6 * friction.alice_largest_late_change_m));
+  EXPECT_LT(friction.alice_largest_late_change_m, 1e-6);
+}
+
 }  // namespace
 }  // namespace handshare::world
