@@ -62,8 +62,9 @@ struct FrictionPatch {
   bool slipped_before = false;  ///< slipping in the previous step: it sticks again only once
                                 ///< |F_t| <= mu_kinetic F_n.
   /// How the fingertip moved along the surface since the last step (the stick minus the last
-  /// slide) [m]: a slip goes this way (kinetic friction opposes the sliding). Zero (a fingertip
-  /// at rest): the way of the sticking trial force (the radial return).
+  /// slide) [m]: a slip goes this way (kinetic friction opposes the sliding). Under 1 um (a
+  /// fingertip at rest): the way the fingertip slid over the material, stick minus slide,
+  /// found in a few rounds from the sticking trial force's.
   Eigen::Vector3d motion_m = Eigen::Vector3d::Zero();
 };
 
