@@ -5,9 +5,12 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdlib>
 #include <limits>
+#include <stdexcept>
+#include <vector>
 
 #include "handshare/scene/scene.hpp"
 #include "handshare/world/scene_models.hpp"
@@ -15,18 +18,29 @@
 namespace handshare::world {
 namespace {
 
-TEST(TailFriction, AFingerStrokingTheTailDragsWithMuTimesTheNormalForce) {
+// The dinosaur scene reduced to its tail, with these friction coefficients on its material.
+scene::Scene TailScene(double mu_static, double mu_kinetic) {
   scene::Scene s = scene::LoadScene(std::filesystem::path(HANDSHARE_SOURCE_ASSETS) / "scenes" / "dinosaur.json");
   std::erase_if(s.objects, [](const scene::SceneObject& o) { return o.id != "triceratops_tail"; });
-  ASSERT_EQ(s.objects.size(), 1u);
-  const double mu_s = 0.8, mu_k = 0.6;
-  s.objects[0].deformable.mu_static = mu_s;
-  s.objects[0].deformable.mu_kinetic = mu_k;
+  if (s.objects.size() != 1) throw std::runtime_error("dinosaur.json has no single triceratops_tail");
+  s.objects[0].deformable.mu_static = mu_static;
+  s.objects[0].deformable.mu_kinetic = mu_kinetic;
+  return s;
+}
+
+// The tail's models, prepared once into HANDSHARE_CACHE (else a folder of the temp dir).
+SceneModels BuildTail(const scene::Scene& s) {
   SceneModelsOptions options;
   const char* cache = std::getenv("HANDSHARE_CACHE");
   options.cache_dir = cache != nullptr ? std::filesystem::path(cache)
                                        : std::filesystem::temp_directory_path() / "handshare_tail_friction_cache";
-  SceneModels sw = BuildSceneModels(s, options);
+  return BuildSceneModels(s, options);
+}
+
+TEST(TailFriction, AFingerStrokingTheTailDragsWithMuTimesTheNormalForce) {
+  const double mu_s = 0.8, mu_k = 0.6;
+  const scene::Scene s = TailScene(mu_s, mu_k);
+  SceneModels sw = BuildTail(s);
   ASSERT_EQ(sw.deformables.size(), 1u);
   const PreparedDeformable& tail = sw.deformables[0];
   const Eigen::Isometry3d X_WO = s.objects[0].X_WO();
@@ -103,16 +117,8 @@ TEST(TailFriction, AFingerStrokingTheTailDragsWithMuTimesTheNormalForce) {
 // trial force's direction and never came to rest: its stick crept about 0.7 mm a step and
 // jumped back, 1.35 mm in one step within the last second of holding (docs/fem.md).
 TEST(TailFriction, AFingertipHeldStillOnTheTailComesToRest) {
-  scene::Scene s = scene::LoadScene(std::filesystem::path(HANDSHARE_SOURCE_ASSETS) / "scenes" / "dinosaur.json");
-  std::erase_if(s.objects, [](const scene::SceneObject& o) { return o.id != "triceratops_tail"; });
-  ASSERT_EQ(s.objects.size(), 1u);
-  s.objects[0].deformable.mu_static = 0.8;
-  s.objects[0].deformable.mu_kinetic = 0.6;
-  SceneModelsOptions options;
-  const char* cache = std::getenv("HANDSHARE_CACHE");
-  options.cache_dir = cache != nullptr ? std::filesystem::path(cache)
-                                       : std::filesystem::temp_directory_path() / "handshare_tail_friction_cache";
-  SceneModels sw = BuildSceneModels(s, options);
+  const scene::Scene s = TailScene(0.8, 0.6);
+  SceneModels sw = BuildTail(s);
   const PreparedDeformable& tail = sw.deformables[0];
   const Eigen::Isometry3d X_WO = s.objects[0].X_WO();
   double x_min = 0.0;
@@ -157,16 +163,9 @@ struct TwoHandsResult {
 };
 
 TwoHandsResult HoldTheTailWithTwoHands(double mu_static, double mu_kinetic) {
-  scene::Scene s = scene::LoadScene(std::filesystem::path(HANDSHARE_SOURCE_ASSETS) / "scenes" / "dinosaur.json");
-  std::erase_if(s.objects, [](const scene::SceneObject& o) { return o.id != "triceratops_tail"; });
-  s.objects[0].deformable.mu_static = mu_static;
-  s.objects[0].deformable.mu_kinetic = mu_kinetic;
-  SceneModelsOptions options;
-  const char* cache = std::getenv("HANDSHARE_CACHE");
-  options.cache_dir = cache != nullptr ? std::filesystem::path(cache)
-                                       : std::filesystem::temp_directory_path() / "handshare_tail_friction_cache";
-  SceneModels alice = BuildSceneModels(s, options);
-  SceneModels bob = BuildSceneModels(s, options);
+  const scene::Scene s = TailScene(mu_static, mu_kinetic);
+  SceneModels alice = BuildTail(s);
+  SceneModels bob = BuildTail(s);
   const PreparedDeformable& tail = alice.deformables[0];
   const Eigen::Isometry3d X_WO = s.objects[0].X_WO();
   double x_min = 0.0;
