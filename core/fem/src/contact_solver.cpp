@@ -801,9 +801,10 @@ bool ContactSolver::WouldStick(std::int32_t a) const noexcept {
 bool ContactSolver::SolveWithPatches(StepStatus& status) noexcept {
   // Like the general path's iteration, with one more kind of change: a sticking patch whose
   // force leaves its cone starts to slip, in the direction e of that force (and never sticks
-  // again within this call; a patch the warm start below made slip is checked once). Patch nodes are held in 3-D; with push_only one that pulls is
-  // released and a released one the surface pushes into the tip is held again (at the patch's
-  // slide). Other contacts behave as on the general path.
+  // again within this call; a patch the warm start below made slip is checked once). Patch
+  // nodes are held in 3-D; with push_only one that pulls is released and a released one the
+  // surface pushes into the tip is held again (at the patch's slide). Other contacts behave as
+  // on the general path.
   //
   // A slipping patch's cone equation F_t = mu_k F_n e ties its tangential force to its normal
   // force in a fixed direction (non-associated friction): the held-set problem is no longer
@@ -816,13 +817,17 @@ bool ContactSolver::SolveWithPatches(StepStatus& status) noexcept {
     active_[j] = 1;
     releases_[j] = 0;
   }
+  // A fingertip that moved less than this along the surface this step is at rest: 1 mm/s at
+  // 1 kHz, where a stroke is 10-100 um a step and a device's noise well under 1 um.
+  constexpr double kRestMotion_m = 1e-6;
   // A patch that slipped in the previous step and whose fingertip still moves along the surface
   // starts slipping, that way: after the first solve WouldStick() checks it against sticking,
-  // which the same factor answers, and it sticks if that is inside its cone.
+  // which the same factor answers, and it sticks if that is inside its cone. (At rest it starts
+  // sticking: a slip's direction then comes from its slide, below.)
   for (std::int32_t p = 0; p < num_patches_; ++p) {
     const FrictionPatch& in = patch_in_[p];
     const Eigen::Vector2d moved = tangent_[p].transpose() * in.motion_m;
-    warm_slip_[p] = in.slipped_before && moved.norm() > 1e-12 ? 1 : 0;
+    warm_slip_[p] = in.slipped_before && moved.norm() > kRestMotion_m ? 1 : 0;
     if (!warm_slip_[p]) continue;
     patch_state_[p].slipping = true;
     slip_dir_[p] = moved.normalized();
@@ -833,7 +838,6 @@ bool ContactSolver::SolveWithPatches(StepStatus& status) noexcept {
   std::array<std::uint8_t, 1024> from_slide{};  // max_friction_patches <= 1024
   std::int32_t direction_rounds = 0;  // since the held set last changed (converges in about 6)
   constexpr std::int32_t kMaxDirectionRounds = 16;
-  constexpr double kRestMotion_m = 1e-6;  // 1 mm/s at 1 kHz; a stroke is 10-100 um a step
   BlockPivoting pivoting(num_unique_);
   std::int32_t pivots = 0, updates = 0;
   constexpr double kTol = 1e-9;
