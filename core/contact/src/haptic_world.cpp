@@ -475,13 +475,14 @@ void HapticWorld::StepDeformable(Object& o, std::span<const RemoteContact> remot
     const Eigen::Vector3d& p = fo.contact.p_O_m;
     const Eigen::Vector3d& n = fo.contact.n_O;
     Eigen::Vector3d stick = Eigen::Vector3d::Zero();
+    auto anchor_here = [&] {  // the fingertip holds the material under it now
+      fo.anchor_O_m = p;
+      fo.slide_O_m.setZero();
+      fo.anchored = true;
+      fo.slipped = false;
+    };
     if (friction) {
-      if (!fo.anchored) {
-        fo.anchor_O_m = p;
-        fo.slide_O_m.setZero();
-        fo.anchored = true;
-        fo.slipped = false;
-      }
+      if (!fo.anchored) anchor_here();
       const Eigen::Vector3d d = p - fo.anchor_O_m;
       stick = d - d.dot(n) * n;
     }
@@ -491,9 +492,7 @@ void HapticWorld::StepDeformable(Object& o, std::span<const RemoteContact> remot
       // No node under the anchor (a slide left it off the fingertip's footprint): without a
       // patch the anchor would never move again and the fingertip would feel nothing while it
       // presses. It holds the material under it now instead.
-      fo.anchor_O_m = p;
-      fo.slide_O_m.setZero();
-      fo.slipped = false;
+      anchor_here();
       stick.setZero();
       add_patch(p, n, fo.contact.depth_m, fo.patch_count, trunc);
     }

@@ -4,7 +4,6 @@
 #include <Eigen/Geometry>
 
 #include <algorithm>
-#include <array>
 #include <cstring>
 #include <cmath>
 #include <limits>
@@ -775,14 +774,18 @@ bool ContactSolver::SolvePatchedSystem(bool refactor) noexcept {
   return ForcesFromRows();
 }
 
+Eigen::Vector2d ContactSolver::SlidOver(std::int32_t a) const noexcept {
+  const std::int32_t p = slipping_list_[a];
+  return tangent_[p].transpose() * patch_in_[p].slide_m - Eigen::Vector2d(slip_rhs_[2 * a], slip_rhs_[2 * a + 1]);
+}
+
 bool ContactSolver::WouldStick(std::int32_t a) const noexcept {
   // Held at its stick instead of its slide s_a, the patch's rows would be y + Z_a (T^T stick -
   // s_a) with everything else as solved (the system is linear in the slides).
   const int ld = 3 * options_.max_contacts;
   const std::int32_t p = slipping_list_[a];
   const FrictionPatch& in = patch_in_[p];
-  const Eigen::Vector2d delta =
-      tangent_[p].transpose() * in.slide_m - Eigen::Vector2d(slip_rhs_[2 * a], slip_rhs_[2 * a + 1]);
+  const Eigen::Vector2d delta = SlidOver(a);
   const double* z0 = Z_.data() + static_cast<std::ptrdiff_t>(2 * a) * ld;
   const double* z1 = z0 + ld;
   Eigen::Vector3d force = Eigen::Vector3d::Zero();
@@ -820,22 +823,20 @@ bool ContactSolver::SolveWithPatches(StepStatus& status) noexcept {
   // A fingertip that moved less than this along the surface this step is at rest: 1 mm/s at
   // 1 kHz, where a stroke is 10-100 um a step and a device's noise well under 1 um.
   constexpr double kRestMotion_m = 1e-6;
+  auto moved = [&](std::int32_t p) -> Eigen::Vector2d { return tangent_[p].transpose() * patch_in_[p].motion_m; };
   // A patch that slipped in the previous step and whose fingertip still moves along the surface
   // starts slipping, that way: after the first solve WouldStick() checks it against sticking,
   // which the same factor answers, and it sticks if that is inside its cone. (At rest it starts
   // sticking: a slip's direction then comes from its slide, below.)
   for (std::int32_t p = 0; p < num_patches_; ++p) {
-    const FrictionPatch& in = patch_in_[p];
-    const Eigen::Vector2d moved = tangent_[p].transpose() * in.motion_m;
-    warm_slip_[p] = in.slipped_before && moved.norm() > kRestMotion_m ? 1 : 0;
+    const Eigen::Vector2d m = moved(p);
+    warm_slip_[p] = patch_in_[p].slipped_before && m.norm() > kRestMotion_m ? 1 : 0;
     if (!warm_slip_[p]) continue;
     patch_state_[p].slipping = true;
-    slip_dir_[p] = moved.normalized();
+    slip_dir_[p] = m.normalized();
   }
   given_force_ = false;
   bool refactor = true;
-  // Per patch: slipping under a fingertip at rest, its direction taken from its slide.
-  std::array<std::uint8_t, 1024> from_slide{};  // max_friction_patches <= 1024
   std::int32_t direction_rounds = 0;  // since the held set last changed (converges in about 6)
   constexpr std::int32_t kMaxDirectionRounds = 16;
   BlockPivoting pivoting(num_unique_);
@@ -876,9 +877,8 @@ bool ContactSolver::SolveWithPatches(StepStatus& status) noexcept {
     bool turned = false;
     for (std::int32_t a = 0; a < num_slipping_ && !given_force_; ++a) {
       const std::int32_t p = slipping_list_[a];
-      if (!from_slide[static_cast<std::size_t>(p)]) continue;
-      const Eigen::Vector2d slid =
-          tangent_[p].transpose() * patch_in_[p].slide_m - Eigen::Vector2d(slip_rhs_[2 * a], slip_rhs_[2 * a + 1]);
+      if (moved(p).norm() > kRestMotion_m) continue;  // a moving fingertip slips the way it moves
+      const Eigen::Vector2d slid = SlidOver(a);
       if (!(slid.norm() > 1e-12)) continue;
       const Eigen::Vector2d e = slid.normalized();
       if ((e - slip_dir_[p]).norm() <= 1e-6) continue;
@@ -917,10 +917,8 @@ bool ContactSolver::SolveWithPatches(StepStatus& status) noexcept {
       st.slipping = true;
       // The way it slides: the fingertip's motion along the surface; a fingertip at rest (less
       // than kRestMotion_m this step) starts from the trial force's and then follows the slide.
-      const Eigen::Vector2d moved = tangent_[p].transpose() * in.motion_m;
-      const bool moving = moved.norm() > kRestMotion_m;
-      slip_dir_[p] = moving ? Eigen::Vector2d(moved.normalized()) : Eigen::Vector2d(f_t / f_t.norm());
-      from_slide[static_cast<std::size_t>(p)] = moving ? 0 : 1;
+      const Eigen::Vector2d m = moved(p);
+      slip_dir_[p] = m.norm() > kRestMotion_m ? Eigen::Vector2d(m.normalized()) : Eigen::Vector2d(f_t / f_t.norm());
       slip_force_[p] = cone_force(p);
       newly_slipping = true;
     }

@@ -202,6 +202,9 @@ class ContactSolver {
   // For a patch the warm start made slip (list index a of the last SolvePatchedSystem): true if
   // held at its stick instead it would be inside its cone (the forces from z0 + Z s, no solve).
   bool WouldStick(std::int32_t a) const noexcept;
+  // For list index a of the last SolvePatchedSystem: how far its fingertip slid over the
+  // material, the stick minus the slide it solved (tangent coordinates).
+  Eigen::Vector2d SlidOver(std::int32_t a) const noexcept;
   void ComputeContactDisplacements() noexcept;
   // Push-only with every contact frictionless: the scalar problem on S = N^T C_cc N, warm
   // started from the previous Solve()'s active set. Returns false on a numerical failure.
