@@ -854,6 +854,41 @@ bool ContactSolver::SolveWithPatches(StepStatus& status) noexcept {
     const double f_n = -patch_in_[p].n_out.dot(patch_state_[p].force_N);
     return patch_in_[p].mu_kinetic * std::max(f_n, 0.0) * slip_dir_[p];
   };
+  // A sticking patch whose force leaves its cone starts to slip. Under a moving fingertip that
+  // is checked on every solve, as the held set settles; under a fingertip at rest only once it
+  // has settled (no node pulls or is pushed in while released). A trial with nodes that pull
+  // holds more tangential force than the patch can: at rest that slipped a patch every step
+  // although the previous step's slide, held, was on its kinetic cone, and it never came to
+  // rest (docs/fem.md). Such a patch's nodes then start again held in 3-D: what the sticking
+  // trial's pivoting decided about them no longer holds.
+  auto start_slipping = [&](bool settled, double f_scale) {
+    bool any = false;
+    for (std::int32_t p = 0; p < num_patches_; ++p) {
+      FrictionPatchState& st = patch_state_[p];
+      const Eigen::Vector2d m = moved(p);
+      if (st.slipping || (m.norm() <= kRestMotion_m) != settled) continue;
+      const FrictionPatch& in = patch_in_[p];
+      const double f_n = -in.n_out.dot(st.force_N);
+      const Eigen::Vector2d f_t = tangent_[p].transpose() * st.force_N;
+      const double mu = in.slipped_before ? in.mu_kinetic : in.mu_static;
+      if (f_t.norm() <= mu * std::max(f_n, 0.0) + kTol * f_scale) continue;
+      st.slipping = true;
+      // The way it slides: the fingertip's motion along the surface; a fingertip at rest starts
+      // from the trial force's and then follows the slide.
+      slip_dir_[p] = settled ? Eigen::Vector2d(f_t / f_t.norm()) : Eigen::Vector2d(m.normalized());
+      slip_force_[p] = cone_force(p);
+      any = true;
+      if (!settled) continue;
+      for (std::int32_t j = 0; j < num_unique_; ++j) {
+        if (patch_of_[j] != p) continue;
+        active_[j] = 1;
+        mode_[j] = ContactMode::kFull3d;
+        slipping_[j] = 0;
+        releases_[j] = 0;
+      }
+    }
+    return any;
+  };
   while (true) {
     if (!SolvePatchedSystem(refactor)) return false;
     refactor = false;
@@ -905,24 +940,7 @@ bool ContactSolver::SolveWithPatches(StepStatus& status) noexcept {
       ++iterations_;
       continue;
     }
-    bool newly_slipping = false;
-    for (std::int32_t p = 0; p < num_patches_; ++p) {
-      FrictionPatchState& st = patch_state_[p];
-      if (st.slipping) continue;
-      const FrictionPatch& in = patch_in_[p];
-      const double f_n = -in.n_out.dot(st.force_N);
-      const Eigen::Vector2d f_t = tangent_[p].transpose() * st.force_N;
-      const double mu = in.slipped_before ? in.mu_kinetic : in.mu_static;
-      if (f_t.norm() <= mu * std::max(f_n, 0.0) + kTol * f_scale) continue;
-      st.slipping = true;
-      // The way it slides: the fingertip's motion along the surface; a fingertip at rest (less
-      // than kRestMotion_m this step) starts from the trial force's and then follows the slide.
-      const Eigen::Vector2d m = moved(p);
-      slip_dir_[p] = m.norm() > kRestMotion_m ? Eigen::Vector2d(m.normalized()) : Eigen::Vector2d(f_t / f_t.norm());
-      slip_force_[p] = cone_force(p);
-      newly_slipping = true;
-    }
-    if (newly_slipping) {
+    if (start_slipping(/*settled=*/false, f_scale)) {
       ++iterations_;
       continue;  // at most one re-solve per patch: slipping does not revert
     }
@@ -981,6 +999,14 @@ bool ContactSolver::SolveWithPatches(StepStatus& status) noexcept {
         }
         if (!block) break;  // least index
       }
+      continue;
+    }
+    if (start_slipping(/*settled=*/true, f_scale)) {
+      ++iterations_;
+      refactor = true;
+      direction_rounds = 0;
+      pivoting = BlockPivoting(num_unique_);
+      pivots = 0;
       continue;
     }
     if (!given_force_) break;

@@ -83,8 +83,9 @@ TEST(TailFriction, AFingerStrokingTheTailDragsWithMuTimesTheNormalForce) {
   }
   ASSERT_TRUE(sw.world->fingers()[1].in_contact);
   const Eigen::Vector3d stroke_W = X_WO.linear() * -Eigen::Vector3d::UnitX();
-  int slipping = 0, measured = 0;
+  int slipping = 0, measured = 0, paused = 0;
   double worst = 0.0, first_slip_mm = -1.0;
+  Eigen::Vector3d contact_before = sw.world->fingers()[1].p_WC_m;
   for (int k = 1; k <= 500; ++k) {
     tip_O.x() -= 20e-6;
     tips[1] = X_WO * tip_O;
@@ -96,7 +97,16 @@ TEST(TailFriction, AFingerStrokingTheTailDragsWithMuTimesTheNormalForce) {
       ASSERT_GT(fn, 0.0) << k << ": f " << r.f_E_W_N.transpose() << ", " << r.patch_nodes << " patch nodes, "
                        << rep.solver_faults << " solver faults";
     if (!r.sticking && first_slip_mm < 0.0) first_slip_mm = k * 0.02;
+    // Where the proxy pauses for a step or two (at an edge of the tail's triangles), its contact
+    // point does not move over the surface: the patch holds there (it sticks, inside its cone).
+    const bool moved = (r.p_WC_m - contact_before).norm() > 1e-6;
+    contact_before = r.p_WC_m;
     if (k <= 250) continue;  // well into the stroke
+    if (!moved) {
+      ++paused;
+      EXPECT_LE(ft.norm(), mu_k * fn * (1 + 1e-9)) << k;
+      continue;
+    }
     ++measured;
     slipping += r.sticking ? 0 : 1;
     EXPECT_LT(ft.dot(stroke_W), 0.0) << k;  // against the stroke
@@ -104,6 +114,8 @@ TEST(TailFriction, AFingerStrokingTheTailDragsWithMuTimesTheNormalForce) {
   }
   RecordProperty("stick_length_mm", std::to_string(first_slip_mm));
   RecordProperty("worst_ratio_error", std::to_string(worst));
+  RecordProperty("steps_the_proxy_paused", std::to_string(paused));
+  EXPECT_LT(paused, 25);
   // (Pressed straight down on the sloping top, the fingertip already leans on its cone: it
   // slips from the first millimetres of the stroke.)
   EXPECT_EQ(slipping, measured);
@@ -159,10 +171,13 @@ TEST(TailFriction, AFingertipHeldStillOnTheTailComesToRest) {
 // exchange their contacts every step (what their contact sets carry).
 struct TwoHandsResult {
   double alice_force_N = 0.0;
-  double alice_largest_late_change_m = 0.0;
+  double largest_late_change_m = 0.0;   // of either fingertip's imposed displacement, per step
+  double largest_late_change_N = 0.0;   // of the force either fingertip feels, per step
 };
 
-TwoHandsResult HoldTheTailWithTwoHands(double mu_static, double mu_kinetic) {
+// Alice's fingertip above the top at the fraction at_a of the way to the tail's tip, bob's at
+// at_b (negative: bob stays away).
+TwoHandsResult HoldTheTailWithTwoHands(double mu_static, double mu_kinetic, double at_a = 0.35, double at_b = 0.55) {
   const scene::Scene s = TailScene(mu_static, mu_kinetic);
   SceneModels alice = BuildTail(s);
   SceneModels bob = BuildTail(s);
@@ -183,7 +198,7 @@ TwoHandsResult HoldTheTailWithTwoHands(double mu_static, double mu_kinetic) {
     at.z() += alice.world->config().fingertip_radius_m + 0.003;
     return at;
   };
-  Eigen::Vector3d tip_a = above_top(0.35 * x_min), tip_b = above_top(0.55 * x_min);
+  Eigen::Vector3d tip_a = above_top(at_a * x_min), tip_b = above_top(at_b * x_min);
   std::array<Eigen::Vector3d, 5> tips_a, tips_b;
   tips_a.fill(Eigen::Vector3d(5, 5, 5));
   tips_b.fill(Eigen::Vector3d(5, 5, 5));
@@ -194,21 +209,28 @@ TwoHandsResult HoldTheTailWithTwoHands(double mu_static, double mu_kinetic) {
   };
   std::vector<contact::RemoteContact> from_alice, from_bob;
   TwoHandsResult out;
-  Eigen::Vector3d u_prev = Eigen::Vector3d::Zero();
+  contact::FingerResult a_prev, b_prev;
   for (int k = 0; k < 2100; ++k) {  // down 7 mm in 100 steps (4 mm in), then held for 2 s
     if (k < 100) {
       tip_a.z() -= 0.007 / 100;
       tip_b.z() -= 0.007 / 100;
     }
     tips_a[1] = X_WO * tip_a;
-    tips_b[1] = X_WO * tip_b;
+    tips_b[1] = at_b < 0.0 ? Eigen::Vector3d(5, 5, 5) : Eigen::Vector3d(X_WO * tip_b);  // bob away
     alice.world->Step(1e-3, tips_a, from_bob);
     bob.world->Step(1e-3, tips_b, from_alice);
     const contact::FingerResult& a = alice.world->fingers()[1];
+    const contact::FingerResult& b = bob.world->fingers()[1];
     from_alice = sent(a);
-    from_bob = sent(bob.world->fingers()[1]);
-    if (k >= 1100) out.alice_largest_late_change_m = std::max(out.alice_largest_late_change_m, (a.u_W_m - u_prev).norm());
-    u_prev = a.u_W_m;
+    from_bob = sent(b);
+    if (k >= 1100) {  // the last second
+      out.largest_late_change_m = std::max({out.largest_late_change_m, (a.u_W_m - a_prev.u_W_m).norm(),
+                                            (b.u_W_m - b_prev.u_W_m).norm()});
+      out.largest_late_change_N = std::max({out.largest_late_change_N, (a.f_E_W_N - a_prev.f_E_W_N).norm(),
+                                            (b.f_E_W_N - b_prev.f_E_W_N).norm()});
+    }
+    a_prev = a;
+    b_prev = b;
     out.alice_force_N = a.f_E_W_N.norm();
   }
   return out;
@@ -223,21 +245,37 @@ TEST(TailFriction, TwoHandsHeldStillOnTheTailBothFeelTheirPress) {
   RecordProperty("alice_force_frictionless_N", std::to_string(frictionless.alice_force_N));
   RecordProperty("alice_force_friction_N", std::to_string(friction.alice_force_N));
   ASSERT_GT(frictionless.alice_force_N, 1.0);
-  EXPECT_LT(frictionless.alice_largest_late_change_m, 1e-6);
+  EXPECT_LT(frictionless.largest_late_change_m, 1e-6);
   // Friction changes the force's direction a little, not whether the fingertip is pushed back.
   EXPECT_GT(friction.alice_force_N, 0.7 * frictionless.alice_force_N);
 }
 
-// Known bug, kept as its reproduction (disabled: it fails today; run it with
-// --gtest_also_run_disabled_tests). The same two hands held still do not come to rest with
-// friction: alice's stick is about 3.5 mm sideways and jumps by about 1 mm in some steps
-// of the last second (0 without friction). So the three cross-process cases where two users
-// hold the tail never see it still, and the scenes stay frictionless (docs/scenes.md).
-TEST(TailFriction, DISABLED_TwoHandsHeldStillOnTheTailComeToRest) {
-  const TwoHandsResult friction = HoldTheTailWithTwoHands(0.8, 0.6);
-  RecordProperty("alice_largest_change_per_step_in_the_last_second_um",
-                 std::to_string(1e6 * friction.alice_largest_late_change_m));
-  EXPECT_LT(friction.alice_largest_late_change_m, 1e-6);
+// Held still anywhere along the tail, one fingertip or two (two worlds exchanging contacts)
+// come to rest: in the last second neither fingertip's imposed displacement changes by 1 um a
+// step, nor its force by 1 mN. Before a patch at rest was checked against its cone on a settled
+// held set (ContactSolver), 21 of these 22 pairs never did (alice's stick jumped by 1 mm every
+// step at 0.35/0.55), nor 4 of these 12 single fingertips (up to 2.5 mm a step). So the three
+// cross-process cases where two users hold the tail never saw it still (docs/scenes.md).
+TEST(TailFriction, HandsHeldStillAnywhereAlongTheTailComeToRest) {
+  int pairs = 0, single = 0;
+  for (double a : {0.1, 0.2, 0.25, 0.3, 0.35, 0.4, 0.45, 0.5, 0.55, 0.6, 0.7, 0.8}) {
+    const TwoHandsResult r = HoldTheTailWithTwoHands(0.8, 0.6, a, -1.0);
+    EXPECT_LT(r.largest_late_change_m, 1e-6) << "one hand at " << a;
+    EXPECT_LT(r.largest_late_change_N, 1e-3) << "one hand at " << a;
+    EXPECT_GT(r.alice_force_N, 0.1) << a;
+    ++single;
+  }
+  for (double a : {0.2, 0.3, 0.35, 0.4, 0.5}) {
+    for (double b : {0.45, 0.55, 0.6, 0.7, 0.8}) {
+      if (b <= a + 0.05) continue;
+      const TwoHandsResult r = HoldTheTailWithTwoHands(0.8, 0.6, a, b);
+      EXPECT_LT(r.largest_late_change_m, 1e-6) << "hands at " << a << " and " << b;
+      EXPECT_LT(r.largest_late_change_N, 1e-3) << "hands at " << a << " and " << b;
+      ++pairs;
+    }
+  }
+  EXPECT_EQ(single, 12);
+  EXPECT_EQ(pairs, 22);
 }
 
 }  // namespace
