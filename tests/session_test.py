@@ -113,11 +113,15 @@ class Harness:
     def start(self, label, name, *args):
         """Starts a node. The test ends it when it has seen what it needs; --duration is only a
         backstop, so that a node whose test was killed (a ctest timeout) does not run forever."""
+        return self.start_at(label, self.exe(name), *args)
+
+    def start_at(self, label, path, *args):
+        """Starts the node or tool at path (one not named like its folder), as start() does."""
         log = open(os.path.join(self.work, label + ".log"), "w")
         if "--duration" not in args:
             args = (*args, "--duration", BACKSTOP_S)
         self.note_domain(args)
-        proc = subprocess.Popen([self.exe(name), *map(str, args)], stdout=log, stderr=subprocess.STDOUT)
+        proc = subprocess.Popen([path, *map(str, args)], stdout=log, stderr=subprocess.STDOUT)
         self.procs[label] = (proc, log)
         return proc
 
@@ -936,6 +940,59 @@ def case_rejoin(h, domain):
     gaps = [b["t_s"] - a["t_s"] for a, b in zip(rows, rows[1:])]
     print(f"rejoin: {rejoins} rejoins before the world server came, then one member; alice's loop ran on "
           f"through them (trace rows {len(rows)}, largest gap {1e3 * max(gaps):.0f} ms)")
+    recorder_rejoins(h, domain)
+
+
+def recorder_rejoins(h, domain):
+    """The recorder hears the world server but may never hear one member (a secured handshake
+    between the two that never finished): it watches the server's roster, and a member there it
+    has not heard for --rejoin-after seconds makes it join again with a new participant, the
+    recording going on. Here a roster names a ghost nobody hears; without it, nobody rejoins."""
+    session = f"it-rejoin-rec-{os.getpid()}"
+    h.start("world_server", "world_server", "--domain", domain, "--session", session)
+    h.wait_for_line("world_server", "message board #1", 30)
+    h.start("alice", "haptic_node", "--domain", domain, "--session", session, "--user", "alice")
+    h.wait_for_line("world_server", "member joined: user=alice", 30)
+    recording = os.path.join(h.work, "session.rec")
+    h.start_at("recorder", os.path.join(h.bin_dir, "world_server", "session_record"), "--domain", domain,
+               "--session", session, "--out", recording, "--rejoin-after", "2.5")
+    h.wait_for_line("recorder", "recording session", 30)
+    # Everyone the roster names is heard: after twice the wait, no rejoin.
+    wait_until("alice's loop statistics in the recording", 30, lambda: recorded(recording, "loop_statistics") >= 3)
+    before = recorded(recording, "loop_statistics")
+    wait_until("10 more loop statistics (1 Hz from alice and the server: 5-10 s)", 30,
+               lambda: recorded(recording, "loop_statistics") >= before + 10)
+    check("joining again" not in h.log("recorder"), f"the recorder rejoined with every member heard:\n{h.log('recorder')}")
+    h.start_at("ghost", os.path.join(h.bin_dir, "tests", "bad_sample_publisher"), "--domain", domain,
+               "--session", session, "--ghost", f"{session}/ghost", "--rate", "20", "--as", "ghost_roster")
+    h.wait_for_line("recorder", "the world server has " + f"{session}/ghost" + ", not heard here 2.5 s after joining: "
+                    "leaving and joining again with a new participant (rejoin 1)", 30)
+    # The recording goes on with the new participant.
+    at_rejoin = recorded(recording, "loop_statistics")
+    wait_until("alice's loop statistics after the rejoin", 30,
+               lambda: recorded(recording, "loop_statistics") >= at_rejoin + 3)
+    check(h.stop("ghost", 10) == 0, f"the ghost's roster writer failed:\n{h.log('ghost')}")
+    check(h.stop("recorder", 30) == 0, f"session_record failed:\n{h.log('recorder')}")
+    rejoins = h.log("recorder").count("leaving and joining again")
+    check(1 <= rejoins <= 5, f"the recorder rejoined {rejoins} times (at most 5):\n{h.log('recorder')}")
+    check(h.stop("alice", 10) == 0, "alice's haptic node did not end cleanly")
+    check(h.stop("world_server", 10) == 0, "world_server did not end cleanly")
+    report = subprocess.run([os.path.join(h.bin_dir, "world_server", "session_report"), recording],
+                            capture_output=True, text=True, timeout=60)
+    check(report.returncode == 0 and "alice" in report.stdout,
+          f"session_report could not read the recording:\n{report.stdout}{report.stderr}")
+    print(f"rejoin: the recorder, with a ghost in the roster, rejoined {rejoins} time(s) and recorded on "
+          f"({recorded(recording, 'loop_statistics')} loop statistics)")
+
+
+def recorded(path, topic):
+    """Samples of handshare/TOPIC in a recording so far (0 while it cannot be read)."""
+    try:
+        with sqlite3.connect(f"file:{path}?mode=ro", uri=True) as db:
+            return db.execute("SELECT COUNT(*) FROM samples JOIN instances ON samples.instance = instances.id "
+                              "WHERE instances.topic = ?", (f"handshare/{topic}",)).fetchone()[0]
+    except sqlite3.Error:
+        return 0
 
 
 def case_lever_round_trip(h, domain):

@@ -9,10 +9,15 @@ int main(int argc, char** argv) {
                         "session_play, read it with session_report.");
   handshare::common::DeclareSessionOptions(options);
   options.Value("out", "FILE", "the recording to create (must not exist)", std::nullopt, true);
+  options.Value("rejoin-after", "SEC",
+                "join again with a new participant when a member the world server has stays unheard this "
+                "long (a secured join whose handshake never finished; 0: never)",
+                "15");
   return handshare::common::RunNodeMain(argc, argv, options, [](const auto& o) {
     handshare::server::RecordConfig config;
     config.where = handshare::common::ReadSessionOptions(o);
     config.out = o.GetString("out");
+    config.rejoin_after = std::chrono::duration<double>(o.GetDouble("rejoin-after", 0.0, 3600.0));
     return handshare::server::RunRecorder(config);
   });
 }

@@ -41,13 +41,14 @@ T_DEFORM=handshare/deformation
 T_EVENT=handshare/control_event
 T_CONTROL=handshare/control_state
 T_STATS=handshare/loop_statistics
+T_ROSTER=handshare/session_roster
 ALL_TOPICS="$T_MEMBER $T_SCENE $T_BOARD $T_DEVICE $T_CONTACT $T_OBJECT $T_DEFORM $T_EVENT $T_STATS $T_CONTROL"
 
 # Least privilege, from who creates which writer and reader (grep MakeWriter / MakeReader):
 # publish topics | subscribe topics of each role.
 role_publish() {
   case "$1" in
-    world_server) echo "$T_SCENE $T_BOARD $T_OBJECT $T_DEFORM $T_CONTROL" ;;
+    world_server) echo "$T_SCENE $T_BOARD $T_OBJECT $T_DEFORM $T_CONTROL $T_ROSTER" ;;
     haptic) echo "$T_MEMBER $T_DEVICE $T_CONTACT $T_EVENT $T_STATS" ;;
     spectator | audio_guide) echo "$T_MEMBER" ;;
     recorder) echo "" ;;
@@ -60,7 +61,7 @@ role_subscribe() {
     haptic) echo "$T_MEMBER $T_SCENE $T_CONTACT $T_OBJECT $T_CONTROL" ;;
     spectator) echo "$T_MEMBER $T_SCENE $T_BOARD $T_DEVICE $T_OBJECT $T_DEFORM $T_CONTROL" ;;
     audio_guide) echo "$T_BOARD" ;;
-    recorder) echo "$ALL_TOPICS" ;;
+    recorder) echo "$ALL_TOPICS $T_ROSTER" ;;  # the roster: to rejoin (not recorded)
     player) echo "" ;;
   esac
 }

@@ -1,7 +1,8 @@
 // bad_sample_publisher: a hostile or broken participant for tests. Joins a session and
 // publishes malformed samples on every topic the nodes read (non-finite and huge numbers,
 // wrong sizes, unknown kinds, another session's ids), round after round at --rate, until
-// --duration passes; with --forge USER also well-formed samples in a present user's name. Each round's samples are described on stdout once, with their count at
+// --duration passes; with --forge USER also well-formed samples in a present user's name; with
+// --ghost MEMBER only a world server's roster that names a member nobody can hear. Each round's samples are described on stdout once, with their count at
 // the end, so a test can compare what was sent with what the nodes dropped.
 #include <chrono>
 #include <cmath>
@@ -44,6 +45,23 @@ int Run(const common::Options& o) {
   const std::string object = o.GetString("object");
   const double rate_Hz = o.GetDouble("rate", 1.0, 10000.0);
   dds::Participant participant(where, o.GetString("as"));
+  if (const std::string ghost = o.GetString("ghost"); !ghost.empty()) {
+    // A roster, as the world server writes it, naming a member no node hears: each node that
+    // watches the roster should join again after its wait (RosterWatch).
+    auto rosters = dds::MakeWriter<msg::SessionRoster>(participant, dds::topics::kSessionRoster);
+    msg::SessionRoster roster;
+    roster.session(where.session);
+    roster.members().push_back(ghost);
+    std::printf("bad_sample_publisher: a roster naming '%s', at %.0f Hz\n", ghost.c_str(), rate_Hz);
+    std::fflush(stdout);
+    const auto start = std::chrono::steady_clock::now();
+    while (!common::ShutdownRequested() &&
+           (where.duration.count() == 0 || std::chrono::steady_clock::now() - start < where.duration)) {
+      rosters.Write(roster);
+      std::this_thread::sleep_for(std::chrono::duration<double>(1.0 / rate_Hz));
+    }
+    return 0;
+  }
   auto contacts = dds::MakeWriter<msg::ContactSet>(participant, dds::topics::kContactSet);
   auto objects = dds::MakeWriter<msg::ObjectState>(participant, dds::topics::kObjectState);
   auto events = dds::MakeWriter<msg::ControlEvent>(participant, dds::topics::kControlEvent);
@@ -185,6 +203,7 @@ int main(int argc, char** argv) {
   options.Value("object", "ID", "the object the bad contact sets and deformations name", "tail")
       .Value("rate", "HZ", "rounds per second", "1000")
       .Value("forge", "USER", "also write well-formed samples in this user's name (\"\": none)", "")
+      .Value("ghost", "MEMBER", "write nothing but a world server's roster naming this member id (\"\": none)", "")
       .Value("as", "NAME", "participant name; with --security it picks the identity (e.g. graphics_node/x: a "
                            "spectator's)", "bad_sample_publisher");
   return handshare::common::RunNodeMain(argc, argv, options, [](const handshare::common::Options& o) { return Run(o); });

@@ -7,6 +7,7 @@
 #include <cstdio>
 #include <fstream>
 #include <map>
+#include <memory>
 #include <mutex>
 #include <optional>
 #include <thread>
@@ -15,6 +16,7 @@
 #include "handshare/common/shutdown.hpp"
 #include "handshare/dds/membership.hpp"
 #include "handshare/dds/messages.hpp"
+#include "handshare/dds/sample_checks.hpp"
 #include "handshare/dds/serialization.hpp"
 #include "handshare/world_server/member_registry.hpp"
 #include "handshare/world_server/session_log.hpp"
@@ -480,44 +482,61 @@ int RunRecorder(const RecordConfig& config) {
   std::string scene_name;
   std::uint32_t scene_revision = 0;
 
-  dds::Participant participant(where, "session_record");
+  // The participant and its taps, made again when a member the world server has stays unheard
+  // (a secured handshake with that member's participant that never finished): a new
+  // participant starts a new handshake with everyone. The recording and its log go on.
+  std::unique_ptr<dds::Participant> participant;
   std::vector<std::unique_ptr<TopicTap>> taps;
+  dds::Reader<msg::SessionRoster> roster_reader;
   namespace t = dds::topics;
-  taps.push_back(std::make_unique<Tap<msg::MemberInfo>>(
-      participant, t::kMemberInfo,
-      [&](const msg::MemberInfo& info, const dds::SampleMeta& meta, std::int64_t unix_ns) {
-        if (meta.valid_data && meta.instance_state == dds::InstanceState::kAlive) {
-          log_member(members.OnInfo(meta.instance, meta.writer, ToMember(info)), unix_ns);
-        } else if (meta.instance_state != dds::InstanceState::kAlive) {
-          log_member(members.OnGone(meta.instance, meta.instance_state == dds::InstanceState::kDisposed), unix_ns);
-        }
-      },
-      [&](const dds::SampleMeta::Key& writer_key, std::int64_t unix_ns) {
-        for (const auto& e : members.OnWriterLost(writer_key)) log_member(e, unix_ns);
-      }));
-  taps.push_back(std::make_unique<Tap<msg::SceneState>>(
-      participant, t::kSceneState, [&](const msg::SceneState& s, const dds::SampleMeta& meta, std::int64_t unix_ns) {
-        if (!meta.valid_data || (s.scene() == scene_name && s.revision() == scene_revision)) return;
-        scene_name = s.scene().to_string();
-        scene_revision = s.revision();
-        // The scene state carries no title: the report names worlds by their scene.
-        log.OnSceneChange(scene_name, "", static_cast<std::uint64_t>(unix_ns));
-      }));
-  taps.push_back(std::make_unique<Tap<msg::MessageBoard>>(participant, t::kMessageBoard));
-  taps.push_back(std::make_unique<Tap<msg::DeviceState>>(participant, t::kDeviceState));
-  taps.push_back(std::make_unique<Tap<msg::ContactSet>>(participant, t::kContactSet));
-  taps.push_back(std::make_unique<Tap<msg::ObjectState>>(participant, t::kObjectState));
-  taps.push_back(std::make_unique<Tap<msg::Deformation>>(participant, t::kDeformation));
-  taps.push_back(std::make_unique<Tap<msg::ControlState>>(participant, t::kControlState));
-  taps.push_back(std::make_unique<Tap<msg::ControlEvent>>(
-      participant, t::kControlEvent, [&](const msg::ControlEvent& e, const dds::SampleMeta& meta, std::int64_t unix_ns) {
-        if (!meta.valid_data) return;
-        if (const auto input = ToControlInput(e)) {
-          log.OnControlEvent(ToControlRecord(e, *input, static_cast<std::uint64_t>(unix_ns)));
-        }
-      }));
-  taps.push_back(std::make_unique<Tap<msg::LoopStatistics>>(participant, t::kLoopStatistics));
-
+  const auto join = [&] {
+    participant = std::make_unique<dds::Participant>(where, "session_record");
+    dds::Participant& p = *participant;
+    taps.push_back(std::make_unique<Tap<msg::MemberInfo>>(
+        p, t::kMemberInfo,
+        [&](const msg::MemberInfo& info, const dds::SampleMeta& meta, std::int64_t unix_ns) {
+          if (meta.valid_data && meta.instance_state == dds::InstanceState::kAlive) {
+            log_member(members.OnInfo(meta.instance, meta.writer, ToMember(info)), unix_ns);
+          } else if (meta.instance_state != dds::InstanceState::kAlive) {
+            log_member(members.OnGone(meta.instance, meta.instance_state == dds::InstanceState::kDisposed), unix_ns);
+          }
+        },
+        [&](const dds::SampleMeta::Key& writer_key, std::int64_t unix_ns) {
+          for (const auto& e : members.OnWriterLost(writer_key)) log_member(e, unix_ns);
+        }));
+    taps.push_back(std::make_unique<Tap<msg::SceneState>>(
+        p, t::kSceneState, [&](const msg::SceneState& s, const dds::SampleMeta& meta, std::int64_t unix_ns) {
+          if (!meta.valid_data || (s.scene() == scene_name && s.revision() == scene_revision)) return;
+          scene_name = s.scene().to_string();
+          scene_revision = s.revision();
+          // The scene state carries no title: the report names worlds by their scene.
+          log.OnSceneChange(scene_name, "", static_cast<std::uint64_t>(unix_ns));
+        }));
+    taps.push_back(std::make_unique<Tap<msg::MessageBoard>>(p, t::kMessageBoard));
+    taps.push_back(std::make_unique<Tap<msg::DeviceState>>(p, t::kDeviceState));
+    taps.push_back(std::make_unique<Tap<msg::ContactSet>>(p, t::kContactSet));
+    taps.push_back(std::make_unique<Tap<msg::ObjectState>>(p, t::kObjectState));
+    taps.push_back(std::make_unique<Tap<msg::Deformation>>(p, t::kDeformation));
+    taps.push_back(std::make_unique<Tap<msg::ControlState>>(p, t::kControlState));
+    taps.push_back(std::make_unique<Tap<msg::ControlEvent>>(
+        p, t::kControlEvent, [&](const msg::ControlEvent& e, const dds::SampleMeta& meta, std::int64_t unix_ns) {
+          if (!meta.valid_data) return;
+          if (const auto input = ToControlInput(e)) {
+            log.OnControlEvent(ToControlRecord(e, *input, static_cast<std::uint64_t>(unix_ns)));
+          }
+        }));
+    taps.push_back(std::make_unique<Tap<msg::LoopStatistics>>(p, t::kLoopStatistics));
+    roster_reader = dds::MakeReader<msg::SessionRoster>(p, t::kSessionRoster);
+  };
+  const auto leave = [&] {  // readers before their participant
+    roster_reader = {};
+    taps.clear();
+    participant.reset();
+  };
+  join();
+  RosterWatch roster(config.rejoin_after);
+  int rejoins = 0;
+  auto roster_checked = SteadyClock::now();
   std::printf("[session_record] recording session '%s' on domain %d into %s\n", where.session.c_str(),
               where.domain_id, config.out.c_str());
   std::fflush(stdout);
@@ -527,12 +546,38 @@ int RunRecorder(const RecordConfig& config) {
   // Readers keep the last sample of each instance (stream topics keep-last 1): take them every
   // millisecond, well inside the 10 ms between a haptic node's device states.
   while (!common::ShutdownRequested()) {
-    if (where.duration.count() > 0 && SteadyClock::now() - start_time >= where.duration) break;
+    const auto now = SteadyClock::now();
+    if (where.duration.count() > 0 && now - start_time >= where.duration) break;
     for (auto& tap : taps) taken += tap->Drain(*writer, t0);
+    if (now - roster_checked >= std::chrono::milliseconds(100)) {
+      roster_checked = now;
+      msg::SessionRoster r;
+      dds::SampleMeta meta;
+      while (roster_reader.TakeNext(r, meta)) {
+        if (!meta.valid_data || !dds::CheckSessionRoster(r, where.session).empty()) continue;
+        std::vector<std::string> ids;
+        for (const auto& m : r.members()) ids.push_back(m.to_string());
+        roster.OnRoster(std::move(ids));
+      }
+      std::vector<std::string> heard;
+      for (const Member& m : members.present()) heard.push_back(m.member_id);
+      const std::vector<std::string> unheard = roster.Unheard(heard, now);
+      if (!unheard.empty() && rejoins < kMaxRecorderRejoins) {
+        ++rejoins;
+        std::printf("[session_record] the world server has %s, not heard here %.1f s after joining: leaving and "
+                    "joining again with a new participant (rejoin %d)\n",
+                    unheard.front().c_str(), config.rejoin_after.count(), rejoins);
+        std::fflush(stdout);
+        for (auto& tap : taps) taken += tap->Drain(*writer, t0);
+        leave();
+        join();
+        roster.Restart(SteadyClock::now());
+      }
+    }
     std::this_thread::sleep_for(std::chrono::milliseconds(1));
   }
   for (auto& tap : taps) taken += tap->Drain(*writer, t0);
-  taps.clear();
+  leave();
   writer->Finish(static_cast<std::int64_t>(common::UnixNowNs()));
   const double seconds = std::chrono::duration<double>(SteadyClock::now() - start_time).count();
   std::printf("[session_record] recorded %lld samples in %.1f s into %s\n", static_cast<long long>(writer->written()),

@@ -42,6 +42,7 @@ ServerSession::ServerSession(WorldServer& server, const WorldServerConfig& confi
       control_state_writer_(dds::MakeWriter<msg::ControlState>(participant, dds::topics::kControlState)),
       object_writer_(dds::MakeWriter<msg::ObjectState>(participant, dds::topics::kObjectState)),
       deformation_writer_(dds::MakeWriter<msg::Deformation>(participant, dds::topics::kDeformation)),
+      roster_writer_(dds::MakeWriter<msg::SessionRoster>(participant, dds::topics::kSessionRoster)),
       member_reader_(dds::MakeReader<msg::MemberInfo>(participant, dds::topics::kMemberInfo)),
       contact_reader_(dds::MakeReader<msg::ContactSet>(participant, dds::topics::kContactSet)),
       control_reader_(dds::MakeReader<msg::ControlEvent>(participant, dds::topics::kControlEvent)) {
@@ -61,6 +62,7 @@ ServerSession::ServerSession(WorldServer& server, const WorldServerConfig& confi
     }
   }
   PublishScene();
+  PublishRoster();
   server_.Say("session '" + session_ + "' on domain " + std::to_string(config.where.domain_id) + ": scene '" +
               scene_.name + "' (" + std::to_string(scene_.objects.size()) + " objects)");
   server_.OnSceneChange(scene_.name, scene_.title);
@@ -106,6 +108,7 @@ void ServerSession::TakeMembers(Clock::time_point now) {
       events.push_back(e);
     }
   }
+  if (!events.empty()) PublishRoster();
   for (const auto& event : events) {
     server_.OnMemberEvent(event, members_.present().size());
     if (event.change != MemberChange::kJoined) {
@@ -114,6 +117,16 @@ void ServerSession::TakeMembers(Clock::time_point now) {
       objects_.RequestKeyframes();  // a new spectator gets the whole deformed surfaces
     }
   }
+}
+
+void ServerSession::PublishRoster() {
+  msg::SessionRoster roster;
+  roster.session(session_);
+  for (const Member& m : members_.present()) {
+    if (roster.members().size() == kMaxRoster) break;  // IDL bound; a session has far fewer
+    roster.members().push_back(m.member_id);
+  }
+  roster_writer_.Write(roster);
 }
 
 void ServerSession::TakeControlEvents() {

@@ -55,6 +55,10 @@ class ServerSession {
   }
   /// Publishes the scene as its next revision.
   void PublishScene();
+  /// Publishes the members present (SessionRoster): a node that hears this server but never
+  /// one of them can tell, and join again.
+  void PublishRoster();
+  static constexpr std::size_t kMaxRoster = 64;  // the IDL's bound
   /// Records where the session is (world, revision, clock, board) in the session log.
   void LogState();
   /// Records the poses of the bodies just published (at most every kPoseLogPeriod a body).
@@ -86,6 +90,7 @@ class ServerSession {
   dds::Writer<msg::ControlState> control_state_writer_;
   dds::Writer<msg::ObjectState> object_writer_;
   dds::Writer<msg::Deformation> deformation_writer_;
+  dds::Writer<msg::SessionRoster> roster_writer_;
   dds::Reader<msg::MemberInfo> member_reader_;
   dds::Reader<msg::ContactSet> contact_reader_;
   dds::Reader<msg::ControlEvent> control_reader_;

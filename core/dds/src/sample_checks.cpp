@@ -124,6 +124,15 @@ std::string CheckControlState(const msg::ControlState& s, std::string_view sessi
   return c.reason();
 }
 
+std::string CheckSessionRoster(const msg::SessionRoster& s, std::string_view session) {
+  Checker c;
+  c.Session(s.session().to_string(), session);
+  for (std::size_t i = 0; i < s.members().size() && c.ok(); ++i) {
+    c.NonEmpty("members[" + std::to_string(i) + "]", s.members()[i].to_string());
+  }
+  return c.reason();
+}
+
 std::string CheckControlEvent(const msg::ControlEvent& s, std::string_view session) {
   Checker c;
   c.Session(s.session().to_string(), session);

@@ -179,6 +179,18 @@ TEST(SampleChecks, ControlStatesNameAControlOfAWorldAndAPlausibleIndex) {
   EXPECT_EQ(CheckControlState(s, "museum"), "control_id is empty");
 }
 
+TEST(SampleChecks, ARosterIsTheSessionsAndNamesEveryMember) {
+  msg::SessionRoster s;
+  s.session("museum");
+  EXPECT_EQ(CheckSessionRoster(s, "museum"), "");  // nobody yet
+  s.members().push_back("museum/alice");
+  s.members().push_back("museum/spectator-1");
+  EXPECT_EQ(CheckSessionRoster(s, "museum"), "");
+  EXPECT_NE(CheckSessionRoster(s, "lab"), "");
+  s.members().push_back("");
+  EXPECT_EQ(CheckSessionRoster(s, "museum"), "members[2] is empty");
+}
+
 TEST(DroppedSamples, CountsPerTopicAndPrintsAFloodOncePerThousand) {
   DroppedSamples d;
   EXPECT_EQ(d.Summary(), "none");

@@ -124,7 +124,13 @@ struct RecordConfig {
   common::SessionOptions where;         ///< duration 0: until SIGINT/SIGTERM
   std::filesystem::path out;            ///< must not exist
   std::chrono::milliseconds flush_period{250};
+  /// A member the world server has (its roster) and this recorder has not heard this long:
+  /// join again with a new participant; 0: never.
+  std::chrono::duration<double> rejoin_after{15.0};
 };
+/// At most this many rejoins in one recording: a member the recorder can never reach (a
+/// network it is not on) would otherwise make it leave and join every rejoin_after.
+inline constexpr int kMaxRecorderRejoins = 5;
 /// session_record: records every topic of the session until the duration passes or a signal.
 int RunRecorder(const RecordConfig& config);
 

@@ -39,6 +39,7 @@ std::string CheckObjectState(const msg::ObjectState& s, std::string_view session
 std::string CheckSceneState(const msg::SceneState& s, std::string_view session, const SampleBounds& b = {});
 std::string CheckControlEvent(const msg::ControlEvent& s, std::string_view session);
 std::string CheckControlState(const msg::ControlState& s, std::string_view session);
+std::string CheckSessionRoster(const msg::SessionRoster& s, std::string_view session);
 std::string CheckDeviceState(const msg::DeviceState& s, std::string_view session, const SampleBounds& b = {});
 /// Also: 3 displacements per node id, ids below surface_node_count when it is given.
 std::string CheckDeformation(const msg::Deformation& s, std::string_view session, const SampleBounds& b = {});
