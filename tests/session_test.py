@@ -770,6 +770,12 @@ class PressWatch:
         if held is not None:
             if held["revision"] != self.revision:
                 self.revision, self.since = held["revision"], time.monotonic()
+                # Every revision seen, with who loads it near their fingertip, beside the dump:
+                # what a failed wait for stillness is read from.
+                with open(self.file + ".seen", "a") as f:
+                    near = {u: len(self.loaded_near(held, u)) for u in self.fingertips_xy}
+                    f.write(f"{time.monotonic():.3f} revision {held['revision']} users {held['users']} "
+                            f"loads near {near}\n")
             self.held = held
         return held
 

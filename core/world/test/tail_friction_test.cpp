@@ -9,6 +9,7 @@
 #include <cmath>
 #include <cstdlib>
 #include <limits>
+#include <random>
 #include <stdexcept>
 #include <vector>
 
@@ -176,8 +177,12 @@ struct TwoHandsResult {
 };
 
 // Alice's fingertip above the top at the fraction at_a of the way to the tail's tip, bob's at
-// at_b (negative: bob stays away).
-TwoHandsResult HoldTheTailWithTwoHands(double mu_static, double mu_kinetic, double at_a = 0.35, double at_b = 0.55) {
+// at_b (negative: bob stays away). A device's jitter: every fingertip position gets a normal
+// error of jitter_m a coordinate, every step.
+TwoHandsResult HoldTheTailWithTwoHands(double mu_static, double mu_kinetic, double at_a = 0.35, double at_b = 0.55,
+                                       double jitter_m = 0.0) {
+  std::mt19937 rng(5);
+  std::normal_distribution<double> noise(0.0, 1.0);
   const scene::Scene s = TailScene(mu_static, mu_kinetic);
   SceneModels alice = BuildTail(s);
   SceneModels bob = BuildTail(s);
@@ -215,8 +220,8 @@ TwoHandsResult HoldTheTailWithTwoHands(double mu_static, double mu_kinetic, doub
       tip_a.z() -= 0.007 / 100;
       tip_b.z() -= 0.007 / 100;
     }
-    tips_a[1] = X_WO * tip_a;
-    tips_b[1] = at_b < 0.0 ? Eigen::Vector3d(5, 5, 5) : Eigen::Vector3d(X_WO * tip_b);  // bob away
+    tips_a[1] = X_WO * tip_a + jitter_m * Eigen::Vector3d(noise(rng), noise(rng), noise(rng));
+    tips_b[1] = at_b < 0.0 ? Eigen::Vector3d(5, 5, 5) : Eigen::Vector3d(X_WO * tip_b + jitter_m * Eigen::Vector3d(noise(rng), noise(rng), noise(rng)));  // bob away
     alice.world->Step(1e-3, tips_a, from_bob);
     bob.world->Step(1e-3, tips_b, from_alice);
     const contact::FingerResult& a = alice.world->fingers()[1];
@@ -256,6 +261,11 @@ TEST(TailFriction, TwoHandsHeldStillOnTheTailBothFeelTheirPress) {
 // held set (ContactSolver), 21 of these 22 pairs never did (alice's stick jumped by 1 mm every
 // step at 0.35/0.55), nor 4 of these 12 single fingertips (up to 2.5 mm a step). So the three
 // cross-process cases where two users hold the tail never saw it still (docs/scenes.md).
+// Held by devices that jitter (2 um a coordinate and step, white: above the HIRO II model's
+// 1.3 um p50 a step), they stay within 30 um and 30 mN a step. Before the fingertip's motion
+// was smoothed (HapticWorld), that jitter was taken for strokes and 19 of the 22 pairs jumped
+// by up to 7 mm a step; the HIRO II user of session.encyclopedia never let the tail come to
+// rest (1 run in 2).
 TEST(TailFriction, HandsHeldStillAnywhereAlongTheTailComeToRest) {
   int pairs = 0, single = 0;
   for (double a : {0.1, 0.2, 0.25, 0.3, 0.35, 0.4, 0.45, 0.5, 0.55, 0.6, 0.7, 0.8}) {
@@ -265,15 +275,23 @@ TEST(TailFriction, HandsHeldStillAnywhereAlongTheTailComeToRest) {
     EXPECT_GT(r.alice_force_N, 0.1) << a;
     ++single;
   }
+  double jittered_m = 0.0, jittered_N = 0.0;
   for (double a : {0.2, 0.3, 0.35, 0.4, 0.5}) {
     for (double b : {0.45, 0.55, 0.6, 0.7, 0.8}) {
       if (b <= a + 0.05) continue;
       const TwoHandsResult r = HoldTheTailWithTwoHands(0.8, 0.6, a, b);
       EXPECT_LT(r.largest_late_change_m, 1e-6) << "hands at " << a << " and " << b;
       EXPECT_LT(r.largest_late_change_N, 1e-3) << "hands at " << a << " and " << b;
+      const TwoHandsResult j = HoldTheTailWithTwoHands(0.8, 0.6, a, b, 2e-6);
+      EXPECT_LT(j.largest_late_change_m, 30e-6) << "jittering hands at " << a << " and " << b;
+      EXPECT_LT(j.largest_late_change_N, 30e-3) << "jittering hands at " << a << " and " << b;
+      jittered_m = std::max(jittered_m, j.largest_late_change_m);
+      jittered_N = std::max(jittered_N, j.largest_late_change_N);
       ++pairs;
     }
   }
+  RecordProperty("jittering_pairs_largest_change_per_step_um", std::to_string(1e6 * jittered_m));
+  RecordProperty("jittering_pairs_largest_force_change_per_step_mN", std::to_string(1e3 * jittered_N));
   EXPECT_EQ(single, 12);
   EXPECT_EQ(pairs, 22);
 }

@@ -251,6 +251,8 @@ class HapticWorld {
     // undeformed surface), whether it holds one, and whether it slipped in the last step.
     Eigen::Vector3d anchor_O_m = Eigen::Vector3d::Zero();
     Eigen::Vector3d slide_O_m = Eigen::Vector3d::Zero();  // the stick the last step held
+    // The fingertip's motion along the surface per step, smoothed (FrictionPatch::motion_m).
+    Eigen::Vector3d motion_O_m = Eigen::Vector3d::Zero();
     bool anchored = false;
     bool slipped = false;
     std::int16_t friction_patch = -1;  // this step's patch index in the solve, -1: none

@@ -61,10 +61,11 @@ struct FrictionPatch {
   double mu_kinetic = 0.0;   ///< ... and slips with |F_t| = mu_kinetic F_n.
   bool slipped_before = false;  ///< slipping in the previous step: it sticks again only once
                                 ///< |F_t| <= mu_kinetic F_n.
-  /// How the fingertip moved along the surface since the last step (the stick minus the last
-  /// slide) [m]: a slip goes this way (kinetic friction opposes the sliding). Under 1 um (a
-  /// fingertip at rest): the way the fingertip slid over the material, stick minus slide,
-  /// found in a few rounds from the sticking trial force's.
+  /// How the fingertip moves along the surface per step (the stick minus the last slide;
+  /// HapticWorld smooths it over about 16 steps, so a device's jitter is no motion) [m]: a slip
+  /// goes this way (kinetic friction opposes the sliding). Under 1 um (a fingertip at rest):
+  /// the way the fingertip slid over the material, stick minus slide, found in a few rounds
+  /// from the sticking trial force's; and the cone is checked once the held set has settled.
   Eigen::Vector3d motion_m = Eigen::Vector3d::Zero();
 };
 
