@@ -7,6 +7,7 @@
 
 #include <gtest/gtest.h>
 
+#include <array>
 #include <cmath>
 #include <iomanip>
 #include <memory>
@@ -164,26 +165,39 @@ TEST(ContactFriction, APatchThatSlippedNeedsTheKineticConeToStick) {
   EXPECT_NEAR(F2.head<2>().norm(), 0.8 * ratio * -F2.z(), 1e-9 * -F2.z());
 }
 
+// Two patches side by side on the box's top (the first pressed 1.2 mm, the second 0.8 mm),
+// each with a random stick of up to 1.5 mm a coordinate, mu_kinetic in [mu_min, 0.8] and
+// mu_static 1.2 times it.
+struct SideBySide {
+  std::vector<ContactInput> in;
+  std::array<FrictionPatch, 2> patches;
+};
+
+SideBySide RandomSideBySide(const Model& m, std::mt19937& rng, double mu_min) {
+  std::uniform_real_distribution<double> drag(-1.5e-3, 1.5e-3), mu(mu_min, 0.8);
+  SideBySide s;
+  s.in = TopPatch(m, 0.013, 0.02, 0.007, 1.2e-3, 0);
+  const auto second = TopPatch(m, 0.026, 0.02, 0.007, 0.8e-3, 1);
+  s.in.insert(s.in.end(), second.begin(), second.end());
+  for (auto& p : s.patches) {
+    p.n_out = Eigen::Vector3d::UnitZ();
+    p.slide_m = {drag(rng), drag(rng), 0.0};
+    p.mu_kinetic = mu(rng);
+    p.mu_static = p.mu_kinetic * 1.2;
+  }
+  return s;
+}
+
 // Push-only: every held patch node pushes, no released one is pushed into the tip (at the
 // patch's slide), every patch is inside or on its cone, and the forces are the direct solve's
 // with the held nodes at their targets. Two patches side by side, random drags.
 TEST(ContactFriction, PushOnlyPatchesAgreeWithTheDirectSolve) {
   const Model& m = BoxModel();
   std::mt19937 rng(11);
-  std::uniform_real_distribution<double> drag(-1.5e-3, 1.5e-3), mu(0.0, 0.8);
   ContactSolver solver(m.c64, {.max_contacts = 48, .push_only = true});
   int slipping = 0, sticking = 0, released = 0;
   for (int trial = 0; trial < 12; ++trial) {
-    auto in = TopPatch(m, 0.013, 0.02, 0.007, 1.2e-3, 0);
-    const auto second = TopPatch(m, 0.026, 0.02, 0.007, 0.8e-3, 1);
-    in.insert(in.end(), second.begin(), second.end());
-    FrictionPatch patches[2];
-    for (auto& p : patches) {
-      p.n_out = Eigen::Vector3d::UnitZ();
-      p.slide_m = {drag(rng), drag(rng), 0.0};
-      p.mu_kinetic = mu(rng);
-      p.mu_static = p.mu_kinetic * 1.2;
-    }
+    auto [in, patches] = RandomSideBySide(m, rng, 0.0);
     ASSERT_EQ(solver.Solve(in, patches), StepStatus::kOk) << trial;
     std::vector<ContactState> states(solver.states().begin(), solver.states().end());
     std::vector<ContactInput> held;
@@ -240,20 +254,10 @@ TEST(ContactFriction, PushOnlyPatchesAgreeWithTheDirectSolve) {
 TEST(ContactFriction, APatchAtRestComesToRestOnItsLastSlide) {
   const Model& m = BoxModel();
   std::mt19937 rng(11);
-  std::uniform_real_distribution<double> drag(-1.5e-3, 1.5e-3), mu(0.1, 0.8);
   ContactSolver solver(m.c64, {.max_contacts = 48, .push_only = true});
   int slipped = 0, stuck_at_once = 0, worst_steps = 0;
   for (int trial = 0; trial < 40; ++trial) {
-    auto in = TopPatch(m, 0.013, 0.02, 0.007, 1.2e-3, 0);
-    const auto second = TopPatch(m, 0.026, 0.02, 0.007, 0.8e-3, 1);
-    in.insert(in.end(), second.begin(), second.end());
-    FrictionPatch patches[2];
-    for (auto& p : patches) {
-      p.n_out = Eigen::Vector3d::UnitZ();
-      p.slide_m = {drag(rng), drag(rng), 0.0};
-      p.mu_kinetic = mu(rng);
-      p.mu_static = p.mu_kinetic * 1.2;
-    }
+    auto [in, patches] = RandomSideBySide(m, rng, 0.1);
     ASSERT_EQ(solver.Solve(in, patches), StepStatus::kOk) << trial;
     if (!solver.patch_states()[0].slipping && !solver.patch_states()[1].slipping) continue;
     ++slipped;
