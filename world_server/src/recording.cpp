@@ -461,6 +461,10 @@ class Tap : public TopicTap {
 
 }  // namespace
 
+// At most this many rejoins in one recording: a member the recorder can never reach (a
+// network it is not on) would otherwise make it leave and join every rejoin_after.
+constexpr int kMaxRecorderRejoins = 5;
+
 int RunRecorder(const RecordConfig& config) {
   const auto& where = config.where;
   char host[256] = {};

@@ -824,16 +824,16 @@ bool ContactSolver::SolveWithPatches(StepStatus& status) noexcept {
   // 1 kHz, where a stroke is 10-100 um a step and a device's noise well under 1 um.
   constexpr double kRestMotion_m = 1e-6;
   auto moved = [&](std::int32_t p) -> Eigen::Vector2d { return tangent_[p].transpose() * patch_in_[p].motion_m; };
+  auto at_rest = [&](std::int32_t p) { return moved(p).norm() <= kRestMotion_m; };
   // A patch that slipped in the previous step and whose fingertip still moves along the surface
   // starts slipping, that way: after the first solve WouldStick() checks it against sticking,
   // which the same factor answers, and it sticks if that is inside its cone. (At rest it starts
   // sticking: a slip's direction then comes from its slide, below.)
   for (std::int32_t p = 0; p < num_patches_; ++p) {
-    const Eigen::Vector2d m = moved(p);
-    warm_slip_[p] = patch_in_[p].slipped_before && m.norm() > kRestMotion_m ? 1 : 0;
+    warm_slip_[p] = patch_in_[p].slipped_before && !at_rest(p) ? 1 : 0;
     if (!warm_slip_[p]) continue;
     patch_state_[p].slipping = true;
-    slip_dir_[p] = m.normalized();
+    slip_dir_[p] = moved(p).normalized();
   }
   given_force_ = false;
   bool refactor = true;
@@ -865,8 +865,7 @@ bool ContactSolver::SolveWithPatches(StepStatus& status) noexcept {
     bool any = false;
     for (std::int32_t p = 0; p < num_patches_; ++p) {
       FrictionPatchState& st = patch_state_[p];
-      const Eigen::Vector2d m = moved(p);
-      if (st.slipping || (m.norm() <= kRestMotion_m) != settled) continue;
+      if (st.slipping || at_rest(p) != settled) continue;
       const FrictionPatch& in = patch_in_[p];
       const double f_n = -in.n_out.dot(st.force_N);
       const Eigen::Vector2d f_t = tangent_[p].transpose() * st.force_N;
@@ -875,7 +874,7 @@ bool ContactSolver::SolveWithPatches(StepStatus& status) noexcept {
       st.slipping = true;
       // The way it slides: the fingertip's motion along the surface; a fingertip at rest starts
       // from the trial force's and then follows the slide.
-      slip_dir_[p] = settled ? Eigen::Vector2d(f_t / f_t.norm()) : Eigen::Vector2d(m.normalized());
+      slip_dir_[p] = settled ? Eigen::Vector2d(f_t / f_t.norm()) : Eigen::Vector2d(moved(p).normalized());
       slip_force_[p] = cone_force(p);
       any = true;
       if (!settled) continue;
@@ -912,7 +911,7 @@ bool ContactSolver::SolveWithPatches(StepStatus& status) noexcept {
     bool turned = false;
     for (std::int32_t a = 0; a < num_slipping_ && !given_force_; ++a) {
       const std::int32_t p = slipping_list_[a];
-      if (moved(p).norm() > kRestMotion_m) continue;  // a moving fingertip slips the way it moves
+      if (!at_rest(p)) continue;  // a moving fingertip slips the way it moves
       const Eigen::Vector2d slid = SlidOver(a);
       if (!(slid.norm() > 1e-12)) continue;
       const Eigen::Vector2d e = slid.normalized();

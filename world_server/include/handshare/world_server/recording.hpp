@@ -128,9 +128,6 @@ struct RecordConfig {
   /// join again with a new participant; 0: never.
   std::chrono::duration<double> rejoin_after{15.0};
 };
-/// At most this many rejoins in one recording: a member the recorder can never reach (a
-/// network it is not on) would otherwise make it leave and join every rejoin_after.
-inline constexpr int kMaxRecorderRejoins = 5;
 /// session_record: records every topic of the session until the duration passes or a signal.
 int RunRecorder(const RecordConfig& config);
 
