@@ -9,6 +9,8 @@ int main(int argc, char** argv) {
   options.Value("name", "NAME", "member name (default audio-<pid>)", "")
       .Value("out", "DIR", "write one WAV (and a .txt) per message here instead of playing", "")
       .Value("alsa-device", "PCM", "ALSA device to play on", "default")
+      .Value("language", "en|ja", "the board's language to speak (ja: from the scene's kana reading)", "en")
+      .Value("cues", "on|off", "sound cues: a button's click, a lever's detent, a page turned, a world changed", "on")
       .Value("rejoin-after", "SEC",
              "join again with a new participant when no board came from the world server this long after "
              "joining (a secured join whose handshake never finished; 0: never)", "15");
@@ -18,6 +20,8 @@ int main(int argc, char** argv) {
     c.name = o.GetString("name");
     c.out_dir = o.GetString("out");
     c.alsa_device = o.GetString("alsa-device");
+    c.language = o.GetChoice("language", {"en", "ja"});
+    c.cues = o.GetChoice("cues", {"on", "off"}) == "on";
     c.rejoin_after_s = o.GetDouble("rejoin-after", 0.0, 3600.0);
     return handshare::audio_guide::Guide(c).Run();
   });

@@ -20,6 +20,7 @@ int main(int argc, char** argv) {
              "join again with a new participant when no scene came from the world server this long after "
              "joining (a secured join whose handshake never finished; 0: never)", "15")
       .Value("stereo", "MODE", "mono, side-by-side or anaglyph", "mono")
+      .Value("language", "en|ja", "the message board's language shown", "en")
       .Flag("fullscreen", "window: full screen on the primary monitor (large screen)")
       .Value("assets", "DIR", "folder that the scene's mesh paths are relative to",
              handshare::graphics::DefaultAssetsDir().string())
@@ -42,6 +43,7 @@ int main(int argc, char** argv) {
     c.assets_dir = o.GetString("assets");
     c.deformation_out = o.GetString("deformation-out");
     c.state_out = o.GetString("state-out");
+    c.language = o.GetChoice("language", {"en", "ja"});
     const std::string stereo = o.GetString("stereo");
     if (stereo == "mono") c.stereo = handshare::graphics::StereoOutput::kMono;
     else if (stereo == "side-by-side") c.stereo = handshare::graphics::StereoOutput::kSideBySide;

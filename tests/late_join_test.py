@@ -153,7 +153,8 @@ def case_late_joiners(h, domain):
     check(state is not None, f"the spectator wrote no {state_file}")
     check(state["scene"] == "dinosaur" and state["revision"] == revision,
           f"the spectator shows scene {state['scene']!r} revision {state['revision']}, the server dinosaur {revision}")
-    check(state["board"] == {"message_id": board_id, "text": board_text},
+    check(state["board"]["message_id"] == board_id and state["board"]["text"] == board_text
+          and state["board"]["language"] == "en",
           f"the spectator's board {state['board']}, the server's #{board_id} {board_text!r}")
     with open(os.path.join(w, "frames", "frame_times.csv")) as f:
         last_frame = f.read().strip().split("\n")[-1].split(",")

@@ -5,6 +5,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <functional>
 #include <memory>
 
 #include "handshare/common/rejoin_clock.hpp"
@@ -14,6 +15,7 @@
 #include "handshare/dds/name_binding.hpp"
 #include "handshare/dds/sample_checks.hpp"
 #include "handshare/speech/audio_clip.hpp"
+#include "handshare/speech/cues.hpp"
 #include "handshare/speech/playback.hpp"
 #include "handshare/speech/speech_synthesizer.hpp"
 
@@ -28,16 +30,29 @@ int Guide::Run() {
   speech::SpeechSynthesizer synthesizer;  // fails early if eSpeak NG data is missing
 
   // Everything of the guide that lives on DDS; a rejoin makes a new one.
+  const auto say = [&name](const std::string& line) {
+    std::fprintf(stderr, "[audio_guide %s] %s\n", name.c_str(), line.c_str());
+  };
   struct Link {
-    Link(const common::SessionOptions& where, const std::string& name)
+    Link(const common::SessionOptions& where, const std::string& name, bool cues,
+         const std::function<void(const std::string&)>& say)
         : participant(where, "audio_guide/" + name),  // the role picks its identity
           member(participant, name, msg::NODE_AUDIO_GUIDE),
-          board_reader(dds::MakeReader<msg::MessageBoard>(participant, dds::topics::kMessageBoard)) {}
+          board_reader(dds::MakeReader<msg::MessageBoard>(participant, dds::topics::kMessageBoard)) {
+      if (!cues) return;
+      // A keystore made before the guide had cues grants neither: the guide speaks without them.
+      scene_reader = dds::MakeReaderIfGranted<msg::SceneState>(participant, dds::topics::kSceneState, say,
+                                                               "no world-change cue");
+      control_reader = dds::MakeReaderIfGranted<msg::ControlState>(participant, dds::topics::kControlState, say,
+                                                                   "no control cues");
+    }
     dds::Participant participant;
     dds::MemberAnnouncement member;
     dds::Reader<msg::MessageBoard> board_reader;
+    dds::Reader<msg::SceneState> scene_reader;
+    dds::Reader<msg::ControlState> control_reader;
   };
-  auto link = std::make_unique<Link>(config_.where, name);
+  auto link = std::make_unique<Link>(config_.where, name, config_.cues, say);
   common::RejoinClock rejoin(std::chrono::duration<double>(config_.rejoin_after_s));
 
   const auto start = Clock::now();
@@ -47,25 +62,67 @@ int Guide::Run() {
   msg::MessageBoard board;
   dds::SampleMeta meta;
   dds::DroppedSamples dropped;
+  speech::CueWatch cue_watch;
+  int cues = 0;
+  // A cue into its own WAV file with an output folder, else to the sound device.
+  const auto sound = [&](speech::Cue cue, const std::string& why) {
+    const speech::AudioClip clip = speech::SynthesizeCue(cue, synthesizer.sample_rate_hz());
+    ++cues;
+    if (!config_.out_dir.empty()) {
+      const auto file = std::filesystem::path(config_.out_dir) /
+                        ("cue_" + std::to_string(cues) + "_" + speech::CueName(cue) + ".wav");
+      speech::WriteWav(file, clip.samples, clip.sample_rate_hz);
+      std::printf("[audio_guide %s] cue #%d (%s: %s) -> %s\n", name.c_str(), cues, speech::CueName(cue), why.c_str(),
+                  file.c_str());
+    } else if (const speech::PlaybackStatus status = speech::Play(clip.samples, clip.sample_rate_hz, config_.alsa_device);
+               !status.ok()) {
+      std::fprintf(stderr, "[audio_guide %s] cannot play cue %s: %s\n", name.c_str(), speech::CueName(cue),
+                   status.message.c_str());
+    }
+    std::fflush(stdout);
+  };
+  const auto sender = [](const dds::SampleMeta& m) { return "participant " + dds::ParticipantOf(m.writer); };
+  const auto log_dropped = [&](const std::string& line) { say(line); };
   while (!common::ShutdownRequested()) {
     if (config_.where.duration.count() > 0 && Clock::now() - start >= config_.where.duration) break;
+    msg::SceneState scene;
+    while (link->scene_reader && link->scene_reader.TakeNext(scene, meta)) {
+      if (!meta.valid_data ||
+          !dropped.Accept("scene_state", sender(meta), dds::CheckSceneState(scene, config_.where.session), log_dropped)) {
+        continue;
+      }
+      if (const auto cue = cue_watch.OnWorld(scene.scene().to_string())) sound(*cue, "world " + scene.scene().to_string());
+    }
+    msg::ControlState control;
+    while (link->control_reader && link->control_reader.TakeNext(control, meta)) {
+      if (!meta.valid_data ||
+          !dropped.Accept("control_state", sender(meta), dds::CheckControlState(control, config_.where.session), log_dropped)) {
+        continue;
+      }
+      const speech::ControlSnapshot now{control.scene().to_string(), control.index(), control.engaged(), control.changes()};
+      if (const auto cue = cue_watch.OnControl(control.control_id().to_string(), now)) {
+        sound(*cue, "control " + control.control_id().to_string());
+      }
+    }
     if (!link->board_reader.TakeNext(board, meta)) {
       if (rejoin.Due(heard)) {
         std::fprintf(stderr, "[audio_guide %s] %s\n", name.c_str(), rejoin.Message("board").c_str());
         link.reset();
-        link = std::make_unique<Link>(config_.where, name);
+        link = std::make_unique<Link>(config_.where, name, config_.cues, say);
         continue;
       }
       link->board_reader.WaitForData(std::chrono::milliseconds(50));
       continue;
     }
-    if (!meta.valid_data || board.message_id() == last_id) continue;  // already spoken
+    if (!meta.valid_data) continue;
     const std::string bad = dds::CheckMessageBoard(board, config_.where.session);
     if (!dropped.Accept("message_board", "participant " + dds::ParticipantOf(meta.writer), bad, [&](const std::string& line) {
           std::fprintf(stderr, "[audio_guide %s] %s\n", name.c_str(), line.c_str());
         })) {
       continue;
     }
+    // The board comes in every language of the scene under one number: this guide speaks one.
+    if (board.language().to_string() != config_.language || board.message_id() == last_id) continue;
     last_id = board.message_id();
     heard = true;
     // When it arrived, counted from joining (the reader exists): a late joiner's figure.
@@ -73,6 +130,7 @@ int Guide::Run() {
                 std::chrono::duration<double>(Clock::now() - start).count());
     std::string text = board.text().to_string();
     if (board.next_action().size() > 0) text += " " + board.next_action().to_string();
+    if (config_.language == "ja") text = board.reading().to_string();  // checked: kana, no kanji
     const speech::Utterance u = synthesizer.Synthesize(text, board.language().to_string());
     ++spoken;
     if (!config_.out_dir.empty()) {
@@ -94,7 +152,7 @@ int Guide::Run() {
     }
     std::fflush(stdout);
   }
-  std::printf("[audio_guide %s] spoke %d messages\n", name.c_str(), spoken);
+  std::printf("[audio_guide %s] spoke %d messages, sounded %d cues\n", name.c_str(), spoken, cues);
   if (rejoin.rejoins() > 0) {
     std::printf("[audio_guide %s] rejoined the session %d time(s)\n", name.c_str(), rejoin.rejoins());
   }

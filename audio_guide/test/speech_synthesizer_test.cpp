@@ -4,6 +4,7 @@
 
 #include <unistd.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
@@ -12,6 +13,7 @@
 #include <string>
 #include <thread>
 
+#include "handshare/scene/scene.hpp"
 #include "speech_analysis.hpp"
 
 namespace handshare::speech {
@@ -92,6 +94,28 @@ TEST_F(SpeechSynthesis, JapaneseUsesTheJapaneseVoiceWhereInstalled) {
   // 1.5 s): a much shorter clip shows that the Japanese voice really spoke.
   const double english_s = synthesizer_.Synthesize("こんにちは、ようこそ", "en").audio.duration_s();
   EXPECT_LT(utterance.audio.duration_s(), 0.5 * english_s);
+}
+
+// The board's Japanese is spoken from the scene's kana reading: it sounds like speech, and the
+// text itself would not do (the ja voice spells its kanji out in English).
+TEST_F(SpeechSynthesis, TheScenesJapaneseReadingsSoundLikeSpeech) {
+  if (!synthesizer_.HasLanguage("ja")) GTEST_SKIP() << "espeak-ng-data has no ja voice here";
+  for (const char* name : {"start_menu", "solar_system", "dinosaur", "microscopic", "commons"}) {
+    const scene::Scene s = scene::LoadSceneByName(name, HANDSHARE_SOURCE_SCENES);
+    const auto ja = std::find_if(s.messages.begin(), s.messages.end(), [](const auto& m) { return m.language == "ja"; });
+    ASSERT_NE(ja, s.messages.end()) << name;
+    const Utterance spoken = synthesizer_.Synthesize(ja->reading, "ja");
+    EXPECT_EQ(spoken.language, "ja") << name;
+    const test::SpeechProfile profile = test::Profile(spoken.audio);
+    EXPECT_GT(spoken.audio.duration_s(), 2.0) << name;
+    EXPECT_GE(profile.loud_frames, 100) << name;
+    EXPECT_GE(profile.inner_pauses, 3) << name << ": pauses between phrases";
+    EXPECT_GE(profile.voiced_frames, 50) << name;
+    // The text itself: the voice says "Chinese letter" in English for every kanji (measured
+    // 24-30 s against 7-10 s for the readings).
+    const double text_s = synthesizer_.Synthesize(ja->text + ja->next_action, "ja").audio.duration_s();
+    EXPECT_GT(text_s, 1.5 * spoken.audio.duration_s()) << name << ": the ja voice reads kanji now";
+  }
 }
 
 TEST_F(SpeechSynthesis, UnknownLanguageFallsBackToEnglishWithAWarning) {

@@ -30,6 +30,7 @@ void GlApi::Load(Loader loader) {
   Resolve(loader, "glColorMaterial", ColorMaterial);
   Resolve(loader, "glDepthFunc", DepthFunc);
   Resolve(loader, "glDisable", Disable);
+  Resolve(loader, "glDrawPixels", DrawPixels);
   Resolve(loader, "glEnable", Enable);
   Resolve(loader, "glEnd", End);
   Resolve(loader, "glFinish", Finish);
@@ -43,6 +44,7 @@ void GlApi::Load(Loader loader) {
   Resolve(loader, "glMatrixMode", MatrixMode);
   Resolve(loader, "glNormal3d", Normal3d);
   Resolve(loader, "glPixelStorei", PixelStorei);
+  Resolve(loader, "glRasterPos2d", RasterPos2d);
   Resolve(loader, "glReadBuffer", ReadBuffer);
   Resolve(loader, "glReadPixels", ReadPixels);
   Resolve(loader, "glScissor", Scissor);

@@ -24,6 +24,7 @@ struct GlApi {
   decltype(&::glColorMaterial) ColorMaterial = nullptr;
   decltype(&::glDepthFunc) DepthFunc = nullptr;
   decltype(&::glDisable) Disable = nullptr;
+  decltype(&::glDrawPixels) DrawPixels = nullptr;
   decltype(&::glEnable) Enable = nullptr;
   decltype(&::glEnd) End = nullptr;
   decltype(&::glFinish) Finish = nullptr;
@@ -37,6 +38,7 @@ struct GlApi {
   decltype(&::glMatrixMode) MatrixMode = nullptr;
   decltype(&::glNormal3d) Normal3d = nullptr;
   decltype(&::glPixelStorei) PixelStorei = nullptr;
+  decltype(&::glRasterPos2d) RasterPos2d = nullptr;
   decltype(&::glReadBuffer) ReadBuffer = nullptr;
   decltype(&::glReadPixels) ReadPixels = nullptr;
   decltype(&::glScissor) Scissor = nullptr;

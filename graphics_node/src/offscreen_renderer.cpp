@@ -14,6 +14,7 @@ namespace handshare::render {
 struct OffscreenRenderer::Impl {
   OSMesaContext context = nullptr;
   detail::GlApi gl;
+  detail::CaptionCache captions;
   std::vector<std::uint8_t> rgba;  // OSMesa colour buffer, bottom row first.
 
   Impl() {
@@ -47,7 +48,7 @@ ImageRgb8 OffscreenRenderer::Render(const SceneView& scene, const Camera& camera
     throw std::runtime_error("OffscreenRenderer: OSMesaMakeCurrent failed for " +
                              std::to_string(width_px) + " x " + std::to_string(height_px) + " px");
   }
-  detail::DrawFrame(impl_->gl, scene, camera, mode, width_px, height_px);
+  detail::DrawFrame(impl_->gl, scene, camera, mode, width_px, height_px, impl_->captions);
   impl_->gl.Finish();
 
   // OSMesa's buffer starts at the bottom row; images start at the top.
@@ -62,5 +63,7 @@ ImageRgb8 OffscreenRenderer::Render(const SceneView& scene, const Camera& camera
   }
   return image;
 }
+
+const CaptionStats& OffscreenRenderer::last_caption() const { return impl_->captions.stats(); }
 
 }  // namespace handshare::render

@@ -7,7 +7,7 @@
 #include <string>
 #include <vector>
 
-#include "bitmap_font.hpp"
+#include "caption_text.hpp"
 #include "handshare/render/projection.hpp"
 
 namespace handshare::render::detail {
@@ -198,31 +198,16 @@ void DrawEye(const GlApi& gl, const SceneView& scene, const Camera& camera, Eye 
   gl.Disable(GL_LIGHTING);
 }
 
-// One caption line at the bottom of `viewport`, in pixel units with y pointing down.
-void DrawCaption(const GlApi& gl, const SceneView& scene, const Viewport& viewport) {
-  if (scene.caption.empty()) return;
-  std::vector<char32_t> text = DecodeUtf8(scene.caption);
-  for (char32_t& c : text) {
-    if (c < 0x20 || c == 0x7F) c = U' ';  // control characters take a blank cell.
-  }
+// The caption at the bottom of `viewport`: a dark band as tall as its lines, the text blended
+// over it at its coverage (antialiased), in pixel units with y pointing down.
+void DrawCaption(const GlApi& gl, const SceneView& scene, const Viewport& viewport, CaptionCache& captions) {
   const int w = viewport.width_px;
   const int h = viewport.height_px;
-  constexpr int kCellWidth = kGlyphWidth + 1;  // one column of spacing [font pixels]
-  constexpr int kPadding = 3;                  // above and below the glyphs [font pixels]
-  // Largest integer scale, ~1/240 of the height, that fits the whole line; else scale 1 and cut.
-  int scale = std::max(1, h / 240);
-  const auto fits = [&](std::size_t count, int s) {
-    return static_cast<long long>(count) * kCellWidth * s + 2LL * kPadding * s <= w;
-  };
-  while (scale > 1 && !fits(text.size(), scale)) --scale;
-  if (!fits(text.size(), scale)) {
-    const long long capacity = std::max(0LL, (w - 2LL * kPadding * scale) / (kCellWidth * scale));
-    const std::size_t keep = capacity > 3 ? static_cast<std::size_t>(capacity - 3) : 0;
-    text.resize(keep);
-    text.insert(text.end(), {U'.', U'.', U'.'});
-    if (static_cast<long long>(text.size()) > capacity) text.resize(static_cast<std::size_t>(capacity));
-  }
-  const int band_px = (kGlyphHeight + 2 * kPadding) * scale;
+  const CaptionBitmap& text = captions.For(scene.caption, w, h);
+  if (text.height_px == 0 || text.width_px == 0) return;
+  const int pad_px = std::max(2, text.stats.pixel_size / 2);
+  const int margin_px = text.stats.pixel_size;  // CaptionCache wraps to the width less two margins
+  const int band_px = std::min(h, text.height_px + 2 * pad_px);
 
   gl.Viewport(viewport.x_px, viewport.y_px, w, h);
   // Orthographic pixels: x right in [0, w], y DOWN in [0, h] (glOrtho(0, w, h, 0, -1, 1)).
@@ -249,31 +234,32 @@ void DrawCaption(const GlApi& gl, const SceneView& scene, const Viewport& viewpo
   gl.Vertex2d(w, h);
   gl.Vertex2d(w, h - band_px);
   gl.End();
-  gl.Disable(GL_BLEND);
 
-  // Each lit font pixel is a scale x scale square on exact pixel edges.
-  gl.Color3f(scene.caption_rgb.r, scene.caption_rgb.g, scene.caption_rgb.b);
-  gl.Begin(GL_QUADS);
-  const int top_px = h - band_px + kPadding * scale;
-  for (std::size_t k = 0; k < text.size(); ++k) {
-    const int left_px = kPadding * scale + static_cast<int>(k) * kCellWidth * scale;
-    const bool glyph = HasGlyph(text[k]);
-    for (int row = 0; row < kGlyphHeight; ++row) {
-      for (int col = 0; col < kGlyphWidth; ++col) {
-        const bool lit = glyph ? GlyphPixel(text[k], col, row)
-                               : (row == 0 || row == kGlyphHeight - 1 || col == 0 ||
-                                  col == kGlyphWidth - 1);  // hollow box for missing glyphs
-        if (!lit) continue;
-        const double x0 = left_px + col * scale;
-        const double y0 = top_px + row * scale;
-        gl.Vertex2d(x0, y0);
-        gl.Vertex2d(x0, y0 + scale);
-        gl.Vertex2d(x0 + scale, y0 + scale);
-        gl.Vertex2d(x0 + scale, y0);
+  // The text: RGBA pixels of the caption colour with the coverage as alpha, bottom row first
+  // (glDrawPixels goes up from the raster position, the text's lower-left corner).
+  const int tw = std::min(text.width_px, std::max(0, w - margin_px));
+  const int th = std::min(text.height_px, band_px);
+  if (tw > 0 && th > 0) {
+    const auto channel = [](float v) { return static_cast<std::uint8_t>(std::lround(255.0F * std::clamp(v, 0.0F, 1.0F))); };
+    const std::uint8_t r = channel(scene.caption_rgb.r);
+    const std::uint8_t g = channel(scene.caption_rgb.g);
+    const std::uint8_t b = channel(scene.caption_rgb.b);
+    std::vector<std::uint8_t> rgba(4 * static_cast<std::size_t>(tw) * static_cast<std::size_t>(th));
+    for (int y = 0; y < th; ++y) {
+      std::uint8_t* row = rgba.data() + 4 * static_cast<std::size_t>(th - 1 - y) * static_cast<std::size_t>(tw);
+      for (int x = 0; x < tw; ++x) {
+        row[4 * x] = r;
+        row[4 * x + 1] = g;
+        row[4 * x + 2] = b;
+        row[4 * x + 3] = text.At(x, y);
       }
     }
+    const int top_px = h - band_px + std::max(0, (band_px - th) / 2);
+    gl.PixelStorei(GL_UNPACK_ALIGNMENT, 1);
+    gl.RasterPos2d(margin_px, top_px + th - 0.5);  // inside the viewport, so the position is valid
+    gl.DrawPixels(tw, th, GL_RGBA, GL_UNSIGNED_BYTE, rgba.data());
   }
-  gl.End();
+  gl.Disable(GL_BLEND);
 }
 
 }  // namespace
@@ -300,7 +286,7 @@ void ValidateScene(const SceneView& scene, const Camera& camera) {
 }
 
 void DrawFrame(const GlApi& gl, const SceneView& scene, const Camera& camera, StereoMode mode,
-               int fb_width_px, int fb_height_px) {
+               int fb_width_px, int fb_height_px, CaptionCache& captions) {
   ValidateScene(scene, camera);
   if (fb_width_px <= 0 || fb_height_px <= 0) return;  // minimized window: nothing to draw.
 
@@ -313,7 +299,7 @@ void DrawFrame(const GlApi& gl, const SceneView& scene, const Camera& camera, St
   switch (mode) {
     case StereoMode::kMono:
       DrawEye(gl, scene, camera, Eye::kCenter, full);
-      DrawCaption(gl, scene, full);
+      DrawCaption(gl, scene, full, captions);
       break;
     case StereoMode::kSideBySide: {
       const int left_width_px = fb_width_px / 2;
@@ -321,10 +307,10 @@ void DrawFrame(const GlApi& gl, const SceneView& scene, const Camera& camera, St
       const Viewport right{left_width_px, 0, fb_width_px - left_width_px, fb_height_px};
       if (left.width_px > 0) {
         DrawEye(gl, scene, camera, Eye::kLeft, left);
-        DrawCaption(gl, scene, left);
+        DrawCaption(gl, scene, left, captions);
       }
       DrawEye(gl, scene, camera, Eye::kRight, right);
-      DrawCaption(gl, scene, right);
+      DrawCaption(gl, scene, right, captions);
       break;
     }
     case StereoMode::kAnaglyph:
@@ -335,7 +321,7 @@ void DrawFrame(const GlApi& gl, const SceneView& scene, const Camera& camera, St
       gl.ColorMask(GL_FALSE, GL_TRUE, GL_TRUE, GL_TRUE);
       DrawEye(gl, scene, camera, Eye::kRight, full);
       gl.ColorMask(GL_TRUE, GL_TRUE, GL_TRUE, GL_TRUE);
-      DrawCaption(gl, scene, full);
+      DrawCaption(gl, scene, full, captions);
       break;
   }
   gl.CheckError("drawing the scene");

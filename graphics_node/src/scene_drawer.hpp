@@ -5,6 +5,7 @@
 #include <atomic>
 #include <cstdint>
 
+#include "caption_text.hpp"
 #include "gl_api.hpp"
 #include "handshare/render/scene_view.hpp"
 
@@ -16,8 +17,9 @@ void ValidateScene(const SceneView& scene, const Camera& camera);
 /// Clears and draws the whole framebuffer (fb_width_px x fb_height_px, GL origin bottom-left)
 /// in `mode`; side by side splits it into two halves. The caption goes into every eye view.
 /// Expects the context of `gl` to be current. Throws on GL errors.
+/// The caption's layout is kept in `captions` between frames.
 void DrawFrame(const GlApi& gl, const SceneView& scene, const Camera& camera, StereoMode mode,
-               int fb_width_px, int fb_height_px);
+               int fb_width_px, int fb_height_px, CaptionCache& captions);
 
 /// Bumped each time an OSMesa context is made current in this process. OSMesa and Mesa's GLX
 /// driver share libglapi's per-thread current dispatch, so a window context must really be

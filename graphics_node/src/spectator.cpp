@@ -45,7 +45,7 @@ struct UserHand {
 class WorldView {
  public:
   WorldView(dds::Participant& p, const std::filesystem::path& assets_dir, const std::string& name,
-            const std::string& session)
+            const std::string& session, const std::string& language)
       : session_(session),
         joined_(Clock::now()),
         prefix_("[graphics_node " + name + "] "),
@@ -57,7 +57,8 @@ class WorldView {
         member_reader_(dds::NameBinding::MakeMemberReader(p, [this](const std::string& line) { Say(line); })),
         control_reader_(dds::MakeReaderIfGranted<msg::ControlState>(
             p, dds::topics::kControlState, [this](const std::string& line) { Say(line); }, "controls are drawn at rest")),
-        world_(assets_dir, std::cerr, "[graphics_node " + name + "] ") {}
+        world_(assets_dir, std::cerr, "[graphics_node " + name + "] "),
+        language_(language) {}
 
   void Update() {
     dds::SampleMeta meta;
@@ -121,7 +122,10 @@ class WorldView {
     msg::MessageBoard board;
     while (board_reader_.TakeNext(board, meta)) {
       if (meta.valid_data && Accept("message_board", "participant " + dds::ParticipantOf(meta.writer), dds::CheckMessageBoard(board, session_))) {
-        caption_ = board.text().to_string();
+        // The board comes in every language of the scene: this view shows its own.
+        if (board.language().to_string() != language_) continue;
+        board_text_ = board.text().to_string();
+        next_action_ = board.next_action().to_string();
         board_id_ = board.message_id();
         Arrived("message board #" + std::to_string(board_id_));
       }
@@ -157,7 +161,7 @@ class WorldView {
     }
     const nlohmann::ordered_json out = {{"scene", scene_name_},
                                         {"revision", scene_revision_},
-                                        {"board", {{"message_id", board_id_}, {"text", caption_}}},
+                                        {"board", {{"message_id", board_id_}, {"language", language_}, {"text", board_text_}, {"next_action", next_action_}}},
                                         {"objects", std::move(objects)},
                                         {"controls", std::move(controls)}};
     std::filesystem::path tmp = file;
@@ -174,7 +178,7 @@ class WorldView {
 
   render::SceneView Build() const {
     render::SceneView view;
-    view.caption = caption_;
+    view.caption = board_text_.empty() || next_action_.empty() ? board_text_ : board_text_ + "\n" + next_action_;
     world_.AddObjects(view);
     for (const auto& [user, hand] : hands_) {
       if (hand.state.fault()) continue;  // a faulted device has no trustworthy pose
@@ -223,7 +227,9 @@ class WorldView {
   msg::Deformation deformation_;  // reused: a sample holds up to 16k values
   SceneReplica world_;
   std::map<std::string, UserHand> hands_;
-  std::string caption_;
+  std::string language_;     // the board's language shown: en or ja
+  std::string board_text_;   // the board shown: its text and what to do next
+  std::string next_action_;
 };
 
 /// Everything of a spectator that lives on DDS: its participant, what it reads and its member
@@ -231,9 +237,9 @@ class WorldView {
 struct SpectatorLink {
   /// fps: the frame rate, announced so that haptic nodes send device states no faster.
   SpectatorLink(const common::SessionOptions& where, const std::filesystem::path& assets_dir, const std::string& name,
-                double fps)
+                double fps, const std::string& language)
       : participant(where, "graphics_node/" + name),  // the role picks its identity
-        world(participant, assets_dir, name, where.session),
+        world(participant, assets_dir, name, where.session, language),
         member(participant, name, msg::NODE_GRAPHICS, "", fps) {}
   dds::Participant participant;
   // The readers first: the server re-sends body poses (best-effort) when it sees the member
@@ -355,13 +361,13 @@ int Spectator::Run() {
     window_renderer.emplace(options);
   }
 
-  auto link = std::make_unique<SpectatorLink>(config_.where, assets_dir, name, config_.fps);
+  auto link = std::make_unique<SpectatorLink>(config_.where, assets_dir, name, config_.fps, config_.language);
   common::RejoinClock rejoin(config_.rejoin_after);
   const auto rejoin_if_unheard = [&] {
     if (!rejoin.Due(link->world.has_scene())) return;
     std::fprintf(stderr, "[graphics_node %s] %s\n", name.c_str(), rejoin.Message("scene").c_str());
     link.reset();
-    link = std::make_unique<SpectatorLink>(config_.where, assets_dir, name, config_.fps);
+    link = std::make_unique<SpectatorLink>(config_.where, assets_dir, name, config_.fps, config_.language);
   };
   // When the frames are written or the window closes: what the spectator received, for a
   // comparison with an oracle.

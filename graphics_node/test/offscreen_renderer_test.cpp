@@ -276,37 +276,71 @@ int CountCaptionPixels(const ImageRgb8& image, int row_begin, int row_end) {
 TEST_F(RenderOffscreen, CaptionIsDrawnAtTheBottomOnlyWhenPresent) {
   Camera camera = ObliqueCamera();
   camera.width_px = 480;
-  camera.height_px = 480;  // scale 2: glyphs 10 x 14 px in a 26 px band
+  camera.height_px = 480;  // em height 16 px: one line and its band take about 40 px
   SceneView scene;
   scene.grid.visible = false;
-  const int band_top = camera.height_px - 30;
+  const int band_top = camera.height_px - 48;
 
   const ImageRgb8 without = renderer_.Render(scene, camera);
   EXPECT_EQ(CountCaptionPixels(without, 0, camera.height_px), 0);
+  EXPECT_EQ(renderer_.last_caption().lines, 0);
 
   scene.caption = "Welcome to the solar system";
   const ImageRgb8 with = renderer_.Render(scene, camera);
   const int text_pixels = CountCaptionPixels(with, band_top, camera.height_px);
   EXPECT_GT(text_pixels, 200);
   EXPECT_EQ(CountCaptionPixels(with, 0, band_top), 0) << "caption must stay in the bottom band";
+  EXPECT_EQ(renderer_.last_caption().lines, 1);
+  EXPECT_EQ(renderer_.last_caption().glyphs, 23);
   // The band darkens the background under it.
   EXPECT_LT(with.At(camera.width_px - 3, camera.height_px - 3)[2],
             without.At(camera.width_px - 3, camera.height_px - 3)[2]);
 
-  // Different text, different pixels; non-ASCII is drawn as boxes, not dropped.
+  // Different text, different pixels.
   scene.caption = "iiiiiiiiii";
   const int thin = CountCaptionPixels(renderer_.Render(scene, camera), band_top, camera.height_px);
   scene.caption = "WWWWWWWWWW";
   const int wide = CountCaptionPixels(renderer_.Render(scene, camera), band_top, camera.height_px);
   EXPECT_LT(thin, wide);
-  scene.caption = "\xE5\xA4\xAA\xE9\x99\xBD";  // two CJK characters (taiyou, "sun")
-  EXPECT_GT(CountCaptionPixels(renderer_.Render(scene, camera), band_top, camera.height_px), 40);
 
-  // A line far too long for the image is cut, and still only in the band.
+  // Text longer than a line wraps upwards, and far too much is cut at a third of the image.
   scene.caption = std::string(1000, 'M');
   const ImageRgb8 cut = renderer_.Render(scene, camera);
-  EXPECT_EQ(CountCaptionPixels(cut, 0, band_top), 0);
-  EXPECT_GT(CountCaptionPixels(cut, band_top, camera.height_px), text_pixels);
+  EXPECT_TRUE(renderer_.last_caption().cut);
+  EXPECT_GT(renderer_.last_caption().lines, 1);
+  EXPECT_EQ(CountCaptionPixels(cut, 0, camera.height_px * 2 / 3), 0);
+  EXPECT_GT(CountCaptionPixels(cut, camera.height_px * 2 / 3, camera.height_px), 3 * text_pixels);
+}
+
+// The board in Japanese: its caption is drawn in the font's own glyphs (no empty boxes) and
+// differs from the English one in the same frame.
+TEST_F(RenderOffscreen, AJapaneseCaptionHasGlyphsAndDiffersFromTheEnglishOne) {
+  Camera camera = ObliqueCamera();
+  camera.width_px = 960;
+  camera.height_px = 540;
+  SceneView scene;
+  scene.grid.visible = false;
+  scene.caption = "You are on the Moon. Gravity here is one sixth of the Earth's.";
+  const ImageRgb8 english = renderer_.Render(scene, camera);
+  EXPECT_EQ(renderer_.last_caption().missing_glyphs, 0);
+  scene.caption = "ここは月です。重力は地球の約6分の1です。";
+  const ImageRgb8 japanese = renderer_.Render(scene, camera);
+  EXPECT_EQ(renderer_.last_caption().missing_glyphs, 0);
+  EXPECT_EQ(renderer_.last_caption().glyphs, 21);
+  const int band_top = camera.height_px * 2 / 3;
+  const int ja_pixels = CountCaptionPixels(japanese, band_top, camera.height_px);
+  EXPECT_GT(ja_pixels, 21 * 20) << "every glyph has ink";
+  int differ = 0;
+  for (int row = band_top; row < camera.height_px; ++row) {
+    for (int col = 0; col < camera.width_px; ++col) {
+      differ += std::abs(japanese.At(col, row)[0] - english.At(col, row)[0]) > 64 ? 1 : 0;
+    }
+  }
+  EXPECT_GT(differ, ja_pixels / 2);
+  // A character the font lacks is still drawn, as a box, and reported.
+  scene.caption = "\xF0\x9F\xA6\x96";
+  (void)renderer_.Render(scene, camera);
+  EXPECT_EQ(renderer_.last_caption().missing_glyphs, 1);
 }
 
 TEST_F(RenderOffscreen, SideBySideStereoShiftsNearAndFarSpheresOppositeWays) {

@@ -63,6 +63,7 @@ msg::MessageBoard ToMessageBoard(const scene::Message& m, const std::string& ses
   board.language(m.language);
   board.text(m.text);
   board.next_action(m.next_action);
+  board.reading(m.reading);
   return board;
 }
 

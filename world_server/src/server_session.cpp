@@ -1,5 +1,7 @@
 #include "server_session.hpp"
 
+#include <algorithm>
+
 #include "server_conversions.hpp"
 #include "handshare/common/clock.hpp"
 #include "handshare/dds/membership.hpp"
@@ -204,14 +206,14 @@ void ServerSession::PublishScene() {
 }
 
 void ServerSession::ShowMessage(const std::vector<scene::Message>& messages) {
-  for (const auto& m : messages) {
-    if (m.language != "en") continue;
-    board_writer_.Write(ToMessageBoard(m, session_, ++message_id_));
-    board_ = messages;
-    server_.Say("message board #" + std::to_string(message_id_) + ": " + m.text);
-    LogState();
-    return;
-  }
+  if (messages.empty()) return;
+  // Every language of the message, under one number: each screen and guide shows its own.
+  ++message_id_;
+  for (const auto& m : messages) board_writer_.Write(ToMessageBoard(m, session_, message_id_));
+  board_ = messages;
+  const auto en = std::find_if(messages.begin(), messages.end(), [](const auto& m) { return m.language == "en"; });
+  server_.Say("message board #" + std::to_string(message_id_) + ": " + (en != messages.end() ? en->text : messages[0].text));
+  LogState();
 }
 
 void ServerSession::LogState() {

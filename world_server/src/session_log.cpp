@@ -65,7 +65,9 @@ using Row = std::variant<MemberRow, SceneRow, ControlRecord, OwnershipRow, EndRo
 
 std::string BoardJson(const std::vector<scene::Message>& board) {
   nlohmann::json j = nlohmann::json::array();
-  for (const auto& m : board) j.push_back({{"language", m.language}, {"text", m.text}, {"next_action", m.next_action}});
+  for (const auto& m : board) {
+    j.push_back({{"language", m.language}, {"text", m.text}, {"next_action", m.next_action}, {"reading", m.reading}});
+  }
   return j.dump();
 }
 
@@ -389,8 +391,9 @@ std::optional<ResumePoint> FindResumePoint(const std::filesystem::path& file, co
     st.message_id = static_cast<std::uint32_t>(s.Int(10));
     try {
       for (const auto& m : nlohmann::json::parse(s.Text(11))) {
+        // A log written before boards had readings resumes with none (value(): "" when absent).
         st.board.push_back({m.at("language").get<std::string>(), m.at("text").get<std::string>(),
-                            m.at("next_action").get<std::string>()});
+                            m.at("next_action").get<std::string>(), m.value("reading", std::string())});
       }
     } catch (const nlohmann::json::exception& e) {
       throw SessionLogError(file.string() + ": session " + std::to_string(r.session_id) + ": bad board_json: " + e.what());

@@ -11,7 +11,7 @@ namespace {
 
 using controls::EventKind;
 
-scene::Message Msg(const std::string& language, const std::string& text) { return {language, text, ""}; }
+scene::Message Msg(const std::string& language, const std::string& text) { return {language, text, "", language == "ja" ? "よみ" : ""}; }
 
 scene::ControlSpec Control(const std::string& id, scene::ControlType type) {
   scene::ControlSpec c;

@@ -86,11 +86,14 @@ TEST(ServerConversions, AControlEventOfAnUnknownKindIsDropped) {
 }
 
 TEST(ServerConversions, BoardAndDeformationSamplesCarryTheirFields) {
-  const msg::MessageBoard b = ToMessageBoard({"en", "Lift the ball.", "Pull the lever."}, "museum", 3);
+  const msg::MessageBoard b = ToMessageBoard({"en", "Lift the ball.", "Pull the lever.", ""}, "museum", 3);
   EXPECT_EQ(b.message_id(), 3u);
   EXPECT_EQ(b.language().to_string(), "en");
   EXPECT_EQ(b.text().to_string(), "Lift the ball.");
   EXPECT_EQ(b.next_action().to_string(), "Pull the lever.");
+  const msg::MessageBoard ja = ToMessageBoard({"ja", "月", "", "つき"}, "museum", 3);
+  EXPECT_EQ(ja.language().to_string(), "ja");
+  EXPECT_EQ(ja.reading().to_string(), "つき");
   DeformationSample s;
   s.revision = 9;
   s.keyframe = true;

@@ -47,7 +47,7 @@ SessionState MarsState() {
   st.gravity_W_m_per_s2[2] = -3.71;
   st.epoch_unix_ns = kT0;
   st.message_id = 4;
-  st.board = {{"en", "Now lift it on Mars.", "Pull the lever back."}, {"ja", "火星で持ち上げよう。", ""}};
+  st.board = {{"en", "Now lift it on Mars.", "Pull the lever back.", ""}, {"ja", "火星で持ち上げよう。", "", "かせいで もちあげよう。"}};
   return st;
 }
 
@@ -86,6 +86,7 @@ TEST(SessionResume, AKilledServersSessionIsFoundWithItsStateAndPoses) {
   ASSERT_EQ(r->state.board.size(), 2u);
   EXPECT_EQ(r->state.board[0].next_action, "Pull the lever back.");
   EXPECT_EQ(r->state.board[1].text, "火星で持ち上げよう。");
+  EXPECT_EQ(r->state.board[1].reading, "かせいで もちあげよう。");
   ASSERT_EQ(r->poses.size(), 1u);
   EXPECT_EQ(r->poses[0].object_id, "ball");
   EXPECT_EQ(r->poses[0].owner, "alice");

@@ -126,4 +126,14 @@ double Options::GetDouble(const std::string& name, double min, double max) const
   return v;
 }
 
+std::string Options::GetChoice(const std::string& name, const std::vector<std::string>& choices) const {
+  std::string text = GetString(name);
+  for (const std::string& c : choices) {
+    if (c == text) return text;
+  }
+  std::string list;
+  for (const std::string& c : choices) list += (list.empty() ? "" : "|") + c;
+  throw OptionError("option --" + name + ": '" + text + "' is not one of " + list);
+}
+
 }  // namespace handshare::common

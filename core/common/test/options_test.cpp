@@ -64,6 +64,24 @@ TEST(Options, ErrorNamesTheOption) {
   }
 }
 
+TEST(Options, AChoiceIsOneOfItsValuesOrNamesThem) {
+  Options o("prog", "test program");
+  o.Value("language", "en|ja", "language", "en");
+  const char* argv[] = {"prog", "--language", "fr"};
+  ASSERT_TRUE(o.Parse(3, argv));
+  try {
+    (void)o.GetChoice("language", {"en", "ja"});
+    ADD_FAILURE() << "fr accepted";
+  } catch (const OptionError& e) {
+    EXPECT_STREQ(e.what(), "option --language: 'fr' is not one of en|ja");
+  }
+  Options d("prog", "test program");
+  d.Value("language", "en|ja", "language", "en");
+  const char* none[] = {"prog"};
+  ASSERT_TRUE(d.Parse(1, none));
+  EXPECT_EQ(d.GetChoice("language", {"en", "ja"}), "en");
+}
+
 TEST(Options, HelpReturnsFalse) {
   Options o = Make();
   const char* argv[] = {"prog", "--help"};

@@ -1,5 +1,7 @@
 #include "handshare/dds/sample_checks.hpp"
 
+#include "handshare/common/utf8.hpp"
+
 #include <cmath>
 #include <sstream>
 
@@ -182,7 +184,15 @@ std::string CheckDeformation(const msg::Deformation& s, std::string_view session
 std::string CheckMessageBoard(const msg::MessageBoard& s, std::string_view session) {
   Checker c;
   c.Session(s.session().to_string(), session);
-  c.NonEmpty("language", s.language().to_string());
+  const std::string language = s.language().to_string();
+  if (c.ok() && language != "en" && language != "ja") c.Fail("language '" + language + "' is not en or ja");
+  if (c.ok() && language == "ja") {
+    const std::string reading = s.reading().to_string();
+    c.NonEmpty("reading", reading);
+    if (const auto at = common::FirstOutsideKanaReading(reading); c.ok() && at) {
+      c.Fail("reading: byte " + std::to_string(*at) + " is not kana, ASCII, 、 or 。");
+    }
+  }
   return c.reason();
 }
 

@@ -150,6 +150,16 @@ TEST(SampleChecks, DeviceStatesBoardsAndMembers) {
   EXPECT_EQ(CheckMessageBoard(b, "museum"), "");
   b.session("lab");
   EXPECT_NE(CheckMessageBoard(b, "museum"), "");
+  b.session("museum");
+  b.language("fr");
+  EXPECT_EQ(CheckMessageBoard(b, "museum"), "language 'fr' is not en or ja");
+  // A Japanese board carries the kana the audio guide speaks; a kanji in it would go unspoken.
+  b.language("ja");
+  EXPECT_EQ(CheckMessageBoard(b, "museum"), "reading is empty");
+  b.reading("つきです");
+  EXPECT_EQ(CheckMessageBoard(b, "museum"), "");
+  b.reading("月です");
+  EXPECT_EQ(CheckMessageBoard(b, "museum"), "reading: byte 0 is not kana, ASCII, 、 or 。");
   msg::MemberInfo m;
   m.session("museum");
   m.user("alice");

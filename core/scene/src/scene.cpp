@@ -3,6 +3,7 @@
 #include <nlohmann/json.hpp>
 
 #include "handshare/common/data_dir.hpp"
+#include "handshare/common/utf8.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -323,13 +324,23 @@ std::shared_ptr<const Mesh> MeshOf(const Context& c, const std::string& field,
 
 Message ParseMessage(const Context& c, const json& j, const std::string& path) {
   c.Object(j, path.substr(0, path.size() - 1));
-  c.OnlyKnown(j, path, {"language", "text", "next_action", "note"});
+  c.OnlyKnown(j, path, {"language", "text", "next_action", "reading", "note"});
   Message m;
   m.language = c.String(j, "language", path);
   if (m.language != "en" && m.language != "ja") c.Fail(path + "language", "'" + m.language + "' is not en or ja");
   m.text = c.String(j, "text", path);
   if (m.text.empty()) c.Fail(path + "text", "must have 1..1023 bytes");
   m.next_action = j.contains("next_action") ? c.String(j, "next_action", path, 511) : "";
+  if (m.language == "ja") {
+    m.reading = c.String(j, "reading", path, 2047);
+    if (m.reading.empty()) c.Fail(path + "reading", "must have 1..2047 bytes");
+    if (const auto at = common::FirstOutsideKanaReading(m.reading)) {
+      c.Fail(path + "reading", "byte " + std::to_string(*at) +
+                                   " is not kana, ASCII, 、 or 。 (the ja voice spells kanji and other signs out in English)");
+    }
+  } else if (j.contains("reading")) {
+    c.Fail(path + "reading", "only a ja message has a reading");
+  }
   return m;
 }
 

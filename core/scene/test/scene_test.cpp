@@ -2,6 +2,8 @@
 
 #include <gtest/gtest.h>
 
+#include "handshare/common/utf8.hpp"
+
 #include <algorithm>
 #include <chrono>
 #include <fstream>
@@ -252,6 +254,40 @@ TEST(Scene, ErrorsNameTheLineOfTheField) {
   const std::string number_eol = Replace(text, "[0, 0, 0.1]", "[0, 0,\n 1000\n]");
   const std::string err5 = ErrorOf("eol", number_eol);
   EXPECT_NE(err5.find(":9: field 'objects[1].position_m[2]'"), std::string::npos) << err5;
+}
+
+// Every Japanese message carries the reading the audio guide speaks: the ja voice cannot read kanji.
+TEST(Scene, JapaneseMessagesCarryAKanaReading) {
+  std::size_t readings = 0;
+  for (const char* name : {"start_menu", "solar_system", "dinosaur", "microscopic", "commons"}) {
+    const Scene s = LoadSceneByName(name, kScenes);
+    std::vector<Message> all = s.messages;
+    for (const auto& c : s.controls) {
+      all.insert(all.end(), c.action.messages.begin(), c.action.messages.end());
+      for (const auto& a : c.detent_actions) all.insert(all.end(), a.messages.begin(), a.messages.end());
+      for (const auto& a : c.page_actions) all.insert(all.end(), a.messages.begin(), a.messages.end());
+    }
+    for (const Message& m : all) {
+      if (m.language == "en") {
+        EXPECT_TRUE(m.reading.empty()) << name;
+        continue;
+      }
+      ++readings;
+      EXPECT_FALSE(m.reading.empty()) << name << ": " << m.text;
+      EXPECT_FALSE(common::FirstOutsideKanaReading(m.reading).has_value()) << name << ": " << m.reading;
+    }
+  }
+  EXPECT_EQ(readings, 9U);  // the nine Japanese messages of the project's scenes
+
+  const std::string head = R"({"name": "x", "messages": [{"language": "en", "text": "t"},
+    {"language": "ja", "text": "月", )";
+  const std::string none = ErrorOf("noreading", head + R"("next_action": "x"}]})");
+  EXPECT_NE(none.find(":2: field 'messages[1].reading': missing"), std::string::npos) << none;
+  const std::string kanji = ErrorOf("kanji", head + R"("reading": "つき 月"}]})");
+  EXPECT_NE(kanji.find("field 'messages[1].reading': byte 7 is not kana"), std::string::npos) << kanji;
+  const std::string english = ErrorOf("enreading", R"({"name": "x", "messages": [
+    {"language": "en", "text": "t", "reading": "tee"}]})");
+  EXPECT_NE(english.find("field 'messages[0].reading': only a ja message has a reading"), std::string::npos) << english;
 }
 
 TEST(Scene, ControlErrorsNameTheField) {

@@ -23,13 +23,15 @@ struct SpectatorConfig {
   double fps = 30.0;
   StereoOutput stereo = StereoOutput::kMono;
   bool fullscreen = false;
+  std::string language = "en";       // the board's language shown: en or ja
   std::chrono::duration<double> wait_for_scene{5.0};  // headless: wait this long for the scene
   /// No scene from the world server this long after joining: join again with a new participant
   /// (a secured handshake that never finished; docs/security.md); 0: never.
   std::chrono::duration<double> rejoin_after{15.0};
   std::filesystem::path assets_dir;  // mesh uris are relative to it; "" = DefaultAssetsDir()
   std::filesystem::path deformation_out;  // "" = none; else at exit: SceneReplica::WriteDeformationJson
-  /// "" = none; else at exit, JSON: {"scene", "revision", "board": {"message_id", "text"},
+  /// "" = none; else at exit, JSON: {"scene", "revision",
+  /// "board": {"message_id", "language", "text", "next_action"},
   /// "objects": {id: {"p_WO_m", "q_WO_wxyz", "from": "object_state" | "scene_state"}}}: the
   /// scene, board and poses the spectator shows (a late joiner's check).
   std::filesystem::path state_out;

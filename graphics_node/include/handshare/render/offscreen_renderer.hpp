@@ -30,6 +30,9 @@ class OffscreenRenderer {
   [[nodiscard]] ImageRgb8 Render(const SceneView& scene, const Camera& camera,
                                  StereoMode mode = StereoMode::kMono);
 
+  /// What the caption of the last rendered frame held (zeros without a caption).
+  [[nodiscard]] const CaptionStats& last_caption() const;
+
  private:
   struct Impl;
   std::unique_ptr<Impl> impl_;

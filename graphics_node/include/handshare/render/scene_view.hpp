@@ -100,15 +100,25 @@ struct GroundGrid {
   Rgb rgb{0.45F, 0.45F, 0.5F};                               ///< line colour.
 };
 
+/// What the caption of the last frame held: for a viewer to report, and for tests.
+struct CaptionStats {
+  int pixel_size = 0;      ///< the font's em height [px]
+  int lines = 0;           ///< lines drawn
+  int glyphs = 0;          ///< characters drawn with the font's own glyph (spaces not counted)
+  int missing_glyphs = 0;  ///< characters the font lacks, drawn as hollow boxes
+  bool cut = false;        ///< the text did not fit and ends in an ellipsis
+};
+
 /// Everything drawn in one frame.
 struct SceneView {
   std::vector<Sphere> spheres;
   std::vector<Box> boxes;
   std::vector<TriangleMesh> meshes;
   GroundGrid grid;
-  /// One line of text (the message board), UTF-8, drawn at the bottom of the image over a dark
-  /// band. Printable ASCII uses a built-in 5x7 bitmap font; other characters are drawn as hollow
-  /// boxes; text that does not fit is cut and ends in "...". Empty: no band.
+  /// The message board, UTF-8, drawn at the bottom of the image over a dark band in the caption
+  /// font (FreeType, a CJK font: Latin and Japanese): wrapped to the image's width, '\n' starts a
+  /// paragraph, at most a third of the height; text beyond that is cut and ends in an ellipsis.
+  /// A character the font lacks is drawn as a hollow box. Empty: no band.
   std::string caption;
   Rgb caption_rgb{1.0F, 1.0F, 1.0F};            ///< caption text colour.
   Rgb background_rgb{0.08F, 0.09F, 0.12F};      ///< clear colour.

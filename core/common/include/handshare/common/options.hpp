@@ -38,6 +38,8 @@ class Options {
   long GetInt(const std::string& name, long min, long max) const;
   /// Finite number in [min, max], else OptionError.
   double GetDouble(const std::string& name, double min, double max) const;
+  /// One of `choices`, else OptionError naming the option, the value and the choices.
+  std::string GetChoice(const std::string& name, const std::vector<std::string>& choices) const;
 
  private:
   struct Spec {

@@ -36,7 +36,9 @@
 ///           action (on opening), page_actions [index = page number]
 ///   } ]
 ///   action: {goto: scene name} and/or {set_gravity [3], title, messages [...]}
-///   messages [ {language: en | ja, text, next_action} ]   (required, non-empty)
+///   messages [ {language: en | ja, text, next_action, reading} ]   (required, non-empty)
+///     reading: what the audio guide speaks for ja, text and next action in kana (eSpeak NG's
+///              ja voice says "Chinese letter" for a kanji); required for ja, without kanji; not for en
 ///
 /// Every error names the file, the line and the field: "dinosaur.json:12: field
 /// 'objects[1].material.E_Pa': value -3 outside [100, 1e+12]".
@@ -148,6 +150,7 @@ struct Message {
   std::string language;  // "en", "ja"
   std::string text;
   std::string next_action;
+  std::string reading;   // ja: text and next action in kana, as spoken; "" for en
 };
 
 /// What a control does when it is actuated. Empty fields change nothing.

@@ -1,0 +1,123 @@
+#include "caption_text.hpp"
+
+#include <gtest/gtest.h>
+
+#include <string>
+
+#include "handshare/common/utf8.hpp"
+#include "handshare/scene/scene.hpp"
+
+namespace handshare::render::detail {
+namespace {
+
+int Ink(const CaptionBitmap& b, int x0 = 0, int x1 = -1) {
+  if (x1 < 0) x1 = b.width_px;
+  int n = 0;
+  for (int y = 0; y < b.height_px; ++y) {
+    for (int x = x0; x < x1; ++x) n += b.At(x, y) > 128 ? 1 : 0;
+  }
+  return n;
+}
+
+int Printed(const std::string& text) {  // code points that are neither spaces nor line breaks
+  int n = 0;
+  for (const char32_t c : common::DecodeUtf8(text)) n += (c != U' ' && c != U'\n' && c != 0x3000) ? 1 : 0;
+  return n;
+}
+
+std::vector<scene::Message> AllMessages(const scene::Scene& s) {
+  std::vector<scene::Message> all = s.messages;
+  for (const auto& c : s.controls) {
+    all.insert(all.end(), c.action.messages.begin(), c.action.messages.end());
+    for (const auto& a : c.detent_actions) all.insert(all.end(), a.messages.begin(), a.messages.end());
+    for (const auto& a : c.page_actions) all.insert(all.end(), a.messages.begin(), a.messages.end());
+  }
+  return all;
+}
+
+class CaptionText : public ::testing::Test {
+ protected:
+  CaptionFont font_{DefaultCaptionFont()};
+};
+
+// Every board text of the project, English and Japanese, is drawn with the font's own glyphs:
+// no character falls back to an empty box.
+TEST_F(CaptionText, EveryBoardTextOfTheScenesHasItsGlyphs) {
+  int japanese = 0;
+  for (const char* name : {"start_menu", "solar_system", "dinosaur", "microscopic", "commons"}) {
+    const scene::Scene s = scene::LoadSceneByName(name, HANDSHARE_SOURCE_SCENES);
+    for (const scene::Message& m : AllMessages(s)) {
+      const std::string text = m.text + (m.next_action.empty() ? "" : "\n" + m.next_action);
+      const CaptionBitmap b = font_.Layout(text, 24, 900, 20);
+      EXPECT_EQ(b.stats.missing_glyphs, 0) << name << ": " << text;
+      EXPECT_EQ(b.stats.glyphs, Printed(text)) << name << ": " << text;
+      EXPECT_FALSE(b.stats.cut) << name;
+      EXPECT_GT(Ink(b), 20 * b.stats.glyphs) << name << ": glyphs with ink, at 24 px";
+      japanese += m.language == "ja" ? 1 : 0;
+    }
+  }
+  EXPECT_EQ(japanese, 9);
+}
+
+TEST_F(CaptionText, WrapsAtSpacesAndBetweenJapaneseCharacters) {
+  const std::string english = "Press a part of the triceratops with your partner, or pass the ball.";
+  const CaptionBitmap one = font_.Layout(english, 20, 2000, 10);
+  EXPECT_EQ(one.stats.lines, 1);
+  const CaptionBitmap wrapped = font_.Layout(english, 20, 200, 10);
+  EXPECT_GE(wrapped.stats.lines, 3);
+  EXPECT_LE(wrapped.width_px, 200);
+  EXPECT_EQ(wrapped.stats.glyphs, one.stats.glyphs) << "wrapping loses no character";
+  EXPECT_EQ(wrapped.height_px, wrapped.stats.lines * one.height_px);
+
+  // Japanese has no spaces: it wraps between any two characters, never before 、 or 。.
+  const std::string japanese = "パートナーと一緒にトリケラトプスを押すか、ボールを渡してください。";
+  const CaptionBitmap ja = font_.Layout(japanese, 20, 100, 20);  // five characters a line
+  EXPECT_GE(ja.stats.lines, 6);
+  EXPECT_LE(ja.width_px, 100);
+  EXPECT_EQ(ja.stats.glyphs, Printed(japanese));
+
+  // A paragraph break starts a line; a word longer than the line is cut, not lost.
+  EXPECT_EQ(font_.Layout("one\ntwo", 20, 2000, 10).stats.lines, 2);
+  const CaptionBitmap word = font_.Layout(std::string(40, 'W'), 20, 200, 10);
+  EXPECT_GE(word.stats.lines, 3);
+  EXPECT_EQ(word.stats.glyphs, 40);
+}
+
+TEST_F(CaptionText, TooMuchTextIsCutWithAnEllipsis) {
+  std::string text;
+  for (int i = 0; i < 60; ++i) text += "lever ";
+  const CaptionBitmap b = font_.Layout(text, 20, 300, 2);
+  EXPECT_EQ(b.stats.lines, 2);
+  EXPECT_TRUE(b.stats.cut);
+  EXPECT_LT(b.stats.glyphs, 300);
+  EXPECT_FALSE(font_.Layout("lever", 20, 300, 2).stats.cut);
+}
+
+TEST_F(CaptionText, ACharacterTheFontLacksIsAVisibleBox) {
+  ASSERT_FALSE(font_.HasGlyph(0x1F996));  // a sauropod emoji: not in IPA Gothic
+  ASSERT_TRUE(font_.HasGlyph(U'恐'));
+  const CaptionBitmap b = font_.Layout("a\xF0\x9F\xA6\x96" "b", 24, 900, 2);
+  EXPECT_EQ(b.stats.missing_glyphs, 1);
+  EXPECT_EQ(b.stats.glyphs, 2);
+  const CaptionBitmap ab = font_.Layout("ab", 24, 900, 2);
+  EXPECT_GT(b.width_px, ab.width_px + 10);
+  EXPECT_GT(Ink(b), Ink(ab) + 30) << "the box has ink";
+}
+
+TEST_F(CaptionText, EmptyTextIsNoBitmap) {
+  const CaptionBitmap b = font_.Layout("", 24, 900, 2);
+  EXPECT_EQ(b.width_px * b.height_px, 0);
+  EXPECT_EQ(b.stats.lines, 0);
+}
+
+TEST(CaptionFontFile, AMissingFontNamesTheFile) {
+  try {
+    CaptionFont font("/nonexistent/font.ttf");
+    ADD_FAILURE() << "opened";
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(std::string(e.what()).find("/nonexistent/font.ttf"), std::string::npos) << e.what();
+  }
+}
+
+}  // namespace
+}  // namespace handshare::render::detail
