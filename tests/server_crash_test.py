@@ -152,7 +152,7 @@ def run(h, domain):
     faults = sum(1 for r in rows if r["fault"] != 0)
     check(faults == 0, f"{faults} faulted steps in alice's trace")
     # The board: the same message again, not spoken twice.
-    wavs = sorted(f for f in os.listdir(os.path.join(h.work, "speech")) if f.endswith(".wav"))
+    wavs = sorted(f for f in os.listdir(os.path.join(h.work, "speech")) if f.startswith("message_") and f.endswith(".wav"))
     spoken = len(re.findall(r"message board #", lines_before))
     check(len(wavs) == spoken, f"{len(wavs)} messages spoken for {spoken} shown before the crash: {wavs}")
 

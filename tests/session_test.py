@@ -362,12 +362,16 @@ def check_hands_in_last_frame(frames_dir, traces):
     return check_frames(frames_dir, tips)
 
 
-def check_speech(wav_path):
-    """Non-silent speech: long enough, loud enough, with voiced stretches and pauses."""
+def read_wav(wav_path):
+    """(rate, samples) of a 16-bit mono WAV."""
     with wave.open(wav_path) as w:
         check(w.getnchannels() == 1 and w.getsampwidth() == 2, f"{wav_path}: not 16-bit mono")
-        rate = w.getframerate()
-        samples = array("h", w.readframes(w.getnframes()))
+        return w.getframerate(), array("h", w.readframes(w.getnframes()))
+
+
+def check_speech(wav_path):
+    """Non-silent speech: long enough, loud enough, with voiced stretches and pauses."""
+    rate, samples = read_wav(wav_path)
     duration = len(samples) / rate
     check(duration > 1.0, f"{wav_path}: only {duration:.2f} s")
     rms = math.sqrt(sum(x * x for x in samples) / len(samples))
@@ -432,7 +436,7 @@ def case_shared_session(h, domain):
 
     tips = {u: last_trace_row(os.path.join(w, u + ".csv")) for u in ("alice", "bob")}
     checked = check_frames(os.path.join(w, "frames"), tips)
-    wavs = sorted(glob.glob(os.path.join(w, "speech", "*.wav")))
+    wavs = sorted(glob.glob(os.path.join(w, "speech", "message_*.wav")))
     check(len(wavs) == 1, f"expected one message WAV, found {wavs}")
     duration, rms = check_speech(wavs[0])
     print(f"shared session: {checked} fingertips checked in the last frame; speech {duration:.1f} s, RMS {rms:.0f}")
@@ -650,11 +654,15 @@ def case_encyclopedia(h, domain):
             "--deformation-out", received_file)
     h.start("audio_guide", "audio_guide", "--domain", domain, "--session", session,
             "--out", os.path.join(h.work, "speech"))
-    # The guide is in the room before the tour starts: it has spoken the board it found (the
+    # A second guide speaks the board in Japanese, from the scenes' kana readings.
+    h.start("audio_guide_ja", "audio_guide", "--domain", domain, "--session", session, "--language", "ja",
+            "--cues", "off", "--out", os.path.join(h.work, "speech_ja"))
+    # The guides are in the room before the tour starts: each has spoken the board it found (the
     # start menu's, transient-local) and will speak every one after it. (One that joins later
     # speaks the current board only: keep-last 1. Its member sample reaching the server is not
     # enough: across a lossy network its board reader can match the server's writer later.)
     h.wait_for_line("audio_guide", "message #1 (", 60)
+    h.wait_for_line("audio_guide_ja", "message #1 (ja, ", 60)
     h.start("alice", "haptic_node", "--domain", domain, "--session", session, "--user", "alice",
             "--script", os.path.join(SCRIPTS, "tour_alice.hand"), "--trace", trace)
     # bob is at a HIRO II (the model on its simulated plant, his hand scripted as alice's): he
@@ -699,13 +707,30 @@ def case_encyclopedia(h, domain):
     # the one after the gravity change.
     boards = h.log("world_server").count("message board #")
     h.wait_for_line("audio_guide", f"message #{boards} (", 60)
+    h.wait_for_line("audio_guide_ja", f"message #{boards} (ja, ", 60)
     check(h.stop("audio_guide", 30) == 0, "audio_guide failed")
+    check(h.stop("audio_guide_ja", 30) == 0, "the Japanese audio guide failed")
     check(h.stop("world_server", 30) == 0, "world_server failed")
-    wavs = sorted(glob.glob(os.path.join(h.work, "speech", "*.wav")))
+    wavs = sorted(glob.glob(os.path.join(h.work, "speech", "message_*.wav")))
     check(len(wavs) == boards, f"{boards} board messages, {len(wavs)} WAV files: {wavs}")
     speech_s = sum(check_speech(w)[0] for w in wavs)
+    wavs_ja = sorted(glob.glob(os.path.join(h.work, "speech_ja", "message_*.wav")))
+    check(len(wavs_ja) == boards, f"{boards} board messages, {len(wavs_ja)} Japanese WAV files: {wavs_ja}")
+    speech_ja_s = sum(check_speech(w)[0] for w in wavs_ja)
+    check(not glob.glob(os.path.join(h.work, "speech_ja", "cue_*")), "the Japanese guide sounded cues with --cues off")
+    # Its sound cues: a chime for each of the four world changes (solar system, dinosaur,
+    # microscopic, start menu; the gravity change is the same world), a detent for the lever to
+    # Mars. (The click of a control that opens a world may come after the world's chime and
+    # then stays silent: the new world's controls are first seen.)
+    cues = [os.path.basename(c) for c in sorted(glob.glob(os.path.join(h.work, "speech", "cue_*.wav")),
+                                                key=lambda c: int(os.path.basename(c).split("_")[1]))]
+    check(sum(c.endswith("_world.wav") for c in cues) == 4, f"expected 4 world-change chimes, got {cues}")
+    check(any(c.endswith("_detent.wav") for c in cues), f"no lever detent among the cues {cues}")
+    for c in cues:
+        rate, samples = read_wav(os.path.join(h.work, "speech", c))
+        check(0.03 < len(samples) / rate < 0.7 and max(abs(s) for s in samples) > 2000, f"cue {c} is not a short sound")
     print(f"spectator: both hands in its last frame ({fingertips} fingertips checked); audio guide: {len(wavs)} "
-          f"messages spoken, {speech_s:.1f} s of speech")
+          f"messages spoken, {speech_s:.1f} s of speech ({speech_ja_s:.1f} s in Japanese), cues {cues}")
     # The peer stream went through each hand's deadband (session/contact_deadband.hpp): of the
     # contact sets the two bridges offered, most stayed home (88 % in the tour, loopback and
     # quiet; none with --deadband 0), and the tour above still held its weights and fields.

@@ -185,6 +185,7 @@ std::string CheckMessageBoard(const msg::MessageBoard& s, std::string_view sessi
   Checker c;
   c.Session(s.session().to_string(), session);
   const std::string language = s.language().to_string();
+  c.NonEmpty("language", language);
   if (c.ok() && language != "en" && language != "ja") c.Fail("language '" + language + "' is not en or ja");
   if (c.ok() && language == "ja") {
     const std::string reading = s.reading().to_string();
