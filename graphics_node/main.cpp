@@ -1,4 +1,7 @@
 // graphics_node: a spectator's view of a session, headless (PNG frames) or in a window.
+#include <cmath>
+#include <cstdio>
+
 #include "handshare/common/node_main.hpp"
 #include "handshare/graphics/spectator.hpp"
 #include "handshare/render/window_renderer.hpp"
@@ -6,7 +9,7 @@
 int main(int argc, char** argv) {
   using handshare::common::OptionError;
   handshare::common::Options options(
-      "graphics_node", "Spectates a handshare session: the scene and every user's five fingertips "
+      "graphics_node", "Spectates a handshare session: the scene and every user's hand and five fingertips "
                        "(red, green, blue, yellow, cyan), headless into PNG frames or in a window.");
   handshare::common::DeclareSessionOptions(options);
   options.Value("name", "NAME", "member name (default graphics-<pid>)", "")
@@ -21,6 +24,10 @@ int main(int argc, char** argv) {
              "joining (a secured join whose handshake never finished; 0: never)", "15")
       .Value("stereo", "MODE", "mono, side-by-side or anaglyph", "mono")
       .Value("language", "en|ja", "the message board's language shown", "en")
+      .Value("view", "spectator|user:NAME",
+             "whose view: the spectator's, or a user's own (from their eye, following their hand)", "spectator")
+      .Value("eye", "X,Y,Z", "user view: the eye in the hand base's frame [m] (fingers along +y, up +z)",
+             "0,-0.30,0.25")
       .Flag("fullscreen", "window: full screen on the primary monitor (large screen)")
       .Value("assets", "DIR", "folder that the scene's mesh paths are relative to",
              handshare::graphics::DefaultAssetsDir().string())
@@ -44,6 +51,20 @@ int main(int argc, char** argv) {
     c.deformation_out = o.GetString("deformation-out");
     c.state_out = o.GetString("state-out");
     c.language = o.GetChoice("language", {"en", "ja"});
+    const std::string view = o.GetString("view");
+    if (view.rfind("user:", 0) == 0 && view.size() > 5) {
+      c.view_user = view.substr(5);
+    } else if (view != "spectator") {
+      throw OptionError("option --view: '" + view + "' is not spectator or user:NAME");
+    }
+    const std::string eye = o.GetString("eye");
+    double xyz[3];
+    char tail = 0;
+    if (std::sscanf(eye.c_str(), "%lf,%lf,%lf%c", &xyz[0], &xyz[1], &xyz[2], &tail) != 3 ||
+        !std::isfinite(xyz[0] + xyz[1] + xyz[2]) || std::abs(xyz[0]) + std::abs(xyz[1]) + std::abs(xyz[2]) > 10.0) {
+      throw OptionError("option --eye: '" + eye + "' is not X,Y,Z in metres (each within 10 m)");
+    }
+    c.eye.eye_H = Eigen::Vector3d(xyz[0], xyz[1], xyz[2]);
     const std::string stereo = o.GetString("stereo");
     if (stereo == "mono") c.stereo = handshare::graphics::StereoOutput::kMono;
     else if (stereo == "side-by-side") c.stereo = handshare::graphics::StereoOutput::kSideBySide;

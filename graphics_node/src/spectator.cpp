@@ -41,6 +41,17 @@ struct UserHand {
   Clock::time_point received;
 };
 
+constexpr render::Rgb kSkinRgb{0.86F, 0.70F, 0.58F};
+
+// The hand base pose of a device state (identity rotation where the quaternion is unusable).
+Eigen::Isometry3d HandPose(const msg::DeviceState& s) {
+  Eigen::Isometry3d X = Eigen::Isometry3d::Identity();
+  const Eigen::Quaterniond q(s.q_WH_wxyz()[0], s.q_WH_wxyz()[1], s.q_WH_wxyz()[2], s.q_WH_wxyz()[3]);
+  if (q.coeffs().allFinite() && q.norm() > 0.5) X.linear() = q.normalized().toRotationMatrix();
+  X.translation() = Eigen::Vector3d(s.p_WH_m()[0], s.p_WH_m()[1], s.p_WH_m()[2]);
+  return X;
+}
+
 /// Everything the view needs, updated from DDS on the render thread.
 class WorldView {
  public:
@@ -135,6 +146,14 @@ class WorldView {
     }
   }
 
+  /// The camera of `user`'s own view at their latest hand pose; `fallback` while they are not
+  /// seen (or their device is faulted).
+  render::Camera UserCamera(const std::string& user, const UserEye& eye, const render::Camera& fallback) const {
+    const auto it = hands_.find(user);
+    if (it == hands_.end() || it->second.state.fault()) return fallback;
+    return UserEyeCamera(HandPose(it->second.state), eye, fallback);
+  }
+
   bool has_scene() const { return world_.has_scene(); }
   const std::string& scene_name() const { return scene_name_; }
   std::uint32_t scene_revision() const { return scene_revision_; }
@@ -182,6 +201,10 @@ class WorldView {
     world_.AddObjects(view);
     for (const auto& [user, hand] : hands_) {
       if (hand.state.fault()) continue;  // a faulted device has no trustworthy pose
+      // The hand itself, fitted to the device's hand base and fingertips, under the fingertips.
+      std::array<Eigen::Vector3d, kHandFingers> tips;
+      for (int i = 0; i < kHandFingers; ++i) tips[i] = Eigen::Vector3d(hand.state.p_WE_m()[i].data());
+      AddHandFigure(FitHandToFingertips(HandPose(hand.state), tips), hand.state.fingertip_radius_m(), kSkinRgb, view);
       for (int i = 0; i < 5; ++i) {
         const auto& p = hand.state.p_WE_m()[i];
         view.spheres.push_back(render::Sphere{
@@ -403,7 +426,9 @@ int Spectator::Run() {
       rejoin_if_unheard();
       WorldView& world = link->world;
       world.Update();
-      const render::ImageRgb8 image = renderer.Render(world.Build(), camera, ToRender(config_.stereo));
+      const render::Camera frame_camera =
+          config_.view_user.empty() ? camera : world.UserCamera(config_.view_user, config_.eye, camera);
+      const render::ImageRgb8 image = renderer.Render(world.Build(), frame_camera, ToRender(config_.stereo));
       char file[32];
       std::snprintf(file, sizeof(file), "frame_%05d.png", written);
       render::WritePng(out_dir / file, image);
@@ -437,7 +462,8 @@ int Spectator::Run() {
     if (config_.where.duration.count() > 0 && Clock::now() - start >= config_.where.duration) break;
     rejoin_if_unheard();
     link->world.Update();
-    window.Render(link->world.Build(), camera);
+    window.Render(link->world.Build(),
+                  config_.view_user.empty() ? camera : link->world.UserCamera(config_.view_user, config_.eye, camera));
     next += period;
     std::this_thread::sleep_until(next);
   }

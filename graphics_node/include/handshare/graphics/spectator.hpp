@@ -8,6 +8,7 @@
 #include <string>
 
 #include "handshare/common/node_main.hpp"
+#include "handshare/graphics/hand_figure.hpp"
 
 namespace handshare::graphics {
 
@@ -24,6 +25,8 @@ struct SpectatorConfig {
   StereoOutput stereo = StereoOutput::kMono;
   bool fullscreen = false;
   std::string language = "en";       // the board's language shown: en or ja
+  std::string view_user;             // "" = the spectator's camera; else that user's own view (eye)
+  UserEye eye;                       // the user's eye relative to their hand base
   std::chrono::duration<double> wait_for_scene{5.0};  // headless: wait this long for the scene
   /// No scene from the world server this long after joining: join again with a new participant
   /// (a secured handshake that never finished; docs/security.md); 0: never.

@@ -1,0 +1,145 @@
+#include "handshare/graphics/hand_figure.hpp"
+
+#include <cmath>
+#include <numbers>
+
+namespace handshare::graphics {
+
+namespace {
+
+constexpr double kMaxFlexRad = 2.0 * std::numbers::pi / 3.0;  // per joint: a fist
+constexpr double kLinkHalfWidthM = 0.007;
+constexpr double kJointRadiusM = 0.0075;
+
+// The planar chain of `links` with every joint flexed by `theta`: its end point.
+Eigen::Vector2d ChainEnd(const std::array<double, 3>& links, double theta) {
+  Eigen::Vector2d p = Eigen::Vector2d::Zero();
+  for (int k = 0; k < 3; ++k) p += links[k] * Eigen::Vector2d(std::cos(k * theta), std::sin(k * theta));
+  return p;
+}
+
+}  // namespace
+
+const std::array<std::array<double, 3>, kHandFingers>& HandLinkLengths() noexcept {
+  static const std::array<std::array<double, 3>, kHandFingers> kLinks = {{
+      {0.035, 0.030, 0.024},   // thumb: metacarpal, proximal, distal
+      {0.035, 0.022, 0.018},   // index: proximal, middle, distal phalanx
+      {0.038, 0.024, 0.018},   // middle
+      {0.035, 0.023, 0.018},   // ring
+      {0.030, 0.019, 0.017}}};  // little
+  return kLinks;
+}
+
+const std::array<Eigen::Vector3d, kHandFingers>& HandKnuckles_H() noexcept {
+  // The simulated hand's frame (haptic_node's sim_hand): fingers along +y, thumb towards -x.
+  static const std::array<Eigen::Vector3d, kHandFingers> kKnuckles = {
+      Eigen::Vector3d(-0.030, -0.010, -0.010), Eigen::Vector3d(-0.030, 0.030, 0.0),
+      Eigen::Vector3d(-0.010, 0.032, 0.0), Eigen::Vector3d(0.010, 0.030, 0.0),
+      Eigen::Vector3d(0.028, 0.026, 0.0)};
+  return kKnuckles;
+}
+
+HandFigure FitHandToFingertips(const Eigen::Isometry3d& X_WH, const std::array<Eigen::Vector3d, kHandFingers>& p_WE) {
+  HandFigure hand;
+  hand.X_WH = X_WH.matrix().allFinite() ? X_WH : Eigen::Isometry3d::Identity();
+  const Eigen::Vector3d palm_normal_W = -(hand.X_WH.linear() * Eigen::Vector3d::UnitZ());  // the palm side
+  for (int f = 0; f < kHandFingers; ++f) {
+    const std::array<double, 3>& links = HandLinkLengths()[f];
+    const double length = links[0] + links[1] + links[2];
+    const Eigen::Vector3d knuckle = hand.X_WH * HandKnuckles_H()[f];
+    auto& joints = hand.joints_W[f];
+    joints[0] = knuckle;
+    Eigen::Vector3d chord = p_WE[f] - knuckle;
+    const double d = chord.norm();
+    if (!chord.allFinite() || d < 1e-9) {  // no usable fingertip: a straight finger along +y
+      const Eigen::Vector3d along = hand.X_WH.linear() * Eigen::Vector3d::UnitY();
+      double s = 0.0;
+      for (int k = 0; k < 3; ++k) joints[k + 1] = knuckle + (s += links[k]) * along;
+      continue;
+    }
+    const Eigen::Vector3d u = chord / d;
+    // The bending direction: the palm's normal, made orthogonal to the chord (or any
+    // orthogonal direction where the two are parallel).
+    Eigen::Vector3d n = palm_normal_W - palm_normal_W.dot(u) * u;
+    if (n.norm() < 1e-6) n = u.unitOrthogonal();
+    n.normalize();
+    // Equal flexion theta at each joint whose chain spans exactly d (the span falls as theta
+    // grows over [0, kMaxFlex]); beyond reach: straight and stretched.
+    double theta = 0.0;
+    double scale = 1.0;
+    if (d >= length) {
+      scale = d / length;
+      hand.stretched[f] = d > length * (1.0 + 1e-9);
+    } else {
+      double lo = 0.0, hi = kMaxFlexRad;
+      if (ChainEnd(links, hi).norm() >= d) {
+        theta = hi;  // closer than a fist reaches: as bent as a finger goes, and scaled down
+        scale = d / ChainEnd(links, hi).norm();
+      } else {
+        for (int it = 0; it < 60; ++it) {
+          const double mid = 0.5 * (lo + hi);
+          (ChainEnd(links, mid).norm() > d ? lo : hi) = mid;
+        }
+        theta = 0.5 * (lo + hi);
+      }
+    }
+    // The planar chain, rotated so that its chord lies along u, placed in the (u, n) plane: it
+    // curls towards n, the palm, and its knuckles bulge away from it.
+    const Eigen::Vector2d end = ChainEnd(links, theta);
+    const double phi = std::atan2(end.y(), end.x());
+    const Eigen::Rotation2Dd to_chord(-phi);
+    Eigen::Vector2d p = Eigen::Vector2d::Zero();
+    for (int k = 0; k < 3; ++k) {
+      p += links[k] * Eigen::Vector2d(std::cos(k * theta), std::sin(k * theta));
+      const Eigen::Vector2d q = scale * (to_chord * p);
+      joints[k + 1] = knuckle + q.x() * u + q.y() * n;
+    }
+    joints[3] = p_WE[f];  // exact, not within round-off
+  }
+  return hand;
+}
+
+void AddHandFigure(const HandFigure& hand, double fingertip_radius_m, const render::Rgb& skin,
+                   render::SceneView& view) {
+  render::Box palm;
+  palm.p_W = hand.X_WH * Eigen::Vector3d(0.0, 0.0, -0.004);  // its front edge at the knuckles
+  palm.half_extents_m = Eigen::Vector3d(0.040, 0.030, 0.008);
+  palm.q_WB = Eigen::Quaterniond(hand.X_WH.linear());
+  palm.rgb = skin;
+  view.boxes.push_back(palm);
+  for (const auto& joints : hand.joints_W) {
+    for (int k = 0; k < 3; ++k) {
+      const Eigen::Vector3d a = joints[k];
+      Eigen::Vector3d b = joints[k + 1];
+      if (k == 2) {  // stop at the fingertip sphere's surface
+        const double full = (b - a).norm();
+        if (full <= fingertip_radius_m) continue;
+        b = a + (b - a) * ((full - fingertip_radius_m) / full);
+      }
+      const double length = (b - a).norm();
+      if (length < 1e-6) continue;
+      render::Box link;
+      link.p_W = 0.5 * (a + b);
+      link.half_extents_m = Eigen::Vector3d(kLinkHalfWidthM, 0.5 * length, kLinkHalfWidthM);
+      link.q_WB = Eigen::Quaterniond::FromTwoVectors(Eigen::Vector3d::UnitY(), (b - a) / length);
+      link.rgb = skin;
+      view.boxes.push_back(link);
+    }
+    for (int k = 0; k < 3; ++k) view.spheres.push_back(render::Sphere{joints[k], kJointRadiusM, skin});
+  }
+}
+
+render::Camera UserEyeCamera(const Eigen::Isometry3d& X_WH, const UserEye& eye, render::Camera camera) {
+  // Only the hand base's heading turns the view (yaw about +z): a tilted or rolled hand does
+  // not tilt the user's head.
+  Eigen::Vector3d forward = X_WH.linear() * Eigen::Vector3d::UnitY();
+  forward.z() = 0.0;
+  const double yaw = forward.norm() > 1e-9 ? std::atan2(-forward.x(), forward.y()) : 0.0;
+  const Eigen::Isometry3d X_WY = Eigen::Translation3d(X_WH.translation()) * Eigen::AngleAxisd(yaw, Eigen::Vector3d::UnitZ());
+  camera.eye_W = X_WY * eye.eye_H;
+  camera.target_W = X_WY * eye.look_at_H;
+  camera.up_W = Eigen::Vector3d::UnitZ();
+  return camera;
+}
+
+}  // namespace handshare::graphics
