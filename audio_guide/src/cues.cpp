@@ -105,7 +105,10 @@ std::optional<Cue> CueWatch::OnWorld(const std::string& scene) {
   if (scene == world_) return std::nullopt;
   const bool first = world_.empty();
   world_ = scene;
-  controls_.clear();
+  // The controls of other worlds are forgotten (a world visited again starts its controls
+  // afresh); those of this world stay: across a network its controls' states may arrive before
+  // its scene state (seen: the lever's first state, then the world, then the lever's detent).
+  std::erase_if(controls_, [&](const auto& entry) { return entry.second.scene != scene; });
   if (first) return std::nullopt;
   return Cue::kWorldChange;
 }

@@ -89,5 +89,19 @@ TEST(Cues, ControlStatesSoundAsTheControlMoves) {
   EXPECT_EQ(w.OnControl("lever", {"start_menu", 1, false, 5}), std::nullopt);
 }
 
+// Across a network a world's control states can arrive before the world's scene state: the
+// control is still known when it moves (net.tour lost the lever's detent this way).
+TEST(Cues, AControlSeenBeforeItsWorldStillSoundsWhenItMoves) {
+  CueWatch w;
+  EXPECT_EQ(w.OnWorld("start_menu"), std::nullopt);
+  EXPECT_EQ(w.OnControl("lever", {"solar_system", 0, false, 0}), std::nullopt);  // ahead of its world
+  EXPECT_EQ(w.OnWorld("solar_system"), Cue::kWorldChange);
+  EXPECT_EQ(w.OnControl("lever", {"solar_system", 1, false, 1}), Cue::kLeverDetent);
+  // Leaving and coming back: the old world's controls were forgotten, its first state is silent.
+  EXPECT_EQ(w.OnWorld("dinosaur"), Cue::kWorldChange);
+  EXPECT_EQ(w.OnWorld("solar_system"), Cue::kWorldChange);
+  EXPECT_EQ(w.OnControl("lever", {"solar_system", 0, false, 0}), std::nullopt);
+}
+
 }  // namespace
 }  // namespace handshare::speech

@@ -59,7 +59,7 @@ role_subscribe() {
   case "$1" in
     world_server) echo "$T_MEMBER $T_CONTACT $T_EVENT" ;;
     haptic) echo "$T_MEMBER $T_SCENE $T_CONTACT $T_OBJECT $T_CONTROL" ;;
-    spectator) echo "$T_MEMBER $T_SCENE $T_BOARD $T_DEVICE $T_OBJECT $T_DEFORM $T_CONTROL" ;;
+    spectator) echo "$T_MEMBER $T_SCENE $T_BOARD $T_DEVICE $T_OBJECT $T_DEFORM $T_CONTROL $T_ROSTER" ;;  # roster: to rejoin
     audio_guide) echo "$T_BOARD $T_SCENE $T_CONTROL" ;;  # scene, controls: the sound cues
     recorder) echo "$ALL_TOPICS $T_ROSTER" ;;  # the roster: to rejoin (not recorded)
     player) echo "" ;;

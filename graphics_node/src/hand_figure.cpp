@@ -3,6 +3,8 @@
 #include <cmath>
 #include <numbers>
 
+#include "handshare/hiro/hiro_model.hpp"
+
 namespace handshare::graphics {
 
 namespace {
@@ -102,8 +104,8 @@ HandFigure FitHandToFingertips(const Eigen::Isometry3d& X_WH, const std::array<E
 void AddHandFigure(const HandFigure& hand, double fingertip_radius_m, const render::Rgb& skin,
                    render::SceneView& view) {
   render::Box palm;
-  palm.p_W = hand.X_WH * Eigen::Vector3d(0.0, 0.0, -0.004);  // its front edge at the knuckles
-  palm.half_extents_m = Eigen::Vector3d(0.040, 0.030, 0.008);
+  palm.p_W = hand.X_WH * hand.palm_center_H;
+  palm.half_extents_m = hand.palm_half_extents_H;
   palm.q_WB = Eigen::Quaterniond(hand.X_WH.linear());
   palm.rgb = skin;
   view.boxes.push_back(palm);
@@ -127,6 +129,26 @@ void AddHandFigure(const HandFigure& hand, double fingertip_radius_m, const rend
     }
     for (int k = 0; k < 3; ++k) view.spheres.push_back(render::Sphere{joints[k], kJointRadiusM, skin});
   }
+}
+
+HandFigure HiroHandFigure(const hiro::HiroModel& model, const Eigen::Isometry3d& X_WH,
+                          const std::array<double, 3 * kHandFingers>& q_hand_rad) {
+  static_assert(hiro::kFingerCount == kHandFingers && hiro::kFingerJoints == 3);
+  HandFigure hand;
+  hand.X_WH = X_WH;
+  Eigen::Vector3d lo = Eigen::Vector3d::Constant(1e9), hi = Eigen::Vector3d::Constant(-1e9);
+  for (int f = 0; f < kHandFingers; ++f) {
+    hiro::FingerVector q;
+    for (int j = 0; j < 3; ++j) q[j] = std::isfinite(q_hand_rad[3 * f + j]) ? q_hand_rad[3 * f + j] : 0.0;
+    const hiro::FingerKinematics k = hiro::FingerFk(model.finger[f], q);
+    for (int j = 0; j < 3; ++j) hand.joints_W[f][j] = X_WH * k.point_H[j];
+    hand.joints_W[f][3] = X_WH * k.p_HE;
+    lo = lo.cwiseMin(model.finger[f].p_HF);
+    hi = hi.cwiseMax(model.finger[f].p_HF);
+  }
+  hand.palm_center_H = 0.5 * (lo + hi);
+  hand.palm_half_extents_H = (0.5 * (hi - lo) + Eigen::Vector3d::Constant(0.010)).cwiseMax(0.008);
+  return hand;
 }
 
 render::Camera UserEyeCamera(const Eigen::Isometry3d& X_WH, const UserEye& eye, render::Camera camera) {

@@ -16,12 +16,14 @@
 #include <nlohmann/json.hpp>
 
 #include "handshare/common/rejoin_clock.hpp"
+#include "handshare/common/roster_watch.hpp"
 #include "handshare/common/shutdown.hpp"
 #include "handshare/dds/membership.hpp"
 #include "handshare/dds/messages.hpp"
 #include "handshare/dds/name_binding.hpp"
 #include "handshare/dds/sample_checks.hpp"
 #include "handshare/graphics/scene_replica.hpp"
+#include "handshare/hiro/hiro_model.hpp"
 #include "handshare/render/image.hpp"
 #include "handshare/render/offscreen_renderer.hpp"
 #include "handshare/render/window_renderer.hpp"
@@ -42,6 +44,8 @@ struct UserHand {
 };
 
 constexpr render::Rgb kSkinRgb{0.86F, 0.70F, 0.58F};
+constexpr int kMaxRosterRejoins = 5;  // a member unheard for ever (another fault) costs at most this many
+constexpr render::Rgb kHiroRgb{0.62F, 0.64F, 0.68F};  // the robot hand: brushed metal
 
 // The hand base pose of a device state (identity rotation where the quaternion is unusable).
 Eigen::Isometry3d HandPose(const msg::DeviceState& s) {
@@ -69,7 +73,16 @@ class WorldView {
         control_reader_(dds::MakeReaderIfGranted<msg::ControlState>(
             p, dds::topics::kControlState, [this](const std::string& line) { Say(line); }, "controls are drawn at rest")),
         world_(assets_dir, std::cerr, "[graphics_node " + name + "] "),
-        language_(language) {}
+        language_(language) {
+    // The HIRO II's own hand is drawn from its joint angles with its model; without the model
+    // file, a HIRO user's hand is fitted to the fingertips like any other.
+    const std::filesystem::path hiro_file = assets_dir / "devices" / "hiro2.json";
+    try {
+      hiro_ = hiro::HiroModel::Load(hiro_file);
+    } catch (const std::exception& e) {
+      Say(std::string("HIRO II hands are fitted to their fingertips: ") + e.what());
+    }
+  }
 
   void Update() {
     dds::SampleMeta meta;
@@ -154,6 +167,13 @@ class WorldView {
     return UserEyeCamera(HandPose(it->second.state), eye, fallback);
   }
 
+  /// The member ids (MemberInfo::member_id) of the members this view has heard.
+  std::vector<std::string> HeardMemberIds() const {
+    std::vector<std::string> ids;
+    for (const std::string& user : names_.users()) ids.push_back(session_ + "/" + user);
+    return ids;
+  }
+
   bool has_scene() const { return world_.has_scene(); }
   const std::string& scene_name() const { return scene_name_; }
   std::uint32_t scene_revision() const { return scene_revision_; }
@@ -201,10 +221,16 @@ class WorldView {
     world_.AddObjects(view);
     for (const auto& [user, hand] : hands_) {
       if (hand.state.fault()) continue;  // a faulted device has no trustworthy pose
-      // The hand itself, fitted to the device's hand base and fingertips, under the fingertips.
-      std::array<Eigen::Vector3d, kHandFingers> tips;
-      for (int i = 0; i < kHandFingers; ++i) tips[i] = Eigen::Vector3d(hand.state.p_WE_m()[i].data());
-      AddHandFigure(FitHandToFingertips(HandPose(hand.state), tips), hand.state.fingertip_radius_m(), kSkinRgb, view);
+      // The hand itself under the fingertips: a HIRO II's from its joint angles, any other
+      // fitted to the device's hand base and fingertips.
+      if (hiro_ && names_.DeviceOf(user) == "hiro") {
+        AddHandFigure(HiroHandFigure(*hiro_, HandPose(hand.state), hand.state.q_hand_rad()),
+                      hand.state.fingertip_radius_m(), kHiroRgb, view);
+      } else {
+        std::array<Eigen::Vector3d, kHandFingers> tips;
+        for (int i = 0; i < kHandFingers; ++i) tips[i] = Eigen::Vector3d(hand.state.p_WE_m()[i].data());
+        AddHandFigure(FitHandToFingertips(HandPose(hand.state), tips), hand.state.fingertip_radius_m(), kSkinRgb, view);
+      }
       for (int i = 0; i < 5; ++i) {
         const auto& p = hand.state.p_WE_m()[i];
         view.spheres.push_back(render::Sphere{
@@ -251,6 +277,7 @@ class WorldView {
   SceneReplica world_;
   std::map<std::string, UserHand> hands_;
   std::string language_;     // the board's language shown: en or ja
+  std::optional<hiro::HiroModel> hiro_;  // the HIRO II's model, for its users' hands
   std::string board_text_;   // the board shown: its text and what to do next
   std::string next_action_;
 };
@@ -263,12 +290,17 @@ struct SpectatorLink {
                 double fps, const std::string& language)
       : participant(where, "graphics_node/" + name),  // the role picks its identity
         world(participant, assets_dir, name, where.session, language),
-        member(participant, name, msg::NODE_GRAPHICS, "", fps) {}
+        member(participant, name, msg::NODE_GRAPHICS, "", fps),
+        roster(dds::MakeReaderIfGranted<msg::SessionRoster>(
+            participant, dds::topics::kSessionRoster,
+            [&name](const std::string& line) { std::fprintf(stderr, "[graphics_node %s] %s\n", name.c_str(), line.c_str()); },
+            "no rejoin when a member stays unheard")) {}
   dds::Participant participant;
   // The readers first: the server re-sends body poses (best-effort) when it sees the member
   // join, and a reader created after the announcement could miss them.
   WorldView world;
   dds::MemberAnnouncement member;
+  dds::Reader<msg::SessionRoster> roster;  // the world server's members: to rejoin if one stays unheard
 };
 
 // One line on what the shared world received, for the node's log.
@@ -386,11 +418,40 @@ int Spectator::Run() {
 
   auto link = std::make_unique<SpectatorLink>(config_.where, assets_dir, name, config_.fps, config_.language);
   common::RejoinClock rejoin(config_.rejoin_after);
+  // A member the world server has (its roster) that this view never hears, a user's hand
+  // above all, is a secured handshake between the two that never finished (Fast DDS 2.9,
+  // docs/security.md): a new participant starts it again, as the recorder does.
+  common::RosterWatch roster_watch(config_.rejoin_after);
+  int roster_rejoins = 0;
+  const std::string own_id = config_.where.session + "/" + name;
   const auto rejoin_if_unheard = [&] {
-    if (!rejoin.Due(link->world.has_scene())) return;
-    std::fprintf(stderr, "[graphics_node %s] %s\n", name.c_str(), rejoin.Message("scene").c_str());
+    if (rejoin.Due(link->world.has_scene())) {
+      std::fprintf(stderr, "[graphics_node %s] %s\n", name.c_str(), rejoin.Message("scene").c_str());
+      link.reset();
+      link = std::make_unique<SpectatorLink>(config_.where, assets_dir, name, config_.fps, config_.language);
+      roster_watch.Restart(Clock::now());
+      return;
+    }
+    msg::SessionRoster r;
+    dds::SampleMeta meta;
+    while (link->roster && link->roster.TakeNext(r, meta)) {
+      if (!meta.valid_data || !dds::CheckSessionRoster(r, config_.where.session).empty()) continue;
+      std::vector<std::string> ids;
+      for (const auto& m : r.members()) ids.push_back(m.to_string());
+      roster_watch.OnRoster(std::move(ids));
+    }
+    std::vector<std::string> heard = link->world.HeardMemberIds();
+    heard.push_back(own_id);
+    const std::vector<std::string> unheard = roster_watch.Unheard(heard, Clock::now());
+    if (unheard.empty() || roster_rejoins >= kMaxRosterRejoins) return;
+    ++roster_rejoins;
+    std::fprintf(stderr,
+                 "[graphics_node %s] the world server has %s, not heard here %.1f s after joining: leaving and "
+                 "joining again with a new participant (rejoin %d)\n",
+                 name.c_str(), unheard.front().c_str(), config_.rejoin_after.count(), roster_rejoins);
     link.reset();
     link = std::make_unique<SpectatorLink>(config_.where, assets_dir, name, config_.fps, config_.language);
+    roster_watch.Restart(Clock::now());
   };
   // When the frames are written or the window closes: what the spectator received, for a
   // comparison with an oracle.
@@ -398,8 +459,8 @@ int Spectator::Run() {
     WorldView& world = link->world;
     world.Update();  // what arrived since the last frame counts too (a stop between frames)
     PrintWorldSummary(name, world.world(), world.dropped(), world.device_deadlines_missed());
-    if (rejoin.rejoins() > 0) {
-      std::printf("[graphics_node %s] rejoined the session %d time(s)\n", name.c_str(), rejoin.rejoins());
+    if (rejoin.rejoins() + roster_rejoins > 0) {
+      std::printf("[graphics_node %s] rejoined the session %d time(s)\n", name.c_str(), rejoin.rejoins() + roster_rejoins);
     }
     std::printf("[graphics_node %s] %s\n", name.c_str(), link->participant.TrafficSummary().c_str());
     std::fflush(stdout);

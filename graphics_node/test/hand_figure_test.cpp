@@ -4,6 +4,9 @@
 
 #include <random>
 
+#include "handshare/haptic/sim_hand.hpp"
+#include "handshare/hiro/hiro_device.hpp"
+#include "handshare/hiro/hiro_hardware.hpp"
 #include "handshare/render/offscreen_renderer.hpp"
 
 namespace handshare::graphics {
@@ -79,6 +82,36 @@ TEST(HandFigure, BadFingertipsGiveAStraightHandNotNaN) {
   for (const auto& finger : hand.joints_W) {
     for (const auto& j : finger) EXPECT_TRUE(j.allFinite());
   }
+}
+
+// The HIRO II's hand, drawn from the joint angles its device state carries, ends at the
+// fingertips the same state reports (the device's own kinematics, run by its driver on its
+// simulated plant, as an independent path), with the model's link lengths.
+TEST(HandFigure, TheHiroHandFromItsJointAnglesReachesTheReportedFingertips) {
+  const std::string config = std::string(HANDSHARE_SOURCE_ASSETS) + "/devices/hiro2.json";
+  hiro::HiroSimOptions sim;
+  sim.script = haptic::HandScript::Parse("start 0 0 0\nmove 0.4 0.03 0.02 0.01 grip 1\nmove 0.4 -0.02 0.0 0.03 grip 0\n", "t");
+  auto device = hiro::MakeSimulatedHiroDevice(config, sim);
+  const hiro::HiroModel& model = device->model();
+  haptic::DeviceReading r;
+  double worst_m = 0.0;
+  for (int n = 1; n <= 800; ++n) {
+    device->Read(n * 1e-3, r);
+    ASSERT_TRUE(r.valid);
+    device->Command({});
+    if (n % 50 != 0) continue;
+    Eigen::Isometry3d X_WH = Eigen::Isometry3d::Identity();
+    X_WH.linear() = Eigen::Quaterniond(r.q_WH_wxyz[0], r.q_WH_wxyz[1], r.q_WH_wxyz[2], r.q_WH_wxyz[3]).toRotationMatrix();
+    X_WH.translation() = r.p_WH;
+    const HandFigure hand = HiroHandFigure(model, X_WH, r.q_hand_rad);
+    for (int f = 0; f < kHandFingers; ++f) {
+      worst_m = std::max(worst_m, (hand.joints_W[f][3] - r.p_WE[f]).norm());
+      for (int k = 0; k < 2; ++k) {
+        EXPECT_NEAR((hand.joints_W[f][k + 1] - hand.joints_W[f][k]).norm(), model.finger[f].link_m[k], 1e-9) << f;
+      }
+    }
+  }
+  EXPECT_LT(worst_m, 1e-9) << "the drawn fingertips are where the device says they are";
 }
 
 TEST(HandFigure, TheUsersEyeIsBehindAndAboveTheHandAndTurnsWithIt) {

@@ -32,6 +32,8 @@ void ToDeviceState(const HapticSnapshot& s, msg::DeviceState& out) {
     }
   }
   out.fingertip_radius_m(s.fingertip_radius_m);
+  for (int j = 0; j < 15; ++j) out.q_hand_rad()[j] = s.q_hand_rad[j];
+  for (int j = 0; j < 6; ++j) out.q_arm_rad()[j] = s.q_arm_rad[j];
   out.fault(s.fault);
 }
 

@@ -68,9 +68,13 @@ TEST_F(BridgeConversions, DeviceStateCarriesTheSnapshot) {
   s.p_WE_m[4][1] = -0.03;
   s.f_E_W_N[2][0] = 1.5;
   s.fingertip_radius_m = 0.008;
+  s.q_hand_rad[14] = 0.7;
+  s.q_arm_rad[5] = -0.4;
   s.fault = true;
   msg::DeviceState m;
   ToDeviceState(s, m);
+  EXPECT_EQ(m.q_hand_rad()[14], 0.7);
+  EXPECT_EQ(m.q_arm_rad()[5], -0.4);
   EXPECT_EQ(m.seq(), 42u);
   EXPECT_EQ(m.stamp_ns(), 123456789u);
   EXPECT_EQ(m.p_WH_m()[2], 0.2);

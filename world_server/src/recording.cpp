@@ -13,6 +13,7 @@
 #include <thread>
 
 #include "handshare/common/clock.hpp"
+#include "handshare/common/roster_watch.hpp"
 #include "handshare/common/shutdown.hpp"
 #include "handshare/dds/membership.hpp"
 #include "handshare/dds/messages.hpp"
@@ -538,7 +539,7 @@ int RunRecorder(const RecordConfig& config) {
     participant.reset();
   };
   join();
-  RosterWatch roster(config.rejoin_after);
+  common::RosterWatch roster(config.rejoin_after);
   int rejoins = 0;
   auto roster_checked = SteadyClock::now();
   std::printf("[session_record] recording session '%s' on domain %d into %s\n", where.session.c_str(),

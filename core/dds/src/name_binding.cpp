@@ -28,8 +28,23 @@ std::string AuthorMismatch(const std::string& user, const Guid& announced, const
 }
 
 void NameBinding::OnMember(const Guid& instance, const std::string& user, const Guid& writer, msg::NodeKind kind,
-                           double view_Hz) {
-  members_[instance] = Member{user, writer, kind, view_Hz};
+                           double view_Hz, const std::string& device) {
+  members_[instance] = Member{user, writer, kind, view_Hz, device};
+}
+
+std::vector<std::string> NameBinding::users() const {
+  std::vector<std::string> out;
+  for (const auto& [instance, m] : members_) {
+    if (std::find(out.begin(), out.end(), m.user) == out.end()) out.push_back(m.user);
+  }
+  return out;
+}
+
+std::string NameBinding::DeviceOf(const std::string& user) const {
+  for (const auto& [instance, m] : members_) {
+    if (m.user == user && m.kind == msg::NODE_HAPTIC) return m.device;
+  }
+  return "";
 }
 
 Viewers NameBinding::viewers() const {
@@ -67,7 +82,7 @@ void NameBinding::Follow(Reader<msg::MemberInfo>& reader) {
   SampleMeta meta;
   while (reader.TakeNext(info, meta)) {
     if (meta.valid_data && meta.instance_state == InstanceState::kAlive && !info.leaving()) {
-      OnMember(meta.instance, info.user().to_string(), meta.writer, info.kind(), info.view_Hz());
+      OnMember(meta.instance, info.user().to_string(), meta.writer, info.kind(), info.view_Hz(), info.device().to_string());
     } else {
       OnMemberGone(meta.instance);
     }

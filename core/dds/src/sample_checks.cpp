@@ -159,6 +159,9 @@ std::string CheckDeviceState(const msg::DeviceState& s, std::string_view session
     c.Vector("f_E_W_N[" + std::to_string(i) + "]", s.f_E_W_N()[i], 3, b.max_force_N);
   }
   c.Range("fingertip_radius_m", s.fingertip_radius_m(), 0.0, b.max_fingertip_radius_m);
+  // Joint angles (screens draw a HIRO II's hand from them): finite, each within a few turns.
+  for (std::size_t j = 0; j < s.q_hand_rad().size(); ++j) c.Range("q_hand_rad[" + std::to_string(j) + "]", s.q_hand_rad()[j], -20.0, 20.0);
+  for (std::size_t j = 0; j < s.q_arm_rad().size(); ++j) c.Range("q_arm_rad[" + std::to_string(j) + "]", s.q_arm_rad()[j], -20.0, 20.0);
   return c.reason();
 }
 

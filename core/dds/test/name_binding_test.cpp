@@ -41,6 +41,21 @@ TEST(NameBinding, ANameIsFreeAgainOnceItsMemberLeftOrItsWriterWasLost) {
   EXPECT_EQ(b.size(), 0u);
 }
 
+TEST(NameBinding, APresentUsersDeviceIsKnownUntilTheyLeave) {
+  NameBinding b;
+  b.OnMember(Instance(1), "alice", Endpoint(7, 1), msg::NODE_HAPTIC, 0.0, "sim");
+  b.OnMember(Instance(2), "bob", Endpoint(9, 1), msg::NODE_HAPTIC, 0.0, "hiro");
+  b.OnMember(Instance(3), "screen", Endpoint(11, 1), msg::NODE_GRAPHICS, 30.0);
+  EXPECT_EQ(b.DeviceOf("alice"), "sim");
+  EXPECT_EQ(b.DeviceOf("bob"), "hiro");
+  EXPECT_EQ(b.DeviceOf("screen"), "");
+  EXPECT_EQ(b.DeviceOf("carol"), "");
+  EXPECT_EQ(b.users(), (std::vector<std::string>{"alice", "bob", "screen"}));
+  b.OnMemberGone(Instance(2));
+  EXPECT_EQ(b.DeviceOf("bob"), "");
+  EXPECT_EQ(b.users(), (std::vector<std::string>{"alice", "screen"}));
+}
+
 TEST(NameBinding, ThePresentViewersAndTheFastestFrameRate) {
   NameBinding b;
   b.OnMember(Instance(1), "alice", Endpoint(7, 1), msg::NODE_HAPTIC);

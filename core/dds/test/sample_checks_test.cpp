@@ -4,6 +4,8 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
+
 #include <limits>
 #include <string>
 #include <vector>
@@ -144,6 +146,14 @@ TEST(SampleChecks, DeviceStatesBoardsAndMembers) {
   EXPECT_EQ(CheckDeviceState(d, "museum"), "");
   d.p_WE_m()[4][0] = kInf;
   EXPECT_EQ(CheckDeviceState(d, "museum"), "p_WE_m[4][0] is inf");
+  d.p_WE_m()[4][0] = 0.0;
+  d.q_hand_rad()[7] = std::nan("");
+  EXPECT_EQ(CheckDeviceState(d, "museum"), "q_hand_rad[7] is nan (expected -20 to 20)");
+  d.q_hand_rad()[7] = 0.3;
+  d.q_arm_rad()[2] = 1e6;
+  EXPECT_EQ(CheckDeviceState(d, "museum"), "q_arm_rad[2] is 1e+06 (expected -20 to 20)");
+  d.q_arm_rad()[2] = 0.0;
+  EXPECT_EQ(CheckDeviceState(d, "museum"), "");
   msg::MessageBoard b;
   b.session("museum");
   b.language("en");

@@ -42,7 +42,7 @@ class CueWatch {
   /// clicks softly, a book opened or at another page swishes.
   std::optional<Cue> OnControl(const std::string& control_id, const ControlSnapshot& now);
   /// The world shown: another world than the last one chimes (not the first one seen; a new
-  /// revision of the same world, a gravity change, is silent). Forgets the controls.
+  /// revision of the same world, a gravity change, is silent). Forgets the other worlds' controls.
   std::optional<Cue> OnWorld(const std::string& scene);
 
  private:

@@ -8,6 +8,10 @@
 
 #include "handshare/render/scene_view.hpp"
 
+namespace handshare::hiro {
+struct HiroModel;
+}
+
 namespace handshare::graphics {
 
 /// Fingers thumb first, as the device state's fingertips.
@@ -20,6 +24,9 @@ struct HandFigure {
   /// Per finger: true if the fingertip was farther from its knuckle than the finger is long (the
   /// links were stretched to reach it).
   std::array<bool, kHandFingers> stretched{};
+  /// The palm, a box in H: its centre and half sizes along H's axes.
+  Eigen::Vector3d palm_center_H{0.0, 0.0, -0.004};  // its front edge at the knuckles
+  Eigen::Vector3d palm_half_extents_H{0.040, 0.030, 0.008};
 };
 
 /// The link lengths of each finger [m], knuckle to fingertip, thumb first (an adult hand).
@@ -33,6 +40,12 @@ struct HandFigure {
 /// straightens the finger and stretches it. Non-finite input gives a hand at X_WH, fingers straight.
 [[nodiscard]] HandFigure FitHandToFingertips(const Eigen::Isometry3d& X_WH,
                                              const std::array<Eigen::Vector3d, kHandFingers>& p_WE);
+
+/// The HIRO II's own hand at its joint angles (DeviceState::q_hand_rad, finger f joint j at
+/// 3 f + j), through the model's finger kinematics (hiro::FingerFk) from its hand base X_WH:
+/// each finger's three joint centres and its fingertip; the palm spans the fingers' bases.
+[[nodiscard]] HandFigure HiroHandFigure(const hiro::HiroModel& model, const Eigen::Isometry3d& X_WH,
+                                        const std::array<double, 3 * kHandFingers>& q_hand_rad);
 
 /// Adds the hand to a scene: the palm as a box, each link as a thin box from joint to joint, each
 /// joint as a sphere. The fingertips are the caller's to draw, as spheres of fingertip_radius_m:

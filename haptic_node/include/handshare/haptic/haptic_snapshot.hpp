@@ -19,6 +19,9 @@ struct HapticSnapshot {
   /// window's t_s span is the mean force over every step of it (not over the bridge's samples).
   double impulse_E_W_Ns[kFingers][3] = {};
   double fingertip_radius_m = 0.0;
+  /// The device's joint angles (zeros for a device without joints): screens draw its hand.
+  double q_hand_rad[15] = {};
+  double q_arm_rad[6] = {};
   bool fault = false;  // device fault or a finger's safety fault this step
 };
 

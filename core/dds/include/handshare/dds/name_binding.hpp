@@ -35,9 +35,9 @@ struct Viewers {
 class NameBinding {
  public:
   /// A live member sample: member `instance` (its key hash) is `user`, announced by `writer`;
-  /// a graphics node gives its frame rate (view_Hz), other nodes 0.
+  /// a graphics node gives its frame rate (view_Hz), other nodes 0; a haptic node its device.
   void OnMember(const Guid& instance, const std::string& user, const Guid& writer, msg::NodeKind kind = msg::NODE_HAPTIC,
-                double view_Hz = 0.0);
+                double view_Hz = 0.0, const std::string& device = "");
   /// Member `instance` left (disposed) or has no writer any more.
   void OnMemberGone(const Guid& instance);
   /// A member_info writer went away (killed or lost): the members it announced are gone.
@@ -53,6 +53,10 @@ class NameBinding {
   /// Takes every member sample and lost member writer of `reader` (empty: nothing).
   void Follow(Reader<msg::MemberInfo>& reader);
   std::size_t size() const { return members_.size(); }
+  /// The names of the present members (users and nodes), each once.
+  std::vector<std::string> users() const;
+  /// The device a present user announced ("sim", "hiro", "replay"), "" if none or not present.
+  std::string DeviceOf(const std::string& user) const;
   /// The present graphics nodes, for a writer of device states that sends only as often as
   /// the fastest of them draws.
   Viewers viewers() const;
@@ -63,6 +67,7 @@ class NameBinding {
     Guid writer{};
     msg::NodeKind kind = msg::NODE_HAPTIC;
     double view_Hz = 0.0;
+    std::string device;
   };
   std::map<Guid, Member> members_;
 };
