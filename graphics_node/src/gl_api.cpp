@@ -29,6 +29,7 @@ void GlApi::Load(Loader loader) {
   Resolve(loader, "glColorMask", ColorMask);
   Resolve(loader, "glColorMaterial", ColorMaterial);
   Resolve(loader, "glDepthFunc", DepthFunc);
+  Resolve(loader, "glDepthMask", DepthMask);
   Resolve(loader, "glDisable", Disable);
   Resolve(loader, "glDrawPixels", DrawPixels);
   Resolve(loader, "glEnable", Enable);

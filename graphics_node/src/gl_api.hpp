@@ -23,6 +23,7 @@ struct GlApi {
   decltype(&::glColorMask) ColorMask = nullptr;
   decltype(&::glColorMaterial) ColorMaterial = nullptr;
   decltype(&::glDepthFunc) DepthFunc = nullptr;
+  decltype(&::glDepthMask) DepthMask = nullptr;
   decltype(&::glDisable) Disable = nullptr;
   decltype(&::glDrawPixels) DrawPixels = nullptr;
   decltype(&::glEnable) Enable = nullptr;

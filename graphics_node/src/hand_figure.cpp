@@ -108,7 +108,7 @@ void AddHandFigure(const HandFigure& hand, double fingertip_radius_m, const rend
   palm.half_extents_m = hand.palm_half_extents_H;
   palm.q_WB = Eigen::Quaterniond(hand.X_WH.linear());
   palm.rgb = skin;
-  view.boxes.push_back(palm);
+  view.hand_boxes.push_back(palm);
   for (const auto& joints : hand.joints_W) {
     for (int k = 0; k < 3; ++k) {
       const Eigen::Vector3d a = joints[k];
@@ -125,9 +125,9 @@ void AddHandFigure(const HandFigure& hand, double fingertip_radius_m, const rend
       link.half_extents_m = Eigen::Vector3d(kLinkHalfWidthM, 0.5 * length, kLinkHalfWidthM);
       link.q_WB = Eigen::Quaterniond::FromTwoVectors(Eigen::Vector3d::UnitY(), (b - a) / length);
       link.rgb = skin;
-      view.boxes.push_back(link);
+      view.hand_boxes.push_back(link);
     }
-    for (int k = 0; k < 3; ++k) view.spheres.push_back(render::Sphere{joints[k], kJointRadiusM, skin});
+    for (int k = 0; k < 3; ++k) view.hand_spheres.push_back(render::Sphere{joints[k], kJointRadiusM, skin});
   }
 }
 

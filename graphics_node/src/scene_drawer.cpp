@@ -195,6 +195,13 @@ void DrawEye(const GlApi& gl, const SceneView& scene, const Camera& camera, Eye 
   DrawSpheres(gl, scene.spheres);
   DrawBoxes(gl, scene.boxes);
   DrawMeshes(gl, scene.meshes);
+  // The hands: hidden by the scene in front of them, but writing no depth, so that the markers
+  // drawn after them (the fingertips) show through them.
+  gl.DepthMask(GL_FALSE);
+  DrawBoxes(gl, scene.hand_boxes);
+  DrawSpheres(gl, scene.hand_spheres);
+  gl.DepthMask(GL_TRUE);
+  DrawSpheres(gl, scene.markers);
   gl.Disable(GL_LIGHTING);
 }
 

@@ -233,7 +233,7 @@ class WorldView {
       }
       for (int i = 0; i < 5; ++i) {
         const auto& p = hand.state.p_WE_m()[i];
-        view.spheres.push_back(render::Sphere{
+        view.markers.push_back(render::Sphere{
             Eigen::Vector3d(p[0], p[1], p[2]), hand.state.fingertip_radius_m(),
             render::Rgb{kFingertipRgb[i][0], kFingertipRgb[i][1], kFingertipRgb[i][2]}});
       }

@@ -144,7 +144,7 @@ TEST(HandFigure, TheDrawnHandLiesBetweenPalmAndFingertips) {
   const render::Rgb skin{0.86F, 0.70F, 0.58F};
   const HandFigure hand = FitHandToFingertips(Eigen::Isometry3d::Identity(), kOpen_H);
   AddHandFigure(hand, 0.008, skin, scene);
-  for (int f = 0; f < kHandFingers; ++f) scene.spheres.push_back(render::Sphere{kOpen_H[f], 0.008, render::Rgb{1.0F, 0.0F, 0.0F}});
+  for (int f = 0; f < kHandFingers; ++f) scene.markers.push_back(render::Sphere{kOpen_H[f], 0.008, render::Rgb{1.0F, 0.0F, 0.0F}});
   const render::ImageRgb8 image = renderer.Render(scene, camera);
   const auto is_skin = [](const std::uint8_t* p) { return p[0] > 60 && p[1] > 0.6 * p[0] && p[1] < 0.95 * p[0] && p[2] < p[1]; };
   const auto is_red = [](const std::uint8_t* p) { return p[0] > 110 && p[1] < 0.5 * p[0] && p[2] < 0.5 * p[0]; };
@@ -168,6 +168,34 @@ TEST(HandFigure, TheDrawnHandLiesBetweenPalmAndFingertips) {
   EXPECT_TRUE(is_skin(image.At(mx, my))) << mx << "," << my;
   const auto [sx, sy] = project(Eigen::Vector3d(0.12, 0.05, 0.0));
   EXPECT_FALSE(is_skin(image.At(sx, sy)));
+}
+
+// A fingertip behind its own hand (as the spectator, behind the users, sees them) shows
+// through the hand; behind a scene object, it is hidden.
+TEST(HandFigure, FingertipsShowThroughTheHandButNotThroughTheScene) {
+  render::OffscreenRenderer renderer;
+  render::Camera camera;
+  camera.eye_W = Eigen::Vector3d(0.0, -0.5, 0.0);
+  camera.target_W = Eigen::Vector3d::Zero();
+  camera.width_px = 200;
+  camera.height_px = 200;
+  const auto centre_is_red = [&](const render::SceneView& scene) {
+    const std::uint8_t* p = renderer.Render(scene, camera).At(100, 100);
+    return p[0] > 110 && p[1] < 0.5 * p[0] && p[2] < 0.5 * p[0];
+  };
+  render::Box wall;
+  wall.p_W = Eigen::Vector3d(0.0, -0.1, 0.0);  // between the eye and the fingertip
+  wall.half_extents_m = Eigen::Vector3d(0.05, 0.005, 0.05);
+  wall.rgb = render::Rgb{0.86F, 0.70F, 0.58F};
+  render::SceneView scene;
+  scene.grid.visible = false;
+  scene.markers.push_back(render::Sphere{Eigen::Vector3d::Zero(), 0.01, render::Rgb{1.0F, 0.0F, 0.0F}});
+  EXPECT_TRUE(centre_is_red(scene));
+  scene.hand_boxes.push_back(wall);
+  EXPECT_TRUE(centre_is_red(scene)) << "through the hand";
+  scene.hand_boxes.clear();
+  scene.boxes.push_back(wall);
+  EXPECT_FALSE(centre_is_red(scene)) << "a scene object in front hides it";
 }
 
 }  // namespace

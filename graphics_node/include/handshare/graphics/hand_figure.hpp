@@ -47,9 +47,9 @@ struct HandFigure {
 [[nodiscard]] HandFigure HiroHandFigure(const hiro::HiroModel& model, const Eigen::Isometry3d& X_WH,
                                         const std::array<double, 3 * kHandFingers>& q_hand_rad);
 
-/// Adds the hand to a scene: the palm as a box, each link as a thin box from joint to joint, each
-/// joint as a sphere. The fingertips are the caller's to draw, as spheres of fingertip_radius_m:
-/// the last links stop at their surface, so they never hide a fingertip's colour.
+/// Adds the hand to a scene's hand parts: the palm as a box, each link as a thin box from joint
+/// to joint, each joint as a sphere. The fingertips are the caller's to draw, as markers of
+/// fingertip_radius_m (seen through the hand); the last links stop at their surface.
 void AddHandFigure(const HandFigure& hand, double fingertip_radius_m, const render::Rgb& skin,
                    render::SceneView& view);
 

@@ -114,6 +114,12 @@ struct SceneView {
   std::vector<Sphere> spheres;
   std::vector<Box> boxes;
   std::vector<TriangleMesh> meshes;
+  /// The users' hands, drawn after the scene (hidden by what is in front of them) without
+  /// writing depth: the markers show through them.
+  std::vector<Box> hand_boxes;
+  std::vector<Sphere> hand_spheres;
+  /// Drawn last, over the hands: the fingertips (the contact points a spectator must see).
+  std::vector<Sphere> markers;
   GroundGrid grid;
   /// The message board, UTF-8, drawn at the bottom of the image over a dark band in the caption
   /// font (FreeType, a CJK font: Latin and Japanese): wrapped to the image's width, '\n' starts a
