@@ -26,7 +26,8 @@ import time
 SKIP = 77
 INSTALLED_EXES = ["world_server", "session_report", "haptic_node", "graphics_node", "audio_guide",
                   "world_prepare", "fem_solve", "fem_precompute", "handshare-demo"]
-INSTALLED_DATA = ["assets/scenes/start_menu.json", "assets/meshes/button.obj", "assets/devices/hiro2.json",
+INSTALLED_DATA = ["assets/scenes/start_menu.json", "assets/meshes/button.obj", "assets/images/solar_system.png",
+                  "assets/devices/hiro2.json",
                   "qos/handshare_qos.xml", "scripts/tour_alice.hand", "scripts/tour_bob.hand"]
 
 

@@ -35,7 +35,7 @@ def make_assets(work):
     """The project's assets, with a dinosaur world that also holds a ball, in the air."""
     assets = os.path.join(work, "assets")
     os.makedirs(os.path.join(assets, "scenes"))
-    for folder in ("meshes", "devices"):
+    for folder in ("meshes", "images", "devices"):
         os.symlink(os.path.abspath(os.path.join(ASSETS, folder)), os.path.join(assets, folder))
     for path in glob.glob(os.path.join(ASSETS, "scenes", "*.json")):
         with open(path) as f:

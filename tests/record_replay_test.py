@@ -46,13 +46,15 @@ class RecordHarness(Harness):
 
 
 def frame_times(folder):
+    """{(scene, revision, hands): (frame file, moving objects' pose stamps)} of a spectator's
+    frames that show hands."""
     rows = {}
     with open(os.path.join(folder, "frame_times.csv")) as f:
         next(f)
         for line in f:
-            frame, file, scene, revision, hands = line.rstrip("\n").split(",")
+            frame, file, scene, revision, hands, objects = line.rstrip("\n").split(",")
             if hands:
-                rows[(scene, int(revision), hands)] = os.path.join(folder, file)
+                rows[(scene, int(revision), hands)] = (os.path.join(folder, file), objects)
     return rows
 
 
@@ -133,21 +135,25 @@ def main():
         check(h.wait("replay", 30) == 0, "the replay spectator did not end cleanly")
 
         live, replay = frame_times(os.path.join(args.work, "live")), frame_times(os.path.join(args.work, "replay"))
-        # Pairs: the same world and revision, and hands' device states at most one device-state
-        # period (10 ms at 100 Hz) apart. The two spectators draw in their own phase, so showing
-        # the very same states is luck (2 of ~270 frames on a loaded machine); a hand moves at
-        # most a few mm in 10 ms, which the pixel tolerance covers.
-        def stamps(hands):
-            return {u: int(t) for u, t in (h.split("@") for h in hands.split(";") if h)}
+        # Pairs: the same world and revision, hands' device states at most one device-state
+        # period (10 ms at 100 Hz) apart, and the same poses of moving objects (the Daphnia
+        # bobs: its object states come about every 40 ms, and a pose 40 ms older is a pixel or
+        # two off all round its outline, which failed 1 run in about 20 under load). The two
+        # spectators draw in their own phase, so showing the very same states is luck (2 of ~270
+        # frames on a loaded machine); a hand moves at most a few mm in 10 ms, which the pixel
+        # tolerance covers.
+        def stamps(text):
+            return {u: int(t) for u, t in (h.split("@") for h in text.split(";") if h)}
         replay_by_world = {}
-        for (scene, rev, hands), path in replay.items():
-            replay_by_world.setdefault((scene, rev), []).append((stamps(hands), path))
+        for (scene, rev, hands), (path, objects) in replay.items():
+            replay_by_world.setdefault((scene, rev), []).append((stamps(hands), stamps(objects), path))
         pairs = []
-        for (scene, rev, hands), path in live.items():
+        for (scene, rev, hands), (path, objects) in live.items():
             want = stamps(hands)
+            want_objects = stamps(objects)
             best = None
-            for got, rpath in replay_by_world.get((scene, rev), []):
-                if got.keys() != want.keys():
+            for got, got_objects, rpath in replay_by_world.get((scene, rev), []):
+                if got.keys() != want.keys() or got_objects != want_objects:
                     continue
                 gap = max(abs(got[u] - want[u]) for u in want)
                 if gap <= 10_000_000 and (best is None or gap < best[0]):

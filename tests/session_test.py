@@ -1069,9 +1069,82 @@ def case_lever_round_trip(h, domain):
     check(h.stop("world_server", 30) == 0, "world_server failed")
 
 
+def book_page_ink(image, camera, corners, rgb_test):
+    """How many pixels inside the projected middle half of a page pass rgb_test."""
+    cols, rows = [], []
+    for p in corners:
+        col, row, _, _ = project(camera, p)
+        cols.append(col)
+        rows.append(row)
+    c0, c1 = sorted(cols)[1], sorted(cols)[2]  # the inner half, away from the page's edges
+    r0, r1 = sorted(rows)[1], sorted(rows)[2]
+    n = 0
+    for y in range(max(0, int(r0)), min(image.size[1], int(r1))):
+        for x in range(max(0, int(c0)), min(image.size[0], int(c1))):
+            n += 1 if rgb_test(image.getpixel((x, y))) else 0
+    return n
+
+
+def case_book(h, domain):
+    """A book as a visitor uses it (issue: books that are books): in the start menu alice opens
+    the solar-system book, which shows page 1 (its board message, no other world), then swipes
+    its right page and turns to page 2, whose action is the solar system. The screen draws the
+    open book with page 1's picture (the solar system's dark sky) on the left page and its text
+    on paper on the right."""
+    from PIL import Image
+
+    session = f"it-book-{os.getpid()}"
+    frames = os.path.join(h.work, "frames")
+    h.start("world_server", "world_server", "--domain", domain, "--session", session, "--scene", "start_menu")
+    h.wait_for_line("world_server", "message board #1", 30)
+    h.start("spectator", "graphics_node", "--domain", domain, "--session", session, "--headless",
+            "--frames", 100000, "--fps", 4, "--out", frames)
+    h.wait_for_line("spectator", "scene 'start_menu'", 60)
+    h.start("alice", "haptic_node", "--domain", domain, "--session", session, "--user", "alice",
+            "--script", os.path.join(DATA, "book_alice.hand"))
+    h.wait_for_line("world_server", "control book_solar_system: opened by alice", 90)
+    h.wait_for_line("world_server", "Planets in the solar system.", 30)
+    h.wait_for_line("spectator", "control 'book_solar_system' of 'start_menu' at index 0, engaged (by alice)", 30)
+    h.wait_for_line("world_server", "control book_solar_system by alice: scene 'solar_system'", 90)
+    h.wait_for_line("alice", "scene 'solar_system'", 60)
+    server = h.log("world_server")
+    opened = server.index("control book_solar_system: opened by alice")
+    check("scene 'solar_system'" not in server[:opened], "the book went to its world before it was opened")
+    check(re.search(r"control book_solar_system: page_turned by alice \(value 1\.000", server),
+          "the world server should have taken a turn to page 2 (index 1)")
+    check(h.stop("spectator", 20) == 0, "the spectator did not end cleanly")
+
+    # The frames: the open book at page 1, its picture on the left page and text on the right.
+    with open(os.path.join(frames, "camera.json")) as f:
+        camera = json.load(f)
+    with open(os.path.join(HERE, "..", "assets", "scenes", "start_menu.json")) as f:
+        book = [c for c in json.load(f)["controls"] if c["id"] == "book_solar_system"][0]
+    (x, y, z), (w, hgt, _) = book["position_m"], book["size_m"]
+    left = [(x - 1.5 * w, y - hgt / 2, z), (x - 0.5 * w, y - hgt / 2, z), (x - 0.5 * w, y + hgt / 2, z),
+            (x - 1.5 * w, y + hgt / 2, z)]
+    right = [(x - 0.5 * w, y - hgt / 2, z), (x + 0.5 * w, y - hgt / 2, z), (x + 0.5 * w, y + hgt / 2, z),
+             (x - 0.5 * w, y + hgt / 2, z)]
+    sky = lambda p: p[2] < 80 and p[2] > p[0] + 15 and p[2] > p[1] + 10  # solar_system.png's (14, 18, 44)
+    paper = lambda p: p[0] > 225 and p[1] > 220 and p[2] > 200            # the page (245, 240, 224), unlit
+    ink = lambda p: max(p) < 110                                             # the text
+    shown = []
+    for png in sorted(glob.glob(os.path.join(frames, "frame_*.png"))):
+        image = Image.open(png).convert("RGB")
+        shown.append((png, book_page_ink(image, camera, left, sky), book_page_ink(image, camera, right, paper),
+                      book_page_ink(image, camera, right, ink)))
+    check(shown, f"no frames in {frames}")
+    check(shown[0][1] == 0 and shown[0][2] == 0, f"the first frame shows the book shut: {shown[0]}")
+    open_frames = [s for s in shown if s[1] > 50 and s[2] > 200 and s[3] > 20]
+    check(open_frames, "no frame shows the open book with page 1's picture and text: "
+                       f"(frame, sky px, paper px, ink px) = {shown}")
+    print(f"{len(open_frames)} of {len(shown)} frames show the book open at page 1, e.g. {open_frames[0]}")
+    check(h.stop("alice", 30) == 0, "alice's haptic node failed")
+    check(h.stop("world_server", 30) == 0, "world_server failed")
+
+
 CASES = {"shared_session": case_shared_session, "lever_round_trip": case_lever_round_trip, "encyclopedia": case_encyclopedia, "killed_member": case_killed_member,
          "vanished_member": case_vanished_member,
-         "signals": case_signals, "bad_input": case_bad_input, "rejoin": case_rejoin}
+         "signals": case_signals, "bad_input": case_bad_input, "rejoin": case_rejoin, "book": case_book}
 
 
 def run_cases(cases, harness=None):

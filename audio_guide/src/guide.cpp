@@ -82,13 +82,12 @@ int Guide::Run() {
     std::fflush(stdout);
   };
   const auto sender = [](const dds::SampleMeta& m) { return "participant " + dds::ParticipantOf(m.writer); };
-  const auto log_dropped = [&](const std::string& line) { say(line); };
   while (!common::ShutdownRequested()) {
     if (config_.where.duration.count() > 0 && Clock::now() - start >= config_.where.duration) break;
     msg::SceneState scene;
     while (link->scene_reader && link->scene_reader.TakeNext(scene, meta)) {
       if (!meta.valid_data ||
-          !dropped.Accept("scene_state", sender(meta), dds::CheckSceneState(scene, config_.where.session), log_dropped)) {
+          !dropped.Accept("scene_state", sender(meta), dds::CheckSceneState(scene, config_.where.session), say)) {
         continue;
       }
       if (const auto cue = cue_watch.OnWorld(scene.scene().to_string())) sound(*cue, "world " + scene.scene().to_string());
@@ -96,7 +95,7 @@ int Guide::Run() {
     msg::ControlState control;
     while (link->control_reader && link->control_reader.TakeNext(control, meta)) {
       if (!meta.valid_data ||
-          !dropped.Accept("control_state", sender(meta), dds::CheckControlState(control, config_.where.session), log_dropped)) {
+          !dropped.Accept("control_state", sender(meta), dds::CheckControlState(control, config_.where.session), say)) {
         continue;
       }
       const speech::ControlSnapshot now{control.scene().to_string(), control.index(), control.engaged(), control.changes()};
@@ -116,11 +115,7 @@ int Guide::Run() {
     }
     if (!meta.valid_data) continue;
     const std::string bad = dds::CheckMessageBoard(board, config_.where.session);
-    if (!dropped.Accept("message_board", "participant " + dds::ParticipantOf(meta.writer), bad, [&](const std::string& line) {
-          std::fprintf(stderr, "[audio_guide %s] %s\n", name.c_str(), line.c_str());
-        })) {
-      continue;
-    }
+    if (!dropped.Accept("message_board", "participant " + dds::ParticipantOf(meta.writer), bad, say)) continue;
     // The board comes in every language of the scene under one number: this guide speaks one.
     if (board.language().to_string() != config_.language || board.message_id() == last_id) continue;
     last_id = board.message_id();

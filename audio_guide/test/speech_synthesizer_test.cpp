@@ -100,7 +100,7 @@ TEST_F(SpeechSynthesis, JapaneseUsesTheJapaneseVoiceWhereInstalled) {
 // text itself would not do (the ja voice spells its kanji out in English).
 TEST_F(SpeechSynthesis, TheScenesJapaneseReadingsSoundLikeSpeech) {
   if (!synthesizer_.HasLanguage("ja")) GTEST_SKIP() << "espeak-ng-data has no ja voice here";
-  for (const char* name : {"start_menu", "solar_system", "dinosaur", "microscopic", "commons"}) {
+  for (const std::string& name : scene::SceneNames(HANDSHARE_SOURCE_SCENES)) {
     const scene::Scene s = scene::LoadSceneByName(name, HANDSHARE_SOURCE_SCENES);
     const auto ja = std::find_if(s.messages.begin(), s.messages.end(), [](const auto& m) { return m.language == "ja"; });
     ASSERT_NE(ja, s.messages.end()) << name;

@@ -231,21 +231,45 @@ CaptionCache::CaptionCache(std::filesystem::path font_file) : font_file_(std::mo
 CaptionCache::~CaptionCache() = default;
 
 const CaptionBitmap& CaptionCache::For(std::string_view text, int width_px, int height_px) {
-  if (text == text_ && width_px == width_px_ && height_px == height_px_) return bitmap_;
-  text_ = text;
-  width_px_ = width_px;
-  height_px_ = height_px;
+  ++clock_;
+  for (Slot& s : slots_) {
+    if (s.used != 0 && text == s.text && width_px == s.width_px && height_px == s.height_px) {
+      s.used = clock_;
+      last_ = &s;
+      return s.bitmap;
+    }
+  }
+  Slot& s = slots_[0].used <= slots_[1].used ? slots_[0] : slots_[1];  // the one used longest ago
+  s.text = text;
+  s.width_px = width_px;
+  s.height_px = height_px;
+  s.used = clock_;
+  last_ = &s;
   if (text.empty()) {  // no caption: the font is not even opened
-    bitmap_ = CaptionBitmap{};
-    return bitmap_;
+    s.bitmap = CaptionBitmap{};
+    return s.bitmap;
   }
   if (!font_) font_ = std::make_unique<CaptionFont>(font_file_);
+  ++laid_out_;
   const int pixel_size = std::max(12, height_px / 30);
   const int margin_px = pixel_size;
   const int line_px = pixel_size * 5 / 4;  // about the font's line height
   const int max_lines = std::max(1, (height_px / 3) / line_px);
-  bitmap_ = font_->Layout(text, pixel_size, std::max(1, width_px - 2 * margin_px), max_lines);
-  return bitmap_;
+  s.bitmap = font_->Layout(text, pixel_size, std::max(1, width_px - 2 * margin_px), max_lines);
+  return s.bitmap;
+}
+
+LabelCache::LabelCache(std::filesystem::path font_file) : font_file_(std::move(font_file)) {}
+LabelCache::~LabelCache() = default;
+
+const CaptionBitmap& LabelCache::For(const std::string& text, int height_px, int max_width_px) {
+  const int pixel_size = std::max(12, height_px / 40);
+  const auto key = std::make_tuple(text, pixel_size, max_width_px);
+  if (const auto it = layouts_.find(key); it != layouts_.end()) return it->second;
+  if (layouts_.size() >= kEntries) layouts_.clear();
+  if (!font_) font_ = std::make_unique<CaptionFont>(font_file_);
+  ++laid_out_;
+  return layouts_.emplace(key, font_->Layout(text, pixel_size, std::max(1, max_width_px), 2)).first->second;
 }
 
 }  // namespace handshare::render::detail

@@ -3,11 +3,14 @@
 // width (at spaces, and between any two Japanese characters), antialiased into a coverage
 // bitmap that the scene drawer blends over the frame.
 
+#include <array>
 #include <cstdint>
 #include <filesystem>
+#include <map>
 #include <memory>
 #include <string>
 #include <string_view>
+#include <tuple>
 #include <vector>
 
 #include "handshare/render/scene_view.hpp"
@@ -54,8 +57,10 @@ class CaptionFont {
 [[nodiscard]] std::filesystem::path DefaultCaptionFont();
 
 /// The caption of the frames a renderer draws: the font, opened at the first caption, and the
-/// last layout, kept while the text and the size stay the same (a caption changes with the
-/// board, every few seconds at most; a frame is drawn 60 times a second).
+/// last two layouts, kept while the text and the size stay the same (a caption changes with the
+/// board, every few seconds at most; a frame is drawn 60 times a second). Two, because the eyes
+/// of a side-by-side frame of odd width are a pixel apart in width: one layout would be made
+/// again for every eye of every frame.
 class CaptionCache {
  public:
   explicit CaptionCache(std::filesystem::path font_file = DefaultCaptionFont());
@@ -69,15 +74,48 @@ class CaptionCache {
   const CaptionBitmap& For(std::string_view text, int width_px, int height_px);
 
   /// The last caption's statistics.
-  [[nodiscard]] const CaptionStats& stats() const { return bitmap_.stats; }
+  [[nodiscard]] const CaptionStats& stats() const { return last_->bitmap.stats; }
+  /// How many layouts were made so far.
+  [[nodiscard]] std::uint64_t laid_out() const { return laid_out_; }
+
+ private:
+  struct Slot {
+    std::string text;
+    int width_px = -1;
+    int height_px = -1;
+    CaptionBitmap bitmap;
+    std::uint64_t used = 0;
+  };
+  std::filesystem::path font_file_;
+  std::unique_ptr<CaptionFont> font_;
+  std::array<Slot, 2> slots_;
+  const Slot* last_ = &slots_[0];
+  std::uint64_t clock_ = 0;
+  std::uint64_t laid_out_ = 0;
+};
+
+/// The labels' layouts, kept while their text and size stay the same (labels change with the
+/// world; a frame draws each up to 60 times a second). Keeps at most kEntries layouts; beyond
+/// that it starts over. Not thread-safe.
+class LabelCache {
+ public:
+  static constexpr std::size_t kEntries = 64;
+  explicit LabelCache(std::filesystem::path font_file = DefaultCaptionFont());
+  ~LabelCache();
+  LabelCache(const LabelCache&) = delete;
+  LabelCache& operator=(const LabelCache&) = delete;
+
+  /// `text` laid out for a viewport `height_px` high: em height 1/40 of it (at least 12 px), at
+  /// most two lines of at most `max_width_px`.
+  const CaptionBitmap& For(const std::string& text, int height_px, int max_width_px);
+  /// How many layouts were made so far.
+  [[nodiscard]] std::uint64_t laid_out() const { return laid_out_; }
 
  private:
   std::filesystem::path font_file_;
   std::unique_ptr<CaptionFont> font_;
-  std::string text_;
-  int width_px_ = -1;
-  int height_px_ = -1;
-  CaptionBitmap bitmap_;
+  std::map<std::tuple<std::string, int, int>, CaptionBitmap> layouts_;
+  std::uint64_t laid_out_ = 0;
 };
 
 }  // namespace handshare::render::detail

@@ -21,6 +21,7 @@ void Resolve(GlApi::Loader loader, const char* name, Fn& fn) {
 
 void GlApi::Load(Loader loader) {
   Resolve(loader, "glBegin", Begin);
+  Resolve(loader, "glBindTexture", BindTexture);
   Resolve(loader, "glBlendFunc", BlendFunc);
   Resolve(loader, "glClear", Clear);
   Resolve(loader, "glClearColor", ClearColor);
@@ -29,12 +30,18 @@ void GlApi::Load(Loader loader) {
   Resolve(loader, "glColorMask", ColorMask);
   Resolve(loader, "glColorMaterial", ColorMaterial);
   Resolve(loader, "glDepthFunc", DepthFunc);
+  Resolve(loader, "glDeleteTextures", DeleteTextures);
+  Resolve(loader, "glDisableClientState", DisableClientState);
+  Resolve(loader, "glDrawArrays", DrawArrays);
+  Resolve(loader, "glDrawElements", DrawElements);
+  Resolve(loader, "glEnableClientState", EnableClientState);
   Resolve(loader, "glDepthMask", DepthMask);
   Resolve(loader, "glDisable", Disable);
   Resolve(loader, "glDrawPixels", DrawPixels);
   Resolve(loader, "glEnable", Enable);
   Resolve(loader, "glEnd", End);
   Resolve(loader, "glFinish", Finish);
+  Resolve(loader, "glGenTextures", GenTextures);
   Resolve(loader, "glGetError", GetError);
   Resolve(loader, "glLightModelfv", LightModelfv);
   Resolve(loader, "glLightModeli", LightModeli);
@@ -42,16 +49,27 @@ void GlApi::Load(Loader loader) {
   Resolve(loader, "glLineWidth", LineWidth);
   Resolve(loader, "glLoadIdentity", LoadIdentity);
   Resolve(loader, "glLoadMatrixd", LoadMatrixd);
+  Resolve(loader, "glMaterialf", Materialf);
+  Resolve(loader, "glMaterialfv", Materialfv);
   Resolve(loader, "glMatrixMode", MatrixMode);
+  Resolve(loader, "glMultMatrixd", MultMatrixd);
   Resolve(loader, "glNormal3d", Normal3d);
+  Resolve(loader, "glNormalPointer", NormalPointer);
   Resolve(loader, "glPixelStorei", PixelStorei);
+  Resolve(loader, "glPopMatrix", PopMatrix);
+  Resolve(loader, "glPushMatrix", PushMatrix);
   Resolve(loader, "glRasterPos2d", RasterPos2d);
   Resolve(loader, "glReadBuffer", ReadBuffer);
   Resolve(loader, "glReadPixels", ReadPixels);
   Resolve(loader, "glScissor", Scissor);
   Resolve(loader, "glShadeModel", ShadeModel);
+  Resolve(loader, "glTexCoord2d", TexCoord2d);
+  Resolve(loader, "glTexEnvi", TexEnvi);
+  Resolve(loader, "glTexImage2D", TexImage2D);
+  Resolve(loader, "glTexParameteri", TexParameteri);
   Resolve(loader, "glVertex2d", Vertex2d);
   Resolve(loader, "glVertex3d", Vertex3d);
+  Resolve(loader, "glVertexPointer", VertexPointer);
   Resolve(loader, "glViewport", Viewport);
 }
 

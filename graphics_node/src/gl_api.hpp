@@ -15,6 +15,7 @@ struct GlApi {
 
   // Filled by Load(); every pointer is non-null after a successful load.
   decltype(&::glBegin) Begin = nullptr;
+  decltype(&::glBindTexture) BindTexture = nullptr;
   decltype(&::glBlendFunc) BlendFunc = nullptr;
   decltype(&::glClear) Clear = nullptr;
   decltype(&::glClearColor) ClearColor = nullptr;
@@ -23,12 +24,18 @@ struct GlApi {
   decltype(&::glColorMask) ColorMask = nullptr;
   decltype(&::glColorMaterial) ColorMaterial = nullptr;
   decltype(&::glDepthFunc) DepthFunc = nullptr;
+  decltype(&::glDeleteTextures) DeleteTextures = nullptr;
+  decltype(&::glDisableClientState) DisableClientState = nullptr;
+  decltype(&::glDrawArrays) DrawArrays = nullptr;
+  decltype(&::glDrawElements) DrawElements = nullptr;
+  decltype(&::glEnableClientState) EnableClientState = nullptr;
   decltype(&::glDepthMask) DepthMask = nullptr;
   decltype(&::glDisable) Disable = nullptr;
   decltype(&::glDrawPixels) DrawPixels = nullptr;
   decltype(&::glEnable) Enable = nullptr;
   decltype(&::glEnd) End = nullptr;
   decltype(&::glFinish) Finish = nullptr;
+  decltype(&::glGenTextures) GenTextures = nullptr;
   decltype(&::glGetError) GetError = nullptr;
   decltype(&::glLightModelfv) LightModelfv = nullptr;
   decltype(&::glLightModeli) LightModeli = nullptr;
@@ -36,16 +43,27 @@ struct GlApi {
   decltype(&::glLineWidth) LineWidth = nullptr;
   decltype(&::glLoadIdentity) LoadIdentity = nullptr;
   decltype(&::glLoadMatrixd) LoadMatrixd = nullptr;
+  decltype(&::glMaterialf) Materialf = nullptr;
+  decltype(&::glMaterialfv) Materialfv = nullptr;
   decltype(&::glMatrixMode) MatrixMode = nullptr;
+  decltype(&::glMultMatrixd) MultMatrixd = nullptr;
   decltype(&::glNormal3d) Normal3d = nullptr;
+  decltype(&::glNormalPointer) NormalPointer = nullptr;
   decltype(&::glPixelStorei) PixelStorei = nullptr;
+  decltype(&::glPopMatrix) PopMatrix = nullptr;
+  decltype(&::glPushMatrix) PushMatrix = nullptr;
   decltype(&::glRasterPos2d) RasterPos2d = nullptr;
   decltype(&::glReadBuffer) ReadBuffer = nullptr;
   decltype(&::glReadPixels) ReadPixels = nullptr;
   decltype(&::glScissor) Scissor = nullptr;
   decltype(&::glShadeModel) ShadeModel = nullptr;
+  decltype(&::glTexCoord2d) TexCoord2d = nullptr;
+  decltype(&::glTexEnvi) TexEnvi = nullptr;
+  decltype(&::glTexImage2D) TexImage2D = nullptr;
+  decltype(&::glTexParameteri) TexParameteri = nullptr;
   decltype(&::glVertex2d) Vertex2d = nullptr;
   decltype(&::glVertex3d) Vertex3d = nullptr;
+  decltype(&::glVertexPointer) VertexPointer = nullptr;
   decltype(&::glViewport) Viewport = nullptr;
 
   /// Resolves every entry point with `loader` (the current context's GetProcAddress).

@@ -14,7 +14,7 @@ namespace handshare::render {
 struct OffscreenRenderer::Impl {
   OSMesaContext context = nullptr;
   detail::GlApi gl;
-  detail::CaptionCache captions;
+  detail::TextCaches text;  // the caption's layout, the pages' textures
   std::vector<std::uint8_t> rgba;  // OSMesa colour buffer, bottom row first.
 
   Impl() {
@@ -48,7 +48,7 @@ ImageRgb8 OffscreenRenderer::Render(const SceneView& scene, const Camera& camera
     throw std::runtime_error("OffscreenRenderer: OSMesaMakeCurrent failed for " +
                              std::to_string(width_px) + " x " + std::to_string(height_px) + " px");
   }
-  detail::DrawFrame(impl_->gl, scene, camera, mode, width_px, height_px, impl_->captions);
+  detail::DrawFrame(impl_->gl, scene, camera, mode, width_px, height_px, impl_->text);
   impl_->gl.Finish();
 
   // OSMesa's buffer starts at the bottom row; images start at the top.
@@ -64,6 +64,6 @@ ImageRgb8 OffscreenRenderer::Render(const SceneView& scene, const Camera& camera
   return image;
 }
 
-const CaptionStats& OffscreenRenderer::last_caption() const { return impl_->captions.stats(); }
+const CaptionStats& OffscreenRenderer::last_caption() const { return impl_->text.captions.stats(); }
 
 }  // namespace handshare::render

@@ -7,6 +7,7 @@
 
 #include "caption_text.hpp"
 #include "gl_api.hpp"
+#include "page_texture.hpp"
 #include "handshare/render/scene_view.hpp"
 
 namespace handshare::render::detail {
@@ -14,12 +15,19 @@ namespace handshare::render::detail {
 /// Throws std::invalid_argument if the camera or any mesh of `scene` is malformed.
 void ValidateScene(const SceneView& scene, const Camera& camera);
 
+/// What a renderer keeps between frames: the caption's and the labels' layouts, the pages'
+/// textures.
+struct TextCaches {
+  CaptionCache captions;
+  PageCache pages;
+  LabelCache labels;
+};
+
 /// Clears and draws the whole framebuffer (fb_width_px x fb_height_px, GL origin bottom-left)
 /// in `mode`; side by side splits it into two halves. The caption goes into every eye view.
 /// Expects the context of `gl` to be current. Throws on GL errors.
-/// The caption's layout is kept in `captions` between frames.
 void DrawFrame(const GlApi& gl, const SceneView& scene, const Camera& camera, StereoMode mode,
-               int fb_width_px, int fb_height_px, CaptionCache& captions);
+               int fb_width_px, int fb_height_px, TextCaches& text);
 
 /// Bumped each time an OSMesa context is made current in this process. OSMesa and Mesa's GLX
 /// driver share libglapi's per-thread current dispatch, so a window context must really be

@@ -2,8 +2,10 @@
 
 #include "handshare/scene/scene.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <fstream>
+#include <numbers>
 #include <stdexcept>
 #include <system_error>
 
@@ -34,26 +36,59 @@ void Add(DeformationStats& sum, const DeformationStats& s) {
 
 render::Rgb RgbOf(const msg::SceneObject& o) { return {o.rgb()[0], o.rgb()[1], o.rgb()[2]}; }
 
+// Where an object's label points: 1 cm above its top, over its middle (a mesh's drawn
+// vertices; a sphere's or box's centre and half height).
+template <typename Object>
+Eigen::Vector3d LabelPoint(const Object& o, const Eigen::Isometry3d& X_WO) {
+  constexpr double kAbove_m = 0.01;
+  if (o.mesh && !o.mesh->p_MV.empty()) {
+    Eigen::AlignedBox3d box;
+    for (const Eigen::Vector3d& p : o.mesh->p_MV) box.extend(X_WO * p);
+    return Eigen::Vector3d(box.center().x(), box.center().y(), box.max().z() + kAbove_m);
+  }
+  const auto& h = o.spec.half_extent_m();
+  const double up = o.spec.shape() == "sphere" ? h[0] : h[2];
+  return X_WO.translation() + Eigen::Vector3d(0.0, 0.0, up + kAbove_m);
+}
+
 }  // namespace
 
-SceneReplica::SceneReplica(std::filesystem::path assets_dir, std::ostream& errors, std::string prefix)
-    : errors_(errors), prefix_(std::move(prefix)), scenes_dir_(assets_dir / "scenes"), meshes_(std::move(assets_dir)) {}
+SceneReplica::SceneReplica(std::filesystem::path assets_dir, std::ostream& errors, std::string prefix,
+                           std::string language)
+    : errors_(errors),
+      prefix_(std::move(prefix)),
+      scenes_dir_(assets_dir / "scenes"),
+      language_(std::move(language)),
+      meshes_(std::move(assets_dir)) {}
 
 void SceneReplica::OnControlState(const msg::ControlState& state) {
-  control_states_[state.control_id().to_string()] = {state.scene().to_string(), state.index(), state.engaged()};
+  control_states_[state.control_id().to_string()] = {state.scene().to_string(), state.index(), state.engaged(),
+                                                     state.moving(), state.position()};
+}
+
+const SceneReplica::ControlDrawn* SceneReplica::drawn_state(const std::string& control_id) const {
+  const auto it = control_states_.find(control_id);
+  return it == control_states_.end() || it->second.scene != scene_ ? nullptr : &it->second;
 }
 
 std::optional<std::pair<std::int32_t, bool>> SceneReplica::control_state(const std::string& control_id) const {
-  const auto it = control_states_.find(control_id);
-  if (it == control_states_.end() || it->second.scene != scene_) return std::nullopt;
-  return std::pair{it->second.index, it->second.engaged};
+  const ControlDrawn* s = drawn_state(control_id);
+  if (s == nullptr) return std::nullopt;
+  return std::pair{s->index, s->engaged};
 }
 
 Eigen::Isometry3d SceneReplica::DrawnPose(const std::string& id, const Eigen::Isometry3d& X_WO) const {
   const auto g = control_geometry_.find(id);
-  const auto state = control_state(id);
-  if (g == control_geometry_.end() || !state) return X_WO;
-  const auto [index, engaged] = *state;
+  const ControlDrawn* drawn = drawn_state(id);
+  if (g == control_geometry_.end() || drawn == nullptr) return X_WO;
+  if (drawn->moving) {  // where the hand has it now
+    if (!g->second.detent_angles_rad.empty()) return X_WO * Eigen::AngleAxisd(drawn->position, Eigen::Vector3d::UnitX());
+    if (g->second.travel_m > 0.0) {
+      return X_WO * Eigen::Translation3d(0.0, 0.0, -std::clamp(drawn->position, 0.0, g->second.travel_m));
+    }
+  }
+  const auto index = drawn->index;
+  const bool engaged = drawn->engaged;
   const auto& angles = g->second.detent_angles_rad;
   if (index >= 0 && static_cast<std::size_t>(index) < angles.size()) {
     // The handle turns about the hinge axis x of C, from z towards -y as the angle grows.
@@ -77,16 +112,30 @@ void SceneReplica::OnSceneState(const msg::SceneState& state) {
     // The controls' geometry, for drawing them in their state (the meshes are not loaded
     // again). No file of that name (a scene these assets do not have): its controls at rest.
     control_geometry_.clear();
+    labels_.clear();
+    looks_.clear();
     std::error_code ec;
     if (std::filesystem::exists(scenes_dir_ / (scene + ".json"), ec)) {
       try {
         const scene::Scene file = scene::LoadSceneByName(scene, scenes_dir_, scene::LoadOptions{.load_meshes = false});
+        for (const auto& o : file.objects) {  // objects and the controls' visuals
+          if (const std::string& label = scene::TextIn(o.label, language_); !label.empty()) labels_[o.id] = label;
+          looks_[o.id] = render::Appearance{static_cast<float>(o.appearance.specular),
+                                            static_cast<float>(o.appearance.shininess),
+                                            static_cast<float>(o.appearance.opacity)};
+        }
         for (const auto& c : file.controls) {
           ControlGeometry g;
           if (c.type == scene::ControlType::kLever) {
             for (int k = 0; k < c.lever.detents; ++k) g.detent_angles_rad.push_back(c.lever.detent_angle_rad(k));
           } else if (c.type == scene::ControlType::kButton || c.type == scene::ControlType::kArrow) {
             g.travel_m = c.push.travel_m;
+          } else if (c.type == scene::ControlType::kBook) {
+            g.book = true;
+            g.X_WC.linear() = c.q_WC.toRotationMatrix();
+            g.X_WC.translation() = c.p_WC_m;
+            g.size_m = c.size_m;
+            for (const scene::BookPage& page : c.page_content) g.pages.push_back({page.TextIn(language_), page.image_path});
           }
           control_geometry_[c.id] = std::move(g);
         }
@@ -165,7 +214,18 @@ void SceneReplica::OnObjectState(const msg::ObjectState& state) {
     return;
   }
   it->second.X_WO_state = *X_WO;
+  it->second.state_stamp_ns = state.stamp_ns();
   ++stats_.object_states;
+}
+
+std::string SceneReplica::pose_stamps() const {
+  std::string out;
+  for (const std::string& id : order_) {
+    const Object& o = objects_.at(id);
+    if (!o.X_WO_state) continue;
+    out += (out.empty() ? "" : ";") + id + "@" + std::to_string(o.state_stamp_ns);
+  }
+  return out;
 }
 
 std::optional<Eigen::Isometry3d> SceneReplica::X_WO(const std::string& object_id) const {
@@ -192,15 +252,108 @@ DeformationStats SceneReplica::deformation_stats() const {
   return sum;
 }
 
+std::shared_ptr<const render::ImageRgb8> SceneReplica::PageImage(const std::filesystem::path& file) const {
+  if (file.empty()) return nullptr;
+  if (const auto it = page_images_.find(file); it != page_images_.end()) return it->second;
+  std::shared_ptr<const render::ImageRgb8> image;
+  try {
+    image = std::make_shared<const render::ImageRgb8>(render::ReadPng(file));
+  } catch (const std::exception& e) {
+    errors_ << prefix_ << "cannot read the book page picture " << file.string() << " (drawn blank): " << e.what()
+            << std::endl;
+  }
+  page_images_.emplace(file, image);
+  return image;
+}
+
+void SceneReplica::AddBook(render::SceneView& view, const std::string& id, const ControlGeometry& book,
+                           const render::Rgb& rgb) const {
+  // In C: spine along y at x = -w/2, the closed book's top at z = 0, its back cover at z = -t.
+  const double w = book.size_m.x();
+  const double h = book.size_m.y();
+  const double t = book.size_m.z();
+  const double cover = std::min(0.003, t / 5.0);  // a cover's thickness
+  const double inset = std::min(0.003, w / 20.0);  // how far the pages stay inside the covers
+  const render::Rgb paper{0.96F, 0.94F, 0.88F};
+  const Eigen::Quaterniond q_WC(book.X_WC.linear());
+  const auto box = [&](const Eigen::Vector3d& lo_C, const Eigen::Vector3d& hi_C, const render::Rgb& colour) {
+    render::Box b;
+    b.p_W = book.X_WC * (0.5 * (lo_C + hi_C));
+    b.half_extents_m = 0.5 * (hi_C - lo_C);
+    b.q_WB = q_WC;
+    b.rgb = colour;
+    view.boxes.push_back(b);
+  };
+  const render::Rgb spine{0.7F * rgb.r, 0.7F * rgb.g, 0.7F * rgb.b};
+  box({-0.5 * w, -0.5 * h, -t}, {0.5 * w, 0.5 * h, -t + cover}, rgb);  // the back cover
+  const ControlDrawn* state = drawn_state(id);
+  const bool open = state != nullptr && state->engaged;
+  if (!open) {
+    // The front cover, shut, or lifted by a hand: turned about the spine's top edge (x = -w/2,
+    // z = 0) towards -x by the cover's angle.
+    const double angle = state != nullptr && state->moving ? std::clamp(state->position, 0.0, std::numbers::pi) : 0.0;
+    render::Box front;
+    const Eigen::Isometry3d X_CF = Eigen::Translation3d(-0.5 * w, 0.0, 0.0) *
+                                   Eigen::AngleAxisd(-angle, Eigen::Vector3d::UnitY()) *
+                                   Eigen::Translation3d(0.5 * w, 0.0, -0.5 * cover);
+    const Eigen::Isometry3d X_WF = book.X_WC * X_CF;
+    front.p_W = X_WF.translation();
+    front.half_extents_m = Eigen::Vector3d(0.5 * w, 0.5 * h, 0.5 * cover);
+    front.q_WB = Eigen::Quaterniond(X_WF.linear());
+    front.rgb = rgb;
+    view.boxes.push_back(front);
+    box({-0.5 * w, -0.5 * h, -t}, {-0.5 * w + cover, 0.5 * h, 0.0}, spine);          // the spine
+    box({-0.5 * w + cover, -0.5 * h + inset, -t + cover}, {0.5 * w - inset, 0.5 * h - inset, -cover}, paper);
+    return;
+  }
+  // Open: the front cover lies flat on the left, the pages on both sides up to z = 0.
+  box({-1.5 * w, -0.5 * h, -t}, {-0.5 * w, 0.5 * h, -t + cover}, rgb);
+  box({-0.5 * w - 0.5 * cover, -0.5 * h, -t}, {-0.5 * w + 0.5 * cover, 0.5 * h, -t + 2.0 * cover}, spine);
+  box({-0.5 * w, -0.5 * h + inset, -t + cover}, {0.5 * w - inset, 0.5 * h - inset, 0.0}, paper);
+  box({-1.5 * w + inset, -0.5 * h + inset, -t + cover}, {-0.5 * w, 0.5 * h - inset, 0.0}, paper);
+  const int index = std::max(0, state->index);
+  if (static_cast<std::size_t>(index) >= book.pages.size()) return;  // a blank spread
+  const auto& spread = book.pages[static_cast<std::size_t>(index)];
+  constexpr double kAbove = 0.0004;  // the print lies on the paper, not in it
+  const auto page = [&](double x0, double x1) {
+    render::Page p;
+    const double y0 = -0.5 * h + inset;
+    const double y1 = 0.5 * h - inset;
+    p.corners_W = {book.X_WC * Eigen::Vector3d(x0, y0, kAbove), book.X_WC * Eigen::Vector3d(x1, y0, kAbove),
+                   book.X_WC * Eigen::Vector3d(x1, y1, kAbove), book.X_WC * Eigen::Vector3d(x0, y1, kAbove)};
+    p.paper = paper;
+    return p;
+  };
+  render::Page left = page(-1.5 * w + inset, -0.5 * w);
+  left.image = PageImage(spread.image);
+  render::Page right = page(-0.5 * w, 0.5 * w - inset);
+  right.text = spread.text;
+  if (left.image) view.pages.push_back(std::move(left));
+  if (!right.text.empty()) view.pages.push_back(std::move(right));
+}
+
 void SceneReplica::AddObjects(render::SceneView& view) const {
   for (const std::string& id : order_) {
     const Object& o = objects_.at(id);
+    if (const auto label = labels_.find(id); label != labels_.end()) {
+      render::Label l;
+      l.p_W = LabelPoint(o, DrawnPose(id, o.X_WO()));
+      l.text = label->second;
+      view.labels.push_back(std::move(l));
+    }
+    if (const auto g = control_geometry_.find(id); g != control_geometry_.end() && g->second.book) {
+      AddBook(view, id, g->second, RgbOf(o.spec));
+      continue;
+    }
     const Eigen::Isometry3d X_WO = DrawnPose(id, o.X_WO());
     const auto& h = o.spec.half_extent_m();
+    const auto look_it = looks_.find(id);
+    const render::Appearance look = look_it == looks_.end() ? render::Appearance{} : look_it->second;
     if (o.mesh) {
       render::TriangleMesh mesh = *o.mesh;
       mesh.X_WM = X_WO;
       mesh.rgb = RgbOf(o.spec);
+      mesh.look = look;
       if (o.field && o.field->displaced()) {
         // p_WV = X_WO p_OV + u_W  <=>  p_OV' = p_OV + R_WO^T u_W, drawn with X_WM = X_WO.
         const Eigen::Matrix3d R_OW = X_WO.linear().transpose();
@@ -212,7 +365,7 @@ void SceneReplica::AddObjects(render::SceneView& view) const {
       }
       view.meshes.push_back(std::move(mesh));
     } else if (o.spec.shape() == "sphere") {
-      view.spheres.push_back(render::Sphere{X_WO.translation(), h[0], RgbOf(o.spec)});
+      view.spheres.push_back(render::Sphere{X_WO.translation(), h[0], RgbOf(o.spec), look});
     } else {
       // Boxes, and meshes that could not be loaded: their bounding box.
       render::Box box;
@@ -220,6 +373,7 @@ void SceneReplica::AddObjects(render::SceneView& view) const {
       box.half_extents_m = Eigen::Vector3d(h[0], h[1], h[2]);
       box.q_WB = Eigen::Quaterniond(X_WO.linear());
       box.rgb = RgbOf(o.spec);
+      box.look = look;
       view.boxes.push_back(box);
     }
   }

@@ -16,7 +16,7 @@
 #include <nlohmann/json.hpp>
 
 #include "handshare/common/rejoin_clock.hpp"
-#include "handshare/common/roster_watch.hpp"
+#include "handshare/dds/roster_rejoin.hpp"
 #include "handshare/common/shutdown.hpp"
 #include "handshare/dds/membership.hpp"
 #include "handshare/dds/messages.hpp"
@@ -44,7 +44,6 @@ struct UserHand {
 };
 
 constexpr render::Rgb kSkinRgb{0.86F, 0.70F, 0.58F};
-constexpr int kMaxRosterRejoins = 5;  // a member unheard for ever (another fault) costs at most this many
 constexpr render::Rgb kHiroRgb{0.62F, 0.64F, 0.68F};  // the robot hand: brushed metal
 
 // The hand base pose of a device state (identity rotation where the quaternion is unusable).
@@ -72,7 +71,7 @@ class WorldView {
         member_reader_(dds::NameBinding::MakeMemberReader(p, [this](const std::string& line) { Say(line); })),
         control_reader_(dds::MakeReaderIfGranted<msg::ControlState>(
             p, dds::topics::kControlState, [this](const std::string& line) { Say(line); }, "controls are drawn at rest")),
-        world_(assets_dir, std::cerr, "[graphics_node " + name + "] "),
+        world_(assets_dir, std::cerr, "[graphics_node " + name + "] ", language),
         language_(language) {
     // The HIRO II's own hand is drawn from its joint angles with its model; without the model
     // file, a HIRO user's hand is fitted to the fingertips like any other.
@@ -138,6 +137,7 @@ class WorldView {
       if (meta.valid_data && Accept("control_state", "participant " + dds::ParticipantOf(meta.writer),
                                     dds::CheckControlState(control, session_))) {
         world_.OnControlState(control);
+        if (control.moving()) continue;  // a hand moving it: drawn, not logged
         Arrived("control '" + control.control_id().to_string() + "' of '" + control.scene().to_string() +
                 "' at index " + std::to_string(control.index()) + (control.engaged() ? ", engaged" : "") +
                 (control.user().to_string().empty() ? "" : " (by " + control.user().to_string() + ")"));
@@ -321,16 +321,6 @@ void PrintWorldSummary(const std::string& name, const SceneReplica& world, const
   std::fflush(stdout);
 }
 
-render::Camera DefaultCamera(int width, int height) {
-  render::Camera c;
-  c.eye_W = Eigen::Vector3d(0.0, -0.55, 0.45);
-  c.target_W = Eigen::Vector3d(0.0, 0.05, 0.05);
-  c.up_W = Eigen::Vector3d(0.0, 0.0, 1.0);
-  c.fov_y_rad = 0.8;
-  c.width_px = width;
-  c.height_px = height;
-  return c;
-}
 
 render::StereoMode ToRender(StereoOutput s) {
   switch (s) {
@@ -358,13 +348,24 @@ void WriteCameraJson(const std::filesystem::path& file, const render::Camera& c,
 
 }  // namespace
 
+render::Camera SpectatorCamera(int width, int height) {
+  render::Camera c;
+  c.eye_W = Eigen::Vector3d(0.0, -0.55, 0.45);
+  c.target_W = Eigen::Vector3d(0.0, 0.05, 0.05);
+  c.up_W = Eigen::Vector3d(0.0, 0.0, 1.0);
+  c.fov_y_rad = 0.8;
+  c.width_px = width;
+  c.height_px = height;
+  return c;
+}
+
 std::filesystem::path DefaultAssetsDir() { return scene::DefaultSceneDir().parent_path(); }
 
 Spectator::Spectator(SpectatorConfig config) : config_(std::move(config)) {}
 
 int Spectator::Run() {
   const std::string name = config_.name.empty() ? "graphics-" + std::to_string(getpid()) : config_.name;
-  const render::Camera camera = DefaultCamera(config_.width_px, config_.height_px);
+  const render::Camera camera = SpectatorCamera(config_.width_px, config_.height_px);
   render::ValidateCamera(camera);
 
   // Bad paths fail here, before any DDS entity or frame exists.
@@ -393,11 +394,12 @@ int Spectator::Run() {
     if (!index) throw std::runtime_error("cannot write " + (out_dir / "frames.csv").string());
     index << "frame,file,user,finger,x_m,y_m,z_m,radius_m\n" << std::setprecision(9);
     // frame_times.csv: what each frame shows by the senders' own stamps (the scene state's
-    // revision, each hand's device-state stamp_ns), which a replay (session_play) carries
-    // unchanged: frames of a live session and of its replay are matched on them.
+    // revision, each hand's device-state stamp_ns, each moving object's object-state stamp_ns),
+    // which a replay (session_play) carries unchanged: frames of a live session and of its
+    // replay are matched on them.
     times.open(out_dir / "frame_times.csv");
     if (!times) throw std::runtime_error("cannot write " + (out_dir / "frame_times.csv").string());
-    times << "frame,file,scene,revision,hands\n";
+    times << "frame,file,scene,revision,hands,objects\n";
   }
 
   // The renderer before joining: OpenGL's start-up (3.8 s once on a loaded machine) would
@@ -421,37 +423,25 @@ int Spectator::Run() {
   // A member the world server has (its roster) that this view never hears, a user's hand
   // above all, is a secured handshake between the two that never finished (Fast DDS 2.9,
   // docs/security.md): a new participant starts it again, as the recorder does.
-  common::RosterWatch roster_watch(config_.rejoin_after);
-  int roster_rejoins = 0;
+  dds::RosterRejoin roster_rejoin(config_.rejoin_after, config_.where.session);
   const std::string own_id = config_.where.session + "/" + name;
   const auto rejoin_if_unheard = [&] {
     if (rejoin.Due(link->world.has_scene())) {
       std::fprintf(stderr, "[graphics_node %s] %s\n", name.c_str(), rejoin.Message("scene").c_str());
       link.reset();
       link = std::make_unique<SpectatorLink>(config_.where, assets_dir, name, config_.fps, config_.language);
-      roster_watch.Restart(Clock::now());
+      roster_rejoin.Restart(Clock::now());
       return;
     }
-    msg::SessionRoster r;
-    dds::SampleMeta meta;
-    while (link->roster && link->roster.TakeNext(r, meta)) {
-      if (!meta.valid_data || !dds::CheckSessionRoster(r, config_.where.session).empty()) continue;
-      std::vector<std::string> ids;
-      for (const auto& m : r.members()) ids.push_back(m.to_string());
-      roster_watch.OnRoster(std::move(ids));
-    }
+    roster_rejoin.Take(link->roster);
     std::vector<std::string> heard = link->world.HeardMemberIds();
     heard.push_back(own_id);
-    const std::vector<std::string> unheard = roster_watch.Unheard(heard, Clock::now());
-    if (unheard.empty() || roster_rejoins >= kMaxRosterRejoins) return;
-    ++roster_rejoins;
-    std::fprintf(stderr,
-                 "[graphics_node %s] the world server has %s, not heard here %.1f s after joining: leaving and "
-                 "joining again with a new participant (rejoin %d)\n",
-                 name.c_str(), unheard.front().c_str(), config_.rejoin_after.count(), roster_rejoins);
+    const std::string why = roster_rejoin.Due(heard, Clock::now());
+    if (why.empty()) return;
+    std::fprintf(stderr, "[graphics_node %s] %s\n", name.c_str(), why.c_str());
     link.reset();
     link = std::make_unique<SpectatorLink>(config_.where, assets_dir, name, config_.fps, config_.language);
-    roster_watch.Restart(Clock::now());
+    roster_rejoin.Restart(Clock::now());
   };
   // When the frames are written or the window closes: what the spectator received, for a
   // comparison with an oracle.
@@ -459,8 +449,9 @@ int Spectator::Run() {
     WorldView& world = link->world;
     world.Update();  // what arrived since the last frame counts too (a stop between frames)
     PrintWorldSummary(name, world.world(), world.dropped(), world.device_deadlines_missed());
-    if (rejoin.rejoins() + roster_rejoins > 0) {
-      std::printf("[graphics_node %s] rejoined the session %d time(s)\n", name.c_str(), rejoin.rejoins() + roster_rejoins);
+    if (rejoin.rejoins() + roster_rejoin.rejoins() > 0) {
+      std::printf("[graphics_node %s] rejoined the session %d time(s)\n", name.c_str(),
+                  rejoin.rejoins() + roster_rejoin.rejoins());
     }
     std::printf("[graphics_node %s] %s\n", name.c_str(), link->participant.TrafficSummary().c_str());
     std::fflush(stdout);
@@ -507,7 +498,7 @@ int Spectator::Run() {
         times << sep << user << "@" << hand.state.stamp_ns();
         sep = ";";
       }
-      times << "\n";
+      times << "," << world.world().pose_stamps() << "\n";
       next += period;
       std::this_thread::sleep_until(next);
     }

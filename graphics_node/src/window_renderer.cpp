@@ -44,7 +44,7 @@ struct WindowRenderer::Impl {
   GLFWwindow* window = nullptr;
   StereoMode stereo = StereoMode::kMono;
   detail::GlApi gl;
-  detail::CaptionCache captions;
+  detail::TextCaches text;  // the caption's layout, the pages' textures
   std::uint64_t offscreen_binds_seen = 0;
 
   // Makes the window's context current; forces a real re-bind if an OSMesa context was bound
@@ -112,7 +112,7 @@ void WindowRenderer::Render(const SceneView& scene, const Camera& camera) {
   int width_px = 0;
   int height_px = 0;
   glfwGetFramebufferSize(impl_->window, &width_px, &height_px);
-  detail::DrawFrame(impl_->gl, scene, camera, impl_->stereo, width_px, height_px, impl_->captions);
+  detail::DrawFrame(impl_->gl, scene, camera, impl_->stereo, width_px, height_px, impl_->text);
   glfwSwapBuffers(impl_->window);
   glfwPollEvents();
 }
@@ -122,7 +122,7 @@ ImageRgb8 WindowRenderer::RenderAndCapture(const SceneView& scene, const Camera&
   int width_px = 0;
   int height_px = 0;
   glfwGetFramebufferSize(impl_->window, &width_px, &height_px);
-  detail::DrawFrame(impl_->gl, scene, camera, impl_->stereo, width_px, height_px, impl_->captions);
+  detail::DrawFrame(impl_->gl, scene, camera, impl_->stereo, width_px, height_px, impl_->text);
   ImageRgb8 image(width_px, height_px);
   if (width_px > 0 && height_px > 0) {
     ImageRgb8 bottom_up(width_px, height_px);

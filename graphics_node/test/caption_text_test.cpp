@@ -25,16 +25,6 @@ int Printed(const std::string& text) {  // code points that are neither spaces n
   return n;
 }
 
-std::vector<scene::Message> AllMessages(const scene::Scene& s) {
-  std::vector<scene::Message> all = s.messages;
-  for (const auto& c : s.controls) {
-    all.insert(all.end(), c.action.messages.begin(), c.action.messages.end());
-    for (const auto& a : c.detent_actions) all.insert(all.end(), a.messages.begin(), a.messages.end());
-    for (const auto& a : c.page_actions) all.insert(all.end(), a.messages.begin(), a.messages.end());
-  }
-  return all;
-}
-
 class CaptionText : public ::testing::Test {
  protected:
   CaptionFont font_{DefaultCaptionFont()};
@@ -44,9 +34,9 @@ class CaptionText : public ::testing::Test {
 // no character falls back to an empty box.
 TEST_F(CaptionText, EveryBoardTextOfTheScenesHasItsGlyphs) {
   int japanese = 0;
-  for (const char* name : {"start_menu", "solar_system", "dinosaur", "microscopic", "commons"}) {
+  for (const std::string& name : scene::SceneNames(HANDSHARE_SOURCE_SCENES)) {
     const scene::Scene s = scene::LoadSceneByName(name, HANDSHARE_SOURCE_SCENES);
-    for (const scene::Message& m : AllMessages(s)) {
+    for (const scene::Message& m : scene::AllMessages(s)) {
       const std::string text = m.text + (m.next_action.empty() ? "" : "\n" + m.next_action);
       const CaptionBitmap b = font_.Layout(text, 24, 900, 20);
       EXPECT_EQ(b.stats.missing_glyphs, 0) << name << ": " << text;
@@ -56,7 +46,24 @@ TEST_F(CaptionText, EveryBoardTextOfTheScenesHasItsGlyphs) {
       japanese += m.language == "ja" ? 1 : 0;
     }
   }
-  EXPECT_EQ(japanese, 9);
+  EXPECT_EQ(japanese, 12);
+}
+
+// The same for the text printed on the books' pages.
+TEST_F(CaptionText, EveryPageTextOfTheBooksHasItsGlyphs) {
+  int texts = 0;
+  const scene::Scene s = scene::LoadSceneByName("start_menu", HANDSHARE_SOURCE_SCENES);
+  for (const auto& c : s.controls) {
+    for (const auto& page : c.page_content) {
+      for (const auto& t : page.text) {
+        const CaptionBitmap b = font_.Layout(t.text, 20, 300, 20);
+        EXPECT_EQ(b.stats.missing_glyphs, 0) << c.id << ": " << t.text;
+        EXPECT_EQ(b.stats.glyphs, Printed(t.text)) << c.id << ": " << t.text;
+        ++texts;
+      }
+    }
+  }
+  EXPECT_EQ(texts, 12);  // three books, two pages each, in English and Japanese
 }
 
 TEST_F(CaptionText, WrapsAtSpacesAndBetweenJapaneseCharacters) {
@@ -117,6 +124,23 @@ TEST(CaptionFontFile, AMissingFontNamesTheFile) {
   } catch (const std::runtime_error& e) {
     EXPECT_NE(std::string(e.what()).find("/nonexistent/font.ttf"), std::string::npos) << e.what();
   }
+}
+
+// A side-by-side frame of odd width has eyes a pixel apart in width: their two captions are
+// both kept, not laid out again for every eye of every frame; another text is laid out once.
+TEST(CaptionCacheTest, TheTwoEyesOfAnOddSideBySideFrameKeepTheirLayouts) {
+  CaptionCache cache;
+  for (int frame = 0; frame < 5; ++frame) {
+    EXPECT_GT(cache.For("Welcome", 960, 1080).width_px, 0);
+    EXPECT_GT(cache.For("Welcome", 961, 1080).width_px, 0);
+  }
+  EXPECT_EQ(cache.laid_out(), 2U);
+  (void)cache.For("Next", 960, 1080);
+  EXPECT_EQ(cache.laid_out(), 3U);
+  EXPECT_EQ(cache.stats().glyphs, 4);
+  (void)cache.For("", 960, 1080);
+  EXPECT_EQ(cache.laid_out(), 3U) << "no text, no layout";
+  EXPECT_EQ(cache.stats().glyphs, 0);
 }
 
 }  // namespace

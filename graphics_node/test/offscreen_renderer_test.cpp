@@ -2,8 +2,10 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <functional>
+#include <memory>
 #include <string>
 
 #include "test_oracle.hpp"
@@ -341,6 +343,179 @@ TEST_F(RenderOffscreen, AJapaneseCaptionHasGlyphsAndDiffersFromTheEnglishOne) {
   scene.caption = "\xF0\x9F\xA6\x96";
   (void)renderer_.Render(scene, camera);
   EXPECT_EQ(renderer_.last_caption().missing_glyphs, 1);
+}
+
+// A page (a book's open spread) lies flat on the table, seen from above: its picture is drawn
+// where its quad projects, above its text, on paper; without text the text band is blank; a box
+// in front of it hides it.
+TEST_F(RenderOffscreen, APageShowsItsPictureAboveItsTextWhereItsQuadProjects) {
+  Camera camera;
+  camera.eye_W = {0.0, 0.0, 0.2};
+  camera.target_W = {0.0, 0.0, 0.0};
+  camera.up_W = {0.0, 1.0, 0.0};
+  camera.width_px = 400;
+  camera.height_px = 400;
+  camera.near_m = 0.01;
+  camera.far_m = 10.0;
+  SceneView scene;
+  scene.grid.visible = false;
+  scene.background_rgb = {0.0F, 0.0F, 0.3F};
+  Page page;
+  page.corners_W = {Eigen::Vector3d(-0.05, -0.07, 0.0), Eigen::Vector3d(0.05, -0.07, 0.0),
+                    Eigen::Vector3d(0.05, 0.07, 0.0), Eigen::Vector3d(-0.05, 0.07, 0.0)};
+  auto red = std::make_shared<ImageRgb8>(4, 4);
+  for (std::size_t i = 0; i < red->rgb.size(); i += 3) red->rgb[i] = 255;
+  page.image = red;
+  page.text = "The Moon and Mars pull on everything less than the Earth does.";
+  scene.pages.push_back(page);
+  // Where the page's texture pixel (x, y) of 256 x 358 lands (row 0 at the page's top edge).
+  const auto at = [&](double x, double y) {
+    const Eigen::Vector3d p_W(-0.05 + 0.1 * x / 256.0, 0.07 - 0.14 * y / 358.0, 0.0);
+    return OracleProject(camera, p_W);
+  };
+  const auto dark = [](const std::uint8_t* px) { return px[0] < 110 && px[1] < 110 && px[2] < 110; };
+  const auto ink_in_text_band = [&](const ImageRgb8& image) {
+    // The text starts below the picture (rows 16 .. 214 of the texture) and its margin.
+    const PixelPoint top_left = at(16, 226);
+    const PixelPoint bottom_right = at(240, 342);
+    int n = 0;
+    for (int row = static_cast<int>(top_left.row); row < static_cast<int>(bottom_right.row); ++row) {
+      for (int col = static_cast<int>(top_left.col); col < static_cast<int>(bottom_right.col); ++col) {
+        n += dark(image.At(col, row)) ? 1 : 0;
+      }
+    }
+    return n;
+  };
+
+  const ImageRgb8 image = renderer_.Render(scene, camera);
+  const std::uint8_t* picture = PixelAt(image, at(128, 115));
+  EXPECT_TRUE(IsRed(picture)) << Describe(picture);
+  const std::uint8_t* paper = PixelAt(image, at(6, 179));  // in the left margin
+  EXPECT_GT(paper[0], 220) << Describe(paper);
+  EXPECT_GT(paper[1], 210) << Describe(paper);
+  EXPECT_GT(paper[2], 190) << Describe(paper);
+  const std::uint8_t* outside = PixelAt(image, OracleProject(camera, Eigen::Vector3d(0.08, 0.0, 0.0)));
+  EXPECT_LT(outside[0], 20) << "beside the page, the background: " << Describe(outside);
+  const int ink = ink_in_text_band(image);
+  EXPECT_GT(ink, 300) << "the text's ink";
+
+  scene.pages[0].text.clear();
+  EXPECT_EQ(ink_in_text_band(renderer_.Render(scene, camera)), 0) << "no text, no ink";
+
+  // A red box 5 cm above the page's middle hides it there.
+  scene.pages[0].image = nullptr;
+  Box box;
+  box.p_W = {0.0, 0.0, 0.05};
+  box.half_extents_m = {0.02, 0.02, 0.005};
+  box.rgb = kGreen;
+  scene.boxes.push_back(box);
+  const std::uint8_t* hidden = PixelAt(renderer_.Render(scene, camera), at(128, 179));
+  EXPECT_GT(hidden[1], kHigh) << Describe(hidden);
+  EXPECT_LT(hidden[0], kLow) << Describe(hidden);
+}
+
+// A label is drawn just above its point's projection, in its colour on a darkened box; not at
+// all when its point is behind the eye or outside the image; a fingertip marker in front of it
+// stays visible (markers are drawn after the labels).
+TEST_F(RenderOffscreen, ALabelIsDrawnAboveItsPointAndUnderTheFingertips) {
+  Camera camera = ObliqueCamera();
+  camera.width_px = 480;
+  camera.height_px = 360;
+  SceneView scene;
+  scene.grid.visible = false;
+  scene.background_rgb = {0.3F, 0.3F, 0.3F};
+  const Eigen::Vector3d point(0.02, 0.05, 0.08);
+  const PixelPoint at = OracleProject(camera, point);
+  const auto count = [](const ImageRgb8& image, int col0, int col1, int row0, int row1, auto&& test) {
+    int n = 0;
+    for (int row = std::max(0, row0); row < std::min(image.height_px, row1); ++row) {
+      for (int col = std::max(0, col0); col < std::min(image.width_px, col1); ++col) n += test(image.At(col, row)) ? 1 : 0;
+    }
+    return n;
+  };
+  // The label colour (1, 0.93, 0.6): (255, 237, 153) where a glyph covers a pixel fully.
+  const auto yellowish = [](const std::uint8_t* px) { return px[0] > 170 && px[1] > 160 && px[0] > px[2] + 40; };
+  const auto darkened = [](const std::uint8_t* px) { return px[0] < 60 && px[1] < 60 && px[2] < 60; };
+  const int c0 = static_cast<int>(at.col) - 80;
+  const int c1 = static_cast<int>(at.col) + 80;
+  const int r = static_cast<int>(at.row);
+
+  const ImageRgb8 without = renderer_.Render(scene, camera);
+  EXPECT_EQ(count(without, 0, camera.width_px, 0, camera.height_px, yellowish), 0);
+  Label label;
+  label.p_W = point;
+  label.text = "Tail";
+  scene.labels.push_back(label);
+  const ImageRgb8 with = renderer_.Render(scene, camera);
+  const int above = count(with, c0, c1, r - 40, r, yellowish);
+  EXPECT_GT(above, 20) << "the text, above its point";
+  EXPECT_GT(count(with, c0, c1, r - 40, r, darkened), 50) << "on a darkened box";
+  EXPECT_EQ(count(with, 0, camera.width_px, r + 2, camera.height_px, yellowish), 0) << "nothing below its point";
+
+  // A fingertip in front of the label, between it and the eye: drawn over it.
+  const Eigen::Vector3d near_label = camera.eye_W + 0.5 * (point + Eigen::Vector3d(0.0, 0.0, 0.012) - camera.eye_W);
+  scene.markers.push_back(Sphere{near_label, 0.004, kRed});
+  const ImageRgb8 marked = renderer_.Render(scene, camera);
+  const std::uint8_t* tip = PixelAt(marked, OracleProject(camera, near_label));
+  EXPECT_TRUE(IsRed(tip)) << Describe(tip);
+  scene.markers.clear();
+
+  // Behind the eye, or outside the image: no label.
+  scene.labels[0].p_W = camera.eye_W - (camera.target_W - camera.eye_W);
+  EXPECT_EQ(count(renderer_.Render(scene, camera), 0, camera.width_px, 0, camera.height_px, yellowish), 0);
+  scene.labels[0].p_W = point + Eigen::Vector3d(5.0, 0.0, 0.0);
+  EXPECT_EQ(count(renderer_.Render(scene, camera), 0, camera.width_px, 0, camera.height_px, yellowish), 0);
+}
+
+// Appearance: a translucent box in front of a red sphere lets it show through (an opaque one
+// hides it); a specular sphere is brighter than a matte one of its colour somewhere (its
+// highlight) and the same elsewhere.
+TEST_F(RenderOffscreen, TranslucentObjectsShowWhatIsBehindThemAndSpecularOnesShine) {
+  Camera camera = ObliqueCamera();
+  SceneView scene;
+  scene.grid.visible = false;
+  const Sphere red{Eigen::Vector3d(0.02, 0.05, 0.08), 0.03, kRed};
+  scene.spheres.push_back(red);
+  Box pane;
+  pane.p_W = camera.eye_W + 0.5 * (red.p_W - camera.eye_W);  // halfway to the eye
+  pane.half_extents_m = {0.05, 0.05, 0.05};
+  pane.rgb = kBlue;
+  scene.boxes.push_back(pane);
+  const PixelPoint at = OracleProject(camera, red.p_W);
+  const std::uint8_t* hidden = PixelAt(renderer_.Render(scene, camera), at);
+  EXPECT_LT(hidden[0], kLow) << "behind an opaque box: " << Describe(hidden);
+  SceneView bare = scene;
+  bare.boxes.clear();
+  const int direct = PixelAt(renderer_.Render(bare, camera), at)[0];
+  scene.boxes[0].look.opacity = 0.4F;
+  const ImageRgb8 through = renderer_.Render(scene, camera);
+  const std::uint8_t* seen = PixelAt(through, at);
+  // Through both faces of the pane: (1 - 0.4)^2 = 0.36 of the sphere's red, and blue of the pane.
+  EXPECT_NEAR(seen[0], 0.36 * direct, 0.05 * direct) << "red through the pane: " << Describe(seen);
+  EXPECT_GT(seen[2], 40) << "and some of the pane's blue: " << Describe(seen);
+
+  SceneView balls;
+  balls.grid.visible = false;
+  balls.spheres.push_back(Sphere{Eigen::Vector3d(0.02, 0.05, 0.08), 0.04, Rgb{0.5F, 0.5F, 0.5F}});
+  const ImageRgb8 matte = renderer_.Render(balls, camera);
+  balls.spheres[0].look.specular = 1.0F;
+  balls.spheres[0].look.shininess = 40.0F;
+  const ImageRgb8 shiny = renderer_.Render(balls, camera);
+  int brighter = 0;
+  int brightest = 0;
+  for (int row = 0; row < camera.height_px; ++row) {
+    for (int col = 0; col < camera.width_px; ++col) {
+      const int d = shiny.At(col, row)[1] - matte.At(col, row)[1];
+      EXPECT_GE(d, 0) << "a highlight only adds light, at (" << col << ", " << row << ")";
+      brighter += d > 30 ? 1 : 0;
+      brightest = std::max(brightest, d);
+    }
+  }
+  EXPECT_GT(brighter, 10) << "a highlight";
+  EXPECT_GT(brightest, 80);
+  const std::uint8_t* edge = PixelAt(shiny, OracleProject(camera, Eigen::Vector3d(0.02, 0.05, 0.08) + Eigen::Vector3d(0.0, 0.0, -0.038)));
+  const std::uint8_t* edge_matte = PixelAt(matte, OracleProject(camera, Eigen::Vector3d(0.02, 0.05, 0.08) + Eigen::Vector3d(0.0, 0.0, -0.038)));
+  EXPECT_NEAR(edge[1], edge_matte[1], 3) << "away from the highlight, the same";
 }
 
 TEST_F(RenderOffscreen, SideBySideStereoShiftsNearAndFarSpheresOppositeWays) {

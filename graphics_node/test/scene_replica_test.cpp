@@ -6,6 +6,7 @@
 #include <fstream>
 #include <limits>
 #include <map>
+#include <numbers>
 #include <set>
 #include <sstream>
 
@@ -116,6 +117,209 @@ TEST(SceneReplica, ControlsAreDrawnWhereTheirStateLeftThem) {
   world.OnControlState(arrow);
   EXPECT_TRUE(drawn("arrow_next").isApprox(at_rest["arrow_next"], 1e-12));
   EXPECT_EQ(errors.str(), "");
+}
+
+// The start menu's books: shut, each is covers, a spine and a block of pages, and no page is
+// printed; the solar-system book open at its second page shows that page's picture on the left
+// and its text in the replica's language on the right, on top of the pages (z = 0 of C).
+TEST(SceneReplica, ABookIsDrawnShutOrOpenAtItsPage) {
+  const scene::Scene menu = scene::LoadSceneByName("start_menu", kAssets / "scenes");
+  std::vector<msg::SceneObject> objects;
+  for (const auto& c : menu.controls) {
+    Eigen::Isometry3d X = Eigen::Isometry3d::Identity();
+    X.translation() = c.p_WC_m;
+    objects.push_back(Object(c.id, "mesh", c.mesh_uri, X, {}));
+  }
+  const scene::ControlSpec& solar = menu.controls[0];
+  ASSERT_EQ(solar.id, "book_solar_system");
+  for (const char* language : {"en", "ja"}) {
+    std::ostringstream errors;
+    SceneReplica world(kAssets, errors, "", language);
+    world.OnSceneState(Scene("start_menu", 1, objects));
+    render::SceneView shut;
+    world.AddObjects(shut);
+    EXPECT_TRUE(shut.pages.empty());
+    EXPECT_EQ(shut.boxes.size(), 3U * 4U) << "three books of four parts";
+    EXPECT_EQ(shut.meshes.size(), 3U) << "the three buttons";
+
+    msg::ControlState state;
+    state.control_id("book_solar_system");
+    state.scene("start_menu");
+    state.index(1);
+    state.engaged(true);
+    world.OnControlState(state);
+    render::SceneView open;
+    world.AddObjects(open);
+    ASSERT_EQ(open.pages.size(), 2U) << language;
+    const render::Page& left = open.pages[0];
+    const render::Page& right = open.pages[1];
+    ASSERT_NE(left.image, nullptr);
+    EXPECT_EQ(left.image->width_px, 240);
+    EXPECT_EQ(left.image->height_px, 320);
+    EXPECT_TRUE(left.text.empty());
+    EXPECT_EQ(right.text, solar.page_content[1].TextIn(language));
+    EXPECT_EQ(right.image, nullptr);
+    const double top = solar.p_WC_m.z() + 0.0004;
+    for (const render::Page* page : {&left, &right}) {
+      for (const Eigen::Vector3d& corner : page->corners_W) EXPECT_NEAR(corner.z(), top, 1e-12);
+    }
+    const double w = solar.size_m.x();
+    EXPECT_LT(left.corners_W[1].x(), solar.p_WC_m.x() - 0.5 * w + 1e-9) << "left of the spine";
+    EXPECT_GT(right.corners_W[0].x(), solar.p_WC_m.x() - 0.5 * w - 1e-9) << "right of the spine";
+    EXPECT_GT(left.corners_W[3].y(), left.corners_W[0].y()) << "read from the visitor's side (-y)";
+    EXPECT_EQ(open.boxes.size(), 3U * 4U + 1U) << "open: two covers, a spine, two blocks of pages";
+    EXPECT_EQ(errors.str(), "");
+  }
+  EXPECT_NE(solar.page_content[1].TextIn("en"), solar.page_content[1].TextIn("ja"));
+}
+
+// A page picture that cannot be read: said once, the page drawn without it.
+TEST(SceneReplica, ABookPagePictureThatCannotBeReadIsReportedOnce) {
+  const auto assets = std::filesystem::temp_directory_path() / "hs_replica_book_assets";
+  std::filesystem::remove_all(assets);
+  std::filesystem::create_directories(assets / "scenes");
+  std::filesystem::create_directories(assets / "images");
+  std::ofstream(assets / "images" / "broken.png") << "not a png";
+  std::ofstream(assets / "scenes" / "shelf.json") << R"({"name": "shelf", "messages": [{"language": "en", "text": "t"}],
+    "controls": [{"id": "book", "type": "book", "position_m": [0, 0, 0],
+                  "pages": [{"image": "images/broken.png", "text": [{"language": "en", "text": "Hello"}]}]}]})";
+  std::ostringstream errors;
+  SceneReplica world(assets, errors);
+  world.OnSceneState(Scene("shelf", 1, {Object("book", "box", "", Eigen::Isometry3d::Identity(), {})}));
+  msg::ControlState state;
+  state.control_id("book");
+  state.scene("shelf");
+  state.index(0);
+  state.engaged(true);
+  world.OnControlState(state);
+  for (int frame = 0; frame < 3; ++frame) {
+    render::SceneView view;
+    world.AddObjects(view);
+    ASSERT_EQ(view.pages.size(), 1U);
+    EXPECT_EQ(view.pages[0].text, "Hello");
+  }
+  const std::string said = errors.str();
+  EXPECT_NE(said.find("cannot read the book page picture"), std::string::npos) << said;
+  EXPECT_NE(said.find("broken.png"), std::string::npos) << said;
+  const std::string line = "cannot read the book page picture";
+  EXPECT_EQ(said.find(line, said.find(line) + 1), std::string::npos) << "once: " << said;
+  std::filesystem::remove_all(assets);
+}
+
+// While a hand moves a control (the world server's state says moving, with its position), it
+// is drawn where the hand has it: the lever at its angle between detents, the arrow part way
+// down, a book's cover lifted about its spine; at rest, where it settled.
+TEST(SceneReplica, AControlAHandMovesIsDrawnWhereTheHandHasIt) {
+  std::ostringstream errors;
+  SceneReplica world(kAssets, errors);
+  const scene::Scene solar = scene::LoadSceneByName("solar_system", kAssets / "scenes");
+  std::vector<msg::SceneObject> objects;
+  std::map<std::string, Eigen::Isometry3d> at_rest;
+  for (const auto& c : solar.controls) {
+    Eigen::Isometry3d X = Eigen::Isometry3d::Identity();
+    X.linear() = c.q_WC.toRotationMatrix();
+    X.translation() = c.p_WC_m;
+    at_rest[c.id] = X;
+    objects.push_back(Object(c.id, "box", "", X, {}));
+  }
+  world.OnSceneState(Scene("solar_system", 1, objects));
+  const auto drawn = [&](const std::string& id) {
+    render::SceneView view;
+    world.AddObjects(view);
+    for (std::size_t i = 0; i < objects.size(); ++i) {
+      if (objects[i].object_id().to_string() == id) {
+        return Eigen::Isometry3d(Eigen::Translation3d(view.boxes[i].p_W) * view.boxes[i].q_WB);
+      }
+    }
+    return Eigen::Isometry3d::Identity();
+  };
+  msg::ControlState lever;
+  lever.control_id("lever_planet");
+  lever.scene("solar_system");
+  lever.index(0);
+  lever.moving(true);
+  lever.position(0.25);
+  world.OnControlState(lever);
+  EXPECT_TRUE(drawn("lever_planet").isApprox(at_rest["lever_planet"] * Eigen::AngleAxisd(0.25, Eigen::Vector3d::UnitX()), 1e-9));
+  lever.moving(false);
+  lever.position(0.0);
+  world.OnControlState(lever);
+  EXPECT_TRUE(drawn("lever_planet").isApprox(at_rest["lever_planet"], 1e-12)) << "let go: back in detent 0";
+  msg::ControlState arrow;
+  arrow.control_id("arrow_next");
+  arrow.scene("solar_system");
+  arrow.moving(true);
+  arrow.position(0.0007);
+  world.OnControlState(arrow);
+  EXPECT_TRUE(drawn("arrow_next").isApprox(at_rest["arrow_next"] * Eigen::Translation3d(0, 0, -0.0007), 1e-12));
+  arrow.position(1.0);  // beyond its travel: drawn at the bottom of it
+  world.OnControlState(arrow);
+  const double travel = solar.controls[2].push.travel_m;
+  EXPECT_TRUE(drawn("arrow_next").isApprox(at_rest["arrow_next"] * Eigen::Translation3d(0, 0, -travel), 1e-12));
+
+  // The start menu's solar-system book with its cover lifted upright (pi / 2): the front cover
+  // stands on the spine's top edge.
+  const scene::Scene menu = scene::LoadSceneByName("start_menu", kAssets / "scenes");
+  std::vector<msg::SceneObject> menu_objects;
+  for (const auto& c : menu.controls) {
+    Eigen::Isometry3d X = Eigen::Isometry3d::Identity();
+    X.translation() = c.p_WC_m;
+    menu_objects.push_back(Object(c.id, "box", "", X, {}));
+  }
+  world.OnSceneState(Scene("start_menu", 1, menu_objects));
+  msg::ControlState book;
+  book.control_id("book_solar_system");
+  book.scene("start_menu");
+  book.index(-1);
+  book.moving(true);
+  book.position(std::numbers::pi / 2);
+  world.OnControlState(book);
+  render::SceneView view;
+  world.AddObjects(view);
+  const scene::ControlSpec& spec = menu.controls[0];
+  const Eigen::Vector3d hinge = spec.p_WC_m + Eigen::Vector3d(-0.5 * spec.size_m.x(), 0.0, 0.0);
+  int standing = 0;
+  for (const render::Box& b : view.boxes) {
+    // Upright: its long side (x of the box) along z, its centre half a book's width above the hinge.
+    const Eigen::Vector3d along = b.q_WB * Eigen::Vector3d::UnitX();
+    if (std::abs(std::abs(along.z()) - 1.0) < 1e-9 && std::abs(b.p_W.z() - (hinge.z() + 0.5 * spec.size_m.x())) < 1e-9 &&
+        std::abs(b.p_W.x() - hinge.x()) < 0.005) {
+      ++standing;
+    }
+  }
+  EXPECT_EQ(standing, 1) << "the solar-system book's front cover stands on its spine";
+  EXPECT_TRUE(view.pages.empty()) << "not open yet";
+  EXPECT_EQ(errors.str(), "");
+}
+
+// Labels from the scene file, in the replica's language: the solar system's ball is named 1 cm
+// above its top, the lever above its handle; the ground has none.
+TEST(SceneReplica, ObjectsAndControlsAreLabelledInTheReplicasLanguage) {
+  const scene::Scene solar = scene::LoadSceneByName("solar_system", kAssets / "scenes");
+  std::vector<msg::SceneObject> objects;
+  for (const auto& o : solar.objects) {
+    const std::string shape = o.shape == scene::Shape::kSphere ? "sphere" : o.shape == scene::Shape::kBox ? "box" : "mesh";
+    objects.push_back(Object(o.id, shape, o.mesh_uri, o.X_WO(), {}, o.half_extent_m));
+  }
+  for (const char* language : {"en", "ja"}) {
+    std::ostringstream errors;
+    SceneReplica world(kAssets, errors, "", language);
+    world.OnSceneState(Scene("solar_system", 1, objects));
+    render::SceneView view;
+    world.AddObjects(view);
+    std::map<std::string, Eigen::Vector3d> at;
+    for (const render::Label& l : view.labels) at[l.text] = l.p_W;
+    const std::string ball = std::string(language) == "ja" ? "ボール" : "Ball";
+    ASSERT_EQ(at.count(ball), 1U) << language;
+    const scene::SceneObject& spec = solar.objects[1];
+    ASSERT_EQ(spec.id, "ball");
+    EXPECT_TRUE(at[ball].isApprox(spec.p_WO_m + Eigen::Vector3d(0.0, 0.0, spec.half_extent_m.x() + 0.01), 1e-12));
+    const std::string lever = std::string(language) == "ja" ? "月 | 火星" : "Moon | Mars";
+    ASSERT_EQ(at.count(lever), 1U) << language;
+    EXPECT_GT(at[lever].z(), solar.controls[0].p_WC_m.z() + 0.08) << "above the handle's top";
+    EXPECT_EQ(view.labels.size(), 5U) << "ball, weight, lever and two arrows; not the ground";
+    EXPECT_EQ(errors.str(), "");
+  }
 }
 
 TEST(SceneReplica, EachMeshFileIsLoadedOnce) {

@@ -52,7 +52,12 @@ void HapticBridge::FollowControlStates() {
     const std::string bad = dds::CheckControlState(state, config_.where.session);
     if (!dropped_.Accept("control_state", "participant " + dds::ParticipantOf(meta.writer), bad, say_)) continue;
     const std::string id = state.control_id().to_string();
-    if (renderer_ && state.scene().to_string() == renderer_->scene().name &&
+    // Another hand's motion (moving, position) is for screens: the haptic loop takes settled
+    // states only, and each once.
+    const auto known = control_states_.find(id);
+    const bool settled_change = known == control_states_.end() || known->second.scene() != state.scene() ||
+                                known->second.index() != state.index() || known->second.engaged() != state.engaged();
+    if (settled_change && renderer_ && state.scene().to_string() == renderer_->scene().name &&
         !renderer_->SetControlState(id, state.index(), state.engaged())) {
       say_("control state of '" + id + "' not handed to the haptic loop: its queue is full");
     }
@@ -141,11 +146,22 @@ void HapticBridge::AdoptScene(const msg::SceneState& state) {
 void HapticBridge::ForwardControlEvents() {
   controls::ControlEvent event;
   while (renderer_->TakeEvent(event)) {
-    event_writer_.Write(session::ToMessage(event, config_.where.session, config_.user, common::SteadyNowNs()));
-    ++control_events_sent_;
+    held_events_.push_back(session::ToMessage(event, config_.where.session, config_.user, common::SteadyNowNs()));
+    if (held_events_.size() > kMaxHeldEvents) {
+      held_events_.pop_front();
+      if (held_events_dropped_++ == 0) say_("control events wait for the world server's reader; the oldest are dropped");
+    }
+    if (event.kind == controls::EventKind::kMoving) continue;  // up to 25 a second: not logged
     say_(Format("control %s: %s (value %.3f, error %.1f mm)", std::string(event.id()).c_str(),
                 controls::ToString(event.kind), event.value, 1e3 * event.error_m));
   }
+  // Written once a reader (the world server's) has matched this writer: before, they are lost.
+  if (held_events_.empty() || event_writer_.matched_readers() == 0) return;
+  for (const msg::ControlEvent& m : held_events_) {
+    event_writer_.Write(m);
+    ++control_events_sent_;
+  }
+  held_events_.clear();
 }
 
 void HapticBridge::ReceivePeers() {

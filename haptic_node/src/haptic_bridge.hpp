@@ -5,6 +5,7 @@
 /// node library: it holds DDS writers and readers.
 #include <cstdint>
 #include <cstdio>
+#include <deque>
 #include <functional>
 #include <map>
 #include <memory>
@@ -79,8 +80,11 @@ class HapticBridge {
   /// The world server's control states: kept per control, and handed to the renderer of
   /// their world (another user moved a control; a rebuilt world starts from them).
   void FollowControlStates();
-  /// The renderer's control events, to the world server (reliably).
+  /// The renderer's control events, to the world server (reliably). The topic is volatile: an
+  /// event written before a reader matched this writer never reaches it, so events wait (at most
+  /// kMaxHeldEvents, the oldest dropped and counted beyond) until a reader is matched.
   void ForwardControlEvents();
+  static constexpr std::size_t kMaxHeldEvents = 256;
   /// The other users' contact sets, on this world's deformables.
   void ReceivePeers();
   /// Rigid bodies another process simulates: this hand follows their published states.
@@ -145,6 +149,8 @@ class HapticBridge {
   Clock::time_point next_stats_;
   std::uint64_t device_states_published_ = 0;
   std::uint64_t control_events_sent_ = 0;
+  std::deque<msg::ControlEvent> held_events_;  // taken, not yet written: no reader matched
+  std::uint64_t held_events_dropped_ = 0;
   dds::DroppedSamples dropped_;
   common::LatencyHistogram peer_age_;
   common::LatencyHistogram peer_loop_age_;

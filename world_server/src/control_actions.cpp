@@ -12,11 +12,6 @@ const scene::ControlSpec* FindControl(const scene::Scene& scene, const std::stri
   }
   return nullptr;
 }
-
-const scene::Action* At(const std::vector<scene::Action>& actions, std::int32_t index) {
-  return index >= 0 && static_cast<std::size_t>(index) < actions.size() ? &actions[static_cast<std::size_t>(index)]
-                                                                         : nullptr;
-}
 }  // namespace
 
 scene::Scene LoadWorld(const std::string& name) { return scene::LoadSceneByName(name); }
@@ -24,16 +19,7 @@ scene::Scene LoadWorld(const std::string& name) { return scene::LoadSceneByName(
 const scene::Action* ActionOf(const scene::Scene& scene, const ControlInput& input) {
   const scene::ControlSpec* spec = FindControl(scene, input.control_id);
   if (spec == nullptr) return nullptr;  // a control of a world already left
-  const bool clickable = spec->type == scene::ControlType::kButton || spec->type == scene::ControlType::kArrow;
-  switch (input.kind) {
-    case controls::EventKind::kPressed: return clickable ? &spec->action : nullptr;
-    case controls::EventKind::kOpened: return spec->type == scene::ControlType::kBook ? &spec->action : nullptr;
-    case controls::EventKind::kMoved: return At(spec->detent_actions, input.index);
-    case controls::EventKind::kPageTurned: return At(spec->page_actions, input.index);
-    case controls::EventKind::kReleased:
-    case controls::EventKind::kMissed: return nullptr;
-  }
-  return nullptr;
+  return controls::ActionOf(*spec, input.kind, input.index);
 }
 
 ControlOutcome ApplyControlAction(scene::Scene& scene, const ControlInput& input, const SceneLoader& load) {
@@ -101,8 +87,16 @@ const ControlStateRecord* UpdateControlState(std::vector<ControlStateRecord>& st
       break;
     case controls::EventKind::kPageTurned: next.index = input.index; break;
     case controls::EventKind::kMissed: return nullptr;
+    case controls::EventKind::kMoving: break;
   }
-  if (it->known && next.index == it->index && next.engaged == it->engaged) return nullptr;
+  const bool motion = input.kind == controls::EventKind::kMoving;
+  next.moving = motion && input.index != 0;
+  next.position = next.moving ? input.value : 0.0;
+  if (motion && !it->known) return nullptr;  // motion of a control whose settled state is unknown
+  if (it->known && next.index == it->index && next.engaged == it->engaged && next.moving == it->moving &&
+      next.position == it->position) {
+    return nullptr;
+  }
   next.known = true;
   next.user = input.user;
   ++next.changes;

@@ -13,7 +13,7 @@
 #include <thread>
 
 #include "handshare/common/clock.hpp"
-#include "handshare/common/roster_watch.hpp"
+#include "handshare/dds/roster_rejoin.hpp"
 #include "handshare/common/shutdown.hpp"
 #include "handshare/dds/membership.hpp"
 #include "handshare/dds/messages.hpp"
@@ -462,10 +462,6 @@ class Tap : public TopicTap {
 
 }  // namespace
 
-// At most this many rejoins in one recording: a member the recorder can never reach (a
-// network it is not on) would otherwise make it leave and join every rejoin_after.
-constexpr int kMaxRecorderRejoins = 5;
-
 int RunRecorder(const RecordConfig& config) {
   const auto& where = config.where;
   char host[256] = {};
@@ -539,8 +535,7 @@ int RunRecorder(const RecordConfig& config) {
     participant.reset();
   };
   join();
-  common::RosterWatch roster(config.rejoin_after);
-  int rejoins = 0;
+  dds::RosterRejoin roster(config.rejoin_after, where.session);
   auto roster_checked = SteadyClock::now();
   std::printf("[session_record] recording session '%s' on domain %d into %s\n", where.session.c_str(),
               where.domain_id, config.out.c_str());
@@ -556,22 +551,11 @@ int RunRecorder(const RecordConfig& config) {
     for (auto& tap : taps) taken += tap->Drain(*writer, t0);
     if (now - roster_checked >= std::chrono::milliseconds(100)) {
       roster_checked = now;
-      msg::SessionRoster r;
-      dds::SampleMeta meta;
-      while (roster_reader.TakeNext(r, meta)) {
-        if (!meta.valid_data || !dds::CheckSessionRoster(r, where.session).empty()) continue;
-        std::vector<std::string> ids;
-        for (const auto& m : r.members()) ids.push_back(m.to_string());
-        roster.OnRoster(std::move(ids));
-      }
+      roster.Take(roster_reader);
       std::vector<std::string> heard;
       for (const Member& m : members.present()) heard.push_back(m.member_id);
-      const std::vector<std::string> unheard = roster.Unheard(heard, now);
-      if (!unheard.empty() && rejoins < kMaxRecorderRejoins) {
-        ++rejoins;
-        std::printf("[session_record] the world server has %s, not heard here %.1f s after joining: leaving and "
-                    "joining again with a new participant (rejoin %d)\n",
-                    unheard.front().c_str(), config.rejoin_after.count(), rejoins);
+      if (const std::string why = roster.Due(heard, now); !why.empty()) {
+        std::printf("[session_record] %s\n", why.c_str());
         std::fflush(stdout);
         for (auto& tap : taps) taken += tap->Drain(*writer, t0);
         leave();

@@ -8,6 +8,7 @@
 
 #include "handshare/dds/messages.hpp"
 #include "handshare/scene/scene.hpp"
+#include "handshare/session/scene_state.hpp"
 #include "handshare/world_server/control_actions.hpp"
 #include "handshare/world_server/deformation_delta.hpp"
 #include "handshare/world_server/member_registry.hpp"
@@ -15,10 +16,8 @@
 
 namespace handshare::server {
 
-/// The scene state every node builds its world from: revision `revision` of `scene`, with the
-/// session clock's origin and the server's tick rate (how often it reads contact sets).
-msg::SceneState ToSceneState(const scene::Scene& s, const std::string& session, std::uint32_t revision,
-                             std::uint64_t session_epoch_unix_ns, double tick_Hz = 0.0);
+/// The scene state every node builds its world from (shared with the graphics bench).
+using session::ToSceneState;
 
 /// A member as announced.
 Member ToMember(const msg::MemberInfo& info);

@@ -144,6 +144,13 @@ void ServerSession::TakeControlEvents() {
     }
     const auto input = ToControlInput(sample);
     if (!input) continue;  // CheckControlEvent refused every kind ToControlInput cannot map
+    if (input->kind == controls::EventKind::kMoving) {
+      // Motion (up to 25 a second while a hand moves a control): for the screens, not the log.
+      if (const ControlStateRecord* changed = UpdateControlState(control_states_, *input)) {
+        control_state_writer_.Write(ToControlState(*changed, session_));
+      }
+      continue;
+    }
     server_.OnControlEvent(ToControlRecord(sample, *input, common::UnixNowNs()));
     // Where the event left its control, before its action (which may leave the world).
     if (const ControlStateRecord* changed = UpdateControlState(control_states_, *input)) {

@@ -23,6 +23,7 @@ const char* LogName(controls::EventKind kind) {
     case controls::EventKind::kPageTurned: return "page_turned";
     case controls::EventKind::kMissed: return "missed";
     case controls::EventKind::kOpened: return "opened";
+    case controls::EventKind::kMoving: return "moving";  // not logged: motion, not an event of the session
   }
   return "?";
 }
@@ -344,7 +345,11 @@ void SessionLog::OnSceneChange(const std::string& scene, const std::string& titl
   impl_->Push(SceneRow{unix_ns, scene, title});
 }
 
-void SessionLog::OnControlEvent(const ControlRecord& event) { impl_->Push(event); }
+void SessionLog::OnControlEvent(const ControlRecord& event) {
+  // A hand moving a control (up to 25 reports a second) is not an event of the session.
+  if (event.kind == controls::EventKind::kMoving) return;
+  impl_->Push(event);
+}
 
 void SessionLog::OnOwnership(const std::string& object_id, const std::string& owner, const std::string& reason,
                              std::uint64_t unix_ns) {

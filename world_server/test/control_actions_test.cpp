@@ -150,6 +150,45 @@ TEST_F(ControlActions, ABooksPagesTakeTheirOwnActions) {
   EXPECT_EQ(s.name, "dinosaur");
 }
 
+TEST_F(ControlActions, ABookWithoutItsOwnActionOpensAtPageOne) {
+  scene::Scene s = menu_;
+  s.controls[1].action = scene::Action{};
+  s.controls[1].page_actions[0].title = "Page one";
+  const ControlOutcome out = ApplyControlAction(s, {"book_solar", EventKind::kOpened, 0, "alice"}, Loader());
+  EXPECT_TRUE(out.taken);
+  EXPECT_FALSE(out.world_changed);
+  EXPECT_EQ(s.name, "start_menu");
+  EXPECT_EQ(s.title, "Page one");
+}
+
+// The project's start menu: a book opens at page 1 (its board message, no other world), and
+// page 2 takes the book's world. Every book alike.
+TEST(ControlActionsOfTheScenes, OpenABookTurnToPageTwoAndGoToItsWorld) {
+  for (const char* world : {"solar_system", "dinosaur", "microscopic"}) {
+    scene::Scene s = LoadWorld("start_menu");
+    const std::string book = std::string("book_") + world;
+    std::vector<ControlStateRecord> states = InitialControlStates(s);
+    const ControlInput open{book, EventKind::kOpened, 0, "alice"};
+    ASSERT_NE(UpdateControlState(states, open), nullptr);
+    ControlOutcome out = ApplyControlAction(s, open, LoadWorld);
+    EXPECT_TRUE(out.taken) << world;
+    EXPECT_FALSE(out.world_changed) << world;
+    EXPECT_EQ(s.name, "start_menu");
+    ASSERT_EQ(out.boards.size(), 1U) << world;
+    EXPECT_EQ(out.boards[0].size(), 2U) << world << ": English and Japanese";
+    const ControlInput turn{book, EventKind::kPageTurned, 1, "alice"};
+    const ControlStateRecord* page = UpdateControlState(states, turn);
+    ASSERT_NE(page, nullptr);
+    EXPECT_EQ(page->index, 1);
+    EXPECT_TRUE(page->engaged);
+    out = ApplyControlAction(s, turn, LoadWorld);
+    EXPECT_TRUE(out.world_changed) << world;
+    EXPECT_EQ(s.name, world);
+    ASSERT_FALSE(out.notes.empty());
+    EXPECT_NE(out.notes[0].find("control " + book + " by alice: scene '" + world + "'"), std::string::npos) << out.notes[0];
+  }
+}
+
 TEST_F(ControlActions, APageOrDetentOutsideTheListsTakesNothing) {
   scene::Scene s = menu_;
   for (std::int32_t page : {-1, 3, 99}) {
@@ -202,8 +241,8 @@ TEST_F(ControlActions, AWorldThatCannotBeLoadedLeavesTheSceneAsItWasAndSaysWhy) 
 }
 
 TEST_F(ControlActions, TheShippedStartMenuBookTakesItsPageActions) {
-  // The real scene files: page 0 of the solar-system book has a bilingual text, and opening the
-  // book goes to the solar system.
+  // The real scene files: back at page 1 of the solar-system book (a turn back from page 2 is
+  // possible only in a book whose page 2 does not leave), its bilingual text again.
   scene::Scene s = scene::LoadSceneByName("start_menu");
   const ControlInput page{"book_solar_system", EventKind::kPageTurned, 0, "a"};
   const ControlOutcome turned = ApplyControlAction(s, page, LoadWorld);
@@ -213,10 +252,6 @@ TEST_F(ControlActions, TheShippedStartMenuBookTakesItsPageActions) {
   ASSERT_EQ(turned.boards[0].size(), 2u);
   EXPECT_EQ(turned.boards[0][0].text, "Planets in the solar system.");
   EXPECT_EQ(turned.boards[0][1].language, "ja");
-  const ControlOutcome opened =
-      ApplyControlAction(s, {"book_solar_system", EventKind::kOpened, 0, "a"}, LoadWorld);
-  EXPECT_TRUE(opened.world_changed);
-  EXPECT_EQ(s.name, "solar_system");
 }
 
 }  // namespace
@@ -266,6 +301,40 @@ TEST_F(ControlActions, AfterAResumeTheFirstEventOfAControlIsAlwaysAChange) {
   EXPECT_TRUE(r->known);
   EXPECT_EQ(UpdateControlState(moon, {"lever", EventKind::kMoved, 0, "alice"}), nullptr);
   EXPECT_EQ(UpdateControlState(moon, {"lever", EventKind::kMissed, -1, "alice"}), nullptr);
+}
+
+// A hand moving a control (motion reports) makes it moving at that position, for screens; at
+// rest, or with a settled event, it stops moving. Motion takes no action, and a control whose
+// settled state is unknown (after a resume) takes no motion until an event says where it is.
+TEST_F(ControlActions, MotionReportsMoveAControlForTheScreens) {
+  std::vector<ControlStateRecord> moon = InitialControlStates(worlds_["solar_system"]);
+  ControlInput moving{"lever", EventKind::kMoving, 1, "alice", 0.2};
+  const ControlStateRecord* r = UpdateControlState(moon, moving);
+  ASSERT_NE(r, nullptr);
+  EXPECT_TRUE(r->moving);
+  EXPECT_DOUBLE_EQ(r->position, 0.2);
+  EXPECT_EQ(r->index, 0) << "still in its detent until it settles in another";
+  EXPECT_EQ(UpdateControlState(moon, moving), nullptr) << "the same position again: no change";
+  moving.value = 0.35;
+  ASSERT_NE(UpdateControlState(moon, moving), nullptr);
+  r = UpdateControlState(moon, {"lever", EventKind::kMoved, 1, "alice"});
+  ASSERT_NE(r, nullptr);
+  EXPECT_FALSE(r->moving) << "settled";
+  EXPECT_EQ(r->index, 1);
+  EXPECT_DOUBLE_EQ(r->position, 0.0);
+  ASSERT_NE(UpdateControlState(moon, {"lever", EventKind::kMoving, 1, "alice", 0.58}), nullptr);
+  r = UpdateControlState(moon, {"lever", EventKind::kMoving, 0, "alice", 0.6});
+  ASSERT_NE(r, nullptr);
+  EXPECT_FALSE(r->moving) << "at rest";
+  EXPECT_EQ(r->index, 1);
+
+  scene::Scene s = worlds_["solar_system"];
+  const ControlOutcome out = ApplyControlAction(s, {"lever", EventKind::kMoving, 1, "alice", 0.5}, Loader());
+  EXPECT_FALSE(out.taken);
+  EXPECT_DOUBLE_EQ(s.gravity_W_m_per_s2.z(), -1.62);
+
+  std::vector<ControlStateRecord> resumed = InitialControlStates(worlds_["solar_system"], /*known=*/false);
+  EXPECT_EQ(UpdateControlState(resumed, {"lever", EventKind::kMoving, 1, "alice", 0.2}), nullptr);
 }
 
 TEST_F(ControlActions, ABookOpensAtItsFirstPageAndTurns) {

@@ -67,6 +67,9 @@ TEST(SessionLog, CreatesAVersionedWalLogAndRecordsEveryKindOfRow) {
     log.OnMember(MemberChange::kJoined, Member{"demo/alice", "alice", "haptic", "sim", 11}, kT0 + 1 * kSecond);
     log.OnControlEvent(ControlRecord{kT0 + 2 * kSecond, "alice", "lever", controls::EventKind::kMoved, 0.5, 0.004});
     log.OnControlEvent(ControlRecord{kT0 + 3 * kSecond, "alice", "lever", controls::EventKind::kMissed, 0.0, std::nullopt});
+    // A hand's motion report is no event of the session (the recorder passes every control
+    // event it hears: one made the log refuse its row and the recorder stop).
+    log.OnControlEvent(ControlRecord{kT0 + 3 * kSecond, "alice", "lever", controls::EventKind::kMoving, 0.3, std::nullopt});
     log.OnOwnership("ball", "alice", "granted", kT0 + 4 * kSecond);
     log.OnMember(MemberChange::kLost, Member{"demo/alice", "alice", "haptic", "sim", 11}, kT0 + 5 * kSecond);
     log.Flush();

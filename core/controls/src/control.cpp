@@ -26,6 +26,7 @@ const char* ToString(EventKind kind) noexcept {
     case EventKind::kPageTurned: return "PAGE_TURNED";
     case EventKind::kMissed: return "MISSED";
     case EventKind::kOpened: return "OPENED";
+    case EventKind::kMoving: return "MOVING";
   }
   return "?";
 }
@@ -36,6 +37,36 @@ Control::Control(const scene::ControlSpec& spec) : spec_(spec) {
   X_WC.translation() = spec.p_WC_m;
   X_CW_ = X_WC.inverse();
   R_WC_ = X_WC.linear();
+  switch (spec.type) {
+    case scene::ControlType::kButton:
+    case scene::ControlType::kArrow: motion_resolution_ = spec.push.travel_m / 20.0; break;
+    case scene::ControlType::kLever: motion_resolution_ = 0.01; break;
+    case scene::ControlType::kBook: motion_resolution_ = 0.05; break;
+  }
+}
+
+void Control::SyncMotion() noexcept {
+  last_position_ = reported_position_ = position();
+  since_report_s_ = 0.0;
+  reporting_ = false;
+}
+
+void Control::ReportMotion(double dt_s, EventBuffer& events) noexcept {
+  const double now = position();
+  since_report_s_ += dt_s;
+  const bool still = std::abs(now - last_position_) <= 1e-12;
+  last_position_ = now;
+  const auto report = [&](bool moving) {
+    Emit(events, EventKind::kMoving, -1, now, 0.0, moving ? 1 : 0);
+    reported_position_ = now;
+    since_report_s_ = 0.0;
+    reporting_ = moving;
+  };
+  if (touched() || !still) {
+    if (std::abs(now - reported_position_) > motion_resolution_ && since_report_s_ >= kMotionPeriod_s) report(true);
+  } else if (reporting_ || std::abs(now - reported_position_) > motion_resolution_) {
+    report(false);  // left alone and still: where it rests
+  }
 }
 
 void Control::Step(double dt_s, std::span<const Eigen::Vector3d> p_WE, double fingertip_radius_m,
@@ -43,7 +74,9 @@ void Control::Step(double dt_s, std::span<const Eigen::Vector3d> p_WE, double fi
   if (requested_.waiting && !touched()) {
     ApplyState(requested_.index, requested_.engaged);
     requested_.waiting = false;
+    SyncMotion();  // moved from elsewhere: not this hand's motion to report
   }
+  if (first_step_) SyncMotion();
   const std::size_t n = std::min({p_WE.size(), f_E_W.size(), static_cast<std::size_t>(kMaxFingertips)});
   for (std::size_t i = 0; i < n; ++i) {
     present_[i] = Finite(p_WE[i]);
@@ -63,6 +96,7 @@ void Control::Step(double dt_s, std::span<const Eigen::Vector3d> p_WE, double fi
     f_E_W[i].noalias() += R_WC_ * f;
   }
   TrackApproach(fingers, events);
+  if (dt_s > 0.0 && std::isfinite(dt_s)) ReportMotion(dt_s, events);
   first_step_ = false;
 }
 
@@ -144,21 +178,28 @@ void Control::TrackApproach(const Fingers& fingers, EventBuffer& events) noexcep
   }
 }
 
-const scene::Action* Control::ActionFor(const ControlEvent& e) const noexcept {
-  const auto pick = [](const std::vector<scene::Action>& list, int i) -> const scene::Action* {
+const scene::Action* ActionOf(const scene::ControlSpec& spec, EventKind kind, std::int32_t index) noexcept {
+  const auto pick = [](const std::vector<scene::Action>& list, std::int32_t i) -> const scene::Action* {
     return i >= 0 && static_cast<std::size_t>(i) < list.size() ? &list[static_cast<std::size_t>(i)] : nullptr;
   };
+  const bool clickable = spec.type == scene::ControlType::kButton || spec.type == scene::ControlType::kArrow;
+  const bool book = spec.type == scene::ControlType::kBook;
   const scene::Action* a = nullptr;
-  switch (e.kind) {
-    case EventKind::kPressed:
-    case EventKind::kOpened: a = &spec_.action; break;
-    case EventKind::kMoved: a = pick(spec_.detent_actions, e.index); break;
-    case EventKind::kPageTurned: a = pick(spec_.page_actions, e.index); break;
+  switch (kind) {
+    case EventKind::kPressed: a = clickable ? &spec.action : nullptr; break;
+    case EventKind::kOpened:
+      if (book) a = spec.action.empty() ? pick(spec.page_actions, 0) : &spec.action;
+      break;
+    case EventKind::kMoved: a = spec.type == scene::ControlType::kLever ? pick(spec.detent_actions, index) : nullptr; break;
+    case EventKind::kPageTurned: a = book ? pick(spec.page_actions, index) : nullptr; break;
     case EventKind::kReleased:
-    case EventKind::kMissed: break;
+    case EventKind::kMissed:
+    case EventKind::kMoving: break;
   }
   return a != nullptr && !a->empty() ? a : nullptr;
 }
+
+const scene::Action* Control::ActionFor(const ControlEvent& e) const noexcept { return ActionOf(spec_, e.kind, e.index); }
 
 ControlSet::ControlSet(std::vector<std::unique_ptr<Control>> controls) : controls_(std::move(controls)) {
   for (const auto& c : controls_) max_force_N_ = std::max(max_force_N_, c->spec().max_force_N);

@@ -123,6 +123,7 @@ std::string CheckControlState(const msg::ControlState& s, std::string_view sessi
   c.NonEmpty("control_id", s.control_id().to_string());
   c.NonEmpty("scene", s.scene().to_string());
   c.Range("index", s.index(), -1.0, 1000.0);
+  c.Range("position", s.position(), -10.0, 10.0);  // radians or metres: finite and small
   return c.reason();
 }
 
@@ -141,10 +142,14 @@ std::string CheckControlEvent(const msg::ControlEvent& s, std::string_view sessi
   c.NonEmpty("user", s.user().to_string());
   c.NonEmpty("control_id", s.control_id().to_string());
   const auto kind = static_cast<int>(s.kind());
-  if (c.ok() && (kind < static_cast<int>(msg::CONTROL_PRESSED) || kind > static_cast<int>(msg::CONTROL_OPENED))) {
+  if (c.ok() && (kind < static_cast<int>(msg::CONTROL_PRESSED) || kind > static_cast<int>(msg::CONTROL_MOVING))) {
     c.Fail("kind " + std::to_string(kind) + " is not a control event kind");
   }
   c.Range("index", static_cast<double>(s.index()), -1.0, 1000.0);
+  if (c.ok() && s.kind() == msg::CONTROL_MOVING) {
+    c.Range("value", s.value(), -10.0, 10.0);  // where it is: radians or metres
+    c.Range("index", static_cast<double>(s.index()), 0.0, 1.0);
+  }
   return c.reason();
 }
 

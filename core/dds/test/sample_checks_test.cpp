@@ -118,6 +118,16 @@ TEST(SampleChecks, ControlEventsOfUnknownKindOrIndexAreRefused) {
   e.kind(msg::CONTROL_MOVED);
   e.index(-7);
   EXPECT_NE(CheckControlEvent(e, "museum").find("index is -7"), std::string::npos);
+  // Motion: where the control is (finite, radians or metres) and whether it still moves (1, 0).
+  e.kind(msg::CONTROL_MOVING);
+  e.index(1);
+  e.value(0.3);
+  EXPECT_EQ(CheckControlEvent(e, "museum"), "");
+  e.value(std::numeric_limits<double>::quiet_NaN());
+  EXPECT_EQ(CheckControlEvent(e, "museum"), "value is nan (expected -10 to 10)");
+  e.value(0.3);
+  e.index(2);
+  EXPECT_EQ(CheckControlEvent(e, "museum"), "index is 2 (expected 0 to 1)");
 }
 
 TEST(SampleChecks, DeformationsNeedThreeDisplacementsPerIdAndIdsInRange) {
@@ -195,6 +205,9 @@ TEST(SampleChecks, ControlStatesNameAControlOfAWorldAndAPlausibleIndex) {
   s.index(-7);
   EXPECT_EQ(CheckControlState(s, "museum"), "index is -7 (expected -1 to 1000)");
   s.index(0);
+  s.position(std::numeric_limits<double>::infinity());
+  EXPECT_EQ(CheckControlState(s, "museum"), "position is inf (expected -10 to 10)");
+  s.position(0.2);
   s.control_id("");
   EXPECT_EQ(CheckControlState(s, "museum"), "control_id is empty");
 }

@@ -6,6 +6,7 @@
 #include "handshare/common/utf8.hpp"
 
 #include <algorithm>
+#include <cctype>
 #include <cmath>
 #include <fstream>
 #include <initializer_list>
@@ -20,6 +21,10 @@ namespace handshare::scene {
 namespace {
 
 using nlohmann::json;
+
+// A book's pages with content (the scene-state message does not carry them; a graphics node
+// reads them from the scene file).
+constexpr std::size_t kMaxBookPages = 64;
 
 // ------------------------------------------------------------------------------------------
 // JSON with the line of every field.
@@ -299,8 +304,9 @@ Eigen::Vector3d Scale(const Context& c, const json& j, const std::string& path) 
   return s;
 }
 
-// Where meshes live: paths relative to the assets folder, the parent of the scene folder.
-std::filesystem::path ResolveMesh(const std::filesystem::path& scene_file, const std::string& uri) {
+// Where meshes and images live: paths relative to the assets folder, the parent of the scene
+// folder.
+std::filesystem::path ResolveAsset(const std::filesystem::path& scene_file, const std::string& uri) {
   const std::filesystem::path p(uri);
   if (p.is_absolute()) return p;
   return scene_file.parent_path().parent_path() / p;
@@ -376,12 +382,61 @@ Action ParseAction(const Context& c, const json& j, const std::string& field,
   return a;
 }
 
+// [ {language: en | ja, text} ]: one text per language, each 1..max_bytes bytes.
+std::vector<LocalText> ParseTexts(const Context& c, const json& v, const std::string& field, std::size_t max_bytes) {
+  c.Array(v, field, 8);
+  std::vector<LocalText> out;
+  for (std::size_t i = 0; i < v.size(); ++i) {
+    const std::string tpath = field + "[" + std::to_string(i) + "].";
+    c.Object(v[i], tpath.substr(0, tpath.size() - 1));
+    c.OnlyKnown(v[i], tpath, {"language", "text", "note"});
+    LocalText t;
+    t.language = c.String(v[i], "language", tpath);
+    if (t.language != "en" && t.language != "ja") c.Fail(tpath + "language", "'" + t.language + "' is not en or ja");
+    for (const auto& earlier : out) {
+      if (earlier.language == t.language) c.Fail(tpath + "language", "a second '" + t.language + "' text");
+    }
+    t.text = c.String(v[i], "text", tpath, max_bytes);
+    if (t.text.empty()) c.Fail(tpath + "text", "must have 1.." + std::to_string(max_bytes) + " bytes");
+    out.push_back(std::move(t));
+  }
+  return out;
+}
+
+// Labels are a few words beside an object.
+constexpr std::size_t kMaxLabelBytes = 127;
+
+// One page of a book: {text [ {language, text} ], image, action}. The action goes to `action`.
+BookPage ParsePage(const Context& c, const json& j, const std::string& field, const std::filesystem::path& file,
+                   Action& action) {
+  c.Object(j, field);
+  const std::string path = field + ".";
+  c.OnlyKnown(j, path, {"text", "image", "action", "note"});
+  BookPage page;
+  if (j.contains("text")) page.text = ParseTexts(c, j["text"], path + "text", 1023);
+  if (j.contains("image")) {
+    page.image_uri = c.String(j, "image", path, 127);
+    page.image_path = ResolveAsset(file, page.image_uri);
+    std::string ext = page.image_path.extension().string();
+    std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char ch) { return static_cast<char>(std::tolower(ch)); });
+    if (ext != ".png") c.Fail(path + "image", "'" + page.image_uri + "' is not a PNG file (.png)");
+    if (!std::filesystem::is_regular_file(page.image_path)) {
+      c.Fail(path + "image", "image file '" + page.image_path.string() + "' does not exist");
+    }
+  }
+  if (j.contains("action")) action = ParseAction(c, j["action"], path + "action", file.parent_path());
+  if (page.text.empty() && page.image_uri.empty() && action.empty()) {
+    c.Fail(field, "a page needs text, an image or an action");
+  }
+  return page;
+}
+
 SceneObject ParseObject(const Context& c, const json& j, const std::string& path,
                         const std::filesystem::path& file, const LoadOptions& options) {
   c.Object(j, path.substr(0, path.size() - 1));
   c.OnlyKnown(j, path, {"id", "kind", "shape", "radius_m", "half_extent_m", "mesh", "mesh_scale",
                         "position_m", "orientation_wxyz", "mass_kg", "rgb", "material", "fixed",
-                        "motion", "note"});
+                        "motion", "label", "appearance", "note"});
   SceneObject o;
   o.line = c.LineOf(path.substr(0, path.size() - 1));
   o.id = c.String(j, "id", path, 63);
@@ -402,7 +457,7 @@ SceneObject ParseObject(const Context& c, const json& j, const std::string& path
     o.shape = Shape::kMesh;
     o.mesh_uri = c.String(j, "mesh", path, 127);  // idl: string<128> mesh_uri
     o.mesh_scale = Scale(c, j, path);
-    o.mesh_path = ResolveMesh(file, o.mesh_uri);
+    o.mesh_path = ResolveAsset(file, o.mesh_uri);
     o.mesh = MeshOf(c, path + "mesh", o.mesh_path, o.mesh_scale, options.load_meshes);
     if (o.mesh) {
       Eigen::AlignedBox3d box;
@@ -423,6 +478,15 @@ SceneObject ParseObject(const Context& c, const json& j, const std::string& path
   o.q_WO = Orientation(c, j, path);
   o.mass_kg = c.Number(j, "mass_kg", path, 0.0, 1000.0, 0.0);
   if (j.contains("rgb")) o.rgb = Rgb(c, j["rgb"], path + "rgb");
+  if (j.contains("label")) o.label = ParseTexts(c, j["label"], path + "label", kMaxLabelBytes);
+  if (j.contains("appearance")) {
+    const std::string ap = path + "appearance.";
+    const json& a = c.Object(j["appearance"], path + "appearance");
+    c.OnlyKnown(a, ap, {"specular", "shininess", "opacity", "note"});
+    o.appearance.specular = c.Number(a, "specular", ap, 0.0, 1.0, o.appearance.specular);
+    o.appearance.shininess = c.Number(a, "shininess", ap, 1.0, 128.0, o.appearance.shininess);
+    o.appearance.opacity = c.Number(a, "opacity", ap, 0.05, 1.0, o.appearance.opacity);
+  }
 
   const std::string mpath = path + "material.";
   if (o.kind == ObjectKind::kRigid && j.contains("material")) {
@@ -499,7 +563,7 @@ ControlSpec ParseControl(const Context& c, const json& j, const std::string& pat
   if (s.id.empty()) c.Fail(path + "id", "must have 1..31 characters");
   const std::string type = c.String(j, "type", path);
   const auto common = {"id", "type", "position_m", "orientation_wxyz", "size_m", "rgb", "mesh",
-                       "mesh_scale", "approach_margin_m", "max_force_N", "note"};
+                       "mesh_scale", "approach_margin_m", "max_force_N", "label", "note"};
   std::vector<const char*> allowed(common);
   const std::initializer_list<const char*> push_keys = {
       "travel_m", "click_at_m", "release_at_m", "stiffness_N_per_m", "preload_N", "click_drop",
@@ -539,12 +603,13 @@ ControlSpec ParseControl(const Context& c, const json& j, const std::string& pat
   s.q_WC = Orientation(c, j, path);
   if (j.contains("size_m")) s.size_m = c.Vector<3>(j["size_m"], path + "size_m", 1e-3, 1.0);
   if (j.contains("rgb")) s.rgb = Rgb(c, j["rgb"], path + "rgb");
+  if (j.contains("label")) s.label = ParseTexts(c, j["label"], path + "label", kMaxLabelBytes);
   s.approach_margin_m = c.Number(j, "approach_margin_m", path, 0.0, 0.5, s.approach_margin_m);
   s.max_force_N = c.Number(j, "max_force_N", path, 0.0, 20.0, s.max_force_N);
   if (j.contains("mesh")) {
     s.mesh_uri = c.String(j, "mesh", path, 127);
     s.mesh_scale = Scale(c, j, path);
-    s.mesh_path = ResolveMesh(file, s.mesh_uri);
+    s.mesh_path = ResolveAsset(file, s.mesh_uri);
     s.mesh = MeshOf(c, path + "mesh", s.mesh_path, s.mesh_scale, options.load_meshes);
   }
   const std::filesystem::path scene_dir = file.parent_path();
@@ -581,7 +646,21 @@ ControlSpec ParseControl(const Context& c, const json& j, const std::string& pat
     }
   } else {
     auto& b = s.book;
-    if (j.contains("pages")) b.pages = c.Integer(j["pages"], path + "pages", 1, 1000);
+    if (j.contains("pages") && j["pages"].is_array()) {
+      // Pages with their content: each carries its own action.
+      const std::string f = path + "pages";
+      const json& pages = c.Array(j["pages"], f, kMaxBookPages);
+      if (pages.empty()) c.Fail(f, "a book needs at least one page");
+      if (j.contains("page_actions")) c.Fail(path + "page_actions", "give each page's action in pages[i].action");
+      b.pages = static_cast<int>(pages.size());
+      for (std::size_t i = 0; i < pages.size(); ++i) {
+        Action action;
+        s.page_content.push_back(ParsePage(c, pages[i], f + "[" + std::to_string(i) + "]", file, action));
+        s.page_actions.push_back(std::move(action));
+      }
+    } else if (j.contains("pages")) {
+      b.pages = c.Integer(j["pages"], path + "pages", 1, 1000);
+    }
     b.open_angle_rad = c.Number(j, "open_angle_rad", path, 0.2, 3.0, b.open_angle_rad);
     b.swipe_m = c.Number(j, "swipe_m", path, 0.005, 0.3, b.swipe_m);
     b.surface_stiffness_N_per_m = c.Number(j, "surface_stiffness_N_per_m", path, 1.0, 1e6, b.surface_stiffness_N_per_m);
@@ -589,7 +668,7 @@ ControlSpec ParseControl(const Context& c, const json& j, const std::string& pat
     if (j.contains("action")) s.action = ParseAction(c, j["action"], path + "action", scene_dir);
     if (j.contains("page_actions")) {
       const std::string f = path + "page_actions";
-      const json& a = c.Array(j["page_actions"], f, static_cast<std::size_t>(b.pages) + 1);
+      const json& a = c.Array(j["page_actions"], f, static_cast<std::size_t>(b.pages));
       for (std::size_t i = 0; i < a.size(); ++i) {
         s.page_actions.push_back(ParseAction(c, a[i], f + "[" + std::to_string(i) + "]", scene_dir));
       }
@@ -607,6 +686,7 @@ SceneObject ControlVisual(const ControlSpec& s) {
   o.q_WO = s.q_WC;
   o.rgb = s.rgb;
   o.line = s.line;
+  o.label = s.label;
   o.half_extent_m = 0.5 * s.size_m;
   if (!s.mesh_uri.empty()) {
     o.shape = Shape::kMesh;
@@ -625,6 +705,28 @@ SceneObject ControlVisual(const ControlSpec& s) {
 }
 
 }  // namespace
+
+const std::string& TextIn(const std::vector<LocalText>& texts, const std::string& language) noexcept {
+  static const std::string kNone;
+  for (const auto& t : texts) {
+    if (t.language == language) return t.text;
+  }
+  for (const auto& t : texts) {
+    if (t.language == "en") return t.text;
+  }
+  return texts.empty() ? kNone : texts.front().text;
+}
+
+std::vector<Message> AllMessages(const Scene& scene) {
+  std::vector<Message> all = scene.messages;
+  const auto add = [&all](const Action& a) { all.insert(all.end(), a.messages.begin(), a.messages.end()); };
+  for (const auto& c : scene.controls) {
+    add(c.action);
+    for (const auto& a : c.detent_actions) add(a);
+    for (const auto& a : c.page_actions) add(a);
+  }
+  return all;
+}
 
 Eigen::Vector3d Motion::Offset_W(double t_s) const noexcept {
   if (!active()) return Eigen::Vector3d::Zero();
@@ -694,19 +796,23 @@ Scene LoadScene(const std::filesystem::path& file, const LoadOptions& options) {
 
 std::filesystem::path DefaultSceneDir() { return common::AssetsDir() / "scenes"; }
 
+std::vector<std::string> SceneNames(const std::filesystem::path& dir) {
+  std::vector<std::string> names;
+  std::error_code ec;
+  if (!std::filesystem::is_directory(dir, ec)) return names;
+  for (const auto& e : std::filesystem::directory_iterator(dir, ec)) {
+    if (e.path().extension() == ".json") names.push_back(e.path().stem().string());
+  }
+  std::sort(names.begin(), names.end());
+  return names;
+}
+
 Scene LoadSceneByName(const std::string& name, const std::filesystem::path& dir,
                       const LoadOptions& options) {
   const auto file = dir / (name + ".json");
   if (!std::filesystem::exists(file)) {
     std::string available;
-    if (std::filesystem::is_directory(dir)) {
-      std::vector<std::string> names;
-      for (const auto& e : std::filesystem::directory_iterator(dir)) {
-        if (e.path().extension() == ".json") names.push_back(e.path().stem().string());
-      }
-      std::sort(names.begin(), names.end());
-      for (const auto& n : names) available += " " + n;
-    }
+    for (const auto& n : SceneNames(dir)) available += " " + n;
     throw SceneError("unknown scene '" + name + "' (no " + file.string() + "); available:" +
                      (available.empty() ? " none" : available));
   }

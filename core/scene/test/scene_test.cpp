@@ -58,9 +58,28 @@ bool HasBothLanguages(const std::vector<Message>& messages) {
   return has("en") && has("ja");
 }
 
+// The project's scenes, every file of assets/scenes.
+const std::vector<std::string> kProjectScenes = {"commons",           "dinosaur",          "microscopic",
+                                                 "microscopic_belly", "microscopic_horn",  "solar_system",
+                                                 "start_menu"};
+
+TEST(Scene, SceneNamesListsTheFolder) {
+  EXPECT_EQ(SceneNames(kScenes), kProjectScenes);
+  EXPECT_TRUE(SceneNames(kScenes / "no_such_folder").empty());
+  const std::string err = [] {
+    try {
+      (void)LoadSceneByName("atlantis", kScenes);
+    } catch (const SceneError& e) {
+      return std::string(e.what());
+    }
+    return std::string();
+  }();
+  EXPECT_NE(err.find("available: commons dinosaur microscopic microscopic_belly"), std::string::npos) << err;
+}
+
 TEST(Scene, EveryProjectSceneLoadsWithMeshesAndBothLanguages) {
   const auto start = std::chrono::steady_clock::now();
-  for (const char* name : {"start_menu", "solar_system", "dinosaur", "microscopic"}) {
+  for (const std::string& name : kProjectScenes) {
     const Scene s = LoadSceneByName(name, kScenes);
     EXPECT_EQ(s.name, name);
     EXPECT_TRUE(HasBothLanguages(s.messages)) << name;
@@ -85,6 +104,11 @@ TEST(Scene, EveryProjectSceneLoadsWithMeshesAndBothLanguages) {
         if (!a.messages.empty()) {
           EXPECT_TRUE(HasBothLanguages(a.messages)) << c.id;
         }
+      }
+      for (std::size_t i = 0; i < c.page_content.size(); ++i) {
+        const BookPage& page = c.page_content[i];
+        EXPECT_EQ(page.text.size(), 2U) << c.id << " page " << i << ": English and Japanese";
+        EXPECT_NE(page.TextIn("ja"), page.TextIn("en")) << c.id << " page " << i;
       }
       // Every control is also an object (its visual) for the nodes that only draw objects.
       const SceneObject* visual = FindObject(s, c.id);
@@ -159,8 +183,9 @@ TEST(Scene, FlatPunchMatchesTheHandWorkedValue) {
 }
 
 TEST(Scene, DaphniaMovesPeriodically) {
-  const Scene s = LoadSceneByName("microscopic", kScenes);
   for (const char* id : {"daphnia_belly", "daphnia_horn"}) {
+    // Each part in its own world after the selection screen (microscopic_belly, _horn).
+    const Scene s = LoadSceneByName(std::string("microscopic_") + (std::string(id) == "daphnia_belly" ? "belly" : "horn"), kScenes);
     const SceneObject* o = FindObject(s, id);
     ASSERT_NE(o, nullptr) << id;
     EXPECT_EQ(o->kind, ObjectKind::kDeformable);
@@ -259,15 +284,9 @@ TEST(Scene, ErrorsNameTheLineOfTheField) {
 // Every Japanese message carries the reading the audio guide speaks: the ja voice cannot read kanji.
 TEST(Scene, JapaneseMessagesCarryAKanaReading) {
   std::size_t readings = 0;
-  for (const char* name : {"start_menu", "solar_system", "dinosaur", "microscopic", "commons"}) {
+  for (const std::string& name : kProjectScenes) {
     const Scene s = LoadSceneByName(name, kScenes);
-    std::vector<Message> all = s.messages;
-    for (const auto& c : s.controls) {
-      all.insert(all.end(), c.action.messages.begin(), c.action.messages.end());
-      for (const auto& a : c.detent_actions) all.insert(all.end(), a.messages.begin(), a.messages.end());
-      for (const auto& a : c.page_actions) all.insert(all.end(), a.messages.begin(), a.messages.end());
-    }
-    for (const Message& m : all) {
+    for (const Message& m : AllMessages(s)) {
       if (m.language == "en") {
         EXPECT_TRUE(m.reading.empty()) << name;
         continue;
@@ -277,7 +296,7 @@ TEST(Scene, JapaneseMessagesCarryAKanaReading) {
       EXPECT_FALSE(common::FirstOutsideKanaReading(m.reading).has_value()) << name << ": " << m.reading;
     }
   }
-  EXPECT_EQ(readings, 9U);  // the nine Japanese messages of the project's scenes
+  EXPECT_EQ(readings, 12U);  // the twelve Japanese messages of the project's scenes
 
   const std::string head = R"({"name": "x", "messages": [{"language": "en", "text": "t"},
     {"language": "ja", "text": "月", )";
@@ -309,6 +328,118 @@ TEST(Scene, ControlErrorsNameTheField) {
   const std::string ok = ErrorOf("cok", head + R"({"id": "b", "type": "book", "position_m": [0,0,0],
     "pages": 3, "action": {"goto": "start_menu"}}]})");
   EXPECT_EQ(ok, "");
+}
+
+// The start menu's books: opening one shows its first page (its messages, no other world);
+// the second page goes to the book's world. Every page has a picture and text in both languages.
+TEST(Scene, TheStartMenuBooksHavePagesThatLeadToTheirWorlds) {
+  const Scene s = LoadSceneByName("start_menu", kScenes);
+  int books = 0;
+  for (const char* world : {"solar_system", "dinosaur", "microscopic"}) {
+    const ControlSpec* book = FindControl(s, std::string("book_") + world);
+    ASSERT_NE(book, nullptr) << world;
+    ++books;
+    EXPECT_EQ(book->type, ControlType::kBook);
+    EXPECT_TRUE(book->action.empty()) << world << ": opening shows page 1, it goes nowhere";
+    ASSERT_EQ(book->page_content.size(), 2U) << world;
+    EXPECT_EQ(book->book.pages, 2) << world;
+    ASSERT_EQ(book->page_actions.size(), 2U) << world;
+    EXPECT_TRUE(book->page_actions[0].goto_scene.empty()) << world;
+    EXPECT_TRUE(HasBothLanguages(book->page_actions[0].messages)) << world << ": page 1 speaks";
+    EXPECT_EQ(book->page_actions[1].goto_scene, world);
+    for (const BookPage& page : book->page_content) {
+      EXPECT_TRUE(std::filesystem::is_regular_file(page.image_path)) << page.image_path;
+      EXPECT_EQ(page.image_path.extension(), ".png");
+      EXPECT_FALSE(page.TextIn("en").empty()) << world;
+      EXPECT_EQ(page.TextIn("fr"), page.TextIn("en")) << "a language the page lacks reads English";
+    }
+  }
+  EXPECT_EQ(books, 3);
+}
+
+TEST(Scene, BookPageErrorsNameTheField) {
+  const auto root = TempAssets();
+  std::filesystem::create_directories(root / "images");
+  std::ofstream(root / "images" / "p.png") << "not checked here: graphics nodes read it";
+  std::ofstream(root / "images" / "p.jpg") << "x";
+  const std::string head = std::string(R"({"name": "x", )") + kMsg +
+                           R"(, "controls": [{"id": "b", "type": "book", "position_m": [0,0,0], "pages": )";
+  const auto error = [&](const std::string& name, const std::string& pages, const std::string& more = "") {
+    return ErrorOf(name, head + pages + more + "}]}");
+  };
+  EXPECT_EQ(error("bp_ok", R"([{"text": [{"language": "en", "text": "a"}, {"language": "ja", "text": "あ"}],
+    "image": "images/p.png"}, {"action": {"goto": "start_menu"}}])"), "");
+  const std::string empty = error("bp_empty", "[]");
+  EXPECT_NE(empty.find("'controls[0].pages': a book needs at least one page"), std::string::npos) << empty;
+  const std::string both = error("bp_both", R"([{"image": "images/p.png"}])", R"(, "page_actions": [{"title": "t"}])");
+  EXPECT_NE(both.find("'controls[0].page_actions': give each page's action in pages[i].action"), std::string::npos) << both;
+  const std::string blank = error("bp_blank", R"([{"note": "nothing"}])");
+  EXPECT_NE(blank.find("'controls[0].pages[0]': a page needs text, an image or an action"), std::string::npos) << blank;
+  const std::string jpg = error("bp_jpg", R"([{"image": "images/p.jpg"}])");
+  EXPECT_NE(jpg.find("'controls[0].pages[0].image': 'images/p.jpg' is not a PNG file"), std::string::npos) << jpg;
+  const std::string missing = error("bp_missing", R"([{"image": "images/none.png"}])");
+  EXPECT_NE(missing.find("'controls[0].pages[0].image': image file"), std::string::npos) << missing;
+  EXPECT_NE(missing.find("none.png' does not exist"), std::string::npos) << missing;
+  const std::string twice = error("bp_twice", R"([{"text": [{"language": "en", "text": "a"}, {"language": "en", "text": "b"}]}])");
+  EXPECT_NE(twice.find("'controls[0].pages[0].text[1].language': a second 'en' text"), std::string::npos) << twice;
+  const std::string lang = error("bp_lang", R"([{"text": [{"language": "fr", "text": "a"}]}])");
+  EXPECT_NE(lang.find("'controls[0].pages[0].text[0].language': 'fr' is not en or ja"), std::string::npos) << lang;
+  const std::string typo = error("bp_typo", R"([{"texts": []}])");
+  EXPECT_NE(typo.find("'controls[0].pages[0].texts': unknown field"), std::string::npos) << typo;
+  const std::string goto_ = error("bp_goto", R"([{"action": {"goto": "atlantis"}}])");
+  EXPECT_NE(goto_.find("'controls[0].pages[0].action.goto': no scene 'atlantis'"), std::string::npos) << goto_;
+  const std::string many = error("bp_actions", "2", R"(, "page_actions": [{"title": "a"}, {"title": "b"}, {"title": "c"}])");
+  EXPECT_NE(many.find("'controls[0].page_actions': more than 2 entries"), std::string::npos) << many;
+}
+
+// Every object a visitor touches and every control of the encyclopedia is named on screen, in
+// English and Japanese; the floors are not.
+TEST(Scene, ObjectsAndControlsHaveLabelsInBothLanguages) {
+  int labelled = 0;
+  for (const std::string& name : kProjectScenes) {
+    const Scene s = LoadSceneByName(name, kScenes);
+    for (const SceneObject& o : s.objects) {
+      if (o.id == "ground" || o.id == "table") {
+        EXPECT_TRUE(o.label.empty()) << name << ": " << o.id;
+        continue;
+      }
+      ASSERT_EQ(o.label.size(), 2U) << name << ": " << o.id;
+      EXPECT_NE(TextIn(o.label, "en"), TextIn(o.label, "ja")) << name << ": " << o.id;
+      ++labelled;
+    }
+  }
+  // commons 5, dinosaur 5, microscopic 5, its belly 3 and horn 3, solar system 5, start menu 6
+  EXPECT_EQ(labelled, 5 + 5 + 5 + 3 + 3 + 5 + 6);
+  const std::string head = std::string(R"({"name": "x", )") + kMsg + R"(, "objects": [{"id": "b", "kind": "rigid",
+    "shape": "sphere", "radius_m": 0.01, "position_m": [0,0,0], "label": )";
+  const std::string lang = ErrorOf("label_lang", head + R"([{"language": "de", "text": "Ball"}]}]})");
+  EXPECT_NE(lang.find("'objects[0].label[0].language': 'de' is not en or ja"), std::string::npos) << lang;
+  const std::string empty = ErrorOf("label_empty", head + R"([{"language": "en", "text": ""}]}]})");
+  EXPECT_NE(empty.find("'objects[0].label[0].text': must have 1..127 bytes"), std::string::npos) << empty;
+  const std::string longer = ErrorOf("label_long", head + R"([{"language": "en", "text": ")" + std::string(128, 'x') + R"("}]}]})");
+  EXPECT_NE(longer.find("'objects[0].label[0].text': longer than 127 bytes"), std::string::npos) << longer;
+  const std::string control = ErrorOf("label_control", std::string(R"({"name": "x", )") + kMsg +
+      R"(, "controls": [{"id": "b", "type": "button", "position_m": [0,0,0], "label": "Go"}]})");
+  EXPECT_NE(control.find("'controls[0].label': expected an array, got string"), std::string::npos) << control;
+}
+
+TEST(Scene, AppearanceIsReadAndCheckedAndDefaultsToMattAndOpaque) {
+  const Scene micro = LoadSceneByName("microscopic_belly", kScenes);
+  const SceneObject* belly = FindObject(micro, "daphnia_belly");
+  ASSERT_NE(belly, nullptr);
+  EXPECT_DOUBLE_EQ(belly->appearance.opacity, 0.75);
+  EXPECT_DOUBLE_EQ(belly->appearance.specular, 0.5);
+  const Scene solar = LoadSceneByName("solar_system", kScenes);
+  const SceneObject* ground = FindObject(solar, "ground");
+  ASSERT_NE(ground, nullptr);
+  EXPECT_DOUBLE_EQ(ground->appearance.opacity, 1.0);
+  EXPECT_DOUBLE_EQ(ground->appearance.specular, 0.0);
+  const std::string head = std::string(R"({"name": "x", )") + kMsg + R"(, "objects": [{"id": "b", "kind": "rigid",
+    "shape": "sphere", "radius_m": 0.01, "position_m": [0,0,0], "appearance": )";
+  const std::string clear = ErrorOf("look_opacity", head + R"({"opacity": 0.0}}]})");
+  EXPECT_NE(clear.find("'objects[0].appearance.opacity': value 0 outside [0.05, 1]"), std::string::npos) << clear;
+  const std::string typo = ErrorOf("look_typo", head + R"({"shine": 1}}]})");
+  EXPECT_NE(typo.find("'objects[0].appearance.shine': unknown field"), std::string::npos) << typo;
 }
 
 TEST(Scene, ObjectsAndControlsFitTheSceneStateMessage) {

@@ -10,6 +10,7 @@ msg::ControlEventKind ToMessage(controls::EventKind kind) noexcept {
     case controls::EventKind::kPageTurned: return msg::CONTROL_PAGE_TURNED;
     case controls::EventKind::kMissed: return msg::CONTROL_MISSED;
     case controls::EventKind::kOpened: return msg::CONTROL_OPENED;
+    case controls::EventKind::kMoving: return msg::CONTROL_MOVING;
   }
   return msg::CONTROL_MISSED;
 }
@@ -22,6 +23,7 @@ std::optional<controls::EventKind> FromMessage(msg::ControlEventKind kind) noexc
     case msg::CONTROL_PAGE_TURNED: return controls::EventKind::kPageTurned;
     case msg::CONTROL_MISSED: return controls::EventKind::kMissed;
     case msg::CONTROL_OPENED: return controls::EventKind::kOpened;
+    case msg::CONTROL_MOVING: return controls::EventKind::kMoving;
   }
   return std::nullopt;
 }

@@ -11,7 +11,8 @@ namespace {
 using controls::EventKind;
 
 constexpr EventKind kEveryKind[] = {EventKind::kPressed, EventKind::kReleased, EventKind::kMoved,
-                                    EventKind::kPageTurned, EventKind::kMissed, EventKind::kOpened};
+                                    EventKind::kPageTurned, EventKind::kMissed, EventKind::kOpened,
+                                    EventKind::kMoving};
 
 TEST(ControlEventKinds, EveryKindCrossesTheBoundaryAndComesBackItself) {
   for (EventKind k : kEveryKind) {
@@ -25,7 +26,7 @@ TEST(ControlEventKinds, EveryKindCrossesTheBoundaryAndComesBackItself) {
 }
 
 TEST(ControlEventKinds, AValueOutsideTheEnumerationIsRejected) {
-  EXPECT_FALSE(FromMessage(static_cast<msg::ControlEventKind>(6)).has_value());
+  EXPECT_FALSE(FromMessage(static_cast<msg::ControlEventKind>(7)).has_value());
   EXPECT_FALSE(FromMessage(static_cast<msg::ControlEventKind>(-1)).has_value());
 }
 

@@ -12,6 +12,16 @@
 /// Normals: area-weighted vertex normals of the mesh, recomputed while it is displaced.
 /// A mesh that cannot be loaded is reported once per scene on the error stream (object, file,
 /// reason) and drawn as the object's box (half_extent_m around its origin).
+///
+/// Objects and controls with a `label` in their scene file are named on screen in the replica's
+/// language (English where a label lacks it): render::Label 1 cm above the object's top (its
+/// drawn mesh's highest vertex, a sphere's or box's top), over its middle.
+///
+/// Books are drawn from their scene entry, not their mesh: covers in the book's colour, a spine,
+/// a block of pages. Open (their control state), they lie flat with the spread they are open at:
+/// the page's picture on the left page, its text in the replica's language on the right (the
+/// pages' tops at z = 0 of the book's frame C, where the fingers feel them). A picture that
+/// cannot be read is reported once and its page drawn blank.
 #include <cstdint>
 #include <filesystem>
 #include <map>
@@ -48,8 +58,10 @@ struct SceneReplicaStats {
 class SceneReplica {
  public:
   /// assets_dir: the folder mesh uris are relative to. errors: where mesh errors are written
-  /// (kept by reference; std::cerr in the node). prefix: starts each error line.
-  SceneReplica(std::filesystem::path assets_dir, std::ostream& errors, std::string prefix = "");
+  /// (kept by reference; std::cerr in the node). prefix: starts each error line. language: the
+  /// language books' pages are shown in (en, ja; a page without it shows its English text).
+  SceneReplica(std::filesystem::path assets_dir, std::ostream& errors, std::string prefix = "",
+               std::string language = "en");
 
   /// A new scene state. Another scene (name) resets every deformation field and object pose;
   /// a new revision of the same scene keeps them for the objects that remain.
@@ -62,8 +74,9 @@ class SceneReplica {
   /// quaternion (the last good pose stays).
   void OnObjectState(const msg::ObjectState& state);
   /// A ControlState sample (the world server's): the control is drawn where it left it, a
-  /// lever turned into its detent, a pressed button or arrow down by its travel, while its
-  /// world is the scene. The control's geometry comes from the scene file of that name in the
+  /// lever turned into its detent, a pressed button or arrow down by its travel, a book open at
+  /// its page, while its world is the scene; while a hand moves it (`moving`), where that hand
+  /// has it (`position`: the lever's angle, the button's travel, the book cover's angle). The control's geometry comes from the scene file of that name in the
   /// assets' scenes folder (a scene that cannot be read: its controls are drawn at rest).
   void OnControlState(const msg::ControlState& state);
   /// The newest control state of `control_id` in the current scene: (index, engaged).
@@ -71,7 +84,7 @@ class SceneReplica {
 
   bool has_scene() const { return has_scene_; }
   const std::string& scene() const { return scene_; }
-  /// Appends every object of the scene to view (spheres, boxes, meshes).
+  /// Appends every object of the scene to view (spheres, boxes, meshes, book pages, labels).
   void AddObjects(render::SceneView& view) const;
 
   /// The field of object_id; null if it is not a mesh object of the current scene with a
@@ -81,6 +94,10 @@ class SceneReplica {
   std::optional<Eigen::Isometry3d> X_WO(const std::string& object_id) const;
   /// True when that pose came from an ObjectState (else it is the scene state's).
   bool pose_received(const std::string& object_id) const;
+  /// The sender's stamp of each drawn ObjectState pose, "id@stamp_ns" joined by ';' in scene
+  /// order (objects drawn at the scene state's pose left out): what a frame shows of moving
+  /// objects, by stamps a replay carries unchanged.
+  std::string pose_stamps() const;
   /// The current scene's objects, in scene-state order.
   const std::vector<std::string>& object_ids() const { return order_; }
   const SceneReplicaStats& stats() const { return stats_; }
@@ -102,6 +119,7 @@ class SceneReplica {
     msg::SceneObject spec;
     Eigen::Isometry3d X_WO_scene = Eigen::Isometry3d::Identity();  // from the scene state
     std::optional<Eigen::Isometry3d> X_WO_state;                  // latest ObjectState
+    std::uint64_t state_stamp_ns = 0;                              // its sender's stamp
     std::shared_ptr<const render::TriangleMesh> mesh;              // null: not a mesh, or failed
     std::unique_ptr<DeformationField> field;                       // with mesh
     const Eigen::Isometry3d& X_WO() const { return X_WO_state ? *X_WO_state : X_WO_scene; }
@@ -111,20 +129,42 @@ class SceneReplica {
   struct ControlGeometry {
     std::vector<double> detent_angles_rad;  // a lever's detents (empty: not a lever)
     double travel_m = 0.0;                  // a button's or arrow's travel (0: not one)
+    bool book = false;
+    Eigen::Isometry3d X_WC = Eigen::Isometry3d::Identity();  // a book's frame C
+    Eigen::Vector3d size_m = Eigen::Vector3d::Zero();        // a book's size
+    struct Page {
+      std::string text;             // in the replica's language
+      std::filesystem::path image;  // "" = none
+    };
+    std::vector<Page> pages;  // a book's pages
   };
   struct ControlDrawn {
     std::string scene;
     std::int32_t index = -1;
     bool engaged = false;
+    bool moving = false;    // a hand moves it: drawn at `position`
+    double position = 0.0;  // button travel [m], lever angle [rad], book cover angle [rad]
   };
+  /// The newest state of `control_id` in the current scene, or null.
+  const ControlDrawn* drawn_state(const std::string& control_id) const;
   /// X_WO of object `id` as drawn: a control turned or pressed as its state says.
   Eigen::Isometry3d DrawnPose(const std::string& id, const Eigen::Isometry3d& X_WO) const;
+  /// A book, shut or open at its page as its state says (see the class comment).
+  void AddBook(render::SceneView& view, const std::string& id, const ControlGeometry& book,
+               const render::Rgb& rgb) const;
+  /// The picture of a book page, read once (null, reported once, if it cannot be read).
+  std::shared_ptr<const render::ImageRgb8> PageImage(const std::filesystem::path& file) const;
 
   std::ostream& errors_;
   std::string prefix_;
   std::filesystem::path scenes_dir_;
   std::map<std::string, ControlGeometry> control_geometry_;  // the current scene's controls
+  std::map<std::string, std::string> labels_;                 // object id -> its label, in language_
+  std::map<std::string, render::Appearance> looks_;           // object id -> how it is lit
   std::map<std::string, ControlDrawn> control_states_;        // newest per control id
+  std::string language_;                                      // the books' pages' language
+  // Pictures of book pages by file: read on the graphics thread when first drawn.
+  mutable std::map<std::filesystem::path, std::shared_ptr<const render::ImageRgb8>> page_images_;
   MeshCache meshes_;
   bool has_scene_ = false;
   std::string scene_;

@@ -44,6 +44,9 @@ struct SpectatorConfig {
 /// core/scene finds scenes).
 std::filesystem::path DefaultAssetsDir();
 
+/// The spectator's camera over the table (from the visitors' side, above it), width x height px.
+render::Camera SpectatorCamera(int width, int height);
+
 class Spectator {
  public:
   explicit Spectator(SpectatorConfig config);

@@ -5,10 +5,13 @@
 
 #include <array>
 #include <cstdint>
+#include <memory>
 #include <string>
 #include <vector>
 
 #include <Eigen/Geometry>
+
+#include "handshare/render/image.hpp"
 
 namespace handshare::render {
 
@@ -62,11 +65,22 @@ struct Camera {
 /// (non-finite vectors, eye == target, up parallel to the view direction, bad fov, size or clip).
 void ValidateCamera(const Camera& camera);
 
+/// How a surface takes the light beyond its colour: a white highlight of `specular` strength
+/// (0: matte) and `shininess` tightness (1..128, the Phong exponent), and its `opacity` (1:
+/// opaque; below 1 it is drawn after everything opaque, blended, without hiding what is behind
+/// it).
+struct Appearance {
+  float specular = 0.0F;
+  float shininess = 32.0F;
+  float opacity = 1.0F;
+};
+
 /// A shaded sphere, e.g. a fingertip.
 struct Sphere {
   Eigen::Vector3d p_W = Eigen::Vector3d::Zero();  ///< centre in W [m].
   double radius_m = 0.01;                          ///< radius [m], > 0.
   Rgb rgb;                                         ///< colour.
+  Appearance look{};
 };
 
 /// A shaded box B.
@@ -75,6 +89,7 @@ struct Box {
   Eigen::Vector3d half_extents_m{0.05, 0.05, 0.05};               ///< half sizes along B's axes [m].
   Eigen::Quaterniond q_WB = Eigen::Quaterniond::Identity();       ///< orientation of B in W.
   Rgb rgb;                                                        ///< colour.
+  Appearance look{};
 };
 
 /// A triangle mesh in its own frame M (for example a deformable object's surface, whose vertex
@@ -88,6 +103,7 @@ struct TriangleMesh {
   /// vertex normals are computed from the triangles. Otherwise the size must equal p_MV's.
   std::vector<Eigen::Vector3d> n_MV;
   Rgb rgb;                                                  ///< colour.
+  Appearance look{};
 };
 
 /// A square grid of lines on a plane, drawn unlit.
@@ -98,6 +114,32 @@ struct GroundGrid {
   double half_size_m = 1.0;                                  ///< grid spans +- half_size_m [m].
   double spacing_m = 0.1;                                    ///< distance between lines [m], > 0.
   Rgb rgb{0.45F, 0.45F, 0.5F};                               ///< line colour.
+};
+
+/// A flat page in the scene (a book's open spread): paper with a picture, text, or both (the
+/// picture above, fitted to the page's width and keeping its aspect; the text below it in the
+/// caption font, wrapped to the page, cut with an ellipsis where it does not fit). Drawn unlit,
+/// as a texture on the quad, hidden by what is in front of it.
+struct Page {
+  /// Corners in W [m], counter-clockwise seen from the front: bottom-left, bottom-right,
+  /// top-right, top-left as the page is read.
+  std::array<Eigen::Vector3d, 4> corners_W{Eigen::Vector3d::Zero(), Eigen::Vector3d::UnitX(),
+                                           Eigen::Vector3d(1.0, 1.0, 0.0), Eigen::Vector3d::UnitY()};
+  std::string text;                        ///< UTF-8; '\n' starts a paragraph; empty: none
+  std::shared_ptr<const ImageRgb8> image;  ///< null: none
+  Rgb paper{0.96F, 0.94F, 0.88F};
+  Rgb ink{0.10F, 0.10F, 0.12F};
+};
+
+/// A label: a few words on screen beside a point of the scene (an object's or a control's
+/// name), in the caption font (em height 1/40 of the image's, at least 12 px), on a dark
+/// translucent box, centred above the point's projection and kept inside the image. Drawn over
+/// the scene and its pages but under the hands and the fingertips, which must stay visible; not
+/// drawn when the point is behind the eye or outside the image.
+struct Label {
+  Eigen::Vector3d p_W = Eigen::Vector3d::Zero();  ///< the point it names, in W [m].
+  std::string text;                               ///< UTF-8, at most two lines drawn.
+  Rgb rgb{1.0F, 0.93F, 0.6F};                     ///< text colour.
 };
 
 /// What the caption of the last frame held: for a viewer to report, and for tests.
@@ -114,6 +156,8 @@ struct SceneView {
   std::vector<Sphere> spheres;
   std::vector<Box> boxes;
   std::vector<TriangleMesh> meshes;
+  std::vector<Page> pages;
+  std::vector<Label> labels;
   /// The users' hands, drawn after the scene (hidden by what is in front of them) without
   /// writing depth: the markers show through them.
   std::vector<Box> hand_boxes;

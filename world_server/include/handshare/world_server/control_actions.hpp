@@ -4,12 +4,10 @@
 /// messages on the board), over the scene alone. No DDS and no clock: the server turns the
 /// outcome into samples (a new scene revision, board messages) and log lines.
 ///
-/// Which action an event takes (scene files, docs/scenes.md):
-///   button, arrow: `action` when pressed;
-///   book: `action` when its cover opens; `page_actions[i]` when turned to page i;
-///   lever: `detent_actions[i]` when it settles in detent i.
-/// Releases and misses take none; neither does a control the current world does not have (an
-/// event of a world already left) nor an index outside the lists.
+/// Which action an event takes is controls::ActionOf's rule (scene files, docs/scenes.md): a
+/// button's or arrow's `action` when pressed, a book's when it opens (else its first page's),
+/// a book page's when turned to, a lever detent's when settled in. A control the current world
+/// does not have (an event of a world already left) takes none.
 #include <cstdint>
 #include <functional>
 #include <string>
@@ -24,8 +22,9 @@ namespace handshare::server {
 struct ControlInput {
   std::string control_id;
   controls::EventKind kind = controls::EventKind::kPressed;
-  std::int32_t index = -1;  ///< lever detent, book page; -1 otherwise
+  std::int32_t index = -1;  ///< lever detent, book page; moving: 1 moving, 0 at rest; -1 otherwise
   std::string user;         ///< who actuated it (for the log)
+  double value = 0.0;       ///< the event's value (moving: where the control is)
 };
 
 /// What applying one control event did.
@@ -51,6 +50,8 @@ struct ControlStateRecord {
   bool engaged = false;      ///< button, arrow: pressed; book: open
   std::string user;          ///< who changed it last ("" = nobody since the world appeared)
   std::uint32_t changes = 0; ///< how many events changed it
+  bool moving = false;       ///< a hand is moving it (kMoving reports), at `position`
+  double position = 0.0;     ///< where that hand has it (button travel, lever or cover angle)
   /// false: where the control is is not known here (a server that resumed a killed one's
   /// session: the nodes still hold its last published states); nothing is published for it
   /// until an event, which is then published whatever it says.
@@ -62,8 +63,9 @@ struct ControlStateRecord {
 std::vector<ControlStateRecord> InitialControlStates(const scene::Scene& scene, bool known = true);
 
 /// Applies `input` to the record of its control in `states` (events of controls not there, of
-/// a world already left, change nothing; so do misses). Returns the record it changed, or
-/// nullptr. Apply it before the event's action: an action that changes the world replaces the
+/// a world already left, change nothing; so do misses). A motion report (kMoving) sets where a
+/// hand has the control (moving, position) or, at rest, clears it; a settled event clears it
+/// too. Returns the record it changed, or nullptr. Apply it before the event's action: an action that changes the world replaces the
 /// states with the new world's (InitialControlStates).
 const ControlStateRecord* UpdateControlState(std::vector<ControlStateRecord>& states, const ControlInput& input);
 

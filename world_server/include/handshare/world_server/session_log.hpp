@@ -122,6 +122,7 @@ class SessionLog {
   /// (the error is kept in error() and thrown by Flush()).
   void OnMember(MemberChange change, const Member& member, std::uint64_t unix_ns);
   void OnSceneChange(const std::string& scene, const std::string& title, std::uint64_t unix_ns);
+  /// A hand's motion reports (kMoving) are not events of the session: not logged.
   void OnControlEvent(const ControlRecord& event);
   /// owner "" : the object became free.
   void OnOwnership(const std::string& object_id, const std::string& owner, const std::string& reason,

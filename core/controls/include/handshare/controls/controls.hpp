@@ -46,6 +46,9 @@ enum class EventKind : std::uint8_t {
   kPageTurned,  ///< book page turned; index = the page now shown
   kMissed,      ///< a hand entered the approach zone and left without actuating the control
   kOpened,      ///< book cover pushed past open_angle_rad: the book is open at page 0
+  /// a hand moves the control (not an actuation): value = its position now (Control::position);
+  /// index 1 while it moves, 0 once it is left alone and still (its last report)
+  kMoving,
 };
 const char* ToString(EventKind kind) noexcept;
 
@@ -60,13 +63,15 @@ const char* ToString(EventKind kind) noexcept;
 ///     touched; kPageTurned: from the centre of the page swiped to where the finger first
 ///     touched.
 ///   kMissed: the closest any fingertip of the hand came to that same target point.
+///   kMoving: 0 (no attempt; hand and finger -1).
 struct ControlEvent {
   std::array<char, 32> control_id{};  ///< NUL-terminated
   scene::ControlType type = scene::ControlType::kButton;
   EventKind kind = EventKind::kPressed;
-  std::int32_t index = -1;   ///< lever: detent; book: page (0 = first spread); else -1
+  std::int32_t index = -1;   ///< lever: detent; book: page (0 = first spread); moving: 1
+                             ///< moving, 0 at rest; else -1
   double value = 0.0;        ///< button/arrow: travel [m]; lever: angle [rad]; book: page;
-                             ///< missed: closest distance to the target [m]
+                             ///< missed: closest distance to the target [m]; moving: position
   double error_m = 0.0;      ///< see above
   std::int32_t hand = -1;    ///< hand index (fingertip / kFingers)
   std::int32_t finger = -1;  ///< fingertip index within the hand (0 = thumb)
@@ -146,6 +151,16 @@ class Control {
   void RequestState(std::int32_t index, bool engaged) noexcept { requested_ = {true, index, engaged}; }
   /// Whether a fingertip of any hand is in the control's approach zone.
   bool touched() const noexcept;
+  /// Where the control is now, continuously: a button's or arrow's travel [m], a lever's angle
+  /// [rad], a book's cover angle [rad] (pi: open).
+  virtual double position() const noexcept = 0;
+
+  /// Motion reports (kMoving): while a hand moves the control, its position at most every
+  /// kMotionPeriod_s and only when it moved by more than its resolution (a button's travel / 20,
+  /// 0.01 rad for a lever, 0.05 rad for a book's cover) since the last report; once no hand is
+  /// at it and it is still, one last report at rest. Screens draw it moving with them; the
+  /// settled events (PRESSED ... OPENED) say where it ends up.
+  static constexpr double kMotionPeriod_s = 0.04;
 
  protected:
   /// Fingertips in C, valid ones only flagged in `present`.
@@ -173,6 +188,16 @@ class Control {
 
  private:
   bool guard_first_visits_ = false;
+  /// Reports the control's motion (kMoving) after a step.
+  void ReportMotion(double dt_s, EventBuffer& events) noexcept;
+  /// Takes the control's position as already known (no report): at the first step, and after
+  /// a state set from elsewhere (ApplyState).
+  void SyncMotion() noexcept;
+  double motion_resolution_ = 0.0;
+  double last_position_ = 0.0;      // at the previous step
+  double reported_position_ = 0.0;  // in the last report (or as synced)
+  double since_report_s_ = 0.0;
+  bool reporting_ = false;          // reports went out since the control was last at rest
   struct Requested {
     bool waiting = false;
     std::int32_t index = -1;
@@ -209,6 +234,7 @@ class PushControl final : public Control {
  public:
   explicit PushControl(const scene::ControlSpec& spec);
   double travel_m() const noexcept { return travel_m_; }
+  double position() const noexcept override { return travel_m_; }
   bool pressed() const noexcept { return pressed_; }
   /// Spring force at travel q [N] (before the bottom stop) in the current click state.
   double SpringForce_N(double q_m, bool clicked) const noexcept;
@@ -237,6 +263,7 @@ class Lever final : public Control {
  public:
   explicit Lever(const scene::ControlSpec& spec);
   double angle_rad() const noexcept { return angle_rad_; }
+  double position() const noexcept override { return angle_rad_; }
   int detent() const noexcept { return detent_; }
   double DetentTorque_N_m(double angle_rad) const noexcept;
   /// Into detent `index` (0 .. detents - 1), without an event (the move was reported elsewhere).
@@ -269,6 +296,7 @@ class Book final : public Control {
   /// Open at page `index` (engaged), or shut; without an event.
   void ApplyState(std::int32_t index, bool engaged) noexcept override;
   double cover_angle_rad() const noexcept { return cover_angle_rad_; }
+  double position() const noexcept override { return cover_angle_rad_; }
 
  private:
   void StepModel(double dt_s, const Fingers& fingers, std::span<Eigen::Vector3d> f_E_C,
@@ -312,6 +340,15 @@ class ControlSet {
   std::vector<std::unique_ptr<Control>> controls_;
   double max_force_N_ = 0.0;
 };
+
+/// The scene action an event of the control `spec` takes, or nullptr (none, or an empty one):
+///   button, arrow: `action` when pressed;
+///   book: `action` when its cover opens, or, without one, its first page's (opening shows
+///         page 1); `page_actions[i]` when turned to page i;
+///   lever: `detent_actions[i]` when it settles in detent i.
+/// Releases and misses take none; neither does an index outside the lists. The pointer is
+/// into `spec`.
+const scene::Action* ActionOf(const scene::ControlSpec& spec, EventKind kind, std::int32_t index) noexcept;
 
 /// One control from its scene entry (button and arrow -> PushControl, lever, book).
 std::unique_ptr<Control> MakeControl(const scene::ControlSpec& spec);

@@ -24,16 +24,23 @@
 ///           {nodes [indices]}: nodes of the tetrahedral mesh held fixed, in frame O
 ///     motion: {direction [3], amplitude_m, period_s, phase_rad}: p_WO(t) = position_m +
 ///           amplitude_m sin(2 pi t / period_s + phase_rad) direction
+///     label [ {language: en | ja, text} ]: shown beside the object on screens (1..127 bytes)
+///     appearance: {specular 0..1, shininess 1..128, opacity 0.05..1}: how screens light it
+///           (a highlight's strength and tightness; below 1, seen through), default matte, opaque
 ///   } ]
 ///   controls [ {                   at most 32; each also appears in `objects` as kind control
 ///     id, type: button | arrow | lever | book, position_m, orientation_wxyz, size_m [3], rgb,
-///     mesh, mesh_scale (visual only), approach_margin_m, max_force_N,
+///     mesh, mesh_scale (visual only), approach_margin_m, max_force_N, label (as for objects),
 ///     button/arrow: travel_m, click_at_m, release_at_m, stiffness_N_per_m, preload_N,
 ///                   click_drop (0..1), stop_stiffness_N_per_m, action
 ///     lever: min_angle_rad, max_angle_rad, detents (>= 2), detent_torque_N_m,
 ///            settle_rate_rad_per_s, stop_stiffness_N_per_m, detent_actions [one per detent]
 ///     book: pages, open_angle_rad, swipe_m, surface_stiffness_N_per_m, page_drag_N,
-///           action (on opening), page_actions [index = page number]
+///           action (on opening; default: the first page's)
+///           pages: a count (blank pages, actions in page_actions [index = page number]) or
+///           [ {text [ {language: en | ja, text} ], image, action} ], at most 64: what each
+///           spread shows (image: a PNG relative to the assets folder, on the left page; the
+///           text in the reader's language on the right) and the action turning to it takes
 ///   } ]
 ///   action: {goto: scene name} and/or {set_gravity [3], title, messages [...]}
 ///   messages [ {language: en | ja, text, next_action, reading} ]   (required, non-empty)
@@ -116,6 +123,22 @@ struct Motion {
   Eigen::Vector3d Offset_W(double t_s) const noexcept;
 };
 
+/// How screens light an object beyond its colour: a white highlight of `specular` strength and
+/// `shininess` tightness (the Phong exponent), and its opacity (below 1 it is seen through).
+struct Appearance {
+  double specular = 0.0;
+  double shininess = 32.0;
+  double opacity = 1.0;
+};
+
+/// A short text in several languages (a book page's text, an object's label).
+struct LocalText {
+  std::string language;  ///< en | ja
+  std::string text;      ///< UTF-8
+};
+/// The text in `language`, else the English one, else the first; "" if there is none.
+const std::string& TextIn(const std::vector<LocalText>& texts, const std::string& language) noexcept;
+
 struct SceneObject {
   std::string id;
   ObjectKind kind = ObjectKind::kRigid;
@@ -136,6 +159,8 @@ struct SceneObject {
   DeformableMaterial deformable;                      ///< kDeformable
   FixedRule fixed;                                    ///< kDeformable
   Motion motion;
+  std::vector<LocalText> label;                       ///< shown beside it on screens (may be empty)
+  Appearance appearance;                              ///< how screens light it
   int line = 0;                                       ///< line of the entry in the scene file
 
   Eigen::Isometry3d X_WO() const {
@@ -166,6 +191,16 @@ struct Action {
 };
 
 enum class ControlType { kButton, kArrow, kLever, kBook };
+
+/// One spread of a book as the scene file gives it: a picture on the left page, text on the
+/// right (graphics nodes draw it while the book is open at it).
+struct BookPage {
+  std::vector<LocalText> text;        ///< 1..1023 bytes each
+  std::string image_uri;              ///< as written in the file; "" = no picture
+  std::filesystem::path image_path;   ///< image_uri resolved to a file (a PNG)
+  /// The text in `language`, else the English one, else the first; "" if the page has none.
+  const std::string& TextIn(const std::string& language) const noexcept { return scene::TextIn(text, language); }
+};
 
 /// A control entry: its geometry, force-profile parameters and actions. Frame C: origin and
 /// axes as documented per type in handshare/controls/controls.hpp.
@@ -215,6 +250,8 @@ struct ControlSpec {
   Action action;                     ///< button, arrow: on PRESSED; book: on opening
   std::vector<Action> detent_actions;  ///< lever: on settling in detent i (empty or one each)
   std::vector<Action> page_actions;    ///< book: on turning to page i (may be shorter)
+  std::vector<BookPage> page_content;  ///< book: what page i shows (empty: blank pages)
+  std::vector<LocalText> label;        ///< shown beside it on screens (may be empty)
   int line = 0;
 };
 
@@ -228,6 +265,10 @@ struct Scene {
   std::filesystem::path file;     ///< where it was loaded from
 };
 
+/// Every board message a scene can show, in file order: its own, then each control's (its
+/// action, its detent actions, its page actions).
+std::vector<Message> AllMessages(const Scene& scene);
+
 struct LoadOptions {
   /// Load (and so validate) every mesh into SceneObject::mesh. false: only check that the files
   /// exist (fast listing of scenes).
@@ -240,6 +281,9 @@ Scene LoadScene(const std::filesystem::path& file, const LoadOptions& options = 
 /// The folder of the project's scene files: $HANDSHARE_ASSETS/scenes if set, else the installed
 /// share/handshare/assets/scenes, else the source tree's assets/scenes (common::AssetsDir).
 std::filesystem::path DefaultSceneDir();
+
+/// The scenes in `dir` (the stems of its .json files), sorted; empty if it is not a folder.
+std::vector<std::string> SceneNames(const std::filesystem::path& dir = DefaultSceneDir());
 
 /// Loads scene `name` from dir/name.json. Throws SceneError listing the scenes available.
 Scene LoadSceneByName(const std::string& name, const std::filesystem::path& dir = DefaultSceneDir(),
