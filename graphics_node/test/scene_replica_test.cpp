@@ -68,24 +68,20 @@ TEST(SceneReplica, MeshObjectIsTheFilesMeshAtItsPose) {
   EXPECT_FLOAT_EQ(drawn.rgb.g, 0.45F);
 }
 
-// The world server's control states: the solar system's lever drawn in Mars' detent (turned
-// 0.6 rad about its hinge axis x), a pressed arrow down by its travel; states of another world,
-// or of a world left, are not drawn.
-TEST(SceneReplica, ControlsAreDrawnWhereTheirStateLeftThem) {
-  std::ostringstream errors;
-  SceneReplica world(kAssets, errors);
-  const scene::Scene solar = scene::LoadSceneByName("solar_system", kAssets / "scenes");
-  std::vector<msg::SceneObject> objects;
-  std::map<std::string, Eigen::Isometry3d> at_rest;
-  for (const auto& c : solar.controls) {
-    Eigen::Isometry3d X = Eigen::Isometry3d::Identity();
-    X.linear() = c.q_WC.toRotationMatrix();
-    X.translation() = c.p_WC_m;
-    at_rest[c.id] = X;
-    objects.push_back(Object(c.id, "box", "", X, {}));
+// The solar system's controls as boxes at their frames C, in a replica: where each is at rest,
+// and where the replica draws it now.
+struct SolarControls {
+  explicit SolarControls(SceneReplica& replica) : world(replica) {
+    for (const auto& c : solar.controls) {
+      Eigen::Isometry3d X = Eigen::Isometry3d::Identity();
+      X.linear() = c.q_WC.toRotationMatrix();
+      X.translation() = c.p_WC_m;
+      at_rest[c.id] = X;
+      objects.push_back(Object(c.id, "box", "", X, {}));
+    }
+    world.OnSceneState(Scene("solar_system", 1, objects));
   }
-  world.OnSceneState(Scene("solar_system", 1, objects));
-  const auto drawn = [&](const std::string& id) {
+  Eigen::Isometry3d drawn(const std::string& id) const {
     render::SceneView view;
     world.AddObjects(view);
     for (std::size_t i = 0; i < objects.size(); ++i) {
@@ -94,7 +90,23 @@ TEST(SceneReplica, ControlsAreDrawnWhereTheirStateLeftThem) {
       }
     }
     return Eigen::Isometry3d::Identity();
-  };
+  }
+  SceneReplica& world;
+  const scene::Scene solar = scene::LoadSceneByName("solar_system", kAssets / "scenes");
+  std::vector<msg::SceneObject> objects;
+  std::map<std::string, Eigen::Isometry3d> at_rest;
+};
+
+// The world server's control states: the solar system's lever drawn in Mars' detent (turned
+// 0.6 rad about its hinge axis x), a pressed arrow down by its travel; states of another world,
+// or of a world left, are not drawn.
+TEST(SceneReplica, ControlsAreDrawnWhereTheirStateLeftThem) {
+  std::ostringstream errors;
+  SceneReplica world(kAssets, errors);
+  SolarControls controls(world);
+  const scene::Scene& solar = controls.solar;
+  auto& at_rest = controls.at_rest;
+  const auto drawn = [&](const std::string& id) { return controls.drawn(id); };
   EXPECT_TRUE(drawn("lever_planet").isApprox(at_rest["lever_planet"], 1e-12));  // no state yet
   msg::ControlState lever;
   lever.control_id("lever_planet");
@@ -212,27 +224,10 @@ TEST(SceneReplica, ABookPagePictureThatCannotBeReadIsReportedOnce) {
 TEST(SceneReplica, AControlAHandMovesIsDrawnWhereTheHandHasIt) {
   std::ostringstream errors;
   SceneReplica world(kAssets, errors);
-  const scene::Scene solar = scene::LoadSceneByName("solar_system", kAssets / "scenes");
-  std::vector<msg::SceneObject> objects;
-  std::map<std::string, Eigen::Isometry3d> at_rest;
-  for (const auto& c : solar.controls) {
-    Eigen::Isometry3d X = Eigen::Isometry3d::Identity();
-    X.linear() = c.q_WC.toRotationMatrix();
-    X.translation() = c.p_WC_m;
-    at_rest[c.id] = X;
-    objects.push_back(Object(c.id, "box", "", X, {}));
-  }
-  world.OnSceneState(Scene("solar_system", 1, objects));
-  const auto drawn = [&](const std::string& id) {
-    render::SceneView view;
-    world.AddObjects(view);
-    for (std::size_t i = 0; i < objects.size(); ++i) {
-      if (objects[i].object_id().to_string() == id) {
-        return Eigen::Isometry3d(Eigen::Translation3d(view.boxes[i].p_W) * view.boxes[i].q_WB);
-      }
-    }
-    return Eigen::Isometry3d::Identity();
-  };
+  SolarControls controls(world);
+  const scene::Scene& solar = controls.solar;
+  auto& at_rest = controls.at_rest;
+  const auto drawn = [&](const std::string& id) { return controls.drawn(id); };
   msg::ControlState lever;
   lever.control_id("lever_planet");
   lever.scene("solar_system");
