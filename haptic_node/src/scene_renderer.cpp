@@ -26,6 +26,7 @@ SceneRenderer::SceneRenderer(const scene::Scene& scene, const world::SceneModels
   for (std::size_t i = 0; i < scene_.objects.size(); ++i) {
     const auto id = models_.Find(scene_.objects[i].id);
     if (id >= 0 && scene_.objects[i].motion.active()) moving_.emplace_back(id, i);
+    if (id >= 0 && scene_.objects[i].beat.active()) beating_.emplace_back(id, i);
   }
 }
 
@@ -62,14 +63,16 @@ void SceneRenderer::ReleaseAll() noexcept {
 void SceneRenderer::Render(double /*t_s*/, double dt_s, std::uint64_t now_ns, const DeviceReading& reading,
                            std::array<Eigen::Vector3d, kFingers>& f_E_W) noexcept {
   auto& world = *models_.world;
-  // 1. Objects that move by themselves (the Daphnia swims), on the session's clock.
-  if (!moving_.empty()) {
+  // 1. Objects that move by themselves (the Daphnia swims, its body beats), on the session's
+  // clock.
+  if (!moving_.empty() || !beating_.empty()) {
     const double t = clock_.Now_s();
     for (const auto& [object, i] : moving_) {
       Eigen::Isometry3d X = scene_.objects[i].X_WO();
       X.translation() += scene_.objects[i].motion.Offset_W(t);
       world.SetPose(object, X);
     }
+    for (const auto& [object, i] : beating_) world.SetModeScale(object, scene_.objects[i].beat.Scale(t));
   }
   // 1b. Bodies simulated elsewhere (another user owns them, or the world server): follow.
   followed_in_.Read(followed_);

@@ -182,6 +182,7 @@ void ObjectAuthority::Adopt(world::SceneModels models, TickOutput& out) {
     if (o == nullptr || d.object < 0 || !prepared.compliance) continue;
     d.E_Pa = o->deformable.E_Pa;
     d.nu = o->deformable.nu;
+    if (o->beat.active() && prepared.mode_O_m) d.beat = &o->beat;
     // Published node ids: the scene mesh's vertices, which the tetrahedral mesh keeps first.
     const auto& p = prepared.mesh->positions_m();
     std::int32_t vertices = prepared.mesh->num_nodes();
@@ -206,6 +207,7 @@ void ObjectAuthority::Adopt(world::SceneModels models, TickOutput& out) {
     }
     d.u_slots.assign(static_cast<std::size_t>(compliance.num_nodes()), Eigen::Vector3d::Zero());
     d.u_W.assign(3 * static_cast<std::size_t>(vertices), 0.0);
+    d.u_O.assign(static_cast<std::size_t>(vertices), Eigen::Vector3d::Zero());
     d.delta = std::make_unique<DeformationDelta>(static_cast<std::size_t>(vertices), options_.delta);
     deformables_.push_back(std::move(d));
     if (!options_.dump_dir.empty()) {
@@ -287,6 +289,9 @@ TickOutput ObjectAuthority::Tick(Clock::time_point now, double dt_s) {
     X.translation() += scene_.objects[i].motion.Offset_W(motion_t);
     world.SetPose(object, X);
   }
+  for (const auto& d : deformables_) {
+    if (d.beat != nullptr) world.SetModeScale(d.object, d.beat->Scale(motion_t));
+  }
   const double nan = std::numeric_limits<double>::quiet_NaN();
   const std::array<Eigen::Vector3d, contact::kFingers> no_hand{
       Eigen::Vector3d::Constant(nan), Eigen::Vector3d::Constant(nan), Eigen::Vector3d::Constant(nan),
@@ -340,23 +345,30 @@ TickOutput ObjectAuthority::Tick(Clock::time_point now, double dt_s) {
     out.states.push_back(State(session_, scene_.objects[i].id, "", world.pose(object), Eigen::Vector3d::Zero()));
   }
 
-  // Deformations: the surface field of every touched deformable (and once more after).
+  // Deformations: the surface field of every touched or beating deformable (and once more
+  // after a touch): a beat's s M at every vertex plus the fingertips' field.
   for (auto& d : deformables_) {
     const fem::ContactSolver* solver = world.contact_solver(d.object);
     if (solver == nullptr) continue;
     const bool touched = solver->num_unique() > 0;
-    if (touched || d.touched_before || keyframes_requested_) {
+    if (touched || d.touched_before || keyframes_requested_ || d.beat != nullptr) {
       if (touched) {
         solver->SurfaceDisplacements(d.u_slots);
       } else {
         std::fill(d.u_slots.begin(), d.u_slots.end(), Eigen::Vector3d::Zero());
       }
-      const Eigen::Matrix3d R = world.pose(d.object).linear();
+      const double beat = world.mode_scale(d.object);
+      for (std::size_t v = 0; v < d.u_O.size(); ++v) {
+        d.u_O[v] = d.beat != nullptr ? Eigen::Vector3d(beat * (*d.prepared->mode_O_m)[v]) : Eigen::Vector3d::Zero();
+      }
       for (std::size_t s = 0; s < d.u_slots.size(); ++s) {
         const std::int32_t v = d.vertex_of_slot[s];
-        if (v < 0) continue;
-        const Eigen::Vector3d u = R * d.u_slots[s];
-        for (int k = 0; k < 3; ++k) d.u_W[3 * static_cast<std::size_t>(v) + static_cast<std::size_t>(k)] = u[k];
+        if (v >= 0) d.u_O[static_cast<std::size_t>(v)] += d.u_slots[s];
+      }
+      const Eigen::Matrix3d R = world.pose(d.object).linear();
+      for (std::size_t v = 0; v < d.u_O.size(); ++v) {
+        const Eigen::Vector3d u = R * d.u_O[v];
+        for (int k = 0; k < 3; ++k) d.u_W[3 * v + static_cast<std::size_t>(k)] = u[k];
       }
       const auto samples = d.delta->Update(d.u_W, now);
       for (const auto& sample : samples) out.deformations.emplace_back(d.id, sample);
@@ -393,13 +405,25 @@ void ObjectAuthority::Dump(const Deformable& d, std::uint32_t revision) const {
     j << (first ? "" : ", ") << n + 1;
     first = false;
   }
-  // The load case for an independent static solve: each held node's displacement (in O) imposed.
-  // Nothing else is loaded, so the solution is the same field; the reactions there are the loads.
-  j << "],\n \"imposed\": [";
+  // The load case for an independent static solve: each held node's displacement (in O) imposed,
+  // and a beating body's driven nodes where the beat has them. Nothing else is loaded, so the
+  // solution is the same field; the reactions at the held nodes are the loads.
+  const double beat = d.beat != nullptr ? models_->world->mode_scale(d.object) : 0.0;
+  auto mode_at = [&](std::int32_t node) -> Eigen::Vector3d {
+    return d.beat != nullptr ? Eigen::Vector3d(beat * (*d.prepared->mode_O_m)[static_cast<std::size_t>(node)])
+                             : Eigen::Vector3d::Zero();
+  };
+  j << "],\n \"beat_scale\": " << beat << ", \"driven_nodes\": " << d.prepared->driven_nodes.size();
+  j << ",\n \"imposed\": [";
   first = true;
   for (const auto& load : solver->loads()) {
     const auto node = d.prepared->compliance->nodes()[static_cast<std::size_t>(load.slot)];
-    const Eigen::Vector3d& u = d.u_slots[static_cast<std::size_t>(load.slot)];
+    const Eigen::Vector3d u = d.u_slots[static_cast<std::size_t>(load.slot)] + mode_at(node);
+    j << (first ? "" : ",\n  ") << "{\"node\": " << node + 1 << ", \"u_m\": [" << u.x() << ", " << u.y() << ", " << u.z() << "]}";
+    first = false;
+  }
+  for (const auto node : d.prepared->driven_nodes) {
+    const Eigen::Vector3d u = mode_at(node);
     j << (first ? "" : ",\n  ") << "{\"node\": " << node + 1 << ", \"u_m\": [" << u.x() << ", " << u.y() << ", " << u.z() << "]}";
     first = false;
   }

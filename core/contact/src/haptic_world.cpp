@@ -2,9 +2,11 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <stdexcept>
 #include <string>
 
+#include "handshare/contact/geometry.hpp"
 #include "handshare/fem/error.hpp"
 
 namespace handshare::contact {
@@ -57,6 +59,9 @@ struct HapticWorld::Object {
   std::int32_t max_patch = 0;
   double mu_static = 0.0, mu_kinetic = 0.0;
   std::vector<fem::FrictionPatch> friction;  // this step's patches (local fingers, then peers')
+  std::shared_ptr<const std::vector<Eigen::Vector3d>> mode;  // per node, frame O; null: none
+  double mode_reach_m = 0.0;  // largest |mode|
+  double mode_scale = 0.0;
 };
 
 namespace {
@@ -189,8 +194,21 @@ ObjectId HapticWorld::AddDeformable(const DeformableDesc& d) {
       !std::isfinite(d.mu_static)) {
     throw std::invalid_argument("AddDeformable: need 0 <= mu_kinetic <= mu_static, all finite");
   }
+  if (d.mode_O_m) {
+    if (static_cast<std::int32_t>(d.mode_O_m->size()) != d.mesh->num_nodes()) {
+      throw std::invalid_argument("AddDeformable: the mode has " + std::to_string(d.mode_O_m->size()) +
+                                  " displacements for " + std::to_string(d.mesh->num_nodes()) + " nodes");
+    }
+    for (const auto& m : *d.mode_O_m) {
+      if (!m.allFinite()) throw std::invalid_argument("AddDeformable: the mode has a non-finite displacement");
+    }
+  }
   auto o = std::make_unique<Object>();
   o->kind = ObjectKind::kDeformable;
+  o->mode = d.mode_O_m;
+  if (o->mode) {
+    for (const auto& m : *o->mode) o->mode_reach_m = std::max(o->mode_reach_m, m.norm());
+  }
   o->tet = d.mesh;
   o->compliance = d.compliance;
   o->X_WO = d.X_WO;
@@ -238,6 +256,7 @@ void HapticWorld::Init() {
   CheckSetup("Init");
   fo_.assign(static_cast<std::size_t>(kFingers) * objects_.size(), FingerObject{});
   for (auto& r : results_) r = FingerResult{};
+  mode_candidates_.assign(static_cast<std::size_t>(config_.max_candidates), 0);
   initialized_ = true;
 }
 
@@ -270,8 +289,51 @@ bool HapticWorld::proxy_W(int finger, ObjectId object, Eigen::Vector3d& p_WP_m) 
   if (!initialized_ || finger < 0 || finger >= kFingers || object < 0 || object >= num_objects()) return false;
   const FingerObject& fo = fo_[static_cast<std::size_t>(finger) * objects_.size() + static_cast<std::size_t>(object)];
   if (!fo.proxy.initialized) return false;
-  p_WP_m = objects_[static_cast<std::size_t>(object)]->X_WO * fo.proxy.x_O_m;
+  p_WP_m = objects_[static_cast<std::size_t>(object)]->X_WO * (fo.proxy.x_O_m + fo.shift_O_m);
   return true;
+}
+
+void HapticWorld::SetModeScale(ObjectId id, double s) noexcept {
+  if (id < 0 || id >= num_objects() || !std::isfinite(s)) return;
+  Object& o = *objects_[static_cast<std::size_t>(id)];
+  if (o.mode) o.mode_scale = s;
+}
+
+double HapticWorld::mode_scale(ObjectId id) const noexcept {
+  return id >= 0 && id < num_objects() ? objects_[static_cast<std::size_t>(id)]->mode_scale : 0.0;
+}
+
+Eigen::Vector3d HapticWorld::ModeShift(const Object& o, const Eigen::Vector3d& g) noexcept {
+  const double s = o.mode_scale;
+  const double reach = config_.fingertip_radius_m + std::abs(s) * o.mode_reach_m + 1e-3;
+  const BallQueryResult q = o.collider->QueryBall(g, reach, mode_candidates_);
+  if (q.count == 0) return Eigen::Vector3d::Zero();
+  const TriMesh& mesh = o.collider->mesh();
+  double best = std::numeric_limits<double>::infinity();
+  Eigen::Vector3d shift = Eigen::Vector3d::Zero();
+  for (std::int32_t c = 0; c < q.count; ++c) {
+    const auto& t = mesh.triangles[static_cast<std::size_t>(mode_candidates_[static_cast<std::size_t>(c)])];
+    const Eigen::Vector3d& a = mesh.p_O_m[static_cast<std::size_t>(t[0])];
+    const Eigen::Vector3d& b = mesh.p_O_m[static_cast<std::size_t>(t[1])];
+    const Eigen::Vector3d& cc = mesh.p_O_m[static_cast<std::size_t>(t[2])];
+    const Eigen::Vector3d x = ClosestPointOnTriangle(g, a, b, cc);
+    const double d2 = (x - g).squaredNorm();
+    if (d2 >= best) continue;
+    best = d2;
+    // Barycentric weights of x (on the triangle): the mode is linear over it.
+    const Eigen::Vector3d n = (b - a).cross(cc - a);
+    const double area2 = n.squaredNorm();
+    double wa = 1.0 / 3.0, wb = 1.0 / 3.0, wc = 1.0 / 3.0;
+    if (area2 > 0.0) {
+      wa = (b - x).cross(cc - x).dot(n) / area2;
+      wb = (cc - x).cross(a - x).dot(n) / area2;
+      wc = 1.0 - wa - wb;
+    }
+    const auto& M = *o.mode;
+    shift = s * (wa * M[static_cast<std::size_t>(t[0])] + wb * M[static_cast<std::size_t>(t[1])] +
+                 wc * M[static_cast<std::size_t>(t[2])]);
+  }
+  return shift;
 }
 
 void HapticWorld::SetPose(ObjectId id, const Eigen::Isometry3d& X) noexcept {
@@ -319,8 +381,13 @@ StepReport HapticWorld::Step(double dt_s, std::span<const Eigen::Vector3d> p_WE,
         fo.prev_valid = false;  // proxies are kept: the next valid sample continues from them
         continue;
       }
-      const Eigen::Vector3d g_O = o.X_WO.inverse() * p;
       const bool deformable = o.kind == ObjectKind::kDeformable;
+      Eigen::Vector3d g_O = o.X_WO.inverse() * p;
+      fo.shift_O_m.setZero();
+      if (deformable && o.mode && o.mode_scale != 0.0) {
+        fo.shift_O_m = ModeShift(o, g_O);
+        g_O -= fo.shift_O_m;
+      }
       FrictionParams fr;
       if (!deformable) fr = {o.material.mu_static, o.material.mu_kinetic};
       fo.contact = proxy_solver_.Step(*o.collider, config_.proxy, fr, g_O, fo.proxy);
@@ -364,7 +431,7 @@ StepReport HapticWorld::Step(double dt_s, std::span<const Eigen::Vector3d> p_WE,
       best = mag;
       const Object& o = *objects_[k];
       res.object = static_cast<ObjectId>(k);
-      res.p_WP_m = o.X_WO * fo.contact.x_O_m;
+      res.p_WP_m = o.X_WO * (fo.contact.x_O_m + fo.shift_O_m);
       res.e_PE_W_m = p_WE[static_cast<std::size_t>(i)] - res.p_WP_m;
       res.p_WC_m = o.X_WO * fo.contact.p_O_m;
       res.n_W = o.X_WO.linear() * fo.contact.n_O;

@@ -436,7 +436,7 @@ SceneObject ParseObject(const Context& c, const json& j, const std::string& path
   c.Object(j, path.substr(0, path.size() - 1));
   c.OnlyKnown(j, path, {"id", "kind", "shape", "radius_m", "half_extent_m", "mesh", "mesh_scale",
                         "position_m", "orientation_wxyz", "mass_kg", "rgb", "material", "fixed",
-                        "motion", "label", "appearance", "note"});
+                        "motion", "beat", "label", "appearance", "note"});
   SceneObject o;
   o.line = c.LineOf(path.substr(0, path.size() - 1));
   o.id = c.String(j, "id", path, 63);
@@ -541,6 +541,46 @@ SceneObject ParseObject(const Context& c, const json& j, const std::string& path
     }
   } else if (j.contains("fixed")) {
     c.Fail(path + "fixed", "only deformable objects have fixed nodes");
+  }
+  if (j.contains("beat")) {
+    const std::string bp = path + "beat.";
+    const json& b = c.Object(j["beat"], path + "beat");
+    if (o.kind != ObjectKind::kDeformable) c.Fail(path + "beat", "only deformable objects beat");
+    c.OnlyKnown(b, bp, {"driven", "displacement_m", "rotation_rad", "center_m", "period_s", "phase_rad", "note"});
+    const std::string dp = bp + "driven.";
+    const json& d = c.Object(c.Require(b, "driven", bp), bp + "driven");
+    c.OnlyKnown(d, dp, {"plane_point_m", "plane_normal", "nodes", "note"});
+    FixedRule& rule = o.beat.driven;
+    if (d.contains("nodes") == (d.contains("plane_point_m") || d.contains("plane_normal"))) {
+      c.Fail(bp + "driven", "give exactly one of plane_point_m + plane_normal, nodes");
+    }
+    if (d.contains("nodes")) {
+      rule.kind = FixedRule::Kind::kNodes;
+      const json& nodes = c.Array(d["nodes"], dp + "nodes", 1'000'000);
+      if (nodes.empty()) c.Fail(dp + "nodes", "empty");
+      for (std::size_t i = 0; i < nodes.size(); ++i) {
+        rule.nodes.push_back(c.Integer(nodes[i], dp + "nodes[" + std::to_string(i) + "]", 0, 100'000'000));
+      }
+    } else {
+      rule.kind = FixedRule::Kind::kHalfSpace;
+      rule.point_O_m = c.Vector<3>(c.Require(d, "plane_point_m", dp), dp + "plane_point_m", -10.0, 10.0);
+      rule.normal_O = UnitVector(c, c.Require(d, "plane_normal", dp), dp + "plane_normal");
+      if (o.mesh && std::none_of(o.mesh->vertices_m.begin(), o.mesh->vertices_m.end(), [&](const Eigen::Vector3d& v) {
+            return rule.FixesPoint(v) && !o.fixed.FixesPoint(v);
+          })) {
+        c.Fail(bp + "driven", "drives no vertex of mesh '" + o.mesh_path.string() + "' that is not fixed");
+      }
+    }
+    if (b.contains("displacement_m")) {
+      o.beat.displacement_O_m = c.Vector<3>(b["displacement_m"], bp + "displacement_m", -0.1, 0.1);
+    }
+    if (b.contains("rotation_rad")) o.beat.rotation_O_rad = c.Vector<3>(b["rotation_rad"], bp + "rotation_rad", -0.5, 0.5);
+    if (b.contains("center_m")) o.beat.center_O_m = c.Vector<3>(b["center_m"], bp + "center_m", -10.0, 10.0);
+    if (!(o.beat.displacement_O_m.norm() > 0.0) && !(o.beat.rotation_O_rad.norm() > 0.0)) {
+      c.Fail(path + "beat", "needs a non-zero displacement_m or rotation_rad: nothing beats");
+    }
+    o.beat.period_s = c.Number(c.Require(b, "period_s", bp), bp + "period_s", 0.05, 3600.0);
+    o.beat.phase_rad = c.Number(b, "phase_rad", bp, -10.0, 10.0, 0.0);
   }
   if (j.contains("motion")) {
     const std::string mp = path + "motion.";
@@ -731,6 +771,11 @@ std::vector<Message> AllMessages(const Scene& scene) {
 Eigen::Vector3d Motion::Offset_W(double t_s) const noexcept {
   if (!active()) return Eigen::Vector3d::Zero();
   return amplitude_m * std::sin(2.0 * std::numbers::pi * t_s / period_s + phase_rad) * direction_W;
+}
+
+double Beat::Scale(double t_s) const noexcept {
+  if (!active()) return 0.0;
+  return std::sin(2.0 * std::numbers::pi * t_s / period_s + phase_rad);
 }
 
 double FlatPunchDepth_m(double force_N, double a_m, double E_Pa, double nu) noexcept {

@@ -196,6 +196,66 @@ TEST(Scene, DaphniaMovesPeriodically) {
   }
 }
 
+TEST(Scene, TheDaphniaBeats) {
+  // Its body flexes (the head nods, the back held) and its spine sways (the band by the root
+  // turns): a deformation, not only the rigid bob.
+  for (const auto& [world, id] : {std::pair{"microscopic_belly", "daphnia_belly"}, std::pair{"microscopic_horn", "daphnia_horn"}}) {
+    const Scene s = LoadSceneByName(world, kScenes);
+    ASSERT_NE(FindObject(s, id), nullptr) << world;
+    const SceneObject& o = *FindObject(s, id);
+    ASSERT_TRUE(o.beat.active()) << world;
+    EXPECT_NEAR(o.beat.Scale(0.25 * o.beat.period_s), 1.0, 1e-12) << world;
+    EXPECT_NEAR(o.beat.Scale(o.beat.period_s), 0.0, 1e-12) << world;
+    ASSERT_NE(o.mesh, nullptr);
+    std::size_t driven = 0, fixed = 0;
+    double largest = 0.0;
+    for (const auto& v : o.mesh->vertices_m) {
+      if (o.fixed.FixesPoint(v)) {
+        ++fixed;
+      } else if (o.beat.driven.FixesPoint(v)) {
+        ++driven;
+        largest = std::max(largest, o.beat.DrivenDisplacement_O(v).norm());
+      }
+    }
+    // Tenths of a millimetre (the spine's turning band) to millimetres (the head): a beat to
+    // see and feel, far from tearing the mesh.
+    EXPECT_GT(largest, 2e-4) << world;
+    EXPECT_LT(largest, 6e-3) << world;
+    EXPECT_GT(driven, 10u) << world;
+    EXPECT_GT(fixed, 10u) << world;
+    EXPECT_LT(driven + fixed, o.mesh->vertices_m.size() / 4) << world;
+  }
+  // A rotation turns about its centre: u = rotation x (p - center).
+  Beat b;
+  b.rotation_O_rad = Eigen::Vector3d(0, 0, 0.1);
+  b.center_O_m = Eigen::Vector3d(1, 0, 0);
+  EXPECT_TRUE(b.DrivenDisplacement_O(Eigen::Vector3d(2, 0, 0)).isApprox(Eigen::Vector3d(0, 0.1, 0)));
+  EXPECT_NEAR(b.DrivenDisplacement_O(Eigen::Vector3d(1, 0, 0)).norm(), 0.0, 1e-15);
+  EXPECT_EQ(b.Scale(1.0), 0.0);  // no period: not active
+}
+
+TEST(Scene, BadBeatsNameTheField) {
+  const std::string head = R"({"name": "x", "messages": [{"language": "en", "text": "t"}], "objects": [)";
+  const std::string box = R"({"id": "a", "kind": "deformable", "shape": "box", "half_extent_m": [0.05, 0.05, 0.05],
+    "position_m": [0,0,0], "material": {"E_Pa": 1e4, "nu": 0.3}, "fixed": {"below_m": -0.04}, )";
+  const std::string rigid = ErrorOf("beat_rigid", head + R"({"id": "a", "kind": "rigid", "shape": "sphere",
+    "radius_m": 0.1, "position_m": [0,0,0], "beat": {"driven": {"nodes": [1]}, "displacement_m": [0, 0, 0.001],
+    "period_s": 1}}]})");
+  EXPECT_NE(rigid.find("'objects[0].beat': only deformable objects beat"), std::string::npos) << rigid;
+  const std::string still = ErrorOf("beat_still", head + box + R"("beat": {"driven": {"nodes": [1]},
+    "period_s": 1}}]})");
+  EXPECT_NE(still.find("'objects[0].beat': needs a non-zero displacement_m or rotation_rad"), std::string::npos) << still;
+  const std::string both = ErrorOf("beat_both", head + box + R"("beat": {"driven": {"nodes": [1],
+    "plane_normal": [0, 0, 1]}, "displacement_m": [0, 0, 0.001], "period_s": 1}}]})");
+  EXPECT_NE(both.find("'objects[0].beat.driven': give exactly one of"), std::string::npos) << both;
+  const std::string period = ErrorOf("beat_period", head + box + R"("beat": {"driven": {"nodes": [1]},
+    "displacement_m": [0, 0, 0.001], "period_s": 0}}]})");
+  EXPECT_NE(period.find("objects[0].beat.period_s"), std::string::npos) << period;
+  const std::string typo = ErrorOf("beat_typo", head + box + R"("beat": {"driven": {"nodes": [1]},
+    "displacment_m": [0, 0, 0.001], "period_s": 1}}]})");
+  EXPECT_NE(typo.find("displacment_m"), std::string::npos) << typo;
+}
+
 TEST(Scene, FixedRulesSelectTheIntendedNodes) {
   const Scene s = LoadSceneByName("dinosaur", kScenes);
   const SceneObject* tail = FindObject(s, "triceratops_tail");

@@ -1,10 +1,12 @@
 #include "handshare/world/deformable_prep.hpp"
 
+#include <algorithm>
 #include <chrono>
 #include <cstdlib>
 #include <sstream>
 
 #include "handshare/fem/mesh_io.hpp"
+#include "handshare/fem/static_solver.hpp"
 
 namespace handshare::world {
 
@@ -85,6 +87,36 @@ PreparedDeformable PrepareDeformable(const scene::Scene& scene, const scene::Sce
     Fail(scene, o, "its fixed rule holds every node: nothing can deform");
   }
 
+  // A beat: its driven nodes (fixed ones stay fixed), held by the compliance as well.
+  std::vector<std::int32_t> held = out.fixed_nodes;
+  if (o.beat.active()) {
+    std::vector<char> fixed(static_cast<std::size_t>(mesh->num_nodes()), 0);
+    for (const auto n : out.fixed_nodes) fixed[static_cast<std::size_t>(n)] = 1;
+    std::vector<char> driven(fixed.size(), 0);
+    if (o.beat.driven.kind == scene::FixedRule::Kind::kHalfSpace) {
+      for (std::int32_t i = 0; i < mesh->num_nodes(); ++i) {
+        if (mesh->used_nodes()[i] && o.beat.driven.FixesPoint(p[i])) driven[static_cast<std::size_t>(i)] = 1;
+      }
+    } else {
+      for (std::int32_t n : o.beat.driven.nodes) {
+        if (n < 0 || n >= mesh->num_nodes()) {
+          Fail(scene, o, "driven node " + std::to_string(n) + " of its beat is not a node of its " +
+                             std::to_string(mesh->num_nodes()) + "-node tetrahedral mesh");
+        }
+        driven[static_cast<std::size_t>(n)] = 1;
+      }
+    }
+    for (std::int32_t i = 0; i < mesh->num_nodes(); ++i) {
+      if (driven[static_cast<std::size_t>(i)] != 0 && fixed[static_cast<std::size_t>(i)] == 0) out.driven_nodes.push_back(i);
+    }
+    if (out.driven_nodes.empty()) Fail(scene, o, "its beat drives no node that is not fixed");
+    held.insert(held.end(), out.driven_nodes.begin(), out.driven_nodes.end());
+    std::sort(held.begin(), held.end());
+    if (static_cast<std::int32_t>(held.size()) >= mesh->num_nodes()) {
+      Fail(scene, o, "its fixed and driven nodes are every node: nothing is left to follow the beat");
+    }
+  }
+
   fem::Material material;
   material.E_Pa = o.deformable.E_Pa;
   material.nu = o.deformable.nu;
@@ -93,7 +125,15 @@ PreparedDeformable PrepareDeformable(const scene::Scene& scene, const scene::Sce
   std::filesystem::create_directories(cache_dir);
   out.cache_file = cache_dir / (scene.name + "." + o.id + ".f32.compliance");
   auto compliance = std::make_shared<fem::Compliance>(fem::Compliance::LoadOrPrecompute(
-      out.cache_file, *mesh, material, out.fixed_nodes, options, progress, &out.cache_note));
+      out.cache_file, *mesh, material, held, options, progress, &out.cache_note));
+  if (!out.driven_nodes.empty()) {
+    // The beat's mode: one static solve, the driven nodes at the beat's displacement.
+    fem::StaticSolver solver(*mesh, material, out.fixed_nodes, out.driven_nodes);
+    std::vector<Eigen::Vector3d> drive;
+    drive.reserve(out.driven_nodes.size());
+    for (const auto n : out.driven_nodes) drive.push_back(o.beat.DrivenDisplacement_O(p[static_cast<std::size_t>(n)]));
+    out.mode_O_m = std::make_shared<const std::vector<Eigen::Vector3d>>(solver.Solve(drive).u_m);
+  }
   out.surface = std::make_shared<fem::Surface>(fem::ExtractSurface(*mesh));
   out.mesh = std::move(mesh);
   out.compliance = std::move(compliance);

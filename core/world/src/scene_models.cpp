@@ -80,6 +80,7 @@ SceneModels BuildSceneModels(const scene::Scene& scene, const SceneModelsOptions
         desc.X_WO = o.X_WO();
         desc.mu_static = o.deformable.mu_static;
         desc.mu_kinetic = o.deformable.mu_kinetic;
+        desc.mode_O_m = prepared.mode_O_m;
         id = w.AddDeformable(desc);
         out.deformables.push_back(std::move(prepared));
         break;

@@ -79,7 +79,8 @@ struct FollowedBodies {
 
 class SceneRenderer final : public ForceRenderer {
  public:
-  /// Builds the models of `scene` (deformables from the compliance cache). Periodic motions run
+  /// Builds the models of `scene` (deformables from the compliance cache). Periodic motions and
+  /// beats run
   /// on the session's `clock` (the world server's origin). Not real-time.
   SceneRenderer(const scene::Scene& scene, const world::SceneModelsOptions& options,
                 common::SessionClock clock = {});
@@ -116,6 +117,7 @@ class SceneRenderer final : public ForceRenderer {
   controls::ControlSet controls_;
   double fingertip_radius_m_;
   std::vector<std::pair<contact::ObjectId, std::size_t>> moving_;  // (object, scene index)
+  std::vector<std::pair<contact::ObjectId, std::size_t>> beating_;  // (object, scene index)
   // Haptic-thread state, sized here.
   std::array<Eigen::Vector3d, kFingers> f_controls_{};
   controls::EventBuffer event_buffer_;

@@ -13,7 +13,9 @@
 /// moves with a dynamic body):
 ///   collision + proxy (proxy.hpp) -> contact point, normal n, penetration vector e = p_E - p_P
 ///   rigid:      f_E = -k e - b (v_E . n) n, proxy friction (stick / slip), normal part >= 0
-///   deformable: patch of surface nodes under the fingertip (fem::ContactPatchFinder::Sphere),
+///   deformable: patch of surface nodes under the fingertip (fem::ContactPatchFinder::Sphere;
+///               a beating body: the proxy runs on the rest surface, the fingertip moved back
+///               by the mode's displacement s M near it),
 ///               all fingers of all hands on the object in one fem::ContactSolver::Solve,
 ///               f_E = -(sum of the patch's node forces on the object)
 /// then the sum over objects is clamped to max_force_N, and every dynamic body receives minus
@@ -108,6 +110,11 @@ struct DeformableDesc {
   /// slips with |F_t| = mu_kinetic F_n. Both 0: frictionless (the normal-only solve).
   double mu_static = 0.0;
   double mu_kinetic = 0.0;
+  /// A beating body (scene::Beat, world::PreparedDeformable::mode_O_m): the displacement of
+  /// every node of `mesh` (frame O) at mode scale 1; the surface is at rest + s mode, s set by
+  /// SetModeScale. The compliance must hold the nodes that drive it (linear elasticity: a
+  /// fingertip's field adds to s mode). Null: no mode.
+  std::shared_ptr<const std::vector<Eigen::Vector3d>> mode_O_m;
 };
 
 struct WorldConfig {
@@ -139,7 +146,8 @@ struct FingerResult {
   Eigen::Vector3d f_E_W_N = Eigen::Vector3d::Zero();  ///< force on the fingertip, clamped.
   Eigen::Vector3d p_WP_m = Eigen::Vector3d::Zero();   ///< proxy (IHIP) centre; fingertip if free.
   Eigen::Vector3d e_PE_W_m = Eigen::Vector3d::Zero(); ///< penetration vector, proxy -> fingertip.
-  Eigen::Vector3d p_WC_m = Eigen::Vector3d::Zero();   ///< contact point on the surface.
+  Eigen::Vector3d p_WC_m = Eigen::Vector3d::Zero();   ///< contact point on the surface (a
+                                                      ///< deformable's: undeformed, at rest).
   Eigen::Vector3d n_W = Eigen::Vector3d::Zero();      ///< outward unit normal there.
   Eigen::Vector3d u_W_m = Eigen::Vector3d::Zero();    ///< deformable: imposed displacement (the
                                                       ///< indentation -depth n_W plus the stick).
@@ -206,6 +214,11 @@ class HapticWorld {
   /// Moves an object (static: teleport; dynamic: also zeroes its velocity). Its proxies move
   /// with it. Real-time safe.
   void SetPose(ObjectId id, const Eigen::Isometry3d& X_WO) noexcept;
+  /// Deformable with a mode: the surface is at rest + s mode from the next step on (a
+  /// fingertip presses the moved surface; its patch and force are the contact's part, which
+  /// adds to s mode). Ignored for other objects and non-finite s. Real-time safe.
+  void SetModeScale(ObjectId id, double s) noexcept;
+  double mode_scale(ObjectId id) const noexcept;
   /// Sets a dynamic body's linear and angular velocity (call after SetPose, which zeroes them):
   /// a body handed over from another simulation keeps its motion. Ignored for other objects
   /// and for non-finite values. Real-time safe.
@@ -223,6 +236,9 @@ class HapticWorld {
   struct Object;
   void CheckSetup(const char* what) const;
   void StepDeformable(Object& o, std::span<const RemoteContact> remote, StepReport& report) noexcept;
+  /// A moded deformable: s mode at the surface point nearest g_O (interpolated over its
+  /// triangle), zero if no surface is within reach of the fingertip.
+  Eigen::Vector3d ModeShift(const Object& o, const Eigen::Vector3d& g_O) noexcept;
   /// A dynamic body over dt_s, in substeps of at most kMaxBodySubstep_s (the forces the
   /// fingers put on it held): a stalled loop hands in a long dt_s, and one explicit step of
   /// the support spring (5000 N/m under a 0.2 kg ball: stable below about 12 ms) over it
@@ -242,6 +258,9 @@ class HapticWorld {
   // step's contact and force (before the clamp).
   struct FingerObject {
     ProxyState proxy;
+    // A moded deformable: where the surface near the fingertip has moved (s mode); the proxy
+    // runs on the rest surface toward the fingertip moved back by it.
+    Eigen::Vector3d shift_O_m = Eigen::Vector3d::Zero();
     Eigen::Vector3d prev_goal_O_m = Eigen::Vector3d::Zero();
     bool prev_valid = false;
     ProxyContact contact;
@@ -259,6 +278,7 @@ class HapticWorld {
   };
   std::vector<FingerObject> fo_;  // [finger * num_objects + object]
   std::array<FingerResult, kFingers> results_{};
+  std::vector<std::int32_t> mode_candidates_;  // ModeShift's ball query
   std::array<double, kFingers> scale_{};
 };
 

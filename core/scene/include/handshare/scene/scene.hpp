@@ -24,7 +24,14 @@
 ///           {nodes [indices]}: nodes of the tetrahedral mesh held fixed, in frame O
 ///     motion: {direction [3], amplitude_m, period_s, phase_rad}: p_WO(t) = position_m +
 ///           amplitude_m sin(2 pi t / period_s + phase_rad) direction
-///     label [ {language: en | ja, text} ]: shown beside the object on screens (1..127 bytes)
+///     beat (deformables): {driven: {plane_point_m [3], plane_normal [3]} | {nodes [indices]},
+///           displacement_m [3], rotation_rad [3], center_m [3], period_s, phase_rad}: each
+///           driven node p (those of the rule that are not fixed) moves by
+///           sin(2 pi t / period_s + phase_rad) (displacement_m + rotation_rad x (p - center_m))
+///           (frame O; rotation_rad a small rotation vector, both default 0, not both 0), the
+///           fixed ones stay, and the body deforms between them (its static response,
+///           world::PreparedDeformable::mode_O_m); a fingertip presses the beating body
+//////     label [ {language: en | ja, text} ]: shown beside the object on screens (1..127 bytes)
 ///     appearance: {specular 0..1, shininess 1..128, opacity 0.05..1}: how screens light it
 ///           (a highlight's strength and tightness; below 1, seen through), default matte, opaque
 ///   } ]
@@ -123,6 +130,30 @@ struct Motion {
   Eigen::Vector3d Offset_W(double t_s) const noexcept;
 };
 
+/// A periodic deformation of a deformable (the Daphnia's body and spine beating as it swims):
+/// the `driven` nodes move by Scale(t) displacement_O_m while the fixed nodes stay; the rest of
+/// the body follows by linear elasticity (its static response to that motion).
+struct Beat {
+  FixedRule driven;  ///< which nodes are driven (a node also fixed stays fixed).
+  /// A driven node's displacement at Scale = 1, frame O: a translation plus a small rotation
+  /// (rotation vector, linearised) about center_O_m.
+  Eigen::Vector3d displacement_O_m = Eigen::Vector3d::Zero();
+  Eigen::Vector3d rotation_O_rad = Eigen::Vector3d::Zero();
+  Eigen::Vector3d center_O_m = Eigen::Vector3d::Zero();
+  double period_s = 0.0;  ///< 0: no beat.
+  double phase_rad = 0.0;
+  bool active() const noexcept {
+    return period_s > 0.0 && (displacement_O_m.squaredNorm() > 0.0 || rotation_O_rad.squaredNorm() > 0.0);
+  }
+  /// Where the beat puts a driven node at p_O_m, at Scale = 1 (frame O).
+  Eigen::Vector3d DrivenDisplacement_O(const Eigen::Vector3d& p_O_m) const noexcept {
+    return displacement_O_m + rotation_O_rad.cross(p_O_m - center_O_m);
+  }
+  /// sin(2 pi t_s / period_s + phase_rad) at session time t_s (common::SessionClock); 0 if not
+  /// active.
+  double Scale(double t_s) const noexcept;
+};
+
 /// How screens light an object beyond its colour: a white highlight of `specular` strength and
 /// `shininess` tightness (the Phong exponent), and its opacity (below 1 it is seen through).
 struct Appearance {
@@ -159,6 +190,7 @@ struct SceneObject {
   DeformableMaterial deformable;                      ///< kDeformable
   FixedRule fixed;                                    ///< kDeformable
   Motion motion;
+  Beat beat;                                          ///< kDeformable
   std::vector<LocalText> label;                       ///< shown beside it on screens (may be empty)
   Appearance appearance;                              ///< how screens light it
   int line = 0;                                       ///< line of the entry in the scene file

@@ -1,7 +1,7 @@
 #pragma once
 /// Offline preparation of a scene's deformable object: its surface mesh (already loaded by the
 /// scene loader, frame O) is tetrahedralized by the external tetgen program, its fixed rule
-/// becomes fixed nodes, and the compliance of its free surface nodes is loaded from the cache
+/// becomes fixed nodes (a beat's rule driven nodes, with their static response), and the compliance of its free surface nodes is loaded from the cache
 /// or precomputed (CHOLMOD) and saved. Not real-time: run on a loader thread or ahead of time.
 #include <cstdint>
 #include <filesystem>
@@ -22,6 +22,13 @@ struct PreparedDeformable {
   std::shared_ptr<const fem::Surface> surface;
   std::shared_ptr<const fem::Compliance> compliance;
   std::vector<std::int32_t> fixed_nodes;
+  /// A beating body (scene::Beat): the nodes it drives (not fixed), and its static response
+  /// to the drive at Scale = 1 (every node of `mesh`, frame O: the driven nodes at the beat's
+  /// displacement, the fixed ones at zero). The compliance holds both the fixed and the driven
+  /// nodes: a fingertip's field adds to Scale(t) mode_O_m (linear elasticity). Both empty for a
+  /// body that does not beat.
+  std::vector<std::int32_t> driven_nodes;
+  std::shared_ptr<const std::vector<Eigen::Vector3d>> mode_O_m;
   std::filesystem::path cache_file;
   std::string cache_note;  ///< why the cache was (not) used
   double prepare_s = 0.0;
