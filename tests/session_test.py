@@ -1085,6 +1085,101 @@ def book_page_ink(image, camera, corners, rgb_test):
     return n
 
 
+def check_beating_solve(h, held, vertex_count, user):
+    """One instant of the beating belly as the world server dumped it (held), against an
+    independent static FEM solve (fem_solve) of its tetrahedral mesh: the back fixed, the beat's
+    driven nodes where the beat has them at that instant, and the touched nodes (if user) where
+    the server's solve put them. The reactions at the touched nodes are the loads the server
+    solved for, and minus their sum is the force the user's own haptic solve gave its fingertip;
+    the published field is the solve's at every vertex. Returns a line to print."""
+    work = h.work
+    mesh = os.path.join(h.work, "deformation", held["mesh"])
+    check(held["driven_nodes"] > 10, f"the belly's beat drives {held['driven_nodes']} nodes")
+    check(len(held["imposed"]) == len(held["loads"]) + held["driven_nodes"],
+          f"{len(held['imposed'])} imposed nodes: not the {len(held['loads'])} touched and {held['driven_nodes']} driven")
+    loadcase = os.path.join(work, f"belly_loadcase_{held['revision']}.json")
+    with open(loadcase, "w") as f:
+        json.dump({"E_Pa": held["E_Pa"], "nu": held["nu"], "fixed_nodes": held["fixed_nodes"],
+                   "imposed": held["imposed"]}, f)
+    solved = subprocess.run([os.path.join(h.bin_dir, "core", "fem", "fem_solve"), mesh, loadcase],
+                            capture_output=True, text=True, timeout=300)
+    check(solved.returncode == 0, f"fem_solve failed: {solved.stderr}")
+    oracle = json.loads(solved.stdout)
+    R = held["R_WO"]
+    def to_W(u):
+        return [sum(R[r][c] * u[c] for c in range(3)) for r in range(3)]
+    line = f"beat {held['beat_scale']:+.3f} (revision {held['revision']})"
+    if user:
+        check(held["users"] == [user] and held["loads"], f"the belly's solve does not hold {user}'s fingertip: {held['users']}")
+        f_scale = max(math.sqrt(sum(c * c for c in l["f_N"])) for l in held["loads"])
+        total = [0.0, 0.0, 0.0]
+        for l in held["loads"]:
+            r = oracle["reactions"][str(l["node"])]
+            err = math.sqrt(sum((a - b) ** 2 for a, b in zip(r, l["f_N"])))
+            check(err <= 1e-3 * f_scale, f"node {l['node']}: reaction {r} vs the server's load {l['f_N']}")
+            total = [t + c for t, c in zip(total, r)]
+        f_oracle = [-c for c in to_W(total)]
+        f_felt = [sum(c["weight"] * c["f_E_W_N"][k] for c in held["contacts"]) for k in range(3)]
+        f_norm = math.sqrt(sum(c * c for c in f_oracle))
+        err = math.sqrt(sum((a - b) ** 2 for a, b in zip(f_felt, f_oracle)))
+        check(f_norm > 0.2, f"{user} presses the belly with {f_norm:.3f} N: not a press")
+        check(err <= 0.01 * f_norm, f"{user} felt {f_felt} N, the FEM solve gives {f_oracle} N on her fingertip")
+        line += f": {user} felt {f_norm:.3f} N ({err / f_norm:.1e} off the solve), {len(held['loads'])} touched nodes"
+    sent = held["sent_u_W_m"]
+    u_max = max(math.sqrt(sum(c * c for c in u)) for u in sent.values())
+    check(u_max >= 1e-3, f"the belly's largest displacement is {1e3 * u_max:.2f} mm at beat {held['beat_scale']}")
+    tol = held["threshold_m"] + 1e-4 * u_max  # re-send threshold + float32 storage and wire
+    worst = 0.0
+    for v in range(vertex_count):
+        u_oracle = to_W(oracle["displacements"][str(v + 1)])
+        worst = max(worst, math.sqrt(sum((a - b) ** 2 for a, b in zip(sent.get(str(v), [0.0, 0.0, 0.0]), u_oracle))))
+    check(worst <= tol, f"the published belly field differs from the FEM solve by {worst:.3g} m (> {tol:.3g})")
+    return line + f"; field up to {1e3 * u_max:.2f} mm, {worst:.1e} m off the solve over {vertex_count} vertices"
+
+
+def case_beating_belly(h, domain):
+    """The water flea's belly beats (its head nods while its back is held: the scene's beat) and
+    bobs. Untouched, the published field is the beat's static response; then alice presses the
+    belly and holds, and at two instants of the beat (its scale above 0.5, then below -0.5) the
+    force she felt and the field every screen gets match an independent FEM solve of that
+    instant (check_beating_solve)."""
+    session = f"it-belly-{os.getpid()}"
+    os.environ["HANDSHARE_CACHE"] = fem_cache(h.work)
+    dump = os.path.join(h.work, "deformation")
+    held_file = os.path.join(dump, "daphnia_belly.json")
+    with open(os.path.join(HERE, "..", "assets", "meshes", "daphnia_body.obj")) as f:
+        vertex_count = sum(1 for line in f if line.startswith("v "))
+    h.start("world_server", "world_server", "--domain", domain, "--session", session, "--scene", "microscopic_belly",
+            "--dump-deformation", dump, "--deformation-threshold", "1e-6")
+    h.wait_for_line("world_server", "models of 'microscopic_belly' ready", 300)
+
+    def dump_where(accept):
+        held = read_json(held_file)
+        return held if held is not None and accept(held) else None
+
+    untouched = wait_until("a dump of the untouched belly at a beat of at least 0.5", 60,
+                           lambda: dump_where(lambda j: not j["users"] and abs(j["beat_scale"]) >= 0.5))
+    print("untouched: " + check_beating_solve(h, untouched, vertex_count, None))
+    h.start("alice", "haptic_node", "--domain", domain, "--session", session, "--user", "alice",
+            "--script", os.path.join(DATA, "belly_alice.hand"))
+    h.wait_for_line("alice", "hand script starts at loop time", 120)
+
+    def pressed(sign):
+        def accept(j):
+            # Her newest contact set at full weight (not fading), below the device's force clamp.
+            return (j["users"] == ["alice"] and sign * j["beat_scale"] >= 0.5 and j["contacts"] and
+                    all(c["weight"] == 1.0 and math.sqrt(sum(x * x for x in c["f_E_W_N"])) < 3.3
+                        for c in j["contacts"]))
+        return accept
+
+    for sign in (1, -1):
+        held = wait_until(f"alice pressing the belly at a beat {'above 0.5' if sign > 0 else 'below -0.5'}", 90,
+                          lambda: dump_where(pressed(sign)), lambda: f"last dump: {read_json(held_file)}"[:2000])
+        print("pressed: " + check_beating_solve(h, held, vertex_count, "alice"))
+    check(h.stop("alice", 30) == 0, "alice's haptic node failed")
+    check(h.stop("world_server", 30) == 0, "world_server failed")
+
+
 def case_book(h, domain):
     """A book as a visitor uses it (issue: books that are books): in the start menu alice opens
     the solar-system book, which shows page 1 (its board message, no other world), then swipes
@@ -1144,7 +1239,8 @@ def case_book(h, domain):
 
 CASES = {"shared_session": case_shared_session, "lever_round_trip": case_lever_round_trip, "encyclopedia": case_encyclopedia, "killed_member": case_killed_member,
          "vanished_member": case_vanished_member,
-         "signals": case_signals, "bad_input": case_bad_input, "rejoin": case_rejoin, "book": case_book}
+         "signals": case_signals, "bad_input": case_bad_input, "rejoin": case_rejoin, "book": case_book,
+         "beating_belly": case_beating_belly}
 
 
 def run_cases(cases, harness=None):

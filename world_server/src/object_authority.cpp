@@ -372,7 +372,7 @@ TickOutput ObjectAuthority::Tick(Clock::time_point now, double dt_s) {
       }
       const auto samples = d.delta->Update(d.u_W, now);
       for (const auto& sample : samples) out.deformations.emplace_back(d.id, sample);
-      if (!samples.empty() && !options_.dump_dir.empty()) Dump(d, samples.front().revision);
+      if (!samples.empty() && !options_.dump_dir.empty()) Dump(d, samples.front().revision, now);
     }
     d.touched_before = touched;
   }
@@ -380,13 +380,23 @@ TickOutput ObjectAuthority::Tick(Clock::time_point now, double dt_s) {
   return out;
 }
 
-void ObjectAuthority::Dump(const Deformable& d, std::uint32_t revision) const {
+void ObjectAuthority::Dump(const Deformable& d, std::uint32_t revision, Clock::time_point now) const {
   const fem::ContactSolver* solver = models_->world->contact_solver(d.object);
   const Eigen::Matrix3d R = models_->world->pose(d.object).linear();
   std::set<std::string> users;
-  const auto now = Clock::now();
+  // The fingertips on it as the solve took them: the force each user's own solve gave its
+  // fingertip (what it felt, before the device's clamp) and the fade's weight on it.
+  std::ostringstream contacts;
+  contacts.precision(17);
+  bool first_contact = true;
   peers_.ForEach(*models_, now, [&](const contact::PeerContact& c, const msg::ContactSet& set) {
-    if (c.object == d.object) users.insert(set.user().to_string());
+    if (c.object != d.object) return;
+    users.insert(set.user().to_string());
+    contacts << (first_contact ? "" : ",\n  ") << "{\"user\": \""
+             << set.user().to_string() << "\", \"finger\": " << c.finger << ", \"f_E_W_N\": [" << c.f_E_W_N[0] << ", "
+             << c.f_E_W_N[1] << ", " << c.f_E_W_N[2] << "], \"weight\": "
+             << peers_.fade().WeightAt(session::PeerContacts::SteadyNs(now), c.received_ns) << "}";
+    first_contact = false;
   });
   std::ostringstream j;
   j.precision(17);
@@ -397,7 +407,7 @@ void ObjectAuthority::Dump(const Deformable& d, std::uint32_t revision) const {
     j << (first ? "" : ", ") << "\"" << u << "\"";
     first = false;
   }
-  j << "],\n \"R_WO\": [";
+  j << "],\n \"contacts\": [" << contacts.str() << "],\n \"R_WO\": [";
   for (int r = 0; r < 3; ++r) j << (r ? ", " : "") << "[" << R(r, 0) << ", " << R(r, 1) << ", " << R(r, 2) << "]";
   j << "],\n \"fixed_nodes\": [";
   first = true;

@@ -2,6 +2,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <fstream>
 
 namespace handshare::world {
@@ -90,6 +91,70 @@ TEST(SceneModels, ADeformableWithoutFixedNodesIsAnErrorNamingFileAndObject) {
     EXPECT_NE(std::string(e.what()).find("free.json"), std::string::npos) << e.what();
     EXPECT_NE(std::string(e.what()).find("floater"), std::string::npos) << e.what();
     EXPECT_NE(std::string(e.what()).find("holds no node"), std::string::npos) << e.what();
+  }
+}
+
+}  // namespace
+}  // namespace handshare::world
+
+namespace handshare::world {
+namespace {
+
+// A block whose top is driven up and down (a beat) while its bottom is held. With nu = 0 the
+// exact solution is uniaxial: u_z = d (z + h) / 2h and no lateral motion, which linear
+// tetrahedra reproduce exactly: the mode must be that field at every node.
+TEST(SceneModels, ABeatsModeIsTheBodysStaticResponseToItsDrivenNodes) {
+  const auto dir = TempDir("beat");
+  const std::string block =
+      R"({"id": "block", "kind": "deformable", "shape": "box", "position_m": [0, 0, 0.02],
+          "half_extent_m": [0.02, 0.02, 0.01], "material": {"E_Pa": 20000, "nu": 0.0},
+          "fixed": {"below_m": -0.0099},
+          "beat": {"driven": {"plane_point_m": [0, 0, 0.0099], "plane_normal": [0, 0, -1]},
+                   "displacement_m": [0, 0, 0.002], "period_s": 1.0}})";
+  const scene::Scene s = WriteAndLoad(dir, "beat", block);
+  const PreparedDeformable p = PrepareDeformable(s, s.objects.front(), dir / "cache");
+  ASSERT_NE(p.mode_O_m, nullptr);
+  ASSERT_FALSE(p.driven_nodes.empty());
+  const auto& x = p.mesh->positions_m();
+  for (const auto n : p.driven_nodes) EXPECT_NEAR(x[static_cast<std::size_t>(n)].z(), 0.01, 1e-12);
+  double worst = 0.0;
+  for (std::size_t n = 0; n < x.size(); ++n) {
+    const Eigen::Vector3d exact(0.0, 0.0, 0.002 * (x[n].z() + 0.01) / 0.02);
+    worst = std::max(worst, ((*p.mode_O_m)[n] - exact).norm());
+  }
+  EXPECT_LT(worst, 1e-12) << "largest difference from the uniaxial field [m]";
+  // The compliance holds the driven nodes too: a fingertip's field adds to s M.
+  for (const auto node : p.compliance->nodes()) {
+    EXPECT_FALSE(std::binary_search(p.driven_nodes.begin(), p.driven_nodes.end(), node)) << node;
+  }
+  const std::string still = std::string(block).replace(block.find(",\n          \"beat\""), std::string::npos, "}");
+  const scene::Scene s2 = WriteAndLoad(dir, "still", still);
+  const PreparedDeformable q = PrepareDeformable(s2, s2.objects.front(), dir / "cache");
+  EXPECT_EQ(q.mode_O_m, nullptr);
+  EXPECT_EQ(q.compliance->num_nodes(), p.compliance->num_nodes() + static_cast<std::int32_t>(p.driven_nodes.size()));
+  // The models beat: the world takes the scale.
+  SceneModelsOptions options;
+  options.cache_dir = dir / "cache";
+  SceneModels models = BuildSceneModels(s, options);
+  const auto id = models.Find("block");
+  models.world->SetModeScale(id, 0.5);
+  EXPECT_EQ(models.world->mode_scale(id), 0.5);
+}
+
+TEST(SceneModels, ABeatThatDrivesOnlyFixedNodesNamesTheObject) {
+  const auto dir = TempDir("beat_fixed");
+  const scene::Scene s = WriteAndLoad(dir, "beat_fixed",
+      R"({"id": "block", "kind": "deformable", "shape": "box", "position_m": [0, 0, 0.02],
+          "half_extent_m": [0.02, 0.02, 0.01], "material": {"E_Pa": 20000, "nu": 0.3},
+          "fixed": {"below_m": -0.0099},
+          "beat": {"driven": {"plane_point_m": [0, 0, -0.0099], "plane_normal": [0, 0, 1]},
+                   "displacement_m": [0, 0, 0.002], "period_s": 1.0}})");
+  try {
+    PrepareDeformable(s, s.objects.front(), dir / "cache");
+    FAIL() << "a beat of fixed nodes only was accepted";
+  } catch (const scene::SceneError& e) {
+    EXPECT_NE(std::string(e.what()).find("object 'block': its beat drives no node that is not fixed"), std::string::npos)
+        << e.what();
   }
 }
 

@@ -119,7 +119,7 @@ class ObjectAuthority {
     std::string scene;
     std::future<world::SceneModels> future;
   };
-  void Dump(const Deformable& d, std::uint32_t revision) const;
+  void Dump(const Deformable& d, std::uint32_t revision, Clock::time_point now) const;
 
   std::string session_;
   ObjectAuthorityOptions options_;
