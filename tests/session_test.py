@@ -1138,11 +1138,11 @@ def check_beating_solve(h, held, vertex_count, user):
 
 
 def case_beating_belly(h, domain):
-    """The water flea's belly beats (its head nods while its back is held: the scene's beat) and
-    bobs. Untouched, the published field is the beat's static response; then alice presses the
+    """The water flea's belly beats (its head nods while its back is held: the scene's beat).
+    Untouched, the published field is the beat's static response; then alice presses the
     belly and holds, and at two instants of the beat (its scale above 0.5, then below -0.5) the
     force she felt and the field every screen gets match an independent FEM solve of that
-    instant (check_beating_solve)."""
+    instant (check_beating_solve), and her force swings with the beat while she holds still."""
     session = f"it-belly-{os.getpid()}"
     os.environ["HANDSHARE_CACHE"] = fem_cache(h.work)
     dump = os.path.join(h.work, "deformation")
@@ -1160,15 +1160,17 @@ def case_beating_belly(h, domain):
     untouched = wait_until("a dump of the untouched belly at a beat of at least 0.5", 60,
                            lambda: dump_where(lambda j: not j["users"] and abs(j["beat_scale"]) >= 0.5))
     print("untouched: " + check_beating_solve(h, untouched, vertex_count, None))
+    trace = os.path.join(h.work, "alice.csv")
     h.start("alice", "haptic_node", "--domain", domain, "--session", session, "--user", "alice",
-            "--script", os.path.join(DATA, "belly_alice.hand"))
+            "--script", os.path.join(DATA, "belly_alice.hand"), "--trace", trace)
     h.wait_for_line("alice", "hand script starts at loop time", 120)
 
     def pressed(sign):
         def accept(j):
-            # Her newest contact set at full weight (not fading), below the device's force clamp.
+            # Her newest contact set at full weight (not fading), pressed in (0.5 N) and below
+            # the device's force clamp (3.5 N: the force she reports is the clamped one).
             return (j["users"] == ["alice"] and sign * j["beat_scale"] >= 0.5 and j["contacts"] and
-                    all(c["weight"] == 1.0 and math.sqrt(sum(x * x for x in c["f_E_W_N"])) < 3.3
+                    all(c["weight"] == 1.0 and 0.5 < math.sqrt(sum(x * x for x in c["f_E_W_N"])) < 3.3
                         for c in j["contacts"]))
         return accept
 
@@ -1176,6 +1178,38 @@ def case_beating_belly(h, domain):
         held = wait_until(f"alice pressing the belly at a beat {'above 0.5' if sign > 0 else 'below -0.5'}", 90,
                           lambda: dump_where(pressed(sign)), lambda: f"last dump: {read_json(held_file)}"[:2000])
         print("pressed: " + check_beating_solve(h, held, vertex_count, "alice"))
+    # She feels the beat: while her fingertip holds still on the belly (belly_alice.hand), the
+    # force on it swings with the beat's period (a body beating under a still finger), not
+    # the steady force of a body at rest.
+    with open(os.path.join(HERE, "..", "assets", "scenes", "microscopic_belly.json")) as f:
+        period = json.load(f)["objects"][0]["beat"]["period_s"]
+    def holding():
+        rows = [r for r in read_trace(trace) if abs(r["x1"] - 0.035) < 1e-5 and abs(r["y1"] - 0.004) < 1e-5]
+        return rows if len(rows) >= 2 and rows[-1]["t_s"] - rows[0]["t_s"] >= 4 * period else None
+    rows = wait_until(f"alice holding still on the belly for {4 * period:.1f} s", 60, holding)
+    # The force against f0 + b sin(w t) + c cos(w t) at the beat's frequency, least squares over
+    # the rows there are (a loaded node's trace has gaps): its swing and how much of the force's
+    # variation it explains.
+    w = 2 * math.pi / period
+    t = [r["t_s"] for r in rows]
+    f = [math.sqrt(r["fx1"] ** 2 + r["fy1"] ** 2 + r["fz1"] ** 2) for r in rows]
+    basis = [(1.0, math.sin(w * ti), math.cos(w * ti)) for ti in t]
+    M = [[sum(b[i] * b[j] for b in basis) for j in range(3)] for i in range(3)]
+    v = [sum(b[i] * fi for b, fi in zip(basis, f)) for i in range(3)]
+    def det(m):
+        return (m[0][0] * (m[1][1] * m[2][2] - m[1][2] * m[2][1]) - m[0][1] * (m[1][0] * m[2][2] - m[1][2] * m[2][0]) +
+                m[0][2] * (m[1][0] * m[2][1] - m[1][1] * m[2][0]))
+    d = det(M)
+    f0, b, c = (det([[v[r] if k == i else M[r][k] for k in range(3)] for r in range(3)]) / d for i in range(3))
+    mean = sum(f) / len(f)
+    residual = sum((fi - (f0 + b * bi[1] + c * bi[2])) ** 2 for fi, bi in zip(f, basis))
+    explained = 1 - residual / max(sum((fi - mean) ** 2 for fi in f), 1e-30)
+    amplitude = math.hypot(b, c)
+    check(amplitude >= 0.1 and explained >= 0.8,
+          f"alice's force while she holds still on the beating belly: {amplitude:.3f} N at the beat's period "
+          f"({period} s), explaining {100 * explained:.0f} % of its variation ({len(rows)} rows)")
+    print(f"alice holding still: {f0:.3f} N +- {amplitude:.3f} N at the beat's period, {100 * explained:.0f} % of "
+          f"the variation ({len(rows)} rows over {t[-1] - t[0]:.1f} s)")
     check(h.stop("alice", 30) == 0, "alice's haptic node failed")
     check(h.stop("world_server", 30) == 0, "world_server failed")
 

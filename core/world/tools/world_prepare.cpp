@@ -50,9 +50,16 @@ int main(int argc, char** argv) {
         };
         const auto p = world::PrepareDeformable(s, o, cache, progress);
         std::fprintf(stderr, "\r");
-        std::printf("%s/%s: %d nodes, %d tets, %d compliance nodes, %zu fixed, %.1f s (%s)\n", name.c_str(),
+        std::string beat;
+        if (p.mode_O_m) {
+          double largest = 0.0;
+          for (const auto& u : *p.mode_O_m) largest = std::max(largest, u.norm());
+          beat = ", " + std::to_string(p.driven_nodes.size()) + " driven (the beat moves it up to " +
+                 std::to_string(1e3 * largest).substr(0, 4) + " mm)";
+        }
+        std::printf("%s/%s: %d nodes, %d tets, %d compliance nodes, %zu fixed%s, %.1f s (%s)\n", name.c_str(),
                     o.id.c_str(), p.mesh->num_nodes(), p.mesh->num_tets(), p.compliance->num_nodes(),
-                    p.fixed_nodes.size(), p.prepare_s, p.cache_note.c_str());
+                    p.fixed_nodes.size(), beat.c_str(), p.prepare_s, p.cache_note.c_str());
         std::fflush(stdout);
       }
     }
