@@ -4,11 +4,13 @@
 // exactly what the same press below the resting surface feels.
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <limits>
 #include <memory>
 #include <vector>
 
 #include "handshare/contact/haptic_world.hpp"
+#include "handshare/testing/allocation_counter.hpp"
 #include "test_util.hpp"
 
 namespace handshare::contact {
@@ -105,6 +107,21 @@ TEST(DeformableBeat, TheModeIsReadWhereTheFingertipIs) {
     ASSERT_TRUE(r.in_contact) << x;
     EXPECT_NEAR(r.depth_m, 0.002, 1e-9) << x;
   }
+}
+
+TEST(DeformableBeat, ABeatingStepDoesNotAllocate) {
+  Beating b = MakeBeating(0.004, 0.0);
+  b.world->SetModeScale(b.id, 0.3);
+  Press(*b.world, b.X_WO, 0.03, 0.03, kTop + 0.3 * 0.004, 0.002);  // warm: in contact
+  const long before = testing::AllocationCount();
+  std::array<Eigen::Vector3d, kFingers> tips;
+  for (int i = 0; i < kFingers; ++i) tips[static_cast<std::size_t>(i)] = b.X_WO * Eigen::Vector3d(0.03, 0.03, kTop + kR - 0.003);
+  for (int k = 0; k < 200; ++k) {
+    b.world->SetModeScale(b.id, 0.5 * std::sin(0.05 * k));  // the tips stay 1-5 mm deep
+    b.world->Step(1e-3, tips);
+  }
+  EXPECT_EQ(testing::AllocationCount() - before, 0);
+  EXPECT_TRUE(b.world->fingers()[0].in_contact);
 }
 
 TEST(DeformableBeat, BadModesAreRefusedAtSetup) {
