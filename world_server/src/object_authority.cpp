@@ -182,7 +182,7 @@ void ObjectAuthority::Adopt(world::SceneModels models, TickOutput& out) {
     if (o == nullptr || d.object < 0 || !prepared.compliance) continue;
     d.E_Pa = o->deformable.E_Pa;
     d.nu = o->deformable.nu;
-    if (o->beat.active() && prepared.mode_O_m) d.beat = &o->beat;
+    if (o->beat.active() && prepared.mode_O_m) d.beat = o->beat;
     // Published node ids: the scene mesh's vertices, which the tetrahedral mesh keeps first.
     const auto& p = prepared.mesh->positions_m();
     std::int32_t vertices = prepared.mesh->num_nodes();
@@ -290,7 +290,7 @@ TickOutput ObjectAuthority::Tick(Clock::time_point now, double dt_s) {
     world.SetPose(object, X);
   }
   for (const auto& d : deformables_) {
-    if (d.beat != nullptr) world.SetModeScale(d.object, d.beat->Scale(motion_t));
+    if (d.beat) world.SetModeScale(d.object, d.beat->Scale(motion_t));
   }
   const double nan = std::numeric_limits<double>::quiet_NaN();
   const std::array<Eigen::Vector3d, contact::kFingers> no_hand{
@@ -351,7 +351,7 @@ TickOutput ObjectAuthority::Tick(Clock::time_point now, double dt_s) {
     const fem::ContactSolver* solver = world.contact_solver(d.object);
     if (solver == nullptr) continue;
     const bool touched = solver->num_unique() > 0;
-    if (touched || d.touched_before || keyframes_requested_ || d.beat != nullptr) {
+    if (touched || d.touched_before || keyframes_requested_ || d.beat) {
       if (touched) {
         solver->SurfaceDisplacements(d.u_slots);
       } else {
@@ -359,7 +359,7 @@ TickOutput ObjectAuthority::Tick(Clock::time_point now, double dt_s) {
       }
       const double beat = world.mode_scale(d.object);
       for (std::size_t v = 0; v < d.u_O.size(); ++v) {
-        d.u_O[v] = d.beat != nullptr ? Eigen::Vector3d(beat * (*d.prepared->mode_O_m)[v]) : Eigen::Vector3d::Zero();
+        d.u_O[v] = d.beat ? Eigen::Vector3d(beat * (*d.prepared->mode_O_m)[v]) : Eigen::Vector3d::Zero();
       }
       for (std::size_t s = 0; s < d.u_slots.size(); ++s) {
         const std::int32_t v = d.vertex_of_slot[s];
@@ -418,9 +418,9 @@ void ObjectAuthority::Dump(const Deformable& d, std::uint32_t revision, Clock::t
   // The load case for an independent static solve: each held node's displacement (in O) imposed,
   // and a beating body's driven nodes where the beat has them. Nothing else is loaded, so the
   // solution is the same field; the reactions at the held nodes are the loads.
-  const double beat = d.beat != nullptr ? models_->world->mode_scale(d.object) : 0.0;
+  const double beat = d.beat ? models_->world->mode_scale(d.object) : 0.0;
   auto mode_at = [&](std::int32_t node) -> Eigen::Vector3d {
-    return d.beat != nullptr ? Eigen::Vector3d(beat * (*d.prepared->mode_O_m)[static_cast<std::size_t>(node)])
+    return d.beat ? Eigen::Vector3d(beat * (*d.prepared->mode_O_m)[static_cast<std::size_t>(node)])
                              : Eigen::Vector3d::Zero();
   };
   j << "],\n \"beat_scale\": " << beat << ", \"driven_nodes\": " << d.prepared->driven_nodes.size();

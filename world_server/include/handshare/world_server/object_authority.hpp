@@ -108,7 +108,7 @@ class ObjectAuthority {
     std::vector<Eigen::Vector3d> u_slots;
     std::vector<double> u_W;                     // 3 per vertex
     std::vector<Eigen::Vector3d> u_O;            // per vertex, frame O (the beat's, then the contacts')
-    const scene::Beat* beat = nullptr;           // a beating body's beat, else null
+    std::optional<scene::Beat> beat;             // a beating body's beat (a copy: scene_ is reassigned)
     bool touched_before = false;
     const world::PreparedDeformable* prepared = nullptr;
     double E_Pa = 0.0, nu = 0.0;
