@@ -573,6 +573,19 @@ def read_inp_nodes(path):
     return nodes
 
 
+def solve_dumped(h, held, mesh, loadcase):
+    """The load case of a world server's deformation dump (held) solved again by fem_solve on its
+    tetrahedral mesh: (fem_solve's answer, a function mapping the object frame's vectors to W)."""
+    with open(loadcase, "w") as f:
+        json.dump({"E_Pa": held["E_Pa"], "nu": held["nu"], "fixed_nodes": held["fixed_nodes"],
+                   "imposed": held["imposed"]}, f)
+    solved = subprocess.run([os.path.join(h.bin_dir, "core", "fem", "fem_solve"), mesh, loadcase],
+                            capture_output=True, text=True, timeout=300)
+    check(solved.returncode == 0, f"fem_solve failed: {solved.stderr}")
+    R = held["R_WO"]
+    return json.loads(solved.stdout), lambda u: [sum(R[r][c] * u[c] for c in range(3)) for r in range(3)]
+
+
 def check_shared_deformation(h, held, received_file, alice_xy, bob_xy, X_WO_p):
     """The deformation the world server published while both users pressed the tail (held: its
     dump of that moment) against an independent static FEM solve of the same load case, and
@@ -586,17 +599,7 @@ def check_shared_deformation(h, held, received_file, alice_xy, bob_xy, X_WO_p):
         near = [l for l in held["loads"]
                 if math.hypot(nodes[l["node"]][0] + X_WO_p[0] - x, nodes[l["node"]][1] + X_WO_p[1] - y) < 0.015]
         check(near, f"no loaded node of the tail within 15 mm of {who}'s fingertip")
-    loadcase = os.path.join(work, "tail_loadcase.json")
-    with open(loadcase, "w") as f:
-        json.dump({"E_Pa": held["E_Pa"], "nu": held["nu"], "fixed_nodes": held["fixed_nodes"],
-                   "imposed": held["imposed"]}, f)
-    solved = subprocess.run([os.path.join(h.bin_dir, "core", "fem", "fem_solve"), mesh, loadcase],
-                            capture_output=True, text=True, timeout=300)
-    check(solved.returncode == 0, f"fem_solve failed: {solved.stderr}")
-    oracle = json.loads(solved.stdout)
-    R = held["R_WO"]
-    def to_W(u):
-        return [sum(R[r][c] * u[c] for c in range(3)) for r in range(3)]
+    oracle, to_W = solve_dumped(h, held, mesh, os.path.join(work, "tail_loadcase.json"))
     # Reactions of the independent solve at the held nodes = the loads the server solved for.
     f_scale = max(math.sqrt(sum(c * c for c in l["f_N"])) for l in held["loads"])
     for l in held["loads"]:
@@ -1092,22 +1095,11 @@ def check_beating_solve(h, held, vertex_count, user):
     the server's solve put them. The reactions at the touched nodes are the loads the server
     solved for, and minus their sum is the force the user's own haptic solve gave its fingertip;
     the published field is the solve's at every vertex. Returns a line to print."""
-    work = h.work
     mesh = os.path.join(h.work, "deformation", held["mesh"])
     check(held["driven_nodes"] > 10, f"the belly's beat drives {held['driven_nodes']} nodes")
     check(len(held["imposed"]) == len(held["loads"]) + held["driven_nodes"],
           f"{len(held['imposed'])} imposed nodes: not the {len(held['loads'])} touched and {held['driven_nodes']} driven")
-    loadcase = os.path.join(work, f"belly_loadcase_{held['revision']}.json")
-    with open(loadcase, "w") as f:
-        json.dump({"E_Pa": held["E_Pa"], "nu": held["nu"], "fixed_nodes": held["fixed_nodes"],
-                   "imposed": held["imposed"]}, f)
-    solved = subprocess.run([os.path.join(h.bin_dir, "core", "fem", "fem_solve"), mesh, loadcase],
-                            capture_output=True, text=True, timeout=300)
-    check(solved.returncode == 0, f"fem_solve failed: {solved.stderr}")
-    oracle = json.loads(solved.stdout)
-    R = held["R_WO"]
-    def to_W(u):
-        return [sum(R[r][c] * u[c] for c in range(3)) for r in range(3)]
+    oracle, to_W = solve_dumped(h, held, mesh, os.path.join(h.work, f"belly_loadcase_{held['revision']}.json"))
     line = f"beat {held['beat_scale']:+.3f} (revision {held['revision']})"
     if user:
         check(held["users"] == [user] and held["loads"], f"the belly's solve does not hold {user}'s fingertip: {held['users']}")

@@ -431,6 +431,23 @@ BookPage ParsePage(const Context& c, const json& j, const std::string& field, co
   return page;
 }
 
+// A node rule of a deformable (fixed, or a beat's driven): {nodes [indices]} or
+// {plane_point_m [3], plane_normal [3]} (the side behind the plane).
+void ParseNodesOrPlane(const Context& c, const json& f, const std::string& fpath, FixedRule& rule) {
+  if (f.contains("nodes")) {
+    rule.kind = FixedRule::Kind::kNodes;
+    const json& nodes = c.Array(f["nodes"], fpath + "nodes", 1'000'000);
+    if (nodes.empty()) c.Fail(fpath + "nodes", "empty");
+    for (std::size_t i = 0; i < nodes.size(); ++i) {
+      rule.nodes.push_back(c.Integer(nodes[i], fpath + "nodes[" + std::to_string(i) + "]", 0, 100'000'000));
+    }
+  } else {
+    rule.kind = FixedRule::Kind::kHalfSpace;
+    rule.point_O_m = c.Vector<3>(c.Require(f, "plane_point_m", fpath), fpath + "plane_point_m", -10.0, 10.0);
+    rule.normal_O = UnitVector(c, c.Require(f, "plane_normal", fpath), fpath + "plane_normal");
+  }
+}
+
 SceneObject ParseObject(const Context& c, const json& j, const std::string& path,
                         const std::filesystem::path& file, const LoadOptions& options) {
   c.Object(j, path.substr(0, path.size() - 1));
@@ -521,17 +538,8 @@ SceneObject ParseObject(const Context& c, const json& j, const std::string& path
       rule.kind = FixedRule::Kind::kHalfSpace;
       rule.point_O_m = Eigen::Vector3d(0, 0, c.Number(f["below_m"], fpath + "below_m", -10.0, 10.0));
       rule.normal_O = Eigen::Vector3d::UnitZ();
-    } else if (f.contains("nodes")) {
-      rule.kind = FixedRule::Kind::kNodes;
-      const json& nodes = c.Array(f["nodes"], fpath + "nodes", 1'000'000);
-      if (nodes.empty()) c.Fail(fpath + "nodes", "empty");
-      for (std::size_t i = 0; i < nodes.size(); ++i) {
-        rule.nodes.push_back(c.Integer(nodes[i], fpath + "nodes[" + std::to_string(i) + "]", 0, 100'000'000));
-      }
     } else {
-      rule.kind = FixedRule::Kind::kHalfSpace;
-      rule.point_O_m = c.Vector<3>(c.Require(f, "plane_point_m", fpath), fpath + "plane_point_m", -10.0, 10.0);
-      rule.normal_O = UnitVector(c, c.Require(f, "plane_normal", fpath), fpath + "plane_normal");
+      ParseNodesOrPlane(c, f, fpath, rule);
     }
     if (rule.kind == FixedRule::Kind::kHalfSpace && o.mesh) {
       // A rule that fixes no surface node leaves the FEM model free to float (singular K).
@@ -554,22 +562,11 @@ SceneObject ParseObject(const Context& c, const json& j, const std::string& path
     if (d.contains("nodes") == (d.contains("plane_point_m") || d.contains("plane_normal"))) {
       c.Fail(bp + "driven", "give exactly one of plane_point_m + plane_normal, nodes");
     }
-    if (d.contains("nodes")) {
-      rule.kind = FixedRule::Kind::kNodes;
-      const json& nodes = c.Array(d["nodes"], dp + "nodes", 1'000'000);
-      if (nodes.empty()) c.Fail(dp + "nodes", "empty");
-      for (std::size_t i = 0; i < nodes.size(); ++i) {
-        rule.nodes.push_back(c.Integer(nodes[i], dp + "nodes[" + std::to_string(i) + "]", 0, 100'000'000));
-      }
-    } else {
-      rule.kind = FixedRule::Kind::kHalfSpace;
-      rule.point_O_m = c.Vector<3>(c.Require(d, "plane_point_m", dp), dp + "plane_point_m", -10.0, 10.0);
-      rule.normal_O = UnitVector(c, c.Require(d, "plane_normal", dp), dp + "plane_normal");
-      if (o.mesh && std::none_of(o.mesh->vertices_m.begin(), o.mesh->vertices_m.end(), [&](const Eigen::Vector3d& v) {
-            return rule.FixesPoint(v) && !o.fixed.FixesPoint(v);
-          })) {
-        c.Fail(bp + "driven", "drives no vertex of mesh '" + o.mesh_path.string() + "' that is not fixed");
-      }
+    ParseNodesOrPlane(c, d, dp, rule);
+    if (rule.kind == FixedRule::Kind::kHalfSpace && o.mesh &&
+        std::none_of(o.mesh->vertices_m.begin(), o.mesh->vertices_m.end(),
+                     [&](const Eigen::Vector3d& v) { return rule.FixesPoint(v) && !o.fixed.FixesPoint(v); })) {
+      c.Fail(bp + "driven", "drives no vertex of mesh '" + o.mesh_path.string() + "' that is not fixed");
     }
     if (b.contains("displacement_m")) {
       o.beat.displacement_O_m = c.Vector<3>(b["displacement_m"], bp + "displacement_m", -0.1, 0.1);
