@@ -40,6 +40,28 @@ fem::TetMesh VolumeMesh(const scene::Scene& scene, const scene::SceneObject& o) 
   }
 }
 
+// The nodes a rule selects (a fixed rule, a beat's driven one): those behind its plane, or
+// its listed nodes, each checked against the mesh.
+std::vector<std::int32_t> NodesOf(const scene::Scene& scene, const scene::SceneObject& o, const fem::TetMesh& mesh,
+                                  const scene::FixedRule& rule, const std::string& what) {
+  std::vector<std::int32_t> nodes;
+  if (rule.kind == scene::FixedRule::Kind::kHalfSpace) {
+    const auto& p = mesh.positions_m();
+    for (std::int32_t i = 0; i < mesh.num_nodes(); ++i) {
+      if (mesh.used_nodes()[i] && rule.FixesPoint(p[static_cast<std::size_t>(i)])) nodes.push_back(i);
+    }
+  } else if (rule.kind == scene::FixedRule::Kind::kNodes) {
+    for (const std::int32_t n : rule.nodes) {
+      if (n < 0 || n >= mesh.num_nodes()) {
+        Fail(scene, o, what + std::to_string(n) + " is not a node of its " + std::to_string(mesh.num_nodes()) +
+                           "-node tetrahedral mesh");
+      }
+      nodes.push_back(n);
+    }
+  }
+  return nodes;
+}
+
 }  // namespace
 
 std::filesystem::path DefaultCacheDir() {
@@ -64,24 +86,10 @@ PreparedDeformable PrepareDeformable(const scene::Scene& scene, const scene::Sce
 
   // Fixed nodes from the scene's rule, in frame O.
   const auto& p = mesh->positions_m();
-  switch (o.fixed.kind) {
-    case scene::FixedRule::Kind::kHalfSpace:
-      for (std::int32_t i = 0; i < mesh->num_nodes(); ++i) {
-        if (mesh->used_nodes()[i] && o.fixed.FixesPoint(p[i])) out.fixed_nodes.push_back(i);
-      }
-      break;
-    case scene::FixedRule::Kind::kNodes:
-      for (std::int32_t n : o.fixed.nodes) {
-        if (n < 0 || n >= mesh->num_nodes()) {
-          Fail(scene, o, "fixed node " + std::to_string(n) + " is not a node of its " +
-                             std::to_string(mesh->num_nodes()) + "-node tetrahedral mesh");
-        }
-        out.fixed_nodes.push_back(n);
-      }
-      break;
-    case scene::FixedRule::Kind::kNone:
-      Fail(scene, o, "a deformable needs fixed nodes (field 'fixed'), else it floats away");
+  if (o.fixed.kind == scene::FixedRule::Kind::kNone) {
+    Fail(scene, o, "a deformable needs fixed nodes (field 'fixed'), else it floats away");
   }
+  out.fixed_nodes = NodesOf(scene, o, *mesh, o.fixed, "fixed node ");
   if (out.fixed_nodes.empty()) Fail(scene, o, "its fixed rule holds no node of the tetrahedral mesh");
   if (static_cast<std::int32_t>(out.fixed_nodes.size()) >= mesh->num_nodes()) {
     Fail(scene, o, "its fixed rule holds every node: nothing can deform");
@@ -93,19 +101,7 @@ PreparedDeformable PrepareDeformable(const scene::Scene& scene, const scene::Sce
     std::vector<char> fixed(static_cast<std::size_t>(mesh->num_nodes()), 0);
     for (const auto n : out.fixed_nodes) fixed[static_cast<std::size_t>(n)] = 1;
     std::vector<char> driven(fixed.size(), 0);
-    if (o.beat.driven.kind == scene::FixedRule::Kind::kHalfSpace) {
-      for (std::int32_t i = 0; i < mesh->num_nodes(); ++i) {
-        if (mesh->used_nodes()[i] && o.beat.driven.FixesPoint(p[i])) driven[static_cast<std::size_t>(i)] = 1;
-      }
-    } else {
-      for (std::int32_t n : o.beat.driven.nodes) {
-        if (n < 0 || n >= mesh->num_nodes()) {
-          Fail(scene, o, "driven node " + std::to_string(n) + " of its beat is not a node of its " +
-                             std::to_string(mesh->num_nodes()) + "-node tetrahedral mesh");
-        }
-        driven[static_cast<std::size_t>(n)] = 1;
-      }
-    }
+    for (const auto n : NodesOf(scene, o, *mesh, o.beat.driven, "driven node ")) driven[static_cast<std::size_t>(n)] = 1;
     for (std::int32_t i = 0; i < mesh->num_nodes(); ++i) {
       if (driven[static_cast<std::size_t>(i)] != 0 && fixed[static_cast<std::size_t>(i)] == 0) out.driven_nodes.push_back(i);
     }

@@ -1,8 +1,9 @@
 #pragma once
 /// Offline preparation of a scene's deformable object: its surface mesh (already loaded by the
 /// scene loader, frame O) is tetrahedralized by the external tetgen program, its fixed rule
-/// becomes fixed nodes (a beat's rule driven nodes, with their static response), and the compliance of its free surface nodes is loaded from the cache
-/// or precomputed (CHOLMOD) and saved. Not real-time: run on a loader thread or ahead of time.
+/// becomes fixed nodes (a beat's rule, driven nodes with their static response), and the
+/// compliance of its free surface nodes is loaded from the cache or precomputed (CHOLMOD) and
+/// saved. Not real-time: run on a loader thread or ahead of time.
 #include <cstdint>
 #include <filesystem>
 #include <functional>
