@@ -25,6 +25,9 @@ int main(int argc, char** argv) {
              "paced: device states at the fastest viewer's frame rate, contact sets at the world server's tick "
              "unless a peer touches the same object; full: both at the publish rate",
              "paced")
+      .Value("coupling-passivity", "MODE",
+             "on: a passivity controller holds back what a peer's late contact would put into a shared deformable "
+             "beyond what the peer put in; off: observe only (measurements)", "on")
       .Value("trace", "FILE", "write every published device state to a CSV file", "")
       .Value("rejoin-after", "SEC",
              "join again with a new participant when no world server was heard this long after joining "
@@ -49,6 +52,11 @@ int main(int argc, char** argv) {
     c.rate_Hz = o.GetDouble("rate", 100.0, 20000.0);
     c.publish_Hz = o.GetDouble("publish-rate", 1.0, 1000.0);
     c.deadband_weber = o.GetDouble("deadband", 0.0, 0.5);
+    const std::string passivity = o.GetString("coupling-passivity");
+    if (passivity != "on" && passivity != "off") {
+      throw handshare::common::OptionError("option --coupling-passivity: '" + passivity + "' is not on or off");
+    }
+    c.coupling_passivity = passivity == "on";
     c.trace_file = o.GetString("trace");
     const std::string streams = o.GetString("streams");
     if (streams != "paced" && streams != "full") {

@@ -114,6 +114,7 @@ void HapticBridge::AdoptScene(const msg::SceneState& state) {
   }
   const auto t0 = Clock::now();
   auto next = std::make_shared<SceneRenderer>(scene, models_options_, session_clock_);
+  next->SetCouplingPassivity(config_.coupling_passivity);
   const bool same_world = renderer_ && renderer_->scene().name == scene.name;
   if (same_world && have_report_) {
     for (int b = 0; b < report_.num_bodies; ++b) {
@@ -132,6 +133,8 @@ void HapticBridge::AdoptScene(const msg::SceneState& state) {
   peers_.Clear();
   deadband_.Reset();
   contact_pacer_.Reset();
+  coupling_before_ = coupling_stats();
+  coupling_now_ = {};
   renderer_ = next;
   have_report_ = false;
   loop_.SetRenderer(renderer_);
@@ -193,6 +196,21 @@ void HapticBridge::ReceivePeers() {
   RemoteContacts remote = ToRemoteContacts(peers_, renderer_->models(), now);
   remote.newest_stamp_ns = newest_peer_stamp_ns_;
   renderer_->SetRemote(remote);
+  renderer_->TakeCouplingStats(coupling_now_);
+}
+
+contact::CouplingPassivityStats HapticBridge::coupling_stats() const {
+  contact::CouplingPassivityStats s = coupling_before_;
+  const contact::CouplingPassivityStats& n = coupling_now_;
+  s.steps += n.steps;
+  s.held_back += n.held_back;
+  s.energy_sent_J += n.energy_sent_J;
+  s.energy_received_J += n.energy_received_J;
+  s.observer_min_J = std::min(s.observer_min_J, n.observer_min_J);
+  s.drift_max_m = std::max(s.drift_max_m, n.drift_max_m);
+  s.channels_open = n.channels_open;
+  s.channels_total += n.channels_total;
+  return s;
 }
 
 void HapticBridge::RecordPeerLoopAge() {

@@ -65,6 +65,10 @@ class HapticBridge {
   const common::LatencyHistogram& contact_report_age() const { return report_age_; }
   /// What the contact-set deadband let through (offered: sets a peer could read).
   const session::ContactSetDeadband& deadband() const { return deadband_; }
+  /// What the network coupling's passivity observer and controller did, over every renderer
+  /// this bridge has had (contact/coupling_passivity.hpp).
+  contact::CouplingPassivityStats coupling_stats() const;
+  bool coupling_passivity() const { return config_.coupling_passivity; }
   /// Contact sets written, and how many of them at the full rate (a peer shared an object).
   std::uint64_t contact_sets_sent() const { return contact_sets_sent_; }
   std::uint64_t contact_sets_shared() const { return contact_sets_shared_; }
@@ -139,6 +143,8 @@ class HapticBridge {
   msg::LoopStatistics stats_msg_;
   msg::ContactSet contacts_msg_;
   session::ContactSetDeadband deadband_;
+  // The coupling passivity of the renderers before this one (summed), and of this one.
+  contact::CouplingPassivityStats coupling_before_{}, coupling_now_{};
   session::StreamPacer state_pacer_;
   session::StreamPacer contact_pacer_;
   std::uint64_t contact_sets_sent_ = 0;

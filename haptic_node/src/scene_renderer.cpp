@@ -101,14 +101,21 @@ void SceneRenderer::Render(double /*t_s*/, double dt_s, std::uint64_t now_ns, co
     peer_stamp_ns_ = remote_.newest_stamp_ns;
     peer_seen_ns_ = common::SteadyNowNs();
   }
+  // The network coupling's passivity controller holds back what a late displacement would
+  // put into the body beyond what the peer put in at its end (contact/coupling_passivity.hpp).
   int n_remote = 0;
+  passivity_.BeginStep(dt_s);
   for (int i = 0; i < std::min(remote_.count, kMaxRemoteContacts); ++i) {
     const contact::PeerContact& c = remote_.items[i];
     if (remote_.fade.WeightAt(now_ns, c.received_ns) <= 0.0) continue;
-    remote_contacts_[static_cast<std::size_t>(n_remote++)] = contact::ToRemoteContact(c, remote_.fade, now_ns);
+    contact::RemoteContact& r = remote_contacts_[static_cast<std::size_t>(n_remote++)];
+    r = contact::ToRemoteContact(c, remote_.fade, now_ns);
+    passivity_.Admit(c, r, world.is_deformable(c.object));
   }
   // 3. Contacts: rigid, dynamic and deformable objects, all hands on a deformable together.
   world.Step(dt_s, reading.p_WE, {remote_contacts_.data(), static_cast<std::size_t>(n_remote)});
+  passivity_.Observe(world.remote_forces_W());
+  coupling_stats_.Write(passivity_.stats());
   // 4. Controls: where the session left them (a state from the world server waits while this
   // hand is at the control), then their own force profiles and events.
   ControlCommand command;

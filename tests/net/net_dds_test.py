@@ -2,10 +2,11 @@
 """Smoke tests of handshare over a real (impaired) network: the executables in separate network
 namespaces, so Fast DDS talks UDP over veth and a bridge, not shared memory.
 
-usage: net_dds_test.py two_hosts|partitioned_user|tour|unicast_peers|late_joiners_unicast --bin-dir DIR
+usage: net_dds_test.py two_hosts|partitioned_user|tour|unicast_peers|late_joiners_unicast|delayed_tail --bin-dir DIR
                       --nfq-delay PATH --domain D --work DIR
 """
 import json
+import math
 import os
 import re
 import subprocess
@@ -478,7 +479,171 @@ def case_late_joiners_unicast(args):
         print(f"  delayer {ns}: {st and st.get('raw')}")
 
 
+DELAYS_MS = (0, 10, 25, 50, 100)
+# The holds of tests/data/delay_{alice,bob}.hand, in script time [s]: each user's press at 3 mm
+# and 1 mm deeper while the other holds still, and both holding still at the end.
+STIFFNESS_WINDOWS = {"alice": ((5.0, 8.0), (10.5, 13.5)), "bob": ((16.0, 19.0), (21.5, 24.5))}
+STILL_WINDOW = (27.0, 31.0)
+HF_LIMIT_N = 0.02           # force RMS above 5 Hz while both hold still
+STIFFNESS_TOLERANCE = 0.05  # at 25 ms, of the no-delay stiffness
+OBSERVER_BOUND_J = -1e-4    # the coupling observer's lowest value (one step's prediction error)
+
+
+def hf_rms(values, dt_s, cut_Hz=5.0):
+    """RMS [N] of the part of a uniformly sampled series above cut_Hz (a straight line through it
+    taken out first): from its discrete Fourier transform."""
+    n = len(values)
+    t = [i * dt_s for i in range(n)]
+    tm, vm = sum(t) / n, sum(values) / n
+    slope = sum((a - tm) * (b - vm) for a, b in zip(t, values)) / max(sum((a - tm) ** 2 for a in t), 1e-30)
+    r = [b - vm - slope * (a - tm) for a, b in zip(t, values)]
+    power = 0.0
+    for k in range(1, n // 2 + 1):
+        if k / (n * dt_s) <= cut_Hz:
+            continue
+        re_, im_ = 0.0, 0.0
+        for i, x in enumerate(r):
+            a = 2.0 * math.pi * k * i / n
+            re_ += x * math.cos(a)
+            im_ -= x * math.sin(a)
+        w = 1.0 if 2 * k == n else 2.0  # the other half of the spectrum
+        power += w * (re_ * re_ + im_ * im_) / (n * n)
+    return math.sqrt(power)
+
+
+def coupling_summary(log, user):
+    """The figures of a haptic node's coupling-passivity exit line (None if it had no coupling)."""
+    m = re.search(rf"\[haptic_node {user}\] coupling passivity: (on|off), channels (\d+), steps (\d+), held back (\d+), "
+                  r"energy sent ([-\d.e+]+) J, received ([-\d.e+]+) J, observer min ([-\d.e+]+) J, "
+                  r"drift max ([-\d.e+]+) mm", log)
+    if m is None:
+        return None
+    keys = ("channels", "steps", "held_back", "sent_J", "received_J", "observer_min_J", "drift_max_mm")
+    out = {k: float(v) for k, v in zip(keys, m.groups()[1:])}
+    out["on"] = m.group(1) == "on"
+    return out
+
+
+def case_delayed_tail(args):
+    """Two users at HIRO II devices (the simulated plant: each user's fingertip a mass held at the
+    scripted hand by a spring-damper, so the force each feels moves their fingertip) press the
+    triceratops tail together, on three hosts with 0, 10, 25, 50 and 100 ms one-way delay on what
+    arrives at each. Each presses 1 mm deeper in turn while the other holds still, then both hold.
+    Asserted at every delay: each haptic loop stays stable (force RMS above 5 Hz under HF_LIMIT_N
+    while both hold, no safety faults) and the coupling's passivity observer never falls below
+    its bound; at 25 ms the stiffness each user feels (force change over fingertip depth change)
+    is within STIFFNESS_TOLERANCE of the no-delay value. Writes delayed_tail.csv (the figures)
+    and delayed_tail_forces.csv (each user's force through the run) to --work."""
+    os.makedirs(args.work, exist_ok=True)
+    server_exe, node_exe = exe(args.bin_dir, "world_server"), exe(args.bin_dir, "haptic_node")
+    cache = session_test.fem_cache(args.work)
+    os.environ["HANDSHARE_CACHE"] = cache
+    prep = subprocess.run([os.path.join(args.bin_dir, "core", "world", "world_prepare"), "--cache", cache,
+                           "--scenes", "dinosaur"], capture_output=True, text=True, timeout=600)
+    check(prep.returncode == 0, f"world_prepare failed: {prep.stdout}{prep.stderr}")
+    results, forces = [], []
+    with Network(3, nfq_delay=args.nfq_delay) as net:
+        a, b, c = net.hosts
+        # HANDSHARE_DELAYS_MS=10,25 (by hand): only these delays, no checks that need the others.
+        delays = [int(d) for d in os.environ.get("HANDSHARE_DELAYS_MS", "").split(",") if d] or DELAYS_MS
+        for delay_ms in delays:
+            for seed, h in enumerate((a, b, c), start=1):
+                h.clear_delay()
+                if delay_ms > 0:
+                    h.delay(delay_ms, jitter_ms=0, seed=seed)
+            session = f"net-delay-{delay_ms}-{os.getpid()}"
+            common = ["--domain", args.domain, "--session", session]
+            traces = {u: os.path.join(args.work, f"{u}_{delay_ms}ms.csv") for u in ("alice", "bob")}
+            for f in traces.values():
+                if os.path.exists(f):
+                    os.remove(f)
+            server = a.start(f"world_server_{delay_ms}ms", [server_exe, *common, "--scene", "dinosaur",
+                                                           "--duration", 120], args.work)
+            nodes = {}
+            try:
+                server.wait_for("models of 'dinosaur' ready", 60)
+                for host, user in ((b, "alice"), (c, "bob")):
+                    nodes[user] = host.start(f"{user}_{delay_ms}ms",
+                                             [node_exe, *common, "--user", user, "--device", "hiro", "--script",
+                                              os.path.join(DATA, f"delay_{user}.hand"), "--trace", traces[user],
+                                              "--duration", 90], args.work)
+                starts = {}
+                for user, p in nodes.items():
+                    p.wait_for("hand script starts at loop time", 60)
+                    starts[user] = float(re.search(r"hand script starts at loop time ([\d.]+) s", p.log()).group(1))
+                for user in nodes:
+                    session_test.wait_until(f"{user}'s trace past the still window ({delay_ms} ms)", 90,
+                                            lambda u=user: (rows := session_test.read_trace(traces[u]))
+                                            and rows[-1]["t_s"] - starts[u] >= STILL_WINDOW[1] + 0.2)
+                for user, p in nodes.items():
+                    check(p.stop(timeout=30) == 0, f"{user}'s haptic node failed at {delay_ms} ms:\n{p.log()[-3000:]}")
+                server.stop()
+            except Failure:
+                for p in (server, *nodes.values()):
+                    sys.stderr.write(f"----- {p.label} -----\n{p.log()[-6000:]}\n")
+                raise
+            for user in ("alice", "bob"):
+                rows = session_test.read_trace(traces[user])
+                t0 = starts[user]
+
+                def window(w, rows=rows, t0=t0):
+                    sel = [r for r in rows if w[0] <= r["t_s"] - t0 < w[1]]
+                    check(len(sel) > 50, f"{user}'s trace has {len(sel)} rows in script time {w} at {delay_ms} ms")
+                    return sel
+
+                def mean(sel, f):
+                    return sum(f(r) for r in sel) / len(sel)
+                w3, w4 = (window(w) for w in STIFFNESS_WINDOWS[user])
+                f3, f4 = mean(w3, session_test.net_fz), mean(w4, session_test.net_fz)
+                z3, z4 = mean(w3, lambda r: r["z1"]), mean(w4, lambda r: r["z1"])
+                check(z3 - z4 > 2e-4, f"{user}'s fingertip went {1e3 * (z3 - z4):.3f} mm deeper at {delay_ms} ms")
+                still = window(STILL_WINDOW)
+                dt = (still[-1]["t_s"] - still[0]["t_s"]) / (len(still) - 1)
+                fz = [session_test.net_fz(r) for r in still]
+                summary = loop_summary(nodes[user].log(), user)
+                coupling = coupling_summary(nodes[user].log(), user)
+                check(coupling is not None, f"{user}'s node printed no coupling-passivity line at {delay_ms} ms")
+                results.append({"delay_ms": delay_ms, "user": user, "k_N_per_m": (f4 - f3) / (z3 - z4),
+                                "force_N": mean(still, session_test.net_fz), "hf_rms_N": hf_rms(fz, dt),
+                                "swing_N": max(fz) - min(fz), "observer_min_J": coupling["observer_min_J"],
+                                "held_back": int(coupling["held_back"]), "drift_max_mm": coupling["drift_max_mm"],
+                                "energy_sent_J": coupling["sent_J"], "energy_received_J": coupling["received_J"],
+                                "faults": int(summary["faults"]), "rate_limited": int(summary["rate_limited"]),
+                                "loop_Hz": summary["rate_Hz"]})
+                forces += [(delay_ms, user, r["t_s"] - t0, session_test.net_fz(r)) for r in rows
+                           if 0.0 <= r["t_s"] - t0 <= STILL_WINDOW[1]]
+    columns = list(results[0].keys())
+    with open(os.path.join(args.work, "delayed_tail.csv"), "w") as f:
+        f.write(",".join(columns) + "\n")
+        for r in results:
+            f.write(",".join(f"{r[c]:.6g}" if isinstance(r[c], float) else str(r[c]) for c in columns) + "\n")
+    with open(os.path.join(args.work, "delayed_tail_forces.csv"), "w") as f:
+        f.write("delay_ms,user,t_s,fz_N\n")
+        for d, u, t, v in forces:
+            f.write(f"{d},{u},{t:.4f},{v:.6f}\n")
+    k0 = {r["user"]: r["k_N_per_m"] for r in results if r["delay_ms"] == results[0]["delay_ms"]}
+    print("delayed tail: alice and bob at simulated HIRO IIs press the tail on three hosts; one-way delay on arrival at each")
+    print("  delay user   stiffness [N/m] (vs 0 ms)  force [N]  RMS > 5 Hz [N]  observer min [J]  held back  drift [mm]  faults")
+    for r in results:
+        print(f"  {r['delay_ms']:4d}  {r['user']:6s} {r['k_N_per_m']:9.1f} ({100 * (r['k_N_per_m'] / k0[r['user']] - 1):+5.1f} %)"
+              f"      {r['force_N']:7.3f}   {r['hf_rms_N']:.5f}         {r['observer_min_J']:+.2e}        "
+              f"{r['held_back']:6d}   {r['drift_max_mm']:.3f}       {r['faults']}")
+    for r in results:
+        what = f"{r['user']} at {r['delay_ms']} ms"
+        check(r["hf_rms_N"] < HF_LIMIT_N, f"{what}: force RMS above 5 Hz {r['hf_rms_N']:.4f} N (>= {HF_LIMIT_N} N)")
+        check(r["faults"] == 0, f"{what}: {r['faults']} safety faults")
+        check(r["observer_min_J"] >= OBSERVER_BOUND_J,
+              f"{what}: the coupling observer fell to {r['observer_min_J']:.3e} J (< {OBSERVER_BOUND_J} J)")
+        check(r["k_N_per_m"] > 0.0, f"{what}: stiffness {r['k_N_per_m']:.1f} N/m")
+        if r["delay_ms"] == 25:
+            change = r["k_N_per_m"] / k0[r["user"]] - 1.0
+            check(abs(change) <= STIFFNESS_TOLERANCE,
+                  f"{what}: stiffness {r['k_N_per_m']:.1f} N/m is {100 * change:+.1f} % of the no-delay "
+                  f"{k0[r['user']]:.1f} N/m (> {100 * STIFFNESS_TOLERANCE:.0f} %)")
+
+
 if __name__ == "__main__":
     main({"two_hosts": case_two_hosts, "partitioned_user": case_partitioned_user, "tour": case_tour,
-          "unicast_peers": case_unicast_peers, "late_joiners_unicast": case_late_joiners_unicast},
+          "unicast_peers": case_unicast_peers, "late_joiners_unicast": case_late_joiners_unicast,
+          "delayed_tail": case_delayed_tail},
          failures=(session_test.Failure,))

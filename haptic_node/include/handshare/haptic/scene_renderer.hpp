@@ -16,6 +16,7 @@
 #include "handshare/common/triple_buffer.hpp"
 #include "handshare/controls/controls.hpp"
 #include "handshare/haptic/force_renderer.hpp"
+#include "handshare/contact/coupling_passivity.hpp"
 #include "handshare/contact/peer_contact.hpp"
 #include "handshare/world/scene_models.hpp"
 
@@ -109,6 +110,12 @@ class SceneRenderer final : public ForceRenderer {
   /// fingertip of this hand is at the control, once it has left. False if the queue is full.
   bool SetControlState(const std::string& id, std::int32_t index, bool engaged) noexcept;
   std::uint64_t dropped_events() const noexcept { return dropped_events_.load(std::memory_order_relaxed); }
+  /// The passivity controller on the peers' contacts (on by default; off: observed only).
+  /// Not thread-safe: call before SetRenderer.
+  void SetCouplingPassivity(bool on) noexcept { passivity_.set_enabled(on); }
+  /// What the coupling's passivity observer and controller have seen and done (the haptic
+  /// thread publishes it every step). False before the first step.
+  bool TakeCouplingStats(contact::CouplingPassivityStats& out) noexcept { return coupling_stats_.Read(out); }
 
  private:
   scene::Scene scene_;
@@ -124,10 +131,12 @@ class SceneRenderer final : public ForceRenderer {
   RemoteContacts remote_;
   FollowedBodies followed_;
   std::array<contact::RemoteContact, kMaxRemoteContacts> remote_contacts_{};
+  contact::CouplingPassivity passivity_;
   // Channels.
   common::TripleBuffer<RemoteContacts> remote_in_;
   common::TripleBuffer<FollowedBodies> followed_in_;
   common::TripleBuffer<ContactReport> reports_;
+  common::TripleBuffer<contact::CouplingPassivityStats> coupling_stats_;
   common::SpscQueue<controls::ControlEvent, 256> events_;
   struct ControlCommand {
     std::array<char, 32> id{};  ///< NUL-terminated

@@ -206,11 +206,20 @@ class HapticWorld {
   /// Deformable: the held nodes' loads of the last solve (forces on the object, frame O), for
   /// the deformation the world server publishes. Empty for other objects.
   std::span<const fem::NodeLoad> held_loads(ObjectId id) const noexcept;
+  /// The last step's force of each remote contact's patch on its deformable [N], in W, by the
+  /// contact's index in Step's `remote` span (zero: not a deformable's, rejected, or beyond
+  /// kMaxRemoteForces): what the coupling's passivity observer reads (coupling_passivity.hpp).
+  std::span<const Eigen::Vector3d> remote_forces_W() const noexcept {
+    return {remote_force_W_.data(), num_remote_forces_};
+  }
+  static constexpr std::size_t kMaxRemoteForces = 64;
   /// Deformable: its solver (last solve's per-input forces and states), or nullptr.
   const fem::ContactSolver* contact_solver(ObjectId id) const noexcept;
   /// Pose of an object (dynamic bodies: current).
   Eigen::Isometry3d pose(ObjectId id) const noexcept;
   Eigen::Vector3d body_velocity_W(ObjectId id) const noexcept;
+  /// Whether object `id` is a deformable (false for a bad index).
+  bool is_deformable(ObjectId id) const noexcept;
   /// Moves an object (static: teleport; dynamic: also zeroes its velocity). Its proxies move
   /// with it. Real-time safe.
   void SetPose(ObjectId id, const Eigen::Isometry3d& X_WO) noexcept;
@@ -279,6 +288,8 @@ class HapticWorld {
   std::vector<FingerObject> fo_;  // [finger * num_objects + object]
   std::array<FingerResult, kFingers> results_{};
   std::vector<std::int32_t> mode_candidates_;  // ModeShift's ball query
+  std::array<Eigen::Vector3d, kMaxRemoteForces> remote_force_W_{};
+  std::size_t num_remote_forces_ = 0;
   std::array<double, kFingers> scale_{};
 };
 

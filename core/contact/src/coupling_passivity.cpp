@@ -1,0 +1,156 @@
+#include "handshare/contact/coupling_passivity.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+namespace handshare::contact {
+
+namespace {
+
+// Below this change of the imposed displacement a step says nothing about the stiffness.
+constexpr double kStiffnessProbe_m = 5e-6;
+// The largest stiffness believed (a fingertip patch on the stiffest scene body is ~1e3 N/m).
+constexpr double kMaxStiffness_N_per_m = 1e5;
+// Energy below this is rounding (a fingertip's work over one step is ~1e-6 J and up).
+constexpr double kRounding_J = 1e-12;
+
+Eigen::Vector3d Vec(const double (&a)[3]) noexcept { return {a[0], a[1], a[2]}; }
+
+}  // namespace
+
+CouplingPassivity::Channel* CouplingPassivity::Find(std::int32_t hand, std::int32_t finger,
+                                                    std::int32_t object) noexcept {
+  for (Channel& c : channels_) {
+    if (c.open && c.hand == hand && c.finger == finger && c.object == object) return &c;
+  }
+  return nullptr;
+}
+
+double CouplingPassivity::observer_J(std::int32_t hand, std::int32_t finger, std::int32_t object) const noexcept {
+  for (const Channel& c : channels_) {
+    if (c.open && c.hand == hand && c.finger == finger && c.object == object) return c.e_tx - c.e_rx;
+  }
+  return 0.0;
+}
+
+void CouplingPassivity::BeginStep(double dt_s) noexcept {
+  max_step_m_ = std::isfinite(dt_s) && dt_s > 0.0 ? kMaxSpeed_m_per_s * dt_s : 0.0;
+  num_admitted_ = 0;
+  for (Channel& c : channels_) c.seen = false;
+}
+
+void CouplingPassivity::Admit(const PeerContact& sent, RemoteContact& input, bool deformable) noexcept {
+  if (num_admitted_ >= kMaxChannels) return;  // more than the renderer hands in: passed, unobserved
+  std::int16_t& slot = admitted_[static_cast<std::size_t>(num_admitted_++)];
+  slot = -1;
+  if (!deformable || !input.u_W_m.allFinite()) return;
+  Channel* ch = Find(sent.hand, sent.finger, sent.object);
+  if (ch == nullptr) {
+    for (Channel& c : channels_) {
+      if (!c.open) {
+        c = Channel{};
+        c.open = true;
+        c.hand = sent.hand;
+        c.finger = sent.finger;
+        c.object = sent.object;
+        ch = &c;
+        ++stats_.channels_total;
+        break;
+      }
+    }
+    if (ch == nullptr) return;
+  }
+  if (ch->seen) return;  // the same contact twice in one set: the first one is the channel's
+  ch->seen = true;
+  slot = static_cast<std::int16_t>(ch - channels_.data());
+
+  // The peer's end: the work its sample path did on its body (the body got minus the force on
+  // the fingertip), once per sample.
+  if (sent.received_ns != ch->sample_ns) {
+    const Eigen::Vector3d u = Vec(sent.u_W_m), f = Vec(sent.f_E_W_N);
+    if (u.allFinite() && f.allFinite()) {
+      ch->e_tx += std::max(0.0, -0.5 * (f + ch->f_sent).dot(u - ch->u_sent));
+      ch->u_sent = u;
+      ch->f_sent = f;
+    }
+    ch->sample_ns = sent.received_ns;
+  }
+
+  // This end: the displacement the solve will impose, within what the channel has brought.
+  const Eigen::Vector3d target = input.u_W_m;
+  Eigen::Vector3d u = target;
+  if (enabled_) {
+    // A sample's jump is taken at no more than a fingertip's speed: the step's energy is then
+    // predicted to within (1/2) k (v dt)^2 even before the contact's stiffness is known.
+    Eigen::Vector3d to = target - ch->u_imposed;
+    if (const double d = to.norm(); d > max_step_m_) u = ch->u_imposed + (max_step_m_ / d) * to;
+    const Eigen::Vector3d& F = ch->force;
+    auto predicted = [&](const Eigen::Vector3d& d) { return F.dot(d) + 0.5 * ch->k * d.squaredNorm(); };
+    const double budget = ch->e_tx - ch->e_rx;
+    const Eigen::Vector3d du = u - ch->u_imposed;
+    const double want = predicted(du);
+    // (Rounding: on a linear body without delay the prediction equals the budget's increment.)
+    if (want > budget + kRounding_J + 1e-9 * std::abs(want)) {
+      // Scale the change: k a^2 |du|^2 / 2 + (F . du) a = budget, the root in [0, 1]. With no
+      // budget left (a prediction fell short by a step's error), nothing that puts energy in
+      // passes until the peer's samples bring more; a release always passes.
+      const double room = std::max(budget, 0.0);
+      const double a = 0.5 * ch->k * du.squaredNorm(), b = F.dot(du);
+      double alpha = 0.0;
+      if (a > 0.0) {
+        alpha = (-b + std::sqrt(std::max(0.0, b * b + 4.0 * a * room))) / (2.0 * a);
+      } else if (b > 0.0) {
+        alpha = room / b;
+      }
+      alpha = std::clamp(alpha, 0.0, 1.0);
+      u = ch->u_imposed + alpha * du;
+      ++stats_.held_back;
+      stats_.drift_max_m = std::max(stats_.drift_max_m, (target - u).norm());
+    }
+  }
+  input.u_W_m = u;
+  ch->u_before = ch->u_imposed;
+  ch->u_imposed = u;
+}
+
+void CouplingPassivity::Observe(std::span<const Eigen::Vector3d> force_on_body_W) noexcept {
+  if (num_admitted_ > 0) ++stats_.steps;
+  for (std::int32_t i = 0; i < num_admitted_; ++i) {
+    const std::int16_t slot = admitted_[static_cast<std::size_t>(i)];
+    if (slot < 0) continue;
+    Channel& ch = channels_[static_cast<std::size_t>(slot)];
+    Eigen::Vector3d F = static_cast<std::size_t>(i) < force_on_body_W.size() ? force_on_body_W[static_cast<std::size_t>(i)]
+                                                                             : Eigen::Vector3d::Zero();
+    if (!F.allFinite()) F.setZero();
+    const Eigen::Vector3d du = ch.u_imposed - ch.u_before;
+    ch.e_rx += std::max(0.0, 0.5 * (ch.force + F).dot(du));
+    const double dd = du.squaredNorm();
+    if (dd > kStiffnessProbe_m * kStiffnessProbe_m) {
+      const double k = (F - ch.force).dot(du) / dd;
+      ch.k = std::clamp(std::max(ch.k, k), 0.0, kMaxStiffness_N_per_m);
+    }
+    ch.force = F;
+    stats_.observer_min_J = std::min(stats_.observer_min_J, ch.e_tx - ch.e_rx);
+  }
+  double tx = closed_tx_, rx = closed_rx_;
+  std::int32_t open = 0;
+  for (Channel& c : channels_) {
+    if (!c.open) continue;
+    if (!c.seen) {  // the contact left the solve (lifted, faded out): its channel ends
+      closed_tx_ += c.e_tx;
+      closed_rx_ += c.e_rx;
+      tx += c.e_tx;
+      rx += c.e_rx;
+      c.open = false;
+      continue;
+    }
+    tx += c.e_tx;
+    rx += c.e_rx;
+    ++open;
+  }
+  stats_.energy_sent_J = tx;
+  stats_.energy_received_J = rx;
+  stats_.channels_open = open;
+}
+
+}  // namespace handshare::contact

@@ -1,0 +1,160 @@
+// The network coupling's passivity observer and controller (coupling_passivity.hpp): the
+// observer against hand-computed energies, the controller on a body that has stiffened since the
+// peer's sample, the world's per-contact forces it reads, and no heap in the step. Two delayed
+// hands coupled through one body: haptic_node/test/coupling_stability_test.cpp.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+
+#include "handshare/contact/coupling_passivity.hpp"
+#include "handshare/contact/haptic_world.hpp"
+#include "handshare/fem/mesh.hpp"
+#include "handshare/testing/allocation_counter.hpp"
+
+namespace handshare::contact {
+namespace {
+
+// A press along -z (the body's outward normal +z) of depth x: the imposed displacement, and the
+// force F on the body (along -z) as a fingertip feels it (+z).
+PeerContact Sample(double x_m, double F_N, std::uint64_t received_ns) {
+  PeerContact c;
+  c.hand = 1;
+  c.finger = 0;
+  c.object = 0;
+  c.p_WC_m[2] = 0.0;
+  c.u_W_m[2] = -x_m;
+  c.n_W[2] = 1.0;
+  c.f_E_W_N[2] = F_N;
+  c.received_ns = received_ns;
+  return c;
+}
+
+Eigen::Vector3d OnBody(double F_N) { return {0.0, 0.0, -F_N}; }
+
+TEST(CouplingPassivity, ObserverIsExactOnALinearSpringWithoutDelay) {
+  // The peer presses a 400 N/m spring 0 -> 3 mm in 30 samples; the local body is the same spring,
+  // so what the channel hands over is what the peer put in: (1/2) k x^2 at both ends, the
+  // observer stays at 0 and the controller never acts.
+  const double k = 400.0;
+  CouplingPassivity pc;
+  double x_prev = 0.0;
+  for (int s = 1; s <= 30; ++s) {
+    const double x = 1e-4 * s;
+    const PeerContact sent = Sample(x, k * x, static_cast<std::uint64_t>(s));
+    for (int step = 0; step < 10; ++step) {  // ten haptic steps per sample (zero-order hold)
+      pc.BeginStep(1e-3);
+      RemoteContact in = ToRemoteContact(sent, PeerFade{}, sent.received_ns);
+      pc.Admit(sent, in, true);
+      EXPECT_DOUBLE_EQ(in.u_W_m.z(), -x);  // passed as sent
+      const double imposed = -in.u_W_m.z();
+      const std::array<Eigen::Vector3d, 1> F = {OnBody(k * imposed)};
+      pc.Observe(F);
+    }
+    x_prev = x;
+  }
+  const double e = 0.5 * k * x_prev * x_prev;
+  EXPECT_NEAR(pc.stats().energy_sent_J, e, 1e-15);
+  EXPECT_NEAR(pc.stats().energy_received_J, e, 1e-15);
+  EXPECT_NEAR(pc.observer_J(1, 0, 0), 0.0, 1e-15);
+  EXPECT_EQ(pc.stats().held_back, 0u);
+  EXPECT_EQ(pc.stats().steps, 300u);
+}
+
+// The peer pressed a 400 N/m body; by the time its samples arrive the local body is twice as
+// stiff there (the local hand pressed nearby meanwhile). Returns the controller's stats and the
+// last imposed depth.
+struct StiffenedRun {
+  CouplingPassivityStats stats;
+  double imposed_m = 0.0;
+  double observer_J = 0.0;
+};
+StiffenedRun PressAStiffenedBody(bool passivity) {
+  const double k_peer = 400.0, k_here = 800.0;
+  CouplingPassivity pc(passivity);
+  StiffenedRun run;
+  for (int s = 1; s <= 30; ++s) {
+    const double x = 1e-4 * s;
+    const PeerContact sent = Sample(x, k_peer * x, static_cast<std::uint64_t>(s));
+    for (int step = 0; step < 10; ++step) {
+      pc.BeginStep(1e-3);
+      RemoteContact in = ToRemoteContact(sent, PeerFade{}, sent.received_ns);
+      pc.Admit(sent, in, true);
+      run.imposed_m = -in.u_W_m.z();
+      const std::array<Eigen::Vector3d, 1> F = {OnBody(k_here * run.imposed_m)};
+      pc.Observe(F);
+    }
+  }
+  run.stats = pc.stats();
+  run.observer_J = pc.observer_J(1, 0, 0);
+  return run;
+}
+
+TEST(CouplingPassivity, HoldsBackWhatAStiffenedBodyWouldTakeFromALateDisplacement) {
+  // Sent: (1/2) 400 (3 mm)^2 = 1.8 mJ. Passed as sent, the local body would get
+  // (1/2) 800 (3 mm)^2 = 3.6 mJ: the channel made 1.8 mJ.
+  const StiffenedRun off = PressAStiffenedBody(false);
+  EXPECT_NEAR(off.stats.energy_sent_J, 1.8e-3, 1e-12);
+  EXPECT_NEAR(off.stats.energy_received_J, 3.6e-3, 1e-12);
+  EXPECT_NEAR(off.observer_J, -1.8e-3, 1e-12);
+  EXPECT_NEAR(off.imposed_m, 3e-3, 1e-15);
+  // With the controller the local body gets no more than was sent (to the first step's
+  // prediction error: the stiffness is learnt from the first change), and the depth it holds is
+  // the one that stores that energy: sqrt(2 E / k_here) = 2.12 mm.
+  const StiffenedRun on = PressAStiffenedBody(true);
+  EXPECT_NEAR(on.stats.energy_sent_J, 1.8e-3, 1e-12);
+  EXPECT_LE(on.stats.energy_received_J, on.stats.energy_sent_J + 2e-6);
+  EXPECT_GE(on.stats.observer_min_J, -2e-6 - 1e-12);  // the first sample: (1/2)(800 - 400)(0.1 mm)^2
+  EXPECT_GT(on.stats.held_back, 0u);
+  EXPECT_NEAR(on.imposed_m, std::sqrt(2.0 * 1.8e-3 / 800.0), 2e-5);
+  EXPECT_NEAR(on.stats.drift_max_m, 3e-3 - on.imposed_m, 1e-5);
+}
+
+TEST(CouplingPassivity, TheWorldReportsEachRemoteContactsForceOnTheBody) {
+  // One remote fingertip alone on a block: its patch force is everything the solve holds.
+  HapticWorld w;
+  auto mesh = std::make_shared<fem::TetMesh>(fem::MakeBoxMesh({0.04, 0.04, 0.02}, {8, 8, 4}));
+  auto C = std::make_shared<const fem::Compliance>(
+      fem::Compliance::Precompute(*mesh, fem::Material{2e4, 0.3}, fem::NodesOnPlane(*mesh, 2, 0.0)));
+  DeformableDesc d;
+  d.mesh = mesh;
+  d.compliance = C;
+  d.X_WO = Eigen::Translation3d(0.6, 0, 0) * Eigen::AngleAxisd(0.3, Eigen::Vector3d::UnitZ());
+  const ObjectId block = w.AddDeformable(d);
+  w.Init();
+  std::array<RemoteContact, 2> remote = {
+      RemoteContact{1, 0, block, d.X_WO * Eigen::Vector3d(0.02, 0.02, 0.02), Eigen::Vector3d(0, 0, -0.001),
+                    Eigen::Vector3d(0, 0, 0.1), Eigen::Vector3d(0, 0, 1)},
+      RemoteContact{1, 1, block, Eigen::Vector3d::Constant(NAN), Eigen::Vector3d(0, 0, -0.001)}};
+  std::array<Eigen::Vector3d, kFingers> far;
+  far.fill(Eigen::Vector3d(0, 0, 1));
+  w.Step(1e-3, far, remote);
+  ASSERT_EQ(w.remote_forces_W().size(), 2u);
+  Eigen::Vector3d held = Eigen::Vector3d::Zero();
+  for (const auto& l : w.held_loads(block)) held += l.f_N;
+  held = d.X_WO.linear() * held;
+  EXPECT_GT(held.norm(), 0.01);
+  EXPECT_LT((w.remote_forces_W()[0] - held).norm(), 1e-12 * held.norm());
+  EXPECT_LT(w.remote_forces_W()[0].z(), 0.0);  // pushed in
+  EXPECT_EQ(w.remote_forces_W()[1], Eigen::Vector3d::Zero());  // rejected: not in the solve
+}
+
+TEST(CouplingPassivity, AdmitAndObserveDoNotAllocate) {
+  CouplingPassivity pc;
+  const std::array<Eigen::Vector3d, 2> F = {OnBody(0.5), OnBody(0.2)};
+  const long before = testing::AllocationCount();
+  for (int s = 0; s < 100; ++s) {
+    pc.BeginStep(1e-3);
+    for (int f = 0; f < 2; ++f) {
+      PeerContact sent = Sample(1e-4 * (s % 7), 0.1 * (s % 5), static_cast<std::uint64_t>(s / 3));
+      sent.finger = f;
+      RemoteContact in = ToRemoteContact(sent, PeerFade{}, sent.received_ns);
+      pc.Admit(sent, in, true);
+    }
+    pc.Observe(F);
+  }
+  EXPECT_EQ(testing::AllocationCount() - before, 0);
+}
+
+}  // namespace
+}  // namespace handshare::contact
