@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <numbers>
 #include <stdexcept>
 #include <string>
 
@@ -36,9 +37,13 @@ ForceSafety::ForceSafety(const ForceSafetyConfig& config) : config_(config) {
           "max_damping_N_s_per_m", "must be >= 0");
   Require(std::isfinite(config.min_speed_m_per_s) && config.min_speed_m_per_s > 0.0,
           "min_speed_m_per_s", "must be > 0");
+  Require(std::isfinite(config.min_moving_speed_m_per_s) && config.min_moving_speed_m_per_s >= 0.0,
+          "min_moving_speed_m_per_s", "must be >= 0");
+  Require(std::isfinite(config.moving_cutoff_Hz) && config.moving_cutoff_Hz > 0.0, "moving_cutoff_Hz", "must be > 0");
   Require(config.max_position_m > 0.0, "max_position_m", "must be > 0");
   Require(config.max_speed_m_per_s > 0.0, "max_speed_m_per_s", "must be > 0");
   dt_s_ = period_s;
+  moving_gain_ = 1.0 - std::exp(-2.0 * std::numbers::pi * config.moving_cutoff_Hz * period_s);
   max_step_N_ = config.max_force_rate_N_per_s * period_s;
   // The ramp reaches zero on its ramp_steps_-th faulted step: (ramp_steps_ - 1) periods after
   // the fault is seen, ramp_steps_ periods after the last healthy command. Both <= the ramp
@@ -95,6 +100,7 @@ void ForceSafety::StepFinger(const FingerSafetyInput& in, bool device_fault, Fin
     } else {
       s.energy_J -= s.f_prev.dot(dp);
       v = dp / dt_s_;
+      s.v_moving += moving_gain_ * (v - s.v_moving);
     }
   }
   s.have_p_prev = p_in_range;
@@ -147,7 +153,9 @@ void ForceSafety::StepFinger(const FingerSafetyInput& in, bool device_fault, Fin
     // is paid on the following steps.
     if (config_.passivity) {
       const double speed2 = v.squaredNorm();
-      if (speed2 > config_.min_speed_m_per_s * config_.min_speed_m_per_s) {
+      const double moving = config_.min_moving_speed_m_per_s;
+      if (speed2 > config_.min_speed_m_per_s * config_.min_speed_m_per_s &&
+          s.v_moving.squaredNorm() >= moving * moving) {
         const double w_pred = s.energy_J - f.dot(v) * dt_s_;
         if (w_pred < 0.0) {
           const double alpha = std::min(-w_pred / (dt_s_ * speed2), config_.max_damping_N_s_per_m);

@@ -286,6 +286,46 @@ TEST(ForceSafety, PassivityControllerKeepsASampledStiffWallPassive) {
   EXPECT_LE(on.energy_out_J, 1e-6);  // at the end: debt paid
 }
 
+// A fingertip held still on a HIRO II jitters by about a micron a step in no kept direction. An
+// observer debt (here: the environment pushed the fingertip out 2 mm with 1 N, as a peer's press
+// on a shared body does) must not make the damper turn that jitter into force noise; it waits
+// for real motion. With the gate off (min_moving_speed 0, as before) the held 1 N press buzzed.
+double JitterNoiseWithADebt(double min_moving_speed_m_per_s) {
+  ForceSafetyConfig c;
+  c.min_moving_speed_m_per_s = min_moving_speed_m_per_s;
+  ForceSafety safety(c);
+  ForceSafetyOutput out;
+  const Eigen::Vector3d f(0, 0, 1.0);
+  for (int n = 0; n <= 200; ++n) {  // pushed out along +z at 10 mm/s, force along the motion
+    ForceSafetyInput in;
+    in.finger[0].f_desired_E_W = f;
+    in.finger[0].p_WE = Eigen::Vector3d(0, 0, 1e-5 * n);
+    safety.Step(in, out);
+  }
+  EXPECT_LT(out.finger[0].observed_energy_J, -1e-3);  // the debt the capped damper left
+  double worst = 0.0;
+  std::uint32_t x = 12345;  // a small LCG: +-1.3 um per axis per step
+  auto jitter = [&] {
+    x = x * 1664525u + 1013904223u;
+    return 1.3e-6 * (static_cast<double>(x >> 8) / static_cast<double>(1u << 24) * 2.0 - 1.0);
+  };
+  for (int n = 0; n < 2000; ++n) {
+    ForceSafetyInput in;
+    in.finger[0].f_desired_E_W = f;
+    in.finger[0].p_WE = Eigen::Vector3d(jitter(), jitter(), 2e-3 + jitter());
+    safety.Step(in, out);
+    if (n > 100) worst = std::max(worst, (out.f_E_W[0] - f).norm());
+  }
+  return worst;
+}
+
+TEST(ForceSafety, AStillJitteringFingertipWithADebtGetsNoForceNoise) {
+  const double gated = JitterNoiseWithADebt(ForceSafetyConfig{}.min_moving_speed_m_per_s);
+  const double ungated = JitterNoiseWithADebt(0.0);
+  EXPECT_LT(gated, 1e-9);
+  EXPECT_GT(ungated, 0.05) << "the damper on raw jitter: the guarded case is not exercised";
+}
+
 TEST(ForceSafety, StepDoesNotAllocate) {
   ForceSafety safety(ForceSafetyConfig{});
   ForceSafetyOutput out;

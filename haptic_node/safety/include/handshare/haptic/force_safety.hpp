@@ -36,6 +36,14 @@ struct ForceSafetyConfig {
   double max_damping_N_s_per_m = 40.0;
   /// Below this fingertip speed the damper cannot act (alpha = -W / (T |v|^2) blows up).
   double min_speed_m_per_s = 1e-4;
+  /// The damper acts only while the fingertip moves at least this fast on average (its speed
+  /// low-passed at moving_cutoff_Hz). A device held still jitters (the HIRO II model on its
+  /// plant ~1.3 um a step, no direction kept: a raw speed of 1-5 mm/s): with a debt in W -- a
+  /// peer's press that pushed this fingertip out is energy from outside this port -- the damper
+  /// turned that jitter into force noise, 0.1 N RMS on a 0.2 N press, for as long as the debt
+  /// lasted (net.delayed_tail). The debt waits for real motion instead.
+  double min_moving_speed_m_per_s = 0.002;
+  double moving_cutoff_Hz = 20.0;
   /// A fingertip farther than this from the world origin is out-of-range data [m].
   double max_position_m = 3.0;
   /// A fingertip moving faster than this between two steps is a data glitch [m/s].
@@ -112,6 +120,7 @@ class ForceSafety {
     Eigen::Vector3d p_prev = Eigen::Vector3d::Zero();
     bool have_p_prev = false;
     double energy_J = 0.0;  // observer W(n)
+    Eigen::Vector3d v_moving = Eigen::Vector3d::Zero();  // speed low-passed (min_moving_speed)
     SafetyState state = SafetyState::kOk;
     Eigen::Vector3d f_ramp_start = Eigen::Vector3d::Zero();
     int ramp_step = 0;
@@ -123,6 +132,7 @@ class ForceSafety {
   double dt_s_;
   double max_step_N_;  // max_force_rate * period
   int ramp_steps_;     // ceil(fault_ramp_time / period)
+  double moving_gain_; // the low-pass's 1 - exp(-2 pi f_c T)
   std::array<Finger, kFingers> fingers_{};
   std::uint64_t fault_onsets_ = 0;
   std::uint64_t rate_limited_steps_ = 0;
