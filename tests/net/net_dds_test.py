@@ -482,8 +482,10 @@ def case_late_joiners_unicast(args):
 DELAYS_MS = (0, 10, 25, 50, 100)
 # The holds of tests/data/delay_{alice,bob}.hand, in script time [s]: each user's press at 3 mm
 # and 1 mm deeper while the other holds still, and both holding still at the end.
-STIFFNESS_WINDOWS = {"alice": ((5.0, 8.0), (10.5, 13.5)), "bob": ((16.0, 19.0), (21.5, 24.5))}
-STILL_WINDOW = (27.0, 31.0)
+# (alice: 3 mm from 3 s, 4 mm 6.5-9.5 s; bob: 4 mm 12.5-15.5 s; both at 3 mm from 16 s; the
+# first 1.5-2 s of each hold are the HIRO II arm settling.)
+STIFFNESS_WINDOWS = {"alice": ((5.0, 6.0), (8.0, 9.5)), "bob": ((10.5, 12.0), (14.0, 15.5))}
+STILL_WINDOW = (17.5, 20.5)
 HF_LIMIT_N = 0.02           # force RMS above 5 Hz while both hold still
 STIFFNESS_TOLERANCE = 0.05  # at 25 ms, of the no-delay stiffness
 OBSERVER_BOUND_J = -1e-4    # the coupling observer's lowest value (one step's prediction error)
