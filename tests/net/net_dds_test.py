@@ -147,6 +147,20 @@ def smoothness(rows, t_ref, t_a, t_b, change, fade_s=0.25):
                for (t0, f0), (t1, f1) in zip(window, window[1:]))
 
 
+def dinosaur_ready(args):
+    """The work folder, and the dinosaur world's compliances prepared in its cache (shared by the
+    nodes through HANDSHARE_CACHE): the tail cases' set-up. Returns the server's and the haptic
+    node's executables."""
+    os.makedirs(args.work, exist_ok=True)
+    server_exe, node_exe = exe(args.bin_dir, "world_server"), exe(args.bin_dir, "haptic_node")
+    cache = session_test.fem_cache(args.work)
+    os.environ["HANDSHARE_CACHE"] = cache
+    prep = subprocess.run([os.path.join(args.bin_dir, "core", "world", "world_prepare"), "--cache", cache,
+                           "--scenes", "dinosaur"], capture_output=True, text=True, timeout=600)
+    check(prep.returncode == 0, f"world_prepare failed: {prep.stdout}{prep.stderr}")
+    return server_exe, node_exe
+
+
 def case_partitioned_user(args):
     """Three hosts (world server; alice; bob), 20 ms +- 5 ms and 2 % loss on what arrives at each.
     alice and bob press the triceratops tail together; alice's host is cut off for 3 s, then
@@ -156,13 +170,7 @@ def case_partitioned_user(args):
     after the heal alice is back within 1 s, once (present=2, no duplicate), with her contacts:
     the tail's solve holds her fingertip again and bob's force returns to its shared value; a
     control event she sends afterwards (a reliable sample of her re-matched writer) is applied."""
-    os.makedirs(args.work, exist_ok=True)
-    server_exe, node_exe = exe(args.bin_dir, "world_server"), exe(args.bin_dir, "haptic_node")
-    cache = session_test.fem_cache(args.work)
-    os.environ["HANDSHARE_CACHE"] = cache
-    prep = subprocess.run([os.path.join(args.bin_dir, "core", "world", "world_prepare"), "--cache", cache,
-                           "--scenes", "dinosaur"], capture_output=True, text=True, timeout=600)
-    check(prep.returncode == 0, f"world_prepare failed: {prep.stdout}{prep.stderr}")
+    server_exe, node_exe = dinosaur_ready(args)
     session = f"net-partition-{os.getpid()}"
     common = ["--domain", args.domain, "--session", session]
     dump = os.path.join(args.work, "deformation")
@@ -536,13 +544,7 @@ def case_delayed_tail(args):
     its bound; at 25 ms the stiffness each user feels (force change over fingertip depth change)
     is within STIFFNESS_TOLERANCE of the no-delay value. Writes delayed_tail.csv (the figures)
     and delayed_tail_forces.csv (each user's force through the run) to --work."""
-    os.makedirs(args.work, exist_ok=True)
-    server_exe, node_exe = exe(args.bin_dir, "world_server"), exe(args.bin_dir, "haptic_node")
-    cache = session_test.fem_cache(args.work)
-    os.environ["HANDSHARE_CACHE"] = cache
-    prep = subprocess.run([os.path.join(args.bin_dir, "core", "world", "world_prepare"), "--cache", cache,
-                           "--scenes", "dinosaur"], capture_output=True, text=True, timeout=600)
-    check(prep.returncode == 0, f"world_prepare failed: {prep.stdout}{prep.stderr}")
+    server_exe, node_exe = dinosaur_ready(args)
     results, forces = [], []
     with Network(3, nfq_delay=args.nfq_delay) as net:
         a, b, c = net.hosts

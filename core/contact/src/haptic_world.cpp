@@ -66,25 +66,6 @@ struct HapticWorld::Object {
 
 namespace {
 
-// A deformable is pressed along the fingertip's penetration (proxy centre minus fingertip
-// centre), not along one touching face's normal: in a concave corner of a faceted surface the
-// proxy rests on two or three faces at once, and the proxy step names the one pressed hardest,
-// which a fingertip jittering by a micron swaps (a HIRO II held still moves ~1 um a step). The
-// patch, its depth and the force then jumped between the faces' values, 10 to 100 times a second
-// (up to 0.2 N at 0.2 N on the triceratops tail). The penetration moves continuously with the
-// fingertip. On one face or a convex edge it is that feature's normal already (the proxy is the
-// fingertip's projection); the contact is left as it is there, to the last bit.
-void PressAlongThePenetration(const ProxyParams& params, const Eigen::Vector3d& goal_O, ProxyContact& c) noexcept {
-  const Eigen::Vector3d d = c.x_O_m - goal_O;
-  const double len = d.norm();
-  if (!(len > params.skin_m)) return;
-  const Eigen::Vector3d n = d / len;
-  if (n.dot(c.n_O) > 1.0 - 1e-12) return;  // one feature
-  c.n_O = n;
-  c.depth_m = len - params.skin_m;
-  c.p_O_m = c.x_O_m - (params.radius_m + params.skin_m) * n;
-}
-
 std::shared_ptr<const TriMesh> MeshOf(const Shape& s) {
   switch (s.kind) {
     case Shape::Kind::kSphere:
@@ -420,7 +401,6 @@ StepReport HapticWorld::Step(double dt_s, std::span<const Eigen::Vector3d> p_WE,
                                                 : Eigen::Vector3d::Zero();
       fo.prev_goal_O_m = g_O;
       fo.prev_valid = true;
-      if (deformable && fo.contact.touching) PressAlongThePenetration(config_.proxy, g_O, fo.contact);
       if (!fo.contact.touching || deformable) continue;
       // Rigid: spring from fingertip to proxy, damping on the normal approach speed; the
       // surface only pushes (a negative normal part would be glue: no force then).

@@ -9,8 +9,8 @@
 
 #include "handshare/contact/coupling_passivity.hpp"
 #include "handshare/contact/haptic_world.hpp"
-#include "handshare/fem/mesh.hpp"
 #include "handshare/testing/allocation_counter.hpp"
+#include "test_util.hpp"
 
 namespace handshare::contact {
 namespace {
@@ -113,17 +113,15 @@ TEST(CouplingPassivity, HoldsBackWhatAStiffenedBodyWouldTakeFromALateDisplacemen
 TEST(CouplingPassivity, TheWorldReportsEachRemoteContactsForceOnTheBody) {
   // One remote fingertip alone on a block: its patch force is everything the solve holds.
   HapticWorld w;
-  auto mesh = std::make_shared<fem::TetMesh>(fem::MakeBoxMesh({0.04, 0.04, 0.02}, {8, 8, 4}));
-  auto C = std::make_shared<const fem::Compliance>(
-      fem::Compliance::Precompute(*mesh, fem::Material{2e4, 0.3}, fem::NodesOnPlane(*mesh, 2, 0.0)));
+  const test::SoftBlock b = test::MakeSoftBlock();
   DeformableDesc d;
-  d.mesh = mesh;
-  d.compliance = C;
+  d.mesh = b.mesh;
+  d.compliance = b.C;
   d.X_WO = Eigen::Translation3d(0.6, 0, 0) * Eigen::AngleAxisd(0.3, Eigen::Vector3d::UnitZ());
   const ObjectId block = w.AddDeformable(d);
   w.Init();
   std::array<RemoteContact, 2> remote = {
-      RemoteContact{1, 0, block, d.X_WO * Eigen::Vector3d(0.02, 0.02, 0.02), Eigen::Vector3d(0, 0, -0.001),
+      RemoteContact{1, 0, block, d.X_WO * Eigen::Vector3d(0.03, 0.03, 0.03), Eigen::Vector3d(0, 0, -0.001),
                     Eigen::Vector3d(0, 0, 0.1), Eigen::Vector3d(0, 0, 1)},
       RemoteContact{1, 1, block, Eigen::Vector3d::Constant(NAN), Eigen::Vector3d(0, 0, -0.001)}};
   std::array<Eigen::Vector3d, kFingers> far;
