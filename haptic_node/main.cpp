@@ -52,17 +52,9 @@ int main(int argc, char** argv) {
     c.rate_Hz = o.GetDouble("rate", 100.0, 20000.0);
     c.publish_Hz = o.GetDouble("publish-rate", 1.0, 1000.0);
     c.deadband_weber = o.GetDouble("deadband", 0.0, 0.5);
-    const std::string passivity = o.GetString("coupling-passivity");
-    if (passivity != "on" && passivity != "off") {
-      throw handshare::common::OptionError("option --coupling-passivity: '" + passivity + "' is not on or off");
-    }
-    c.coupling_passivity = passivity == "on";
+    c.coupling_passivity = o.GetChoice("coupling-passivity", {"on", "off"}) == "on";
     c.trace_file = o.GetString("trace");
-    const std::string streams = o.GetString("streams");
-    if (streams != "paced" && streams != "full") {
-      throw handshare::common::OptionError("option --streams: '" + streams + "' is not paced or full");
-    }
-    c.paced_streams = streams == "paced";
+    c.paced_streams = o.GetChoice("streams", {"paced", "full"}) == "paced";
     c.rejoin_after_s = o.GetDouble("rejoin-after", 0.0, 3600.0);
     return handshare::haptic::HapticNode(c).Run();
   });

@@ -110,7 +110,7 @@ void SceneRenderer::Render(double /*t_s*/, double dt_s, std::uint64_t now_ns, co
     if (remote_.fade.WeightAt(now_ns, c.received_ns) <= 0.0) continue;
     contact::RemoteContact& r = remote_contacts_[static_cast<std::size_t>(n_remote++)];
     r = contact::ToRemoteContact(c, remote_.fade, now_ns);
-    passivity_.Admit(c, r, world.is_deformable(c.object));
+    passivity_.Admit(c, r);
   }
   // 3. Contacts: rigid, dynamic and deformable objects, all hands on a deformable together.
   world.Step(dt_s, reading.p_WE, {remote_contacts_.data(), static_cast<std::size_t>(n_remote)});

@@ -86,7 +86,7 @@ PairRun RunDelayedPair(Controllers on, double delay_s) {
       if (me.have) {
         contact::RemoteContact in =
             contact::ToRemoteContact(me.held, contact::PeerFade{1'000'000'000'000, 2'000'000'000'000}, t_ns);
-        me.coupling.Admit(me.held, in, true);
+        me.coupling.Admit(me.held, in);
         x_other = -in.u_W_m.z();
       }
       const auto [F_mine, F_theirs] = forces(me.x, x_other);

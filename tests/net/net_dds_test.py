@@ -548,9 +548,7 @@ def case_delayed_tail(args):
     results, forces = [], []
     with Network(3, nfq_delay=args.nfq_delay) as net:
         a, b, c = net.hosts
-        # HANDSHARE_DELAYS_MS=10,25 (by hand): only these delays, no checks that need the others.
-        delays = [int(d) for d in os.environ.get("HANDSHARE_DELAYS_MS", "").split(",") if d] or DELAYS_MS
-        for delay_ms in delays:
+        for delay_ms in DELAYS_MS:
             for seed, h in enumerate((a, b, c), start=1):
                 h.clear_delay()
                 if delay_ms > 0:
@@ -625,7 +623,7 @@ def case_delayed_tail(args):
         f.write("delay_ms,user,t_s,fz_N\n")
         for d, u, t, v in forces:
             f.write(f"{d},{u},{t:.4f},{v:.6f}\n")
-    k0 = {r["user"]: r["k_N_per_m"] for r in results if r["delay_ms"] == results[0]["delay_ms"]}
+    k0 = {r["user"]: r["k_N_per_m"] for r in results if r["delay_ms"] == 0}
     print("delayed tail: alice and bob at simulated HIRO IIs press the tail on three hosts; one-way delay on arrival at each")
     print("  delay user   stiffness [N/m] (vs 0 ms)  force [N]  RMS > 5 Hz [N]  observer min [J]  held back  drift [mm]  faults")
     for r in results:

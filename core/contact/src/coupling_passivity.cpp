@@ -18,19 +18,17 @@ Eigen::Vector3d Vec(const double (&a)[3]) noexcept { return {a[0], a[1], a[2]}; 
 
 }  // namespace
 
-CouplingPassivity::Channel* CouplingPassivity::Find(std::int32_t hand, std::int32_t finger,
-                                                    std::int32_t object) noexcept {
-  for (Channel& c : channels_) {
-    if (c.open && c.hand == hand && c.finger == finger && c.object == object) return &c;
+int CouplingPassivity::Find(std::int32_t hand, std::int32_t finger, std::int32_t object) const noexcept {
+  for (int i = 0; i < kMaxChannels; ++i) {
+    const Channel& c = channels_[static_cast<std::size_t>(i)];
+    if (c.open && c.hand == hand && c.finger == finger && c.object == object) return i;
   }
-  return nullptr;
+  return -1;
 }
 
 double CouplingPassivity::observer_J(std::int32_t hand, std::int32_t finger, std::int32_t object) const noexcept {
-  for (const Channel& c : channels_) {
-    if (c.open && c.hand == hand && c.finger == finger && c.object == object) return c.e_tx - c.e_rx;
-  }
-  return 0.0;
+  const int i = Find(hand, finger, object);
+  return i < 0 ? 0.0 : channels_[static_cast<std::size_t>(i)].e_tx - channels_[static_cast<std::size_t>(i)].e_rx;
 }
 
 void CouplingPassivity::BeginStep(double dt_s) noexcept {
@@ -39,12 +37,13 @@ void CouplingPassivity::BeginStep(double dt_s) noexcept {
   for (Channel& c : channels_) c.seen = false;
 }
 
-void CouplingPassivity::Admit(const PeerContact& sent, RemoteContact& input, bool deformable) noexcept {
+void CouplingPassivity::Admit(const PeerContact& sent, RemoteContact& input) noexcept {
   if (num_admitted_ >= kMaxChannels) return;  // more than the renderer hands in: passed, unobserved
   std::int16_t& slot = admitted_[static_cast<std::size_t>(num_admitted_++)];
   slot = -1;
-  if (!deformable || !input.u_W_m.allFinite()) return;
-  Channel* ch = Find(sent.hand, sent.finger, sent.object);
+  if (!input.u_W_m.allFinite()) return;
+  const int found = Find(sent.hand, sent.finger, sent.object);
+  Channel* ch = found < 0 ? nullptr : &channels_[static_cast<std::size_t>(found)];
   if (ch == nullptr) {
     for (Channel& c : channels_) {
       if (!c.open) {
@@ -109,7 +108,7 @@ void CouplingPassivity::Admit(const PeerContact& sent, RemoteContact& input, boo
     }
   }
   input.u_W_m = u;
-  ch->u_before = ch->u_imposed;
+  ch->du = u - ch->u_imposed;
   ch->u_imposed = u;
 }
 
@@ -122,7 +121,7 @@ void CouplingPassivity::Observe(std::span<const Eigen::Vector3d> force_on_body_W
     Eigen::Vector3d F = static_cast<std::size_t>(i) < force_on_body_W.size() ? force_on_body_W[static_cast<std::size_t>(i)]
                                                                              : Eigen::Vector3d::Zero();
     if (!F.allFinite()) F.setZero();
-    const Eigen::Vector3d du = ch.u_imposed - ch.u_before;
+    const Eigen::Vector3d& du = ch.du;
     ch.e_rx += std::max(0.0, 0.5 * (ch.force + F).dot(du));
     const double dd = du.squaredNorm();
     if (dd > kStiffnessProbe_m * kStiffnessProbe_m) {
@@ -133,7 +132,6 @@ void CouplingPassivity::Observe(std::span<const Eigen::Vector3d> force_on_body_W
     stats_.observer_min_J = std::min(stats_.observer_min_J, ch.e_tx - ch.e_rx);
   }
   double tx = closed_tx_, rx = closed_rx_;
-  std::int32_t open = 0;
   for (Channel& c : channels_) {
     if (!c.open) continue;
     if (!c.seen) {  // the contact left the solve (lifted, faded out): its channel ends
@@ -146,11 +144,9 @@ void CouplingPassivity::Observe(std::span<const Eigen::Vector3d> force_on_body_W
     }
     tx += c.e_tx;
     rx += c.e_rx;
-    ++open;
   }
   stats_.energy_sent_J = tx;
   stats_.energy_received_J = rx;
-  stats_.channels_open = open;
 }
 
 }  // namespace handshare::contact

@@ -280,10 +280,6 @@ Eigen::Vector3d HapticWorld::body_velocity_W(ObjectId id) const noexcept {
   return objects_[static_cast<std::size_t>(id)]->v_W;
 }
 
-bool HapticWorld::is_deformable(ObjectId id) const noexcept {
-  return id >= 0 && id < num_objects() && objects_[static_cast<std::size_t>(id)]->kind == ObjectKind::kDeformable;
-}
-
 Eigen::Vector3d HapticWorld::finger_reaction_W(ObjectId id) const noexcept {
   if (id < 0 || id >= num_objects()) return Eigen::Vector3d::Zero();
   return objects_[static_cast<std::size_t>(id)]->reaction_W_N;

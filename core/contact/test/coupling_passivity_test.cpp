@@ -45,7 +45,7 @@ TEST(CouplingPassivity, ObserverIsExactOnALinearSpringWithoutDelay) {
     for (int step = 0; step < 10; ++step) {  // ten haptic steps per sample (zero-order hold)
       pc.BeginStep(1e-3);
       RemoteContact in = ToRemoteContact(sent, PeerFade{}, sent.received_ns);
-      pc.Admit(sent, in, true);
+      pc.Admit(sent, in);
       EXPECT_DOUBLE_EQ(in.u_W_m.z(), -x);  // passed as sent
       const double imposed = -in.u_W_m.z();
       const std::array<Eigen::Vector3d, 1> F = {OnBody(k * imposed)};
@@ -79,7 +79,7 @@ StiffenedRun PressAStiffenedBody(bool passivity) {
     for (int step = 0; step < 10; ++step) {
       pc.BeginStep(1e-3);
       RemoteContact in = ToRemoteContact(sent, PeerFade{}, sent.received_ns);
-      pc.Admit(sent, in, true);
+      pc.Admit(sent, in);
       run.imposed_m = -in.u_W_m.z();
       const std::array<Eigen::Vector3d, 1> F = {OnBody(k_here * run.imposed_m)};
       pc.Observe(F);
@@ -147,7 +147,7 @@ TEST(CouplingPassivity, AdmitAndObserveDoNotAllocate) {
       PeerContact sent = Sample(1e-4 * (s % 7), 0.1 * (s % 5), static_cast<std::uint64_t>(s / 3));
       sent.finger = f;
       RemoteContact in = ToRemoteContact(sent, PeerFade{}, sent.received_ns);
-      pc.Admit(sent, in, true);
+      pc.Admit(sent, in);
     }
     pc.Observe(F);
   }

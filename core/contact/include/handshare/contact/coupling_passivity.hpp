@@ -48,7 +48,6 @@ struct CouplingPassivityStats {
   double energy_received_J = 0.0;    ///< the same for E_rx
   double observer_min_J = 0.0;       ///< the lowest E_obs after any step (0 if never negative)
   double drift_max_m = 0.0;          ///< the largest |u_sent - u_imposed| where the controller acted
-  std::int32_t channels_open = 0;
   std::uint64_t channels_total = 0;
 };
 
@@ -67,11 +66,12 @@ class CouplingPassivity {
 
   /// Starts a haptic step of dt_s: every channel is unseen until Admit names it again.
   void BeginStep(double dt_s) noexcept;
-  /// A peer contact entering this step's solve. `sent` is the sample as it arrived (not faded:
-  /// it feeds E_tx when its received_ns is new); `input` the solve's contact (faded), whose
-  /// u_W_m the controller may hold back. Contacts on rigid objects pass untouched (`deformable`
-  /// false). Admitted contacts are numbered in call order for Observe.
-  void Admit(const PeerContact& sent, RemoteContact& input, bool deformable) noexcept;
+  /// A peer contact on a deformable entering this step's solve (the haptic node hands in no
+  /// other: ToRemoteContacts keeps the deformables' only). `sent` is the sample as it arrived
+  /// (not faded: it feeds E_tx when its received_ns is new); `input` the solve's contact
+  /// (faded), whose u_W_m the controller may hold back. Admitted contacts are numbered in call
+  /// order for Observe.
+  void Admit(const PeerContact& sent, RemoteContact& input) noexcept;
   /// After the step: the local solve's force of each admitted contact's patch on its body, in
   /// admission order (HapticWorld::remote_forces_W). Ends the step: unseen channels close.
   void Observe(std::span<const Eigen::Vector3d> force_on_body_W) noexcept;
@@ -90,12 +90,13 @@ class CouplingPassivity {
     Eigen::Vector3d u_sent = Eigen::Vector3d::Zero();            // last sample (sender's)
     Eigen::Vector3d f_sent = Eigen::Vector3d::Zero();
     Eigen::Vector3d u_imposed = Eigen::Vector3d::Zero();         // what the local solve got last step
-    Eigen::Vector3d u_before = Eigen::Vector3d::Zero();          // ... and the step before
+    Eigen::Vector3d du = Eigen::Vector3d::Zero();                // ... and its change in that step
     Eigen::Vector3d force = Eigen::Vector3d::Zero();             // local patch force on the body
     double e_tx = 0.0, e_rx = 0.0;
     double k = 0.0;                                              // stiffness seen [N/m]
   };
-  Channel* Find(std::int32_t hand, std::int32_t finger, std::int32_t object) noexcept;
+  /// The open channel of (hand, finger, object): its index, -1 if none.
+  int Find(std::int32_t hand, std::int32_t finger, std::int32_t object) const noexcept;
 
   bool enabled_;
   double max_step_m_ = 0.0;

@@ -218,8 +218,6 @@ class HapticWorld {
   /// Pose of an object (dynamic bodies: current).
   Eigen::Isometry3d pose(ObjectId id) const noexcept;
   Eigen::Vector3d body_velocity_W(ObjectId id) const noexcept;
-  /// Whether object `id` is a deformable (false for a bad index).
-  bool is_deformable(ObjectId id) const noexcept;
   /// Moves an object (static: teleport; dynamic: also zeroes its velocity). Its proxies move
   /// with it. Real-time safe.
   void SetPose(ObjectId id, const Eigen::Isometry3d& X_WO) noexcept;
