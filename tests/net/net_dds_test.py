@@ -566,7 +566,7 @@ def case_delayed_tail(args):
                 server.wait_for("models of 'dinosaur' ready", 60)
                 for host, user in ((b, "alice"), (c, "bob")):
                     nodes[user] = host.start(f"{user}_{delay_ms}ms",
-                                             [node_exe, *common, "--user", user, "--device", "hiro", "--script",
+                                             [node_exe, *common, "--user", user, "--device", "hiro", "--coupling-passivity", "on", "--script",
                                               os.path.join(DATA, f"delay_{user}.hand"), "--trace", traces[user],
                                               "--duration", 90], args.work)
                 starts = {}
