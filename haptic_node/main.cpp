@@ -27,7 +27,7 @@ int main(int argc, char** argv) {
              "paced")
       .Value("coupling-passivity", "MODE",
              "on: a passivity controller holds back what a peer's late contact would put into a shared deformable "
-             "beyond what the peer put in (its catch-up can step a force); off: observe only", "off")
+             "beyond what the peer put in, and closes the lag at the fade's rate; off: observe only", "on")
       .Value("trace", "FILE", "write every published device state to a CSV file", "")
       .Value("rejoin-after", "SEC",
              "join again with a new participant when no world server was heard this long after joining "

@@ -208,6 +208,8 @@ contact::CouplingPassivityStats HapticBridge::coupling_stats() const {
   s.energy_received_J += n.energy_received_J;
   s.observer_min_J = std::min(s.observer_min_J, n.observer_min_J);
   s.drift_max_m = std::max(s.drift_max_m, n.drift_max_m);
+  s.energy_granted_J += n.energy_granted_J;
+  s.granted_still += n.granted_still;
   s.channels_total += n.channels_total;
   return s;
 }

@@ -90,11 +90,13 @@ void PrintLoopSummary(const std::string& user, const common::LoopStats& stats, s
   if (const auto c = bridge.coupling_stats(); c.channels_total > 0) {
     // The network coupling's passivity (contact/coupling_passivity.hpp): one line a test reads.
     std::printf("[haptic_node %s] coupling passivity: %s, channels %llu, steps %llu, held back %llu, "
-                "energy sent %.6f J, received %.6f J, observer min %.3e J, drift max %.3f mm\n",
+                "energy sent %.6f J, received %.6f J, observer min %.3e J, drift max %.3f mm, "
+                "granted at rest %.3e J in %llu steps\n",
                 user.c_str(), bridge.coupling_passivity() ? "on" : "off",
                 static_cast<unsigned long long>(c.channels_total), static_cast<unsigned long long>(c.steps),
                 static_cast<unsigned long long>(c.held_back),
-                c.energy_sent_J, c.energy_received_J, c.observer_min_J, 1e3 * c.drift_max_m);
+                c.energy_sent_J, c.energy_received_J, c.observer_min_J, 1e3 * c.drift_max_m,
+                c.energy_granted_J, static_cast<unsigned long long>(c.granted_still));
   }
   if (const auto& age = bridge.peer_contact_loop_age(); age.count() > 0) {
     std::printf("[haptic_node %s] peer contact sets: %llu used, age at the haptic loop (sender's write to the "

@@ -104,7 +104,7 @@ void SceneRenderer::Render(double /*t_s*/, double dt_s, std::uint64_t now_ns, co
   // The network coupling's passivity controller holds back what a late displacement would
   // put into the body beyond what the peer put in at its end (contact/coupling_passivity.hpp).
   int n_remote = 0;
-  passivity_.BeginStep(dt_s);
+  passivity_.BeginStep(dt_s, remote_.fade.rate_per_s());
   for (int i = 0; i < std::min(remote_.count, kMaxRemoteContacts); ++i) {
     const contact::PeerContact& c = remote_.items[i];
     if (remote_.fade.WeightAt(now_ns, c.received_ns) <= 0.0) continue;

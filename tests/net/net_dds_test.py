@@ -525,10 +525,11 @@ def coupling_summary(log, user):
     """The figures of a haptic node's coupling-passivity exit line (None if it had no coupling)."""
     m = re.search(rf"\[haptic_node {user}\] coupling passivity: (on|off), channels (\d+), steps (\d+), held back (\d+), "
                   r"energy sent ([-\d.e+]+) J, received ([-\d.e+]+) J, observer min ([-\d.e+]+) J, "
-                  r"drift max ([-\d.e+]+) mm", log)
+                  r"drift max ([-\d.e+]+) mm, granted at rest ([-\d.e+]+) J in (\d+) steps", log)
     if m is None:
         return None
-    keys = ("channels", "steps", "held_back", "sent_J", "received_J", "observer_min_J", "drift_max_mm")
+    keys = ("channels", "steps", "held_back", "sent_J", "received_J", "observer_min_J", "drift_max_mm",
+            "granted_J", "granted_steps")
     out = {k: float(v) for k, v in zip(keys, m.groups()[1:])}
     out["on"] = m.group(1) == "on"
     return out

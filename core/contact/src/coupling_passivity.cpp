@@ -13,6 +13,14 @@ constexpr double kStiffnessProbe_m = 5e-6;
 constexpr double kMaxStiffness_N_per_m = 1e5;
 // Energy below this is rounding (a fingertip's work over one step is ~1e-6 J and up).
 constexpr double kRounding_J = 1e-12;
+// A held-back displacement within this of its target has caught up.
+constexpr double kCaughtUp_m = 1e-7;
+// The peer is still when its samples stay within kStill_m of one another for kStillAfter_ns
+// (most of one deadband keepalive, session/contact_deadband.hpp): slower than about 0.2 mm/s.
+// Absolute, not a Weber fraction: at the turn of a slow swing a relative band would call the
+// peer still for longer than a keepalive, and a grant at every turn could feed the swing.
+constexpr double kStill_m = 20e-6;
+constexpr std::uint64_t kStillAfter_ns = 90'000'000;
 
 Eigen::Vector3d Vec(const double (&a)[3]) noexcept { return {a[0], a[1], a[2]}; }
 
@@ -28,11 +36,16 @@ int CouplingPassivity::Find(std::int32_t hand, std::int32_t finger, std::int32_t
 
 double CouplingPassivity::observer_J(std::int32_t hand, std::int32_t finger, std::int32_t object) const noexcept {
   const int i = Find(hand, finger, object);
-  return i < 0 ? 0.0 : channels_[static_cast<std::size_t>(i)].e_tx - channels_[static_cast<std::size_t>(i)].e_rx;
+  if (i < 0) return 0.0;
+  const Channel& c = channels_[static_cast<std::size_t>(i)];
+  return c.e_tx + c.e_granted - c.e_rx;
 }
 
-void CouplingPassivity::BeginStep(double dt_s) noexcept {
-  max_step_m_ = std::isfinite(dt_s) && dt_s > 0.0 ? kMaxSpeed_m_per_s * dt_s : 0.0;
+void CouplingPassivity::BeginStep(double dt_s, double catch_up_rate_per_s) noexcept {
+  const bool ok = std::isfinite(dt_s) && dt_s > 0.0;
+  dt_s_ = ok ? dt_s : 0.0;
+  max_step_m_ = ok ? kMaxSpeed_m_per_s * dt_s : 0.0;
+  catch_up_rate_per_s_ = std::isfinite(catch_up_rate_per_s) && catch_up_rate_per_s > 0.0 ? catch_up_rate_per_s : 0.0;
   num_admitted_ = 0;
   for (Channel& c : channels_) c.seen = false;
 }
@@ -71,9 +84,16 @@ void CouplingPassivity::Admit(const PeerContact& sent, RemoteContact& input) noe
       ch->e_tx += std::max(0.0, -0.5 * (f + ch->f_sent).dot(u - ch->u_sent));
       ch->u_sent = u;
       ch->f_sent = f;
+      // The peer is still once its samples have stayed within kStill_m of one another for
+      // kStillAfter_ns (a deadbanded still hand sends a keepalive every 100 ms).
+      if (ch->still_since_ns == 0 || (u - ch->u_still).norm() > kStill_m) {
+        ch->u_still = u;
+        ch->still_since_ns = sent.received_ns;
+      }
     }
     ch->sample_ns = sent.received_ns;
   }
+  const bool still = ch->still_since_ns != 0 && sent.received_ns - ch->still_since_ns >= kStillAfter_ns;
 
   // This end: the displacement the solve will impose, within what the channel has brought.
   const Eigen::Vector3d target = input.u_W_m;
@@ -81,15 +101,34 @@ void CouplingPassivity::Admit(const PeerContact& sent, RemoteContact& input) noe
   if (enabled_) {
     // A sample's jump is taken at no more than a fingertip's speed: the step's energy is then
     // predicted to within (1/2) k (v dt)^2 even before the contact's stiffness is known.
+    // After a hold, the lag closes at the fade's rate (the speed at which a peer's contact of
+    // this size fades in or out), not at a fingertip's: the other hand feels a ramp, not a step.
+    // The sample's own change still passes at a fingertip's speed.
+    auto clamped = [](const Eigen::Vector3d& v, double limit) -> Eigen::Vector3d {
+      const double d = v.norm();
+      return d > limit ? Eigen::Vector3d((limit / d) * v) : v;
+    };
     Eigen::Vector3d to = target - ch->u_imposed;
-    if (const double d = to.norm(); d > max_step_m_) u = ch->u_imposed + (max_step_m_ / d) * to;
+    if (ch->held) {
+      const double catch_up_m = catch_up_rate_per_s_ * std::max(target.norm(), ch->u_imposed.norm()) * dt_s_;
+      to = clamped(target - ch->target_prev, max_step_m_) + clamped(ch->target_prev - ch->u_imposed, catch_up_m);
+    }
+    u = ch->u_imposed + clamped(to, max_step_m_);
     const Eigen::Vector3d& F = ch->force;
     auto predicted = [&](const Eigen::Vector3d& d) { return F.dot(d) + 0.5 * ch->k * d.squaredNorm(); };
-    const double budget = ch->e_tx - ch->e_rx;
+    const double budget = ch->e_tx + ch->e_granted - ch->e_rx;
     const Eigen::Vector3d du = u - ch->u_imposed;
     const double want = predicted(du);
     // (Rounding: on a linear body without delay the prediction equals the budget's increment.)
-    if (want > budget + kRounding_J + 1e-9 * std::abs(want)) {
+    if (want > budget + kRounding_J + 1e-9 * std::abs(want) && ch->held && still) {
+      // The peer has stopped and the local copy still lags: the lag closes (at the fade's rate
+      // above), granted beyond the budget so that both copies come to one shape. Bounded by the
+      // work of closing the lag, once per stop; a swing never stops, so it is never granted one.
+      const double grant = want - std::max(budget, 0.0);
+      ch->e_granted += grant;
+      stats_.energy_granted_J += grant;
+      ++stats_.granted_still;
+    } else if (want > budget + kRounding_J + 1e-9 * std::abs(want)) {
       // Scale the change: k a^2 |du|^2 / 2 + (F . du) a = budget, the root in [0, 1]. With no
       // budget left (a prediction fell short by a step's error), nothing that puts energy in
       // passes until the peer's samples bring more; a release always passes.
@@ -103,10 +142,13 @@ void CouplingPassivity::Admit(const PeerContact& sent, RemoteContact& input) noe
       }
       alpha = std::clamp(alpha, 0.0, 1.0);
       u = ch->u_imposed + alpha * du;
+      ch->held = true;
       ++stats_.held_back;
       stats_.drift_max_m = std::max(stats_.drift_max_m, (target - u).norm());
     }
   }
+  if (ch->held && (target - u).norm() <= kCaughtUp_m) ch->held = false;
+  ch->target_prev = target;
   input.u_W_m = u;
   ch->du = u - ch->u_imposed;
   ch->u_imposed = u;
@@ -129,7 +171,7 @@ void CouplingPassivity::Observe(std::span<const Eigen::Vector3d> force_on_body_W
       ch.k = std::clamp(std::max(ch.k, k), 0.0, kMaxStiffness_N_per_m);
     }
     ch.force = F;
-    stats_.observer_min_J = std::min(stats_.observer_min_J, ch.e_tx - ch.e_rx);
+    stats_.observer_min_J = std::min(stats_.observer_min_J, ch.e_tx + ch.e_granted - ch.e_rx);
   }
   double tx = closed_tx_, rx = closed_rx_;
   for (Channel& c : channels_) {

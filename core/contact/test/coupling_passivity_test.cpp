@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <vector>
 
 #include "handshare/contact/coupling_passivity.hpp"
 #include "handshare/contact/haptic_world.hpp"
@@ -108,6 +109,100 @@ TEST(CouplingPassivity, HoldsBackWhatAStiffenedBodyWouldTakeFromALateDisplacemen
   EXPECT_GT(on.stats.held_back, 0u);
   EXPECT_NEAR(on.imposed_m, std::sqrt(2.0 * 1.8e-3 / 800.0), 2e-5);
   EXPECT_NEAR(on.stats.drift_max_m, 3e-3 - on.imposed_m, 1e-5);
+}
+
+// The stiffened body of the test above on a real clock: the peer's samples 10 ms apart, 1 ms
+// haptic steps. The peer presses 0 -> 3 mm in 30 samples, then (from `then_ms` on) its samples
+// follow `after(t_s)` [m] (its force k_peer_after times that) until `end_ms`; a still peer's set
+// comes every 100 ms (the deadband's keepalive). Records the imposed depth after every step.
+struct ClockedRun {
+  CouplingPassivityStats stats;
+  std::vector<double> imposed_m;  // one per 1 ms step
+  double observer_J = 0.0;
+};
+template <typename After>
+ClockedRun PressOnAClock(After after, int end_ms, int sample_every_ms, double k_peer_after = 400.0) {
+  const double k_peer = 400.0, k_here = 800.0;
+  CouplingPassivity pc;
+  ClockedRun run;
+  PeerContact sent;
+  for (int ms = 0; ms < end_ms; ++ms) {
+    const std::uint64_t now_ns = 1'000'000'000ull + 1'000'000ull * static_cast<std::uint64_t>(ms);
+    if (ms < 300 && ms % 10 == 0) {
+      const double x = 1e-4 * (ms / 10 + 1);
+      sent = Sample(x, k_peer * x, now_ns);
+    } else if (ms >= 300 && (ms - 300) % sample_every_ms == 0) {
+      const double x = after(1e-3 * (ms - 300));
+      sent = Sample(x, k_peer_after * x, now_ns);
+    }
+    pc.BeginStep(1e-3);
+    RemoteContact in = ToRemoteContact(sent, PeerFade{}, now_ns);
+    pc.Admit(sent, in);
+    run.imposed_m.push_back(-in.u_W_m.z());
+    const std::array<Eigen::Vector3d, 1> F = {OnBody(k_here * run.imposed_m.back())};
+    pc.Observe(F);
+  }
+  run.stats = pc.stats();
+  run.observer_J = pc.observer_J(1, 0, 0);
+  return run;
+}
+
+TEST(CouplingPassivity, AStillPeersLagClosesAtTheFadesRateAndTheGrantIsReported) {
+  // The peer stops at 3 mm; the controller had held the stiffened local body at 2.12 mm. Once the
+  // peer's samples have stayed put for most of a keepalive (two sets, 100 ms apart), the lag
+  // closes at the fade's rate (3 mm / 0.3 s = 10 um per 1 ms step), beyond the budget: both
+  // copies come to one shape. What that put in beyond what the peer sent is reported:
+  // (1/2) 800 (3^2 - 2.12^2) mm^2 = 1.8 mJ (the body is twice as stiff here).
+  const ClockedRun run = PressOnAClock([](double) { return 3e-3; }, 1000, 100);
+  const double fade_step = PeerFade{}.rate_per_s() * 3e-3 * 1e-3;
+  EXPECT_NEAR(run.imposed_m[299], std::sqrt(2.0 * 1.8e-3 / 800.0), 2e-5);  // held back while pressing
+  EXPECT_NEAR(run.imposed_m[399], run.imposed_m[299], 1e-9);             // the peer not yet still
+  double steepest = 0.0;
+  for (std::size_t i = 300; i < run.imposed_m.size(); ++i) {
+    steepest = std::max(steepest, run.imposed_m[i] - run.imposed_m[i - 1]);
+  }
+  EXPECT_LE(steepest, fade_step * (1.0 + 1e-9));
+  EXPECT_NEAR(run.imposed_m.back(), 3e-3, 1e-9);  // one shape
+  // The lag (0.88 mm) closed in about 88 steps after the second still set.
+  const auto caught = std::find_if(run.imposed_m.begin() + 300, run.imposed_m.end(),
+                                   [](double x) { return x >= 3e-3 - 1e-9; });
+  EXPECT_LE(caught - run.imposed_m.begin(), 400 + 92);
+  EXPECT_NEAR(run.stats.energy_granted_J, 0.5 * 800.0 * (9e-6 - 2.0 * 1.8e-3 / 800.0), 2e-5);
+  EXPECT_GT(run.stats.granted_still, 80u);
+  EXPECT_GE(run.stats.observer_min_J, -2e-6 - 1e-12);  // the grant counts as sent
+  EXPECT_NEAR(run.observer_J, 0.0, 2e-6);
+}
+
+TEST(CouplingPassivity, AnOscillatingPeerNeverGetsAGrant) {
+  // The same press, then the peer swings +-0.5 mm about 2.5 mm at 2 Hz for 3 s, a set every
+  // 10 ms: it never stops, so the controller holds the stiffened body within what was sent.
+  const ClockedRun run = PressOnAClock(
+      [](double t) { return 2.5e-3 + 0.5e-3 * std::sin(2.0 * M_PI * 2.0 * t); }, 3300, 10);
+  EXPECT_EQ(run.stats.granted_still, 0u);
+  EXPECT_EQ(run.stats.energy_granted_J, 0.0);
+  EXPECT_GT(run.stats.held_back, 0u);
+  EXPECT_GE(run.stats.observer_min_J, -2e-6 - 1e-12);
+  EXPECT_LE(run.stats.energy_received_J, run.stats.energy_sent_J + 2e-6);
+}
+
+TEST(CouplingPassivity, AfterAHoldTheLagClosesAtTheFadesRateNotAFingertipsSpeed) {
+  // Held at 2.12 mm by the stiffened body, the peer then jumps to 6 mm against a body that is
+  // stiff at its end (4,000 N/m): a set that brings far more energy than the local body needs.
+  // The sample's own jump passes at a fingertip's speed (0.25 mm per step, as from an unheld
+  // channel), the 0.88 mm lag from before at the fade's rate (at most 6 mm / 0.3 s = 20 um per
+  // step), not in a few steps at a fingertip's speed.
+  const ClockedRun run = PressOnAClock([](double) { return 6e-3; }, 330, 100, 4000.0);
+  const double jump_step = CouplingPassivity::kMaxSpeed_m_per_s * 1e-3;
+  const double fade_step = PeerFade{}.rate_per_s() * 6e-3 * 1e-3;
+  for (std::size_t i = 300; i < run.imposed_m.size(); ++i) {
+    EXPECT_LE(run.imposed_m[i] - run.imposed_m[i - 1], jump_step + 1e-12) << i;
+  }
+  // After the jump's 3 mm passed (12 steps), what is left of the lag closes at <= the fade's rate.
+  for (std::size_t i = 313; i < run.imposed_m.size(); ++i) {
+    EXPECT_LE(run.imposed_m[i] - run.imposed_m[i - 1], fade_step * (1.0 + 1e-9)) << i;
+  }
+  EXPECT_LT(run.imposed_m.back(), 6e-3 - 1e-4);  // still closing, 30 ms later
+  EXPECT_EQ(run.stats.granted_still, 0u);
 }
 
 TEST(CouplingPassivity, TheWorldReportsEachRemoteContactsForceOnTheBody) {

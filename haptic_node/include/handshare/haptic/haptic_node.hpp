@@ -21,7 +21,7 @@ struct HapticNodeConfig {
   double rate_Hz = 1000.0;
   double publish_Hz = 100.0;                     // device state for viewers (60-120 Hz)
   double deadband_weber = 0.10;                  // contact-set deadband (session/contact_deadband.hpp); 0: off
-  bool coupling_passivity = false;               // passivity controller on the peers' contacts (contact/coupling_passivity.hpp); false: observe only
+  bool coupling_passivity = true;                // passivity controller on the peers' contacts (contact/coupling_passivity.hpp); false: observe only
   bool paced_streams = true;                     // streams no faster than read (session/stream_rates.hpp); false: every tick
   double rejoin_after_s = 15.0;                  // no world server heard this long after joining: join again; 0: never
   std::string trace_file;                        // CSV of every published device state

@@ -16,15 +16,22 @@
 ///             local body: E_rx += (F_prev + F_now) / 2 . (u_now - u_prev), F the local solve's
 ///             force of that contact's patch on the body (exact for a linear body whose contact
 ///             set holds through the step);
-///   observer  E_obs = E_tx - E_rx >= 0: the channel has given the local body no more than the
-///             peer put in.
+///   observer  E_obs = E_tx + E_grant - E_rx >= 0: the channel has given the local body no more
+///             than the peer put in, plus what was granted at rest (below).
 /// Controller (admittance type: the coupling imposes a displacement): a sample's jump is taken
 /// at no more than kMaxSpeed_m_per_s, and before each step the displacement's change is scaled by alpha in [0, 1] so that the predicted E_rx stays within
 /// E_tx (prediction F_prev . du + k du^2 / 2, k the largest stiffness seen at that contact);
 /// after a prediction fell short (E_obs < 0 by at most that step's error) nothing that puts
 /// energy in passes until the peer's samples bring more. A release always passes. What is held
-/// back is taken up at later steps as the peer's samples bring energy: the local displacement
-/// lags the peer's (position drift) but never generates energy. (Giving a deficit back by
+/// back is taken up at later steps as the peer's samples bring energy, at the fade's rate (the
+/// speed at which a peer's contact of that size fades in or out: the other hand feels a ramp,
+/// not the step a fingertip's speed made), so the local displacement lags the peer's (position
+/// drift) while the peer moves. Once the peer is still (its samples within 20 um of one another
+/// for most of a keepalive: slower than about 0.2 mm/s), a lag left closes at the fade's rate
+/// even beyond the budget, so that both copies of the body come to one shape; that energy is
+/// granted (E_grant: at most the work of closing the lag, (F + k lag / 2) lag, once per stop;
+/// counted into the budget) and reported. A sustained oscillation never stops, so it never gets
+/// a grant (one slower than about 0.7 Hz at 0.5 mm could, at its turns). (Giving a deficit back by
 /// moving the displacement out along the force was tried: with a small force the move is large,
 /// and the peer's contact flickered in the local solve -- 0.1 N of force noise at the other hand.)
 ///
@@ -48,6 +55,8 @@ struct CouplingPassivityStats {
   double energy_received_J = 0.0;    ///< the same for E_rx
   double observer_min_J = 0.0;       ///< the lowest E_obs after any step (0 if never negative)
   double drift_max_m = 0.0;          ///< the largest |u_sent - u_imposed| where the controller acted
+  double energy_granted_J = 0.0;     ///< what closing lags at rest put in beyond the peers' energy
+  std::uint64_t granted_still = 0;   ///< coupling-steps that got such a grant
   std::uint64_t channels_total = 0;
 };
 
@@ -65,7 +74,9 @@ class CouplingPassivity {
   static constexpr double kMaxSpeed_m_per_s = 0.25;
 
   /// Starts a haptic step of dt_s: every channel is unseen until Admit names it again.
-  void BeginStep(double dt_s) noexcept;
+  /// catch_up_rate_per_s: the peer fade's slope (PeerFade::rate_per_s); a held-back displacement
+  /// catches up at this rate times its size.
+  void BeginStep(double dt_s, double catch_up_rate_per_s = PeerFade{}.rate_per_s()) noexcept;
   /// A peer contact on a deformable entering this step's solve (the haptic node hands in no
   /// other: ToRemoteContacts keeps the deformables' only). `sent` is the sample as it arrived
   /// (not faded: it feeds E_tx when its received_ns is new); `input` the solve's contact
@@ -94,12 +105,19 @@ class CouplingPassivity {
     Eigen::Vector3d force = Eigen::Vector3d::Zero();             // local patch force on the body
     double e_tx = 0.0, e_rx = 0.0;
     double k = 0.0;                                              // stiffness seen [N/m]
+    double e_granted = 0.0;                                      // granted at rest
+    bool held = false;                                           // lagging since a hold
+    Eigen::Vector3d target_prev = Eigen::Vector3d::Zero();       // the displacement asked for last step
+    Eigen::Vector3d u_still = Eigen::Vector3d::Zero();           // the sample the peer is still at
+    std::uint64_t still_since_ns = 0;                            // ... received then (0: none yet)
   };
   /// The open channel of (hand, finger, object): its index, -1 if none.
   int Find(std::int32_t hand, std::int32_t finger, std::int32_t object) const noexcept;
 
   bool enabled_;
   double max_step_m_ = 0.0;
+  double dt_s_ = 0.0;
+  double catch_up_rate_per_s_ = 0.0;
   std::array<Channel, kMaxChannels> channels_{};
   std::array<std::int16_t, kMaxChannels> admitted_{};  // channel index per admitted contact, -1: none
   std::int32_t num_admitted_ = 0;
