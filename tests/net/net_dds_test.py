@@ -567,7 +567,7 @@ def case_delayed_tail(args):
                 server.wait_for("models of 'dinosaur' ready", 60)
                 for host, user in ((b, "alice"), (c, "bob")):
                     nodes[user] = host.start(f"{user}_{delay_ms}ms",
-                                             [node_exe, *common, "--user", user, "--device", "hiro", "--coupling-passivity", "on", "--script",
+                                             [node_exe, *common, "--user", user, "--device", "hiro", "--script",
                                               os.path.join(DATA, f"delay_{user}.hand"), "--trace", traces[user],
                                               "--duration", 90], args.work)
                 starts = {}
@@ -606,10 +606,12 @@ def case_delayed_tail(args):
                 summary = loop_summary(nodes[user].log(), user)
                 coupling = coupling_summary(nodes[user].log(), user)
                 check(coupling is not None, f"{user}'s node printed no coupling-passivity line at {delay_ms} ms")
+                check(coupling["on"], f"{user}'s coupling-passivity controller is not on by default")
                 results.append({"delay_ms": delay_ms, "user": user, "k_N_per_m": (f4 - f3) / (z3 - z4),
                                 "force_N": mean(still, session_test.net_fz), "hf_rms_N": hf_rms(fz, dt),
                                 "swing_N": max(fz) - min(fz), "observer_min_J": coupling["observer_min_J"],
                                 "held_back": int(coupling["held_back"]), "drift_max_mm": coupling["drift_max_mm"],
+                                "granted_J": coupling["granted_J"],
                                 "energy_sent_J": coupling["sent_J"], "energy_received_J": coupling["received_J"],
                                 "faults": int(summary["faults"]), "rate_limited": int(summary["rate_limited"]),
                                 "loop_Hz": summary["rate_Hz"]})
@@ -626,11 +628,12 @@ def case_delayed_tail(args):
             f.write(f"{d},{u},{t:.4f},{v:.6f}\n")
     k0 = {r["user"]: r["k_N_per_m"] for r in results if r["delay_ms"] == 0}
     print("delayed tail: alice and bob at simulated HIRO IIs press the tail on three hosts; one-way delay on arrival at each")
-    print("  delay user   stiffness [N/m] (vs 0 ms)  force [N]  RMS > 5 Hz [N]  observer min [J]  held back  drift [mm]  faults")
+    print("  delay user   stiffness [N/m] (vs 0 ms)  force [N]  RMS > 5 Hz [N]  observer min [J]  held back  drift [mm]  "
+          "granted [J]  faults")
     for r in results:
         print(f"  {r['delay_ms']:4d}  {r['user']:6s} {r['k_N_per_m']:9.1f} ({100 * (r['k_N_per_m'] / k0[r['user']] - 1):+5.1f} %)"
               f"      {r['force_N']:7.3f}   {r['hf_rms_N']:.5f}         {r['observer_min_J']:+.2e}        "
-              f"{r['held_back']:6d}   {r['drift_max_mm']:.3f}       {r['faults']}")
+              f"{r['held_back']:6d}   {r['drift_max_mm']:.3f}       {r['granted_J']:.2e}    {r['faults']}")
     for r in results:
         what = f"{r['user']} at {r['delay_ms']} ms"
         check(r["hf_rms_N"] < HF_LIMIT_N, f"{what}: force RMS above 5 Hz {r['hf_rms_N']:.4f} N (>= {HF_LIMIT_N} N)")
