@@ -29,6 +29,8 @@ int main(int argc, char** argv) {
              "on: a passivity controller holds back what a peer's late contact would put into a shared deformable "
              "beyond what the peer put in, and closes the lag at the fade's rate; off: observe only", "on")
       .Value("trace", "FILE", "write every published device state to a CSV file", "")
+      .Value("dump-deformation", "DIR", "write this node's field of each deformable it touches to DIR/<object>.json, "
+             "at most every 100 ms (to compare with the world server's)", "")
       .Value("rejoin-after", "SEC",
              "join again with a new participant when no world server was heard this long after joining "
              "(a secured join whose handshake never finished; 0: never)", "15");
@@ -54,6 +56,7 @@ int main(int argc, char** argv) {
     c.deadband_weber = o.GetDouble("deadband", 0.0, 0.5);
     c.coupling_passivity = o.GetChoice("coupling-passivity", {"on", "off"}) == "on";
     c.trace_file = o.GetString("trace");
+    c.dump_dir = o.GetString("dump-deformation");
     c.paced_streams = o.GetChoice("streams", {"paced", "full"}) == "paced";
     c.rejoin_after_s = o.GetDouble("rejoin-after", 0.0, 3600.0);
     return handshare::haptic::HapticNode(c).Run();

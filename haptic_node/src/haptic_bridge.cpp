@@ -34,6 +34,9 @@ HapticBridge::HapticBridge(const HapticNodeConfig& config, Device& device, Hapti
   models_options_.cache_dir =
       config_.cache_dir.empty() ? world::DefaultCacheDir() : std::filesystem::path(config_.cache_dir);
   models_options_.fingertip_radius_m = device_.capabilities().fingertip_radius_m;
+  if (!config_.dump_dir.empty()) {
+    field_dump_ = std::make_unique<LocalFieldDump>(config_.dump_dir, config_.user, std::chrono::milliseconds(100));
+  }
   models_options_.max_force_N = device_.capabilities().max_fingertip_force_N;
   state_msg_.user(config_.user);
   state_msg_.session(config_.where.session);
@@ -81,6 +84,7 @@ void HapticBridge::Tick() {
     }
     ReceivePeers();
     FollowPeerBodies();
+    DumpLocalFields();
   }
   PublishDeviceState();
   PublishContactSet();
@@ -115,6 +119,7 @@ void HapticBridge::AdoptScene(const msg::SceneState& state) {
   const auto t0 = Clock::now();
   auto next = std::make_shared<SceneRenderer>(scene, models_options_, session_clock_);
   next->SetCouplingPassivity(config_.coupling_passivity);
+  if (field_dump_) next->EnableLoadSnapshots();
   const bool same_world = renderer_ && renderer_->scene().name == scene.name;
   if (same_world && have_report_) {
     for (int b = 0; b < report_.num_bodies; ++b) {
@@ -212,6 +217,16 @@ contact::CouplingPassivityStats HapticBridge::coupling_stats() const {
   s.granted_still += n.granted_still;
   s.channels_total += n.channels_total;
   return s;
+}
+
+void HapticBridge::DumpLocalFields() {
+  if (!field_dump_) return;
+  try {
+    field_dump_->Update(*renderer_);
+  } catch (const std::exception& e) {
+    say_(std::string(e.what()) + "; no more field dumps");  // the touch goes on
+    field_dump_.reset();
+  }
 }
 
 void HapticBridge::RecordPeerLoopAge() {

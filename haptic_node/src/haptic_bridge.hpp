@@ -14,6 +14,7 @@
 #include <string>
 
 #include "bridge_conversions.hpp"
+#include "local_field_dump.hpp"
 #include "handshare/common/latency_histogram.hpp"
 #include "handshare/common/session_clock.hpp"
 #include "handshare/dds/messages.hpp"
@@ -102,6 +103,8 @@ class HapticBridge {
   /// The loop statistics, once a second.
   void PublishStatistics();
 
+  /// This node's field of each touched deformable, to --dump-deformation DIR.
+  void DumpLocalFields();
   /// The newest report's peer set stamps, into peer_loop_age_.
   void RecordPeerLoopAge();
   /// Builds the renderer of one scene state and hands it to the loop.
@@ -163,6 +166,7 @@ class HapticBridge {
   common::LatencyHistogram report_age_;
   std::uint64_t newest_peer_stamp_ns_ = 0;
   std::uint64_t last_loop_peer_stamp_ns_ = 0;
+  std::unique_ptr<LocalFieldDump> field_dump_;  // --dump-deformation
 };
 
 }  // namespace handshare::haptic

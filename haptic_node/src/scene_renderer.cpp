@@ -53,6 +53,35 @@ void SceneRenderer::PlaceBody(const std::string& id, const Eigen::Isometry3d& X_
   if (object >= 0) models_.world->SetPose(object, X_WO);
 }
 
+void SceneRenderer::WriteLoads(const contact::HapticWorld& world) noexcept {
+  DeformableLoads& out = loads_.WriteSlot();
+  out.step_ns = common::SteadyNowNs();
+  out.count = 0;
+  for (const auto& d : models_.deformables) {
+    if (out.count >= DeformableLoads::kMaxObjects) break;
+    const contact::ObjectId object = models_.Find(d.object_id);
+    const fem::ContactSolver* solver = object >= 0 ? world.contact_solver(object) : nullptr;
+    if (solver == nullptr || solver->num_unique() == 0) continue;
+    auto& item = out.items[out.count++];
+    item.object = object;
+    const Eigen::Matrix3d R = world.pose(object).linear();
+    for (int r = 0; r < 3; ++r) {
+      for (int c = 0; c < 3; ++c) item.R_WO[3 * r + c] = R(r, c);
+    }
+    const auto loads = solver->loads();
+    if (loads.size() > static_cast<std::size_t>(DeformableLoads::kMaxLoads)) {
+      item.num_loads = -1;
+      continue;
+    }
+    item.num_loads = static_cast<std::int32_t>(loads.size());
+    for (std::size_t l = 0; l < loads.size(); ++l) {
+      item.loads[l].slot = loads[l].slot;
+      Put(item.loads[l].f_N, loads[l].f_N);
+    }
+  }
+  loads_.Publish();
+}
+
 void SceneRenderer::ReleaseAll() noexcept {
   ContactReport& r = reports_.WriteSlot();
   r = ContactReport{};
@@ -116,6 +145,10 @@ void SceneRenderer::Render(double /*t_s*/, double dt_s, std::uint64_t now_ns, co
   world.Step(dt_s, reading.p_WE, {remote_contacts_.data(), static_cast<std::size_t>(n_remote)});
   passivity_.Observe(world.remote_forces_W());
   coupling_stats_.Write(passivity_.stats());
+  if (load_snapshots_ && ++steps_since_loads_ >= DeformableLoads::kEverySteps) {
+    steps_since_loads_ = 0;
+    WriteLoads(world);
+  }
   // 4. Controls: where the session left them (a state from the world server waits while this
   // hand is at the control), then their own force profiles and events.
   ControlCommand command;

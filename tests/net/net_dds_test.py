@@ -9,6 +9,7 @@ import json
 import math
 import os
 import re
+import shutil
 import subprocess
 import sys
 import time
@@ -497,6 +498,27 @@ STILL_WINDOW = (17.5, 20.5)
 HF_LIMIT_N = 0.02           # force RMS above 5 Hz while both hold still
 STIFFNESS_TOLERANCE = 0.05  # at 25 ms, of the no-delay stiffness
 OBSERVER_BOUND_J = -1e-4    # the coupling observer's lowest value (one step's prediction error)
+# One body, one shape: each node's field of the tail against the world server's, the largest
+# difference at a vertex. At rest within FIELD_BOUND_M (about 1 % of the 4.3 mm the tail moves
+# where pressed); within it one round trip after the inputs stop, give or take the sampling
+# (the nodes dump every 0.1 s, the test compares every 0.1 s, a still hand's set comes every
+# 0.1 s). The inputs stop when neither fingertip moves more than INPUT_STILL_M in 0.1 s.
+FIELD_BOUND_M = 50e-6
+FIELD_SAMPLING_S = 0.3
+INPUT_STILL_M = 20e-6
+
+
+def last_move(rows, t0, window):
+    """The last script time in `window` at which the fingertip (z1) moved more than
+    INPUT_STILL_M over the 0.1 s before (the window's start if it never did)."""
+    ts = [r["t_s"] - t0 for r in rows]
+    last, j = window[0], 0
+    for i, t in enumerate(ts):
+        while ts[j] < t - 0.1:
+            j += 1
+        if window[0] <= t <= window[1] and abs(rows[i]["z1"] - rows[j]["z1"]) > INPUT_STILL_M:
+            last = t
+    return last
 
 
 def hf_rms(values, dt_s, cut_Hz=5.0):
@@ -535,6 +557,53 @@ def coupling_summary(log, user):
     return out
 
 
+def obj_vertices(path):
+    """The number of vertices of a Wavefront OBJ file."""
+    with open(path) as f:
+        return sum(1 for line in f if line.startswith("v "))
+
+
+# The tail's published vertices: the scene mesh's, which its tetrahedral mesh keeps first.
+TAIL_VERTICES = obj_vertices(os.path.join(HERE, "..", "..", "assets", "meshes", "triceratops_tail.obj"))
+
+
+class FieldWatch:
+    """Compares each haptic node's own field of one deformable (haptic_node --dump-deformation)
+    with the world server's published field of it (world_server --dump-deformation; its
+    `sent_u_W_m`, within the re-send threshold of the server's solve) while the session runs:
+    the largest difference of a vertex's displacement, on this host's clock."""
+
+    EVERY_S = 0.1  # the nodes replace their dumps at most this often
+
+    def __init__(self, dumps, object_id, vertices):
+        self.files = {who: os.path.join(d, object_id + ".json") for who, d in dumps.items()}
+        self.vertices = vertices
+        self.rows = []  # (monotonic s, user, divergence m, the node's largest displacement m)
+        self.next = 0.0
+
+    def poll(self):
+        if time.monotonic() < self.next:
+            return None
+        self.next = time.monotonic() + self.EVERY_S
+        server = session_test.read_json(self.files["server"])
+        if server is None:
+            return None
+        sent = {int(k): v for k, v in server["sent_u_W_m"].items()}
+        now = time.monotonic()
+        for user in ("alice", "bob"):
+            local = session_test.read_json(self.files[user])
+            if local is None:
+                continue
+            mine = {int(k): v for k, v in local["u_W_m"].items() if int(k) < self.vertices}
+            worst = 0.0
+            for k in set(sent) | set(mine):
+                a, b = sent.get(k, (0.0, 0.0, 0.0)), mine.get(k, (0.0, 0.0, 0.0))
+                worst = max(worst, math.sqrt(sum((x - y) ** 2 for x, y in zip(a, b))))
+            largest = max((math.sqrt(sum(x * x for x in v)) for v in mine.values()), default=0.0)
+            self.rows.append((now, user, worst, largest))
+        return None
+
+
 def case_delayed_tail(args):
     """Two users at HIRO II devices (the simulated plant: each user's fingertip a mass held at the
     scripted hand by a spring-damper, so the force each feels moves their fingertip) press the
@@ -543,10 +612,13 @@ def case_delayed_tail(args):
     Asserted at every delay: each haptic loop stays stable (force RMS above 5 Hz under HF_LIMIT_N
     while both hold, no safety faults) and the coupling's passivity observer never falls below
     its bound; at 25 ms the stiffness each user feels (force change over fingertip depth change)
-    is within STIFFNESS_TOLERANCE of the no-delay value. Writes delayed_tail.csv (the figures)
-    and delayed_tail_forces.csv (each user's force through the run) to --work."""
+    is within STIFFNESS_TOLERANCE of the no-delay value. One body, one shape: each node's own
+    field of the tail (haptic_node --dump-deformation) is within FIELD_BOUND_M of the world
+    server's while both hold still, and came within it one round trip (plus the sampling) after
+    the inputs stopped. Writes delayed_tail.csv (the figures), delayed_tail_forces.csv (each
+    user's force through the run) and delayed_tail_field.csv (each comparison) to --work."""
     server_exe, node_exe = dinosaur_ready(args)
-    results, forces = [], []
+    results, forces, fields = [], [], []
     with Network(3, nfq_delay=args.nfq_delay) as net:
         a, b, c = net.hosts
         for delay_ms in DELAYS_MS:
@@ -560,8 +632,14 @@ def case_delayed_tail(args):
             for f in traces.values():
                 if os.path.exists(f):
                     os.remove(f)
+            dumps = {who: os.path.join(args.work, f"field_{delay_ms}ms", who) for who in ("server", "alice", "bob")}
+            for d in dumps.values():
+                shutil.rmtree(d, ignore_errors=True)
             server = a.start(f"world_server_{delay_ms}ms", [server_exe, *common, "--scene", "dinosaur",
-                                                           "--duration", 120], args.work)
+                                                           "--dump-deformation", dumps["server"],
+                                                           "--deformation-threshold", "1e-6", "--duration", 120],
+                             args.work)
+            watch = FieldWatch(dumps, "triceratops_tail", TAIL_VERTICES)
             nodes = {}
             try:
                 server.wait_for("models of 'dinosaur' ready", 60)
@@ -569,15 +647,16 @@ def case_delayed_tail(args):
                     nodes[user] = host.start(f"{user}_{delay_ms}ms",
                                              [node_exe, *common, "--user", user, "--device", "hiro", "--script",
                                               os.path.join(DATA, f"delay_{user}.hand"), "--trace", traces[user],
-                                              "--duration", 90], args.work)
+                                              "--dump-deformation", dumps[user], "--duration", 90], args.work)
                 starts = {}
                 for user, p in nodes.items():
                     p.wait_for("hand script starts at loop time", 60)
                     starts[user] = float(re.search(r"hand script starts at loop time ([\d.]+) s", p.log()).group(1))
                 for user in nodes:
+                    # The fields are compared while the session runs (each dump is replaced).
                     session_test.wait_until(f"{user}'s trace past the still window ({delay_ms} ms)", 90,
-                                            lambda u=user: (rows := session_test.read_trace(traces[u]))
-                                            and rows[-1]["t_s"] - starts[u] >= STILL_WINDOW[1] + 0.2)
+                                            lambda u=user: watch.poll() or ((rows := session_test.read_trace(traces[u]))
+                                            and rows[-1]["t_s"] - starts[u] >= STILL_WINDOW[1] + 0.2))
                 for user, p in nodes.items():
                     check(p.stop(timeout=30) == 0, f"{user}'s haptic node failed at {delay_ms} ms:\n{p.log()[-3000:]}")
                 server.stop()
@@ -585,6 +664,10 @@ def case_delayed_tail(args):
                 for p in (server, *nodes.values()):
                     sys.stderr.write(f"----- {p.label} -----\n{p.log()[-6000:]}\n")
                 raise
+            # When the inputs stopped changing: the last moment either fingertip (the arm settling
+            # after bob's last move) moved more than INPUT_STILL_M in 0.1 s, in script time.
+            inputs_stop = max(last_move(session_test.read_trace(traces[u]), starts[u], (15.0, STILL_WINDOW[1]))
+                              for u in ("alice", "bob"))
             for user in ("alice", "bob"):
                 rows = session_test.read_trace(traces[user])
                 t0 = starts[user]
@@ -603,6 +686,16 @@ def case_delayed_tail(args):
                 still = window(STILL_WINDOW)
                 dt = (still[-1]["t_s"] - still[0]["t_s"]) / (len(still) - 1)
                 fz = [session_test.net_fz(r) for r in still]
+                # The field comparisons on this user's script time (the trace stamps both clocks).
+                offset = rows[-1]["stamp_ns"] * 1e-9 - rows[-1]["t_s"] + t0
+                diffs = [(t - offset, d, big) for t, u, d, big in watch.rows if u == user]
+                fields += [(delay_ms, user, t, d, big) for t, d, big in diffs]
+                at_rest = [d for t, d, _ in diffs if STILL_WINDOW[0] <= t < STILL_WINDOW[1]]
+                check(len(at_rest) >= 10, f"{len(at_rest)} comparisons of {user}'s field with the server's while "
+                                          f"both held still at {delay_ms} ms")
+                # Converged: from when on every comparison is within FIELD_BOUND_M.
+                after = [(t, d) for t, d, _ in diffs if inputs_stop <= t < STILL_WINDOW[1]]
+                converged = max([t for t, d in after if d > FIELD_BOUND_M], default=inputs_stop) - inputs_stop
                 summary = loop_summary(nodes[user].log(), user)
                 coupling = coupling_summary(nodes[user].log(), user)
                 check(coupling is not None, f"{user}'s node printed no coupling-passivity line at {delay_ms} ms")
@@ -611,7 +704,9 @@ def case_delayed_tail(args):
                                 "force_N": mean(still, session_test.net_fz), "hf_rms_N": hf_rms(fz, dt),
                                 "swing_N": max(fz) - min(fz), "observer_min_J": coupling["observer_min_J"],
                                 "held_back": int(coupling["held_back"]), "drift_max_mm": coupling["drift_max_mm"],
-                                "granted_J": coupling["granted_J"],
+                                "granted_J": coupling["granted_J"], "field_diff_rest_m": max(at_rest),
+                                "field_converged_s": converged, "inputs_stop_s": inputs_stop,
+                                "field_max_m": max(big for _, _, big in diffs),
                                 "energy_sent_J": coupling["sent_J"], "energy_received_J": coupling["received_J"],
                                 "faults": int(summary["faults"]), "rate_limited": int(summary["rate_limited"]),
                                 "loop_Hz": summary["rate_Hz"]})
@@ -626,14 +721,20 @@ def case_delayed_tail(args):
         f.write("delay_ms,user,t_s,fz_N\n")
         for d, u, t, v in forces:
             f.write(f"{d},{u},{t:.4f},{v:.6f}\n")
+    with open(os.path.join(args.work, "delayed_tail_field.csv"), "w") as f:
+        f.write("delay_ms,user,t_s,divergence_m,largest_m\n")
+        for d, u, t, div, big in fields:
+            f.write(f"{d},{u},{t:.3f},{div:.4e},{big:.4e}\n")
     k0 = {r["user"]: r["k_N_per_m"] for r in results if r["delay_ms"] == 0}
     print("delayed tail: alice and bob at simulated HIRO IIs press the tail on three hosts; one-way delay on arrival at each")
     print("  delay user   stiffness [N/m] (vs 0 ms)  force [N]  RMS > 5 Hz [N]  observer min [J]  held back  drift [mm]  "
-          "granted [J]  faults")
+          "granted [J]  field vs server at rest [um]                      faults")
     for r in results:
         print(f"  {r['delay_ms']:4d}  {r['user']:6s} {r['k_N_per_m']:9.1f} ({100 * (r['k_N_per_m'] / k0[r['user']] - 1):+5.1f} %)"
               f"      {r['force_N']:7.3f}   {r['hf_rms_N']:.5f}         {r['observer_min_J']:+.2e}        "
-              f"{r['held_back']:6d}   {r['drift_max_mm']:.3f}       {r['granted_J']:.2e}    {r['faults']}")
+              f"{r['held_back']:6d}   {r['drift_max_mm']:.3f}       {r['granted_J']:.2e}    "
+              f"{1e6 * r['field_diff_rest_m']:6.1f} of {1e6 * r['field_max_m']:6.0f}, converged "
+              f"{r['field_converged_s']:.2f} s after {r['inputs_stop_s']:.2f} s     {r['faults']}")
     for r in results:
         what = f"{r['user']} at {r['delay_ms']} ms"
         check(r["hf_rms_N"] < HF_LIMIT_N, f"{what}: force RMS above 5 Hz {r['hf_rms_N']:.4f} N (>= {HF_LIMIT_N} N)")
@@ -641,6 +742,13 @@ def case_delayed_tail(args):
         check(r["observer_min_J"] >= OBSERVER_BOUND_J,
               f"{what}: the coupling observer fell to {r['observer_min_J']:.3e} J (< {OBSERVER_BOUND_J} J)")
         check(r["k_N_per_m"] > 0.0, f"{what}: stiffness {r['k_N_per_m']:.1f} N/m")
+        check(r["field_diff_rest_m"] <= FIELD_BOUND_M,
+              f"{what}: the node's field of the tail is {1e6 * r['field_diff_rest_m']:.1f} um off the server's at rest "
+              f"(> {1e6 * FIELD_BOUND_M:.0f} um)")
+        rule = 2e-3 * r["delay_ms"] + FIELD_SAMPLING_S
+        check(r["field_converged_s"] <= rule,
+              f"{what}: the node's field came within {1e6 * FIELD_BOUND_M:.0f} um of the server's "
+              f"{r['field_converged_s']:.2f} s after the inputs stopped (> one round trip + {FIELD_SAMPLING_S} s)")
         if r["delay_ms"] == 25:
             change = r["k_N_per_m"] / k0[r["user"]] - 1.0
             check(abs(change) <= STIFFNESS_TOLERANCE,

@@ -25,6 +25,7 @@ struct HapticNodeConfig {
   bool paced_streams = true;                     // streams no faster than read (session/stream_rates.hpp); false: every tick
   double rejoin_after_s = 15.0;                  // no world server heard this long after joining: join again; 0: never
   std::string trace_file;                        // CSV of every published device state
+  std::string dump_dir;                          // this node's field of each touched deformable ("" = none)
 };
 
 class HapticNode {

@@ -78,6 +78,26 @@ struct FollowedBodies {
   } items[kMaxReportedBodies];
 };
 
+/// The loads of this hand's solve of each touched deformable (trivially copyable): what the
+/// bridge turns into the local surface field (--dump-deformation). The haptic thread writes it
+/// every kEverySteps steps while enabled.
+struct DeformableLoads {
+  static constexpr int kMaxObjects = 3;
+  static constexpr int kMaxLoads = 384;
+  static constexpr int kEverySteps = 20;
+  std::uint64_t step_ns = 0;  ///< the step that made it (steady clock) [ns]
+  std::int32_t count = 0;
+  struct Item {
+    std::int32_t object = -1;
+    std::int32_t num_loads = 0;  ///< -1: more than kMaxLoads (not copied)
+    double R_WO[9] = {};         ///< the object's orientation, row-major
+    struct Load {
+      std::int32_t slot = -1;  ///< compliance slot (fem::NodeLoad)
+      double f_N[3] = {};      ///< force on the object, frame O [N]
+    } loads[kMaxLoads];
+  } items[kMaxObjects];
+};
+
 class SceneRenderer final : public ForceRenderer {
  public:
   /// Builds the models of `scene` (deformables from the compliance cache). Periodic motions and
@@ -116,8 +136,15 @@ class SceneRenderer final : public ForceRenderer {
   /// What the coupling's passivity observer and controller have seen and done (the haptic
   /// thread publishes it every step). False before the first step.
   bool TakeCouplingStats(contact::CouplingPassivityStats& out) noexcept { return coupling_stats_.Read(out); }
+  /// The haptic thread publishes DeformableLoads from now on. Not thread-safe: call before
+  /// SetRenderer.
+  void EnableLoadSnapshots() noexcept { load_snapshots_ = true; }
+  /// The newest DeformableLoads; false if none is new since the last call.
+  bool TakeLoads(DeformableLoads& out) noexcept { return loads_.Read(out); }
 
  private:
+  void WriteLoads(const contact::HapticWorld& world) noexcept;
+
   scene::Scene scene_;
   common::SessionClock clock_;
   world::SceneModels models_;
@@ -137,6 +164,9 @@ class SceneRenderer final : public ForceRenderer {
   common::TripleBuffer<FollowedBodies> followed_in_;
   common::TripleBuffer<ContactReport> reports_;
   common::TripleBuffer<contact::CouplingPassivityStats> coupling_stats_;
+  bool load_snapshots_ = false;
+  int steps_since_loads_ = 0;
+  common::TripleBuffer<DeformableLoads> loads_;
   common::SpscQueue<controls::ControlEvent, 256> events_;
   struct ControlCommand {
     std::array<char, 32> id{};  ///< NUL-terminated
