@@ -1,7 +1,8 @@
 #!/usr/bin/python3
 """Plots what tests/net/net_dds_test.py's delayed_tail wrote to its --work folder: each user's
-force through the run at every one-way delay (left), and against the delay the stiffness each
-felt relative to the no-delay run and the force RMS above 5 Hz while both held still (right).
+force through the run at every one-way delay (left); against the delay the stiffness each
+felt relative to the no-delay run and the force RMS above 5 Hz while both held still (middle);
+each node's field of the tail against the world server's through the run (right).
 Usage: plot_delayed_tail.py WORK_DIR OUT.png   (Debian's python3-matplotlib)."""
 import csv
 import os
@@ -24,7 +25,9 @@ def main() -> int:
         forces = list(csv.DictReader(f))
     delays = sorted({int(r["delay_ms"]) for r in rows})
     users = sorted({r["user"] for r in rows})
-    fig, (left, right) = plt.subplots(1, 2, figsize=(12, 4.5))
+    with open(os.path.join(work, "delayed_tail_field.csv"), newline="") as f:
+        field = list(csv.DictReader(f))
+    fig, (left, right, third) = plt.subplots(1, 3, figsize=(18, 4.5))
     for d in delays:
         for u, style in zip(users, ("-", "--")):
             series = [(float(r["t_s"]), float(r["fz_N"])) for r in forces
@@ -46,6 +49,18 @@ def main() -> int:
     right.set_xlabel("one-way delay [ms]")
     right.set_title("stiffness felt and force noise, against delay")
     right.legend(fontsize=7)
+    for d in delays:
+        for u, style in zip(users, ("-", "--")):
+            series = [(float(r["t_s"]), 1e6 * float(r["divergence_m"])) for r in field
+                      if int(r["delay_ms"]) == d and r["user"] == u]
+            third.plot([t for t, _ in series], [max(v, 0.1) for _, v in series], style, linewidth=0.8,
+                       label=f"{u}, {d} ms")
+    third.axhline(50.0, color="red", linestyle="--", linewidth=1, label="bound at rest (50 um)")
+    third.set_yscale("log")
+    third.set_xlabel("script time [s]")
+    third.set_ylabel("largest vertex difference [um]")
+    third.set_title("one body, one shape: each node's field vs the server's")
+    third.legend(fontsize=6, ncol=2)
     fig.suptitle("Two users at simulated HIRO IIs press the triceratops tail across a delayed network")
     fig.tight_layout()
     fig.savefig(out, dpi=100)
