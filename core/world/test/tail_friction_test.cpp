@@ -7,12 +7,15 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <cstdio>
 #include <cstdlib>
+#include <functional>
 #include <limits>
 #include <random>
 #include <stdexcept>
 #include <vector>
 
+#include "handshare/contact/coupling_passivity.hpp"
 #include "handshare/scene/scene.hpp"
 #include "handshare/world/scene_models.hpp"
 
@@ -179,8 +182,12 @@ struct TwoHandsResult {
 // Alice's fingertip above the top at the fraction at_a of the way to the tail's tip, bob's at
 // at_b (negative: bob stays away). A device's jitter: every fingertip position gets a normal
 // error of jitter_m a coordinate, every step.
+// With delay_ms >= 0 the contacts cross a network as the haptic nodes exchange them: a sample
+// every 10 ms, delivered delay_ms later, held until the next (zero-order hold), through each
+// receiver's coupling passivity controller (contact::CouplingPassivity, on as by default).
 TwoHandsResult HoldTheTailWithTwoHands(double mu_static, double mu_kinetic, double at_a = 0.35, double at_b = 0.55,
-                                       double jitter_m = 0.0) {
+                                       double jitter_m = 0.0, int delay_ms = -1,
+                                       contact::CouplingPassivityStats* coupling = nullptr) {
   std::mt19937 rng(5);
   std::normal_distribution<double> noise(0.0, 1.0);
   const scene::Scene s = TailScene(mu_static, mu_kinetic);
@@ -213,6 +220,44 @@ TwoHandsResult HoldTheTailWithTwoHands(double mu_static, double mu_kinetic, doub
     return v;
   };
   std::vector<contact::RemoteContact> from_alice, from_bob;
+  // The network: samples in flight (delivery step, sample) and each receiver's controller.
+  auto to_peer = [](const contact::RemoteContact& r, std::uint64_t received_ns) {
+    contact::PeerContact c;
+    c.hand = r.hand;
+    c.finger = r.finger;
+    c.object = r.object;
+    for (int i = 0; i < 3; ++i) {
+      c.p_WC_m[i] = r.p_WC_m[i];
+      c.u_W_m[i] = r.u_W_m[i];
+      c.n_W[i] = r.n_W[i];
+      c.f_E_W_N[i] = r.f_E_W_N[i];
+    }
+    c.received_ns = received_ns;
+    return c;
+  };
+  struct Link {
+    std::vector<std::pair<int, std::vector<contact::RemoteContact>>> in_flight;
+    std::vector<contact::PeerContact> held;
+    contact::CouplingPassivity passivity;
+    std::vector<contact::RemoteContact> Deliver(int k, const std::vector<contact::RemoteContact>& sent,
+                                                const std::function<contact::PeerContact(const contact::RemoteContact&, std::uint64_t)>& peer,
+                                                int delay_ms, const contact::HapticWorld& receiver) {
+      if (k % 10 == 0) in_flight.emplace_back(k + delay_ms, sent);
+      while (!in_flight.empty() && in_flight.front().first <= k) {
+        held.clear();
+        for (const auto& r : in_flight.front().second) held.push_back(peer(r, 1'000'000ull * static_cast<std::uint64_t>(k + 1)));
+        in_flight.erase(in_flight.begin());
+      }
+      std::vector<contact::RemoteContact> out;
+      passivity.BeginStep(1e-3);
+      for (const auto& c : held) {
+        out.push_back(contact::ToRemoteContact(c, contact::PeerFade{}, 1'000'000ull * static_cast<std::uint64_t>(k + 1)));
+        passivity.Admit(c, out.back());
+      }
+      (void)receiver;
+      return out;
+    }
+  } at_alice, at_bob;
   TwoHandsResult out;
   contact::FingerResult a_prev, b_prev;
   for (int k = 0; k < 2100; ++k) {  // down 7 mm in 100 steps (4 mm in), then held for 2 s
@@ -222,8 +267,17 @@ TwoHandsResult HoldTheTailWithTwoHands(double mu_static, double mu_kinetic, doub
     }
     tips_a[1] = X_WO * tip_a + jitter_m * Eigen::Vector3d(noise(rng), noise(rng), noise(rng));
     tips_b[1] = at_b < 0.0 ? Eigen::Vector3d(5, 5, 5) : Eigen::Vector3d(X_WO * tip_b + jitter_m * Eigen::Vector3d(noise(rng), noise(rng), noise(rng)));  // bob away
-    alice.world->Step(1e-3, tips_a, from_bob);
-    bob.world->Step(1e-3, tips_b, from_alice);
+    if (delay_ms < 0) {
+      alice.world->Step(1e-3, tips_a, from_bob);
+      bob.world->Step(1e-3, tips_b, from_alice);
+    } else {
+      const auto in_a = at_alice.Deliver(k, from_bob, to_peer, delay_ms, *alice.world);
+      const auto in_b = at_bob.Deliver(k, from_alice, to_peer, delay_ms, *bob.world);
+      alice.world->Step(1e-3, tips_a, in_a);
+      at_alice.passivity.Observe(alice.world->remote_forces_W());
+      bob.world->Step(1e-3, tips_b, in_b);
+      at_bob.passivity.Observe(bob.world->remote_forces_W());
+    }
     const contact::FingerResult& a = alice.world->fingers()[1];
     const contact::FingerResult& b = bob.world->fingers()[1];
     from_alice = sent(a);
@@ -237,6 +291,14 @@ TwoHandsResult HoldTheTailWithTwoHands(double mu_static, double mu_kinetic, doub
     a_prev = a;
     b_prev = b;
     out.alice_force_N = a.f_E_W_N.norm();
+  }
+  if (coupling != nullptr) {
+    *coupling = at_alice.passivity.stats();
+    const auto& b = at_bob.passivity.stats();
+    coupling->held_back += b.held_back;
+    coupling->drift_max_m = std::max(coupling->drift_max_m, b.drift_max_m);
+    coupling->energy_granted_J += b.energy_granted_J;
+    coupling->observer_min_J = std::min(coupling->observer_min_J, b.observer_min_J);
   }
   return out;
 }
@@ -294,6 +356,29 @@ TEST(TailFriction, HandsHeldStillAnywhereAlongTheTailComeToRest) {
   RecordProperty("jittering_pairs_largest_force_change_per_step_mN", std::to_string(1e3 * jittered_N));
   EXPECT_EQ(single, 12);
   EXPECT_EQ(pairs, 22);
+}
+
+// The same pairs across a delayed network with the coupling's passivity controller (on by
+// default in the haptic nodes) between them: they come to rest too, and the controller never
+// holds anything back here. (A cross-process run with friction in the scenes once saw the tail
+// never at rest, the controller holding alice's contact back at bob's node by 2.6 mm; this
+// in-process pair at 0-50 ms does not reproduce that: docs/scenes.md.)
+TEST(TailFriction, HandsHeldStillAcrossADelayComeToRest) {
+  for (int delay : {0, 20, 50}) {
+    for (double a : {0.2, 0.35}) {
+      for (double b : {0.45, 0.55}) {
+        contact::CouplingPassivityStats c;
+        const TwoHandsResult r = HoldTheTailWithTwoHands(0.8, 0.6, a, b, 0.0, delay, &c);
+        std::printf("delay %d ms, hands at %.2f and %.2f: late change %.2e m %.2e N, held back %llu, drift %.3f mm, "
+                    "granted %.2e J, observer min %.2e J, alice %.3f N\n",
+                    delay, a, b, r.largest_late_change_m, r.largest_late_change_N,
+                    static_cast<unsigned long long>(c.held_back), 1e3 * c.drift_max_m, c.energy_granted_J,
+                    c.observer_min_J, r.alice_force_N);
+        EXPECT_LT(r.largest_late_change_m, 1e-6) << delay << " ms, hands at " << a << " and " << b;
+        EXPECT_LT(r.largest_late_change_N, 1e-3) << delay << " ms, hands at " << a << " and " << b;
+      }
+    }
+  }
 }
 
 }  // namespace
