@@ -4,8 +4,6 @@
 #include <sstream>
 #include <stdexcept>
 
-#include "handshare/common/clock.hpp"
-
 namespace handshare::haptic {
 
 LocalFieldDump::LocalFieldDump(std::filesystem::path dir, std::string user, std::chrono::milliseconds period)

@@ -12,8 +12,10 @@
 #include <filesystem>
 #include <fstream>
 #include <string>
+#include <nlohmann/json.hpp>
 
 #include "bridge_conversions.hpp"
+#include "local_field_dump.hpp"
 #include "handshare/common/clock.hpp"
 #include "handshare/scene/scene.hpp"
 #include "handshare/session/peer_contacts.hpp"
@@ -236,6 +238,88 @@ TEST(SceneRenderer, AVanishedPeerFadesAtTheHapticRateWhileTheBridgeStalls) {
   EXPECT_LT(worst_oracle, 0.02 * std::abs(f_full - f_alone));  // the oracle itself ramps (300 steps)
   EXPECT_NEAR(prev, f_alone, 1e-9);                             // gone at the lifespan
   EXPECT_EQ(allocations, 0);
+  std::filesystem::remove_all(dir);
+}
+
+// --dump-deformation: the haptic thread's snapshot of its solve's loads, turned into a field by
+// the bridge's LocalFieldDump, is the field of the solve itself (the contact solver's own
+// SurfaceDisplacements, in the object's frame turned into W), at every node; and where the
+// fingertip presses the body moves by about the fingertip's depth.
+TEST(SceneRenderer, TheDumpedFieldIsTheFieldOfItsOwnSolve) {
+  const auto dir = std::filesystem::temp_directory_path() /
+                   ("handshare_scene_renderer_dump_test_" + std::to_string(getpid()));
+  std::filesystem::remove_all(dir);
+  std::filesystem::create_directories(dir / "scenes");
+  const auto file = dir / "scenes" / "lab.json";
+  std::ofstream(file) << R"({"name": "lab", "gravity_m_per_s2": [0, 0, -9.81], "objects": [
+      {"id": "block", "kind": "deformable", "shape": "box", "position_m": [-0.1, 0, 0.01],
+       "orientation_wxyz": [0.9238795, 0, 0, 0.3826834],
+       "half_extent_m": [0.02, 0.02, 0.01], "material": {"E_Pa": 20000, "nu": 0.4}, "fixed": {"below_m": -0.0099}}],
+      "messages": [{"language": "en", "text": "t", "next_action": "a"}]})";
+  world::SceneModelsOptions options;
+  options.cache_dir = dir / "cache";
+  SceneRenderer r(scene::LoadScene(file), options);
+  r.EnableLoadSnapshots();
+  DeviceReading alice;
+  alice.valid = true;
+  for (auto& p : alice.p_WE) p = Eigen::Vector3d(1.0, 1.0, 1.0);
+  std::array<Eigen::Vector3d, kFingers> f{};
+  for (int i = 0; i < 2 * DeformableLoads::kEverySteps; ++i) {  // 2 mm into the block's top
+    alice.p_WE[0] = Eigen::Vector3d(-0.1, 0.003, 0.02 + options.fingertip_radius_m - 1e-4 * std::min(i, 20));
+    r.Render(0.0, 1e-3, 1'000'000ull * static_cast<std::uint64_t>(i + 1), alice, f);
+  }
+  ASSERT_GT(f[0].z(), 0.05);  // she presses it
+  LocalFieldDump dump(dir / "dump", "alice", std::chrono::milliseconds(100));
+  dump.Update(r);
+  ASSERT_EQ(dump.written(), 1u);
+  std::ifstream in(dir / "dump" / "block.json");
+  const nlohmann::json j = nlohmann::json::parse(in);
+  EXPECT_EQ(j["object"], "block");
+  EXPECT_EQ(j["user"], "alice");
+
+  const contact::ObjectId block = r.models().Find("block");
+  const contact::HapticWorld& world = *r.models().world;
+  const fem::ContactSolver* solver = world.contact_solver(block);
+  ASSERT_NE(solver, nullptr);
+  const auto& prepared = r.models().deformables[0];
+  std::vector<Eigen::Vector3d> u(static_cast<std::size_t>(prepared.compliance->num_nodes()));
+  ASSERT_TRUE(solver->SurfaceDisplacements(u));
+  const Eigen::Matrix3d R = world.pose(block).linear();
+  double largest = 0.0;
+  int compared = 0;
+  for (std::size_t s = 0; s < u.size(); ++s) {
+    const std::string node = std::to_string(prepared.compliance->nodes()[s]);
+    const Eigen::Vector3d want = R * u[s];
+    if (!j["u_W_m"].contains(node)) {
+      EXPECT_EQ(want.squaredNorm(), 0.0) << node;
+      continue;
+    }
+    const auto& got = j["u_W_m"][node];
+    const Eigen::Vector3d g(got[0].get<double>(), got[1].get<double>(), got[2].get<double>());
+    EXPECT_LE((g - want).norm(), 1e-9 * (1.0 + want.norm()) + 1e-12) << node;  // 9 printed digits
+    largest = std::max(largest, g.norm());
+    ++compared;
+  }
+  EXPECT_GT(compared, 20);
+  // Under the fingertip the solve imposed the sphere's indentation, delta - r^2 / 2R along -n
+  // at a patch node r from the contact point (docs/fem.md): the dumped field has it there.
+  const contact::FingerResult& tip = world.fingers()[0];
+  ASSERT_GE(tip.main_node, 0);
+  EXPECT_GT(tip.depth_m, 1e-3);
+  const Eigen::Vector3d p_node = world.pose(block) * prepared.mesh->positions_m()[static_cast<std::size_t>(tip.main_node)];
+  const double r_m = (p_node - tip.p_WC_m).norm();
+  const double indent = tip.depth_m - r_m * r_m / (2.0 * options.fingertip_radius_m);
+  const auto& at = j["u_W_m"][std::to_string(tip.main_node)];
+  const Eigen::Vector3d u_main(at[0].get<double>(), at[1].get<double>(), at[2].get<double>());
+  EXPECT_NEAR(-u_main.dot(tip.n_W), indent, 1e-3 * indent) << "r " << r_m;
+  EXPECT_LE(largest, tip.depth_m);
+  // A folder that cannot be made is named.
+  try {
+    LocalFieldDump bad("/proc/handshare_no_such_dir/x", "alice", std::chrono::milliseconds(100));
+    ADD_FAILURE() << "no error for an impossible folder";
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(std::string(e.what()).find("/proc/handshare_no_such_dir/x"), std::string::npos) << e.what();
+  }
   std::filesystem::remove_all(dir);
 }
 
