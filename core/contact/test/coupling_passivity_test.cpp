@@ -205,6 +205,43 @@ TEST(CouplingPassivity, AfterAHoldTheLagClosesAtTheFadesRateNotAFingertipsSpeed)
   EXPECT_EQ(run.stats.granted_still, 0u);
 }
 
+TEST(CouplingPassivity, AUsersChannelOutlivesAChangeOfItsHandIndex) {
+  // Hands are numbered in user-name order, so bob's contacts become hand 2 when aaron joins. His
+  // channel is his (the user's key): his held press goes on as it was. Keyed by hand index, his
+  // 3 mm press opened a new channel at 0 and came back at the rate limit: the other hand's body
+  // let go of his patch for 12 ms.
+  CouplingPassivity pc;
+  const std::uint64_t bob = UserKey("bob"), aaron = UserKey("aaron");
+  ASSERT_NE(bob, aaron);
+  double imposed_m = 0.0;
+  auto step = [&](const PeerContact& sent, std::uint64_t now_ns) {
+    pc.BeginStep(1e-3);
+    RemoteContact in = ToRemoteContact(sent, PeerFade{}, now_ns);
+    pc.Admit(sent, in);
+    imposed_m = -in.u_W_m.z();
+    const std::array<Eigen::Vector3d, 1> F = {OnBody(400.0 * imposed_m)};
+    pc.Observe(F);
+  };
+  for (int ms = 0; ms < 300; ++ms) {  // bob presses 0 -> 3 mm, then holds, as hand 1
+    const double x = std::min(3e-3, 1e-4 * (ms / 10 + 1));
+    PeerContact c = Sample(x, 400.0 * x, 1'000'000ull * static_cast<std::uint64_t>(ms - ms % 10 + 1));
+    c.user_key = bob;
+    step(c, 1'000'000ull * static_cast<std::uint64_t>(ms + 1));
+  }
+  ASSERT_NEAR(imposed_m, 3e-3, 1e-12);
+  PeerContact c = Sample(3e-3, 1.2, 301'000'000ull);
+  c.user_key = bob;
+  c.hand = 2;  // aaron joined
+  step(c, 301'000'000ull);
+  EXPECT_NEAR(imposed_m, 3e-3, 1e-12);
+  EXPECT_EQ(pc.stats().channels_total, 1u);
+  // And aaron, now hand 1 on the same finger and object, gets a channel of his own.
+  PeerContact a = Sample(1e-3, 0.4, 302'000'000ull);
+  a.user_key = aaron;
+  step(a, 302'000'000ull);
+  EXPECT_EQ(pc.stats().channels_total, 2u);
+}
+
 TEST(CouplingPassivity, TheWorldReportsEachRemoteContactsForceOnTheBody) {
   // One remote fingertip alone on a block: its patch force is everything the solve holds.
   HapticWorld w;

@@ -5,6 +5,7 @@
 /// these (the DDS boundary); the haptic renderer and the world server turn them into
 /// RemoteContacts for the solves, faded by the contact's age at their own step (PeerFade).
 #include <cstdint>
+#include <string_view>
 
 #include "handshare/contact/haptic_world.hpp"
 
@@ -38,7 +39,8 @@ struct PeerFade {
 /// One peer fingertip on an object of the local models, as its set carried it (not faded).
 /// Plain data.
 struct PeerContact {
-  std::int32_t hand = 0;        ///< 1, 2, ... in user-name order
+  std::int32_t hand = 0;        ///< 1, 2, ... in user-name order (changes as users come and go)
+  std::uint64_t user_key = 0;   ///< the user's, for as long as the user is there (UserKey); 0: unknown
   std::int32_t finger = 0;
   std::int32_t object = -1;     ///< object index of the local models (world::SceneModels)
   double p_WC_m[3] = {};        ///< contact point on the undeformed surface [m], in W
@@ -48,6 +50,13 @@ struct PeerContact {
   double f_E_W_N[3] = {};       ///< force on the peer's fingertip [N], in W, not faded
   std::uint64_t received_ns = 0;  ///< when its set arrived here (steady clock, common::SteadyNowNs) [ns]
 };
+
+/// A user name's key for PeerContact::user_key: FNV-1a of its bytes, never 0.
+inline std::uint64_t UserKey(std::string_view user) noexcept {
+  std::uint64_t h = 0xcbf29ce484222325ull;
+  for (const char ch : user) h = (h ^ static_cast<unsigned char>(ch)) * 0x100000001b3ull;
+  return h == 0 ? 1 : h;
+}
 
 /// The contact as a solve takes it at `now_ns` (steady clock): u and f scaled by the fade's
 /// weight at the contact's age. Whoever steps the solve calls this with its own step time, so

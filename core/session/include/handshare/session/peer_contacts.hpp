@@ -55,6 +55,7 @@ class PeerContacts {
     for (const auto& [user, entry] : sets_) {
       ++hand;
       if (Weight(now - entry.received) <= 0.0) continue;
+      const std::uint64_t user_key = contact::UserKey(user);
       const std::uint64_t received_ns = SteadyNs(entry.received);
       for (int i = 0; i < static_cast<int>(entry.set.fingers().size()); ++i) {
         const auto& f = entry.set.fingers()[i];
@@ -63,6 +64,7 @@ class PeerContacts {
         c.object = models.Find(f.object_id().to_string());
         if (c.object < 0) continue;
         c.hand = hand;
+        c.user_key = user_key;
         c.finger = i;
         c.received_ns = received_ns;
         for (int k = 0; k < 3; ++k) {
