@@ -114,6 +114,22 @@ TEST(SceneRenderer, ReportsTheStepThatFirstUsedANewPeerSet) {
   std::filesystem::remove_all(dir);
 }
 
+// A fresh folder for a test's scene and caches.
+std::filesystem::path LabDir(const std::string& what) {
+  const auto dir = std::filesystem::temp_directory_path() /
+                   ("handshare_scene_renderer_" + what + "_test_" + std::to_string(getpid()));
+  std::filesystem::remove_all(dir);
+  std::filesystem::create_directories(dir / "scenes");
+  return dir;
+}
+// A scene "lab" with these objects (JSON, without the brackets), written under dir/scenes.
+std::filesystem::path WriteLab(const std::filesystem::path& dir, const std::string& objects) {
+  const auto file = dir / "scenes" / "lab.json";
+  std::ofstream(file) << R"({"name": "lab", "gravity_m_per_s2": [0, 0, -9.81], "objects": [)" << objects
+                      << R"(], "messages": [{"language": "en", "text": "t", "next_action": "a"}]})";
+  return file;
+}
+
 // A peer that vanished fades out at the haptic rate whatever the bridge does. The bridge
 // (ReceivePeers, ~100 Hz) hands the peers' contacts over; under load it stalls for tens to
 // 100+ ms. Here bob's last set arrives at t0, the bridge ticks every 10 ms but stalls from
@@ -127,16 +143,11 @@ TEST(SceneRenderer, ReportsTheStepThatFirstUsedANewPeerSet) {
 TEST(SceneRenderer, AVanishedPeerFadesAtTheHapticRateWhileTheBridgeStalls) {
   using namespace std::chrono_literals;
   using Clock = session::PeerContacts::Clock;
-  const auto dir = std::filesystem::temp_directory_path() /
-                   ("handshare_scene_renderer_fade_test_" + std::to_string(getpid()));
-  std::filesystem::remove_all(dir);
-  std::filesystem::create_directories(dir / "scenes");
-  const auto file = dir / "scenes" / "lab.json";
-  std::ofstream(file) << R"({"name": "lab", "gravity_m_per_s2": [0, 0, -9.81], "objects": [
+  const auto dir = LabDir("fade");
+  const auto file = WriteLab(dir, R"(
       {"id": "ground", "kind": "rigid", "shape": "box", "position_m": [0, 0, -0.02], "half_extent_m": [0.3, 0.3, 0.02]},
       {"id": "block", "kind": "deformable", "shape": "box", "position_m": [-0.1, 0, 0.01],
-       "half_extent_m": [0.02, 0.02, 0.01], "material": {"E_Pa": 20000, "nu": 0.4}, "fixed": {"below_m": -0.0099}}],
-      "messages": [{"language": "en", "text": "t", "next_action": "a"}]})";
+       "half_extent_m": [0.02, 0.02, 0.01], "material": {"E_Pa": 20000, "nu": 0.4}, "fixed": {"below_m": -0.0099}})");
   world::SceneModelsOptions options;
   options.cache_dir = dir / "cache";
   const scene::Scene scene = scene::LoadScene(file);
@@ -246,16 +257,11 @@ TEST(SceneRenderer, AVanishedPeerFadesAtTheHapticRateWhileTheBridgeStalls) {
 // SurfaceDisplacements, in the object's frame turned into W), at every node; and where the
 // fingertip presses the body moves by about the fingertip's depth.
 TEST(SceneRenderer, TheDumpedFieldIsTheFieldOfItsOwnSolve) {
-  const auto dir = std::filesystem::temp_directory_path() /
-                   ("handshare_scene_renderer_dump_test_" + std::to_string(getpid()));
-  std::filesystem::remove_all(dir);
-  std::filesystem::create_directories(dir / "scenes");
-  const auto file = dir / "scenes" / "lab.json";
-  std::ofstream(file) << R"({"name": "lab", "gravity_m_per_s2": [0, 0, -9.81], "objects": [
+  const auto dir = LabDir("dump");
+  const auto file = WriteLab(dir, R"(
       {"id": "block", "kind": "deformable", "shape": "box", "position_m": [-0.1, 0, 0.01],
        "orientation_wxyz": [0.9238795, 0, 0, 0.3826834],
-       "half_extent_m": [0.02, 0.02, 0.01], "material": {"E_Pa": 20000, "nu": 0.4}, "fixed": {"below_m": -0.0099}}],
-      "messages": [{"language": "en", "text": "t", "next_action": "a"}]})";
+       "half_extent_m": [0.02, 0.02, 0.01], "material": {"E_Pa": 20000, "nu": 0.4}, "fixed": {"below_m": -0.0099}})");
   world::SceneModelsOptions options;
   options.cache_dir = dir / "cache";
   SceneRenderer r(scene::LoadScene(file), options);
