@@ -121,7 +121,8 @@ void CouplingPassivity::Admit(const PeerContact& sent, RemoteContact& input) noe
     const Eigen::Vector3d du = u - ch->u_imposed;
     const double want = predicted(du);
     // (Rounding: on a linear body without delay the prediction equals the budget's increment.)
-    if (want > budget + kRounding_J + 1e-9 * std::abs(want) && ch->held && still) {
+    const bool over_budget = want > budget + kRounding_J + 1e-9 * std::abs(want);
+    if (over_budget && ch->held && still) {
       // The peer has stopped and the local copy still lags: the lag closes (at the fade's rate
       // above), granted beyond the budget so that both copies come to one shape. Bounded by the
       // work of closing the lag, once per stop; a swing never stops, so it is never granted one.
@@ -129,7 +130,7 @@ void CouplingPassivity::Admit(const PeerContact& sent, RemoteContact& input) noe
       ch->e_granted += grant;
       stats_.energy_granted_J += grant;
       ++stats_.granted_still;
-    } else if (want > budget + kRounding_J + 1e-9 * std::abs(want)) {
+    } else if (over_budget) {
       // Scale the change: k a^2 |du|^2 / 2 + (F . du) a = budget, the root in [0, 1]. With no
       // budget left (a prediction fell short by a step's error), nothing that puts energy in
       // passes until the peer's samples bring more; a release always passes.
