@@ -26,16 +26,16 @@ Eigen::Vector3d Vec(const double (&a)[3]) noexcept { return {a[0], a[1], a[2]}; 
 
 }  // namespace
 
-int CouplingPassivity::Find(std::uint64_t who, std::int32_t finger, std::int32_t object) const noexcept {
+int CouplingPassivity::Find(std::uint64_t user_key, std::int32_t finger, std::int32_t object) const noexcept {
   for (int i = 0; i < kMaxChannels; ++i) {
     const Channel& c = channels_[static_cast<std::size_t>(i)];
-    if (c.open && c.who == who && c.finger == finger && c.object == object) return i;
+    if (c.open && c.user_key == user_key && c.finger == finger && c.object == object) return i;
   }
   return -1;
 }
 
-double CouplingPassivity::observer_J(std::int32_t hand, std::int32_t finger, std::int32_t object) const noexcept {
-  const int i = Find(Who(0, hand), finger, object);
+double CouplingPassivity::observer_J(std::uint64_t user_key, std::int32_t finger, std::int32_t object) const noexcept {
+  const int i = Find(user_key, finger, object);
   if (i < 0) return 0.0;
   const Channel& c = channels_[static_cast<std::size_t>(i)];
   return c.e_tx + c.e_granted - c.e_rx;
@@ -55,15 +55,14 @@ void CouplingPassivity::Admit(const PeerContact& sent, RemoteContact& input) noe
   std::int16_t& slot = admitted_[static_cast<std::size_t>(num_admitted_++)];
   slot = -1;
   if (!input.u_W_m.allFinite()) return;
-  const std::uint64_t who = Who(sent.user_key, sent.hand);
-  const int found = Find(who, sent.finger, sent.object);
+  const int found = Find(sent.user_key, sent.finger, sent.object);
   Channel* ch = found < 0 ? nullptr : &channels_[static_cast<std::size_t>(found)];
   if (ch == nullptr) {
     for (Channel& c : channels_) {
       if (!c.open) {
         c = Channel{};
         c.open = true;
-        c.who = who;
+        c.user_key = sent.user_key;
         c.finger = sent.finger;
         c.object = sent.object;
         ch = &c;

@@ -57,7 +57,7 @@ TEST(CouplingPassivity, ObserverIsExactOnALinearSpringWithoutDelay) {
   const double e = 0.5 * k * x_prev * x_prev;
   EXPECT_NEAR(pc.stats().energy_sent_J, e, 1e-15);
   EXPECT_NEAR(pc.stats().energy_received_J, e, 1e-15);
-  EXPECT_NEAR(pc.observer_J(1, 0, 0), 0.0, 1e-15);
+  EXPECT_NEAR(pc.observer_J(0, 0, 0), 0.0, 1e-15);
   EXPECT_EQ(pc.stats().held_back, 0u);
   EXPECT_EQ(pc.stats().steps, 300u);
 }
@@ -87,7 +87,7 @@ StiffenedRun PressAStiffenedBody(bool passivity) {
     }
   }
   run.stats = pc.stats();
-  run.observer_J = pc.observer_J(1, 0, 0);
+  run.observer_J = pc.observer_J(0, 0, 0);
   return run;
 }
 
@@ -143,7 +143,7 @@ ClockedRun PressOnAClock(After after, int end_ms, int sample_every_ms, double k_
     pc.Observe(F);
   }
   run.stats = pc.stats();
-  run.observer_J = pc.observer_J(1, 0, 0);
+  run.observer_J = pc.observer_J(0, 0, 0);
   return run;
 }
 

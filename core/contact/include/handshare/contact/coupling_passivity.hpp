@@ -88,16 +88,16 @@ class CouplingPassivity {
   void Observe(std::span<const Eigen::Vector3d> force_on_body_W) noexcept;
 
   const CouplingPassivityStats& stats() const noexcept { return stats_; }
-  /// E_obs of the channel of (hand, finger, object) of a contact without a user key, or 0 if
-  /// none is open (tests).
-  double observer_J(std::int32_t hand, std::int32_t finger, std::int32_t object) const noexcept;
+  /// E_obs of the channel of (user_key, finger, object), or 0 if none is open (tests).
+  double observer_J(std::uint64_t user_key, std::int32_t finger, std::int32_t object) const noexcept;
 
  private:
   struct Channel {
     bool open = false;
     bool seen = false;
     bool deformable = false;
-    std::uint64_t who = 0;  // the user (Who): a hand index changes as users come and go
+    std::uint64_t user_key = 0;  // the user's (PeerContact::user_key), not the hand index: that
+                                 // changes as users come and go
     std::int32_t finger = 0, object = -1;
     std::uint64_t sample_ns = 0;                                 // received_ns of the last sample
     Eigen::Vector3d u_sent = Eigen::Vector3d::Zero();            // last sample (sender's)
@@ -113,12 +113,8 @@ class CouplingPassivity {
     Eigen::Vector3d u_still = Eigen::Vector3d::Zero();           // the sample the peer is still at
     std::uint64_t still_since_ns = 0;                            // ... received then (0: none yet)
   };
-  /// Whose contact: the user's key, else (a contact without one) its hand index, tagged apart.
-  static std::uint64_t Who(std::uint64_t user_key, std::int32_t hand) noexcept {
-    return user_key != 0 ? user_key : (0x8000000000000000ull | static_cast<std::uint32_t>(hand));
-  }
-  /// The open channel of (who, finger, object): its index, -1 if none.
-  int Find(std::uint64_t who, std::int32_t finger, std::int32_t object) const noexcept;
+  /// The open channel of (user_key, finger, object): its index, -1 if none.
+  int Find(std::uint64_t user_key, std::int32_t finger, std::int32_t object) const noexcept;
 
   bool enabled_;
   double max_step_m_ = 0.0;
