@@ -28,6 +28,9 @@ SceneRenderer::SceneRenderer(const scene::Scene& scene, const world::SceneModels
     if (id >= 0 && scene_.objects[i].motion.active()) moving_.emplace_back(id, i);
     if (id >= 0 && scene_.objects[i].beat.active()) beating_.emplace_back(id, i);
   }
+  for (const auto& d : models_.deformables) {
+    if (const auto id = models_.Find(d.object_id); id >= 0) deformables_.push_back(id);
+  }
 }
 
 void SceneRenderer::PlaceControl(const std::string& id, std::int32_t index, bool engaged) {
@@ -57,10 +60,9 @@ void SceneRenderer::WriteLoads(const contact::HapticWorld& world) noexcept {
   DeformableLoads& out = loads_.WriteSlot();
   out.step_ns = common::SteadyNowNs();
   out.count = 0;
-  for (const auto& d : models_.deformables) {
+  for (const contact::ObjectId object : deformables_) {
     if (out.count >= DeformableLoads::kMaxObjects) break;
-    const contact::ObjectId object = models_.Find(d.object_id);
-    const fem::ContactSolver* solver = object >= 0 ? world.contact_solver(object) : nullptr;
+    const fem::ContactSolver* solver = world.contact_solver(object);
     if (solver == nullptr || solver->num_unique() == 0) continue;
     auto& item = out.items[out.count++];
     item.object = object;

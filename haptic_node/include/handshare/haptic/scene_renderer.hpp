@@ -152,6 +152,7 @@ class SceneRenderer final : public ForceRenderer {
   double fingertip_radius_m_;
   std::vector<std::pair<contact::ObjectId, std::size_t>> moving_;  // (object, scene index)
   std::vector<std::pair<contact::ObjectId, std::size_t>> beating_;  // (object, scene index)
+  std::vector<contact::ObjectId> deformables_;                       // world indices (load snapshots)
   // Haptic-thread state, sized here.
   std::array<Eigen::Vector3d, kFingers> f_controls_{};
   controls::EventBuffer event_buffer_;
