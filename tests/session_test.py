@@ -82,6 +82,13 @@ def wait_until(what, timeout, probe, explain=None):
         time.sleep(POLL_S)
 
 
+def obj_vertices(path):
+    """The number of vertices of a Wavefront OBJ file (a published field's node ids are below it:
+    tetgen keeps the scene mesh's vertices first)."""
+    with open(path) as f:
+        return sum(1 for line in f if line.startswith("v "))
+
+
 def read_json(path):
     """A JSON file's content, or None while it does not exist (writers rename it into place)."""
     try:
@@ -1139,8 +1146,7 @@ def case_beating_belly(h, domain):
     os.environ["HANDSHARE_CACHE"] = fem_cache(h.work)
     dump = os.path.join(h.work, "deformation")
     held_file = os.path.join(dump, "daphnia_belly.json")
-    with open(os.path.join(HERE, "..", "assets", "meshes", "daphnia_body.obj")) as f:
-        vertex_count = sum(1 for line in f if line.startswith("v "))
+    vertex_count = obj_vertices(os.path.join(HERE, "..", "assets", "meshes", "daphnia_body.obj"))
     h.start("world_server", "world_server", "--domain", domain, "--session", session, "--scene", "microscopic_belly",
             "--dump-deformation", dump, "--deformation-threshold", "1e-6")
     h.wait_for_line("world_server", "models of 'microscopic_belly' ready", 300)

@@ -566,14 +566,8 @@ def coupling_summary(log, user):
     return out
 
 
-def obj_vertices(path):
-    """The number of vertices of a Wavefront OBJ file."""
-    with open(path) as f:
-        return sum(1 for line in f if line.startswith("v "))
-
-
 # The tail's published vertices: the scene mesh's, which its tetrahedral mesh keeps first.
-TAIL_VERTICES = obj_vertices(os.path.join(HERE, "..", "..", "assets", "meshes", "triceratops_tail.obj"))
+TAIL_VERTICES = session_test.obj_vertices(os.path.join(HERE, "..", "..", "assets", "meshes", "triceratops_tail.obj"))
 
 
 class FieldWatch:
