@@ -9,7 +9,6 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
-#include <functional>
 #include <limits>
 #include <random>
 #include <stdexcept>
@@ -221,40 +220,37 @@ TwoHandsResult HoldTheTailWithTwoHands(double mu_static, double mu_kinetic, doub
   };
   std::vector<contact::RemoteContact> from_alice, from_bob;
   // The network: samples in flight (delivery step, sample) and each receiver's controller.
-  auto to_peer = [](const contact::RemoteContact& r, std::uint64_t received_ns) {
-    contact::PeerContact c;
-    c.hand = r.hand;
-    c.finger = r.finger;
-    c.object = r.object;
-    for (int i = 0; i < 3; ++i) {
-      c.p_WC_m[i] = r.p_WC_m[i];
-      c.u_W_m[i] = r.u_W_m[i];
-      c.n_W[i] = r.n_W[i];
-      c.f_E_W_N[i] = r.f_E_W_N[i];
-    }
-    c.received_ns = received_ns;
-    return c;
-  };
   struct Link {
     std::vector<std::pair<int, std::vector<contact::RemoteContact>>> in_flight;
     std::vector<contact::PeerContact> held;
     contact::CouplingPassivity passivity;
-    std::vector<contact::RemoteContact> Deliver(int k, const std::vector<contact::RemoteContact>& sent,
-                                                const std::function<contact::PeerContact(const contact::RemoteContact&, std::uint64_t)>& peer,
-                                                int delay_ms, const contact::HapticWorld& receiver) {
+    std::vector<contact::RemoteContact> Deliver(int k, const std::vector<contact::RemoteContact>& sent, int delay_ms) {
+      const std::uint64_t now_ns = 1'000'000ull * static_cast<std::uint64_t>(k + 1);
       if (k % 10 == 0) in_flight.emplace_back(k + delay_ms, sent);
       while (!in_flight.empty() && in_flight.front().first <= k) {
         held.clear();
-        for (const auto& r : in_flight.front().second) held.push_back(peer(r, 1'000'000ull * static_cast<std::uint64_t>(k + 1)));
+        for (const auto& r : in_flight.front().second) {
+          contact::PeerContact c;
+          c.hand = r.hand;
+          c.finger = r.finger;
+          c.object = r.object;
+          for (int i = 0; i < 3; ++i) {
+            c.p_WC_m[i] = r.p_WC_m[i];
+            c.u_W_m[i] = r.u_W_m[i];
+            c.n_W[i] = r.n_W[i];
+            c.f_E_W_N[i] = r.f_E_W_N[i];
+          }
+          c.received_ns = now_ns;
+          held.push_back(c);
+        }
         in_flight.erase(in_flight.begin());
       }
       std::vector<contact::RemoteContact> out;
       passivity.BeginStep(1e-3);
       for (const auto& c : held) {
-        out.push_back(contact::ToRemoteContact(c, contact::PeerFade{}, 1'000'000ull * static_cast<std::uint64_t>(k + 1)));
+        out.push_back(contact::ToRemoteContact(c, contact::PeerFade{}, now_ns));
         passivity.Admit(c, out.back());
       }
-      (void)receiver;
       return out;
     }
   } at_alice, at_bob;
@@ -271,8 +267,8 @@ TwoHandsResult HoldTheTailWithTwoHands(double mu_static, double mu_kinetic, doub
       alice.world->Step(1e-3, tips_a, from_bob);
       bob.world->Step(1e-3, tips_b, from_alice);
     } else {
-      const auto in_a = at_alice.Deliver(k, from_bob, to_peer, delay_ms, *alice.world);
-      const auto in_b = at_bob.Deliver(k, from_alice, to_peer, delay_ms, *bob.world);
+      const auto in_a = at_alice.Deliver(k, from_bob, delay_ms);
+      const auto in_b = at_bob.Deliver(k, from_alice, delay_ms);
       alice.world->Step(1e-3, tips_a, in_a);
       at_alice.passivity.Observe(alice.world->remote_forces_W());
       bob.world->Step(1e-3, tips_b, in_b);
