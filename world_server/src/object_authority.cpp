@@ -90,6 +90,7 @@ void ObjectAuthority::SetScene(const scene::Scene& scene) {
     last_published_.clear();
     arbiter_.Clear();
     claims_.clear();
+    handing_over_.clear();
     peers_.Clear();
   }
   // A build in flight is superseded, not waited for: the tick goes on, and its models are
@@ -245,6 +246,13 @@ TickOutput ObjectAuthority::Tick(Clock::time_point now, double dt_s) {
   }
   peers_.Expire(now);
   out.ownership = arbiter_.Update(now);
+  for (const auto& change : out.ownership) {
+    if (change.reason == OwnershipReason::kHandedOver) {
+      handing_over_[change.object_id] = {change.previous_owner, std::nullopt};
+    } else {
+      handing_over_.erase(change.object_id);
+    }
+  }
   if (!models_) return out;
   auto& world = *models_->world;
 
@@ -252,6 +260,7 @@ TickOutput ObjectAuthority::Tick(Clock::time_point now, double dt_s) {
   // session's bodies held for their owner's claim stay where the log left them.
   std::map<contact::ObjectId, std::pair<std::string, const session::PeerContacts::Entry*>> owned;
   std::map<contact::ObjectId, Eigen::Isometry3d> held;
+  std::map<contact::ObjectId, Eigen::Isometry3d> held_still;  // published, unlike `held`
   for (const auto body : models_->dynamic_bodies) {
     const std::string& id = models_->ids[static_cast<std::size_t>(body)];
     const std::string owner = arbiter_.owner(id);
@@ -273,6 +282,19 @@ TickOutput ObjectAuthority::Tick(Clock::time_point now, double dt_s) {
       set = &it->second;
     }
     owned[body] = {owner, set};
+    if (set != nullptr) {
+      handing_over_.erase(id);  // the new owner simulates it
+    } else if (const auto h = handing_over_.find(id); h != handing_over_.end()) {
+      // Handed over, and the new owner has not taken it over yet: it is in that owner's grasp,
+      // so it stays where the last owner left it instead of falling for the round trip.
+      if (!h->second.X_WO) {
+        const auto last = peers_.sets().find(h->second.from);
+        const bool reported = last != peers_.sets().end() && last->second.set.simulating() &&
+                              last->second.set.simulated_object_id().to_string() == id && Finite(last->second.set);
+        h->second.X_WO = reported ? ReckonedPose(last->second, now) : world.pose(body);
+      }
+      held_still[body] = *h->second.X_WO;
+    }
   }
   // The users' fingertips on deformables: one solve with everybody. (Rigid bodies need none:
   // whoever touches a body claims it and simulates it; a free body only falls and rests.)
@@ -303,6 +325,10 @@ TickOutput ObjectAuthority::Tick(Clock::time_point now, double dt_s) {
       world.SetPose(body, X);
       world.SetVelocity(body, Eigen::Vector3d::Zero(), Eigen::Vector3d::Zero());
     }
+    for (const auto& [body, X] : held_still) {
+      world.SetPose(body, X);
+      world.SetVelocity(body, Eigen::Vector3d::Zero(), Eigen::Vector3d::Zero());
+    }
     for (const auto& [body, who] : owned) {
       if (who.second == nullptr) continue;
       // At the owner's pose, with its velocity: when the owner lets go, the body flies on
@@ -324,7 +350,11 @@ TickOutput ObjectAuthority::Tick(Clock::time_point now, double dt_s) {
     if (const auto it = owned.find(body); it != owned.end()) {
       if (it->second.second == nullptr) {
         // Granted, and the owner has not taken it over yet: tell it where the body is.
-        out.states.push_back(State(session_, id, it->second.first, world.pose(body), world.body_velocity_W(body)));
+        if (const auto still = held_still.find(body); still != held_still.end()) {
+          out.states.push_back(State(session_, id, it->second.first, still->second, Eigen::Vector3d::Zero()));
+        } else {
+          out.states.push_back(State(session_, id, it->second.first, world.pose(body), world.body_velocity_W(body)));
+        }
       } else {
         const auto& entry = *it->second.second;
         out.states.push_back(State(session_, id, it->second.first, ReckonedPose(entry, now), Velocity(entry.set)));

@@ -134,6 +134,70 @@ TEST_F(BallOnTheMoon, ALetGoBallFliesOnWithTheOwnersVelocity) {
   EXPECT_NEAR(last_v.z(), vb.z() - kMoon * 0.1, 0.02);
 }
 
+// A hand-over: bob grasps the ball alice holds, alice lets go, the server hands it to bob
+// (release grace 100 ms). Until bob's node simulates it (its first set saying so comes a round
+// trip later: 100 ms at 50 ms each way), the ball is in bob's grasp: the server holds it where
+// alice left it, at rest, instead of letting it fall there (8 mm in 0.1 s on the Moon), and
+// publishes it there as bob's. Then bob's pose is the one published.
+TEST_F(BallOnTheMoon, AHandedOverBodyStaysWhereItsLastOwnerLeftItUntilTheNewOwnerSimulatesIt) {
+  ObjectAuthority& world = *world_;
+  const auto dt = kDt;
+  Clock::time_point now = now_;
+  const Eigen::Vector3d p(0.0, 0.0, 0.15), rest = Eigen::Vector3d::Zero();
+  msg::ContactSet bob;
+  bob.session("s");
+  bob.user("bob");
+  bob.grasped_object_id("ball");
+  bob.simulating(false);
+  for (int i = 0; i < 10; ++i) {
+    now += dt;
+    world.OnContactSet(OwnerSet("ball", p, rest), now);
+    if (i >= 5) world.OnContactSet(bob, now);
+    world.Tick(now, 0.01);
+  }
+  ASSERT_EQ(world.owner("ball"), "alice");
+  // alice lets go; her node holds the ball still while bob grasps it and reports it so.
+  bool handed = false;
+  for (int i = 0; i < 50 && !handed; ++i) {
+    now += dt;
+    world.OnContactSet(OwnerSet("", p, rest), now);
+    world.OnContactSet(bob, now);
+    const TickOutput out = world.Tick(now, 0.01);
+    for (const auto& c : out.ownership) handed |= c.reason == OwnershipReason::kHandedOver && c.owner == "bob";
+  }
+  ASSERT_TRUE(handed);
+  // The round trip to bob's node: alice's node follows now (no longer simulating), bob's sets
+  // still claim without simulating.
+  msg::ContactSet alice_follows = OwnerSet("", p, rest);
+  alice_follows.simulating(false);
+  alice_follows.simulated_object_id("");
+  for (int i = 0; i < 10; ++i) {
+    now += dt;
+    world.OnContactSet(alice_follows, now);
+    world.OnContactSet(bob, now);
+    const TickOutput out = world.Tick(now, 0.01);
+    const msg::ObjectState* st = BallState(out);
+    ASSERT_NE(st, nullptr) << "a granted body is published every tick until its owner takes it over";
+    EXPECT_EQ(st->owner().to_string(), "bob");
+    const Eigen::Vector3d got(st->p_WO_m()[0], st->p_WO_m()[1], st->p_WO_m()[2]);
+    const Eigen::Vector3d v(st->v_WO_m_per_s()[0], st->v_WO_m_per_s()[1], st->v_WO_m_per_s()[2]);
+    EXPECT_LT((got - p).norm(), 1e-9) << "tick " << i << ": " << got.transpose();
+    EXPECT_LT(v.norm(), 1e-9) << "tick " << i << ": " << v.transpose();
+  }
+  // bob's node simulates it now: his pose is published.
+  const Eigen::Vector3d p_bob(0.0, 0.0, 0.152);
+  msg::ContactSet bob_owns = OwnerSet("ball", p_bob, rest);
+  bob_owns.user("bob");
+  now += dt;
+  world.OnContactSet(bob_owns, now);
+  const msg::ObjectState* st = nullptr;
+  const TickOutput out = world.Tick(now, 0.01);
+  st = BallState(out);
+  ASSERT_NE(st, nullptr);
+  EXPECT_EQ(st->owner().to_string(), "bob");
+  EXPECT_NEAR(st->p_WO_m()[2], p_bob.z(), 1e-9);
+}
+
 // The owner's deadband sends a carried body's pose only when it leaves the receivers'
 // reckoning (session/contact_deadband.hpp). Between two sets the server publishes the body
 // moved on at the set's velocity, for at most session::kMaxReckoning_s: not held still at the

@@ -142,6 +142,14 @@ class ObjectAuthority {
   session::PeerContacts peers_;
   OwnershipArbiter arbiter_;
   std::map<std::string, std::string> claims_;   // user -> object it claims ("" none)
+  // Bodies handed from one owner to another (OwnershipReason::kHandedOver): held still where the
+  // last owner left them (its newest set's pose) until the new owner's sets simulate them, not
+  // dropped for that round trip.
+  struct HandOver {
+    std::string from;                       // the last owner
+    std::optional<Eigen::Isometry3d> X_WO;  // where it left the body (found at the next tick)
+  };
+  std::map<std::string, HandOver> handing_over_;
   std::vector<Deformable> deformables_;
   std::vector<std::pair<contact::ObjectId, std::size_t>> moving_;  // object, scene index
   std::map<contact::ObjectId, Eigen::Vector3d> last_published_;     // free bodies
