@@ -14,6 +14,8 @@ int main(int argc, char** argv) {
       .Value("cache", "DIR", "deformable models' cache (default: $HANDSHARE_CACHE, else ~/.cache/handshare)", "")
       .Value("dump-deformation", "DIR", "write the loads and field of every published deformation to DIR "
                                         "(for an independent FEM check)", "")
+      .Value("pose-trace", "FILE", "write every published rigid-body state to a CSV file (stamp_ns on the host's "
+                                   "steady clock, object_id, owner, position, velocity)", "")
       .Value("deformation-threshold", "M", "re-send a deformed surface node when it moved more than M metres", "1e-4")
       .Value("resume-within", "SEC", "with --log: a session of this name whose server was killed less than SEC "
                                      "ago is resumed where it was (0: always start afresh)", "600");
@@ -24,6 +26,7 @@ int main(int argc, char** argv) {
     config.log_file = o.GetString("log");
     config.cache_dir = o.GetString("cache");
     config.dump_dir = o.GetString("dump-deformation");
+    config.pose_trace_file = o.GetString("pose-trace");
     config.deformation_threshold_m = o.GetDouble("deformation-threshold", 1e-9, 0.01);
     config.resume_within_s = o.GetDouble("resume-within", 0.0, 1e9);
     return handshare::server::WorldServer(config).Run();

@@ -50,24 +50,77 @@ void ToLoopStatistics(const common::LoopStats& s, std::uint64_t faults, msg::Loo
   out.faults(faults);
 }
 
+bool HandGrasps(const ContactReport& r, std::int32_t object) {
+  if (object < 0) return false;
+  world::FingerForce on_body[kFingers];
+  for (int i = 0; i < kFingers; ++i) {
+    const auto& f = r.fingers[i];
+    on_body[i].active = f.active && f.object == object;
+    for (int k = 0; k < 3; ++k) on_body[i].f_W_N[k] = f.f_W_N[k];
+  }
+  return world::IsGrasp(on_body, kFingers);
+}
+
 std::int32_t ClaimedBody(const ContactReport& r) {
   std::int32_t touched = -1;
   double strongest = 0.0;
   for (int b = 0; b < r.num_bodies; ++b) {
-    world::FingerForce on_body[kFingers];
-    for (int i = 0; i < kFingers; ++i) {
-      const auto& f = r.fingers[i];
-      on_body[i].active = f.active && f.object == r.bodies[b].object;
-      for (int k = 0; k < 3; ++k) on_body[i].f_W_N[k] = f.f_W_N[k];
+    if (HandGrasps(r, r.bodies[b].object)) return r.bodies[b].object;
+    for (const auto& f : r.fingers) {
+      if (!f.active || f.object != r.bodies[b].object) continue;
       const double norm = std::sqrt(f.f_W_N[0] * f.f_W_N[0] + f.f_W_N[1] * f.f_W_N[1] + f.f_W_N[2] * f.f_W_N[2]);
-      if (on_body[i].active && (touched < 0 || norm > strongest)) {
+      if (touched < 0 || norm > strongest) {
         touched = r.bodies[b].object;
         strongest = norm;
       }
     }
-    if (world::IsGrasp(on_body, kFingers)) return r.bodies[b].object;
   }
   return touched;
+}
+
+std::string PeerGrasping(const session::PeerContacts& peers, const std::string& object_id,
+                         session::PeerContacts::Clock::time_point now) {
+  if (object_id.empty()) return {};
+  for (const auto& [user, entry] : peers.sets()) {
+    if (peers.Weight(now - entry.received) <= 0.0) continue;
+    world::FingerForce on_body[kFingers];
+    const auto& fingers = entry.set.fingers();
+    for (int i = 0; i < kFingers && i < static_cast<int>(fingers.size()); ++i) {
+      on_body[i].active = fingers[i].active() && fingers[i].object_id().to_string() == object_id;
+      for (int k = 0; k < 3; ++k) on_body[i].f_W_N[k] = fingers[i].f_W_N()[k];
+    }
+    if (world::IsGrasp(on_body, kFingers)) return user;
+  }
+  return {};
+}
+
+bool HandOverHold::Update(std::int32_t owned, const ContactReport& report, const std::string& grasper,
+                          std::uint64_t now_ns, FollowedBodies& followed) {
+  const bool hold = owned >= 0 && !grasper.empty() && !HandGrasps(report, owned);
+  if (!hold) {
+    object_ = -1;
+    return false;
+  }
+  bool began = false;
+  if (object_ != owned) {
+    const ContactReport::Body* body = nullptr;
+    for (int b = 0; b < report.num_bodies; ++b) {
+      if (report.bodies[b].object == owned) body = &report.bodies[b];
+    }
+    if (body == nullptr) return false;  // not in this world's report: nothing to hold
+    object_ = owned;
+    at_ = *body;
+    ++holds_;
+    began = true;
+  }
+  if (followed.count >= kMaxReportedBodies) return began;
+  auto& item = followed.items[followed.count++];
+  item.object = object_;
+  for (int k = 0; k < 3; ++k) item.p_WO_m[k] = at_.p_WO_m[k];
+  for (int k = 0; k < 4; ++k) item.q_WO_wxyz[k] = at_.q_WO_wxyz[k];
+  for (int k = 0; k < 3; ++k) item.v_WO_m_per_s[k] = 0.0;
+  item.received_ns = now_ns;
+  return began;
 }
 
 Eigen::Isometry3d PoseOf(const ContactReport::Body& body) {

@@ -31,6 +31,37 @@ void ToLoopStatistics(const common::LoopStats& s, std::uint64_t faults, msg::Loo
 /// server gives a claimed free body to its claimant; a body held by another stays theirs.
 std::int32_t ClaimedBody(const ContactReport& r);
 
+/// Whether the report's fingers hold `object` in a grasp (world::IsGrasp on their forces on it).
+bool HandGrasps(const ContactReport& r, std::int32_t object);
+
+/// A peer whose newest contact set, not faded out at `now`, holds `object_id` in a grasp
+/// (world::IsGrasp on its fingers' forces on it; a touch is not a grasp), or "" when none.
+std::string PeerGrasping(const session::PeerContacts& peers, const std::string& object_id,
+                         session::PeerContacts::Clock::time_point now);
+
+/// The body this node owns while its hand lets go of it and another user's hand grasps it.
+/// Remote hands put no force on a rigid body, so simulated on, the body would fall out of that
+/// hand for the release grace and the round trip until the world server's hand-over reaches
+/// the other user's node. Instead it is held still where this hand let go of it (followed at
+/// rest, so it is also reported there) until the server's hand-over arrives, this hand grasps
+/// it again or the other hand lets go.
+class HandOverHold {
+ public:
+  /// One bridge tick: `owned` is OwnedBody(), `report` this hand's newest report, `grasper`
+  /// PeerGrasping() for the owned body ("" none). While the hold lasts the held body is
+  /// appended to `followed` at rest (received at now_ns). Returns true when a hold begins.
+  bool Update(std::int32_t owned, const ContactReport& report, const std::string& grasper, std::uint64_t now_ns,
+              FollowedBodies& followed);
+  std::int32_t held() const noexcept { return object_; }
+  /// How many holds began.
+  std::uint64_t holds() const noexcept { return holds_; }
+
+ private:
+  std::int32_t object_ = -1;
+  ContactReport::Body at_{};
+  std::uint64_t holds_ = 0;
+};
+
 /// The pose a reported body is at (its quaternion normalized).
 Eigen::Isometry3d PoseOf(const ContactReport::Body& body);
 

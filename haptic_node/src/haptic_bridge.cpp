@@ -249,7 +249,18 @@ void HapticBridge::FollowPeerBodies() {
     if (!dropped_.Accept("object_state", body.owner().to_string(), bad, say_)) continue;
     bodies_[body.object_id().to_string()] = {body, common::SteadyNowNs()};
   }
-  renderer_->SetFollowed(ToFollowedBodies(bodies_, config_.user, renderer_->models()));
+  const world::SceneModels& models = renderer_->models();
+  FollowedBodies followed = ToFollowedBodies(bodies_, config_.user, models);
+  // A body this hand lets go of while another user's hand grasps it stays still there until
+  // the server's hand-over arrives (HandOverHold).
+  const std::int32_t owned = have_report_ ? OwnedBody(bodies_, config_.user, models) : -1;
+  const std::string grasper =
+      owned >= 0 ? PeerGrasping(peers_, models.ids[static_cast<std::size_t>(owned)], Clock::now()) : std::string();
+  if (hand_over_.Update(owned, report_, grasper, common::SteadyNowNs(), followed)) {
+    say_("let go of '" + models.ids[static_cast<std::size_t>(owned)] + "' while '" + grasper +
+         "' grasps it: held still there until the hand-over");
+  }
+  renderer_->SetFollowed(followed);
 }
 
 void HapticBridge::PublishDeviceState() {

@@ -141,6 +141,7 @@ class HapticBridge {
   bool last_sent_active_ = false;
   session::PeerContacts peers_;    ///< the other users' newest contact sets (faded when silent)
   ReceivedBodies bodies_;          ///< published rigid-body states, followed unless owned here
+  HandOverHold hand_over_;         ///< an owned body let go of while a peer grasps it
 
   msg::DeviceState state_msg_;
   msg::LoopStatistics stats_msg_;

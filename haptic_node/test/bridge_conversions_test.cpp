@@ -143,6 +143,72 @@ TEST_F(BridgeConversions, AHandFollowsEveryDynamicBodyItDoesNotOwn) {
   EXPECT_EQ(OwnedBody(bodies, "bob", models()), models().Find("ball"));
 }
 
+// alice owns the ball and lets go of it while bob's hand grasps it (his contact set says so:
+// thumb and index squeeze it from opposite sides). Her node holds the ball still where her hand
+// let go of it, at rest, for every tick until the hand-over; a touch of bob's is not a grasp,
+// and the hold ends when bob lets go, when her hand grasps again or when she no longer owns it.
+TEST_F(BridgeConversions, ABodyLetGoOfWhileAPeerGraspsItIsHeldStillUntilTheHandOver) {
+  using Clock = session::PeerContacts::Clock;
+  const auto ball = models().Find("ball");
+  const auto now = Clock::now();
+  msg::ContactSet bob;
+  bob.user("bob");
+  bob.session("s");
+  bob.fingers()[1].active(true);
+  bob.fingers()[1].object_id("ball");
+  bob.fingers()[1].f_W_N({1.0, 0.0, 0.0});
+  session::PeerContacts peers;
+  peers.Receive(bob, now, "alice");
+  EXPECT_EQ(PeerGrasping(peers, "ball", now), "") << "one finger is a touch";
+  bob.fingers()[0].active(true);
+  bob.fingers()[0].object_id("ball");
+  bob.fingers()[0].f_W_N({-1.0, 0.0, 0.0});
+  peers.Receive(bob, now, "alice");
+  EXPECT_EQ(PeerGrasping(peers, "ball", now), "bob");
+  EXPECT_EQ(PeerGrasping(peers, "block", now), "");
+  EXPECT_EQ(PeerGrasping(peers, "ball", now + std::chrono::seconds(1)), "") << "a silent peer's grasp is gone";
+
+  // alice's report: her hand is off the ball, which her node simulates at z = 0.09 m.
+  ContactReport r;
+  r.num_bodies = 1;
+  r.bodies[0].object = ball;
+  r.bodies[0].p_WO_m[2] = 0.09;
+  r.bodies[0].q_WO_wxyz[0] = 1.0;
+  r.bodies[0].v_WO_m_per_s[2] = -0.01;
+  HandOverHold hold;
+  FollowedBodies followed;
+  EXPECT_TRUE(hold.Update(ball, r, "bob", 1000, followed));
+  ASSERT_EQ(followed.count, 1);
+  EXPECT_EQ(followed.items[0].object, ball);
+  EXPECT_EQ(followed.items[0].p_WO_m[2], 0.09);
+  EXPECT_EQ(followed.items[0].v_WO_m_per_s[2], 0.0) << "held at rest";
+  EXPECT_EQ(followed.items[0].received_ns, 1000u);
+  // The next tick: where it was let go, not where the report (now the held pose) drifted.
+  r.bodies[0].p_WO_m[2] = 0.0899;
+  followed = {};
+  EXPECT_FALSE(hold.Update(ball, r, "bob", 2000, followed)) << "the same hold goes on";
+  ASSERT_EQ(followed.count, 1);
+  EXPECT_EQ(followed.items[0].p_WO_m[2], 0.09);
+  EXPECT_EQ(followed.items[0].received_ns, 2000u);
+  EXPECT_EQ(hold.holds(), 1u);
+  // Her hand grasps it again: she simulates it (nothing followed).
+  ContactReport grasping = r;
+  grasping.fingers[0] = {.active = true, .object = ball};
+  grasping.fingers[0].f_W_N[0] = 1.0;
+  grasping.fingers[1] = {.active = true, .object = ball};
+  grasping.fingers[1].f_W_N[0] = -1.0;
+  ASSERT_TRUE(HandGrasps(grasping, ball));
+  followed = {};
+  EXPECT_FALSE(hold.Update(ball, grasping, "bob", 3000, followed));
+  EXPECT_EQ(followed.count, 0);
+  EXPECT_EQ(hold.held(), -1);
+  // bob lets go (no grasper), or the hand-over came (alice owns nothing): no hold.
+  EXPECT_FALSE(hold.Update(ball, r, "", 4000, followed));
+  EXPECT_FALSE(hold.Update(-1, r, "bob", 5000, followed));
+  EXPECT_EQ(followed.count, 0);
+  EXPECT_EQ(hold.holds(), 1u);
+}
+
 TEST_F(BridgeConversions, TheContactSetNamesObjectsAndReportsTheSimulatedBody) {
   const auto ball = models().Find("ball");
   const auto block = models().Find("block");

@@ -2,8 +2,8 @@
 """Smoke tests of handshare over a real (impaired) network: the executables in separate network
 namespaces, so Fast DDS talks UDP over veth and a bridge, not shared memory.
 
-usage: net_dds_test.py two_hosts|partitioned_user|tour|unicast_peers|late_joiners_unicast|delayed_tail --bin-dir DIR
-                      --nfq-delay PATH --domain D --work DIR
+usage: net_dds_test.py two_hosts|partitioned_user|tour|unicast_peers|late_joiners_unicast|delayed_tail|handover
+                      --bin-dir DIR --nfq-delay PATH --domain D --work DIR
 """
 import json
 import math
@@ -759,8 +759,136 @@ def case_delayed_tail(args):
                   f"{k0[r['user']]:.1f} N/m (> {100 * STIFFNESS_TOLERANCE:.0f} %)")
 
 
+HANDOVER_DELAY_MS = 50
+HANDOVER_HOLD_M = 2e-3    # the ball's largest distance from where alice held it until bob's node has it
+HANDOVER_BOUND_M = 5e-3   # ... and until bob lifts it (his grip settles it by its own sag)
+WEIGHT_TOLERANCE = 0.05   # bob's held weight, of m g
+BALL = [o for o in json.load(open(os.path.join(HERE, "..", "..", "assets", "scenes", "solar_system.json")))["objects"]
+        if o["id"] == "ball"][0]
+
+
+def read_poses(path, object_id):
+    """The world server's --pose-trace rows of one body: (steady s, owner, position, speed)."""
+    rows = []
+    try:
+        with open(path) as f:
+            lines = f.read().split("\n")
+    except FileNotFoundError:
+        return rows
+    for line in lines[1:-1]:
+        c = line.split(",")
+        if len(c) == 9 and c[1] == object_id:
+            v = [float(x) for x in c[6:9]]
+            rows.append((int(c[0]) * 1e-9, c[2], [float(x) for x in c[3:6]], math.sqrt(sum(x * x for x in v))))
+    return rows
+
+
+def case_handover(args):
+    """A body handed from one owner to another across a 50 ms one-way delay (three hosts: world
+    server; alice; bob). On the Moon alice lifts the ball 5 cm and holds it; bob's hand grasps it
+    there too; alice lets go. The world server hands it to bob after its release grace, and bob's
+    node simulates it from when that reaches it: a round trip and more after alice's hand opened.
+    Asserted: the hand-over happened (alice -> bob, handed_over); through it, until bob lifts,
+    every pose the server published stays within HANDOVER_BOUND_M of where alice held it (remote
+    hands put no force on a rigid body: unheld, it would fall out of bob's fingers meanwhile);
+    bob's hand then carries its weight (m g within WEIGHT_TOLERANCE, from his loop's impulse)
+    and lifts it 3 cm. Writes handover_poses.csv (the ball's published poses) to --work."""
+    os.makedirs(args.work, exist_ok=True)
+    server_exe, node_exe = exe(args.bin_dir, "world_server"), exe(args.bin_dir, "haptic_node")
+    session = f"net-handover-{os.getpid()}"
+    common = ["--domain", args.domain, "--session", session]
+    poses_csv = os.path.join(args.work, "handover_poses.csv")
+    traces = {u: os.path.join(args.work, f"handover_{u}.csv") for u in ("alice", "bob")}
+    for f in (poses_csv, *traces.values()):
+        if os.path.exists(f):
+            os.remove(f)
+    with Network(3, nfq_delay=args.nfq_delay) as net:
+        a, b, c = net.hosts
+        for seed, h in enumerate((a, b, c), start=1):
+            h.delay(HANDOVER_DELAY_MS, jitter_ms=0, seed=seed)
+        server = a.start("world_server", [server_exe, *common, "--scene", "solar_system", "--pose-trace", poses_csv,
+                                          "--duration", 120], args.work)
+        nodes = {}
+        try:
+            server.wait_for("models of 'solar_system' ready", 60)
+            for host, user in ((b, "alice"), (c, "bob")):
+                nodes[user] = host.start(user, [node_exe, *common, "--user", user, "--device", "sim", "--script",
+                                                os.path.join(DATA, f"handover_{user}.hand"), "--trace", traces[user],
+                                                "--duration", 90], args.work)
+            starts = {}
+            for user, p in nodes.items():
+                p.wait_for("hand script starts at loop time", 60)
+                starts[user] = float(re.search(r"hand script starts at loop time ([\d.]+) s", p.log()).group(1))
+            server.wait_for("object 'ball': owner '' -> 'alice' (granted)", 30)
+            t_handed = server.wait_for("object 'ball': owner 'alice' -> 'bob'", 60)
+            session_test.wait_until("bob's trace past his lift", 60,
+                                    lambda: (rows := session_test.read_trace(traces["bob"]))
+                                    and rows[-1]["t_s"] - starts["bob"] >= 17.6)
+            hold_line = re.search(r"let go of 'ball' while 'bob' grasps it", nodes["alice"].log())
+            for user, p in nodes.items():
+                check(p.stop(timeout=30) == 0, f"{user}'s haptic node failed:\n{p.log()[-3000:]}")
+            server.stop()
+        except Failure:
+            for p in (server, *nodes.values()):
+                sys.stderr.write(f"----- {p.label} -----\n{p.log()[-6000:]}\n")
+            raise
+        ws_log = server.log()
+    reason = re.search(r"object 'ball': owner 'alice' -> 'bob' \((\w+)\)", ws_log).group(1)
+    rows = {u: session_test.read_trace(traces[u]) for u in ("alice", "bob")}
+
+    def steady(user, script_s):
+        """A moment of a user's script on the hosts' steady clock (the trace stamps both)."""
+        last = rows[user][-1]
+        return last["stamp_ns"] * 1e-9 - last["t_s"] + starts[user] + script_s
+    poses = read_poses(poses_csv, "ball")
+    t_release, t_lift, t_lifted = steady("alice", 9.5), steady("bob", 14.0), steady("bob", 16.0)
+    held = [p for t, o, p, _ in poses if steady("alice", 8.5) <= t < t_release and o == "alice"]
+    check(len(held) >= 3, f"{len(held)} poses of the ball held by alice in the second before she let go")
+    p_held = [sum(p[k] for p in held) / len(held) for k in range(3)]
+    check(p_held[2] > BALL["position_m"][2] + 0.04, f"alice held the ball at z = {p_held[2]:.4f} m: not lifted 5 cm")
+    through = [(t, o, p, v) for t, o, p, v in poses if t_release <= t < t_lift]
+    check(through and through[-1][1] == "bob", "the ball was not bob's before he lifted it")
+    far = max(through, key=lambda r: math.dist(r[2], p_held))
+    # Until bob's node can have it (the hand-over plus a round trip), the ball is alice's node's
+    # or the server's to keep where her hand left it.
+    t_bob = t_handed + 2e-3 * HANDOVER_DELAY_MS
+    hold_far = max(math.dist(p, p_held) for t, _, p, _ in through if t < t_bob)
+    fastest = max(v for _, _, _, v in through)
+    lifted = [p for t, o, p, _ in poses if t >= t_lifted and o == "bob"]
+    check(len(lifted) >= 3, f"{len(lifted)} poses of the ball after bob lifted it")
+    rise = sum(p[2] for p in lifted) / len(lifted) - p_held[2]
+    # bob's weight: his loop's impulse from 0.5 s after the hand-over to his lift.
+    w0, w1 = t_handed + 0.5, t_lift - 0.2
+    sel = [r for r in rows["bob"] if w0 <= r["stamp_ns"] * 1e-9 < w1]
+    check(len(sel) > 50 and sel[-1]["t_s"] - sel[0]["t_s"] >= 1.0,
+          f"bob's trace has {len(sel)} rows between the hand-over and his lift")
+    weight = -(session_test.net_jz(sel[-1]) - session_test.net_jz(sel[0])) / (sel[-1]["t_s"] - sel[0]["t_s"])
+    mg = BALL["mass_kg"] * 1.62
+    with open(poses_csv + ".tmp", "w") as f:
+        f.write("t_s,owner,x_m,y_m,z_m,speed_m_per_s\n")
+        for t, o, p, v in poses:
+            f.write(f"{t - t_release:.4f},{o},{p[0]:.6f},{p[1]:.6f},{p[2]:.6f},{v:.5f}\n")
+    os.replace(poses_csv + ".tmp", poses_csv)
+    print(f"hand-over: alice -> bob on three hosts, {HANDOVER_DELAY_MS} ms one-way on arrival at each, the Moon's ball")
+    print(f"  alice held it at z = {p_held[2]:.4f} m and let go (her node {'held it still for bob' if hold_line else 'did not hold it'}); "
+          f"the server handed it over ({reason}) {t_handed - t_release:.2f} s after her hand began to open")
+    print(f"  until bob's node had it ({t_bob - t_release:.2f} s): farthest {1e3 * hold_far:.2f} mm from where alice held it")
+    print(f"  until bob lifted it ({t_lift - t_release:.2f} s): farthest {1e3 * math.dist(far[2], p_held):.2f} mm from where "
+          f"alice held it ({far[1]}'s pose at {far[0] - t_release:.2f} s), fastest {fastest:.3f} m/s")
+    print(f"  bob's hand held {weight:.4f} N (m g = {mg:.4f} N) and lifted it {1e3 * rise:.1f} mm (his hand: 30 mm)")
+    check(reason == "handed_over", f"the ball went from alice to bob by '{reason}', not a hand-over")
+    check(hold_far <= HANDOVER_HOLD_M,
+          f"before bob's node had the ball it went {1e3 * hold_far:.2f} mm from where alice held it "
+          f"(> {1e3 * HANDOVER_HOLD_M:.0f} mm): it fell")
+    check(math.dist(far[2], p_held) <= HANDOVER_BOUND_M,
+          f"through the hand-over the ball went {1e3 * math.dist(far[2], p_held):.1f} mm from where alice held it "
+          f"(> {1e3 * HANDOVER_BOUND_M:.0f} mm; {far[1]}'s pose {far[0] - t_release:.2f} s after she let go)")
+    check(abs(weight - mg) <= WEIGHT_TOLERANCE * mg, f"bob's hand held {weight:.4f} N, not the ball's {mg:.4f} N")
+    check(abs(rise - 0.03) <= HANDOVER_BOUND_M, f"bob's lift moved the ball {1e3 * rise:.1f} mm, not his hand's 30 mm")
+
+
 if __name__ == "__main__":
     main({"two_hosts": case_two_hosts, "partitioned_user": case_partitioned_user, "tour": case_tour,
           "unicast_peers": case_unicast_peers, "late_joiners_unicast": case_late_joiners_unicast,
-          "delayed_tail": case_delayed_tail},
+          "delayed_tail": case_delayed_tail, "handover": case_handover},
          failures=(session_test.Failure,))

@@ -195,6 +195,7 @@ void ServerSession::StepObjects(Clock::time_point now, double dt_s) {
   for (const auto& change : out.ownership) server_.OnOwnershipChange(change);
   for (const auto& state : out.states) object_writer_.Write(state);
   LogPoses(out.states, now);
+  TracePoses(out.states);
   for (const auto& [object_id, sample] : out.deformations) {
     deformation_writer_.Write(ToDeformation(object_id, session_, sample));
     ++deformations_sent_;
@@ -236,6 +237,19 @@ void ServerSession::LogState() {
   st.message_id = message_id_;
   st.board = board_;
   log->OnState(st);
+}
+
+void ServerSession::TracePoses(const std::vector<msg::ObjectState>& states) {
+  std::ostream* trace = server_.pose_trace();
+  if (trace == nullptr || states.empty()) return;
+  const std::uint64_t stamp_ns = common::SteadyNowNs();
+  for (const auto& s : states) {
+    *trace << stamp_ns << ',' << s.object_id().to_string() << ',' << s.owner().to_string();
+    for (int k = 0; k < 3; ++k) *trace << ',' << s.p_WO_m()[k];
+    for (int k = 0; k < 3; ++k) *trace << ',' << s.v_WO_m_per_s()[k];
+    *trace << '\n';
+  }
+  trace->flush();  // a test follows the file while the server runs
 }
 
 void ServerSession::LogPoses(const std::vector<msg::ObjectState>& states, Clock::time_point now) {

@@ -61,6 +61,8 @@ class ServerSession {
   static constexpr std::size_t kMaxRoster = 64;  // the IDL's bound
   /// Records where the session is (world, revision, clock, board) in the session log.
   void LogState();
+  /// Every published rigid-body state, a row each (--pose-trace).
+  void TracePoses(const std::vector<msg::ObjectState>& states);
   /// Records the poses of the bodies just published (at most every kPoseLogPeriod a body).
   void LogPoses(const std::vector<msg::ObjectState>& states, Clock::time_point now);
   static constexpr std::chrono::milliseconds kPoseLogPeriod{100};

@@ -5,7 +5,9 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <iomanip>
 #include <iostream>
+#include <stdexcept>
 #include <sstream>
 #include <thread>
 
@@ -98,6 +100,12 @@ int WorldServer::Run() {
         config_.log_file, SessionStart{config_.where.session, config_.where.domain_id, HostName(),
                                        static_cast<std::int64_t>(getpid()), common::UnixNowNs(),
                                        resume ? resume->session_id : 0});
+  }
+  if (!config_.pose_trace_file.empty() && !pose_trace_.is_open()) {
+    pose_trace_.open(config_.pose_trace_file);
+    if (!pose_trace_) throw std::runtime_error("cannot write the pose trace " + config_.pose_trace_file);
+    pose_trace_ << "stamp_ns,object_id,owner,x_m,y_m,z_m,vx_m_per_s,vy_m_per_s,vz_m_per_s\n" << std::setprecision(9);
+    pose_trace_.flush();
   }
   dds::Participant participant(config_.where, "world_server");
   if (log_) Say("session log " + log_->file().string() + ": session #" + std::to_string(log_->session_id()));

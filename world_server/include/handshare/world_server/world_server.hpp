@@ -4,6 +4,7 @@
 /// vanishing, prints every change and, with a log file, records the session (SessionLog).
 /// One per session.
 #include <chrono>
+#include <fstream>
 #include <memory>
 #include <string>
 
@@ -21,6 +22,7 @@ struct WorldServerConfig {
   std::string log_file;          // "": no session log; else SQLite file, a session is appended
   std::string cache_dir;         // deformable models' cache ("": world::DefaultCacheDir())
   std::string dump_dir;          // "": none; else every published deformation's loads (ObjectAuthority)
+  std::string pose_trace_file;   // "": none; else a CSV row for every published rigid-body state
   double deformation_threshold_m = 1e-4;  // re-send a surface node when it moved more than this
   /// With a log file: a session of this name whose server was killed (never ended) at most this
   /// long ago is resumed where its log says it was; 0 never resumes.
@@ -58,6 +60,9 @@ class WorldServer {
 
   /// nullptr without a log file, or before Run() opened it.
   SessionLog* session_log() { return log_.get(); }
+  /// nullptr without --pose-trace, or before Run() opened it. Rows: stamp_ns (the host's steady
+  /// clock, as haptic_node's traces), object_id, owner, x, y, z [m], vx, vy, vz [m/s].
+  std::ostream* pose_trace() { return pose_trace_.is_open() ? &pose_trace_ : nullptr; }
 
  private:
   /// Reports a log failure once; true while the log is healthy.
@@ -67,6 +72,7 @@ class WorldServer {
 
   WorldServerConfig config_;
   std::unique_ptr<SessionLog> log_;
+  std::ofstream pose_trace_;
   bool log_failed_ = false;
   std::chrono::steady_clock::time_point start_;
 };
