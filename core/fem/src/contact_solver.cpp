@@ -10,6 +10,7 @@
 #include <string>
 
 #include "contact_dense.hpp"
+#include "dense_spd.hpp"
 #include "dense_small.hpp"
 #include "handshare/fem/error.hpp"
 #include "kernels.hpp"
@@ -46,31 +47,14 @@ class BlockPivoting {
 };
 
 // The held systems of the 3-D paths (3 rows per node held in 3-D: 40-60 rows for five fingertip
-// patches) are factored and solved with Eigen's blocked, vectorised kernels in place in the
-// caller's buffer (column-major, leading dimension ld): the scalar loops of dense_small.hpp read
-// the factor's rows with stride ld and were most of a friction step. Eigen's work space for
-// these sizes is on the stack (EIGEN_STACK_ALLOCATION_LIMIT), so the step stays off the heap.
-using StridedMatrix = Eigen::Map<Eigen::MatrixXd, 0, Eigen::OuterStride<>>;
+// patches) are factored and solved in place in the caller's buffer (column-major, leading
+// dimension ld) by dense_spd.hpp: an AVX-512 factor where the processor has it, else Eigen's
+// blocked one, and Eigen's solves (the scalar loops of dense_small.hpp read the factor's rows
+// with stride ld and were most of a friction step). Neither touches the heap.
+bool FactorSpd(double* A, int n, int ld) noexcept { return detail::FactorSpd(A, n, ld, detail::BestIsa()); }
 
-// A = L L^T in the lower triangle of the leading n x n block; false unless positive definite
-// with a finite factor.
-bool FactorSpd(double* A, int n, int ld) noexcept {
-  StridedMatrix m(A, n, n, Eigen::OuterStride<>(ld));
-  const Eigen::LLT<Eigen::Ref<Eigen::MatrixXd, 0, Eigen::OuterStride<>>> llt(m);
-  if (llt.info() != Eigen::Success) return false;
-  for (int k = 0; k < n; ++k) {
-    const double d = A[static_cast<std::ptrdiff_t>(k) * ld + k];
-    if (!(d > 0.0) || !std::isfinite(d)) return false;
-  }
-  return true;
-}
-
-// B = (L L^T)^-1 B for the nrhs columns of B (leading dimension ldb), L from FactorSpd.
 void SolveFactored(const double* L, int n, int ld, double* B, int nrhs, int ldb) noexcept {
-  const Eigen::Map<const Eigen::MatrixXd, 0, Eigen::OuterStride<>> l(L, n, n, Eigen::OuterStride<>(ld));
-  StridedMatrix b(B, n, nrhs, Eigen::OuterStride<>(ldb));
-  l.triangularView<Eigen::Lower>().solveInPlace(b);
-  l.triangularView<Eigen::Lower>().transpose().solveInPlace(b);
+  detail::SolveFactoredSpd(L, n, ld, B, nrhs, ldb);
 }
 
 }  // namespace

@@ -1,0 +1,114 @@
+#include "dense_spd.hpp"
+
+#include <immintrin.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstddef>
+
+#include <Eigen/Cholesky>
+#include <Eigen/Core>
+
+namespace handshare::fem::detail {
+
+namespace {
+
+// ---- portable: Eigen (its work space for these sizes is on the stack) ----
+
+using StridedMatrix = Eigen::Map<Eigen::MatrixXd, 0, Eigen::OuterStride<>>;
+
+bool FactorEigen(double* A, int n, int ld) noexcept {
+  StridedMatrix m(A, n, n, Eigen::OuterStride<>(ld));
+  const Eigen::LLT<Eigen::Ref<Eigen::MatrixXd, 0, Eigen::OuterStride<>>> llt(m);
+  return llt.info() == Eigen::Success;
+}
+
+void SolveEigen(const double* L, int n, int ld, double* B, int nrhs, int ldb) noexcept {
+  const Eigen::Map<const Eigen::MatrixXd, 0, Eigen::OuterStride<>> l(L, n, n, Eigen::OuterStride<>(ld));
+  StridedMatrix b(B, n, nrhs, Eigen::OuterStride<>(ldb));
+  l.triangularView<Eigen::Lower>().solveInPlace(b);
+  l.triangularView<Eigen::Lower>().transpose().solveInPlace(b);
+}
+
+// ---- AVX-512 ----
+
+#define HS_AVX512 __attribute__((target("avx512f,avx512vl,fma")))
+
+// GCC 12 warns inside its own AVX-512 headers (the undefined source of masked intrinsics).
+#pragma GCC diagnostic push
+#pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
+#pragma GCC diagnostic ignored "-Wuninitialized"
+
+// Lanes of the 8-row vector starting `offset` rows into a run of `rows` rows.
+inline __mmask8 Lanes(int rows, int offset) noexcept {
+  const int left = rows - offset;
+  return left >= 8 ? static_cast<__mmask8>(0xFF) : left <= 0 ? static_cast<__mmask8>(0)
+                                                             : static_cast<__mmask8>((1u << left) - 1u);
+}
+
+// Column j's rows [i0, i0 + rows) (rows <= 8 V) less sum_k L[j,k] L[i0.., k] over the columns
+// k < j to its left: the accumulators stay in registers while those columns stream past.
+template <int V>
+HS_AVX512 void UpdateRows(double* A, int ld, int j, int i0, int rows) noexcept {
+  double* cj = A + static_cast<std::ptrdiff_t>(j) * ld + i0;
+  __mmask8 m[V];
+  __m512d acc[V];
+  for (int q = 0; q < V; ++q) {
+    m[q] = Lanes(rows, 8 * q);
+    acc[q] = _mm512_maskz_loadu_pd(m[q], cj + 8 * q);
+  }
+  for (int k = 0; k < j; ++k) {
+    const double* ck = A + static_cast<std::ptrdiff_t>(k) * ld;
+    const __m512d l = _mm512_set1_pd(ck[j]);
+    for (int q = 0; q < V; ++q) acc[q] = _mm512_fnmadd_pd(l, _mm512_maskz_loadu_pd(m[q], ck + i0 + 8 * q), acc[q]);
+  }
+  for (int q = 0; q < V; ++q) _mm512_mask_storeu_pd(cj + 8 * q, m[q], acc[q]);
+}
+
+HS_AVX512 bool FactorAvx512(double* A, int n, int ld) noexcept {
+  for (int j = 0; j < n; ++j) {
+    for (int i0 = j; i0 < n; i0 += 32) {
+      const int rows = std::min(32, n - i0);
+      switch ((rows + 7) / 8) {
+        case 1: UpdateRows<1>(A, ld, j, i0, rows); break;
+        case 2: UpdateRows<2>(A, ld, j, i0, rows); break;
+        case 3: UpdateRows<3>(A, ld, j, i0, rows); break;
+        default: UpdateRows<4>(A, ld, j, i0, rows); break;
+      }
+    }
+    double* cj = A + static_cast<std::ptrdiff_t>(j) * ld;
+    const double d = cj[j];
+    if (!(d > 0.0) || !std::isfinite(d)) return false;
+    const double s = std::sqrt(d);
+    cj[j] = s;
+    const __m512d inv = _mm512_set1_pd(1.0 / s);
+    const int below = n - j - 1;
+    for (int i = 0; i < below; i += 8) {
+      const __mmask8 m = Lanes(below, i);
+      double* p = cj + j + 1 + i;
+      _mm512_mask_storeu_pd(p, m, _mm512_mul_pd(_mm512_maskz_loadu_pd(m, p), inv));
+    }
+  }
+  return true;
+}
+
+#pragma GCC diagnostic pop
+
+}  // namespace
+
+bool FactorSpd(double* A, int n, int ld, Isa isa) noexcept {
+  if (n <= 0) return true;
+  if (isa == Isa::kAvx512 ? !FactorAvx512(A, n, ld) : !FactorEigen(A, n, ld)) return false;
+  for (int k = 0; k < n; ++k) {
+    const double d = A[static_cast<std::ptrdiff_t>(k) * ld + k];
+    if (!(d > 0.0) || !std::isfinite(d)) return false;
+  }
+  return true;
+}
+
+void SolveFactoredSpd(const double* L, int n, int ld, double* B, int nrhs, int ldb) noexcept {
+  if (n <= 0 || nrhs <= 0) return;
+  SolveEigen(L, n, ld, B, nrhs, ldb);
+}
+
+}  // namespace handshare::fem::detail

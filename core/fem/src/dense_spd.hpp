@@ -1,0 +1,27 @@
+#pragma once
+// Internal: the dense Cholesky factor and solves of the contact solver's held system (up to
+// 3 x max_contacts unknowns; 40-60 for five fingertips' patches held in 3-D with friction). A
+// friction step factors it about four times and solves it about nine (docs/fem.md, "Friction").
+// Eigen's blocked LLT spends most of its instructions on packing and blocking at these sizes;
+// the AVX-512 factor here is left-looking over columns (each column's rows in up to four
+// 8-double registers while the columns to its left stream past: every update an FMA on
+// contiguous memory): haptic_bench's deformable_2k_friction went from 64 to 54 us p50 and from
+// 166 to 141 us p99 (docs/haptic_rendering.md). The solves stay Eigen's: a column-oriented
+// AVX-512 substitution was 2.5 times slower (each unknown stored and read back by the next
+// vector load, which waits for the store: the processor does not forward it), and one blocked
+// by 8 rows with the unknowns kept scalar was no faster than Eigen's panels.
+// Real-time safe: noexcept, no allocation.
+
+#include "planar_columns.hpp"  // Isa
+
+namespace handshare::fem::detail {
+
+/// A = L L^T in the lower triangle of A's leading n x n block (column-major, leading dimension
+/// ld; the lower triangle is read and overwritten with L, the upper triangle is left as it is).
+/// False unless A is numerically positive definite with a finite factor.
+bool FactorSpd(double* A, int n, int ld, Isa isa) noexcept;
+
+/// B = (L L^T)^-1 B for the nrhs columns of B (leading dimension ldb), L from FactorSpd.
+void SolveFactoredSpd(const double* L, int n, int ld, double* B, int nrhs, int ldb) noexcept;
+
+}  // namespace handshare::fem::detail
