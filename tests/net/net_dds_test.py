@@ -788,11 +788,14 @@ def case_handover(args):
     server; alice; bob). On the Moon alice lifts the ball 5 cm and holds it; bob's hand grasps it
     there too; alice lets go. The world server hands it to bob after its release grace, and bob's
     node simulates it from when that reaches it: a round trip and more after alice's hand opened.
-    Asserted: the hand-over happened (alice -> bob, handed_over); through it, until bob lifts,
-    every pose the server published stays within HANDOVER_BOUND_M of where alice held it (remote
-    hands put no force on a rigid body: unheld, it would fall out of bob's fingers meanwhile);
-    bob's hand then carries its weight (m g within WEIGHT_TOLERANCE, from his loop's impulse)
-    and lifts it 3 cm. Writes handover_poses.csv (the ball's published poses) to --work."""
+    Asserted: the hand-over happened (alice -> bob, handed_over); until bob's node can have the
+    ball (the hand-over plus a round trip) every pose the server published stays within
+    HANDOVER_HOLD_M of where alice held it (remote hands put no force on a rigid body: unheld, it
+    would fall out of bob's fingers meanwhile), and from the hand-over on it is published at rest
+    (the hand-over carries no kinetic energy into bob's node); until bob lifts, within
+    HANDOVER_BOUND_M (his grip settles it); bob's hand then carries its weight (m g within
+    WEIGHT_TOLERANCE, from his loop's impulse) and lifts it 3 cm. Writes handover_poses.csv (the
+    ball's published poses) to --work."""
     os.makedirs(args.work, exist_ok=True)
     server_exe, node_exe = exe(args.bin_dir, "world_server"), exe(args.bin_dir, "haptic_node")
     session = f"net-handover-{os.getpid()}"
@@ -853,6 +856,11 @@ def case_handover(args):
     # or the server's to keep where her hand left it.
     t_bob = t_handed + 2e-3 * HANDOVER_DELAY_MS
     hold_far = max(math.dist(p, p_held) for t, _, p, _ in through if t < t_bob)
+    # The energy the hand-over carries into bob's node: the body's speed as published from the
+    # hand-over until bob's node has it (he starts simulating it from that state).
+    handed = [v for t, _, _, v in through if t_handed <= t < t_bob]
+    check(handed, "no pose of the ball published between the hand-over and bob's node having it")
+    handed_speed = max(handed)
     fastest = max(v for _, _, _, v in through)
     lifted = [p for t, o, p, _ in poses if t >= t_lifted and o == "bob"]
     check(len(lifted) >= 3, f"{len(lifted)} poses of the ball after bob lifted it")
@@ -872,7 +880,9 @@ def case_handover(args):
     print(f"hand-over: alice -> bob on three hosts, {HANDOVER_DELAY_MS} ms one-way on arrival at each, the Moon's ball")
     print(f"  alice held it at z = {p_held[2]:.4f} m and let go (her node {'held it still for bob' if hold_line else 'did not hold it'}); "
           f"the server handed it over ({reason}) {t_handed - t_release:.2f} s after her hand began to open")
-    print(f"  until bob's node had it ({t_bob - t_release:.2f} s): farthest {1e3 * hold_far:.2f} mm from where alice held it")
+    print(f"  until bob's node had it ({t_bob - t_release:.2f} s): farthest {1e3 * hold_far:.2f} mm from where alice held it; "
+          f"published from the hand-over on at {handed_speed:.2e} m/s at most ({len(handed)} states: "
+          f"{0.5 * BALL['mass_kg'] * handed_speed ** 2:.1e} J of kinetic energy handed over)")
     print(f"  until bob lifted it ({t_lift - t_release:.2f} s): farthest {1e3 * math.dist(far[2], p_held):.2f} mm from where "
           f"alice held it ({far[1]}'s pose at {far[0] - t_release:.2f} s), fastest {fastest:.3f} m/s")
     print(f"  bob's hand held {weight:.4f} N (m g = {mg:.4f} N) and lifted it {1e3 * rise:.1f} mm (his hand: 30 mm)")
@@ -880,6 +890,7 @@ def case_handover(args):
     check(hold_far <= HANDOVER_HOLD_M,
           f"before bob's node had the ball it went {1e3 * hold_far:.2f} mm from where alice held it "
           f"(> {1e3 * HANDOVER_HOLD_M:.0f} mm): it fell")
+    check(handed_speed <= 1e-6, f"the ball was handed over moving at {handed_speed:.4f} m/s, not at rest")
     check(math.dist(far[2], p_held) <= HANDOVER_BOUND_M,
           f"through the hand-over the ball went {1e3 * math.dist(far[2], p_held):.1f} mm from where alice held it "
           f"(> {1e3 * HANDOVER_BOUND_M:.0f} mm; {far[1]}'s pose {far[0] - t_release:.2f} s after she let go)")
