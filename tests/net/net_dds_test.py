@@ -162,6 +162,29 @@ def dinosaur_ready(args):
     return server_exe, node_exe
 
 
+def script_starts(nodes):
+    """Each haptic node's loop time [s] when its hand script started (it logs it once the first
+    world is here)."""
+    starts = {}
+    for user, p in nodes.items():
+        p.wait_for("hand script starts at loop time", 60)
+        starts[user] = float(re.search(r"hand script starts at loop time ([\d.]+) s", p.log()).group(1))
+    return starts
+
+
+def stop_session(server, nodes, when=""):
+    """Stops the haptic nodes (each must exit 0), then the world server."""
+    for user, p in nodes.items():
+        check(p.stop(timeout=30) == 0, f"{user}'s haptic node failed{when}:\n{p.log()[-3000:]}")
+    server.stop()
+
+
+def print_logs(procs):
+    """The end of each process's log, for a failed case."""
+    for p in procs:
+        sys.stderr.write(f"----- {p.label} -----\n{p.log()[-6000:]}\n")
+
+
 STEP_FLOOR = 0.02  # of a force: a step below it is not felt (Weber fraction about 0.1)
 
 
@@ -239,8 +262,7 @@ def case_partitioned_user(args):
             for user in ("alice", "bob"):
                 check(nodes[user].stop(timeout=30) == 0, f"{user}'s haptic node failed:\n{nodes[user].log()[-3000:]}")
         except Failure:
-            for p in (server, alice, bob):
-                sys.stderr.write(f"----- {p.label} -----\n{p.log()[-6000:]}\n")
+            print_logs((server, alice, bob))
             raise
         server.stop()
         summaries = {u: loop_summary(nodes[u].log(), u) for u in ("alice", "bob")}
@@ -651,21 +673,15 @@ def case_delayed_tail(args):
                                              [node_exe, *common, "--user", user, "--device", "hiro", "--script",
                                               os.path.join(DATA, f"delay_{user}.hand"), "--trace", traces[user],
                                               "--dump-deformation", dumps[user], "--duration", 90], args.work)
-                starts = {}
-                for user, p in nodes.items():
-                    p.wait_for("hand script starts at loop time", 60)
-                    starts[user] = float(re.search(r"hand script starts at loop time ([\d.]+) s", p.log()).group(1))
+                starts = script_starts(nodes)
                 for user in nodes:
                     # The fields are compared while the session runs (each dump is replaced).
                     session_test.wait_until(f"{user}'s trace past the still window ({delay_ms} ms)", 90,
                                             lambda u=user: watch.poll() or ((rows := session_test.read_trace(traces[u]))
                                             and rows[-1]["t_s"] - starts[u] >= STILL_WINDOW[1] + 0.2))
-                for user, p in nodes.items():
-                    check(p.stop(timeout=30) == 0, f"{user}'s haptic node failed at {delay_ms} ms:\n{p.log()[-3000:]}")
-                server.stop()
+                stop_session(server, nodes, f" at {delay_ms} ms")
             except Failure:
-                for p in (server, *nodes.values()):
-                    sys.stderr.write(f"----- {p.label} -----\n{p.log()[-6000:]}\n")
+                print_logs((server, *nodes.values()))
                 raise
             # When the inputs stopped changing: the last moment either fingertip (the arm settling
             # after bob's last move) moved more than INPUT_STILL_M in 0.1 s, in script time.
@@ -818,22 +834,16 @@ def case_handover(args):
                 nodes[user] = host.start(user, [node_exe, *common, "--user", user, "--device", "sim", "--script",
                                                 os.path.join(DATA, f"handover_{user}.hand"), "--trace", traces[user],
                                                 "--duration", 90], args.work)
-            starts = {}
-            for user, p in nodes.items():
-                p.wait_for("hand script starts at loop time", 60)
-                starts[user] = float(re.search(r"hand script starts at loop time ([\d.]+) s", p.log()).group(1))
+            starts = script_starts(nodes)
             server.wait_for("object 'ball': owner '' -> 'alice' (granted)", 30)
             t_handed = server.wait_for("object 'ball': owner 'alice' -> 'bob'", 60)
             session_test.wait_until("bob's trace past his lift", 60,
                                     lambda: (rows := session_test.read_trace(traces["bob"]))
                                     and rows[-1]["t_s"] - starts["bob"] >= 17.6)
             hold_line = re.search(r"let go of 'ball' while 'bob' grasps it", nodes["alice"].log())
-            for user, p in nodes.items():
-                check(p.stop(timeout=30) == 0, f"{user}'s haptic node failed:\n{p.log()[-3000:]}")
-            server.stop()
+            stop_session(server, nodes)
         except Failure:
-            for p in (server, *nodes.values()):
-                sys.stderr.write(f"----- {p.label} -----\n{p.log()[-6000:]}\n")
+            print_logs((server, *nodes.values()))
             raise
         ws_log = server.log()
     reason = re.search(r"object 'ball': owner 'alice' -> 'bob' \((\w+)\)", ws_log).group(1)

@@ -12,26 +12,11 @@
 #include <Eigen/LU>
 #include <Eigen/Core>
 
-#include "../src/planar_columns.hpp"
 #include "../src/small_spd_solve.hpp"
+#include "spd_test_support.hpp"
 
 namespace handshare::fem::detail {
 namespace {
-
-std::vector<Isa> IsasToTest() {
-  std::vector<Isa> isas = {Isa::kPortable};
-  if (BestIsa() == Isa::kAvx512) isas.push_back(Isa::kAvx512);
-  return isas;
-}
-
-// Random SPD matrix (Gram matrix plus a diagonal shift), condition number up to ~1e4.
-Eigen::MatrixXd RandomSpd(int n, std::mt19937& rng) {
-  std::normal_distribution<double> g;
-  Eigen::MatrixXd M(n, n);
-  for (int i = 0; i < n; ++i)
-    for (int j = 0; j < n; ++j) M(i, j) = g(rng);
-  return M * M.transpose() + 1e-3 * n * Eigen::MatrixXd::Identity(n, n);
-}
 
 TEST(SmallSpdSolve, MatchesEigenLltForEverySizeWithRegularization) {
   std::mt19937 rng(7);
