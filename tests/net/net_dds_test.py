@@ -807,7 +807,7 @@ def case_handover(args):
     Asserted: the hand-over happened (alice -> bob, handed_over); until bob's node can have the
     ball (the hand-over plus a round trip) every pose the server published stays within
     HANDOVER_HOLD_M of where alice held it (remote hands put no force on a rigid body: unheld, it
-    would fall out of bob's fingers meanwhile), and from the hand-over on it is published at rest
+    would fall out of bob's fingers meanwhile), and the first state published as bob's is at rest
     (the hand-over carries no kinetic energy into bob's node); until bob lifts, within
     HANDOVER_BOUND_M (his grip settles it); bob's hand then carries its weight (m g within
     WEIGHT_TOLERANCE, from his loop's impulse) and lifts it 3 cm. Writes handover_poses.csv (the
@@ -866,11 +866,10 @@ def case_handover(args):
     # or the server's to keep where her hand left it.
     t_bob = t_handed + 2e-3 * HANDOVER_DELAY_MS
     hold_far = max(math.dist(p, p_held) for t, _, p, _ in through if t < t_bob)
-    # The energy the hand-over carries into bob's node: the body's speed as published from the
-    # hand-over until bob's node has it (he starts simulating it from that state).
-    handed = [v for t, _, _, v in through if t_handed <= t < t_bob]
-    check(handed, "no pose of the ball published between the hand-over and bob's node having it")
-    handed_speed = max(handed)
+    # The energy the hand-over carries into bob's node: the state the server first publishes as
+    # his (his node cannot have simulated the body before it gets that state, and starts from it).
+    handed = [v for _, o, _, v in through if o == "bob"]
+    handed_speed = handed[0]
     fastest = max(v for _, _, _, v in through)
     lifted = [p for t, o, p, _ in poses if t >= t_lifted and o == "bob"]
     check(len(lifted) >= 3, f"{len(lifted)} poses of the ball after bob lifted it")
@@ -891,8 +890,8 @@ def case_handover(args):
     print(f"  alice held it at z = {p_held[2]:.4f} m and let go (her node {'held it still for bob' if hold_line else 'did not hold it'}); "
           f"the server handed it over ({reason}) {t_handed - t_release:.2f} s after her hand began to open")
     print(f"  until bob's node had it ({t_bob - t_release:.2f} s): farthest {1e3 * hold_far:.2f} mm from where alice held it; "
-          f"published from the hand-over on at {handed_speed:.2e} m/s at most ({len(handed)} states: "
-          f"{0.5 * BALL['mass_kg'] * handed_speed ** 2:.1e} J of kinetic energy handed over)")
+          f"first published as bob's at {handed_speed:.2e} m/s ({0.5 * BALL['mass_kg'] * handed_speed ** 2:.1e} J of "
+          f"kinetic energy handed over)")
     print(f"  until bob lifted it ({t_lift - t_release:.2f} s): farthest {1e3 * math.dist(far[2], p_held):.2f} mm from where "
           f"alice held it ({far[1]}'s pose at {far[0] - t_release:.2f} s), fastest {fastest:.3f} m/s")
     print(f"  bob's hand held {weight:.4f} N (m g = {mg:.4f} N) and lifted it {1e3 * rise:.1f} mm (his hand: 30 mm)")
