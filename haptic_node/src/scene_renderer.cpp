@@ -138,11 +138,17 @@ void SceneRenderer::Render(double /*t_s*/, double dt_s, std::uint64_t now_ns, co
   passivity_.BeginStep(dt_s, remote_.fade.rate_per_s());
   for (int i = 0; i < std::min(remote_.count, kMaxRemoteContacts); ++i) {
     const contact::PeerContact& c = remote_.items[i];
-    if (remote_.fade.WeightAt(now_ns, c.received_ns) <= 0.0) continue;
+    const double law = remote_.fade.WeightAt(now_ns, c.received_ns);
+    if (law <= 0.0) continue;
+    // A contact coming back after its set had aged into the fade (this bridge stalled) rises at
+    // the fade's rate, not in one step (contact::PeerWeights).
+    const double w = peer_weights_.Weight(c, law, dt_s, remote_.fade.rate_per_s(), now_ns);
+    if (w <= 0.0) continue;
     contact::RemoteContact& r = remote_contacts_[static_cast<std::size_t>(n_remote++)];
-    r = contact::ToRemoteContact(c, remote_.fade, now_ns);
+    r = contact::ToRemoteContact(c, w);
     passivity_.Admit(c, r);
   }
+  peer_weights_.EndStep(now_ns);
   // 3. Contacts: rigid, dynamic and deformable objects, all hands on a deformable together.
   world.Step(dt_s, reading.p_WE, {remote_contacts_.data(), static_cast<std::size_t>(n_remote)});
   passivity_.Observe(world.remote_forces_W());

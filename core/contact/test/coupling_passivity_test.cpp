@@ -269,6 +269,44 @@ TEST(CouplingPassivity, TheWorldReportsEachRemoteContactsForceOnTheBody) {
   EXPECT_EQ(w.remote_forces_W()[1], Eigen::Vector3d::Zero());  // rejected: not in the solve
 }
 
+// The weights a haptic step gives the peers' contacts (PeerWeights): the fade law's going down
+// and for a new contact; going up again (a newer set after a stalled bridge, or a contact back
+// within kMemory_ns after it had gone) at the fade's rate; a contact unseen for longer than
+// kMemory_ns starts at the law's weight again.
+TEST(PeerWeights, AContactComingBackRisesAtTheFadesRate) {
+  PeerWeights weights;
+  PeerContact c;
+  c.user_key = UserKey("bob");
+  c.finger = 1;
+  c.object = 3;
+  const double rate = 1.0 / 0.3, dt = 1e-3;
+  std::uint64_t now = 1'000'000'000;
+  auto step = [&](double law) {
+    now += 1'000'000;
+    const double w = weights.Weight(c, law, dt, rate, now);
+    weights.EndStep(now);
+    return w;
+  };
+  EXPECT_EQ(step(1.0), 1.0);   // new: the law's weight
+  EXPECT_EQ(step(0.4), 0.4);   // fading: the law's
+  EXPECT_NEAR(step(1.0), 0.4 + rate * dt, 1e-12);  // a fresh set: back at the fade's rate
+  double w = 0.0;
+  for (int k = 0; k < 300; ++k) w = step(1.0);
+  EXPECT_EQ(w, 1.0);
+  // Gone for a step (faded out, or the finger left the set), then back: from 0.
+  now += 1'000'000;
+  weights.EndStep(now);
+  EXPECT_NEAR(step(1.0), rate * dt, 1e-12);
+  // Another finger of the same user is another contact: new, at the law's weight.
+  c.finger = 2;
+  EXPECT_EQ(step(0.7), 0.7);
+  // Unseen for longer than the memory: new again.
+  now += PeerWeights::kMemory_ns + 1'000'000;
+  weights.EndStep(now);
+  c.finger = 1;
+  EXPECT_EQ(step(1.0), 1.0);
+}
+
 TEST(CouplingPassivity, AdmitAndObserveDoNotAllocate) {
   CouplingPassivity pc;
   const std::array<Eigen::Vector3d, 2> F = {OnBody(0.5), OnBody(0.2)};

@@ -160,6 +160,7 @@ class SceneRenderer final : public ForceRenderer {
   FollowedBodies followed_;
   std::array<contact::RemoteContact, kMaxRemoteContacts> remote_contacts_{};
   contact::CouplingPassivity passivity_;
+  contact::PeerWeights peer_weights_;  // the fade's weights, rising again at its rate
   // Channels.
   common::TripleBuffer<RemoteContacts> remote_in_;
   common::TripleBuffer<FollowedBodies> followed_in_;

@@ -4,6 +4,8 @@
 /// headers never reach the DDS layer. handshare::session turns received contact sets into
 /// these (the DDS boundary); the haptic renderer and the world server turn them into
 /// RemoteContacts for the solves, faded by the contact's age at their own step (PeerFade).
+#include <algorithm>
+#include <array>
 #include <cstdint>
 #include <string_view>
 
@@ -61,8 +63,7 @@ inline std::uint64_t UserKey(std::string_view user) noexcept {
 /// The contact as a solve takes it at `now_ns` (steady clock): u and f scaled by the fade's
 /// weight at the contact's age. Whoever steps the solve calls this with its own step time, so
 /// the fade moves with every step however late the contact was handed over. Real-time safe.
-inline RemoteContact ToRemoteContact(const PeerContact& c, const PeerFade& fade, std::uint64_t now_ns) noexcept {
-  const double w = fade.WeightAt(now_ns, c.received_ns);
+inline RemoteContact ToRemoteContact(const PeerContact& c, double w) noexcept {
   RemoteContact r;
   r.hand = c.hand;
   r.finger = c.finger;
@@ -73,5 +74,68 @@ inline RemoteContact ToRemoteContact(const PeerContact& c, const PeerFade& fade,
   r.f_E_W_N = w * Eigen::Vector3d(c.f_E_W_N[0], c.f_E_W_N[1], c.f_E_W_N[2]);
   return r;
 }
+
+/// ToRemoteContact at the fade law's weight for its age at now_ns.
+inline RemoteContact ToRemoteContact(const PeerContact& c, const PeerFade& fade, std::uint64_t now_ns) noexcept {
+  return ToRemoteContact(c, fade.WeightAt(now_ns, c.received_ns));
+}
+
+/// The weights a haptic step gives the peers' contacts: the fade law's, except that a contact
+/// whose weight rises again -- a newer set after its bridge stalled past fade_after (the stalls
+/// seen under load are 10-570 ms), or back within kMemory_ns after it had faded out -- rises at
+/// the fade's rate instead of stepping back to full weight in one step: the other hand feels
+/// the same ramp coming back as going. A contact the step has not seen within kMemory_ns starts
+/// at its law's weight, as a new touch does (its displacement grows from zero anyway).
+/// Channels by (user_key, finger, object), in fixed arrays: real-time safe.
+class PeerWeights {
+ public:
+  static constexpr int kMaxChannels = 48;  ///< at least haptic::kMaxRemoteContacts
+  static constexpr std::uint64_t kMemory_ns = 2'000'000'000;
+
+  /// The weight for c this step (law: the fade's weight at its age), dt_s after the last step.
+  double Weight(const PeerContact& c, double law, double dt_s, double rate_per_s, std::uint64_t now_ns) noexcept {
+    Channel* ch = nullptr;
+    for (int i = 0; i < count_ && ch == nullptr; ++i) {
+      Channel& x = channels_[static_cast<std::size_t>(i)];
+      if (x.user_key == c.user_key && x.finger == c.finger && x.object == c.object) ch = &x;
+    }
+    if (ch == nullptr) {
+      if (count_ == kMaxChannels) return law;
+      ch = &channels_[static_cast<std::size_t>(count_++)];
+      *ch = {c.user_key, c.finger, c.object, law, now_ns, true};
+      return law;
+    }
+    const double w = law > ch->w ? std::min(law, ch->w + rate_per_s * dt_s) : law;
+    ch->w = w;
+    ch->seen_ns = now_ns;
+    ch->seen = true;
+    return w;
+  }
+  /// After the step's contacts: a channel not seen this step has weight 0 from now on, and is
+  /// forgotten kMemory_ns after it was last seen.
+  void EndStep(std::uint64_t now_ns) noexcept {
+    for (int i = 0; i < count_;) {
+      Channel& x = channels_[static_cast<std::size_t>(i)];
+      if (!x.seen) x.w = 0.0;
+      x.seen = false;
+      if (now_ns - x.seen_ns > kMemory_ns) {
+        x = channels_[static_cast<std::size_t>(--count_)];
+      } else {
+        ++i;
+      }
+    }
+  }
+
+ private:
+  struct Channel {
+    std::uint64_t user_key = 0;
+    std::int32_t finger = 0, object = -1;
+    double w = 0.0;
+    std::uint64_t seen_ns = 0;
+    bool seen = false;
+  };
+  std::array<Channel, kMaxChannels> channels_{};
+  int count_ = 0;
+};
 
 }  // namespace handshare::contact
