@@ -91,6 +91,7 @@ void ObjectAuthority::SetScene(const scene::Scene& scene) {
     arbiter_.Clear();
     claims_.clear();
     handing_over_.clear();
+    peer_weights_ = {};
     peers_.Clear();
   }
   // A build in flight is superseded, not waited for: the tick goes on, and its models are
@@ -298,11 +299,17 @@ TickOutput ObjectAuthority::Tick(Clock::time_point now, double dt_s) {
   }
   // The users' fingertips on deformables: one solve with everybody. (Rigid bodies need none:
   // whoever touches a body claims it and simulates it; a free body only falls and rests.)
+  // Faded as the haptic nodes fade them, and coming back at the fade's rate as they do
+  // (contact::PeerWeights), so the published field is the one the nodes' solves have.
   std::size_t n_all = 0;
+  const std::uint64_t now_ns = session::PeerContacts::SteadyNs(now);
   peers_.ForEach(*models_, now, [&](const contact::PeerContact& c, const msg::ContactSet&) {
     if (n_all >= remote_.size() || world.contact_solver(c.object) == nullptr) return;
-    remote_[n_all++] = contact::ToRemoteContact(c, peers_.fade(), session::PeerContacts::SteadyNs(now));
+    const double law = peers_.fade().WeightAt(now_ns, c.received_ns);
+    const double w = peer_weights_.Weight(c, law, dt_s, peers_.fade().rate_per_s(), now_ns);
+    if (w > 0.0) remote_[n_all++] = contact::ToRemoteContact(c, w);
   });
+  peer_weights_.EndStep(now_ns);
 
   const double motion_t =
       clock_.At_s(static_cast<std::uint64_t>(std::chrono::nanoseconds(now.time_since_epoch()).count()));

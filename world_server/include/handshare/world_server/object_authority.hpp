@@ -25,6 +25,7 @@
 #include <vector>
 
 #include "handshare/common/session_clock.hpp"
+#include "handshare/contact/peer_contact.hpp"
 #include "handshare/dds/messages.hpp"
 #include "handshare/scene/scene.hpp"
 #include "handshare/session/peer_contacts.hpp"
@@ -154,6 +155,7 @@ class ObjectAuthority {
   std::vector<std::pair<contact::ObjectId, std::size_t>> moving_;  // object, scene index
   std::map<contact::ObjectId, Eigen::Vector3d> last_published_;     // free bodies
   std::vector<contact::RemoteContact> remote_;
+  contact::PeerWeights peer_weights_;  // the fade's weights, rising again at its rate
   bool keyframes_requested_ = false;
   Clock::time_point next_pose_refresh_{};  // ObjectAuthorityOptions::pose_refresh_period
 };
