@@ -66,6 +66,17 @@ Eigen::Isometry3d ReckonedPose(const session::PeerContacts::Entry& e, std::chron
   return X;
 }
 
+/// `user`'s newest set when it reports simulating `id` at a finite pose, else nullptr.
+const session::PeerContacts::Entry* SimulatingSet(const session::PeerContacts& peers, const std::string& user,
+                                                  const std::string& id) {
+  const auto it = peers.sets().find(user);
+  if (it == peers.sets().end() || !it->second.set.simulating() ||
+      it->second.set.simulated_object_id().to_string() != id || !Finite(it->second.set)) {
+    return nullptr;
+  }
+  return &it->second;
+}
+
 }  // namespace
 
 ObjectAuthority::ObjectAuthority(std::string session, ObjectAuthorityOptions options, common::SessionClock clock)
@@ -260,8 +271,10 @@ TickOutput ObjectAuthority::Tick(Clock::time_point now, double dt_s) {
   // Who simulates what: owned bodies follow their owner's newest reported pose; a resumed
   // session's bodies held for their owner's claim stay where the log left them.
   std::map<contact::ObjectId, std::pair<std::string, const session::PeerContacts::Entry*>> owned;
-  std::map<contact::ObjectId, Eigen::Isometry3d> held;
-  std::map<contact::ObjectId, Eigen::Isometry3d> held_still;  // published, unlike `held`
+  // Held at rest this tick: a resumed session's body reserved for its owner's claim (not
+  // published: the claim decides), or a body handed over until its new owner simulates it.
+  std::map<contact::ObjectId, Eigen::Isometry3d> at_rest;
+  std::set<contact::ObjectId> reserved;
   for (const auto body : models_->dynamic_bodies) {
     const std::string& id = models_->ids[static_cast<std::size_t>(body)];
     const std::string owner = arbiter_.owner(id);
@@ -271,17 +284,13 @@ TickOutput ObjectAuthority::Tick(Clock::time_point now, double dt_s) {
         if (owner.empty()) out.notes.push_back("object '" + id + "': no claim from '" + r->second.owner + "', free");
         reserved_.erase(r);
       } else {
-        held[body] = r->second.X_WO;
+        at_rest[body] = r->second.X_WO;
+        reserved.insert(body);
         continue;
       }
     }
     if (owner.empty()) continue;
-    const auto it = peers_.sets().find(owner);
-    const session::PeerContacts::Entry* set = nullptr;
-    if (it != peers_.sets().end() && it->second.set.simulating() &&
-        it->second.set.simulated_object_id().to_string() == id && Finite(it->second.set)) {
-      set = &it->second;
-    }
+    const session::PeerContacts::Entry* set = SimulatingSet(peers_, owner, id);
     owned[body] = {owner, set};
     if (set != nullptr) {
       handing_over_.erase(id);  // the new owner simulates it
@@ -289,12 +298,10 @@ TickOutput ObjectAuthority::Tick(Clock::time_point now, double dt_s) {
       // Handed over, and the new owner has not taken it over yet: it is in that owner's grasp,
       // so it stays where the last owner left it instead of falling for the round trip.
       if (!h->second.X_WO) {
-        const auto last = peers_.sets().find(h->second.from);
-        const bool reported = last != peers_.sets().end() && last->second.set.simulating() &&
-                              last->second.set.simulated_object_id().to_string() == id && Finite(last->second.set);
-        h->second.X_WO = reported ? ReckonedPose(last->second, now) : world.pose(body);
+        const session::PeerContacts::Entry* last = SimulatingSet(peers_, h->second.from, id);
+        h->second.X_WO = last != nullptr ? ReckonedPose(*last, now) : world.pose(body);
       }
-      held_still[body] = *h->second.X_WO;
+      at_rest[body] = *h->second.X_WO;
     }
   }
   // The users' fingertips on deformables: one solve with everybody. (Rigid bodies need none:
@@ -328,11 +335,7 @@ TickOutput ObjectAuthority::Tick(Clock::time_point now, double dt_s) {
   const int substeps = std::clamp(static_cast<int>(std::lround(dt_s / options_.physics_dt_s)), 1, 100);
   const double h = dt_s / substeps;
   for (int s = 0; s < substeps; ++s) {
-    for (const auto& [body, X] : held) {
-      world.SetPose(body, X);
-      world.SetVelocity(body, Eigen::Vector3d::Zero(), Eigen::Vector3d::Zero());
-    }
-    for (const auto& [body, X] : held_still) {
+    for (const auto& [body, X] : at_rest) {
       world.SetPose(body, X);
       world.SetVelocity(body, Eigen::Vector3d::Zero(), Eigen::Vector3d::Zero());
     }
@@ -353,11 +356,11 @@ TickOutput ObjectAuthority::Tick(Clock::time_point now, double dt_s) {
   if (refresh) next_pose_refresh_ = now + std::chrono::duration_cast<Clock::duration>(options_.pose_refresh_period);
   for (const auto body : models_->dynamic_bodies) {
     const std::string& id = models_->ids[static_cast<std::size_t>(body)];
-    if (held.count(body) != 0) continue;  // its owner's claim decides, not this server
+    if (reserved.count(body) != 0) continue;  // its owner's claim decides, not this server
     if (const auto it = owned.find(body); it != owned.end()) {
       if (it->second.second == nullptr) {
         // Granted, and the owner has not taken it over yet: tell it where the body is.
-        if (const auto still = held_still.find(body); still != held_still.end()) {
+        if (const auto still = at_rest.find(body); still != at_rest.end()) {
           out.states.push_back(State(session_, id, it->second.first, still->second, Eigen::Vector3d::Zero()));
         } else {
           out.states.push_back(State(session_, id, it->second.first, world.pose(body), world.body_velocity_W(body)));
