@@ -253,11 +253,12 @@ void HapticBridge::FollowPeerBodies() {
   FollowedBodies followed = ToFollowedBodies(bodies_, config_.user, models);
   // A body this hand lets go of while another user's hand grasps it stays still there until
   // the server's hand-over arrives (HandOverHold).
-  const std::int32_t owned = have_report_ ? OwnedBody(bodies_, config_.user, models) : -1;
+  owned_ = OwnedBody(bodies_, config_.user, models);
+  const std::int32_t held = have_report_ ? owned_ : -1;
   const std::string grasper =
-      owned >= 0 ? PeerGrasping(peers_, models.ids[static_cast<std::size_t>(owned)], Clock::now()) : std::string();
-  if (hand_over_.Update(owned, report_, grasper, common::SteadyNowNs(), followed)) {
-    say_("let go of '" + models.ids[static_cast<std::size_t>(owned)] + "' while '" + grasper +
+      held >= 0 ? PeerGrasping(peers_, models.ids[static_cast<std::size_t>(held)], Clock::now()) : std::string();
+  if (hand_over_.Update(held, report_, grasper, common::SteadyNowNs(), followed)) {
+    say_("let go of '" + models.ids[static_cast<std::size_t>(held)] + "' while '" + grasper +
          "' grasps it: held still there until the hand-over");
   }
   renderer_->SetFollowed(followed);
@@ -283,9 +284,8 @@ void HapticBridge::PublishDeviceState() {
 
 void HapticBridge::PublishContactSet() {
   if (!renderer_ || !have_report_) return;
-  const std::int32_t owned = OwnedBody(bodies_, config_.user, renderer_->models());
   const bool active =
-      ToContactSet(report_, renderer_->models(), owned, models_options_.fingertip_radius_m, contacts_msg_);
+      ToContactSet(report_, renderer_->models(), owned_, models_options_.fingertip_radius_m, contacts_msg_);
   const std::uint64_t now_ns = common::SteadyNowNs();
   if (!(active || last_sent_active_) || contact_writer_.matched_readers() == 0) {
     last_sent_active_ = active;

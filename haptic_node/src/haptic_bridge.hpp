@@ -142,6 +142,7 @@ class HapticBridge {
   session::PeerContacts peers_;    ///< the other users' newest contact sets (faded when silent)
   ReceivedBodies bodies_;          ///< published rigid-body states, followed unless owned here
   HandOverHold hand_over_;         ///< an owned body let go of while a peer grasps it
+  std::int32_t owned_ = -1;        ///< OwnedBody() of this tick (FollowPeerBodies)
 
   msg::DeviceState state_msg_;
   msg::LoopStatistics stats_msg_;
