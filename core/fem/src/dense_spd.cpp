@@ -20,7 +20,12 @@ using StridedMatrix = Eigen::Map<Eigen::MatrixXd, 0, Eigen::OuterStride<>>;
 bool FactorEigen(double* A, int n, int ld) noexcept {
   StridedMatrix m(A, n, n, Eigen::OuterStride<>(ld));
   const Eigen::LLT<Eigen::Ref<Eigen::MatrixXd, 0, Eigen::OuterStride<>>> llt(m);
-  return llt.info() == Eigen::Success;
+  if (llt.info() != Eigen::Success) return false;
+  for (int k = 0; k < n; ++k) {  // LLT's success does not say the factor is finite
+    const double d = A[static_cast<std::ptrdiff_t>(k) * ld + k];
+    if (!(d > 0.0) || !std::isfinite(d)) return false;
+  }
+  return true;
 }
 
 void SolveEigen(const double* L, int n, int ld, double* B, int nrhs, int ldb) noexcept {
@@ -98,12 +103,9 @@ HS_AVX512 bool FactorAvx512(double* A, int n, int ld) noexcept {
 
 bool FactorSpd(double* A, int n, int ld, Isa isa) noexcept {
   if (n <= 0) return true;
-  if (isa == Isa::kAvx512 ? !FactorAvx512(A, n, ld) : !FactorEigen(A, n, ld)) return false;
-  for (int k = 0; k < n; ++k) {
-    const double d = A[static_cast<std::ptrdiff_t>(k) * ld + k];
-    if (!(d > 0.0) || !std::isfinite(d)) return false;
-  }
-  return true;
+  // The AVX-512 kernel checks each pivot before its square root; every entry of L reaches a
+  // later pivot, so a non-finite one fails there too.
+  return isa == Isa::kAvx512 ? FactorAvx512(A, n, ld) : FactorEigen(A, n, ld);
 }
 
 void SolveFactoredSpd(const double* L, int n, int ld, double* B, int nrhs, int ldb) noexcept {
