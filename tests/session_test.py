@@ -236,6 +236,12 @@ def colour_matches(pixel, rgb):
     return min(on) >= 110 and (not off or max(off) <= 0.5 * min(on))
 
 
+def scene_object(scene, object_id):
+    """The object `object_id` of assets/scenes/SCENE.json, as the scene file has it."""
+    with open(os.path.join(HERE, "..", "assets", "scenes", scene + ".json")) as f:
+        return [o for o in json.load(f)["objects"] if o["id"] == object_id][0]
+
+
 def read_trace(path):
     """A haptic trace's complete rows as dicts of floats ([] while there is none). The node
     flushes each row, so a test can follow a trace while the node runs; a partial last line
@@ -696,8 +702,7 @@ def case_encyclopedia(h, domain):
     # it received) while they still hold. Unchanged for 2.5 s: the keyframe that follows the
     # last change within 2 s (the server's keyframe period) has been sent, and a receiver
     # holds exactly what was sent even if it missed deltas (its history keeps the last 4).
-    with open(os.path.join(HERE, "..", "assets", "scenes", "dinosaur.json")) as f:
-        tail = [o for o in json.load(f)["objects"] if o["id"] == "triceratops_tail"][0]
+    tail = scene_object("dinosaur", "triceratops_tail")
     held_file = os.path.join(dump, "triceratops_tail.json")
     pressed = PressWatch(held_file, tail["position_m"], {"alice": (0.225, 0.08), "bob": (0.27, 0.08)})
     held = wait_until("the tail pressed by alice and bob, held still for 2.5 s", 90,
@@ -757,8 +762,7 @@ def case_encyclopedia(h, domain):
                    "control arrow_next by alice: scene 'dinosaur'", "control arrow_next by alice: scene 'microscopic'",
                    "control arrow_start by alice: scene 'start_menu'", "object 'ball': owner '' -> 'alice' (granted)"):
         check(needle in ws, f"world server log lacks: {needle}")
-    with open(os.path.join(HERE, "..", "assets", "scenes", "solar_system.json")) as f:
-        ball = [o for o in json.load(f)["objects"] if o["id"] == "ball"][0]
+    ball = scene_object("solar_system", "ball")
     # The held weights: the last 2 s of each 3 s hold of the lifted ball in alice's trace (the
     # hand still and weighed down), first on the Moon, then on Mars.
     holds = held_weights(trace, 0.5 * ball["mass_kg"] * 1.62)
@@ -860,8 +864,7 @@ def case_vanished_member(h, domain):
             "--script", os.path.join(DATA, "vanish_bob.hand"), "--trace", bob_trace)
     h.start("alice", "haptic_node", "--domain", domain, "--session", session, "--user", "alice",
             "--script", os.path.join(DATA, "vanish_alice.hand"))
-    with open(os.path.join(HERE, "..", "assets", "scenes", "dinosaur.json")) as f:
-        p_tail = [o for o in json.load(f)["objects"] if o["id"] == "triceratops_tail"][0]["position_m"]
+    p_tail = scene_object("dinosaur", "triceratops_tail")["position_m"]
     tail = PressWatch(os.path.join(dump, "triceratops_tail.json"), p_tail, {"alice": (0.225, 0.08), "bob": (0.27, 0.08)})
     # Both press and hold still long enough for bob's force before the kill to be measured.
     wait_until("the tail pressed by alice and bob, held still for 3 s", 60,
@@ -915,8 +918,7 @@ def case_vanished_member(h, domain):
             "--script", os.path.join(DATA, "vanish_owner.hand"), "--trace", owner_trace)
     h.wait_for_line("world_server2", "object 'ball': owner '' -> 'alice' (granted)", 30)
     # Killed while holding the ball up: her trace shows the hand still under its weight.
-    with open(os.path.join(HERE, "..", "assets", "scenes", "solar_system.json")) as f:
-        ball = [o for o in json.load(f)["objects"] if o["id"] == "ball"][0]
+    ball = scene_object("solar_system", "ball")
     wait_until("alice holding the ball still", 30,
                lambda: settled_since(owner_trace, 0.5 * ball["mass_kg"] * 1.62) >= 0.5, lambda: h.log("owner"))
     h.procs["owner"][0].kill()
@@ -1064,8 +1066,7 @@ def case_lever_round_trip(h, domain):
     h.wait_for_line("alice", "revision 3: 3 objects, 3 controls, gravity -1.62", 90)
     moves = re.findall(r"control lever_planet by alice: gravity (-?[\d.]+)", h.log("world_server"))
     check(moves == ["-3.71", "-1.62"], f"the lever should have set Mars' gravity, then the Moon's: {moves}")
-    with open(os.path.join(HERE, "..", "assets", "scenes", "solar_system.json")) as f:
-        ball = [o for o in json.load(f)["objects"] if o["id"] == "ball"][0]
+    ball = scene_object("solar_system", "ball")
     # The script ends holding the ball still for 4 s: two holds in the trace.
     holds = wait_until("two holds of the ball in alice's trace", 90,
                        lambda: (lambda hs: hs if len(hs) >= 2 else None)(held_weights(trace, 0.5 * ball["mass_kg"] * 1.62)))

@@ -5,7 +5,6 @@ namespaces, so Fast DDS talks UDP over veth and a bridge, not shared memory.
 usage: net_dds_test.py two_hosts|partitioned_user|tour|unicast_peers|late_joiners_unicast|delayed_tail|handover
                       --bin-dir DIR --nfq-delay PATH --domain D --work DIR
 """
-import json
 import math
 import os
 import re
@@ -205,8 +204,7 @@ def case_partitioned_user(args):
     for f in traces.values():
         if os.path.exists(f):
             os.remove(f)
-    with open(os.path.join(HERE, "..", "..", "assets", "scenes", "dinosaur.json")) as f:
-        tail = [o for o in json.load(f)["objects"] if o["id"] == "triceratops_tail"][0]
+    tail = session_test.scene_object("dinosaur", "triceratops_tail")
     p_tail = tail["position_m"]
     mu_s, mu_k = tail["material"].get("mu_static", 0.0), tail["material"].get("mu_kinetic", 0.0)
     with Network(3, nfq_delay=args.nfq_delay) as net:
@@ -779,8 +777,6 @@ HANDOVER_DELAY_MS = 50
 HANDOVER_HOLD_M = 2e-3    # the ball's largest distance from where alice held it until bob's node has it
 HANDOVER_BOUND_M = 5e-3   # ... and until bob lifts it (his grip settles it by its own sag)
 WEIGHT_TOLERANCE = 0.05   # bob's held weight, of m g
-BALL = [o for o in json.load(open(os.path.join(HERE, "..", "..", "assets", "scenes", "solar_system.json")))["objects"]
-        if o["id"] == "ball"][0]
 
 
 def read_poses(path, object_id):
@@ -814,6 +810,7 @@ def case_handover(args):
     ball's published poses) to --work."""
     os.makedirs(args.work, exist_ok=True)
     server_exe, node_exe = exe(args.bin_dir, "world_server"), exe(args.bin_dir, "haptic_node")
+    ball = session_test.scene_object("solar_system", "ball")
     session = f"net-handover-{os.getpid()}"
     common = ["--domain", args.domain, "--session", session]
     poses_csv = os.path.join(args.work, "handover_poses.csv")
@@ -858,7 +855,7 @@ def case_handover(args):
     held = [p for t, o, p, _ in poses if steady("alice", 8.5) <= t < t_release and o == "alice"]
     check(len(held) >= 3, f"{len(held)} poses of the ball held by alice in the second before she let go")
     p_held = [sum(p[k] for p in held) / len(held) for k in range(3)]
-    check(p_held[2] > BALL["position_m"][2] + 0.04, f"alice held the ball at z = {p_held[2]:.4f} m: not lifted 5 cm")
+    check(p_held[2] > ball["position_m"][2] + 0.04, f"alice held the ball at z = {p_held[2]:.4f} m: not lifted 5 cm")
     through = [(t, o, p, v) for t, o, p, v in poses if t_release <= t < t_lift]
     check(through and through[-1][1] == "bob", "the ball was not bob's before he lifted it")
     far = max(through, key=lambda r: math.dist(r[2], p_held))
@@ -880,7 +877,7 @@ def case_handover(args):
     check(len(sel) > 50 and sel[-1]["t_s"] - sel[0]["t_s"] >= 1.0,
           f"bob's trace has {len(sel)} rows between the hand-over and his lift")
     weight = -(session_test.net_jz(sel[-1]) - session_test.net_jz(sel[0])) / (sel[-1]["t_s"] - sel[0]["t_s"])
-    mg = BALL["mass_kg"] * 1.62
+    mg = ball["mass_kg"] * 1.62
     with open(poses_csv + ".tmp", "w") as f:
         f.write("t_s,owner,x_m,y_m,z_m,speed_m_per_s\n")
         for t, o, p, v in poses:
@@ -890,7 +887,7 @@ def case_handover(args):
     print(f"  alice held it at z = {p_held[2]:.4f} m and let go (her node {'held it still for bob' if hold_line else 'did not hold it'}); "
           f"the server handed it over ({reason}) {t_handed - t_release:.2f} s after her hand began to open")
     print(f"  until bob's node had it ({t_bob - t_release:.2f} s): farthest {1e3 * hold_far:.2f} mm from where alice held it; "
-          f"first published as bob's at {handed_speed:.2e} m/s ({0.5 * BALL['mass_kg'] * handed_speed ** 2:.1e} J of "
+          f"first published as bob's at {handed_speed:.2e} m/s ({0.5 * ball['mass_kg'] * handed_speed ** 2:.1e} J of "
           f"kinetic energy handed over)")
     print(f"  until bob lifted it ({t_lift - t_release:.2f} s): farthest {1e3 * math.dist(far[2], p_held):.2f} mm from where "
           f"alice held it ({far[1]}'s pose at {far[0] - t_release:.2f} s), fastest {fastest:.3f} m/s")
