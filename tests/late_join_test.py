@@ -11,7 +11,6 @@ pose is no longer the scene state's, and only an ObjectState can tell a late joi
 
 usage: late_join_test.py --bin-dir DIR --domain D --work DIR
 """
-import glob
 import json
 import math
 import os
@@ -23,32 +22,24 @@ import time
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 sys.path.insert(0, HERE)
-from session_test import (DATA, Failure, PressWatch, check, check_speech, read_json, run_cases,  # noqa: E402
-                          fem_cache, wait_until)
+from session_test import (ASSETS, DATA, PressWatch, check, check_speech, edited_assets,  # noqa: E402
+                          read_json, run_cases, fem_cache, wait_until)
 
-ASSETS = os.path.join(HERE, "..", "assets")
 BALL_DROP_M = 0.08  # the ball starts this far above its resting place
 REST_TOL_M = 1e-5  # the world server's rest tolerance: a body at rest moves less per tick
 
 
 def make_assets(work):
     """The project's assets, with a dinosaur world that also holds a ball, in the air."""
-    assets = os.path.join(work, "assets")
-    os.makedirs(os.path.join(assets, "scenes"))
-    for folder in ("meshes", "images", "devices"):
-        os.symlink(os.path.abspath(os.path.join(ASSETS, folder)), os.path.join(assets, folder))
-    for path in glob.glob(os.path.join(ASSETS, "scenes", "*.json")):
-        with open(path) as f:
-            scene = json.load(f)
+    with open(os.path.join(ASSETS, "scenes", "solar_system.json")) as f:
+        ball = dict([o for o in json.load(f)["objects"] if o["id"] == "ball"][0])
+    # Clear of the triceratops, the controls and the hand's path; resting at z = radius.
+    ball["position_m"] = [-0.05, -0.10, ball["radius_m"] + BALL_DROP_M]
+
+    def add_ball(scene):
         if scene["name"] == "dinosaur":
-            with open(os.path.join(ASSETS, "scenes", "solar_system.json")) as f:
-                ball = dict([o for o in json.load(f)["objects"] if o["id"] == "ball"][0])
-            # Clear of the triceratops, the controls and the hand's path; resting at z = radius.
-            ball["position_m"] = [-0.05, -0.10, ball["radius_m"] + BALL_DROP_M]
             scene["objects"].append(ball)
-        with open(os.path.join(assets, "scenes", os.path.basename(path)), "w") as f:
-            json.dump(scene, f, indent=1)
-    return assets, ball
+    return edited_assets(work, add_ball), ball
 
 
 def newest_pose(db_path, object_id):

@@ -26,6 +26,7 @@ from array import array
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 DATA = os.path.join(HERE, "data")
+ASSETS = os.path.join(HERE, "..", "assets")
 SCRIPTS = os.path.join(HERE, "..", "haptic_node", "scripts")
 FINGER_RGB = [(1, 0, 0), (0, 1, 0), (0, 0, 1), (1, 1, 0), (0, 1, 1)]  # thumb first
 
@@ -66,6 +67,11 @@ def check(cond, what):
 
 POLL_S = 0.02  # how often a wait looks again
 BACKSTOP_S = 900  # the longest a node may live (the test ends it long before)
+# Of a force: a step of a fingertip's force below this share of it is not felt (a fifth of the
+# Weber fraction of about 0.1 a fingertip tells apart). The smoothness checks of the cases where
+# one hand leaves a shared body allow it: with friction on the body, where each patch stuck
+# decides how much the other hand's press matters, and a small change leaves such steps.
+STEP_FLOOR = 0.02
 
 
 def wait_until(what, timeout, probe, explain=None):
@@ -238,8 +244,27 @@ def colour_matches(pixel, rgb):
 
 def scene_object(scene, object_id):
     """The object `object_id` of assets/scenes/SCENE.json, as the scene file has it."""
-    with open(os.path.join(HERE, "..", "assets", "scenes", scene + ".json")) as f:
+    with open(os.path.join(ASSETS, "scenes", scene + ".json")) as f:
         return [o for o in json.load(f)["objects"] if o["id"] == object_id][0]
+
+
+def edited_assets(work, edit):
+    """The project's assets for a case that needs its scenes changed: WORK/assets, with every
+    scene file rewritten after edit(scene) changed its dict in place and the other folders
+    linked. Point HANDSHARE_ASSETS at the folder returned."""
+    assets = os.path.join(work, "assets")
+    shutil.rmtree(assets, ignore_errors=True)
+    os.makedirs(os.path.join(assets, "scenes"))
+    for folder in os.listdir(ASSETS):
+        if folder != "scenes":
+            os.symlink(os.path.abspath(os.path.join(ASSETS, folder)), os.path.join(assets, folder))
+    for path in glob.glob(os.path.join(ASSETS, "scenes", "*.json")):
+        with open(path) as f:
+            scene = json.load(f)
+        edit(scene)
+        with open(os.path.join(assets, "scenes", os.path.basename(path)), "w") as f:
+            json.dump(scene, f, indent=1)
+    return assets
 
 
 def read_trace(path):
@@ -620,7 +645,6 @@ def check_shared_deformation(h, held, received_file, alice_xy, bob_xy, X_WO_p):
         err = math.sqrt(sum((a - b) ** 2 for a, b in zip(r, l["f_N"])))
         check(err <= 1e-3 * f_scale, f"node {l['node']}: reaction {r} vs the server's load {l['f_N']}")
     # Every vertex of the tail: published (what receivers hold) against the oracle.
-    vertices = max(n for n in nodes if n <= len(nodes))  # tetrahedral nodes start with the vertices
     sent = held["sent_u_W_m"]
     u_max = max(math.sqrt(sum(c * c for c in u)) for u in sent.values())
     check(u_max >= 1e-3, f"the tail's dent is {1e3 * u_max:.2f} mm: not visible")
@@ -899,14 +923,17 @@ def case_vanished_member(h, domain):
     # Without the fade the whole change comes in one step. The trace has a row per bridge cycle
     # (about 10 ms), and a loaded host can stall that thread: rows dt apart may also show what
     # the fade (0.5 s) does in dt, counted here at twice its speed. A step still fails for any
-    # gap under 175 ms.
+    # gap under 175 ms. With friction on the tail (alice's press matters to bob through where
+    # their patches stuck), a step under STEP_FLOOR of bob's force, which he cannot feel, passes
+    # too (the fault this guards, the whole change at once, is larger than both).
     window = [(t, f) for t, f in fz if -0.5 <= t < 2.0]
     excess = [(abs(f1 - f0) - change * (t1 - t0) / 0.25, abs(f1 - f0), t1 - t0)
               for (t0, f0), (t1, f1) in zip(window, window[1:])]
     worst, largest_step, gap = max(excess)
-    check(worst <= 0.3 * change,
+    allowed = max(0.3 * change, STEP_FLOOR * abs(f_before))
+    check(worst <= allowed,
           f"bob's force jumped by {largest_step:.4f} N between trace rows {1e3 * gap:.0f} ms apart when alice vanished "
-          f"(whole change {change:.4f} N)")
+          f"(whole change {change:.4f} N; allowed {allowed:.4f} N)")
     print(f"alice vanished: bob's force {f_before:.4f} -> {f_after:.4f} N, steepest step {largest_step:.5f} N "
           f"(rows {1e3 * gap:.0f} ms apart)")
     # 2. A grasped object.
@@ -1147,7 +1174,7 @@ def case_beating_belly(h, domain):
     os.environ["HANDSHARE_CACHE"] = fem_cache(h.work)
     dump = os.path.join(h.work, "deformation")
     held_file = os.path.join(dump, "daphnia_belly.json")
-    vertex_count = obj_vertices(os.path.join(HERE, "..", "assets", "meshes", "daphnia_body.obj"))
+    vertex_count = obj_vertices(os.path.join(ASSETS, "meshes", "daphnia_body.obj"))
     h.start("world_server", "world_server", "--domain", domain, "--session", session, "--scene", "microscopic_belly",
             "--dump-deformation", dump, "--deformation-threshold", "1e-6")
     h.wait_for_line("world_server", "models of 'microscopic_belly' ready", 300)
@@ -1180,7 +1207,7 @@ def case_beating_belly(h, domain):
     # She feels the beat: while her fingertip holds still on the belly (belly_alice.hand), the
     # force on it swings with the beat's period (a body beating under a still finger), not
     # the steady force of a body at rest.
-    with open(os.path.join(HERE, "..", "assets", "scenes", "microscopic_belly.json")) as f:
+    with open(os.path.join(ASSETS, "scenes", "microscopic_belly.json")) as f:
         period = json.load(f)["objects"][0]["beat"]["period_s"]
     def holding():
         rows = [r for r in read_trace(trace) if abs(r["x1"] - 0.035) < 1e-5 and abs(r["y1"] - 0.004) < 1e-5]
@@ -1245,7 +1272,7 @@ def case_book(h, domain):
     # The frames: the open book at page 1, its picture on the left page and text on the right.
     with open(os.path.join(frames, "camera.json")) as f:
         camera = json.load(f)
-    with open(os.path.join(HERE, "..", "assets", "scenes", "start_menu.json")) as f:
+    with open(os.path.join(ASSETS, "scenes", "start_menu.json")) as f:
         book = [c for c in json.load(f)["controls"] if c["id"] == "book_solar_system"][0]
     (x, y, z), (w, hgt, _) = book["position_m"], book["size_m"]
     left = [(x - 1.5 * w, y - hgt / 2, z), (x - 0.5 * w, y - hgt / 2, z), (x - 0.5 * w, y + hgt / 2, z),
