@@ -184,6 +184,9 @@ def print_logs(procs):
         sys.stderr.write(f"----- {p.label} -----\n{p.log()[-6000:]}\n")
 
 
+STEP_FLOOR = 0.02  # of a force: a step below it is not felt (Weber fraction about 0.1)
+
+
 def case_partitioned_user(args):
     """Three hosts (world server; alice; bob), 20 ms +- 5 ms and 2 % loss on what arrives at each.
     alice and bob press the triceratops tail together; alice's host is cut off for 3 s, then
@@ -303,9 +306,9 @@ def case_partitioned_user(args):
     # A step is a fault when it is a good part of the change alice's press made to bob's force,
     # and large enough to feel: with friction on the tail, where each patch stuck decides how
     # much alice's press matters to bob (0.024-0.10 N seen), and a change that small leaves
-    # steps under session_test.STEP_FLOOR of his force (a fifth of the 10 % a fingertip tells apart) that
+    # steps under STEP_FLOOR of his force (a fifth of the 10 % a fingertip tells apart) that
     # nobody feels (a 0.019 N step once, with a 0.024 N change).
-    allowed = max(0.3 * change, session_test.STEP_FLOOR * abs(bob_before))
+    allowed = max(0.3 * change, STEP_FLOOR * abs(bob_before))
     check(worst <= allowed, f"bob's force jumped by {step:.4f} N between rows {1e3 * gap:.0f} ms apart when "
                             f"alice was cut off (whole change {change:.4f} N; allowed {allowed:.4f} N)")
     # With friction on the tail, alice's fingertip, held still while the tail rises under it as
@@ -645,12 +648,11 @@ def case_delayed_tail(args):
     server's while both hold still, and came within it one round trip (plus the sampling) after
     the inputs stopped. Writes delayed_tail.csv (the figures), delayed_tail_forces.csv (each
     user's force through the run) and delayed_tail_field.csv (each comparison) to --work.
-    The tail is frictionless here: with the scene's friction the stiffness a user feels depends
-    on where each patch stuck and whether it slipped as the other hand pressed, which changes
-    from run to run at any delay (alice 92-167 N/m in one run's five sessions, at 0 ms too), so
-    it would not isolate what the delay does. Friction across a delay is TailFriction's in one
-    process, and the cases that share the tail with the scene as it is (encyclopedia,
-    vanished_member, partitioned_user)."""
+    The tail is frictionless here whatever the scene file says: with friction on it (tried,
+    docs/scenes.md) the stiffness a user feels depends on where each patch stuck and whether it
+    slipped as the other hand pressed, which changed from session to session at any delay
+    (alice 92-167 N/m in one run's five sessions, at 0 ms too), so it would not isolate what the
+    delay does. Friction across a delay is TailFriction's, in one process."""
     os.makedirs(args.work, exist_ok=True)
     os.environ["HANDSHARE_ASSETS"] = session_test.edited_assets(args.work, frictionless_tail)
     server_exe, node_exe = dinosaur_ready(args)
