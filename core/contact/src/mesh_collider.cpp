@@ -18,6 +18,11 @@
 
 #include "handshare/contact/geometry.hpp"
 
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#include <xmmintrin.h>
+#endif
+
 namespace handshare::contact {
 
 struct MeshCollider::Impl {
@@ -144,6 +149,73 @@ void MeshCollider::BuildFlatTree() {
     return box;
   };
   copy(0);
+  BuildWideTree();
+}
+
+void MeshCollider::BuildWideTree() {
+  wide_.clear();
+  // Wide node for the compact subtree at flat node i (an inner node): its children are the
+  // compact nodes reached by expanding, in place and so in left-to-right order, the inner node
+  // with the largest box among them until there are eight (or only leaves).
+  std::function<std::int32_t(std::int32_t)> build = [&](std::int32_t i) -> std::int32_t {
+    const auto me = static_cast<std::int32_t>(wide_.size());
+    wide_.push_back(WideNode{});
+    std::vector<std::int32_t> kids{i + 1, nodes_[static_cast<std::size_t>(i)].right};
+    auto volume = [&](std::int32_t k) {
+      const FlatNode& n = nodes_[static_cast<std::size_t>(k)];
+      return (static_cast<double>(n.hi[0]) - n.lo[0]) + (static_cast<double>(n.hi[1]) - n.lo[1]) +
+             (static_cast<double>(n.hi[2]) - n.lo[2]);
+    };
+    while (kids.size() < static_cast<std::size_t>(kWide)) {
+      std::size_t best = kids.size();
+      for (std::size_t q = 0; q < kids.size(); ++q) {
+        if (nodes_[static_cast<std::size_t>(kids[q])].right < 0) continue;  // a leaf
+        if (best == kids.size() || volume(kids[q]) > volume(kids[best])) best = q;
+      }
+      if (best == kids.size()) break;
+      const std::int32_t k = kids[best];
+      kids[best] = nodes_[static_cast<std::size_t>(k)].right;
+      kids.insert(kids.begin() + static_cast<std::ptrdiff_t>(best), k + 1);
+    }
+    std::int32_t child[kWide];
+    for (std::size_t q = 0; q < static_cast<std::size_t>(kWide); ++q) {
+      if (q >= kids.size()) {
+        child[q] = -1;
+        continue;
+      }
+      const FlatNode& n = nodes_[static_cast<std::size_t>(kids[q])];
+      child[q] = n.right < 0 ? n.right : build(kids[q]);
+    }
+    WideNode& w = wide_[static_cast<std::size_t>(me)];
+    for (std::size_t q = 0; q < static_cast<std::size_t>(kWide); ++q) {
+      for (int a = 0; a < 3; ++a) {
+        if (q < kids.size()) {
+          const FlatNode& n = nodes_[static_cast<std::size_t>(kids[q])];
+          w.lo[a][q] = n.lo[a];
+          w.hi[a][q] = n.hi[a];
+        } else {
+          w.lo[a][q] = std::numeric_limits<float>::infinity();
+          w.hi[a][q] = -std::numeric_limits<float>::infinity();
+        }
+      }
+      w.child[q] = child[q];
+    }
+    return me;
+  };
+  if (nodes_.empty()) return;
+  if (nodes_[0].right < 0) {  // one triangle: a wide root with one leaf
+    WideNode w{};
+    for (int q = 0; q < kWide; ++q) {
+      for (int a = 0; a < 3; ++a) {
+        w.lo[a][q] = q == 0 ? nodes_[0].lo[a] : std::numeric_limits<float>::infinity();
+        w.hi[a][q] = q == 0 ? nodes_[0].hi[a] : -std::numeric_limits<float>::infinity();
+      }
+      w.child[q] = q == 0 ? nodes_[0].right : -1;
+    }
+    wide_.push_back(w);
+    return;
+  }
+  build(0);
 }
 
 MeshCollider::~MeshCollider() = default;
@@ -161,32 +233,55 @@ BallQueryResult MeshCollider::QueryBall(const Eigen::Vector3d& c, double r_m,
   const double slack = 1e-6 * (coord_scale_m_ + c.cwiseAbs().maxCoeff() + r_m);
   const float rf2 = FloatUp((r_m + slack) * (r_m + slack));
   const float cx = static_cast<float>(c.x()), cy = static_cast<float>(c.y()), cz = static_cast<float>(c.z());
-  const FlatNode* nodes = nodes_.data();
+  const WideNode* wide = wide_.data();
+  // Depth-first over the wide tree, children in order (pushed last to first): the triangles
+  // come out in the compact tree's leaf order. Each pop is a wide node or a triangle (< 0).
   constexpr int kStack = 128;
   std::int32_t stack[kStack];
   int top = 0;
-  std::int32_t i = 0;
-  for (;;) {
-    const FlatNode& n = nodes[i];
-    const float ex = std::max(n.lo[0] - cx, 0.0f) + std::max(cx - n.hi[0], 0.0f);
-    const float ey = std::max(n.lo[1] - cy, 0.0f) + std::max(cy - n.hi[1], 0.0f);
-    const float ez = std::max(n.lo[2] - cz, 0.0f) + std::max(cz - n.hi[2], 0.0f);
-    if (ex * ex + ey * ey + ez * ez <= rf2) {
-      if (n.right >= 0) {
-        if (top == kStack) {
-          out.truncated = true;
-        } else {
-          stack[top++] = n.right;
-          ++i;
-          continue;
-        }
-      } else {
-        const std::int32_t t = -1 - n.right;
-        if (!AddIfReached(tri_[static_cast<std::size_t>(t)], t, c, r2, ids, out)) return out;
-      }
+  stack[top++] = 0;
+  while (top > 0) {
+    const std::int32_t item = stack[--top];
+    if (item < 0) {
+      const std::int32_t t = -1 - item;
+      if (!AddIfReached(tri_[static_cast<std::size_t>(t)], t, c, r2, ids, out)) return out;
+      continue;
     }
-    if (top == 0) break;
-    i = stack[--top];
+    const WideNode& n = wide[item];
+    unsigned mask = 0;
+#if defined(__SSE2__)
+    const __m128 zero = _mm_setzero_ps(), r2v = _mm_set1_ps(rf2);
+    const __m128 cv[3] = {_mm_set1_ps(cx), _mm_set1_ps(cy), _mm_set1_ps(cz)};
+    for (int h = 0; h < kWide; h += 4) {
+      __m128 d2 = zero;
+      for (int a = 0; a < 3; ++a) {
+        const __m128 e = _mm_add_ps(_mm_max_ps(_mm_sub_ps(_mm_load_ps(n.lo[a] + h), cv[a]), zero),
+                                    _mm_max_ps(_mm_sub_ps(cv[a], _mm_load_ps(n.hi[a] + h)), zero));
+        d2 = _mm_add_ps(d2, _mm_mul_ps(e, e));
+      }
+      mask |= static_cast<unsigned>(_mm_movemask_ps(_mm_cmple_ps(d2, r2v))) << h;
+    }
+#else
+    const float cc[3] = {cx, cy, cz};
+    for (int q = 0; q < kWide; ++q) {
+      float d2 = 0.0f;
+      for (int a = 0; a < 3; ++a) {
+        const float e = std::max(n.lo[a][q] - cc[a], 0.0f) + std::max(cc[a] - n.hi[a][q], 0.0f);
+        d2 += e * e;
+      }
+      if (d2 <= rf2) mask |= 1u << q;
+    }
+#endif
+    // Children reached, last first onto the stack.
+    while (mask != 0) {
+      const int q = 31 - __builtin_clz(mask);
+      mask &= ~(1u << q);
+      if (top == kStack) {
+        out.truncated = true;
+        continue;
+      }
+      stack[top++] = n.child[q];
+    }
   }
   return out;
 }

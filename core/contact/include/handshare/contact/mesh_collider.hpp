@@ -87,8 +87,20 @@ class MeshCollider {
     std::int32_t right;
     std::int32_t pad;
   };
+  // The walk's tree: the compact tree with up to three levels collapsed into one node of up to
+  // eight children (boxes in structure-of-arrays form, so one node's eight box tests are a few
+  // vector operations), children in the compact tree's left-to-right order. child >= 0: another
+  // wide node; < 0: -1 - triangle. Unused slots have empty boxes (lo = +inf, hi = -inf).
+  static constexpr int kWide = 8;
+  struct alignas(32) WideNode {
+    float lo[3][kWide];
+    float hi[3][kWide];
+    std::int32_t child[kWide];
+  };
+  void BuildWideTree();
   std::unique_ptr<Impl> impl_;
   std::vector<FlatNode> nodes_;
+  std::vector<WideNode> wide_;
   std::vector<SweepTriangle> tri_;
   std::vector<Eigen::Vector4d> tri_plane_;
   double coord_scale_m_ = 0.0;  // largest |coordinate| of the mesh (float slack of the boxes)
