@@ -71,8 +71,24 @@ double SweepSphereTriangle(const Eigen::Vector3d& x, const Eigen::Vector3d& d, d
   return SweepSphereTriangle(x, d, R_m, MakeSweepTriangle(a, b, c));
 }
 
+namespace {
+double Sweep(const Eigen::Vector3d& x, const Eigen::Vector3d& d, double R_m, const SweepTriangle& tri,
+             unsigned vertices) noexcept;
+}  // namespace
+
 double SweepSphereTriangle(const Eigen::Vector3d& x, const Eigen::Vector3d& d, double R_m,
                            const SweepTriangle& tri) noexcept {
+  return Sweep(x, d, R_m, tri, 7u);
+}
+
+double SweepSphereTriangleOwned(const Eigen::Vector3d& x, const Eigen::Vector3d& d, double R_m,
+                                const SweepTriangle& tri) noexcept {
+  return Sweep(x, d, R_m, tri, tri.own_vertices);
+}
+
+namespace {
+double Sweep(const Eigen::Vector3d& x, const Eigen::Vector3d& d, double R_m, const SweepTriangle& tri,
+             unsigned vertices) noexcept {
   const Eigen::Vector3d& a = tri.v[0];
   const Eigen::Vector3d& b = tri.v[1];
   const Eigen::Vector3d& c = tri.v[2];
@@ -117,10 +133,12 @@ double SweepSphereTriangle(const Eigen::Vector3d& x, const Eigen::Vector3d& d, d
   }
   // Vertices: spheres of radius R.
   for (int k = 0; k < 3; ++k) {
+    if ((vertices & (1u << k)) == 0) continue;
     const double s = SweepPoint(x - tri.v[k], d, R_m);
     if (s < best) best = s;
   }
   return best;
 }
+}  // namespace
 
 }  // namespace handshare::contact

@@ -116,6 +116,17 @@ void MeshCollider::BuildFlatTree() {
       tri_plane_[t].setConstant(std::numeric_limits<double>::quiet_NaN());
     }
   }
+  // Each vertex is swept by one triangle that holds it (the first), see SweepTriangle::own_vertices.
+  std::vector<std::int32_t> owner(mesh.p_O_m.size(), -1);
+  for (std::size_t t = 0; t < nt; ++t) {
+    std::uint8_t own = 0;
+    for (int k = 0; k < 3; ++k) {
+      const auto v = static_cast<std::size_t>(mesh.triangles[t][static_cast<std::size_t>(k)]);
+      if (owner[v] < 0) owner[v] = static_cast<std::int32_t>(t);
+      if (owner[v] == static_cast<std::int32_t>(t)) own = static_cast<std::uint8_t>(own | (1u << k));
+    }
+    tri_[t].own_vertices = own;
+  }
   coord_scale_m_ = 0.0;
   for (const auto& p : mesh.p_O_m) coord_scale_m_ = std::max(coord_scale_m_, p.cwiseAbs().maxCoeff());
   nodes_.clear();

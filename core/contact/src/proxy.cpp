@@ -247,6 +247,11 @@ Eigen::Vector3d ProxySolver::MoveFrom(MeshCollider& collider, const ProxyParams&
         if (reference_) {
           const auto& P = collider.triangle(tri).v;
           s = std::min(s, SweepSphereTriangle(x, d, Rs, P[0], P[1], P[2]));
+        } else if (!last_gather_truncated_) {
+          // Every triangle the segment can reach is a candidate here, so is each reachable
+          // vertex's owner (it holds the vertex), unless it is a constraint, whose vertices the
+          // move cannot reach either (above): each vertex once.
+          s = std::min(s, SweepSphereTriangleOwned(x, d, Rs, collider.triangle(tri)));
         } else {
           s = std::min(s, SweepSphereTriangle(x, d, Rs, collider.triangle(tri)));
         }

@@ -135,6 +135,50 @@ TEST(Shortcuts, PreparedTriangleSweepEqualsTheOldSweepBitForBit) {
   EXPECT_GT(grazing, 40000);
 }
 
+// Each vertex swept once, by its owner: over the triangles a ball around a segment reaches (the
+// proxy's candidates), the first touch on the way is the same bits as with every triangle's three
+// vertices.
+TEST(Shortcuts, SweepingEachVertexOnceByItsOwnerFindsTheSameFirstTouch) {
+  const std::shared_ptr<const TriMesh> meshes[] = {std::make_shared<const TriMesh>(MakeBumpySphere(0.05, 0.003, 5)),
+                                                   WavyPlate()};
+  std::mt19937 rng(23);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  int hits = 0, vertex_hits = 0;
+  for (const auto& mesh : meshes) {
+    MeshCollider collider(mesh, 4096);
+    std::vector<std::int32_t> ids(4096);
+    for (int trial = 0; trial < 4000; ++trial) {
+      // A sphere of R = 8 mm starting 0-1 mm off the surface near a random vertex, moving up to
+      // 2 mm in a random direction.
+      const Eigen::Vector3d& v = mesh->p_O_m[static_cast<std::size_t>(rng() % mesh->p_O_m.size())];
+      const Eigen::Vector3d out = mesh == meshes[0] ? Eigen::Vector3d(v.normalized()) : Eigen::Vector3d(0, 0, 1);
+      const double R = 0.008;
+      const Eigen::Vector3d x = v + (R + 0.001 * (0.5 + 0.5 * u(rng))) * out + 0.004 * Eigen::Vector3d(u(rng), u(rng), u(rng));
+      const Eigen::Vector3d d = 0.002 * Eigen::Vector3d(u(rng), u(rng), u(rng));
+      const BallQueryResult r = collider.QueryBall(x + 0.5 * d, 0.5 * d.norm() + R + 1e-5, ids);
+      ASSERT_FALSE(r.truncated);
+      double all = 2.0, owned = 2.0, no_vertices = 2.0;
+      for (std::int32_t i = 0; i < r.count; ++i) {
+        const SweepTriangle& t = collider.triangle(ids[static_cast<std::size_t>(i)]);
+        all = std::min(all, SweepSphereTriangle(x, d, R, t));
+        owned = std::min(owned, SweepSphereTriangleOwned(x, d, R, t));
+        SweepTriangle faces_and_edges = t;
+        faces_and_edges.own_vertices = 0;
+        no_vertices = std::min(no_vertices, SweepSphereTriangleOwned(x, d, R, faces_and_edges));
+      }
+      // The first touch on the way (s <= 1), or none (any value > 1: a root beyond the move).
+      if (all > 1.0) all = 2.0;
+      if (owned > 1.0) owned = 2.0;
+      if (no_vertices > 1.0) no_vertices = 2.0;
+      ASSERT_EQ(std::memcmp(&all, &owned, sizeof(double)), 0) << "trial " << trial << ": " << all << " vs " << owned;
+      hits += all <= 1.0 ? 1 : 0;
+      vertex_hits += all <= 1.0 && no_vertices != all ? 1 : 0;
+    }
+  }
+  EXPECT_GT(hits, 1000);      // many sweeps touch
+  EXPECT_GT(vertex_hits, 20);  // and some first at a vertex, where the owners matter
+}
+
 TEST(Shortcuts, CompactTreeWalkReturnsTheObbWalksTrianglesInTheSameOrder) {
   const std::shared_ptr<const TriMesh> meshes[] = {std::make_shared<const TriMesh>(MakeBumpySphere(0.05, 0.003, 5)),
                                                    WavyPlate()};

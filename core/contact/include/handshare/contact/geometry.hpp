@@ -3,6 +3,8 @@
 /// Exact point/sphere queries against one triangle, used by the god-object proxy. All functions
 /// are real-time safe (noexcept, no allocation). Positions in any one frame [m].
 
+#include <cstdint>
+
 #include <Eigen/Core>
 #include <Eigen/Geometry>
 
@@ -30,6 +32,10 @@ struct SweepTriangle {
   Eigen::Vector3d ed[3];   ///< edge e: v[(e + 1) % 3] - v[e]
   double len2[3] = {0.0, 0.0, 0.0};  ///< |ed[e]|^2
   bool has_face = false;   ///< |(b - a) x (c - a)| > 0
+  /// The vertices this triangle sweeps for its mesh (bit k: v[k]), read by
+  /// SweepSphereTriangleOwned: a vertex is shared by several triangles and gives the same root in
+  /// each, so one of them (its owner, MeshCollider) sweeps it. All three by default.
+  std::uint8_t own_vertices = 7;
 };
 SweepTriangle MakeSweepTriangle(const Eigen::Vector3d& a, const Eigen::Vector3d& b,
                                 const Eigen::Vector3d& c) noexcept;
@@ -38,6 +44,12 @@ SweepTriangle MakeSweepTriangle(const Eigen::Vector3d& a, const Eigen::Vector3d&
 /// this one: one code path, identical results).
 double SweepSphereTriangle(const Eigen::Vector3d& x, const Eigen::Vector3d& d, double R_m,
                            const SweepTriangle& tri) noexcept;
+
+/// SweepSphereTriangle with only the vertices in tri.own_vertices: over a set of a mesh's
+/// triangles that holds each reachable vertex's owner, the smallest result is the same bits as
+/// with every vertex (each vertex's root is computed from the same numbers in every triangle).
+double SweepSphereTriangleOwned(const Eigen::Vector3d& x, const Eigen::Vector3d& d, double R_m,
+                                const SweepTriangle& tri) noexcept;
 
 /// Approach (over one sweep) below which a feature is treated as tangent, not hit [m]: far below
 /// any motion a hand makes in one haptic step, far above round-off at these scales.
