@@ -998,6 +998,12 @@ def case_rejoin(h, domain):
         most = max(most, alices)
     check(most == 1, f"alice was in the session twice at once (or never):\n{ws}")
     check(f"rejoined the session {rejoins} time(s)" in h.log("alice"), "alice did not count her rejoins")
+    # Each rejoin closed the old participant and opened the new one (a close or an open that
+    # hangs leaves its node out of the session: this line is missing then).
+    for label in ("alice", "spectator", "audio_guide"):
+        log = h.log(label)
+        check(log.count("leaving and joining again") == log.count("joined again (rejoin"),
+              f"{label}: a rejoin never finished closing the old participant and opening the new one:\n{log}")
     rows = read_trace(trace)
     gaps = [b["t_s"] - a["t_s"] for a, b in zip(rows, rows[1:])]
     print(f"rejoin: {rejoins} rejoins before the world server came, then one member; alice's loop ran on "

@@ -163,7 +163,9 @@ int HapticNode::Run() {
       // The haptic loop runs on meanwhile.
       say(rejoin.Message("world"));
       link.reset();
+      rejoin.Closed();
       link = std::make_unique<SessionLink>(config_, *device, loop, trace ? &trace : nullptr, say);
+      say(rejoin.Rejoined());
     }
     next += period;
     if (Clock::now() > next + 5 * period) next = Clock::now();

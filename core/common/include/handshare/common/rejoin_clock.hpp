@@ -33,11 +33,27 @@ class RejoinClock {
                   static_cast<int>(what.size()), what.data(), after_.count(), rejoins_);
     return line;
   }
+  /// The caller has closed the old participant (after Due).
+  void Closed() { closed_ = Clock::now(); }
+  /// The caller has opened the new participant: the wait starts again from now (a slow close
+  /// or open does not count against it), and the log line of how long each took (a close or an
+  /// open that never returns shows as this line missing after Message's).
+  std::string Rejoined() {
+    const auto now = Clock::now();
+    const double close_s = std::chrono::duration<double>(closed_ - joined_).count();
+    const double open_s = std::chrono::duration<double>(now - closed_).count();
+    joined_ = now;
+    char line[160];
+    std::snprintf(line, sizeof(line), "joined again (rejoin %d): the old participant closed in %.2f s, the new one opened in %.2f s",
+                  rejoins_, close_s, open_s);
+    return line;
+  }
   int rejoins() const { return rejoins_; }
 
  private:
   std::chrono::duration<double> after_;
   Clock::time_point joined_;
+  Clock::time_point closed_;
   int rejoins_ = 0;
 };
 
