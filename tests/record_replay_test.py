@@ -16,7 +16,6 @@ import shutil
 import signal
 import subprocess
 import sys
-import time
 
 from PIL import Image, ImageChops, ImageFilter
 

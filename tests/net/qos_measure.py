@@ -28,7 +28,6 @@ import os
 import re
 import subprocess
 import sys
-import time
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 from netharness import Failure, Network, Skip, SKIP_RETURN_CODE  # noqa: E402

@@ -179,6 +179,35 @@ TEST(Shortcuts, SweepingEachVertexOnceByItsOwnerFindsTheSameFirstTouch) {
   EXPECT_GT(vertex_hits, 20);  // and some first at a vertex, where the owners matter
 }
 
+// The smallest trees: one triangle (the wide root holds the leaf itself), two and three.
+TEST(Shortcuts, TheWalkFindsTheTrianglesOfTinyMeshes) {
+  for (int n = 1; n <= 3; ++n) {
+    auto mesh = std::make_shared<TriMesh>();
+    for (int t = 0; t < n; ++t) {
+      const double x = 0.01 * t;
+      const auto base = static_cast<std::int32_t>(mesh->p_O_m.size());
+      mesh->p_O_m.push_back(Eigen::Vector3d(x, 0, 0));
+      mesh->p_O_m.push_back(Eigen::Vector3d(x + 0.005, 0, 0));
+      mesh->p_O_m.push_back(Eigen::Vector3d(x, 0.005, 0));
+      mesh->triangles.push_back({base, base + 1, base + 2});
+    }
+    MeshCollider collider(mesh, 16);
+    std::vector<std::int32_t> a(16), b(16);
+    for (int t = 0; t < n; ++t) {
+      // A ball over triangle t only, then one over all of them.
+      const BallQueryResult one = collider.QueryBall(Eigen::Vector3d(0.01 * t + 0.001, 0.001, 0.002), 0.003, a);
+      ASSERT_EQ(one.count, 1) << n << " triangles, ball over " << t;
+      EXPECT_EQ(a[0], t);
+    }
+    const BallQueryResult all = collider.QueryBall(Eigen::Vector3d(0.01, 0, 0), 0.05, a);
+    const BallQueryResult ref = collider.QueryBallObb(Eigen::Vector3d(0.01, 0, 0), 0.05, b);
+    ASSERT_EQ(all.count, n);
+    ASSERT_EQ(ref.count, n);
+    EXPECT_EQ(a, b);
+    EXPECT_EQ(collider.QueryBall(Eigen::Vector3d(1, 1, 1), 0.01, a).count, 0);
+  }
+}
+
 TEST(Shortcuts, CompactTreeWalkReturnsTheObbWalksTrianglesInTheSameOrder) {
   const std::shared_ptr<const TriMesh> meshes[] = {std::make_shared<const TriMesh>(MakeBumpySphere(0.05, 0.003, 5)),
                                                    WavyPlate()};
