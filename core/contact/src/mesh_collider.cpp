@@ -129,30 +129,30 @@ void MeshCollider::BuildFlatTree() {
   }
   coord_scale_m_ = 0.0;
   for (const auto& p : mesh.p_O_m) coord_scale_m_ = std::max(coord_scale_m_, p.cwiseAbs().maxCoeff());
-  nodes_.clear();
-  nodes_.reserve(static_cast<std::size_t>(bvh.getNumBVs()));
+  std::vector<FlatNode> nodes;
+  nodes.reserve(static_cast<std::size_t>(bvh.getNumBVs()));
   // Depth-first (left before right) copy of FCL's tree; returns the subtree's box (double).
   struct Box {
     Eigen::Vector3d lo, hi;
   };
   std::function<Box(int)> copy = [&](int fcl_id) -> Box {
     const auto& node = bvh.getBV(fcl_id);
-    const auto me = static_cast<std::int32_t>(nodes_.size());
-    nodes_.push_back(FlatNode{});
+    const auto me = static_cast<std::int32_t>(nodes.size());
+    nodes.push_back(FlatNode{});
     Box box;
     if (node.isLeaf()) {
       const auto& P = tri_[static_cast<std::size_t>(node.primitiveId())].v;
       box.lo = P[0].cwiseMin(P[1]).cwiseMin(P[2]);
       box.hi = P[0].cwiseMax(P[1]).cwiseMax(P[2]);
-      nodes_[static_cast<std::size_t>(me)].right = -1 - node.primitiveId();
+      nodes[static_cast<std::size_t>(me)].right = -1 - node.primitiveId();
     } else {
       const Box l = copy(node.leftChild());
-      nodes_[static_cast<std::size_t>(me)].right = static_cast<std::int32_t>(nodes_.size());
+      nodes[static_cast<std::size_t>(me)].right = static_cast<std::int32_t>(nodes.size());
       const Box r = copy(node.rightChild());
       box.lo = l.lo.cwiseMin(r.lo);
       box.hi = l.hi.cwiseMax(r.hi);
     }
-    FlatNode& f = nodes_[static_cast<std::size_t>(me)];
+    FlatNode& f = nodes[static_cast<std::size_t>(me)];
     for (int k = 0; k < 3; ++k) {
       f.lo[k] = FloatDown(box.lo[k]);
       f.hi[k] = FloatUp(box.hi[k]);
@@ -160,73 +160,58 @@ void MeshCollider::BuildFlatTree() {
     return box;
   };
   copy(0);
-  BuildWideTree();
+  BuildWideTree(nodes);
 }
 
-void MeshCollider::BuildWideTree() {
+void MeshCollider::BuildWideTree(const std::vector<FlatNode>& nodes) {
   wide_.clear();
-  // Wide node for the compact subtree at flat node i (an inner node): its children are the
-  // compact nodes reached by expanding, in place and so in left-to-right order, the inner node
-  // with the largest box among them until there are eight (or only leaves).
-  std::function<std::int32_t(std::int32_t)> build = [&](std::int32_t i) -> std::int32_t {
+  auto node = [&](std::int32_t k) -> const FlatNode& { return nodes[static_cast<std::size_t>(k)]; };
+  auto size = [&](std::int32_t k) {  // the box's half perimeter
+    const FlatNode& n = node(k);
+    return (static_cast<double>(n.hi[0]) - n.lo[0]) + (static_cast<double>(n.hi[1]) - n.lo[1]) +
+           (static_cast<double>(n.hi[2]) - n.lo[2]);
+  };
+  // A wide node whose children are the compact nodes `kids` after expanding, in place and so in
+  // left-to-right order, the inner node with the largest box among them until there are eight
+  // (or only leaves).
+  std::function<std::int32_t(std::vector<std::int32_t>)> build = [&](std::vector<std::int32_t> kids) {
     const auto me = static_cast<std::int32_t>(wide_.size());
     wide_.push_back(WideNode{});
-    std::vector<std::int32_t> kids{i + 1, nodes_[static_cast<std::size_t>(i)].right};
-    auto volume = [&](std::int32_t k) {
-      const FlatNode& n = nodes_[static_cast<std::size_t>(k)];
-      return (static_cast<double>(n.hi[0]) - n.lo[0]) + (static_cast<double>(n.hi[1]) - n.lo[1]) +
-             (static_cast<double>(n.hi[2]) - n.lo[2]);
-    };
     while (kids.size() < static_cast<std::size_t>(kWide)) {
       std::size_t best = kids.size();
       for (std::size_t q = 0; q < kids.size(); ++q) {
-        if (nodes_[static_cast<std::size_t>(kids[q])].right < 0) continue;  // a leaf
-        if (best == kids.size() || volume(kids[q]) > volume(kids[best])) best = q;
+        if (node(kids[q]).right < 0) continue;  // a leaf
+        if (best == kids.size() || size(kids[q]) > size(kids[best])) best = q;
       }
       if (best == kids.size()) break;
       const std::int32_t k = kids[best];
-      kids[best] = nodes_[static_cast<std::size_t>(k)].right;
+      kids[best] = node(k).right;
       kids.insert(kids.begin() + static_cast<std::ptrdiff_t>(best), k + 1);
     }
+    // The children first (wide_ may grow, so `me` is filled after).
     std::int32_t child[kWide];
     for (std::size_t q = 0; q < static_cast<std::size_t>(kWide); ++q) {
       if (q >= kids.size()) {
         child[q] = -1;
-        continue;
+      } else {
+        const FlatNode& n = node(kids[q]);
+        child[q] = n.right < 0 ? n.right : build({kids[q] + 1, n.right});
       }
-      const FlatNode& n = nodes_[static_cast<std::size_t>(kids[q])];
-      child[q] = n.right < 0 ? n.right : build(kids[q]);
     }
     WideNode& w = wide_[static_cast<std::size_t>(me)];
     for (std::size_t q = 0; q < static_cast<std::size_t>(kWide); ++q) {
       for (int a = 0; a < 3; ++a) {
-        if (q < kids.size()) {
-          const FlatNode& n = nodes_[static_cast<std::size_t>(kids[q])];
-          w.lo[a][q] = n.lo[a];
-          w.hi[a][q] = n.hi[a];
-        } else {
-          w.lo[a][q] = std::numeric_limits<float>::infinity();
-          w.hi[a][q] = -std::numeric_limits<float>::infinity();
-        }
+        w.lo[a][q] = q < kids.size() ? node(kids[q]).lo[a] : std::numeric_limits<float>::infinity();
+        w.hi[a][q] = q < kids.size() ? node(kids[q]).hi[a] : -std::numeric_limits<float>::infinity();
       }
       w.child[q] = child[q];
     }
     return me;
   };
-  if (nodes_.empty()) return;
-  if (nodes_[0].right < 0) {  // one triangle: a wide root with one leaf
-    WideNode w{};
-    for (int q = 0; q < kWide; ++q) {
-      for (int a = 0; a < 3; ++a) {
-        w.lo[a][q] = q == 0 ? nodes_[0].lo[a] : std::numeric_limits<float>::infinity();
-        w.hi[a][q] = q == 0 ? nodes_[0].hi[a] : -std::numeric_limits<float>::infinity();
-      }
-      w.child[q] = q == 0 ? nodes_[0].right : -1;
-    }
-    wide_.push_back(w);
-    return;
-  }
-  build(0);
+  if (nodes.empty()) return;
+  // The root's children: those of the compact root, or the compact root itself when it is the
+  // only triangle's leaf.
+  build(nodes[0].right < 0 ? std::vector<std::int32_t>{0} : std::vector<std::int32_t>{1, nodes[0].right});
 }
 
 MeshCollider::~MeshCollider() = default;

@@ -79,8 +79,8 @@ class MeshCollider {
  private:
   struct Impl;
   void BuildFlatTree();
-  // Compact tree node: float box; internal nodes have their left child next (i + 1) and the
-  // right one at `right`; leaves have right = -1 - triangle.
+  // Compact tree node (BuildFlatTree's copy of FCL's tree): float box; internal nodes have
+  // their left child next (i + 1) and the right one at `right`; leaves have right = -1 - triangle.
   struct FlatNode {
     float lo[3];
     float hi[3];
@@ -97,9 +97,9 @@ class MeshCollider {
     float hi[3][kWide];
     std::int32_t child[kWide];
   };
-  void BuildWideTree();
+  // Collapses the compact tree (a setup-time step, not kept) into wide_.
+  void BuildWideTree(const std::vector<FlatNode>& nodes);
   std::unique_ptr<Impl> impl_;
-  std::vector<FlatNode> nodes_;
   std::vector<WideNode> wide_;
   std::vector<SweepTriangle> tri_;
   std::vector<Eigen::Vector4d> tri_plane_;
