@@ -106,10 +106,9 @@ int Guide::Run() {
     if (!link->board_reader.TakeNext(board, meta)) {
       if (rejoin.Due(heard)) {
         std::fprintf(stderr, "[audio_guide %s] %s\n", name.c_str(), rejoin.Message("board").c_str());
-        link.reset();
-        rejoin.Closed();
-        link = std::make_unique<Link>(config_.where, name, config_.cues, say);
-        std::fprintf(stderr, "[audio_guide %s] %s\n", name.c_str(), rejoin.Rejoined().c_str());
+        const std::string joined =
+            rejoin.Swap(link, [&] { return std::make_unique<Link>(config_.where, name, config_.cues, say); });
+        std::fprintf(stderr, "[audio_guide %s] %s\n", name.c_str(), joined.c_str());
         continue;
       }
       link->board_reader.WaitForData(std::chrono::milliseconds(50));

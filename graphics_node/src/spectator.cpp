@@ -428,10 +428,10 @@ int Spectator::Run() {
   const auto rejoin_if_unheard = [&] {
     if (rejoin.Due(link->world.has_scene())) {
       std::fprintf(stderr, "[graphics_node %s] %s\n", name.c_str(), rejoin.Message("scene").c_str());
-      link.reset();
-      rejoin.Closed();
-      link = std::make_unique<SpectatorLink>(config_.where, assets_dir, name, config_.fps, config_.language);
-      std::fprintf(stderr, "[graphics_node %s] %s\n", name.c_str(), rejoin.Rejoined().c_str());
+      const std::string joined = rejoin.Swap(link, [&] {
+        return std::make_unique<SpectatorLink>(config_.where, assets_dir, name, config_.fps, config_.language);
+      });
+      std::fprintf(stderr, "[graphics_node %s] %s\n", name.c_str(), joined.c_str());
       roster_rejoin.Restart(Clock::now());
       return;
     }

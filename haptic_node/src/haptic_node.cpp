@@ -162,10 +162,9 @@ int HapticNode::Run() {
     if (rejoin.Due(link->bridge.heard_world_server())) {
       // The haptic loop runs on meanwhile.
       say(rejoin.Message("world"));
-      link.reset();
-      rejoin.Closed();
-      link = std::make_unique<SessionLink>(config_, *device, loop, trace ? &trace : nullptr, say);
-      say(rejoin.Rejoined());
+      say(rejoin.Swap(link, [&] {
+        return std::make_unique<SessionLink>(config_, *device, loop, trace ? &trace : nullptr, say);
+      }));
     }
     next += period;
     if (Clock::now() > next + 5 * period) next = Clock::now();

@@ -5,6 +5,7 @@
 /// handshake with everyone. Shared by the haptic node, the spectator and the audio guide.
 #include <chrono>
 #include <cstdio>
+#include <memory>
 #include <string>
 #include <string_view>
 
@@ -33,16 +34,19 @@ class RejoinClock {
                   static_cast<int>(what.size()), what.data(), after_.count(), rejoins_);
     return line;
   }
-  /// The caller has closed the old participant (after Due).
-  void Closed() { closed_ = Clock::now(); }
-  /// The caller has opened the new participant: the wait starts again from now (a slow close
-  /// or open does not count against it), and the log line of how long each took (a close or an
-  /// open that never returns shows as this line missing after Message's).
-  std::string Rejoined() {
-    const auto now = Clock::now();
-    const double close_s = std::chrono::duration<double>(closed_ - joined_).count();
-    const double open_s = std::chrono::duration<double>(now - closed_).count();
-    joined_ = now;
+  /// The rejoin Due just counted: closes the old participant (`link` reset), opens the new one
+  /// (`link = open()`), starts the wait again from then (a slow close or open does not count
+  /// against it) and returns the log line of how long each took (a close or an open that never
+  /// returns shows as this line missing after Message's).
+  template <class Link, class Open>
+  std::string Swap(std::unique_ptr<Link>& link, Open open) {
+    link.reset();
+    const auto closed = Clock::now();
+    link = open();
+    const auto opened = Clock::now();
+    const double close_s = std::chrono::duration<double>(closed - joined_).count();
+    const double open_s = std::chrono::duration<double>(opened - closed).count();
+    joined_ = opened;
     char line[160];
     std::snprintf(line, sizeof(line), "joined again (rejoin %d): the old participant closed in %.2f s, the new one opened in %.2f s",
                   rejoins_, close_s, open_s);
@@ -53,7 +57,6 @@ class RejoinClock {
  private:
   std::chrono::duration<double> after_;
   Clock::time_point joined_;
-  Clock::time_point closed_;
   int rejoins_ = 0;
 };
 
