@@ -22,8 +22,8 @@ import time
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 sys.path.insert(0, HERE)
-from session_test import (ASSETS, DATA, PressWatch, check, check_speech, edited_assets,  # noqa: E402
-                          read_json, run_cases, fem_cache, wait_until)
+from session_test import (DATA, PressWatch, check, check_speech, edited_assets,  # noqa: E402
+                          read_json, run_cases, fem_cache, scene_object, wait_until)
 
 BALL_DROP_M = 0.08  # the ball starts this far above its resting place
 REST_TOL_M = 1e-5  # the world server's rest tolerance: a body at rest moves less per tick
@@ -31,8 +31,7 @@ REST_TOL_M = 1e-5  # the world server's rest tolerance: a body at rest moves les
 
 def make_assets(work):
     """The project's assets, with a dinosaur world that also holds a ball, in the air."""
-    with open(os.path.join(ASSETS, "scenes", "solar_system.json")) as f:
-        ball = dict([o for o in json.load(f)["objects"] if o["id"] == "ball"][0])
+    ball = dict(scene_object("solar_system", "ball"))
     # Clear of the triceratops, the controls and the hand's path; resting at z = radius.
     ball["position_m"] = [-0.05, -0.10, ball["radius_m"] + BALL_DROP_M]
 
