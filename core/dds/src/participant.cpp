@@ -4,6 +4,7 @@
 
 #include "discovery.hpp"
 #include "handshare/common/data_dir.hpp"
+#include "lease_race_guard.hpp"
 #include "security_properties.hpp"
 
 #include <fastdds/dds/core/condition/StatusCondition.hpp>
@@ -361,6 +362,16 @@ Participant::Participant(const common::SessionOptions& where, const std::string&
   const std::string file = qos_file.empty() ? DefaultQosFile() : qos_file;
   LoadProfilesOnce(file);
 
+  static const bool guarded = [] {
+    const bool active = detail::LeaseRaceGuardActive();
+    if (!active) {
+      std::fprintf(stderr, "handshare: warning: the guard against Fast DDS's lease-check race is not in effect "
+                           "(this executable does not export ParticipantProxyData::clear): a peer leaving may "
+                           "abort this process\n");
+    }
+    return active;
+  }();
+  (void)guarded;
   auto* factory = fdds::DomainParticipantFactory::get_instance();
   fdds::DomainParticipantQos pqos;
   Check(factory->get_participant_qos_from_profile(kParticipantProfile, pqos),
