@@ -54,7 +54,7 @@ class BlockPivoting {
 bool FactorSpd(double* A, int n, int ld) noexcept { return detail::FactorSpd(A, n, ld, detail::BestIsa()); }
 
 void SolveFactored(const double* L, int n, int ld, double* B, int nrhs, int ldb) noexcept {
-  detail::SolveFactoredSpd(L, n, ld, B, nrhs, ldb);
+  detail::SolveFactoredSpd(L, n, ld, B, nrhs, ldb, detail::BestIsa());
 }
 
 }  // namespace

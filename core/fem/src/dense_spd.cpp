@@ -97,6 +97,67 @@ HS_AVX512 bool FactorAvx512(double* A, int n, int ld) noexcept {
   return true;
 }
 
+// Up to 8 right-hand sides at once, one per lane: B's columns are copied into rows of 8 lanes
+// (Y[i] holds row i of every column), so each substitution step is a broadcast of one entry of
+// L times a whole row of Y, and a row of Y is complete long before it is read again (the column
+// form read each unknown back right after its vector store, which is not forwarded). Four
+// accumulators split the sum of each row; the diagonal is applied as its reciprocal, computed off
+// the dependency chain.
+constexpr int kLanesMaxRows = 256;  // 16 kB of stack; larger systems take Eigen's solve
+
+HS_AVX512 void SolveLanesAvx512(const double* L, int n, int ld, double* B, int nrhs, int ldb) noexcept {
+  alignas(64) double Y[kLanesMaxRows * 8];
+  for (int c0 = 0; c0 < nrhs; c0 += 8) {
+    const int w = std::min(8, nrhs - c0);
+    for (int i = 0; i < n; ++i) {
+      double* y = Y + 8 * i;
+      for (int c = 0; c < w; ++c) y[c] = B[static_cast<std::ptrdiff_t>(c0 + c) * ldb + i];
+      for (int c = w; c < 8; ++c) y[c] = 0.0;
+    }
+    // L y = b, row by row: row i of L is L[i + k ld].
+    for (int i = 0; i < n; ++i) {
+      const double* li = L + i;
+      __m512d a0 = _mm512_load_pd(Y + 8 * i), a1 = _mm512_setzero_pd(), a2 = _mm512_setzero_pd(),
+              a3 = _mm512_setzero_pd();
+      int k = 0;
+      for (; k + 4 <= i; k += 4) {
+        a0 = _mm512_fnmadd_pd(_mm512_set1_pd(li[static_cast<std::ptrdiff_t>(k) * ld]), _mm512_load_pd(Y + 8 * k), a0);
+        a1 = _mm512_fnmadd_pd(_mm512_set1_pd(li[static_cast<std::ptrdiff_t>(k + 1) * ld]),
+                              _mm512_load_pd(Y + 8 * (k + 1)), a1);
+        a2 = _mm512_fnmadd_pd(_mm512_set1_pd(li[static_cast<std::ptrdiff_t>(k + 2) * ld]),
+                              _mm512_load_pd(Y + 8 * (k + 2)), a2);
+        a3 = _mm512_fnmadd_pd(_mm512_set1_pd(li[static_cast<std::ptrdiff_t>(k + 3) * ld]),
+                              _mm512_load_pd(Y + 8 * (k + 3)), a3);
+      }
+      for (; k < i; ++k) {
+        a0 = _mm512_fnmadd_pd(_mm512_set1_pd(li[static_cast<std::ptrdiff_t>(k) * ld]), _mm512_load_pd(Y + 8 * k), a0);
+      }
+      const __m512d sum = _mm512_add_pd(_mm512_add_pd(a0, a1), _mm512_add_pd(a2, a3));
+      _mm512_store_pd(Y + 8 * i, _mm512_mul_pd(sum, _mm512_set1_pd(1.0 / li[static_cast<std::ptrdiff_t>(i) * ld])));
+    }
+    // L^T x = y, from the last row up: column j of L below the diagonal, contiguous.
+    for (int j = n - 1; j >= 0; --j) {
+      const double* lj = L + static_cast<std::ptrdiff_t>(j) * ld;
+      __m512d a0 = _mm512_load_pd(Y + 8 * j), a1 = _mm512_setzero_pd(), a2 = _mm512_setzero_pd(),
+              a3 = _mm512_setzero_pd();
+      int i = j + 1;
+      for (; i + 4 <= n; i += 4) {
+        a0 = _mm512_fnmadd_pd(_mm512_set1_pd(lj[i]), _mm512_load_pd(Y + 8 * i), a0);
+        a1 = _mm512_fnmadd_pd(_mm512_set1_pd(lj[i + 1]), _mm512_load_pd(Y + 8 * (i + 1)), a1);
+        a2 = _mm512_fnmadd_pd(_mm512_set1_pd(lj[i + 2]), _mm512_load_pd(Y + 8 * (i + 2)), a2);
+        a3 = _mm512_fnmadd_pd(_mm512_set1_pd(lj[i + 3]), _mm512_load_pd(Y + 8 * (i + 3)), a3);
+      }
+      for (; i < n; ++i) a0 = _mm512_fnmadd_pd(_mm512_set1_pd(lj[i]), _mm512_load_pd(Y + 8 * i), a0);
+      const __m512d sum = _mm512_add_pd(_mm512_add_pd(a0, a1), _mm512_add_pd(a2, a3));
+      _mm512_store_pd(Y + 8 * j, _mm512_mul_pd(sum, _mm512_set1_pd(1.0 / lj[j])));
+    }
+    for (int i = 0; i < n; ++i) {
+      const double* y = Y + 8 * i;
+      for (int c = 0; c < w; ++c) B[static_cast<std::ptrdiff_t>(c0 + c) * ldb + i] = y[c];
+    }
+  }
+}
+
 #pragma GCC diagnostic pop
 
 }  // namespace
@@ -108,9 +169,14 @@ bool FactorSpd(double* A, int n, int ld, Isa isa) noexcept {
   return isa == Isa::kAvx512 ? FactorAvx512(A, n, ld) : FactorEigen(A, n, ld);
 }
 
-void SolveFactoredSpd(const double* L, int n, int ld, double* B, int nrhs, int ldb) noexcept {
+void SolveFactoredSpd(const double* L, int n, int ld, double* B, int nrhs, int ldb, Isa isa) noexcept {
   if (n <= 0 || nrhs <= 0) return;
-  SolveEigen(L, n, ld, B, nrhs, ldb);
+  // One right-hand side stays Eigen's (its vector substitution is as fast: nothing to share).
+  if (isa == Isa::kAvx512 && nrhs > 1 && n <= kLanesMaxRows) {
+    SolveLanesAvx512(L, n, ld, B, nrhs, ldb);
+  } else {
+    SolveEigen(L, n, ld, B, nrhs, ldb);
+  }
 }
 
 }  // namespace handshare::fem::detail

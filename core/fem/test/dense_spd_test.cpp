@@ -62,7 +62,7 @@ TEST(DenseSpd, FactorAndSolveMatchEigenLltForManySizes) {
       std::vector<double> x(static_cast<std::size_t>(ldb) * nrhs, 0.0);
       for (int c = 0; c < nrhs; ++c)
         for (int i = 0; i < n; ++i) x[static_cast<std::size_t>(c) * ldb + i] = B(i, c);
-      SolveFactoredSpd(buf.data(), n, ld, x.data(), nrhs, ldb);
+      SolveFactoredSpd(buf.data(), n, ld, x.data(), nrhs, ldb, isa);
       const Eigen::MatrixXd want = A.llt().solve(B);
       const double cond_bound = 1e-13 * A.norm() * A.inverse().norm();
       for (int c = 0; c < nrhs; ++c) {
