@@ -133,6 +133,10 @@ ContactSolver::ContactSolver(std::shared_ptr<const Compliance> compliance,
   slip_M_.assign(4 * P * P, 0.0);
   slip_rhs_.assign(2 * P, 0.0);
   slip_piv_.assign(2 * P, 0);
+  slip_members_.assign(M, -1);
+  slip_begin_.assign(P + 1, 0);
+  slip_wn_.assign(M, Eigen::Vector2d::Zero());
+  slip_w_.assign(2 * P, Eigen::Vector3d::Zero());
 }
 
 void ContactSolver::ZeroOutputs() noexcept {
@@ -715,19 +719,31 @@ bool ContactSolver::SolvePatchedSystem(bool refactor) noexcept {
     }
     SolveFactored(A_.data(), r, ld, Z_.data(), n2, ld);
     // Phi_a applied to a row vector v (the patch's held nodes' rows). With given forces the
-    // equations are T^T F = g instead (symmetric: Phi Z = B^T A^-1 B).
-    auto phi = [&](std::int32_t a, int k, const double* v) {
+    // equations are T^T F = g instead (symmetric: Phi Z = B^T A^-1 B). Each patch's nodes and
+    // weights are listed once here: the (2P)^2 + 2P applications below visit only them.
+    std::int32_t q = 0;
+    for (std::int32_t a = 0; a < ns; ++a) {
       const std::int32_t p = slipping_list_[a];
       const double mu = given_force_ ? 0.0 : patch_in_[p].mu_kinetic;
-      const Eigen::Vector3d w = tangent_[p].col(k) + mu * slip_dir_[p][k] * patch_in_[p].n_out;
-      double s = 0.0;
+      for (int k = 0; k < 2; ++k) slip_w_[2 * a + k] = tangent_[p].col(k) + mu * slip_dir_[p][k] * patch_in_[p].n_out;
+      slip_begin_[a] = q;
       for (std::int32_t j = 0; j < num_unique_; ++j) {
         if (!active_[j] || patch_of_[j] != p) continue;
+        slip_wn_[q] = Eigen::Vector2d(slip_w_[2 * a].dot(n_[j]), slip_w_[2 * a + 1].dot(n_[j]));
+        slip_members_[q++] = j;
+      }
+    }
+    slip_begin_[ns] = q;
+    auto phi = [&](std::int32_t a, int k, const double* v) {
+      const Eigen::Vector3d& w = slip_w_[2 * a + k];
+      double s = 0.0;
+      for (std::int32_t m = slip_begin_[a]; m < slip_begin_[a + 1]; ++m) {
+        const std::int32_t j = slip_members_[m];
         const double* vj = v + row_of_[j];
         if (mode_[j] == ContactMode::kFull3d) {
           s += w[0] * vj[0] + w[1] * vj[1] + w[2] * vj[2];
         } else {
-          s += w.dot(n_[j]) * vj[0];  // a frictionless patch node: f = lambda n
+          s += slip_wn_[m][k] * vj[0];  // a frictionless patch node: f = lambda n
         }
       }
       return s;

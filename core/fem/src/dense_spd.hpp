@@ -6,12 +6,12 @@
 // the AVX-512 factor here is left-looking over columns (each column's rows in up to four
 // 8-double registers while the columns to its left stream past: every update an FMA on
 // contiguous memory): haptic_bench's deformable_2k_friction went from 64 to 54 us p50 and from
-// 166 to 141 us p99 (docs/haptic_rendering.md). A single right-hand side stays Eigen's: a
-// column-oriented AVX-512 substitution was 2.5 times slower (each unknown stored and read back
-// by the next vector load, which waits for the store: the processor does not forward it), and
-// one blocked by 8 rows with the unknowns kept scalar was no faster than Eigen's panels. Several
-// right-hand sides (the slip directions of the slipping patches) go one per lane: 2.0 against
-// Eigen's 6.9 us for 54 unknowns and 8 columns.
+// 166 to 141 us p99 (docs/haptic_rendering.md). The solves take the right-hand sides one per
+// lane (the slip directions of the slipping patches, or one column): 2.0 against Eigen's 6.9 us
+// for 54 unknowns and 8 columns. A column-oriented AVX-512 substitution was 2.5 times slower
+// than Eigen's (each unknown stored and read back by the next vector load, which waits for the
+// store: the processor does not forward it), and one blocked by 8 rows with the unknowns kept
+// scalar was no faster than Eigen's panels.
 // Real-time safe: noexcept, no allocation.
 
 #include "planar_columns.hpp"  // Isa
@@ -24,7 +24,7 @@ namespace handshare::fem::detail {
 bool FactorSpd(double* A, int n, int ld, Isa isa) noexcept;
 
 /// B = (L L^T)^-1 B for the nrhs columns of B (leading dimension ldb), L from FactorSpd. With
-/// AVX-512, two or more columns are solved eight at a time, one per lane.
+/// AVX-512, the columns are solved eight at a time, one per lane.
 void SolveFactoredSpd(const double* L, int n, int ld, double* B, int nrhs, int ldb, Isa isa) noexcept;
 
 }  // namespace handshare::fem::detail

@@ -291,6 +291,13 @@ class ContactSolver {
   std::vector<double> slip_M_;
   std::vector<double> slip_rhs_;
   std::vector<std::int32_t> slip_piv_;
+  // The cone equations' rows (SolvePatchedSystem): per slipping patch its nodes (members from
+  // slip_begin_[a] to slip_begin_[a + 1]), each with its two weights on a frictionless node's
+  // one row, and the two 3-D weights w_k of a held node's rows.
+  std::vector<std::int32_t> slip_members_;
+  std::vector<std::int32_t> slip_begin_;
+  std::vector<Eigen::Vector2d> slip_wn_;
+  std::vector<Eigen::Vector3d> slip_w_;
   std::int32_t num_patches_ = 0;
   mutable SurfaceField field_;
 };
