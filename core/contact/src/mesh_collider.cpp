@@ -106,14 +106,20 @@ void MeshCollider::BuildFlatTree() {
   const std::size_t nt = mesh.triangles.size();
   tri_.resize(nt);
   tri_plane_.resize(nt);
+  tri_disc_.resize(nt);
   for (std::size_t t = 0; t < nt; ++t) {
     const auto& tr = mesh.triangles[t];
     tri_[t] = MakeSweepTriangle(mesh.p_O_m[tr[0]], mesh.p_O_m[tr[1]], mesh.p_O_m[tr[2]]);
     const Eigen::Vector3d& n = tri_[t].n;
     if (tri_[t].has_face && n.allFinite()) {
       tri_plane_[t] = Eigen::Vector4d(n.x(), n.y(), n.z(), n.dot(tri_[t].v[0]));
+      const Eigen::Vector3d c = (tri_[t].v[0] + tri_[t].v[1] + tri_[t].v[2]) / 3.0;
+      double r = 0.0;
+      for (const Eigen::Vector3d& v : tri_[t].v) r = std::max(r, (v - c).norm());
+      tri_disc_[t] = Eigen::Vector4d(c.x(), c.y(), c.z(), r);
     } else {
       tri_plane_[t].setConstant(std::numeric_limits<double>::quiet_NaN());
+      tri_disc_[t].setConstant(std::numeric_limits<double>::quiet_NaN());
     }
   }
   // Each vertex is swept by one triangle that holds it (the first), see SweepTriangle::own_vertices.
@@ -236,11 +242,17 @@ BallQueryResult MeshCollider::QueryBall(const Eigen::Vector3d& c, double r_m,
   std::int32_t stack[kStack];
   int top = 0;
   stack[top++] = 0;
+  // A triangle whose plane or bounding disc lies beyond the ball (with a slack far above their
+  // round-off) is not reached: the exact closest point is skipped for it, same answer.
+  const double far = r_m + 1e-9 * (coord_scale_m_ + c.cwiseAbs().maxCoeff() + r_m);
   while (top > 0) {
     const std::int32_t item = stack[--top];
     if (item < 0) {
-      const std::int32_t t = -1 - item;
-      if (!AddIfReached(tri_[static_cast<std::size_t>(t)], t, c, r2, ids, out)) return out;
+      const auto t = static_cast<std::size_t>(-1 - item);
+      const Eigen::Vector4d& pl = tri_plane_[t];
+      const double h = pl.x() * c.x() + pl.y() * c.y() + pl.z() * c.z() - pl.w();
+      if (std::abs(h) > far || DiscDistanceBound2(tri_disc_[t], c, h) > far * far) continue;
+      if (!AddIfReached(tri_[t], -1 - item, c, r2, ids, out)) return out;
       continue;
     }
     const WideNode& n = wide[item];

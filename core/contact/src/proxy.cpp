@@ -27,6 +27,22 @@ constexpr double kSameNormal = 1e-9;
 constexpr double kPlaneSlack_m = 1e-10;
 // Gathers reach this many skins beyond R + skin (features about to enter the touch band).
 constexpr double kGatherMarginSkins = 4.0;
+
+// DiscDistanceBound2 for every point of the segment x + s d, s in [0, 1], with plane distances h0
+// at x and h1 at x + d: the smallest |h| on it, and the foot of the segment nearest to the
+// disc's centre.
+inline double SegmentDiscBound2(const Eigen::Vector4d& plane, const Eigen::Vector4d& disc, const Eigen::Vector3d& x,
+                                const Eigen::Vector3d& d, double h0, double h1) noexcept {
+  const double h = (h0 > 0.0) != (h1 > 0.0) ? 0.0 : std::min(std::abs(h0), std::abs(h1));
+  const Eigen::Vector3d n = plane.head<3>();
+  const Eigen::Vector3d foot = x - h0 * n;          // in the plane
+  const Eigen::Vector3d along = d - (h1 - h0) * n;  // the segment's foot runs along this
+  const Eigen::Vector3d to_c = disc.head<3>() - foot;
+  const double a2 = along.squaredNorm();
+  const double s = a2 > 0.0 ? std::clamp(to_c.dot(along) / a2, 0.0, 1.0) : 0.0;
+  const double lateral = std::max(0.0, (to_c - s * along).norm() - disc.w());
+  return h * h + lateral * lateral;
+}
 }  // namespace
 
 ProxySolver::ProxySolver(std::int32_t max_candidates)
@@ -62,10 +78,13 @@ int ProxySolver::CollectConstraints(const MeshCollider& collider, const ProxyPar
   touching_.n = 0;
   for (std::int32_t i = 0; i < num_candidates_; ++i) {
     const std::int32_t t = candidates_[static_cast<std::size_t>(i)];
-    // The distance to a triangle is at least the distance to its plane: a plane beyond the
-    // touch band skips the exact closest point (same constraints, see kPlaneSlack_m).
+    // The distance to a triangle is at least the distance to its plane, and to its disc: a
+    // plane or a disc beyond the touch band skips the exact closest point (same constraints,
+    // see kPlaneSlack_m).
     const Eigen::Vector4d& pl = collider.triangle_plane(t);
-    if (!reference_ && std::abs(pl.x() * x.x() + pl.y() * x.y() + pl.z() * x.z() - pl.w()) > touch + kPlaneSlack_m) continue;
+    const double h = pl.x() * x.x() + pl.y() * x.y() + pl.z() * x.z() - pl.w();
+    const double far = touch + kPlaneSlack_m;
+    if (!reference_ && (std::abs(h) > far || DiscDistanceBound2(collider.triangle_disc(t), x, h) > far * far)) continue;
     const auto& P = collider.triangle(t).v;
     const Eigen::Vector3d c = ClosestPointOnTriangle(x, P[0], P[1], P[2]);
     const double dist = (x - c).norm();
@@ -237,6 +256,8 @@ Eigen::Vector3d ProxySolver::MoveFrom(MeshCollider& collider, const ProxyParams&
         const double h0 = pl.x() * x.x() + pl.y() * x.y() + pl.z() * x.z() - pl.w();
         const double h1 = h0 + (pl.x() * d.x() + pl.y() * d.y() + pl.z() * d.z());
         if (!reference_ && ((h0 > lim && h1 > lim) || (h0 < -lim && h1 < -lim))) continue;
+        // Nor one whose disc stays farther than Rs from the segment (a neighbour beside it).
+        if (!reference_ && SegmentDiscBound2(pl, collider.triangle_disc(tri), x, d, h0, h1) > lim * lim) continue;
         // A triangle in the touch band at x is a constraint: its plane n . t >= n . c + R + skin
         // at its closest point c bounds the whole triangle grown by R + skin (the triangle lies in
         // n . (q - c) <= 0), x and t both satisfy it, so the straight move between them cannot

@@ -113,6 +113,32 @@ TEST(Geometry, FclBallQueryFindsEveryTriangleThatTheBallTouches) {
   }
 }
 
+// The disc bound that lets the proxy and the ball query skip exact tests (DiscDistanceBound2 on
+// MeshCollider::triangle_disc) is a lower bound: points near a bumpy sphere (where the bound is
+// tight: the tilted neighbours of the face under the point) and far from it.
+TEST(Geometry, TheDiscBoundIsNeverAboveTheDistanceToTheTriangle) {
+  auto mesh = std::make_shared<const TriMesh>(MakeBumpySphere(0.05, 0.004, 3));
+  const MeshCollider collider(mesh, 64);
+  std::mt19937 rng(11);
+  std::normal_distribution<double> g;
+  int tight = 0;
+  for (int trial = 0; trial < 400; ++trial) {
+    const Eigen::Vector3d dir = Eigen::Vector3d(g(rng), g(rng), g(rng)).normalized();
+    const Eigen::Vector3d p = dir * (trial % 2 ? 0.05 + 0.01 * std::abs(g(rng)) : 0.1 * std::abs(g(rng)));
+    for (std::int32_t t = 0; t < mesh->num_triangles(); ++t) {
+      const auto& tr = mesh->triangles[static_cast<std::size_t>(t)];
+      const double d = DistToTriangle(p, mesh->p_O_m[tr[0]], mesh->p_O_m[tr[1]], mesh->p_O_m[tr[2]]);
+      const Eigen::Vector4d& pl = collider.triangle_plane(t);
+      const double h = pl.head<3>().dot(p) - pl.w();
+      const double bound2 = DiscDistanceBound2(collider.triangle_disc(t), p, h);
+      ASSERT_LE(bound2, d * d * (1.0 + 1e-12) + 1e-24) << "triangle " << t << " trial " << trial;
+      if (bound2 > 0.25 * d * d) ++tight;
+    }
+  }
+  // And it bounds: most pairs get more than half the distance (a bound of 0 would pass above).
+  EXPECT_GT(tight, 400 * mesh->num_triangles() / 2);
+}
+
 TEST(Geometry, MeshesAreValidAndClosed) {
   for (const TriMesh& m : {MakeIcosphere(0.02, 3), MakeBoxMesh({0.1, 0.1, 0.001}), MakeBumpySphere(0.05, 0.004, 5)}) {
     EXPECT_NO_THROW(m.Validate());

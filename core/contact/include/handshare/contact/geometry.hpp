@@ -3,6 +3,8 @@
 /// Exact point/sphere queries against one triangle, used by the god-object proxy. All functions
 /// are real-time safe (noexcept, no allocation). Positions in any one frame [m].
 
+#include <algorithm>
+#include <cmath>
 #include <cstdint>
 
 #include <Eigen/Core>
@@ -14,6 +16,20 @@ namespace handshare::contact {
 Eigen::Vector3d ClosestPointOnTriangle(const Eigen::Vector3d& p, const Eigen::Vector3d& a,
                                        const Eigen::Vector3d& b,
                                        const Eigen::Vector3d& c) noexcept;
+
+/// Lower bound of the squared distance from a point to a triangle, from the triangle's bounding
+/// disc (centre in its plane, radius; MeshCollider::triangle_disc) and the point's signed
+/// distance h to that plane: a point whose foot lies rho from the centre is at least
+/// sqrt(h^2 + max(0, rho - radius)^2) from every point of the disc. A NaN disc gives NaN (every
+/// "bound > limit" test false). The plane test alone passes the tilted neighbours of a face
+/// (their planes pass close to the point); their discs lie aside. Round-off: the centroid lies in
+/// the plane to ~1e-16 of the coordinates; rho's error is largest where q - h^2 cancels, and
+/// there rho < radius anyway.
+inline double DiscDistanceBound2(const Eigen::Vector4d& disc, const Eigen::Vector3d& x, double h) noexcept {
+  const double q = (x - disc.head<3>()).squaredNorm();
+  const double lateral = std::max(0.0, std::sqrt(std::max(0.0, q - h * h)) - disc.w());
+  return h * h + lateral * lateral;
+}
 
 /// First time of impact s in [0, 1] of a sphere of radius R_m whose centre moves from x to
 /// x + d against the triangle (a, b, c) (both sides; face, edges and vertices), or a value > 1

@@ -68,6 +68,12 @@ class MeshCollider {
   const Eigen::Vector4d& triangle_plane(std::int32_t t) const noexcept {
     return tri_plane_[static_cast<std::size_t>(t)];
   }
+  /// Triangle t's bounding disc in its plane: centre (the centroid) and radius (to the farthest
+  /// vertex); NaN for a degenerate triangle. With the plane it bounds the distance to the
+  /// triangle from below (the proxy's shortcuts skip exact tests with it).
+  const Eigen::Vector4d& triangle_disc(std::int32_t t) const noexcept {
+    return tri_disc_[static_cast<std::size_t>(t)];
+  }
   std::int32_t max_candidates() const noexcept { return max_candidates_; }
   /// Number unique to this collider among all built in the process (keys caches of results
   /// that depend on the mesh only).
@@ -103,6 +109,7 @@ class MeshCollider {
   std::vector<WideNode> wide_;
   std::vector<SweepTriangle> tri_;
   std::vector<Eigen::Vector4d> tri_plane_;
+  std::vector<Eigen::Vector4d> tri_disc_;
   double coord_scale_m_ = 0.0;  // largest |coordinate| of the mesh (float slack of the boxes)
   std::shared_ptr<const TriMesh> mesh_;
   std::int32_t max_candidates_ = 0;
