@@ -595,7 +595,9 @@ int ContactSolver::AssembleHeld(bool fill_matrix) noexcept {
   for (std::int32_t j = 0; j < num_unique_; ++j) {
     if (!active_[j]) continue;
     const bool fj = mode_[j] == ContactMode::kFull3d;
-    for (std::int32_t i = 0; i < num_unique_ && fill_matrix; ++i) {
+    // The lower triangle only (blocks i >= j, whole diagonal blocks): every factor and solve
+    // here reads rows >= column.
+    for (std::int32_t i = j; i < num_unique_ && fill_matrix; ++i) {
       if (!active_[i]) continue;
       const bool fi = mode_[i] == ContactMode::kFull3d;
       Eigen::Map<const Eigen::Matrix3d, 0, Eigen::OuterStride<>> Cij(
@@ -649,7 +651,7 @@ bool ContactSolver::SolveActiveSet() noexcept {
     for (std::int32_t j = 0; j < num_unique_; ++j) f_N_[j].setZero();
     return true;
   }
-  // A = G C_cc G^T (lower triangle is enough for the Cholesky, fill it all: m is small). With
+  // A = G C_cc G^T, its lower triangle (all the Cholesky reads). With
   // every contact held and sticking (r = 3 u) that is C_cc as gathered, which the small solver
   // reads in place.
   const bool small = rows <= detail::kSmallSpdMax;
