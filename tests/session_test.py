@@ -1043,6 +1043,8 @@ def recorder_rejoins(h, domain):
     check(h.stop("recorder", 30) == 0, f"session_record failed:\n{h.log('recorder')}")
     rejoins = h.log("recorder").count("leaving and joining again")
     check(1 <= rejoins <= 5, f"the recorder rejoined {rejoins} times (at most 5):\n{h.log('recorder')}")
+    check(h.log("recorder").count("joined again (rejoin") == rejoins,
+          f"a recorder's rejoin never finished closing the old participant and opening the new one:\n{h.log('recorder')}")
     check(h.stop("alice", 10) == 0, "alice's haptic node did not end cleanly")
     check(h.stop("world_server", 10) == 0, "world_server did not end cleanly")
     report = subprocess.run([os.path.join(h.bin_dir, "world_server", "session_report"), recording],

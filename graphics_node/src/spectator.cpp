@@ -441,9 +441,14 @@ int Spectator::Run() {
     const std::string why = roster_rejoin.Due(heard, Clock::now());
     if (why.empty()) return;
     std::fprintf(stderr, "[graphics_node %s] %s\n", name.c_str(), why.c_str());
+    const auto begun = Clock::now();
     link.reset();
+    const auto closed = Clock::now();
     link = std::make_unique<SpectatorLink>(config_.where, assets_dir, name, config_.fps, config_.language);
-    roster_rejoin.Restart(Clock::now());
+    const auto opened = Clock::now();
+    std::fprintf(stderr, "[graphics_node %s] %s\n", name.c_str(),
+                 common::RejoinClock::DoneLine(roster_rejoin.rejoins(), begun, closed, opened).c_str());
+    roster_rejoin.Restart(opened);
   };
   // When the frames are written or the window closes: what the spectator received, for a
   // comparison with an oracle.

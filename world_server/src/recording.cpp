@@ -13,6 +13,7 @@
 #include <thread>
 
 #include "handshare/common/clock.hpp"
+#include "handshare/common/rejoin_clock.hpp"
 #include "handshare/dds/roster_rejoin.hpp"
 #include "handshare/common/shutdown.hpp"
 #include "handshare/dds/membership.hpp"
@@ -558,9 +559,14 @@ int RunRecorder(const RecordConfig& config) {
         std::printf("[session_record] %s\n", why.c_str());
         std::fflush(stdout);
         for (auto& tap : taps) taken += tap->Drain(*writer, t0);
+        const auto begun = SteadyClock::now();
         leave();
+        const auto closed = SteadyClock::now();
         join();
-        roster.Restart(SteadyClock::now());
+        const auto opened = SteadyClock::now();
+        std::printf("[session_record] %s\n", common::RejoinClock::DoneLine(roster.rejoins(), begun, closed, opened).c_str());
+        std::fflush(stdout);
+        roster.Restart(opened);
       }
     }
     std::this_thread::sleep_for(std::chrono::milliseconds(1));

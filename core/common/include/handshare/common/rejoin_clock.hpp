@@ -44,12 +44,18 @@ class RejoinClock {
     const auto closed = Clock::now();
     link = open();
     const auto opened = Clock::now();
-    const double close_s = std::chrono::duration<double>(closed - joined_).count();
-    const double open_s = std::chrono::duration<double>(opened - closed).count();
+    const std::string line = DoneLine(rejoins_, joined_, closed, opened);
     joined_ = opened;
+    return line;
+  }
+  /// The line of a rejoin that finished: rejoin number `rejoin`, begun at `begun`, the old
+  /// participant closed at `closed` and the new one open at `opened` (also for rejoins that
+  /// another watch counts, as the roster's).
+  static std::string DoneLine(int rejoin, Clock::time_point begun, Clock::time_point closed, Clock::time_point opened) {
     char line[160];
     std::snprintf(line, sizeof(line), "joined again (rejoin %d): the old participant closed in %.2f s, the new one opened in %.2f s",
-                  rejoins_, close_s, open_s);
+                  rejoin, std::chrono::duration<double>(closed - begun).count(),
+                  std::chrono::duration<double>(opened - closed).count());
     return line;
   }
   int rejoins() const { return rejoins_; }
