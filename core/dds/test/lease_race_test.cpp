@@ -2,6 +2,7 @@
 // real participants in a helper process (lease_race_helper.cpp) whose lease checks start late.
 #include <gtest/gtest.h>
 #include <signal.h>
+#include <sys/resource.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -39,6 +40,8 @@ HelperRun RunHelper(const char* helper, int domain, double seconds, std::chrono:
   HelperRun run;
   const pid_t pid = fork();
   if (pid == 0) {
+    const rlimit no_core{0, 0};  // the control's abort is expected: no core file
+    setrlimit(RLIMIT_CORE, &no_core);
     if (!freopen((base + ".out").c_str(), "w", stdout) || !freopen((base + ".err").c_str(), "w", stderr)) _exit(126);
     const std::string d = std::to_string(domain), s = std::to_string(seconds);
     execl(helper, helper, d.c_str(), s.c_str(), nullptr);
