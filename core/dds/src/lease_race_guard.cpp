@@ -8,8 +8,8 @@
 // stop a callback that has already started: one that started just before, and reaches the mutex
 // just after, finds a cleared proxy still marked for lease checks and fails the assertion
 // (assertions are on in Debian's build). The abort (`session.scale`, at exit under load 13,
-// when all 17 participants leave at once) can strike any node whenever a peer leaves; the
-// upstream code is unchanged in later releases.
+// when all 17 participants leave at once) can strike any node whenever a peer leaves; upstream's
+// current code has the same check.
 //
 // The guard: a cleared proxy describes no participant, so it is not lease-checked. This file
 // defines ParticipantProxyData::clear, which the executable exports in place of the library's
@@ -19,8 +19,8 @@
 // unmarked, so the mark now follows what the proxy holds. remove_remote_participant clears under
 // the discovery mutex that the callback reads it under.
 //
-// tests: dds.lease_race_* (core/dds/test/lease_race_helper.cpp) widens the callback's window and
-// aborts without this guard, in about a second.
+// tests: LeaseRace.* (core/dds/test/lease_race_test.cpp), whose helper widens the callback's
+// window and aborts without this guard, in about a second.
 #include "lease_race_guard.hpp"
 
 #include <dlfcn.h>
