@@ -418,7 +418,10 @@ int Spectator::Run() {
     window_renderer.emplace(options);
   }
 
-  auto link = std::make_unique<SpectatorLink>(config_.where, assets_dir, name, config_.fps, config_.language);
+  const auto open_link = [&] {
+    return std::make_unique<SpectatorLink>(config_.where, assets_dir, name, config_.fps, config_.language);
+  };
+  auto link = open_link();
   common::RejoinClock rejoin(config_.rejoin_after);
   // A member the world server has (its roster) that this view never hears, a user's hand
   // above all, is a secured handshake between the two that never finished (Fast DDS 2.9,
@@ -428,9 +431,7 @@ int Spectator::Run() {
   const auto rejoin_if_unheard = [&] {
     if (rejoin.Due(link->world.has_scene())) {
       std::fprintf(stderr, "[graphics_node %s] %s\n", name.c_str(), rejoin.Message("scene").c_str());
-      const std::string joined = rejoin.Swap(link, [&] {
-        return std::make_unique<SpectatorLink>(config_.where, assets_dir, name, config_.fps, config_.language);
-      });
+      const std::string joined = rejoin.Swap(link, open_link);
       std::fprintf(stderr, "[graphics_node %s] %s\n", name.c_str(), joined.c_str());
       roster_rejoin.Restart(Clock::now());
       return;
@@ -441,13 +442,10 @@ int Spectator::Run() {
     const std::string why = roster_rejoin.Due(heard, Clock::now());
     if (why.empty()) return;
     std::fprintf(stderr, "[graphics_node %s] %s\n", name.c_str(), why.c_str());
-    const auto begun = Clock::now();
-    link.reset();
-    const auto closed = Clock::now();
-    link = std::make_unique<SpectatorLink>(config_.where, assets_dir, name, config_.fps, config_.language);
-    const auto opened = Clock::now();
-    std::fprintf(stderr, "[graphics_node %s] %s\n", name.c_str(),
-                 common::RejoinClock::DoneLine(roster_rejoin.rejoins(), begun, closed, opened).c_str());
+    Clock::time_point opened;
+    const std::string joined = common::RunRejoin(
+        roster_rejoin.rejoins(), Clock::now(), [&] { link.reset(); }, [&] { link = open_link(); }, opened);
+    std::fprintf(stderr, "[graphics_node %s] %s\n", name.c_str(), joined.c_str());
     roster_rejoin.Restart(opened);
   };
   // When the frames are written or the window closes: what the spectator received, for a

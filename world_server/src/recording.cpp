@@ -559,12 +559,9 @@ int RunRecorder(const RecordConfig& config) {
         std::printf("[session_record] %s\n", why.c_str());
         std::fflush(stdout);
         for (auto& tap : taps) taken += tap->Drain(*writer, t0);
-        const auto begun = SteadyClock::now();
-        leave();
-        const auto closed = SteadyClock::now();
-        join();
-        const auto opened = SteadyClock::now();
-        std::printf("[session_record] %s\n", common::RejoinClock::DoneLine(roster.rejoins(), begun, closed, opened).c_str());
+        SteadyClock::time_point opened;
+        const std::string joined = common::RunRejoin(roster.rejoins(), SteadyClock::now(), leave, join, opened);
+        std::printf("[session_record] %s\n", joined.c_str());
         std::fflush(stdout);
         roster.Restart(opened);
       }

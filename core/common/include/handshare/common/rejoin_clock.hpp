@@ -36,28 +36,9 @@ class RejoinClock {
   }
   /// The rejoin Due just counted: closes the old participant (`link` reset), opens the new one
   /// (`link = open()`), starts the wait again from then (a slow close or open does not count
-  /// against it) and returns the log line of how long each took (a close or an open that never
-  /// returns shows as this line missing after Message's).
+  /// against it) and returns RunRejoin's line.
   template <class Link, class Open>
-  std::string Swap(std::unique_ptr<Link>& link, Open open) {
-    link.reset();
-    const auto closed = Clock::now();
-    link = open();
-    const auto opened = Clock::now();
-    const std::string line = DoneLine(rejoins_, joined_, closed, opened);
-    joined_ = opened;
-    return line;
-  }
-  /// The line of a rejoin that finished: rejoin number `rejoin`, begun at `begun`, the old
-  /// participant closed at `closed` and the new one open at `opened` (also for rejoins that
-  /// another watch counts, as the roster's).
-  static std::string DoneLine(int rejoin, Clock::time_point begun, Clock::time_point closed, Clock::time_point opened) {
-    char line[160];
-    std::snprintf(line, sizeof(line), "joined again (rejoin %d): the old participant closed in %.2f s, the new one opened in %.2f s",
-                  rejoin, std::chrono::duration<double>(closed - begun).count(),
-                  std::chrono::duration<double>(opened - closed).count());
-    return line;
-  }
+  std::string Swap(std::unique_ptr<Link>& link, Open open);
   int rejoins() const { return rejoins_; }
 
  private:
@@ -65,5 +46,28 @@ class RejoinClock {
   Clock::time_point joined_;
   int rejoins_ = 0;
 };
+
+/// Runs rejoin number `rejoin`, begun at `begun`: `close()` closes the old participant, `open()`
+/// opens the new one. Returns the log line of how long each took (a close or an open that never
+/// returns shows as this line missing after the line that announced the rejoin) and sets `opened`
+/// to when the new participant was open. For every rejoin, whichever watch counted it.
+template <class Close, class Open>
+std::string RunRejoin(int rejoin, RejoinClock::Clock::time_point begun, Close close, Open open,
+                      RejoinClock::Clock::time_point& opened) {
+  close();
+  const auto closed = RejoinClock::Clock::now();
+  open();
+  opened = RejoinClock::Clock::now();
+  char line[160];
+  std::snprintf(line, sizeof(line), "joined again (rejoin %d): the old participant closed in %.2f s, the new one opened in %.2f s",
+                rejoin, std::chrono::duration<double>(closed - begun).count(),
+                std::chrono::duration<double>(opened - closed).count());
+  return line;
+}
+
+template <class Link, class Open>
+std::string RejoinClock::Swap(std::unique_ptr<Link>& link, Open open) {
+  return RunRejoin(rejoins_, joined_, [&] { link.reset(); }, [&] { link = open(); }, joined_);
+}
 
 }  // namespace handshare::common
