@@ -249,9 +249,7 @@ BallQueryResult MeshCollider::QueryBall(const Eigen::Vector3d& c, double r_m,
     const std::int32_t item = stack[--top];
     if (item < 0) {
       const auto t = static_cast<std::size_t>(-1 - item);
-      const Eigen::Vector4d& pl = tri_plane_[t];
-      const double h = pl.x() * c.x() + pl.y() * c.y() + pl.z() * c.z() - pl.w();
-      if (std::abs(h) > far || DiscDistanceBound2(tri_disc_[t], c, h) > far * far) continue;
+      if (BeyondTriangle(tri_disc_[t], c, PlaneDistance(tri_plane_[t], c), far)) continue;
       if (!AddIfReached(tri_[t], -1 - item, c, r2, ids, out)) return out;
       continue;
     }

@@ -81,10 +81,10 @@ int ProxySolver::CollectConstraints(const MeshCollider& collider, const ProxyPar
     // The distance to a triangle is at least the distance to its plane, and to its disc: a
     // plane or a disc beyond the touch band skips the exact closest point (same constraints,
     // see kPlaneSlack_m).
-    const Eigen::Vector4d& pl = collider.triangle_plane(t);
-    const double h = pl.x() * x.x() + pl.y() * x.y() + pl.z() * x.z() - pl.w();
-    const double far = touch + kPlaneSlack_m;
-    if (!reference_ && (std::abs(h) > far || DiscDistanceBound2(collider.triangle_disc(t), x, h) > far * far)) continue;
+    if (!reference_ &&
+        BeyondTriangle(collider.triangle_disc(t), x, PlaneDistance(collider.triangle_plane(t), x), touch + kPlaneSlack_m)) {
+      continue;
+    }
     const auto& P = collider.triangle(t).v;
     const Eigen::Vector3d c = ClosestPointOnTriangle(x, P[0], P[1], P[2]);
     const double dist = (x - c).norm();
@@ -253,7 +253,7 @@ Eigen::Vector3d ProxySolver::MoveFrom(MeshCollider& collider, const ProxyParams&
       for (std::int32_t i = 0; i < num_candidates_; ++i) {
         const std::int32_t tri = candidates_[static_cast<std::size_t>(i)];
         const Eigen::Vector4d& pl = collider.triangle_plane(tri);
-        const double h0 = pl.x() * x.x() + pl.y() * x.y() + pl.z() * x.z() - pl.w();
+        const double h0 = PlaneDistance(pl, x);
         const double h1 = h0 + (pl.x() * d.x() + pl.y() * d.y() + pl.z() * d.z());
         if (!reference_ && ((h0 > lim && h1 > lim) || (h0 < -lim && h1 < -lim))) continue;
         // Nor one whose disc stays farther than Rs from the segment (a neighbour beside it).

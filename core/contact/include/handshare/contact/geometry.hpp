@@ -31,6 +31,17 @@ inline double DiscDistanceBound2(const Eigen::Vector4d& disc, const Eigen::Vecto
   return h * h + lateral * lateral;
 }
 
+/// Signed distance from x to a plane (unit normal, offset w: n . p = w on it; NaN stays NaN).
+inline double PlaneDistance(const Eigen::Vector4d& plane, const Eigen::Vector3d& x) noexcept {
+  return plane.x() * x.x() + plane.y() * x.y() + plane.z() * x.z() - plane.w();
+}
+
+/// True when a triangle's plane or its bounding disc puts all of it farther than `far` from x
+/// (at plane distance h): the exact tests can be skipped. Never for a degenerate (NaN) one.
+inline bool BeyondTriangle(const Eigen::Vector4d& disc, const Eigen::Vector3d& x, double h, double far) noexcept {
+  return std::abs(h) > far || DiscDistanceBound2(disc, x, h) > far * far;
+}
+
 /// First time of impact s in [0, 1] of a sphere of radius R_m whose centre moves from x to
 /// x + d against the triangle (a, b, c) (both sides; face, edges and vertices), or a value > 1
 /// if it does not touch it on the way. Features the sphere already overlaps at s = 0 and
