@@ -45,48 +45,7 @@ double SweepPoint(const Eigen::Vector3d& m, const Eigen::Vector3d& d, double R) 
   return std::max(0.0, (-half_b - std::sqrt(disc)) / a);
 }
 
-}  // namespace
-
-SweepTriangle MakeSweepTriangle(const Eigen::Vector3d& a, const Eigen::Vector3d& b,
-                                const Eigen::Vector3d& c) noexcept {
-  SweepTriangle t;
-  t.v[0] = a;
-  t.v[1] = b;
-  t.v[2] = c;
-  Eigen::Vector3d n = (b - a).cross(c - a);
-  const double nn = n.norm();
-  t.has_face = nn > 0.0;
-  if (t.has_face) n /= nn;
-  t.n = n;
-  for (int e = 0; e < 3; ++e) {
-    t.ed[e] = t.v[(e + 1) % 3] - t.v[e];
-    t.len2[e] = t.ed[e].squaredNorm();
-  }
-  return t;
-}
-
-double SweepSphereTriangle(const Eigen::Vector3d& x, const Eigen::Vector3d& d, double R_m,
-                           const Eigen::Vector3d& a, const Eigen::Vector3d& b,
-                           const Eigen::Vector3d& c) noexcept {
-  return SweepSphereTriangle(x, d, R_m, MakeSweepTriangle(a, b, c));
-}
-
-namespace {
-double Sweep(const Eigen::Vector3d& x, const Eigen::Vector3d& d, double R_m, const SweepTriangle& tri,
-             unsigned vertices) noexcept;
-}  // namespace
-
-double SweepSphereTriangle(const Eigen::Vector3d& x, const Eigen::Vector3d& d, double R_m,
-                           const SweepTriangle& tri) noexcept {
-  return Sweep(x, d, R_m, tri, 7u);
-}
-
-double SweepSphereTriangleOwned(const Eigen::Vector3d& x, const Eigen::Vector3d& d, double R_m,
-                                const SweepTriangle& tri) noexcept {
-  return Sweep(x, d, R_m, tri, tri.own_vertices);
-}
-
-namespace {
+// SweepSphereTriangle sweeping only the vertices in `vertices` (bit k: v[k]).
 double Sweep(const Eigen::Vector3d& x, const Eigen::Vector3d& d, double R_m, const SweepTriangle& tri,
              unsigned vertices) noexcept {
   const Eigen::Vector3d& a = tri.v[0];
@@ -140,5 +99,39 @@ double Sweep(const Eigen::Vector3d& x, const Eigen::Vector3d& d, double R_m, con
   return best;
 }
 }  // namespace
+
+SweepTriangle MakeSweepTriangle(const Eigen::Vector3d& a, const Eigen::Vector3d& b,
+                                const Eigen::Vector3d& c) noexcept {
+  SweepTriangle t;
+  t.v[0] = a;
+  t.v[1] = b;
+  t.v[2] = c;
+  Eigen::Vector3d n = (b - a).cross(c - a);
+  const double nn = n.norm();
+  t.has_face = nn > 0.0;
+  if (t.has_face) n /= nn;
+  t.n = n;
+  for (int e = 0; e < 3; ++e) {
+    t.ed[e] = t.v[(e + 1) % 3] - t.v[e];
+    t.len2[e] = t.ed[e].squaredNorm();
+  }
+  return t;
+}
+
+double SweepSphereTriangle(const Eigen::Vector3d& x, const Eigen::Vector3d& d, double R_m,
+                           const Eigen::Vector3d& a, const Eigen::Vector3d& b,
+                           const Eigen::Vector3d& c) noexcept {
+  return SweepSphereTriangle(x, d, R_m, MakeSweepTriangle(a, b, c));
+}
+
+double SweepSphereTriangle(const Eigen::Vector3d& x, const Eigen::Vector3d& d, double R_m,
+                           const SweepTriangle& tri) noexcept {
+  return Sweep(x, d, R_m, tri, 7u);
+}
+
+double SweepSphereTriangleOwned(const Eigen::Vector3d& x, const Eigen::Vector3d& d, double R_m,
+                                const SweepTriangle& tri) noexcept {
+  return Sweep(x, d, R_m, tri, tri.own_vertices);
+}
 
 }  // namespace handshare::contact
