@@ -112,6 +112,26 @@ HS_AVX512 bool FactorAvx512(double* A, int n, int ld) noexcept {
 // by the diagonal's reciprocal (computed off that chain) only.
 constexpr int kLanesMaxRows = 256;  // 16 kB of stack; larger systems take Eigen's solve
 
+// Row `row` of Y (8 lanes) solved in place: Y[row] less l[k stride] Y[k] over the rows k in
+// [from, to), then over the row `last` solved just before it (-1: none), divided by
+// l[row stride] (the diagonal).
+HS_AVX512 inline void SolveLanesRow(double* Y, const double* l, std::ptrdiff_t stride, int row, int from, int to,
+                                    int last) noexcept {
+  __m512d a0 = _mm512_load_pd(Y + 8 * row), a1 = _mm512_setzero_pd(), a2 = _mm512_setzero_pd(),
+          a3 = _mm512_setzero_pd();
+  int k = from;
+  for (; k + 4 <= to; k += 4) {
+    a0 = _mm512_fnmadd_pd(_mm512_set1_pd(l[k * stride]), _mm512_load_pd(Y + 8 * k), a0);
+    a1 = _mm512_fnmadd_pd(_mm512_set1_pd(l[(k + 1) * stride]), _mm512_load_pd(Y + 8 * (k + 1)), a1);
+    a2 = _mm512_fnmadd_pd(_mm512_set1_pd(l[(k + 2) * stride]), _mm512_load_pd(Y + 8 * (k + 2)), a2);
+    a3 = _mm512_fnmadd_pd(_mm512_set1_pd(l[(k + 3) * stride]), _mm512_load_pd(Y + 8 * (k + 3)), a3);
+  }
+  for (; k < to; ++k) a0 = _mm512_fnmadd_pd(_mm512_set1_pd(l[k * stride]), _mm512_load_pd(Y + 8 * k), a0);
+  __m512d sum = _mm512_add_pd(_mm512_add_pd(a0, a1), _mm512_add_pd(a2, a3));
+  if (last >= 0) sum = _mm512_fnmadd_pd(_mm512_set1_pd(l[last * stride]), _mm512_load_pd(Y + 8 * last), sum);
+  _mm512_store_pd(Y + 8 * row, _mm512_mul_pd(sum, _mm512_set1_pd(1.0 / l[row * stride])));
+}
+
 HS_AVX512 void SolveLanesAvx512(const double* L, int n, int ld, double* B, int nrhs, int ldb) noexcept {
   alignas(64) double Y[kLanesMaxRows * 8];
   for (int c0 = 0; c0 < nrhs; c0 += 8) {
@@ -122,47 +142,10 @@ HS_AVX512 void SolveLanesAvx512(const double* L, int n, int ld, double* B, int n
       for (int c = w; c < 8; ++c) y[c] = 0.0;
     }
     // L y = b, row by row: row i of L is L[i + k ld].
-    for (int i = 0; i < n; ++i) {
-      const double* li = L + i;
-      __m512d a0 = _mm512_load_pd(Y + 8 * i), a1 = _mm512_setzero_pd(), a2 = _mm512_setzero_pd(),
-              a3 = _mm512_setzero_pd();
-      const int last = i - 1;  // the row just solved: its term comes last, after the sum
-      int k = 0;
-      for (; k + 4 <= last; k += 4) {
-        a0 = _mm512_fnmadd_pd(_mm512_set1_pd(li[static_cast<std::ptrdiff_t>(k) * ld]), _mm512_load_pd(Y + 8 * k), a0);
-        a1 = _mm512_fnmadd_pd(_mm512_set1_pd(li[static_cast<std::ptrdiff_t>(k + 1) * ld]),
-                              _mm512_load_pd(Y + 8 * (k + 1)), a1);
-        a2 = _mm512_fnmadd_pd(_mm512_set1_pd(li[static_cast<std::ptrdiff_t>(k + 2) * ld]),
-                              _mm512_load_pd(Y + 8 * (k + 2)), a2);
-        a3 = _mm512_fnmadd_pd(_mm512_set1_pd(li[static_cast<std::ptrdiff_t>(k + 3) * ld]),
-                              _mm512_load_pd(Y + 8 * (k + 3)), a3);
-      }
-      for (; k < last; ++k) {
-        a0 = _mm512_fnmadd_pd(_mm512_set1_pd(li[static_cast<std::ptrdiff_t>(k) * ld]), _mm512_load_pd(Y + 8 * k), a0);
-      }
-      __m512d sum = _mm512_add_pd(_mm512_add_pd(a0, a1), _mm512_add_pd(a2, a3));
-      if (last >= 0) {
-        sum = _mm512_fnmadd_pd(_mm512_set1_pd(li[static_cast<std::ptrdiff_t>(last) * ld]), _mm512_load_pd(Y + 8 * last), sum);
-      }
-      _mm512_store_pd(Y + 8 * i, _mm512_mul_pd(sum, _mm512_set1_pd(1.0 / li[static_cast<std::ptrdiff_t>(i) * ld])));
-    }
+    for (int i = 0; i < n; ++i) SolveLanesRow(Y, L + i, ld, i, 0, i - 1, i - 1);
     // L^T x = y, from the last row up: column j of L below the diagonal, contiguous.
     for (int j = n - 1; j >= 0; --j) {
-      const double* lj = L + static_cast<std::ptrdiff_t>(j) * ld;
-      __m512d a0 = _mm512_load_pd(Y + 8 * j), a1 = _mm512_setzero_pd(), a2 = _mm512_setzero_pd(),
-              a3 = _mm512_setzero_pd();
-      const int last = j + 1;  // the row just solved: its term comes last, after the sum
-      int i = last + 1;
-      for (; i + 4 <= n; i += 4) {
-        a0 = _mm512_fnmadd_pd(_mm512_set1_pd(lj[i]), _mm512_load_pd(Y + 8 * i), a0);
-        a1 = _mm512_fnmadd_pd(_mm512_set1_pd(lj[i + 1]), _mm512_load_pd(Y + 8 * (i + 1)), a1);
-        a2 = _mm512_fnmadd_pd(_mm512_set1_pd(lj[i + 2]), _mm512_load_pd(Y + 8 * (i + 2)), a2);
-        a3 = _mm512_fnmadd_pd(_mm512_set1_pd(lj[i + 3]), _mm512_load_pd(Y + 8 * (i + 3)), a3);
-      }
-      for (; i < n; ++i) a0 = _mm512_fnmadd_pd(_mm512_set1_pd(lj[i]), _mm512_load_pd(Y + 8 * i), a0);
-      __m512d sum = _mm512_add_pd(_mm512_add_pd(a0, a1), _mm512_add_pd(a2, a3));
-      if (last < n) sum = _mm512_fnmadd_pd(_mm512_set1_pd(lj[last]), _mm512_load_pd(Y + 8 * last), sum);
-      _mm512_store_pd(Y + 8 * j, _mm512_mul_pd(sum, _mm512_set1_pd(1.0 / lj[j])));
+      SolveLanesRow(Y, L + static_cast<std::ptrdiff_t>(j) * ld, 1, j, j + 2, n, j + 1 < n ? j + 1 : -1);
     }
     for (int i = 0; i < n; ++i) {
       const double* y = Y + 8 * i;
