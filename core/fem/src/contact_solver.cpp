@@ -694,48 +694,49 @@ bool ContactSolver::SolvePatchedSystem(bool refactor) noexcept {
   }
   SolveFactored(A_.data(), r, ld, rhs_.data(), 1, ld);
   // The slipping patches that hold a node in 3-D (a patch whose nodes all went frictionless
-  // has no tangential force and no slide to find).
-  auto sticks = [&](std::int32_t j, std::int32_t p) {
-    return active_[j] && patch_of_[j] == p && mode_[j] == ContactMode::kFull3d;
-  };
-  std::int32_t ns = 0;
+  // has no tangential force and no slide to find), each with its active nodes (members from
+  // slip_begin_[a] to slip_begin_[a + 1]) and the weights of its cone equations: one scan of
+  // the contacts per slipping patch, for the slide's columns and the equations below.
+  std::int32_t ns = 0, q = 0;
   for (std::int32_t p = 0; p < num_patches_; ++p) {
     if (!patch_state_[p].slipping) continue;
+    const double mu = given_force_ ? 0.0 : patch_in_[p].mu_kinetic;
+    for (int k = 0; k < 2; ++k) slip_w_[2 * ns + k] = tangent_[p].col(k) + mu * slip_dir_[p][k] * patch_in_[p].n_out;
+    const std::int32_t begin = q;
     bool holds = false;
-    for (std::int32_t j = 0; j < num_unique_ && !holds; ++j) holds = sticks(j, p);
-    if (holds) slipping_list_[ns++] = p;
+    for (std::int32_t j = 0; j < num_unique_; ++j) {
+      if (!active_[j] || patch_of_[j] != p) continue;
+      holds = holds || mode_[j] == ContactMode::kFull3d;
+      slip_wn_[q] = Eigen::Vector2d(slip_w_[2 * ns].dot(n_[j]), slip_w_[2 * ns + 1].dot(n_[j]));
+      slip_members_[q++] = j;
+    }
+    if (!holds) {
+      q = begin;
+      continue;
+    }
+    slip_begin_[ns] = begin;
+    slipping_list_[ns++] = p;
   }
+  slip_begin_[ns] = q;
   num_slipping_ = ns;
   if (ns > 0) {
     const int n2 = 2 * ns;
+    // Z = A^-1 B: B puts the tangent basis into the rows of each slipping patch's held nodes.
     for (std::int32_t a = 0; a < ns; ++a) {
       const std::int32_t p = slipping_list_[a];
       for (int c = 0; c < 2; ++c) {
         double* z = Z_.data() + static_cast<std::ptrdiff_t>(2 * a + c) * ld;
         std::fill(z, z + r, 0.0);
-        for (std::int32_t j = 0; j < num_unique_; ++j) {
-          if (!sticks(j, p)) continue;
+        for (std::int32_t m = slip_begin_[a]; m < slip_begin_[a + 1]; ++m) {
+          const std::int32_t j = slip_members_[m];
+          if (mode_[j] != ContactMode::kFull3d) continue;
           for (int k = 0; k < 3; ++k) z[row_of_[j] + k] = tangent_[p](k, c);
         }
       }
     }
     SolveFactored(A_.data(), r, ld, Z_.data(), n2, ld);
     // Phi_a applied to a row vector v (the patch's held nodes' rows). With given forces the
-    // equations are T^T F = g instead (symmetric: Phi Z = B^T A^-1 B). Each patch's nodes and
-    // weights are listed once here: the (2P)^2 + 2P applications below visit only them.
-    std::int32_t q = 0;
-    for (std::int32_t a = 0; a < ns; ++a) {
-      const std::int32_t p = slipping_list_[a];
-      const double mu = given_force_ ? 0.0 : patch_in_[p].mu_kinetic;
-      for (int k = 0; k < 2; ++k) slip_w_[2 * a + k] = tangent_[p].col(k) + mu * slip_dir_[p][k] * patch_in_[p].n_out;
-      slip_begin_[a] = q;
-      for (std::int32_t j = 0; j < num_unique_; ++j) {
-        if (!active_[j] || patch_of_[j] != p) continue;
-        slip_wn_[q] = Eigen::Vector2d(slip_w_[2 * a].dot(n_[j]), slip_w_[2 * a + 1].dot(n_[j]));
-        slip_members_[q++] = j;
-      }
-    }
-    slip_begin_[ns] = q;
+    // equations are T^T F = g instead (symmetric: Phi Z = B^T A^-1 B).
     auto phi = [&](std::int32_t a, int k, const double* v) {
       const Eigen::Vector3d& w = slip_w_[2 * a + k];
       double s = 0.0;
