@@ -104,7 +104,6 @@ ContactSolver::ContactSolver(std::shared_ptr<const Compliance> compliance,
   is_new_.assign(M, 0);
   free_pos_.assign(M, 0);
   table_.assign(9 * M * (M + 1) / 2, 0.0);
-  table_S_.assign(M * (M + 1) / 2, 0.0);
   pos_n_.assign(M, Eigen::Vector3d::Zero());
   same_n_.assign(M, 0);
   A_.assign(9 * M * M, 0.0);
@@ -116,6 +115,9 @@ ContactSolver::ContactSolver(std::shared_ptr<const Compliance> compliance,
   lambda_N_.assign(M, 0.0);
   dn_m_.assign(M, 0.0);
   act_.assign(M, -1);
+  act_pos_.assign(M, -1);
+  index_of_slot_.assign(static_cast<std::size_t>(compliance_->num_nodes()), -1);
+  prev_of_slot_.assign(static_cast<std::size_t>(compliance_->num_nodes()), -1);
   violates_.assign(M, 0);
   prev_slot_.assign(M, -1);
   prev_active_.assign(M, 0);
@@ -231,8 +233,8 @@ StepStatus ContactSolver::Solve(std::span<const ContactInput> contacts,
       states_[i] = ContactState::kRejectedInvalid;
       continue;
     }
-    const std::int32_t j =
-        detail::MergeTouch(slot, c.u_m, slot_.data(), multiplicity_.data(), d_m_.data(), num_unique_);
+    const std::int32_t j = detail::MergeTouch(slot, c.u_m, slot_.data(), multiplicity_.data(), d_m_.data(),
+                                              num_unique_, index_of_slot_.data());
     if (multiplicity_[j] == 1) {
       n_[j].setZero();
       mode_[j] = c.mode;
@@ -244,6 +246,7 @@ StepStatus ContactSolver::Solve(std::span<const ContactInput> contacts,
     states_[i] = ContactState::kActive;
   }
   for (std::int32_t j = 0; j < num_unique_; ++j) {
+    index_of_slot_[slot_[j]] = -1;  // merged: the map is clean for the next Solve()
     d_m_[j] /= static_cast<double>(multiplicity_[j]);
     const double nn = n_[j].norm();
     if (nn > 1e-12) {
@@ -256,12 +259,12 @@ StepStatus ContactSolver::Solve(std::span<const ContactInput> contacts,
   }
   if (invalid) {
     ZeroOutputs();
-    num_prev_ = 0;
+    ForgetPrevious();
     table_valid_ = false;
     return StepStatus::kInvalidInput;
   }
   if (num_unique_ == 0) {
-    num_prev_ = 0;
+    ForgetPrevious();
     table_valid_ = false;
     return rejected ? StepStatus::kSomeRejected : StepStatus::kOk;
   }
@@ -290,14 +293,14 @@ StepStatus ContactSolver::Solve(std::span<const ContactInput> contacts,
     // Fingertip patches with friction: their own iteration (SolveWithPatches).
     if (patched && !SolveWithPatches(status)) {
       ZeroOutputs();
-      num_prev_ = 0;
+      ForgetPrevious();
       return StepStatus::kNumericalFailure;
     }
   } else {
     // Every fingertip patch of the haptic world: the scalar problem, warm started.
     if (!SolveNormalPushOnly(status)) {
       ZeroOutputs();
-      num_prev_ = 0;
+      ForgetPrevious();
       table_valid_ = false;
       return StepStatus::kNumericalFailure;
     }
@@ -306,7 +309,7 @@ StepStatus ContactSolver::Solve(std::span<const ContactInput> contacts,
   while (!all_normal && !patched) {
     if (!SolveActiveSet()) {
       ZeroOutputs();
-      num_prev_ = 0;
+      ForgetPrevious();
       table_valid_ = false;
       return StepStatus::kNumericalFailure;
     }
@@ -388,15 +391,7 @@ void ContactSolver::GatherNormalCompliance() noexcept {
   const std::int32_t u = num_unique_;
   const std::int32_t M = options_.max_contacts;
   // Which nodes the previous Solve() touched too (also the warm start's map).
-  for (std::int32_t j = 0; j < u; ++j) {
-    prev_index_[j] = -1;
-    for (std::int32_t k = 0; k < num_prev_; ++k) {
-      if (prev_slot_[k] == slot_[j]) {
-        prev_index_[j] = k;
-        break;
-      }
-    }
-  }
+  for (std::int32_t j = 0; j < u; ++j) prev_index_[j] = prev_of_slot_[slot_[j]];
   // The blocks of a large compliance lie far apart in memory (a cache miss or more each), so
   // reading them is the costliest part of the force path; fingertips move a fraction of a node
   // spacing per haptic step. So the blocks stay in a table between steps: a node keeps its
@@ -456,24 +451,23 @@ void ContactSolver::GatherNormalCompliance() noexcept {
   for (std::int32_t j = 0; j < u; ++j) {
     same_n_[j] = !is_new_[j] && std::memcmp(pos_n_[pos_[j]].data(), n_[j].data(), sizeof(double) * 3) == 0;
   }
+  // S_ holds each pair at its table positions; a pair of old nodes with the normals bit for bit
+  // those of its last computation keeps its entry (both nodes kept their positions since), so
+  // only the pairs of a new or turned node are computed: each once.
   for (std::int32_t j = 0; j < u; ++j) {
-    for (std::int32_t i = 0; i <= j; ++i) {
+    if (same_n_[j]) continue;
+    for (std::int32_t i = 0; i < u; ++i) {
+      if (!same_n_[i] && i > j) continue;  // both computed here: once, at the later of the two
       const bool ij = pos_[i] <= pos_[j];
       const std::int32_t a = ij ? i : j, b = ij ? j : i;  // pos_[a] <= pos_[b]
       const std::int64_t pb = pos_[b];
       const std::int64_t packed = pb * (pb + 1) / 2 + pos_[a];
-      double v;
-      if (same_n_[a] && same_n_[b]) {
-        v = table_S_[packed];  // both old, normals unchanged: the value computed before
-      } else {
-        double* blk = table_.data() + 9 * packed;
-        Eigen::Map<Eigen::Matrix3d> B(blk);
-        if (is_new_[i] || is_new_[j]) B = C.Block(slot_[a], slot_[b]);
-        v = n_[a].dot(B * n_[b]);
-        table_S_[packed] = v;
-      }
-      S_[static_cast<std::size_t>(j) * M + i] = v;
-      S_[static_cast<std::size_t>(i) * M + j] = v;
+      double* blk = table_.data() + 9 * packed;
+      Eigen::Map<Eigen::Matrix3d> B(blk);
+      if (is_new_[i] || is_new_[j]) B = C.Block(slot_[a], slot_[b]);
+      const double v = n_[a].dot(B * n_[b]);
+      S_[static_cast<std::size_t>(pos_[j]) * M + pos_[i]] = v;
+      S_[static_cast<std::size_t>(pos_[i]) * M + pos_[j]] = v;
     }
   }
   for (std::int32_t j = 0; j < u; ++j) pos_n_[pos_[j]] = n_[j];
@@ -491,12 +485,19 @@ void ContactSolver::WarmStartActiveSet() noexcept {
 }
 
 void ContactSolver::RememberActiveSet() noexcept {
+  ForgetPrevious();
   for (std::int32_t j = 0; j < num_unique_; ++j) {
     prev_slot_[j] = slot_[j];
     prev_active_[j] = active_[j];
     prev_pos_[j] = table_valid_ ? pos_[j] : -1;
+    prev_of_slot_[slot_[j]] = j;
   }
   num_prev_ = num_unique_;
+}
+
+void ContactSolver::ForgetPrevious() noexcept {
+  for (std::int32_t k = 0; k < num_prev_; ++k) prev_of_slot_[prev_slot_[k]] = -1;
+  num_prev_ = 0;
 }
 
 bool ContactSolver::SolveNormalPushOnly(StepStatus& status) noexcept {
@@ -520,13 +521,16 @@ bool ContactSolver::SolveNormalPushOnly(StepStatus& status) noexcept {
     std::int32_t r = 0;
     for (std::int32_t j = 0; j < u; ++j) {
       lambda_N_[j] = 0.0;
-      if (active_[j]) act_[r++] = j;
+      if (active_[j]) {
+        act_pos_[r] = pos_[j];
+        act_[r++] = j;
+      }
     }
     if (r > 0) {
       for (std::int32_t b = 0; b < r; ++b) {
-        const double* Sb = S_.data() + static_cast<std::size_t>(act_[b]) * M;
+        const double* Sb = S_.data() + static_cast<std::size_t>(act_pos_[b]) * M;
         double* Lb = L_.data() + static_cast<std::size_t>(b) * r;
-        for (std::int32_t a = b; a < r; ++a) Lb[a] = Sb[act_[a]];
+        for (std::int32_t a = b; a < r; ++a) Lb[a] = Sb[act_pos_[a]];
         Lb[b] += eps_m_per_N_;
         rhs_[b] = dn_m_[act_[b]];
       }
@@ -551,9 +555,9 @@ bool ContactSolver::SolveNormalPushOnly(StepStatus& status) noexcept {
       if (active_[j]) {
         v = lambda_N_[j] / f_scale > kTol;
       } else {
-        const double* Sj = S_.data() + static_cast<std::size_t>(j) * M;
+        const double* Sj = S_.data() + static_cast<std::size_t>(pos_[j]) * M;
         double un = 0.0;
-        for (std::int32_t b = 0; b < r; ++b) un += Sj[act_[b]] * rhs_[b];
+        for (std::int32_t b = 0; b < r; ++b) un += Sj[act_pos_[b]] * rhs_[b];
         v = (un - dn_m_[j]) / d_scale > kTol;
       }
       violates_[j] = v ? 1 : 0;

@@ -12,13 +12,20 @@ namespace handshare::fem::detail {
 // touched nodes: slots[0..count), their touch counts and the sums of their imposed
 // displacements. A new node is appended (count grows; the arrays must have room). Returns the
 // node's index; multiplicity[j] == 1 tells the caller it is new. The caller averages d_m by
-// multiplicity once every touch is in. Linear scan: a step has at most a few tens of touches.
+// multiplicity once every touch is in. Without index_of_slot a linear scan (a few tens of
+// touches); with it (one entry per compliance slot, -1 where the slot is not among slots[0..count))
+// a lookup, which the caller keeps: it must reset the entries of slots[0..count) to -1 when done.
 inline std::int32_t MergeTouch(std::int32_t slot, const Eigen::Vector3d& u_m, std::int32_t* slots,
                                std::int32_t* multiplicity, Eigen::Vector3d* d_m,
-                               std::int32_t& count) noexcept {
+                               std::int32_t& count, std::int32_t* index_of_slot = nullptr) noexcept {
   std::int32_t j = 0;
-  while (j < count && slots[j] != slot) ++j;
+  if (index_of_slot != nullptr) {
+    j = index_of_slot[slot] >= 0 ? index_of_slot[slot] : count;
+  } else {
+    while (j < count && slots[j] != slot) ++j;
+  }
   if (j == count) {
+    if (index_of_slot != nullptr) index_of_slot[slot] = j;
     slots[j] = slot;
     multiplicity[j] = 0;
     d_m[j].setZero();

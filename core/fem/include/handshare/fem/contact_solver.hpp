@@ -211,9 +211,12 @@ class ContactSolver {
   // started from the previous Solve()'s active set. Returns false on a numerical failure.
   bool SolveNormalPushOnly(StepStatus& status) noexcept;
   void WarmStartActiveSet() noexcept;
-  // Fills S_ for slot_[0..num_unique_), reading only blocks the table lacks.
+  // Fills S_ for slot_[0..num_unique_) at their table positions, reading only blocks the table
+  // lacks and computing only the entries of nodes that are new or whose normal changed.
   void GatherNormalCompliance() noexcept;
   void RememberActiveSet() noexcept;
+  // Drops the previous Solve()'s nodes (no warm start, no table positions carried over).
+  void ForgetPrevious() noexcept;
   void ZeroOutputs() noexcept;
 
   std::shared_ptr<const Compliance> compliance_;
@@ -245,14 +248,21 @@ class ContactSolver {
   std::vector<std::int32_t> row_of_;
   std::vector<NodeLoad> loads_;
   std::int32_t num_loads_ = 0;
-  // Scalar (frictionless) path: S (M x M, ld M), its factor on the active rows (compact, ld r),
-  // normal forces lambda (f = lambda n), normal gaps, active indices.
+  // Scalar (frictionless) path: S (M x M, ld M) indexed by table positions (pos_: entry
+  // (pos_[i], pos_[j]) is n_i^T C_ij n_j, kept between Solve()s like the block table), its
+  // factor on the active rows (compact, ld r), normal forces lambda (f = lambda n), normal
+  // gaps, active indices and their table positions.
   std::vector<double> S_;
   std::vector<double> L_;
   std::vector<double> lambda_N_;
   std::vector<double> dn_m_;
   std::vector<std::int32_t> act_;
+  std::vector<std::int32_t> act_pos_;
   std::vector<std::uint8_t> violates_;
+  // Per compliance slot: its distinct node's index while Stage 1 merges touches, and its index
+  // in the previous Solve() (-1: none), so that neither is a search over the nodes.
+  std::vector<std::int32_t> index_of_slot_;
+  std::vector<std::int32_t> prev_of_slot_;
   // The previous Solve()'s distinct nodes and which were held (warm start).
   std::vector<std::int32_t> prev_slot_;
   std::vector<std::uint8_t> prev_active_;
@@ -265,9 +275,8 @@ class ContactSolver {
   std::vector<std::int32_t> prev_pos_;
   std::vector<std::uint8_t> prev_kept_;
   std::vector<std::int32_t> free_pos_;
-  // S of the table's pairs (packed like table_) and the normal each position had when they were
-  // computed: a pair of old nodes whose normals are bit for bit the same reuses its S entry.
-  std::vector<double> table_S_;
+  // The normal each position had when its S_ entries were computed: a pair of old nodes whose
+  // normals are bit for bit the same keeps its S_ entry.
   std::vector<Eigen::Vector3d> pos_n_;
   std::vector<std::uint8_t> same_n_;
   std::int32_t num_free_ = 0;
