@@ -59,6 +59,19 @@ struct HapticWorld::Object {
   std::int32_t max_patch = 0;
   double mu_static = 0.0, mu_kinetic = 0.0;
   std::vector<fem::FrictionPatch> friction;  // this step's patches (local fingers, then peers')
+  // Each remote contact's patch as last found (by its index in the remote list): its query bit
+  // for bit and the nodes it gave. A peer's contact set changes at the network's rate, not the
+  // haptic loop's, so most steps ask the same query again and copy the answer.
+  struct PatchMemo {
+    Eigen::Vector3d p_O_m = Eigen::Vector3d::Constant(std::numeric_limits<double>::quiet_NaN());
+    Eigen::Vector3d n_O = Eigen::Vector3d::Zero();
+    double depth_m = 0.0;
+    std::int32_t room = -1;
+    std::int32_t count = 0;
+    bool truncated = false;
+  };
+  std::vector<PatchMemo> remote_memo;
+  std::vector<fem::ContactInput> remote_memo_inputs;  // max_patch per memo
   std::shared_ptr<const std::vector<Eigen::Vector3d>> mode;  // per node, frame O; null: none
   double mode_reach_m = 0.0;  // largest |mode|
   double mode_scale = 0.0;
@@ -230,6 +243,8 @@ ObjectId HapticWorld::AddDeformable(const DeformableDesc& d) {
   o->solver = std::make_unique<fem::ContactSolver>(d.compliance, so);
   o->inputs.assign(static_cast<std::size_t>(max_contacts), fem::ContactInput{});
   o->friction.assign(static_cast<std::size_t>(so.max_friction_patches), fem::FrictionPatch{});
+  o->remote_memo.assign(kMaxRemoteForces, Object::PatchMemo{});
+  o->remote_memo_inputs.assign(kMaxRemoteForces * static_cast<std::size_t>(d.max_patch_nodes), fem::ContactInput{});
   objects_.push_back(std::move(o));
   return static_cast<ObjectId>(objects_.size() - 1);
 }
@@ -607,7 +622,24 @@ void HapticWorld::StepDeformable(Object& o, std::span<const RemoteContact> remot
     std::int32_t count = 0;
     bool trunc = false;
     const std::int32_t begin = m;
-    add_patch(X_OW * rc.p_WC_m - (sticks ? stick_O : Eigen::Vector3d::Zero()), n_O, depth, count, trunc);
+    const Eigen::Vector3d center_O = X_OW * rc.p_WC_m - (sticks ? stick_O : Eigen::Vector3d::Zero());
+    if (r < kMaxRemoteForces) {
+      Object::PatchMemo& memo = o.remote_memo[r];
+      fem::ContactInput* kept = o.remote_memo_inputs.data() + r * static_cast<std::size_t>(o.max_patch);
+      const std::int32_t room = std::min(o.max_patch, cap - m);
+      if (memo.room == room && memo.depth_m == depth && memo.p_O_m == center_O && memo.n_O == n_O) {
+        std::copy(kept, kept + memo.count, o.inputs.begin() + m);
+        count = memo.count;
+        trunc = memo.truncated;
+        m += count;
+      } else {
+        add_patch(center_O, n_O, depth, count, trunc);
+        std::copy(o.inputs.begin() + begin, o.inputs.begin() + m, kept);
+        memo = Object::PatchMemo{center_O, n_O, depth, room, count, trunc};
+      }
+    } else {
+      add_patch(center_O, n_O, depth, count, trunc);
+    }
     if (r < kMaxRemoteForces) remote_patch[r] = {begin, count};
     if (!sticks || count == 0) continue;
     for (std::int32_t q = 0; q < count; ++q) o.inputs[static_cast<std::size_t>(begin + q)].patch = num_friction;

@@ -169,5 +169,45 @@ TEST(Deformable, TwoHandsOnOneObjectAreSolvedTogether) {
   ASSERT_EQ(a->held_loads(id_a).size(), h->held_loads(id_b).size());
 }
 
+// A peer's contacts change at the network's rate, so the world keeps each remote contact's patch
+// from the step before and reuses it while the contact is the same. Every change must still be
+// seen: over a sequence where a peer's contacts deepen, move, swap places in its list, go and
+// come back, the force each remote contact puts on the block equals that of a new world (no
+// earlier step) given the same contacts.
+TEST(Deformable, APeersContactsAreFollowedThroughEveryChange) {
+  const Block& b = TheBlock();
+  const Eigen::Vector3d n_W = b.X_WO.linear() * Eigen::Vector3d::UnitZ();
+  auto at = [&](int finger, double x, double y, double depth) {
+    return RemoteContact{1, finger, 0, b.X_WO * Eigen::Vector3d(x, y, b.top), -depth * n_W, Eigen::Vector3d::Zero(), n_W};
+  };
+  const RemoteContact c0 = at(0, 0.02, 0.02, 0.0015), c1 = at(1, 0.04, 0.035, 0.001);
+  RemoteContact c0_deeper = c0;
+  c0_deeper.u_W_m = -0.0022 * n_W;
+  RemoteContact c1_moved = c1;
+  c1_moved.p_WC_m += b.X_WO.linear() * Eigen::Vector3d(0.001, 0.0, 0.0);
+  const std::vector<std::vector<RemoteContact>> schedule = {
+      {c0, c1}, {c0, c1}, {c0, c1}, {c0_deeper, c1}, {c0_deeper, c1}, {c0_deeper, c1_moved},
+      {c1_moved, c0_deeper}, {c1_moved, c0_deeper}, {c0, c1}, {c0}, {c0, c1}, {c1}, {c0, c1}};
+  ObjectId id = -1;
+  auto w = MakeWorld(b, 16, &id);
+  ASSERT_EQ(id, 0);
+  std::array<Eigen::Vector3d, kFingers> away;
+  for (int i = 0; i < kFingers; ++i) away[static_cast<std::size_t>(i)] = Eigen::Vector3d(5.0, 5.0, 5.0 + i);
+  for (std::size_t k = 0; k < schedule.size(); ++k) {
+    w->Step(1e-3, away, schedule[k]);
+    ObjectId id_fresh = -1;
+    auto fresh = MakeWorld(b, 16, &id_fresh);
+    fresh->Step(1e-3, away, schedule[k]);
+    ASSERT_EQ(w->remote_forces_W().size(), schedule[k].size());
+    ASSERT_EQ(fresh->remote_forces_W().size(), schedule[k].size());
+    for (std::size_t r = 0; r < schedule[k].size(); ++r) {
+      const Eigen::Vector3d f = w->remote_forces_W()[r], g = fresh->remote_forces_W()[r];
+      ASSERT_GT(g.norm(), 0.01) << "step " << k << " contact " << r;
+      EXPECT_LT((f - g).norm(), 1e-12 * g.norm()) << "step " << k << " contact " << r << ": " << f.transpose()
+                                                  << " against " << g.transpose();
+    }
+  }
+}
+
 }  // namespace
 }  // namespace handshare::contact

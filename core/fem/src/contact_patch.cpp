@@ -86,7 +86,6 @@ PatchResult ContactPatchFinder::Collect(const Eigen::Vector3d& p_W, const Eigen:
   // Nodes within a of the contact point in the tangent plane, close to that plane, and on a part
   // of the surface that faces the fingertip (not the far side of a thin object).
   const double slab_m = std::max(a_m, cell_m_);
-  const double r_max = std::sqrt(a_m * a_m + slab_m * slab_m);
   auto visit = [&](std::int32_t s) {
     const Eigen::Vector3d d = p_m_[s] - p_W;
     const double h = d.dot(n);
@@ -119,8 +118,15 @@ PatchResult ContactPatchFinder::Collect(const Eigen::Vector3d& p_W, const Eigen:
     }
     if (worst >= 0) out[worst] = c;
   };
-  const Eigen::Vector3d lo = ((p_W.array() - r_max - origin_m_.array()) / cell_m_).floor();
-  const Eigen::Vector3d hi = ((p_W.array() + r_max - origin_m_.array()) / cell_m_).floor();
+  // The nodes it takes lie in the cylinder r < a, |h| <= slab about n: its bounding box reaches
+  // slab |n_k| + a sqrt(1 - n_k^2) along axis k (a flat patch's box is a wide and 2 slab deep,
+  // where a ball of the cylinder's corner radius visited about three times the cells). The
+  // slack covers the round-off of h and r; the cells are visited in the same order as before,
+  // so the same nodes come out in the same order.
+  const Eigen::Array3d reach =
+      slab_m * n.array().abs() + a_m * (1.0 - n.array().square()).max(0.0).sqrt() + 1e-9 * (slab_m + a_m);
+  const Eigen::Vector3d lo = ((p_W.array() - reach - origin_m_.array()) / cell_m_).floor();
+  const Eigen::Vector3d hi = ((p_W.array() + reach - origin_m_.array()) / cell_m_).floor();
   const double cells = (hi - lo + Eigen::Vector3d::Ones()).prod();
   if (!(cells < static_cast<double>(keys_.size()))) {
     for (std::int32_t s = 0; s < static_cast<std::int32_t>(p_m_.size()); ++s) visit(s);

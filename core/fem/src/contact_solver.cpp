@@ -9,7 +9,6 @@
 #include <limits>
 #include <string>
 
-#include "contact_dense.hpp"
 #include "dense_spd.hpp"
 #include "dense_small.hpp"
 #include "handshare/fem/error.hpp"
@@ -537,8 +536,9 @@ bool ContactSolver::SolveNormalPushOnly(StepStatus& status) noexcept {
       if (r <= detail::kSmallSpdMax) {  // a few nodes: the register kernel (eps is in L_ already)
         if (!detail::SmallSpdSolve(L_.data(), r, r, 0.0, rhs_.data(), detail::BestIsa())) return false;
       } else {
-        if (!detail::CholeskyCompact(L_.data(), r)) return false;
-        detail::CholeskyCompactSolve(L_.data(), r, rhs_.data());
+        const detail::Isa isa = detail::BestIsa();
+        if (!detail::FactorSpd(L_.data(), r, r, isa)) return false;
+        detail::SolveFactoredSpd(L_.data(), r, r, rhs_.data(), 1, r, isa);
       }
       for (std::int32_t b = 0; b < r; ++b) {
         if (!std::isfinite(rhs_[b])) return false;

@@ -10,6 +10,7 @@
 #include <map>
 #include <tuple>
 #include <memory>
+#include <random>
 
 #include "handshare/fem/compliance.hpp"
 #include "handshare/fem/contact_patch.hpp"
@@ -201,6 +202,62 @@ TEST(ContactPatch, TruncatesToCapacityKeepingTheClosestNodes) {
   std::vector<ContactInput> out(10);
   EXPECT_EQ(m.finder->FlatPunch({1, 1, 1}, Eigen::Vector3d::UnitZ(), kA, kDelta, ContactMode::kFull3d, out).count, 0);
   EXPECT_EQ(m.finder->Sphere({0, 0, 0}, Eigen::Vector3d::UnitZ(), 0.01, 0.0, ContactMode::kFull3d, out).count, 0);
+}
+
+// The patch holds every node of the footprint, wherever the fingertip is and whichever way its
+// normal points: the nodes the finder returns are exactly those a scan of all compliance nodes
+// takes by the same rule (within the contact radius a of the contact point across the normal,
+// within a of its tangent plane along it -- the slab is a where a exceeds the grid's cell, as
+// here -- on the side of the surface facing the fingertip, pressed). Guards the cells the finder
+// visits (a box about the footprint), which a narrower box would cut.
+TEST(ContactPatch, FindsEveryNodeOfTheFootprintWhateverTheNormal) {
+  const TetMesh mesh = MakeBoxMesh({0.04, 0.04, 0.04}, {8, 8, 8});
+  const Surface surface = ExtractSurface(mesh);
+  const auto fixed = NodesOnPlane(mesh, 2, 0.0, 1e-12);
+  const auto c = std::make_shared<Compliance>(Compliance::Precompute(mesh, kMat, fixed, {}));
+  const ContactPatchFinder finder(mesh, surface, *c);
+  const auto& x = mesh.positions_m();
+  double max_edge = 0.0;
+  for (const Triangle& t : surface.triangles) {
+    for (int e = 0; e < 3; ++e) max_edge = std::max(max_edge, (x[t[(e + 1) % 3]] - x[t[e]]).norm());
+  }
+  std::vector<Eigen::Vector3d> normal_of(x.size(), Eigen::Vector3d::Zero());
+  for (std::size_t i = 0; i < surface.nodes.size(); ++i) normal_of[surface.nodes[i]] = surface.normals[i];
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<double> U(-1.0, 1.0);
+  std::vector<ContactInput> out(static_cast<std::size_t>(c->num_nodes()));
+  int nonempty = 0;
+  for (int trial = 0; trial < 400; ++trial) {
+    const Eigen::Vector3d p = Eigen::Vector3d(0.02, 0.02, 0.02) + 0.028 * Eigen::Vector3d(U(rng), U(rng), U(rng));
+    Eigen::Vector3d n(U(rng), U(rng), U(rng));
+    if (n.norm() < 0.1) continue;
+    n.normalize();
+    const double R = 0.05;
+    const double a = (2.2 + 1.5 * (U(rng) + 1.0)) * max_edge;  // above the cell (twice the mean edge)
+    const double depth = a * a / (2.0 * R);
+    const PatchResult r = finder.Sphere(p, n, R, depth, ContactMode::kNormalOnly, out);
+    ASSERT_FALSE(r.truncated);
+    std::vector<std::int32_t> found;
+    for (std::int32_t k = 0; k < r.count; ++k) {
+      found.push_back(out[static_cast<std::size_t>(k)].node);
+      const Eigen::Vector3d d = x[out[static_cast<std::size_t>(k)].node] - p;
+      const double rk = (d - d.dot(n) * n).norm();
+      EXPECT_NEAR((out[static_cast<std::size_t>(k)].u_m + (depth - rk * rk / (2.0 * R)) * n).norm(), 0.0, 1e-15);
+    }
+    std::vector<std::int32_t> expected;
+    for (const std::int32_t node : c->nodes()) {
+      const Eigen::Vector3d d = x[node] - p;
+      const double h = d.dot(n);
+      const double rr = (d - h * n).norm();
+      if (std::abs(h) <= a && rr < a && normal_of[node].dot(n) >= 0.3 && depth - rr * rr / (2.0 * R) > 0.0) {
+        expected.push_back(node);
+      }
+    }
+    std::sort(found.begin(), found.end());
+    ASSERT_EQ(found, expected) << "trial " << trial << " at " << p.transpose() << ", n " << n.transpose();
+    nonempty += expected.empty() ? 0 : 1;
+  }
+  EXPECT_GT(nonempty, 100);  // most trials touch the block
 }
 
 }  // namespace
