@@ -130,7 +130,7 @@ ContactSolver::ContactSolver(std::shared_ptr<const Compliance> compliance,
   slip_dir_.assign(P, Eigen::Vector2d::Zero());
   patch_state_.assign(P, FrictionPatchState{});
   slipping_list_.assign(P, -1);
-  Z_.assign(3 * M * 2 * P, 0.0);
+  Z_.assign(3 * M * (2 * P + 1), 0.0);
   slip_M_.assign(4 * P * P, 0.0);
   slip_rhs_.assign(2 * P, 0.0);
   slip_piv_.assign(2 * P, 0);
@@ -696,7 +696,6 @@ bool ContactSolver::SolvePatchedSystem(bool refactor) noexcept {
     }
     if (!FactorSpd(A_.data(), r, ld)) return false;
   }
-  SolveFactored(A_.data(), r, ld, rhs_.data(), 1, ld);
   // The slipping patches that hold a node in 3-D (a patch whose nodes all went frictionless
   // has no tangential force and no slide to find), each with its active nodes (members from
   // slip_begin_[a] to slip_begin_[a + 1]) and the weights of its cone equations: one scan of
@@ -723,22 +722,27 @@ bool ContactSolver::SolvePatchedSystem(bool refactor) noexcept {
   }
   slip_begin_[ns] = q;
   num_slipping_ = ns;
-  if (ns > 0) {
-    const int n2 = 2 * ns;
-    // Z = A^-1 B: B puts the tangent basis into the rows of each slipping patch's held nodes.
-    for (std::int32_t a = 0; a < ns; ++a) {
-      const std::int32_t p = slipping_list_[a];
-      for (int c = 0; c < 2; ++c) {
-        double* z = Z_.data() + static_cast<std::ptrdiff_t>(2 * a + c) * ld;
-        std::fill(z, z + r, 0.0);
-        for (std::int32_t m = slip_begin_[a]; m < slip_begin_[a + 1]; ++m) {
-          const std::int32_t j = slip_members_[m];
-          if (mode_[j] != ContactMode::kFull3d) continue;
-          for (int k = 0; k < 3; ++k) z[row_of_[j] + k] = tangent_[p](k, c);
-        }
+  // Z = A^-1 B: B puts the tangent basis into the rows of each slipping patch's held nodes.
+  // z0 and Z are solved together, b0 in the column before Z's (Z_'s column 0): one pass of the
+  // lane solve takes eight columns, so the right-hand side rides along with up to three
+  // slipping patches instead of a pass of its own.
+  for (std::int32_t a = 0; a < ns; ++a) {
+    const std::int32_t p = slipping_list_[a];
+    for (int c = 0; c < 2; ++c) {
+      double* z = Zcol(2 * a + c);
+      std::fill(z, z + r, 0.0);
+      for (std::int32_t m = slip_begin_[a]; m < slip_begin_[a + 1]; ++m) {
+        const std::int32_t j = slip_members_[m];
+        if (mode_[j] != ContactMode::kFull3d) continue;
+        for (int k = 0; k < 3; ++k) z[row_of_[j] + k] = tangent_[p](k, c);
       }
     }
-    SolveFactored(A_.data(), r, ld, Z_.data(), n2, ld);
+  }
+  std::copy(rhs_.begin(), rhs_.begin() + r, Z_.begin());
+  SolveFactored(A_.data(), r, ld, Z_.data(), 1 + 2 * ns, ld);
+  std::copy(Z_.begin(), Z_.begin() + r, rhs_.begin());
+  if (ns > 0) {
+    const int n2 = 2 * ns;
     // Phi_a applied to a row vector v (the patch's held nodes' rows). With given forces the
     // equations are T^T F = g instead (symmetric: Phi Z = B^T A^-1 B).
     auto phi = [&](std::int32_t a, int k, const double* v) {
@@ -761,7 +765,7 @@ bool ContactSolver::SolvePatchedSystem(bool refactor) noexcept {
         slip_rhs_[row] = (given_force_ ? slip_force_[slipping_list_[a]][k] : 0.0) - phi(a, k, rhs_.data());
         for (int col = 0; col < n2; ++col) {
           slip_M_[static_cast<std::ptrdiff_t>(col) * n2 + row] =
-              phi(a, k, Z_.data() + static_cast<std::ptrdiff_t>(col) * ld);
+              phi(a, k, Zcol(col));
         }
       }
     }
@@ -770,7 +774,7 @@ bool ContactSolver::SolvePatchedSystem(bool refactor) noexcept {
     for (int col = 0; col < n2; ++col) {
       const double s = slip_rhs_[col];
       if (!std::isfinite(s)) return false;
-      const double* z = Z_.data() + static_cast<std::ptrdiff_t>(col) * ld;
+      const double* z = Zcol(col);
       for (int k = 0; k < r; ++k) rhs_[k] += s * z[k];
     }
     for (std::int32_t a = 0; a < ns; ++a) {
@@ -789,12 +793,11 @@ Eigen::Vector2d ContactSolver::SlidOver(std::int32_t a) const noexcept {
 bool ContactSolver::WouldStick(std::int32_t a) const noexcept {
   // Held at its stick instead of its slide s_a, the patch's rows would be y + Z_a (T^T stick -
   // s_a) with everything else as solved (the system is linear in the slides).
-  const int ld = 3 * options_.max_contacts;
   const std::int32_t p = slipping_list_[a];
   const FrictionPatch& in = patch_in_[p];
   const Eigen::Vector2d delta = SlidOver(a);
-  const double* z0 = Z_.data() + static_cast<std::ptrdiff_t>(2 * a) * ld;
-  const double* z1 = z0 + ld;
+  const double* z0 = Zcol(2 * a);
+  const double* z1 = Zcol(2 * a + 1);
   Eigen::Vector3d force = Eigen::Vector3d::Zero();
   for (std::int32_t j = 0; j < num_unique_; ++j) {
     if (!active_[j] || patch_of_[j] != p) continue;

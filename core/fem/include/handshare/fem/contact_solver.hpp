@@ -284,7 +284,7 @@ class ContactSolver {
   std::int32_t num_prev_ = 0;
   // Friction patches: per distinct node its patch (-1: none); per patch the input, its tangent
   // basis (3x2), the direction it slips in (tangent coordinates) and the result; the slipping
-  // patches' response columns Z = A^-1 B (3M x 2P, ld 3M) and their 2P x 2P system.
+  // patches' response columns (Z_, below) and their 2P x 2P system.
   std::vector<std::int16_t> patch_of_;
   std::vector<std::uint8_t> releases_;  // per distinct node: times released in this Solve()
   std::vector<FrictionPatch> patch_in_;
@@ -296,7 +296,12 @@ class ContactSolver {
   std::vector<FrictionPatchState> patch_state_;
   std::vector<std::int32_t> slipping_list_;
   std::int32_t num_slipping_ = 0;  // in slipping_list_, as the last SolvePatchedSystem left it
+  // z0 (column 0) and the slipping patches' columns Z = A^-1 B (3M x (1 + 2P), ld 3M).
   std::vector<double> Z_;
+  double* Zcol(int col) noexcept { return Z_.data() + static_cast<std::ptrdiff_t>(1 + col) * 3 * options_.max_contacts; }
+  const double* Zcol(int col) const noexcept {
+    return Z_.data() + static_cast<std::ptrdiff_t>(1 + col) * 3 * options_.max_contacts;
+  }
   std::vector<double> slip_M_;
   std::vector<double> slip_rhs_;
   std::vector<std::int32_t> slip_piv_;
