@@ -1041,8 +1041,11 @@ bool ContactSolver::SolveWithPatches(StepStatus& status) noexcept {
 }
 
 void ContactSolver::ComputeContactDisplacements() noexcept {
+  // Only a released node's displacement is read (is the surface pushed into the fingertip?): a
+  // held node's is the one imposed on it.
   const int ld = 3 * options_.max_contacts;
   for (std::int32_t i = 0; i < num_unique_; ++i) {
+    if (active_[i]) continue;
     Eigen::Vector3d u = Eigen::Vector3d::Zero();
     for (std::int32_t j = 0; j < num_unique_; ++j) {
       if (!active_[j]) continue;

@@ -206,6 +206,7 @@ class ContactSolver {
   // For list index a of the last SolvePatchedSystem: how far its fingertip slid over the
   // material, the stick minus the slide it solved (tangent coordinates).
   Eigen::Vector2d SlidOver(std::int32_t a) const noexcept;
+  // u_c_m_ of the released nodes: C_cc f from the held ones.
   void ComputeContactDisplacements() noexcept;
   // Push-only with every contact frictionless: the scalar problem on S = N^T C_cc N, warm
   // started from the previous Solve()'s active set. Returns false on a numerical failure.
