@@ -120,6 +120,11 @@ ContactSolver::ContactSolver(std::shared_ptr<const Compliance> compliance,
   violates_.assign(M, 0);
   prev_slot_.assign(M, -1);
   prev_active_.assign(M, 0);
+  perm_.assign(M, 0);
+  in_perm_.assign(M, 0);
+  fac_slot_.assign(M, -1);
+  fac_full3d_.assign(M, 0);
+  fac_n_.assign(M, Eigen::Vector3d::Zero());
   const auto P = static_cast<std::size_t>(options_.max_friction_patches);
   patch_of_.assign(M, -1);
   releases_.assign(M, 0);
@@ -280,6 +285,7 @@ StepStatus ContactSolver::Solve(std::span<const ContactInput> contacts,
   //     Murty's least-index rule, which terminates. A pulling contact is released; a released
   //     node the surface pushes into the tip is re-engaged (frictionless).
   StepStatus status = StepStatus::kOk;
+  for (std::int32_t j = 0; j < num_unique_; ++j) perm_[j] = j;
   bool all_normal = options_.push_only;
   bool patched = false;
   for (std::int32_t j = 0; j < num_unique_; ++j) {
@@ -583,11 +589,13 @@ bool ContactSolver::SolveNormalPushOnly(StepStatus& status) noexcept {
   return true;
 }
 
-int ContactSolver::AssembleHeld(bool fill_matrix) noexcept {
-  // Rows of G: 3 per sticking contact, 1 per frictionless one (n^T).
+int ContactSolver::AssembleHeld(bool fill_matrix, int from_row) noexcept {
+  // Rows of G: 3 per sticking contact, 1 per frictionless one (n^T), node by node in perm_'s
+  // order (C_cc is gathered whole, so any order reads it).
   const int ld = 3 * options_.max_contacts;
   int r = 0;
-  for (std::int32_t j = 0; j < num_unique_; ++j) {
+  for (std::int32_t q = 0; q < num_unique_; ++q) {
+    const std::int32_t j = perm_[q];
     if (!active_[j]) {
       row_of_[j] = -1;
       f_N_[j].setZero();
@@ -596,13 +604,15 @@ int ContactSolver::AssembleHeld(bool fill_matrix) noexcept {
     row_of_[j] = r;
     r += mode_[j] == ContactMode::kFull3d ? 3 : 1;
   }
-  for (std::int32_t j = 0; j < num_unique_; ++j) {
+  for (std::int32_t q = 0; q < num_unique_; ++q) {
+    const std::int32_t j = perm_[q];
     if (!active_[j]) continue;
     const bool fj = mode_[j] == ContactMode::kFull3d;
-    // The lower triangle only (blocks i >= j, whole diagonal blocks): every factor and solve
-    // here reads rows >= column.
-    for (std::int32_t i = j; i < num_unique_ && fill_matrix; ++i) {
-      if (!active_[i]) continue;
+    // The lower triangle only (blocks of the nodes at or after j in the order, whole diagonal
+    // blocks): every factor and solve here reads rows >= column.
+    for (std::int32_t qi = q; qi < num_unique_ && fill_matrix; ++qi) {
+      const std::int32_t i = perm_[qi];
+      if (!active_[i] || row_of_[i] < from_row) continue;
       const bool fi = mode_[i] == ContactMode::kFull3d;
       Eigen::Map<const Eigen::Matrix3d, 0, Eigen::OuterStride<>> Cij(
           Ccc_.data() + static_cast<std::ptrdiff_t>(3 * j) * ld + 3 * i, 3, 3, Eigen::OuterStride<>(ld));
@@ -658,6 +668,7 @@ bool ContactSolver::SolveActiveSet() noexcept {
   // A = G C_cc G^T, its lower triangle (all the Cholesky reads). With
   // every contact held and sticking (r = 3 u) that is C_cc as gathered, which the small solver
   // reads in place.
+  fac_valid_ = false;  // A_ gets another matrix
   const bool small = rows <= detail::kSmallSpdMax;
   const bool in_place = small && rows == 3 * num_unique_;
   const int r = AssembleHeld(!in_place);
@@ -682,19 +693,26 @@ bool ContactSolver::SolvePatchedSystem(bool refactor) noexcept {
   //   Phi y = sum_j (T^T + mu_k e n^T) f_j = F_t - mu_k F_n e = 0   (F_n = -n . sum f_j)
   // give the 2P x 2P system (Phi Z) s = -Phi z0. The columns of Z share A's factor.
   const int ld = 3 * options_.max_contacts;
-  const int r = AssembleHeld(refactor);
+  const int p0 = refactor ? ResumableRows() : 0;
+  const int r = AssembleHeld(refactor, p0);
   num_slipping_ = 0;
   for (std::int32_t j = 0; j < num_unique_; ++j) {
     const std::int32_t p = patch_of_[j];
     if (!active_[j] || p < 0 || mode_[j] != ContactMode::kFull3d || patch_state_[p].slipping) continue;
     for (int c = 0; c < 3; ++c) rhs_[row_of_[j] + c] += patch_in_[p].slide_m[c];
   }
-  if (r == 0) return true;
+  if (r == 0) {
+    fac_valid_ = false;
+    return true;
+  }
   if (refactor) {
     if (eps_m_per_N_ > 0.0) {
-      for (int k = 0; k < r; ++k) A_[static_cast<std::ptrdiff_t>(k) * ld + k] += eps_m_per_N_;
+      for (int k = p0; k < r; ++k) A_[static_cast<std::ptrdiff_t>(k) * ld + k] += eps_m_per_N_;
     }
-    if (!FactorSpd(A_.data(), r, ld)) return false;
+    fac_valid_ = false;
+    const bool ok = p0 > 0 ? detail::ResumeFactorSpd(A_.data(), r, ld, p0, detail::BestIsa()) : FactorSpd(A_.data(), r, ld);
+    if (!ok) return false;
+    RememberFactored();
   }
   // The slipping patches that hold a node in 3-D (a patch whose nodes all went frictionless
   // has no tangential force and no slide to find), each with its active nodes (members from
@@ -785,6 +803,34 @@ bool ContactSolver::SolvePatchedSystem(bool refactor) noexcept {
   return ForcesFromRows();
 }
 
+int ContactSolver::ResumableRows() const noexcept {
+  if (!fac_valid_ || detail::BestIsa() != detail::Isa::kAvx512) return 0;
+  int rows = 0;
+  std::int32_t k = 0;  // held nodes matched so far
+  for (std::int32_t q = 0; q < num_unique_ && k < fac_count_; ++q) {
+    const std::int32_t j = perm_[q];
+    if (!active_[j]) continue;
+    const bool full3d = mode_[j] == ContactMode::kFull3d;
+    if (fac_slot_[k] != slot_[j] || (fac_full3d_[k] != 0) != full3d) break;
+    if (!full3d && std::memcmp(fac_n_[k].data(), n_[j].data(), sizeof(double) * 3) != 0) break;
+    rows += full3d ? 3 : 1;
+    ++k;
+  }
+  return rows;
+}
+
+void ContactSolver::RememberFactored() noexcept {
+  fac_count_ = 0;
+  for (std::int32_t q = 0; q < num_unique_; ++q) {
+    const std::int32_t j = perm_[q];
+    if (!active_[j]) continue;
+    fac_slot_[fac_count_] = slot_[j];
+    fac_n_[fac_count_] = n_[j];
+    fac_full3d_[fac_count_++] = mode_[j] == ContactMode::kFull3d ? 1 : 0;
+  }
+  fac_valid_ = true;
+}
+
 Eigen::Vector2d ContactSolver::SlidOver(std::int32_t a) const noexcept {
   const std::int32_t p = slipping_list_[a];
   return tangent_[p].transpose() * patch_in_[p].slide_m - Eigen::Vector2d(slip_rhs_[2 * a], slip_rhs_[2 * a + 1]);
@@ -829,6 +875,30 @@ bool ContactSolver::SolveWithPatches(StepStatus& status) noexcept {
   for (std::int32_t j = 0; j < num_unique_; ++j) {
     active_[j] = 1;
     releases_[j] = 0;
+  }
+  // The held rows' order (perm_): the nodes of the factor in A_ (the last held set factored,
+  // this step's or an earlier one's) in its row order, then the new ones, where pivots mostly
+  // happen; so the first factor resumes after the rows of the nodes that stayed, and so does a
+  // refactor after a pivot.
+  {
+    std::int32_t q = 0;
+    if (fac_valid_) {
+      for (std::int32_t j = 0; j < num_unique_; ++j) index_of_slot_[slot_[j]] = j;
+      for (std::int32_t k = 0; k < fac_count_; ++k) {
+        const std::int32_t j = index_of_slot_[fac_slot_[k]];
+        if (j < 0 || in_perm_[j]) continue;
+        in_perm_[j] = 1;
+        perm_[q++] = j;
+      }
+      for (std::int32_t j = 0; j < num_unique_; ++j) index_of_slot_[slot_[j]] = -1;
+    }
+    for (std::int32_t j = 0; j < num_unique_; ++j) {
+      if (in_perm_[j]) {
+        in_perm_[j] = 0;
+      } else {
+        perm_[q++] = j;
+      }
+    }
   }
   // A fingertip that moved less than this along the surface this step is at rest: 1 mm/s at
   // 1 kHz, where a stroke is 10-100 um a step and a device's noise well under 1 um.

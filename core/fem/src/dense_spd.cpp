@@ -76,8 +76,29 @@ HS_AVX512 void UpdateRows(double* A, int ld, int j, int i0, int rows) noexcept {
   for (int q = 0; q < V; ++q) _mm512_mask_storeu_pd(cj + 8 * q, m[q], acc[q]);
 }
 
-HS_AVX512 bool FactorAvx512(double* A, int n, int ld) noexcept {
+// Columns [0, p0) are already factored down to row p0 (see ResumeFactorSpd): only their rows
+// from p0 on are computed, each from the same sums in the same order as a whole factor would.
+HS_AVX512 bool FactorAvx512(double* A, int n, int ld, int p0 = 0) noexcept {
   for (int j = 0; j < n; ++j) {
+    if (j < p0) {
+      double* cj = A + static_cast<std::ptrdiff_t>(j) * ld;
+      for (int i0 = p0; i0 < n; i0 += 32) {
+        const int rows = std::min(32, n - i0);
+        switch ((rows + 7) / 8) {
+          case 1: UpdateRows<1>(A, ld, j, i0, rows); break;
+          case 2: UpdateRows<2>(A, ld, j, i0, rows); break;
+          case 3: UpdateRows<3>(A, ld, j, i0, rows); break;
+          default: UpdateRows<4>(A, ld, j, i0, rows); break;
+        }
+      }
+      const __m512d inv = _mm512_set1_pd(1.0 / cj[j]);
+      for (int i = p0; i < n; i += 8) {
+        const __mmask8 m = Lanes(n, i);
+        double* p = cj + i;
+        _mm512_mask_storeu_pd(p, m, _mm512_mul_pd(_mm512_maskz_loadu_pd(m, p), inv));
+      }
+      continue;
+    }
     for (int i0 = j; i0 < n; i0 += 32) {
       const int rows = std::min(32, n - i0);
       switch ((rows + 7) / 8) {
@@ -163,6 +184,11 @@ bool FactorSpd(double* A, int n, int ld, Isa isa) noexcept {
   // The AVX-512 kernel checks each pivot before its square root; every entry of L reaches a
   // later pivot, so a non-finite one fails there too.
   return isa == Isa::kAvx512 ? FactorAvx512(A, n, ld) : FactorEigen(A, n, ld);
+}
+
+bool ResumeFactorSpd(double* A, int n, int ld, int p0, Isa isa) noexcept {
+  if (isa != Isa::kAvx512 || p0 < 0 || p0 > n) return false;
+  return FactorAvx512(A, n, ld, p0);
 }
 
 void SolveFactoredSpd(const double* L, int n, int ld, double* B, int nrhs, int ldb, Isa isa) noexcept {

@@ -23,6 +23,15 @@ namespace handshare::fem::detail {
 /// False unless A is numerically positive definite with a finite factor.
 bool FactorSpd(double* A, int n, int ld, Isa isa) noexcept;
 
+/// FactorSpd of a matrix whose leading p0 x p0 block is that of one factored before: A's columns
+/// [0, p0) hold that factor in their rows [0, p0), everything else in the lower triangle holds
+/// the new matrix. Fills in the rest of L: bit for bit what FactorSpd would make of the whole
+/// matrix (the left-looking order computes every entry from the same sums either way), at the
+/// cost of the rows from p0 on. Held-set pivots that change only the last rows refactor this
+/// way. AVX-512 only: false without it (A untouched; the caller assembles and factors it whole),
+/// or, as FactorSpd, when the matrix is not numerically positive definite.
+bool ResumeFactorSpd(double* A, int n, int ld, int p0, Isa isa) noexcept;
+
 /// B = (L L^T)^-1 B for the nrhs columns of B (leading dimension ldb), L from FactorSpd. With
 /// AVX-512, the columns are solved eight at a time, one per lane.
 void SolveFactoredSpd(const double* L, int n, int ld, double* B, int nrhs, int ldb, Isa isa) noexcept;

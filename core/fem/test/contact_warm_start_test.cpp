@@ -5,6 +5,8 @@
 // patches (nodes entering and leaving every few steps, fingers lifting off, a NaN step and a
 // sticking step in between) against a fresh solver per step and against the contact conditions
 // themselves (displacements through Displacements(), an independent path over the blocks).
+// With friction patches it keeps the factor of its last held set, resumed after the rows that
+// stayed: checked against a fresh solver per step too.
 
 #include <gtest/gtest.h>
 
@@ -149,6 +151,61 @@ TEST(ContactWarmStart, EveryStepSatisfiesTheContactConditions) {
     }
   }
   EXPECT_GT(checked, 5000);
+}
+
+// With friction patches the solver keeps the factor of its last held set between steps and
+// resumes the next factor after the rows of the nodes that stayed (ResumeFactorSpd; the rows
+// are ordered for it). That must not change the answer: the same five patches, held in 3-D with
+// a stick that strokes each fingertip's way (some patches stick, some slip, rims are released),
+// against a new solver per step, which factors every held set whole in node order. Tolerance
+// 1e-9 of the largest force (another row order: round-off only).
+TEST(ContactWarmStart, FrictionPatchesWithAKeptFactorMatchAFreshSolvePerStep) {
+  const Plate& p = TopPlate();
+  const ContactSolverOptions opt{.max_contacts = 160, .push_only = true, .max_friction_patches = 5};
+  ContactSolver kept(p.c, opt);
+  std::vector<ContactInput> buf(64);
+  int compared = 0, slipping = 0, sticking = 0;
+  for (int step = 0; step < 300; ++step) {
+    std::vector<ContactInput> in;
+    std::vector<FrictionPatch> patches;
+    const double t = 1e-3 * step;
+    for (int f = 0; f < 5; ++f) {
+      const double ang = (4.0 + f) * t + 1.2566 * f;
+      const double rad = 0.008 + 0.003 * f;
+      const Eigen::Vector3d c(0.03 + rad * std::cos(ang), 0.03 + rad * std::sin(ang), 0.02);
+      const double depth = 0.00085 + 0.00115 * std::sin(20.0 * t + f);
+      const PatchResult r = p.finder->Sphere(c, Eigen::Vector3d::UnitZ(), kR, depth, ContactMode::kNormalOnly, buf);
+      if (r.count == 0) continue;
+      const auto patch = static_cast<std::int32_t>(patches.size());
+      for (std::int32_t k = 0; k < r.count; ++k) {
+        ContactInput q = buf[static_cast<std::size_t>(k)];
+        q.patch = patch;
+        in.push_back(q);
+      }
+      // The stick grows along the stroke (0.1-0.6 mm: some patches stick, some slip).
+      const Eigen::Vector3d along(-std::sin(ang), std::cos(ang), 0.0);
+      const double stick = 1e-4 * (1.0 + f) * (1.0 + std::sin(7.0 * t + f));
+      patches.push_back({Eigen::Vector3d::UnitZ(), stick * along, 0.8, 0.6, step % 3 == f % 3, 2e-5 * along});
+    }
+    ContactSolver fresh(p.c, opt);
+    const StepStatus sk = kept.Solve(in, patches);
+    const StepStatus sf = fresh.Solve(in, patches);
+    ASSERT_EQ(sk, sf) << "step " << step;
+    if (in.empty()) continue;
+    ASSERT_EQ(sk, StepStatus::kOk) << "step " << step;
+    ++compared;
+    const double scale = std::max(MaxForce(fresh), 1e-12);
+    for (std::size_t i = 0; i < in.size(); ++i) {
+      ASSERT_LE((kept.forces_N()[i] - fresh.forces_N()[i]).norm(), 1e-9 * scale) << "step " << step << " contact " << i;
+    }
+    for (std::size_t a = 0; a < patches.size(); ++a) {
+      ASSERT_EQ(kept.patch_states()[a].slipping, fresh.patch_states()[a].slipping) << "step " << step << " patch " << a;
+      (fresh.patch_states()[a].slipping ? slipping : sticking) += 1;
+    }
+  }
+  EXPECT_GT(compared, 250);
+  EXPECT_GT(slipping, 50);  // both regimes were exercised
+  EXPECT_GT(sticking, 50);
 }
 
 }  // namespace

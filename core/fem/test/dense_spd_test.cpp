@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstring>
 #include <limits>
 #include <random>
 #include <vector>
@@ -95,6 +96,62 @@ TEST(DenseSpd, RejectsIndefiniteAndNonFiniteInput) {
       }
     }
   }
+}
+
+// A factor resumed after the rows from p0 changed (ResumeFactorSpd) is bit for bit the factor of
+// the whole new matrix: its leading p0 x p0 block is the old one's, the rows below are new (a
+// held-set pivot that releases or adds the last nodes' rows). Sizes up to 100 with p0 from 0 to
+// n, leading dimensions above n, NaN in the upper triangle; without AVX-512 it declines.
+TEST(DenseSpd, AResumedFactorIsTheWholeFactorBitForBit) {
+  std::mt19937 rng(23);
+  std::normal_distribution<double> g;
+  bool ran = false;
+  for (Isa isa : IsasToTest()) {
+    for (int n : {1, 5, 9, 17, 33, 41, 54, 70, 100}) {
+      for (int p0 : {0, 1, n / 3, n / 2, n - 3, n - 1, n}) {
+        if (p0 < 0 || p0 > n) continue;
+        const int ld = n + 3;
+        const Eigen::MatrixXd A = RandomSpd(n, rng);
+        // The new matrix: the same leading block, other rows below it, SPD by construction
+        // (its Schur complement onto the trailing rows is a random SPD matrix).
+        const int t = n - p0;
+        Eigen::MatrixXd B(n, n);
+        const Eigen::MatrixXd A11 = A.topLeftCorner(p0, p0);
+        Eigen::MatrixXd B21(t, p0);
+        for (int i = 0; i < t; ++i)
+          for (int j = 0; j < p0; ++j) B21(i, j) = 0.3 * g(rng);
+        B.topLeftCorner(p0, p0) = A11;
+        B.bottomLeftCorner(t, p0) = B21;
+        B.topRightCorner(p0, t) = B21.transpose();
+        Eigen::MatrixXd S = t > 0 ? RandomSpd(t, rng) : Eigen::MatrixXd(0, 0);
+        if (p0 > 0 && t > 0) S += B21 * A11.llt().solve(B21.transpose());
+        B.bottomRightCorner(t, t) = 0.5 * (S + S.transpose());
+        std::vector<double> resumed = LowerInBuffer(A, ld);
+        const bool avx = isa == Isa::kAvx512;
+        ASSERT_TRUE(FactorSpd(resumed.data(), n, ld, isa));
+        // B's rows from p0 on, over the old factor's leading columns' rows below p0.
+        for (int j = 0; j < n; ++j)
+          for (int i = std::max(j, p0); i < n; ++i) resumed[static_cast<std::size_t>(j) * ld + i] = B(i, j);
+        const std::vector<double> before = resumed;
+        const bool ok = ResumeFactorSpd(resumed.data(), n, ld, p0, isa);
+        std::vector<double> whole = LowerInBuffer(B, ld);
+        ASSERT_TRUE(FactorSpd(whole.data(), n, ld, isa));
+        if (!avx) {
+          EXPECT_FALSE(ok);
+          EXPECT_EQ(0, std::memcmp(before.data(), resumed.data(), sizeof(double) * before.size()));
+          continue;
+        }
+        ran = true;
+        ASSERT_TRUE(ok) << "n=" << n << " p0=" << p0;
+        for (std::size_t k = 0; k < whole.size(); ++k) {
+          const double a = resumed[k], b = whole[k];
+          ASSERT_TRUE((std::isnan(a) && std::isnan(b)) || std::memcmp(&a, &b, sizeof a) == 0)
+              << "n=" << n << " p0=" << p0 << " entry " << k << ": " << a << " against " << b;
+        }
+      }
+    }
+  }
+  if (!ran) GTEST_SKIP() << "no AVX-512 here: the resumed factor is declined (checked above)";
 }
 
 }  // namespace

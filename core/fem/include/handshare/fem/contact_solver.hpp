@@ -187,9 +187,14 @@ class ContactSolver {
 
  private:
   bool SolveActiveSet() noexcept;
-  // Fills rhs_ = G d* and row_of_ for the held contacts and, with fill_matrix, A_ = G C_cc G^T
-  // (all of it); returns the row count.
-  int AssembleHeld(bool fill_matrix) noexcept;
+  // Fills rhs_ = G d* and row_of_ for the held contacts, rows in the order perm_ lists the nodes,
+  // and, with fill_matrix, A_ = G C_cc G^T (its lower triangle; only the rows from from_row on,
+  // for a factor resumed there); returns the row count.
+  int AssembleHeld(bool fill_matrix, int from_row = 0) noexcept;
+  // The rows of the held set (in perm_ order, with their modes) that are those of the factor in
+  // A_ (fac_*), so that a refactor resumes after them; 0 where none are, or it cannot resume.
+  int ResumableRows() const noexcept;
+  void RememberFactored() noexcept;
   // f_N_ of the held contacts from the solved rows in rhs_; false if one is not finite.
   bool ForcesFromRows() noexcept;
   // Push-only or not, with the friction patches (every patch node held in 3-D). Returns false on
@@ -267,6 +272,20 @@ class ContactSolver {
   // The previous Solve()'s distinct nodes and which were held (warm start).
   std::vector<std::int32_t> prev_slot_;
   std::vector<std::uint8_t> prev_active_;
+  // The order of the held rows (node indices): identity, except with friction patches, where the
+  // nodes of the factor in A_ come first, in its row order, and the others (new ones) after
+  // them. A factor's rows are those of the held set that stayed, then the ones a pivot changed,
+  // so a refactor after the next pivot, or the next step's first factor, resumes after the rows
+  // that stayed (ResumeFactorSpd): their block of G C_cc G^T is the same numbers (the same
+  // compliance blocks, normals and regularization). fac_*: the held nodes of the factor in A_
+  // in row order, by compliance slot, whether in 3-D, and the normal of the others.
+  std::vector<std::int32_t> perm_;
+  std::vector<std::uint8_t> in_perm_;
+  std::vector<std::int32_t> fac_slot_;
+  std::vector<std::uint8_t> fac_full3d_;
+  std::vector<Eigen::Vector3d> fac_n_;
+  std::int32_t fac_count_ = 0;
+  bool fac_valid_ = false;
   std::vector<std::int32_t> prev_index_;  // per distinct node: its index in the previous Solve()
   // Block table of the scalar path: C_ab of table positions a <= b (packed, 3x3 column-major
   // each); the position of each distinct node, of the previous Solve()'s nodes, free positions.
