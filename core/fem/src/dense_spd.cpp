@@ -76,50 +76,44 @@ HS_AVX512 void UpdateRows(double* A, int ld, int j, int i0, int rows) noexcept {
   for (int q = 0; q < V; ++q) _mm512_mask_storeu_pd(cj + 8 * q, m[q], acc[q]);
 }
 
+// Column j's rows [from, n) less the columns to its left (UpdateRows, 32 rows at a time).
+HS_AVX512 void UpdateColumn(double* A, int n, int ld, int j, int from) noexcept {
+  for (int i0 = from; i0 < n; i0 += 32) {
+    const int rows = std::min(32, n - i0);
+    switch ((rows + 7) / 8) {
+      case 1: UpdateRows<1>(A, ld, j, i0, rows); break;
+      case 2: UpdateRows<2>(A, ld, j, i0, rows); break;
+      case 3: UpdateRows<3>(A, ld, j, i0, rows); break;
+      default: UpdateRows<4>(A, ld, j, i0, rows); break;
+    }
+  }
+}
+
+// Rows [begin, end) of a column times 1 / L[j,j].
+HS_AVX512 void ScaleRows(double* c, int begin, int end, double ljj) noexcept {
+  const __m512d inv = _mm512_set1_pd(1.0 / ljj);
+  for (int i = begin; i < end; i += 8) {
+    const __mmask8 m = Lanes(end - begin, i - begin);
+    _mm512_mask_storeu_pd(c + i, m, _mm512_mul_pd(_mm512_maskz_loadu_pd(m, c + i), inv));
+  }
+}
+
 // Columns [0, p0) are already factored down to row p0 (see ResumeFactorSpd): only their rows
 // from p0 on are computed, each from the same sums in the same order as a whole factor would.
 HS_AVX512 bool FactorAvx512(double* A, int n, int ld, int p0 = 0) noexcept {
   for (int j = 0; j < n; ++j) {
+    double* cj = A + static_cast<std::ptrdiff_t>(j) * ld;
     if (j < p0) {
-      double* cj = A + static_cast<std::ptrdiff_t>(j) * ld;
-      for (int i0 = p0; i0 < n; i0 += 32) {
-        const int rows = std::min(32, n - i0);
-        switch ((rows + 7) / 8) {
-          case 1: UpdateRows<1>(A, ld, j, i0, rows); break;
-          case 2: UpdateRows<2>(A, ld, j, i0, rows); break;
-          case 3: UpdateRows<3>(A, ld, j, i0, rows); break;
-          default: UpdateRows<4>(A, ld, j, i0, rows); break;
-        }
-      }
-      const __m512d inv = _mm512_set1_pd(1.0 / cj[j]);
-      for (int i = p0; i < n; i += 8) {
-        const __mmask8 m = Lanes(n, i);
-        double* p = cj + i;
-        _mm512_mask_storeu_pd(p, m, _mm512_mul_pd(_mm512_maskz_loadu_pd(m, p), inv));
-      }
+      UpdateColumn(A, n, ld, j, p0);
+      ScaleRows(cj, p0, n, cj[j]);
       continue;
     }
-    for (int i0 = j; i0 < n; i0 += 32) {
-      const int rows = std::min(32, n - i0);
-      switch ((rows + 7) / 8) {
-        case 1: UpdateRows<1>(A, ld, j, i0, rows); break;
-        case 2: UpdateRows<2>(A, ld, j, i0, rows); break;
-        case 3: UpdateRows<3>(A, ld, j, i0, rows); break;
-        default: UpdateRows<4>(A, ld, j, i0, rows); break;
-      }
-    }
-    double* cj = A + static_cast<std::ptrdiff_t>(j) * ld;
+    UpdateColumn(A, n, ld, j, j);
     const double d = cj[j];
     if (!(d > 0.0) || !std::isfinite(d)) return false;
     const double s = std::sqrt(d);
     cj[j] = s;
-    const __m512d inv = _mm512_set1_pd(1.0 / s);
-    const int below = n - j - 1;
-    for (int i = 0; i < below; i += 8) {
-      const __mmask8 m = Lanes(below, i);
-      double* p = cj + j + 1 + i;
-      _mm512_mask_storeu_pd(p, m, _mm512_mul_pd(_mm512_maskz_loadu_pd(m, p), inv));
-    }
+    ScaleRows(cj, j + 1, n, s);
   }
   return true;
 }
