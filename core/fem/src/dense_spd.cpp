@@ -77,7 +77,7 @@ HS_AVX512 void UpdateRows(double* A, int ld, int j, int i0, int rows) noexcept {
 }
 
 // Column j's rows [from, n) less the columns to its left (UpdateRows, 32 rows at a time).
-HS_AVX512 void UpdateColumn(double* A, int n, int ld, int j, int from) noexcept {
+HS_AVX512 __attribute__((always_inline)) inline void UpdateColumn(double* A, int n, int ld, int j, int from) noexcept {
   for (int i0 = from; i0 < n; i0 += 32) {
     const int rows = std::min(32, n - i0);
     switch ((rows + 7) / 8) {
@@ -90,7 +90,7 @@ HS_AVX512 void UpdateColumn(double* A, int n, int ld, int j, int from) noexcept 
 }
 
 // Rows [begin, end) of a column times 1 / L[j,j].
-HS_AVX512 void ScaleRows(double* c, int begin, int end, double ljj) noexcept {
+HS_AVX512 __attribute__((always_inline)) inline void ScaleRows(double* c, int begin, int end, double ljj) noexcept {
   const __m512d inv = _mm512_set1_pd(1.0 / ljj);
   for (int i = begin; i < end; i += 8) {
     const __mmask8 m = Lanes(end - begin, i - begin);
