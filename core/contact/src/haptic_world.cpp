@@ -528,16 +528,30 @@ void HapticWorld::StepDeformable(Object& o, std::span<const RemoteContact> remot
   const double R = config_.fingertip_radius_m;
   const auto cap = static_cast<std::int32_t>(o.inputs.size());
   std::int32_t m = 0;
+  // With a memo (a remote contact's), the patch is copied from it while its query is bit for bit
+  // the same, and found and kept in it otherwise.
   auto add_patch = [&](const Eigen::Vector3d& p_O, const Eigen::Vector3d& n_O, double depth,
-                       std::int32_t& count, bool& truncated) {
+                       std::int32_t& count, bool& truncated, Object::PatchMemo* memo = nullptr,
+                       fem::ContactInput* kept = nullptr) {
     count = 0;
     const std::int32_t room = std::min(o.max_patch, cap - m);
     if (room <= 0 || !(depth > 0.0)) return;
+    if (memo != nullptr && memo->room == room && memo->depth_m == depth && memo->p_O_m == p_O && memo->n_O == n_O) {
+      std::copy(kept, kept + memo->count, o.inputs.begin() + m);
+      count = memo->count;
+      truncated = memo->truncated;
+      m += count;
+      return;
+    }
     const fem::PatchResult pr =
         o.patches->Sphere(p_O, n_O, R, depth, fem::ContactMode::kNormalOnly,
                           std::span<fem::ContactInput>(o.inputs.data() + m, static_cast<std::size_t>(room)));
     count = pr.count;
     truncated = pr.truncated;
+    if (memo != nullptr) {
+      std::copy(o.inputs.begin() + m, o.inputs.begin() + m + count, kept);
+      *memo = Object::PatchMemo{p_O, n_O, depth, room, count, truncated};
+    }
     m += pr.count;
   };
   // Local fingers: the patch under each proxy, pressed to the proxy's depth. With friction the
@@ -622,24 +636,10 @@ void HapticWorld::StepDeformable(Object& o, std::span<const RemoteContact> remot
     std::int32_t count = 0;
     bool trunc = false;
     const std::int32_t begin = m;
-    const Eigen::Vector3d center_O = X_OW * rc.p_WC_m - (sticks ? stick_O : Eigen::Vector3d::Zero());
-    if (r < kMaxRemoteForces) {
-      Object::PatchMemo& memo = o.remote_memo[r];
-      fem::ContactInput* kept = o.remote_memo_inputs.data() + r * static_cast<std::size_t>(o.max_patch);
-      const std::int32_t room = std::min(o.max_patch, cap - m);
-      if (memo.room == room && memo.depth_m == depth && memo.p_O_m == center_O && memo.n_O == n_O) {
-        std::copy(kept, kept + memo.count, o.inputs.begin() + m);
-        count = memo.count;
-        trunc = memo.truncated;
-        m += count;
-      } else {
-        add_patch(center_O, n_O, depth, count, trunc);
-        std::copy(o.inputs.begin() + begin, o.inputs.begin() + m, kept);
-        memo = Object::PatchMemo{center_O, n_O, depth, room, count, trunc};
-      }
-    } else {
-      add_patch(center_O, n_O, depth, count, trunc);
-    }
+    const bool memo = r < kMaxRemoteForces;
+    add_patch(X_OW * rc.p_WC_m - (sticks ? stick_O : Eigen::Vector3d::Zero()), n_O, depth, count, trunc,
+              memo ? &o.remote_memo[r] : nullptr,
+              memo ? o.remote_memo_inputs.data() + r * static_cast<std::size_t>(o.max_patch) : nullptr);
     if (r < kMaxRemoteForces) remote_patch[r] = {begin, count};
     if (!sticks || count == 0) continue;
     for (std::int32_t q = 0; q < count; ++q) o.inputs[static_cast<std::size_t>(begin + q)].patch = num_friction;
