@@ -5,6 +5,10 @@
 #include <cstring>
 #include <limits>
 
+#if defined(__x86_64__)
+#include <immintrin.h>
+#endif
+
 #include <Eigen/Dense>
 
 #include "handshare/contact/geometry.hpp"
@@ -27,6 +31,12 @@ constexpr double kSameNormal = 1e-9;
 constexpr double kPlaneSlack_m = 1e-10;
 // Gathers reach this many skins beyond R + skin (features about to enter the touch band).
 constexpr double kGatherMarginSkins = 4.0;
+// A neighbourhood reaches this far beyond the gather that made it [m]: the next gathers of a
+// proxy moving up to this far (a few steps of a fingertip at speed) are served from it.
+constexpr double kNeighbourSlack_m = 2e-3;
+// Slack of the neighbourhood's containment and sphere tests [m]: far above the round-off of
+// distances at these sizes (1e-17 m), far below anything they decide.
+constexpr double kNeighbourRoundoff_m = 1e-9;
 
 // DiscDistanceBound2 for every point of the segment x + s d, s in [0, 1], with plane distances h0
 // at x and h1 at x + d: the smallest |h| on it, and the foot of the segment nearest to the
@@ -46,7 +56,140 @@ inline double SegmentDiscBound2(const Eigen::Vector4d& plane, const Eigen::Vecto
 }  // namespace
 
 ProxySolver::ProxySolver(std::int32_t max_candidates)
-    : candidates_(static_cast<std::size_t>(std::max<std::int32_t>(max_candidates, 1))), ends_(kEndEntries) {}
+    : candidates_(static_cast<std::size_t>(std::max<std::int32_t>(max_candidates, 1))), ends_(kEndEntries) {
+  for (Neighbourhood& h : hoods_) {
+    for (auto& v : h.soa) v.resize(candidates_.size());
+    h.ids.resize(candidates_.size());
+  }
+}
+
+namespace {
+// The segment cull of a neighbourhood's triangles (SegmentDiscBound2 against lim), written to
+// keep: out[k] = ids[i] for each triangle kept. Keeps every triangle whose plane-and-disc bound
+// is not beyond lim (a NaN one too: every comparison below is false for it).
+std::int32_t CullScalar(const std::array<const double*, 8>& q, const std::int32_t* ids, std::int32_t n,
+                        const Eigen::Vector3d& x, const Eigen::Vector3d& d, double lim, std::int32_t* out) noexcept {
+  std::int32_t k = 0;
+  for (std::int32_t i = 0; i < n; ++i) {
+    const Eigen::Vector4d plane(q[0][i], q[1][i], q[2][i], q[3][i]);
+    const Eigen::Vector4d disc(q[4][i], q[5][i], q[6][i], q[7][i]);
+    const double h0 = PlaneDistance(plane, x);
+    const double h1 = h0 + (plane.x() * d.x() + plane.y() * d.y() + plane.z() * d.z());
+    out[k] = ids[i];
+    const bool beyond = (h0 > lim && h1 > lim) || (h0 < -lim && h1 < -lim) ||
+                        SegmentDiscBound2(plane, disc, x, d, h0, h1) > lim * lim;
+    k += !beyond;
+  }
+  return k;
+}
+
+#if defined(__x86_64__)
+#define HS_AVX512_CULL __attribute__((target("avx512f,avx512vl,fma")))
+// GCC 12 reads the intrinsics' unspecified pass-through operand (_mm512_undefined_pd) as
+// possibly uninitialised; it is never read.
+#pragma GCC diagnostic push
+#pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
+#pragma GCC diagnostic ignored "-Wuninitialized"
+// CullScalar eight triangles at a time (the same bound; its round-off differs from the scalar
+// one's by far less than the slack the caller adds to lim).
+HS_AVX512_CULL std::int32_t CullAvx512(const std::array<const double*, 8>& q, const std::int32_t* ids,
+                                       std::int32_t n, const Eigen::Vector3d& x, const Eigen::Vector3d& d,
+                                       double lim, std::int32_t* out) noexcept {
+  const __m512d xx = _mm512_set1_pd(x.x()), xy = _mm512_set1_pd(x.y()), xz = _mm512_set1_pd(x.z());
+  const __m512d dx = _mm512_set1_pd(d.x()), dy = _mm512_set1_pd(d.y()), dz = _mm512_set1_pd(d.z());
+  const __m512d vlim = _mm512_set1_pd(lim), vnlim = _mm512_set1_pd(-lim), vlim2 = _mm512_set1_pd(lim * lim);
+  const __m512d zero = _mm512_setzero_pd(), one = _mm512_set1_pd(1.0);
+  std::int32_t k = 0;
+  for (std::int32_t i = 0; i < n; i += 8) {
+    const __mmask8 live = static_cast<__mmask8>(n - i >= 8 ? 0xFF : (1u << (n - i)) - 1u);
+    const __m512d nx = _mm512_maskz_loadu_pd(live, q[0] + i), ny = _mm512_maskz_loadu_pd(live, q[1] + i);
+    const __m512d nz = _mm512_maskz_loadu_pd(live, q[2] + i), w = _mm512_maskz_loadu_pd(live, q[3] + i);
+    const __m512d cx = _mm512_maskz_loadu_pd(live, q[4] + i), cy = _mm512_maskz_loadu_pd(live, q[5] + i);
+    const __m512d cz = _mm512_maskz_loadu_pd(live, q[6] + i), cr = _mm512_maskz_loadu_pd(live, q[7] + i);
+    const __m512d h0 = _mm512_sub_pd(_mm512_fmadd_pd(nz, xz, _mm512_fmadd_pd(ny, xy, _mm512_mul_pd(nx, xx))), w);
+    const __m512d dh = _mm512_fmadd_pd(nz, dz, _mm512_fmadd_pd(ny, dy, _mm512_mul_pd(nx, dx)));
+    const __m512d h1 = _mm512_add_pd(h0, dh);
+    // Plane beyond on one side at both ends.
+    const __mmask8 above = _mm512_cmp_pd_mask(h0, vlim, _CMP_GT_OQ) & _mm512_cmp_pd_mask(h1, vlim, _CMP_GT_OQ);
+    const __mmask8 below = _mm512_cmp_pd_mask(h0, vnlim, _CMP_LT_OQ) & _mm512_cmp_pd_mask(h1, vnlim, _CMP_LT_OQ);
+    // Smallest |h| on the segment (0 where it crosses the plane).
+    const __mmask8 cross = _mm512_cmp_pd_mask(h0, zero, _CMP_GT_OQ) ^ _mm512_cmp_pd_mask(h1, zero, _CMP_GT_OQ);
+    const __m512d h = _mm512_maskz_min_pd(static_cast<__mmask8>(~cross), _mm512_abs_pd(h0), _mm512_abs_pd(h1));
+    // The segment's foot in the plane and the disc's centre relative to it.
+    const __m512d fx = _mm512_fnmadd_pd(h0, nx, xx), fy = _mm512_fnmadd_pd(h0, ny, xy), fz = _mm512_fnmadd_pd(h0, nz, xz);
+    const __m512d ax = _mm512_fnmadd_pd(dh, nx, dx), ay = _mm512_fnmadd_pd(dh, ny, dy), az = _mm512_fnmadd_pd(dh, nz, dz);
+    const __m512d tx = _mm512_sub_pd(cx, fx), ty = _mm512_sub_pd(cy, fy), tz = _mm512_sub_pd(cz, fz);
+    const __m512d a2 = _mm512_fmadd_pd(az, az, _mm512_fmadd_pd(ay, ay, _mm512_mul_pd(ax, ax)));
+    const __m512d ta = _mm512_fmadd_pd(tz, az, _mm512_fmadd_pd(ty, ay, _mm512_mul_pd(tx, ax)));
+    const __mmask8 moving = _mm512_cmp_pd_mask(a2, zero, _CMP_GT_OQ);
+    const __m512d s = _mm512_min_pd(_mm512_max_pd(_mm512_maskz_div_pd(moving, ta, a2), zero), one);
+    const __m512d lx = _mm512_fnmadd_pd(s, ax, tx), ly = _mm512_fnmadd_pd(s, ay, ty), lz = _mm512_fnmadd_pd(s, az, tz);
+    const __m512d l = _mm512_sqrt_pd(_mm512_fmadd_pd(lz, lz, _mm512_fmadd_pd(ly, ly, _mm512_mul_pd(lx, lx))));
+    const __m512d lat = _mm512_max_pd(_mm512_sub_pd(l, cr), zero);
+    const __m512d b2 = _mm512_fmadd_pd(lat, lat, _mm512_mul_pd(h, h));
+    const __mmask8 far = _mm512_cmp_pd_mask(b2, vlim2, _CMP_GT_OQ);
+    const __mmask8 keep = static_cast<__mmask8>(live & ~(above | below | far));
+    const __m256i vid = _mm256_maskz_loadu_epi32(live, ids + i);
+    _mm256_mask_compressstoreu_epi32(out + k, keep, vid);
+    k += __builtin_popcount(keep);
+  }
+  return k;
+}
+#pragma GCC diagnostic pop
+#endif
+
+std::int32_t Cull(const std::array<const double*, 8>& q, const std::int32_t* ids, std::int32_t n,
+                  const Eigen::Vector3d& x, const Eigen::Vector3d& d, double lim, std::int32_t* out,
+                  bool vector) noexcept {
+#if defined(__x86_64__)
+  static const bool avx512 = __builtin_cpu_supports("avx512f") && __builtin_cpu_supports("avx512vl");
+  if (vector && avx512) return CullAvx512(q, ids, n, x, d, lim, out);
+#endif
+  return CullScalar(q, ids, n, x, d, lim, out);
+}
+}  // namespace
+
+bool ProxySolver::GatherFromNeighbourhood(const MeshCollider& collider, const Eigen::Vector3d& x,
+                                          const Eigen::Vector3d& d, double r) noexcept {
+  const Eigen::Vector3d c = x + 0.5 * d;
+  const double r_ball = 0.5 * d.norm() + r;
+  for (Neighbourhood& h : hoods_) {
+    if (h.collider_id != collider.id() || !((c - h.c).norm() + r_ball <= h.r - kNeighbourRoundoff_m)) continue;
+    h.used = ++hood_clock_;
+    std::array<const double*, 8> q{};
+    for (std::size_t a = 0; a < q.size(); ++a) q[a] = h.soa[a].data();
+    num_candidates_ = Cull(q, h.ids.data(), h.n, x, d, r + kNeighbourRoundoff_m, candidates_.data(), vector_cull_);
+    last_gather_truncated_ = false;
+    return true;
+  }
+  return false;
+}
+
+bool ProxySolver::FillNeighbourhood(const MeshCollider& collider, const Eigen::Vector3d& c, double r) noexcept {
+  Neighbourhood* h = &hoods_[0];
+  for (Neighbourhood& q : hoods_) {
+    if (q.used < h->used) h = &q;
+  }
+  h->collider_id = 0;
+  const std::int32_t cap = std::min<std::int32_t>(static_cast<std::int32_t>(h->ids.size()), collider.max_candidates());
+  const BallQueryResult q =
+      collider.QueryBall(c, r + kNeighbourSlack_m, std::span<std::int32_t>(h->ids.data(), static_cast<std::size_t>(cap)));
+  if (q.truncated) return false;
+  for (std::int32_t i = 0; i < q.count; ++i) {
+    const std::int32_t t = h->ids[static_cast<std::size_t>(i)];
+    const auto u = static_cast<std::size_t>(i);
+    for (int a = 0; a < 4; ++a) {
+      h->soa[static_cast<std::size_t>(a)][u] = collider.triangle_plane(t)[a];
+      h->soa[static_cast<std::size_t>(a + 4)][u] = collider.triangle_disc(t)[a];
+    }
+  }
+  h->collider_id = collider.id();
+  h->c = c;
+  h->r = r + kNeighbourSlack_m;
+  h->n = q.count;
+  h->used = ++hood_clock_;
+  return true;
+}
 
 std::size_t ProxySolver::EndSlot(const Eigen::Vector3d& x) noexcept {
   std::uint64_t h = 0;
@@ -58,8 +201,14 @@ std::size_t ProxySolver::EndSlot(const Eigen::Vector3d& x) noexcept {
   return static_cast<std::size_t>(h >> 58) % kEndEntries;
 }
 
-bool ProxySolver::Gather(MeshCollider& collider, const Eigen::Vector3d& center,
-                         double radius) noexcept {
+bool ProxySolver::Gather(MeshCollider& collider, const Eigen::Vector3d& x, const Eigen::Vector3d& d,
+                         double r_m) noexcept {
+  const Eigen::Vector3d center = x + 0.5 * d;
+  const double radius = 0.5 * d.norm() + r_m;
+  if (!reference_ && (GatherFromNeighbourhood(collider, x, d, r_m) ||
+                      (FillNeighbourhood(collider, center, radius) && GatherFromNeighbourhood(collider, x, d, r_m)))) {
+    return num_candidates_ > 0;
+  }
   const std::int32_t cap = std::min<std::int32_t>(static_cast<std::int32_t>(candidates_.size()),
                                                   collider.max_candidates());
   const std::span<std::int32_t> ids(candidates_.data(), static_cast<std::size_t>(cap));
@@ -137,7 +286,7 @@ bool ProxySolver::Site::Is(const MeshCollider& collider, const ProxyParams& para
 
 int ProxySolver::ConstraintsAt(MeshCollider& collider, const ProxyParams& params, const Eigen::Vector3d& x) noexcept {
   if (!reference_ && cons_site_.Is(collider, params, x)) return cons_m_;
-  Gather(collider, x, params.radius_m + params.skin_m + kGatherMarginSkins * params.skin_m);
+  Gather(collider, x, Eigen::Vector3d::Zero(), params.radius_m + params.skin_m + kGatherMarginSkins * params.skin_m);
   return CollectConstraints(collider, params, x);
 }
 
@@ -245,7 +394,7 @@ Eigen::Vector3d ProxySolver::MoveFrom(MeshCollider& collider, const ProxyParams&
     // Sweep against every triangle near the segment (the ball around it covers all points
     // within R + skin of it); no triangle: free motion.
     double s = 2.0;
-    if (Gather(collider, x + 0.5 * d, 0.5 * d.norm() + Rs + margin)) {
+    if (Gather(collider, x, d, Rs + margin)) {
       // A triangle whose plane stays farther than Rs from both ends of the segment, on one side,
       // is farther than Rs from every point of it: no touch in [0, 1] (the exact sweep could
       // only return a root beyond 1, and only min(s, 1) is used), so it is skipped.

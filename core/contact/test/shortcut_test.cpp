@@ -243,13 +243,15 @@ TEST(Shortcuts, CompactTreeWalkReturnsTheObbWalksTrianglesInTheSameOrder) {
 
 // Random fingertip paths (sliding, pressing, diving through, jumping) with friction, two fingers
 // on each of two meshes served by one solver in turn (as HapticWorld does): every Step's contact
-// and proxy state equal the reference path's exactly.
+// and proxy state equal the reference path's exactly, with the neighbourhoods culled eight
+// triangles at a time (where the processor has AVX-512) and one at a time.
 TEST(Shortcuts, ProxyStepsEqualTheExactPathOnRandomPaths) {
   const std::shared_ptr<const TriMesh> meshes[] = {std::make_shared<const TriMesh>(MakeBumpySphere(0.05, 0.003, 5)),
                                                    WavyPlate()};
   MeshCollider colliders[] = {MeshCollider(meshes[0], 512), MeshCollider(meshes[1], 512)};
-  ProxySolver fast(512), ref(512);
+  ProxySolver fast(512), ref(512), scalar(512);
   ref.set_reference_path(true);
+  scalar.set_vector_cull(false);
   ProxyParams params;
   const FrictionParams friction{0.6, 0.5};
   std::mt19937 rng(5);
@@ -257,7 +259,7 @@ TEST(Shortcuts, ProxyStepsEqualTheExactPathOnRandomPaths) {
   long touching = 0, sticking = 0, steps = 0, iterations = 0;
   constexpr int kTips = 4;  // fingers 0, 1 on the sphere, 2, 3 on the plate
   for (int path = 0; path < 40; ++path) {
-    ProxyState sf[kTips], sr[kTips];
+    ProxyState sf[kTips], sr[kTips], ss[kTips];  // ss: the scalar cull's
     Eigen::Vector3d goal[kTips], inward[kTips], vel[kTips];
     for (int f = 0; f < kTips; ++f) {
       // Start above the surface, then a random walk with a drift into it.
@@ -275,6 +277,9 @@ TEST(Shortcuts, ProxyStepsEqualTheExactPathOnRandomPaths) {
         MeshCollider& collider = colliders[f / 2];
         const ProxyContact cf = fast.Step(collider, params, friction, goal[f], sf[f]);
         const ProxyContact cr = ref.Step(collider, params, friction, goal[f], sr[f]);
+        const ProxyContact cs = scalar.Step(collider, params, friction, goal[f], ss[f]);
+        ASSERT_TRUE(SameBits(cs.x_O_m, cr.x_O_m)) << "scalar cull, finger " << f << " path " << path << " step " << k;
+        ASSERT_TRUE(SameBits(cs.n_O, cr.n_O)) << "scalar cull, finger " << f << " path " << path << " step " << k;
         ASSERT_TRUE(SameBits(cf.x_O_m, cr.x_O_m)) << "finger " << f << " path " << path << " step " << k;
         ASSERT_TRUE(SameBits(cf.p_O_m, cr.p_O_m)) << "finger " << f << " path " << path << " step " << k;
         ASSERT_TRUE(SameBits(cf.n_O, cr.n_O)) << "finger " << f << " path " << path << " step " << k;

@@ -92,6 +92,9 @@ class ProxySolver {
   /// shortcuts (compact float tree, plane-distance skips, reuse of the constraints at the point
   /// where the last move ended) must reproduce bit for bit.
   void set_reference_path(bool on) noexcept { reference_ = on; }
+  /// Tests: false culls the neighbourhoods' triangles one at a time (the path of processors
+  /// without AVX-512) where the eight-wide cull would run.
+  void set_vector_cull(bool on) noexcept { vector_cull_ = on; }
 
   /// The frictionless constrained motion from x0 toward goal (the core of Step; public for
   /// tests). Returns the final proxy centre.
@@ -136,8 +139,9 @@ class ProxySolver {
     double dist = 0.0;
     std::int32_t tri = -1;
   };
-  // Candidate triangles around the motion; returns false if none.
-  bool Gather(MeshCollider& collider, const Eigen::Vector3d& center, double radius) noexcept;
+  // Candidate triangles within r of the segment x + s d, s in [0, 1] (at least those; d = 0: of
+  // the point x); returns false if none.
+  bool Gather(MeshCollider& collider, const Eigen::Vector3d& x, const Eigen::Vector3d& d, double r) noexcept;
   int CollectConstraints(const MeshCollider& collider, const ProxyParams& params,
                          const Eigen::Vector3d& x) noexcept;
   Eigen::Vector3d Project(const Eigen::Vector3d& goal, const Eigen::Vector3d& x, int m) const noexcept;
@@ -158,6 +162,7 @@ class ProxySolver {
   bool truncated_ = false;
   bool last_gather_truncated_ = false;
   bool reference_ = false;
+  bool vector_cull_ = true;
   std::array<Constraint, kMaxConstraints> cons_{};
   Touching touching_;  // at the point cons_ were collected
   // Where a set of constraints was collected: they are a function of (mesh, x, R, skin) alone
@@ -183,6 +188,33 @@ class ProxySolver {
   static constexpr std::size_t kEndEntries = 64;
   std::vector<EndEntry> ends_;
   static std::size_t EndSlot(const Eigen::Vector3d& x) noexcept;
+  // Neighbourhoods: the triangles within a ball (an untruncated QueryBall, in its order) with
+  // their planes and bounding discs. A gather whose ball lies inside one is served from it: the
+  // triangles whose plane-and-disc bound (SegmentDiscBound2) comes within the gather's radius of
+  // its segment, a superset of what the sweep can hit and of what lies within the touch band of
+  // any point of the segment, in the query's order, so the sweep and the constraint collection
+  // reduce it to the same results bit for bit. The answer is a function of the mesh and the
+  // ball alone, so an entry serves any finger. Slots are reused least recently used.
+  struct Neighbourhood {
+    std::uint64_t collider_id = 0;  // 0: empty
+    Eigen::Vector3d c = Eigen::Vector3d::Zero();
+    double r = 0.0;
+    std::int32_t n = 0;
+    std::uint64_t used = 0;
+    std::vector<std::int32_t> ids;  // capacity: the candidate buffer's
+    // ids[i]'s plane (unit normal, offset) and bounding disc (centre, radius), one array each
+    std::array<std::vector<double>, 8> soa;
+  };
+  static constexpr int kNeighbourhoods = 8;
+  std::array<Neighbourhood, kNeighbourhoods> hoods_;
+  std::uint64_t hood_clock_ = 0;
+  // The candidates for the segment x + s d, s in [0, 1], grown by r, from a neighbourhood that
+  // holds its ball; false: none holds it.
+  bool GatherFromNeighbourhood(const MeshCollider& collider, const Eigen::Vector3d& x, const Eigen::Vector3d& d,
+                               double r) noexcept;
+  // A new neighbourhood (c, r + kNeighbourSlack) in the least recently used slot; false when its
+  // query overflowed (nothing kept).
+  bool FillNeighbourhood(const MeshCollider& collider, const Eigen::Vector3d& c, double r) noexcept;
 };
 
 }  // namespace handshare::contact
