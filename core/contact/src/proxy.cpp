@@ -150,9 +150,8 @@ std::int32_t Cull(const std::array<const double*, 8>& q, const std::int32_t* ids
 }  // namespace
 
 bool ProxySolver::GatherFromNeighbourhood(const MeshCollider& collider, const Eigen::Vector3d& x,
-                                          const Eigen::Vector3d& d, double r) noexcept {
+                                          const Eigen::Vector3d& d, double r_ball, double r) noexcept {
   const Eigen::Vector3d c = x + 0.5 * d;
-  const double r_ball = 0.5 * d.norm() + r;
   for (Neighbourhood& h : hoods_) {
     if (h.collider_id != collider.id() || !((c - h.c).norm() + r_ball <= h.r - kNeighbourRoundoff_m)) continue;
     h.used = ++hood_clock_;
@@ -201,14 +200,18 @@ std::size_t ProxySolver::EndSlot(const Eigen::Vector3d& x) noexcept {
   return static_cast<std::size_t>(h >> 58) % kEndEntries;
 }
 
-bool ProxySolver::Gather(MeshCollider& collider, const Eigen::Vector3d& x, const Eigen::Vector3d& d,
-                         double r_m) noexcept {
+bool ProxySolver::Gather(MeshCollider& collider, const ProxyParams& params, const Eigen::Vector3d& x,
+                         const Eigen::Vector3d& d) noexcept {
+  const double Rs = params.radius_m + params.skin_m;
   const Eigen::Vector3d center = x + 0.5 * d;
-  const double radius = 0.5 * d.norm() + r_m;
-  if (!reference_ && (GatherFromNeighbourhood(collider, x, d, r_m) ||
-                      (FillNeighbourhood(collider, center, radius) && GatherFromNeighbourhood(collider, x, d, r_m)))) {
-    return num_candidates_ > 0;
-  }
+  const double radius = 0.5 * d.norm() + Rs + kGatherMarginSkins * params.skin_m;
+  // From a neighbourhood: the triangles within the touch band of the segment (what the sweep
+  // can hit and what the constraints along it are made of), culled already.
+  const double cull = Rs + kTouchBand_m + kNeighbourRoundoff_m;
+  culled_ = !reference_ && (GatherFromNeighbourhood(collider, x, d, radius, cull) ||
+                            (FillNeighbourhood(collider, center, radius) &&
+                             GatherFromNeighbourhood(collider, x, d, radius, cull)));
+  if (culled_) return num_candidates_ > 0;
   const std::int32_t cap = std::min<std::int32_t>(static_cast<std::int32_t>(candidates_.size()),
                                                   collider.max_candidates());
   const std::span<std::int32_t> ids(candidates_.data(), static_cast<std::size_t>(cap));
@@ -286,7 +289,7 @@ bool ProxySolver::Site::Is(const MeshCollider& collider, const ProxyParams& para
 
 int ProxySolver::ConstraintsAt(MeshCollider& collider, const ProxyParams& params, const Eigen::Vector3d& x) noexcept {
   if (!reference_ && cons_site_.Is(collider, params, x)) return cons_m_;
-  Gather(collider, x, Eigen::Vector3d::Zero(), params.radius_m + params.skin_m + kGatherMarginSkins * params.skin_m);
+  Gather(collider, params, x, Eigen::Vector3d::Zero());
   return CollectConstraints(collider, params, x);
 }
 
@@ -379,7 +382,6 @@ Eigen::Vector3d ProxySolver::MoveFrom(MeshCollider& collider, const ProxyParams&
                                       bool* truncated, std::int32_t* iterations) noexcept {
   truncated_ = false;
   const double Rs = params.radius_m + params.skin_m;
-  const double margin = kGatherMarginSkins * params.skin_m;
   Eigen::Vector3d x = x0;
   // Constraints at the start: the triangles within R + skin of the proxy (already at hand when
   // the last collection was at x0 from an untruncated gather).
@@ -394,7 +396,7 @@ Eigen::Vector3d ProxySolver::MoveFrom(MeshCollider& collider, const ProxyParams&
     // Sweep against every triangle near the segment (the ball around it covers all points
     // within R + skin of it); no triangle: free motion.
     double s = 2.0;
-    if (Gather(collider, x, d, Rs + margin)) {
+    if (Gather(collider, params, x, d)) {
       // A triangle whose plane stays farther than Rs from both ends of the segment, on one side,
       // is farther than Rs from every point of it: no touch in [0, 1] (the exact sweep could
       // only return a root beyond 1, and only min(s, 1) is used), so it is skipped.
@@ -404,9 +406,12 @@ Eigen::Vector3d ProxySolver::MoveFrom(MeshCollider& collider, const ProxyParams&
         const Eigen::Vector4d& pl = collider.triangle_plane(tri);
         const double h0 = PlaneDistance(pl, x);
         const double h1 = h0 + (pl.x() * d.x() + pl.y() * d.y() + pl.z() * d.z());
-        if (!reference_ && ((h0 > lim && h1 > lim) || (h0 < -lim && h1 < -lim))) continue;
+        // (A neighbourhood's candidates have been through both tests, up to the touch band.)
+        if (!reference_ && !culled_ && ((h0 > lim && h1 > lim) || (h0 < -lim && h1 < -lim))) continue;
         // Nor one whose disc stays farther than Rs from the segment (a neighbour beside it).
-        if (!reference_ && SegmentDiscBound2(pl, collider.triangle_disc(tri), x, d, h0, h1) > lim * lim) continue;
+        if (!reference_ && !culled_ && SegmentDiscBound2(pl, collider.triangle_disc(tri), x, d, h0, h1) > lim * lim) {
+          continue;
+        }
         // A triangle in the touch band at x is a constraint: its plane n . t >= n . c + R + skin
         // at its closest point c bounds the whole triangle grown by R + skin (the triangle lies in
         // n . (q - c) <= 0), x and t both satisfy it, so the straight move between them cannot

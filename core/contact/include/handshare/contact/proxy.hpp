@@ -139,9 +139,11 @@ class ProxySolver {
     double dist = 0.0;
     std::int32_t tri = -1;
   };
-  // Candidate triangles within r of the segment x + s d, s in [0, 1] (at least those; d = 0: of
-  // the point x); returns false if none.
-  bool Gather(MeshCollider& collider, const Eigen::Vector3d& x, const Eigen::Vector3d& d, double r) noexcept;
+  // Candidate triangles near the segment x + s d, s in [0, 1] (d = 0: the point x): at least
+  // every one within the touch band of it (culled_: only those, up to round-off), else every one
+  // in the ball around it grown by R + skin and a margin. Returns false if none.
+  bool Gather(MeshCollider& collider, const ProxyParams& params, const Eigen::Vector3d& x,
+              const Eigen::Vector3d& d) noexcept;
   int CollectConstraints(const MeshCollider& collider, const ProxyParams& params,
                          const Eigen::Vector3d& x) noexcept;
   Eigen::Vector3d Project(const Eigen::Vector3d& goal, const Eigen::Vector3d& x, int m) const noexcept;
@@ -163,6 +165,7 @@ class ProxySolver {
   bool last_gather_truncated_ = false;
   bool reference_ = false;
   bool vector_cull_ = true;
+  bool culled_ = false;  // the last gather came from a neighbourhood, culled to the touch band
   std::array<Constraint, kMaxConstraints> cons_{};
   Touching touching_;  // at the point cons_ were collected
   // Where a set of constraints was collected: they are a function of (mesh, x, R, skin) alone
@@ -208,10 +211,10 @@ class ProxySolver {
   static constexpr int kNeighbourhoods = 8;
   std::array<Neighbourhood, kNeighbourhoods> hoods_;
   std::uint64_t hood_clock_ = 0;
-  // The candidates for the segment x + s d, s in [0, 1], grown by r, from a neighbourhood that
-  // holds its ball; false: none holds it.
+  // The candidates within r of the segment x + s d, s in [0, 1], from a neighbourhood that holds
+  // the ball around its midpoint of radius r_ball; false: none holds it.
   bool GatherFromNeighbourhood(const MeshCollider& collider, const Eigen::Vector3d& x, const Eigen::Vector3d& d,
-                               double r) noexcept;
+                               double r_ball, double r) noexcept;
   // A new neighbourhood (c, r + kNeighbourSlack) in the least recently used slot; false when its
   // query overflowed (nothing kept).
   bool FillNeighbourhood(const MeshCollider& collider, const Eigen::Vector3d& c, double r) noexcept;
