@@ -38,7 +38,9 @@ double SweepPoint(const Eigen::Vector3d& m, const Eigen::Vector3d& d, double R) 
   const double c = m.squaredNorm() - R * R;
   if (c < 0.0) return 2.0;  // already overlapping: a constraint, not a hit
   const double half_b = m.dot(d);
-  if (half_b >= -kMinApproach_m * m.norm()) return 2.0;  // tangent or moving away
+  // Tangent or moving away (the first test is the second's answer for half_b >= 0, without the
+  // square root).
+  if (half_b >= 0.0 || half_b >= -kMinApproach_m * m.norm()) return 2.0;
   const double a = d.squaredNorm();
   const double disc = half_b * half_b - a * c;
   if (disc < 0.0) return 2.0;
@@ -81,8 +83,12 @@ double Sweep(const Eigen::Vector3d& x, const Eigen::Vector3d& d, double R_m, con
     const double len2 = tri.len2[e];
     if (!(len2 > 0.0)) continue;
     const Eigen::Vector3d m = x - p0;
-    const Eigen::Vector3d m_perp = m - (m.dot(ed) / len2) * ed;
-    const Eigen::Vector3d d_perp = d - (d.dot(ed) / len2) * ed;
+    const double t0 = m.dot(ed) / len2, dt = d.dot(ed) / len2;
+    // The centre's foot on the edge's line moves from t0 to t0 + dt: a touch of the cylinder
+    // that projects inside the edge needs that range to meet [0, 1] (the ends are the vertices').
+    if ((t0 < 0.0 && t0 + dt < 0.0) || (t0 > 1.0 && t0 + dt > 1.0)) continue;
+    const Eigen::Vector3d m_perp = m - t0 * ed;
+    const Eigen::Vector3d d_perp = d - dt * ed;
     if (d_perp.squaredNorm() <= 0.0) continue;
     const double s = SweepPoint(m_perp, d_perp, R_m);
     if (s < best) {

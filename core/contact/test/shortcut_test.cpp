@@ -128,7 +128,11 @@ TEST(Shortcuts, PreparedTriangleSweepEqualsTheOldSweepBitForBit) {
     if (trial % 50 == 3) b = a + 0.5 * (c - a);  // degenerate (collinear) triangle
     const double old_s = OldSweepSphereTriangle(x, d, R, a, b, c);
     const double new_s = SweepSphereTriangle(x, d, R, MakeSweepTriangle(a, b, c));
-    ASSERT_EQ(std::memcmp(&old_s, &new_s, sizeof(double)), 0) << "trial " << trial << ": " << old_s << " vs " << new_s;
+    // A touch on the way (s <= 1) is the same bits; a miss is any value beyond 1 (the new sweep
+    // skips an edge whose foot stays beyond one end of it, whose root could only lie beyond 1).
+    if (old_s <= 1.0 || new_s <= 1.0) {
+      ASSERT_EQ(std::memcmp(&old_s, &new_s, sizeof(double)), 0) << "trial " << trial << ": " << old_s << " vs " << new_s;
+    }
     hits += old_s <= 1.0 ? 1 : 0;
   }
   EXPECT_GT(hits, 20000);  // many of the random sweeps touch
