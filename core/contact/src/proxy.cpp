@@ -34,9 +34,13 @@ constexpr double kGatherMarginSkins = 4.0;
 // A neighbourhood reaches this far beyond the gather that made it [m]: the next gathers of a
 // proxy moving up to this far (a few steps of a fingertip at speed) are served from it.
 constexpr double kNeighbourSlack_m = 2e-3;
-// Slack of the neighbourhood's containment and sphere tests [m]: far above the round-off of
-// distances at these sizes (1e-17 m), far below anything they decide.
+// Slack of the neighbourhood's containment test [m]: far above the round-off of distances at
+// these sizes (1e-17 m), far below anything it decides.
 constexpr double kNeighbourRoundoff_m = 1e-9;
+// Slack of the neighbourhood's cull [m]: its float planes and discs, relative to the centre
+// (within about 15 mm), and its float arithmetic are off by less than 1e-8 m; the triangles it
+// keeps beyond the touch band (by up to this) only cost the exact tests that reject them.
+constexpr double kCullFloatSlack_m = 1e-6;
 
 // DiscDistanceBound2 for every point of the segment x + s d, s in [0, 1], with plane distances h0
 // at x and h1 at x + d: the smallest |h| on it, and the foot of the segment nearest to the
@@ -61,13 +65,16 @@ ProxySolver::ProxySolver(std::int32_t max_candidates)
     for (auto& v : h.soa) v.resize(candidates_.size());
     h.ids.resize(candidates_.size());
   }
+  candidates_.resize(candidates_.size() + 16);  // the vector cull stores whole groups of 16
 }
 
 namespace {
 // The segment cull of a neighbourhood's triangles (SegmentDiscBound2 against lim), written to
-// keep: out[k] = ids[i] for each triangle kept. Keeps every triangle whose plane-and-disc bound
-// is not beyond lim (a NaN one too: every comparison below is false for it).
-std::int32_t CullScalar(const std::array<const double*, 8>& q, const std::int32_t* ids, std::int32_t n,
+// keep: out[k] = ids[i] for each triangle kept. The triangles' planes and discs are floats
+// relative to the neighbourhood's centre (as are x and d here), whose round-off (below 1e-8 m
+// at the sizes a neighbourhood has) the caller's lim covers with kCullFloatSlack_m. Keeps every
+// triangle whose bound is not beyond lim (a NaN one too: every comparison is false for it).
+std::int32_t CullScalar(const std::array<const float*, 8>& q, const std::int32_t* ids, std::int32_t n,
                         const Eigen::Vector3d& x, const Eigen::Vector3d& d, double lim, std::int32_t* out) noexcept {
   std::int32_t k = 0;
   for (std::int32_t i = 0; i < n; ++i) {
@@ -85,52 +92,60 @@ std::int32_t CullScalar(const std::array<const double*, 8>& q, const std::int32_
 
 #if defined(__x86_64__)
 #define HS_AVX512_CULL __attribute__((target("avx512f,avx512vl,fma")))
-// GCC 12 reads the intrinsics' unspecified pass-through operand (_mm512_undefined_pd) as
+// GCC 12 reads the intrinsics' unspecified pass-through operand (_mm512_undefined_ps) as
 // possibly uninitialised; it is never read.
 #pragma GCC diagnostic push
 #pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
 #pragma GCC diagnostic ignored "-Wuninitialized"
-// CullScalar eight triangles at a time (the same bound; its round-off differs from the scalar
-// one's by far less than the slack the caller adds to lim).
-HS_AVX512_CULL std::int32_t CullAvx512(const std::array<const double*, 8>& q, const std::int32_t* ids,
+// CullScalar sixteen triangles at a time (the same bound in float; its round-off is covered by
+// the same slack).
+HS_AVX512_CULL std::int32_t CullAvx512(const std::array<const float*, 8>& q, const std::int32_t* ids,
                                        std::int32_t n, const Eigen::Vector3d& x, const Eigen::Vector3d& d,
                                        double lim, std::int32_t* out) noexcept {
-  const __m512d xx = _mm512_set1_pd(x.x()), xy = _mm512_set1_pd(x.y()), xz = _mm512_set1_pd(x.z());
-  const __m512d dx = _mm512_set1_pd(d.x()), dy = _mm512_set1_pd(d.y()), dz = _mm512_set1_pd(d.z());
-  const __m512d vlim = _mm512_set1_pd(lim), vnlim = _mm512_set1_pd(-lim), vlim2 = _mm512_set1_pd(lim * lim);
-  const __m512d zero = _mm512_setzero_pd(), one = _mm512_set1_pd(1.0);
+  const __m512 xx = _mm512_set1_ps(static_cast<float>(x.x())), xy = _mm512_set1_ps(static_cast<float>(x.y())),
+               xz = _mm512_set1_ps(static_cast<float>(x.z()));
+  const __m512 dx = _mm512_set1_ps(static_cast<float>(d.x())), dy = _mm512_set1_ps(static_cast<float>(d.y())),
+               dz = _mm512_set1_ps(static_cast<float>(d.z()));
+  const auto flim = static_cast<float>(lim);
+  const __m512 vlim = _mm512_set1_ps(flim), vnlim = _mm512_set1_ps(-flim), vlim2 = _mm512_set1_ps(flim * flim);
+  const __m512 zero = _mm512_setzero_ps(), one = _mm512_set1_ps(1.0f), shrink = _mm512_set1_ps(1.0f - 0x1p-12f);
   std::int32_t k = 0;
-  for (std::int32_t i = 0; i < n; i += 8) {
-    const __mmask8 live = static_cast<__mmask8>(n - i >= 8 ? 0xFF : (1u << (n - i)) - 1u);
-    const __m512d nx = _mm512_maskz_loadu_pd(live, q[0] + i), ny = _mm512_maskz_loadu_pd(live, q[1] + i);
-    const __m512d nz = _mm512_maskz_loadu_pd(live, q[2] + i), w = _mm512_maskz_loadu_pd(live, q[3] + i);
-    const __m512d cx = _mm512_maskz_loadu_pd(live, q[4] + i), cy = _mm512_maskz_loadu_pd(live, q[5] + i);
-    const __m512d cz = _mm512_maskz_loadu_pd(live, q[6] + i), cr = _mm512_maskz_loadu_pd(live, q[7] + i);
-    const __m512d h0 = _mm512_sub_pd(_mm512_fmadd_pd(nz, xz, _mm512_fmadd_pd(ny, xy, _mm512_mul_pd(nx, xx))), w);
-    const __m512d dh = _mm512_fmadd_pd(nz, dz, _mm512_fmadd_pd(ny, dy, _mm512_mul_pd(nx, dx)));
-    const __m512d h1 = _mm512_add_pd(h0, dh);
+  for (std::int32_t i = 0; i < n; i += 16) {
+    const auto live = static_cast<__mmask16>(n - i >= 16 ? 0xFFFFu : (1u << (n - i)) - 1u);
+    const __m512 nx = _mm512_maskz_loadu_ps(live, q[0] + i), ny = _mm512_maskz_loadu_ps(live, q[1] + i);
+    const __m512 nz = _mm512_maskz_loadu_ps(live, q[2] + i), w = _mm512_maskz_loadu_ps(live, q[3] + i);
+    const __m512 cx = _mm512_maskz_loadu_ps(live, q[4] + i), cy = _mm512_maskz_loadu_ps(live, q[5] + i);
+    const __m512 cz = _mm512_maskz_loadu_ps(live, q[6] + i), cr = _mm512_maskz_loadu_ps(live, q[7] + i);
+    const __m512 h0 = _mm512_sub_ps(_mm512_fmadd_ps(nz, xz, _mm512_fmadd_ps(ny, xy, _mm512_mul_ps(nx, xx))), w);
+    const __m512 dh = _mm512_fmadd_ps(nz, dz, _mm512_fmadd_ps(ny, dy, _mm512_mul_ps(nx, dx)));
+    const __m512 h1 = _mm512_add_ps(h0, dh);
     // Plane beyond on one side at both ends.
-    const __mmask8 above = _mm512_cmp_pd_mask(h0, vlim, _CMP_GT_OQ) & _mm512_cmp_pd_mask(h1, vlim, _CMP_GT_OQ);
-    const __mmask8 below = _mm512_cmp_pd_mask(h0, vnlim, _CMP_LT_OQ) & _mm512_cmp_pd_mask(h1, vnlim, _CMP_LT_OQ);
+    const __mmask16 above = _mm512_cmp_ps_mask(h0, vlim, _CMP_GT_OQ) & _mm512_cmp_ps_mask(h1, vlim, _CMP_GT_OQ);
+    const __mmask16 below = _mm512_cmp_ps_mask(h0, vnlim, _CMP_LT_OQ) & _mm512_cmp_ps_mask(h1, vnlim, _CMP_LT_OQ);
     // Smallest |h| on the segment (0 where it crosses the plane).
-    const __mmask8 cross = _mm512_cmp_pd_mask(h0, zero, _CMP_GT_OQ) ^ _mm512_cmp_pd_mask(h1, zero, _CMP_GT_OQ);
-    const __m512d h = _mm512_maskz_min_pd(static_cast<__mmask8>(~cross), _mm512_abs_pd(h0), _mm512_abs_pd(h1));
+    const __mmask16 cross = _mm512_cmp_ps_mask(h0, zero, _CMP_GT_OQ) ^ _mm512_cmp_ps_mask(h1, zero, _CMP_GT_OQ);
+    const __m512 h = _mm512_maskz_min_ps(static_cast<__mmask16>(~cross), _mm512_abs_ps(h0), _mm512_abs_ps(h1));
     // The segment's foot in the plane and the disc's centre relative to it.
-    const __m512d fx = _mm512_fnmadd_pd(h0, nx, xx), fy = _mm512_fnmadd_pd(h0, ny, xy), fz = _mm512_fnmadd_pd(h0, nz, xz);
-    const __m512d ax = _mm512_fnmadd_pd(dh, nx, dx), ay = _mm512_fnmadd_pd(dh, ny, dy), az = _mm512_fnmadd_pd(dh, nz, dz);
-    const __m512d tx = _mm512_sub_pd(cx, fx), ty = _mm512_sub_pd(cy, fy), tz = _mm512_sub_pd(cz, fz);
-    const __m512d a2 = _mm512_fmadd_pd(az, az, _mm512_fmadd_pd(ay, ay, _mm512_mul_pd(ax, ax)));
-    const __m512d ta = _mm512_fmadd_pd(tz, az, _mm512_fmadd_pd(ty, ay, _mm512_mul_pd(tx, ax)));
-    const __mmask8 moving = _mm512_cmp_pd_mask(a2, zero, _CMP_GT_OQ);
-    const __m512d s = _mm512_min_pd(_mm512_max_pd(_mm512_maskz_div_pd(moving, ta, a2), zero), one);
-    const __m512d lx = _mm512_fnmadd_pd(s, ax, tx), ly = _mm512_fnmadd_pd(s, ay, ty), lz = _mm512_fnmadd_pd(s, az, tz);
-    const __m512d l = _mm512_sqrt_pd(_mm512_fmadd_pd(lz, lz, _mm512_fmadd_pd(ly, ly, _mm512_mul_pd(lx, lx))));
-    const __m512d lat = _mm512_max_pd(_mm512_sub_pd(l, cr), zero);
-    const __m512d b2 = _mm512_fmadd_pd(lat, lat, _mm512_mul_pd(h, h));
-    const __mmask8 far = _mm512_cmp_pd_mask(b2, vlim2, _CMP_GT_OQ);
-    const __mmask8 keep = static_cast<__mmask8>(live & ~(above | below | far));
-    const __m256i vid = _mm256_maskz_loadu_epi32(live, ids + i);
-    _mm256_mask_compressstoreu_epi32(out + k, keep, vid);
+    const __m512 fx = _mm512_fnmadd_ps(h0, nx, xx), fy = _mm512_fnmadd_ps(h0, ny, xy), fz = _mm512_fnmadd_ps(h0, nz, xz);
+    const __m512 ax = _mm512_fnmadd_ps(dh, nx, dx), ay = _mm512_fnmadd_ps(dh, ny, dy), az = _mm512_fnmadd_ps(dh, nz, dz);
+    const __m512 tx = _mm512_sub_ps(cx, fx), ty = _mm512_sub_ps(cy, fy), tz = _mm512_sub_ps(cz, fz);
+    const __m512 a2 = _mm512_fmadd_ps(az, az, _mm512_fmadd_ps(ay, ay, _mm512_mul_ps(ax, ax)));
+    const __m512 ta = _mm512_fmadd_ps(tz, az, _mm512_fmadd_ps(ty, ay, _mm512_mul_ps(tx, ax)));
+    const __mmask16 moving = _mm512_cmp_ps_mask(a2, zero, _CMP_GT_OQ);
+    const __m512 s = _mm512_min_ps(_mm512_max_ps(_mm512_maskz_div_ps(moving, ta, a2), zero), one);
+    const __m512 lx = _mm512_fnmadd_ps(s, ax, tx), ly = _mm512_fnmadd_ps(s, ay, ty), lz = _mm512_fnmadd_ps(s, az, tz);
+    // |l| from below: l2 / sqrt(l2) with the 2^-14 estimate of 1 / sqrt, scaled down past its
+    // error (a smaller lateral distance keeps more: the cull stays conservative); l2 = 0 gives
+    // NaN, and the max below takes 0 for it.
+    const __m512 l2 = _mm512_fmadd_ps(lz, lz, _mm512_fmadd_ps(ly, ly, _mm512_mul_ps(lx, lx)));
+    const __m512 l = _mm512_mul_ps(_mm512_mul_ps(l2, _mm512_rsqrt14_ps(l2)), shrink);
+    const __m512 lat = _mm512_max_ps(_mm512_sub_ps(l, cr), zero);
+    const __m512 b2 = _mm512_fmadd_ps(lat, lat, _mm512_mul_ps(h, h));
+    const __mmask16 far = _mm512_cmp_ps_mask(b2, vlim2, _CMP_GT_OQ);
+    const auto keep = static_cast<__mmask16>(live & ~(above | below | far));
+    // Compressed in a register and stored whole (out has 16 spare entries past n).
+    const __m512i vid = _mm512_maskz_compress_epi32(keep, _mm512_maskz_loadu_epi32(live, ids + i));
+    _mm512_storeu_si512(out + k, vid);
     k += __builtin_popcount(keep);
   }
   return k;
@@ -138,7 +153,7 @@ HS_AVX512_CULL std::int32_t CullAvx512(const std::array<const double*, 8>& q, co
 #pragma GCC diagnostic pop
 #endif
 
-std::int32_t Cull(const std::array<const double*, 8>& q, const std::int32_t* ids, std::int32_t n,
+std::int32_t Cull(const std::array<const float*, 8>& q, const std::int32_t* ids, std::int32_t n,
                   const Eigen::Vector3d& x, const Eigen::Vector3d& d, double lim, std::int32_t* out,
                   bool vector) noexcept {
 #if defined(__x86_64__)
@@ -155,9 +170,9 @@ bool ProxySolver::GatherFromNeighbourhood(const MeshCollider& collider, const Ei
   for (Neighbourhood& h : hoods_) {
     if (h.collider_id != collider.id() || !((c - h.c).norm() + r_ball <= h.r - kNeighbourRoundoff_m)) continue;
     h.used = ++hood_clock_;
-    std::array<const double*, 8> q{};
+    std::array<const float*, 8> q{};
     for (std::size_t a = 0; a < q.size(); ++a) q[a] = h.soa[a].data();
-    num_candidates_ = Cull(q, h.ids.data(), h.n, x, d, r + kNeighbourRoundoff_m, candidates_.data(), vector_cull_);
+    num_candidates_ = Cull(q, h.ids.data(), h.n, x - h.c, d, r + kCullFloatSlack_m, candidates_.data(), vector_cull_);
     last_gather_truncated_ = false;
     return true;
   }
@@ -177,10 +192,16 @@ bool ProxySolver::FillNeighbourhood(const MeshCollider& collider, const Eigen::V
   for (std::int32_t i = 0; i < q.count; ++i) {
     const std::int32_t t = h->ids[static_cast<std::size_t>(i)];
     const auto u = static_cast<std::size_t>(i);
-    for (int a = 0; a < 4; ++a) {
-      h->soa[static_cast<std::size_t>(a)][u] = collider.triangle_plane(t)[a];
-      h->soa[static_cast<std::size_t>(a + 4)][u] = collider.triangle_disc(t)[a];
-    }
+    // Relative to the centre: the plane's offset n . c less, the disc's centre less c, its
+    // radius rounded up.
+    const Eigen::Vector4d& pl = collider.triangle_plane(t);
+    const Eigen::Vector4d& di = collider.triangle_disc(t);
+    const Eigen::Vector3d dc = di.head<3>() - c;
+    const float rel[8] = {static_cast<float>(pl.x()), static_cast<float>(pl.y()), static_cast<float>(pl.z()),
+                          static_cast<float>(pl.w() - pl.head<3>().dot(c)), static_cast<float>(dc.x()),
+                          static_cast<float>(dc.y()), static_cast<float>(dc.z()),
+                          std::nextafter(static_cast<float>(di.w()), std::numeric_limits<float>::infinity())};
+    for (std::size_t a = 0; a < 8; ++a) h->soa[a][u] = rel[a];
   }
   h->collider_id = collider.id();
   h->c = c;
@@ -212,7 +233,7 @@ bool ProxySolver::Gather(MeshCollider& collider, const ProxyParams& params, cons
                             (FillNeighbourhood(collider, center, radius) &&
                              GatherFromNeighbourhood(collider, x, d, radius, cull)));
   if (culled_) return num_candidates_ > 0;
-  const std::int32_t cap = std::min<std::int32_t>(static_cast<std::int32_t>(candidates_.size()),
+  const std::int32_t cap = std::min<std::int32_t>(static_cast<std::int32_t>(candidates_.size()) - 16,
                                                   collider.max_candidates());
   const std::span<std::int32_t> ids(candidates_.data(), static_cast<std::size_t>(cap));
   const BallQueryResult r = reference_ ? collider.QueryBallObb(center, radius, ids) : collider.QueryBall(center, radius, ids);

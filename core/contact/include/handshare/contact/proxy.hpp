@@ -205,8 +205,9 @@ class ProxySolver {
     std::int32_t n = 0;
     std::uint64_t used = 0;
     std::vector<std::int32_t> ids;  // capacity: the candidate buffer's
-    // ids[i]'s plane (unit normal, offset) and bounding disc (centre, radius), one array each
-    std::array<std::vector<double>, 8> soa;
+    // ids[i]'s plane (unit normal, offset) and bounding disc (centre, radius), one array each,
+    // in float relative to c
+    std::array<std::vector<float>, 8> soa;
   };
   static constexpr int kNeighbourhoods = 8;
   std::array<Neighbourhood, kNeighbourhoods> hoods_;
