@@ -2,6 +2,11 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstddef>
+
+#if defined(__x86_64__)
+#include <immintrin.h>
+#endif
 
 namespace handshare::contact {
 
@@ -138,6 +143,166 @@ double SweepSphereTriangle(const Eigen::Vector3d& x, const Eigen::Vector3d& d, d
 double SweepSphereTriangleOwned(const Eigen::Vector3d& x, const Eigen::Vector3d& d, double R_m,
                                 const SweepTriangle& tri) noexcept {
   return Sweep(x, d, R_m, tri, tri.own_vertices);
+}
+
+namespace {
+#if defined(__x86_64__)
+// Sweep (own vertices, from 2) in eight lanes. Every value is computed with the scalar code's
+// operations in its order (Eigen's 3-vector dot is (x0 y0 + x1 y1) + x2 y2), with no fused
+// multiply-add (contraction is off for this function), and each branch of the scalar code is a
+// lane mask: each lane's result is the scalar result's bits.
+#define HS_AVX512_SWEEP __attribute__((target("avx512f,avx512vl"), optimize("fp-contract=off")))
+#pragma GCC diagnostic push
+#pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
+#pragma GCC diagnostic ignored "-Wuninitialized"
+#pragma GCC diagnostic ignored "-Wattributes"
+
+struct V3 {
+  __m512d x, y, z;
+};
+
+HS_AVX512_SWEEP inline __m512d Dot(const V3& a, const V3& b) {
+  return _mm512_add_pd(_mm512_add_pd(_mm512_mul_pd(a.x, b.x), _mm512_mul_pd(a.y, b.y)), _mm512_mul_pd(a.z, b.z));
+}
+HS_AVX512_SWEEP inline V3 Sub(const V3& a, const V3& b) {
+  return {_mm512_sub_pd(a.x, b.x), _mm512_sub_pd(a.y, b.y), _mm512_sub_pd(a.z, b.z)};
+}
+HS_AVX512_SWEEP inline V3 Cross(const V3& a, const V3& b) {
+  return {_mm512_sub_pd(_mm512_mul_pd(a.y, b.z), _mm512_mul_pd(a.z, b.y)),
+          _mm512_sub_pd(_mm512_mul_pd(a.z, b.x), _mm512_mul_pd(a.x, b.z)),
+          _mm512_sub_pd(_mm512_mul_pd(a.x, b.y), _mm512_mul_pd(a.y, b.x))};
+}
+// a - s b and a + s b, per component.
+HS_AVX512_SWEEP inline V3 SubScaled(const V3& a, __m512d s, const V3& b) {
+  return {_mm512_sub_pd(a.x, _mm512_mul_pd(s, b.x)), _mm512_sub_pd(a.y, _mm512_mul_pd(s, b.y)),
+          _mm512_sub_pd(a.z, _mm512_mul_pd(s, b.z))};
+}
+HS_AVX512_SWEEP inline V3 AddScaled(const V3& a, __m512d s, const V3& b) {
+  return {_mm512_add_pd(a.x, _mm512_mul_pd(s, b.x)), _mm512_add_pd(a.y, _mm512_mul_pd(s, b.y)),
+          _mm512_add_pd(a.z, _mm512_mul_pd(s, b.z))};
+}
+
+HS_AVX512_SWEEP inline __m512d NegateWhere(__m512d v, __mmask8 k) {
+  const __m512i bits = _mm512_castpd_si512(v);
+  return _mm512_castsi512_pd(_mm512_mask_xor_epi64(bits, k, bits, _mm512_set1_epi64(INT64_MIN)));
+}
+
+// SweepPoint in lanes: the root where the scalar one returns it, 2 elsewhere.
+HS_AVX512_SWEEP inline __m512d SweepPointLanes(const V3& m, const V3& d, double R) {
+  const __m512d two = _mm512_set1_pd(2.0), zero = _mm512_setzero_pd();
+  const __m512d m2 = Dot(m, m);
+  const __m512d c = _mm512_sub_pd(m2, _mm512_set1_pd(R * R));
+  __mmask8 ok = _mm512_cmp_pd_mask(c, zero, _CMP_NLT_UQ);  // !(c < 0)
+  const __m512d half_b = Dot(m, d);
+  ok &= _mm512_cmp_pd_mask(half_b, zero, _CMP_NGE_UQ);  // !(half_b >= 0)
+  ok &= _mm512_cmp_pd_mask(half_b, _mm512_mul_pd(_mm512_set1_pd(-kMinApproach_m), _mm512_sqrt_pd(m2)), _CMP_NGE_UQ);
+  const __m512d a = Dot(d, d);
+  const __m512d disc = _mm512_sub_pd(_mm512_mul_pd(half_b, half_b), _mm512_mul_pd(a, c));
+  ok &= _mm512_cmp_pd_mask(disc, zero, _CMP_NLT_UQ);  // !(disc < 0)
+  // std::max(0.0, v) is (0 < v) ? v : 0, as max_pd(v, 0) is (v > 0) ? v : 0.
+  const __m512d root = _mm512_max_pd(
+      _mm512_div_pd(_mm512_sub_pd(_mm512_sub_pd(zero, half_b), _mm512_sqrt_pd(disc)), a), zero);
+  return _mm512_mask_mov_pd(two, ok, root);
+}
+
+HS_AVX512_SWEEP double SweepOwnedAvx512(const Eigen::Vector3d& x_in, const Eigen::Vector3d& d_in, double R,
+                                        const SweepTriangle* tris, const std::int32_t* ids, std::int32_t n) {
+  static_assert(sizeof(SweepTriangle) % sizeof(double) == 0, "triangles gathered as doubles");
+  constexpr int kStride = static_cast<int>(sizeof(SweepTriangle) / sizeof(double));
+  const auto* base = reinterpret_cast<const double*>(tris);
+  const V3 x{_mm512_set1_pd(x_in.x()), _mm512_set1_pd(x_in.y()), _mm512_set1_pd(x_in.z())};
+  const V3 d{_mm512_set1_pd(d_in.x()), _mm512_set1_pd(d_in.y()), _mm512_set1_pd(d_in.z())};
+  const __m512d vR = _mm512_set1_pd(R), zero = _mm512_setzero_pd(), one = _mm512_set1_pd(1.0);
+  __m512d best_all = _mm512_set1_pd(2.0);
+  for (std::int32_t i = 0; i < n; i += 8) {
+    const auto live = static_cast<__mmask8>(n - i >= 8 ? 0xFF : (1u << (n - i)) - 1u);
+    const __m256i id = _mm256_maskz_loadu_epi32(live, ids + i);
+    const __m256i idx = _mm256_mullo_epi32(id, _mm256_set1_epi32(kStride));
+    auto field = [&](std::size_t offset_bytes) HS_AVX512_SWEEP {
+      return _mm512_mask_i32gather_pd(zero, live, idx, base + offset_bytes / sizeof(double), 8);
+    };
+    auto vec = [&](std::size_t offset_bytes) HS_AVX512_SWEEP {
+      return V3{field(offset_bytes), field(offset_bytes + 8), field(offset_bytes + 16)};
+    };
+    const V3 v[3] = {vec(offsetof(SweepTriangle, v)), vec(offsetof(SweepTriangle, v) + 24),
+                     vec(offsetof(SweepTriangle, v) + 48)};
+    // The flags, lane by lane.
+    __mmask8 has_face = 0, own[3] = {0, 0, 0};
+    for (int q = 0; q < 8; ++q) {
+      if (!(live & (1u << q))) continue;
+      const SweepTriangle& t = tris[ids[i + q]];
+      has_face |= static_cast<__mmask8>(t.has_face ? 1u << q : 0u);
+      for (int k = 0; k < 3; ++k) own[k] |= static_cast<__mmask8>(t.own_vertices & (1u << k) ? 1u << q : 0u);
+    }
+    __m512d best = _mm512_set1_pd(2.0);
+    // Face interior.
+    {
+      const V3 n_tri = vec(offsetof(SweepTriangle, n));
+      __m512d h0 = Dot(n_tri, Sub(x, v[0]));
+      const __mmask8 flip = _mm512_cmp_pd_mask(h0, zero, _CMP_LT_OQ);
+      // n = -n, h0 = -h0 where h0 < 0 (the sign bit flipped, as unary minus does).
+      const V3 nf{NegateWhere(n_tri.x, flip), NegateWhere(n_tri.y, flip), NegateWhere(n_tri.z, flip)};
+      h0 = NegateWhere(h0, flip);
+      const __m512d vn = Dot(nf, d);
+      __mmask8 hit = has_face & _mm512_cmp_pd_mask(h0, vR, _CMP_GE_OQ) &
+                     _mm512_cmp_pd_mask(vn, _mm512_set1_pd(-kMinApproach_m), _CMP_LT_OQ);
+      const __m512d s = _mm512_div_pd(_mm512_sub_pd(h0, vR), _mm512_sub_pd(zero, vn));
+      hit &= _mm512_cmp_pd_mask(s, one, _CMP_LE_OQ);
+      if (hit) {
+        const V3 q = SubScaled(AddScaled(x, s, d), vR, nf);
+        const __m512d wa = Dot(Cross(Sub(v[1], q), Sub(v[2], q)), n_tri);
+        const __m512d wb = Dot(Cross(Sub(v[2], q), Sub(v[0], q)), n_tri);
+        const __m512d wc = Dot(Cross(Sub(v[0], q), Sub(v[1], q)), n_tri);
+        hit &= _mm512_cmp_pd_mask(wa, zero, _CMP_GE_OQ) & _mm512_cmp_pd_mask(wb, zero, _CMP_GE_OQ) &
+               _mm512_cmp_pd_mask(wc, zero, _CMP_GE_OQ);
+        best = _mm512_mask_mov_pd(best, hit, s);
+      }
+    }
+    // Edges.
+    for (int e = 0; e < 3; ++e) {
+      const V3 ed = vec(offsetof(SweepTriangle, ed) + 24 * static_cast<std::size_t>(e));
+      const __m512d len2 = field(offsetof(SweepTriangle, len2) + 8 * static_cast<std::size_t>(e));
+      __mmask8 go = live & _mm512_cmp_pd_mask(len2, zero, _CMP_GT_OQ);
+      const V3 m = Sub(x, v[e]);
+      const __m512d t0 = _mm512_div_pd(Dot(m, ed), len2), dt = _mm512_div_pd(Dot(d, ed), len2);
+      const __m512d t1 = _mm512_add_pd(t0, dt);
+      const __mmask8 before = _mm512_cmp_pd_mask(t0, zero, _CMP_LT_OQ) & _mm512_cmp_pd_mask(t1, zero, _CMP_LT_OQ);
+      const __mmask8 after = _mm512_cmp_pd_mask(t0, one, _CMP_GT_OQ) & _mm512_cmp_pd_mask(t1, one, _CMP_GT_OQ);
+      go &= static_cast<__mmask8>(~(before | after));
+      const V3 m_perp = SubScaled(m, t0, ed), d_perp = SubScaled(d, dt, ed);
+      go &= _mm512_cmp_pd_mask(Dot(d_perp, d_perp), zero, _CMP_NLE_UQ);  // !(|d_perp|^2 <= 0)
+      if (!go) continue;
+      const __m512d s = SweepPointLanes(m_perp, d_perp, R);
+      go &= _mm512_cmp_pd_mask(s, best, _CMP_LT_OQ);
+      const __m512d t = _mm512_div_pd(Dot(AddScaled(m, s, d), ed), len2);
+      go &= _mm512_cmp_pd_mask(t, zero, _CMP_GE_OQ) & _mm512_cmp_pd_mask(t, one, _CMP_LE_OQ);
+      best = _mm512_mask_mov_pd(best, go, s);
+    }
+    // Own vertices.
+    for (int k = 0; k < 3; ++k) {
+      const __mmask8 go = live & own[k];
+      if (!go) continue;
+      const __m512d s = SweepPointLanes(Sub(x, v[k]), d, R);
+      best = _mm512_mask_mov_pd(best, go & _mm512_cmp_pd_mask(s, best, _CMP_LT_OQ), s);
+    }
+    best_all = _mm512_mask_min_pd(best_all, live, best_all, best);
+  }
+  return _mm512_reduce_min_pd(best_all);
+}
+#pragma GCC diagnostic pop
+#endif
+}  // namespace
+
+double SweepSphereTrianglesOwned(const Eigen::Vector3d& x, const Eigen::Vector3d& d, double R_m,
+                                 const SweepTriangle* tris, const std::int32_t* ids, std::int32_t n,
+                                 bool vector) noexcept {
+#if defined(__x86_64__)
+  static const bool avx512 = __builtin_cpu_supports("avx512f") && __builtin_cpu_supports("avx512vl");
+  if (vector && avx512) return SweepOwnedAvx512(x, d, R_m, tris, ids, n);
+#endif
+  double s = 2.0;
+  for (std::int32_t i = 0; i < n; ++i) s = std::min(s, SweepSphereTriangleOwned(x, d, R_m, tris[ids[i]]));
+  return s;
 }
 
 }  // namespace handshare::contact

@@ -65,6 +65,7 @@ ProxySolver::ProxySolver(std::int32_t max_candidates)
     for (auto& v : h.soa) v.resize(candidates_.size());
     h.ids.resize(candidates_.size());
   }
+  sweep_ids_.resize(candidates_.size());
   candidates_.resize(candidates_.size() + 16);  // the vector cull stores whole groups of 16
 }
 
@@ -417,7 +418,18 @@ Eigen::Vector3d ProxySolver::MoveFrom(MeshCollider& collider, const ProxyParams&
     // Sweep against every triangle near the segment (the ball around it covers all points
     // within R + skin of it); no triangle: free motion.
     double s = 2.0;
-    if (Gather(collider, params, x, d)) {
+    if (Gather(collider, params, x, d) && culled_) {
+      // A neighbourhood's candidates have been through the plane and disc tests below (up to the
+      // touch band) and hold every reachable vertex's owner: the touching ones out (below), the
+      // rest swept at once.
+      std::int32_t k = 0;
+      for (std::int32_t i = 0; i < num_candidates_; ++i) {
+        const std::int32_t tri = candidates_[static_cast<std::size_t>(i)];
+        sweep_ids_[static_cast<std::size_t>(k)] = tri;
+        k += touching_.Has(tri) ? 0 : 1;
+      }
+      s = SweepSphereTrianglesOwned(x, d, Rs, collider.triangles(), sweep_ids_.data(), k, vector_cull_);
+    } else if (num_candidates_ > 0) {
       // A triangle whose plane stays farther than Rs from both ends of the segment, on one side,
       // is farther than Rs from every point of it: no touch in [0, 1] (the exact sweep could
       // only return a root beyond 1, and only min(s, 1) is used), so it is skipped.
@@ -427,12 +439,9 @@ Eigen::Vector3d ProxySolver::MoveFrom(MeshCollider& collider, const ProxyParams&
         const Eigen::Vector4d& pl = collider.triangle_plane(tri);
         const double h0 = PlaneDistance(pl, x);
         const double h1 = h0 + (pl.x() * d.x() + pl.y() * d.y() + pl.z() * d.z());
-        // (A neighbourhood's candidates have been through both tests, up to the touch band.)
-        if (!reference_ && !culled_ && ((h0 > lim && h1 > lim) || (h0 < -lim && h1 < -lim))) continue;
+        if (!reference_ && ((h0 > lim && h1 > lim) || (h0 < -lim && h1 < -lim))) continue;
         // Nor one whose disc stays farther than Rs from the segment (a neighbour beside it).
-        if (!reference_ && !culled_ && SegmentDiscBound2(pl, collider.triangle_disc(tri), x, d, h0, h1) > lim * lim) {
-          continue;
-        }
+        if (!reference_ && SegmentDiscBound2(pl, collider.triangle_disc(tri), x, d, h0, h1) > lim * lim) continue;
         // A triangle in the touch band at x is a constraint: its plane n . t >= n . c + R + skin
         // at its closest point c bounds the whole triangle grown by R + skin (the triangle lies in
         // n . (q - c) <= 0), x and t both satisfy it, so the straight move between them cannot

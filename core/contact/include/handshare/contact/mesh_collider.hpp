@@ -63,6 +63,8 @@ class MeshCollider {
 
   /// Triangle t prepared for the sweep (its vertices, the mesh's values, copied at setup).
   const SweepTriangle& triangle(std::int32_t t) const noexcept { return tri_[static_cast<std::size_t>(t)]; }
+  /// All of them, by id.
+  const SweepTriangle* triangles() const noexcept { return tri_.data(); }
   /// Triangle t's plane: unit normal (winding order) and offset, n . p = w on the plane; NaN for
   /// a degenerate triangle (so that every plane-distance shortcut is skipped for it).
   const Eigen::Vector4d& triangle_plane(std::int32_t t) const noexcept {

@@ -92,8 +92,8 @@ class ProxySolver {
   /// shortcuts (compact float tree, plane-distance skips, reuse of the constraints at the point
   /// where the last move ended) must reproduce bit for bit.
   void set_reference_path(bool on) noexcept { reference_ = on; }
-  /// Tests: false culls the neighbourhoods' triangles one at a time (the path of processors
-  /// without AVX-512) where the eight-wide cull would run.
+  /// Tests: false culls the neighbourhoods' triangles and sweeps them one at a time (the path of
+  /// processors without AVX-512) where the vector passes would run.
   void set_vector_cull(bool on) noexcept { vector_cull_ = on; }
 
   /// The frictionless constrained motion from x0 toward goal (the core of Step; public for
@@ -140,7 +140,7 @@ class ProxySolver {
     std::int32_t tri = -1;
   };
   // Candidate triangles near the segment x + s d, s in [0, 1] (d = 0: the point x): at least
-  // every one within the touch band of it (culled_: only those, up to round-off), else every one
+  // every one within the touch band of it (culled_: only those, up to the cull's float slack), else every one
   // in the ball around it grown by R + skin and a margin. Returns false if none.
   bool Gather(MeshCollider& collider, const ProxyParams& params, const Eigen::Vector3d& x,
               const Eigen::Vector3d& d) noexcept;
@@ -160,6 +160,7 @@ class ProxySolver {
   void StoreEnd() noexcept;
 
   std::vector<std::int32_t> candidates_;
+  std::vector<std::int32_t> sweep_ids_;  // the candidates a move sweeps (touching ones left out)
   std::int32_t num_candidates_ = 0;
   bool truncated_ = false;
   bool last_gather_truncated_ = false;
