@@ -188,17 +188,21 @@ HS_AVX512_SWEEP inline __m512d NegateWhere(__m512d v, __mmask8 k) {
 }
 
 // SweepPoint in lanes: the root where the scalar one returns it, 2 elsewhere.
-HS_AVX512_SWEEP inline __m512d SweepPointLanes(const V3& m, const V3& d, double R) {
+HS_AVX512_SWEEP inline __m512d SweepPointLanes(const V3& m, const V3& d, double R, __mmask8 live) {
   const __m512d two = _mm512_set1_pd(2.0), zero = _mm512_setzero_pd();
   const __m512d m2 = Dot(m, m);
   const __m512d c = _mm512_sub_pd(m2, _mm512_set1_pd(R * R));
-  __mmask8 ok = _mm512_cmp_pd_mask(c, zero, _CMP_NLT_UQ);  // !(c < 0)
+  __mmask8 ok = live & _mm512_cmp_pd_mask(c, zero, _CMP_NLT_UQ);  // !(c < 0)
   const __m512d half_b = Dot(m, d);
   ok &= _mm512_cmp_pd_mask(half_b, zero, _CMP_NGE_UQ);  // !(half_b >= 0)
+  // (The square roots and the division only where some lane needs them: the divider is the
+  // pass's bottleneck.)
+  if (!ok) return two;
   ok &= _mm512_cmp_pd_mask(half_b, _mm512_mul_pd(_mm512_set1_pd(-kMinApproach_m), _mm512_sqrt_pd(m2)), _CMP_NGE_UQ);
   const __m512d a = Dot(d, d);
   const __m512d disc = _mm512_sub_pd(_mm512_mul_pd(half_b, half_b), _mm512_mul_pd(a, c));
   ok &= _mm512_cmp_pd_mask(disc, zero, _CMP_NLT_UQ);  // !(disc < 0)
+  if (!ok) return two;
   // std::max(0.0, v) is (0 < v) ? v : 0, as max_pd(v, 0) is (v > 0) ? v : 0.
   const __m512d root = _mm512_max_pd(
       _mm512_div_pd(_mm512_sub_pd(_mm512_sub_pd(zero, half_b), _mm512_sqrt_pd(disc)), a), zero);
@@ -246,7 +250,7 @@ HS_AVX512_SWEEP double SweepOwnedAvx512(const Eigen::Vector3d& x_in, const Eigen
       const __m512d vn = Dot(nf, d);
       __mmask8 hit = has_face & _mm512_cmp_pd_mask(h0, vR, _CMP_GE_OQ) &
                      _mm512_cmp_pd_mask(vn, _mm512_set1_pd(-kMinApproach_m), _CMP_LT_OQ);
-      const __m512d s = _mm512_div_pd(_mm512_sub_pd(h0, vR), _mm512_sub_pd(zero, vn));
+      const __m512d s = hit ? _mm512_div_pd(_mm512_sub_pd(h0, vR), _mm512_sub_pd(zero, vn)) : one;
       hit &= _mm512_cmp_pd_mask(s, one, _CMP_LE_OQ);
       if (hit) {
         const V3 q = SubScaled(AddScaled(x, s, d), vR, nf);
@@ -272,8 +276,9 @@ HS_AVX512_SWEEP double SweepOwnedAvx512(const Eigen::Vector3d& x_in, const Eigen
       const V3 m_perp = SubScaled(m, t0, ed), d_perp = SubScaled(d, dt, ed);
       go &= _mm512_cmp_pd_mask(Dot(d_perp, d_perp), zero, _CMP_NLE_UQ);  // !(|d_perp|^2 <= 0)
       if (!go) continue;
-      const __m512d s = SweepPointLanes(m_perp, d_perp, R);
+      const __m512d s = SweepPointLanes(m_perp, d_perp, R, go);
       go &= _mm512_cmp_pd_mask(s, best, _CMP_LT_OQ);
+      if (!go) continue;
       const __m512d t = _mm512_div_pd(Dot(AddScaled(m, s, d), ed), len2);
       go &= _mm512_cmp_pd_mask(t, zero, _CMP_GE_OQ) & _mm512_cmp_pd_mask(t, one, _CMP_LE_OQ);
       best = _mm512_mask_mov_pd(best, go, s);
@@ -282,7 +287,7 @@ HS_AVX512_SWEEP double SweepOwnedAvx512(const Eigen::Vector3d& x_in, const Eigen
     for (int k = 0; k < 3; ++k) {
       const __mmask8 go = live & own[k];
       if (!go) continue;
-      const __m512d s = SweepPointLanes(Sub(x, v[k]), d, R);
+      const __m512d s = SweepPointLanes(Sub(x, v[k]), d, R, go);
       best = _mm512_mask_mov_pd(best, go & _mm512_cmp_pd_mask(s, best, _CMP_LT_OQ), s);
     }
     best_all = _mm512_mask_min_pd(best_all, live, best_all, best);
