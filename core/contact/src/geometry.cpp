@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstddef>
+#include <limits>
 
 #if defined(__x86_64__)
 #include <immintrin.h>
@@ -294,9 +295,71 @@ HS_AVX512_SWEEP double SweepOwnedAvx512(const Eigen::Vector3d& x_in, const Eigen
   }
   return _mm512_reduce_min_pd(best_all);
 }
+// Squared distance from x to eight triangles: the plane's where the foot lies inside all three
+// edges (or the triangle is degenerate: then the edges' only), else the nearest edge segment's.
+HS_AVX512_SWEEP std::int32_t WithinAvx512(const Eigen::Vector3d& x_in, double r, const SweepTriangle* tris,
+                                          const std::int32_t* ids, std::int32_t n, std::int32_t* out) {
+  constexpr int kStride = static_cast<int>(sizeof(SweepTriangle) / sizeof(double));
+  const auto* base = reinterpret_cast<const double*>(tris);
+  const V3 x{_mm512_set1_pd(x_in.x()), _mm512_set1_pd(x_in.y()), _mm512_set1_pd(x_in.z())};
+  const __m512d zero = _mm512_setzero_pd(), one = _mm512_set1_pd(1.0);
+  const double rs = r * (1.0 + 1e-9);
+  const __m512d r2 = _mm512_set1_pd(rs * rs);
+  std::int32_t k = 0;
+  for (std::int32_t i = 0; i < n; i += 8) {
+    const auto live = static_cast<__mmask8>(n - i >= 8 ? 0xFF : (1u << (n - i)) - 1u);
+    const __m256i id = _mm256_maskz_loadu_epi32(live, ids + i);
+    const __m256i idx = _mm256_mullo_epi32(id, _mm256_set1_epi32(kStride));
+    auto field = [&](std::size_t offset_bytes) HS_AVX512_SWEEP {
+      return _mm512_mask_i32gather_pd(zero, live, idx, base + offset_bytes / sizeof(double), 8);
+    };
+    auto vec = [&](std::size_t offset_bytes) HS_AVX512_SWEEP {
+      return V3{field(offset_bytes), field(offset_bytes + 8), field(offset_bytes + 16)};
+    };
+    __mmask8 has_face = 0;
+    for (int q = 0; q < 8; ++q) {
+      if (live & (1u << q)) has_face |= static_cast<__mmask8>(tris[ids[i + q]].has_face ? 1u << q : 0u);
+    }
+    const V3 nrm = vec(offsetof(SweepTriangle, n));
+    __m512d d2 = _mm512_set1_pd(std::numeric_limits<double>::infinity());
+    __mmask8 inside = has_face;
+    for (int e = 0; e < 3; ++e) {
+      const V3 p0 = vec(offsetof(SweepTriangle, v) + 24 * static_cast<std::size_t>(e));
+      const V3 ed = vec(offsetof(SweepTriangle, ed) + 24 * static_cast<std::size_t>(e));
+      const __m512d len2 = field(offsetof(SweepTriangle, len2) + 8 * static_cast<std::size_t>(e));
+      const V3 m = Sub(x, p0);
+      // The foot is inside edge e's side where (ed x m) . n >= 0 (winding order).
+      inside &= _mm512_cmp_pd_mask(Dot(Cross(ed, m), nrm), zero, _CMP_GE_OQ);
+      // Point-segment distance (a zero-length edge: its start point).
+      const __mmask8 has_len = _mm512_cmp_pd_mask(len2, zero, _CMP_GT_OQ);
+      const __m512d t = _mm512_min_pd(
+          _mm512_max_pd(_mm512_maskz_div_pd(has_len, Dot(m, ed), len2), zero), one);
+      const V3 diff = SubScaled(m, t, ed);
+      d2 = _mm512_min_pd(d2, Dot(diff, diff));
+    }
+    const __m512d h = Dot(nrm, Sub(x, vec(offsetof(SweepTriangle, v))));
+    d2 = _mm512_mask_mov_pd(d2, inside, _mm512_mul_pd(h, h));
+    // Kept: within r (with the slack), and any lane whose distance is NaN.
+    const auto keep = static_cast<__mmask8>(live & _mm512_cmp_pd_mask(d2, r2, _CMP_NGT_UQ));
+    const __m256i kept = _mm256_maskz_compress_epi32(keep, id);
+    _mm256_storeu_si256(reinterpret_cast<__m256i*>(out + k), kept);
+    k += __builtin_popcount(keep);
+  }
+  return k;
+}
 #pragma GCC diagnostic pop
 #endif
 }  // namespace
+
+std::int32_t TrianglesWithin(const Eigen::Vector3d& x, double r, const SweepTriangle* tris, const std::int32_t* ids,
+                             std::int32_t n, std::int32_t* out, bool vector) noexcept {
+#if defined(__x86_64__)
+  static const bool avx512 = __builtin_cpu_supports("avx512f") && __builtin_cpu_supports("avx512vl");
+  if (vector && avx512) return WithinAvx512(x, r, tris, ids, n, out);
+#endif
+  std::copy(ids, ids + n, out);
+  return n;
+}
 
 double SweepSphereTrianglesOwned(const Eigen::Vector3d& x, const Eigen::Vector3d& d, double R_m,
                                  const SweepTriangle* tris, const std::int32_t* ids, std::int32_t n,

@@ -65,7 +65,7 @@ ProxySolver::ProxySolver(std::int32_t max_candidates)
     for (auto& v : h.soa) v.resize(candidates_.size());
     h.ids.resize(candidates_.size());
   }
-  sweep_ids_.resize(candidates_.size());
+  sweep_ids_.resize(candidates_.size() + 8);
   candidates_.resize(candidates_.size() + 16);  // the vector cull stores whole groups of 16
 }
 
@@ -250,8 +250,16 @@ int ProxySolver::CollectConstraints(const MeshCollider& collider, const ProxyPar
   const double touch = R + params.skin_m + kTouchBand_m;
   int m = 0;
   touching_.n = 0;
-  for (std::int32_t i = 0; i < num_candidates_; ++i) {
-    const std::int32_t t = candidates_[static_cast<std::size_t>(i)];
+  // A neighbourhood's candidates are first reduced to those within the touch band of x (the
+  // distances in lanes; the same triangles in the same order for the exact tests below).
+  const std::int32_t* cand = candidates_.data();
+  std::int32_t num = num_candidates_;
+  if (culled_) {
+    num = TrianglesWithin(x, touch, collider.triangles(), cand, num, sweep_ids_.data(), vector_cull_);
+    cand = sweep_ids_.data();
+  }
+  for (std::int32_t i = 0; i < num; ++i) {
+    const std::int32_t t = cand[static_cast<std::size_t>(i)];
     // The distance to a triangle is at least the distance to its plane, and to its disc: a
     // plane or a disc beyond the touch band skips the exact closest point (same constraints,
     // see kPlaneSlack_m).

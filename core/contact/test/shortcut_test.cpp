@@ -176,6 +176,47 @@ TEST(Shortcuts, BatchSweepEqualsTheOneAtATimeFoldBitForBit) {
   EXPECT_GT(hits, batches / 10);  // many batches touch something on the way
 }
 
+// The lane distance filter of the constraint collection keeps every triangle within r of the
+// point (by the exact closest point), in order, and drops the ones clearly beyond.
+TEST(Shortcuts, TrianglesWithinKeepsEveryTriangleInReachAndDropsTheRest) {
+  std::mt19937 rng(29);
+  std::uniform_real_distribution<double> u(-0.01, 0.01);
+  std::vector<SweepTriangle> tris;
+  for (int i = 0; i < 2000; ++i) {
+    const Eigen::Vector3d a(u(rng), u(rng), 0.2 * u(rng)), c(u(rng), u(rng), 0.2 * u(rng));
+    Eigen::Vector3d b(u(rng), u(rng), 0.2 * u(rng));
+    if (i % 50 == 3) b = a + 0.5 * (c - a);  // degenerate (collinear)
+    if (i % 97 == 5) b = a;                  // a zero-length edge
+    tris.push_back(MakeSweepTriangle(a, b, c));
+  }
+  std::vector<std::int32_t> ids(21), out(21 + 8);
+  long kept = 0, dropped = 0;
+  for (int trial = 0; trial < 20000; ++trial) {
+    const Eigen::Vector3d x(u(rng), u(rng), u(rng));
+    const double r = 0.002 + 0.004 * std::abs(u(rng)) / 0.01;
+    const auto n = static_cast<std::int32_t>(1 + trial % 21);
+    for (std::int32_t i = 0; i < n; ++i) ids[static_cast<std::size_t>(i)] = static_cast<std::int32_t>(rng() % tris.size());
+    const std::int32_t k = TrianglesWithin(x, r, tris.data(), ids.data(), n, out.data());
+    std::int32_t j = 0;  // walks out[] alongside: kept ids in their order
+    for (std::int32_t i = 0; i < n; ++i) {
+      const SweepTriangle& t = tris[static_cast<std::size_t>(ids[static_cast<std::size_t>(i)])];
+      const double dist = (x - ClosestPointOnTriangle(x, t.v[0], t.v[1], t.v[2])).norm();
+      const bool is_kept = j < k && out[static_cast<std::size_t>(j)] == ids[static_cast<std::size_t>(i)];
+      if (is_kept) ++j;
+      if (dist <= r) {
+        ASSERT_TRUE(is_kept) << "trial " << trial << ": a triangle " << dist << " from x dropped";
+      }
+      if (dist > r * (1.0 + 1e-6)) {
+        EXPECT_FALSE(is_kept) << "trial " << trial << ": kept at " << dist << " > " << r;
+      }
+      (is_kept ? kept : dropped) += 1;
+    }
+    ASSERT_EQ(j, k);
+  }
+  EXPECT_GT(kept, 1000);
+  EXPECT_GT(dropped, 1000);
+}
+
 // Each vertex swept once, by its owner: over the triangles a ball around a segment reaches (the
 // proxy's candidates), the first touch on the way is the same bits as with every triangle's three
 // vertices.

@@ -86,6 +86,13 @@ double SweepSphereTrianglesOwned(const Eigen::Vector3d& x, const Eigen::Vector3d
                                  const SweepTriangle* tris, const std::int32_t* ids, std::int32_t n,
                                  bool vector = true) noexcept;
 
+/// Writes to out, in order, the ids among ids[0..n) of the triangles of `tris` that may lie
+/// within r of x: every one whose distance is at most r, and others only within round-off of r
+/// (the distance is computed exactly in eight lanes where the processor has AVX-512 and kept
+/// with a relative slack of 1e-9; elsewhere every id is kept). Returns how many. out holds n + 8.
+std::int32_t TrianglesWithin(const Eigen::Vector3d& x, double r, const SweepTriangle* tris, const std::int32_t* ids,
+                             std::int32_t n, std::int32_t* out, bool vector = true) noexcept;
+
 /// Approach (over one sweep) below which a feature is treated as tangent, not hit [m]: far below
 /// any motion a hand makes in one haptic step, far above round-off at these scales.
 inline constexpr double kMinApproach_m = 1e-13;
