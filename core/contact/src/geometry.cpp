@@ -265,8 +265,9 @@ HS_AVX512_SWEEP double SweepOwnedAvx512(const Eigen::Vector3d& x_in, const Eigen
     }
     // Edges.
     for (int e = 0; e < 3; ++e) {
-      const V3 ed = vec(offsetof(SweepTriangle, ed) + 24 * static_cast<std::size_t>(e));
-      const __m512d len2 = field(offsetof(SweepTriangle, len2) + 8 * static_cast<std::size_t>(e));
+      // ed and len2 as MakeSweepTriangle computes them (the same bits, two gathers fewer a field).
+      const V3 ed = Sub(v[(e + 1) % 3], v[e]);
+      const __m512d len2 = Dot(ed, ed);
       __mmask8 go = live & _mm512_cmp_pd_mask(len2, zero, _CMP_GT_OQ);
       const V3 m = Sub(x, v[e]);
       const __m512d t0 = _mm512_div_pd(Dot(m, ed), len2), dt = _mm512_div_pd(Dot(d, ed), len2);
@@ -323,10 +324,12 @@ HS_AVX512_SWEEP std::int32_t WithinAvx512(const Eigen::Vector3d& x_in, double r,
     const V3 nrm = vec(offsetof(SweepTriangle, n));
     __m512d d2 = _mm512_set1_pd(std::numeric_limits<double>::infinity());
     __mmask8 inside = has_face;
+    const V3 v[3] = {vec(offsetof(SweepTriangle, v)), vec(offsetof(SweepTriangle, v) + 24),
+                     vec(offsetof(SweepTriangle, v) + 48)};
     for (int e = 0; e < 3; ++e) {
-      const V3 p0 = vec(offsetof(SweepTriangle, v) + 24 * static_cast<std::size_t>(e));
-      const V3 ed = vec(offsetof(SweepTriangle, ed) + 24 * static_cast<std::size_t>(e));
-      const __m512d len2 = field(offsetof(SweepTriangle, len2) + 8 * static_cast<std::size_t>(e));
+      const V3& p0 = v[e];
+      const V3 ed = Sub(v[(e + 1) % 3], v[e]);
+      const __m512d len2 = Dot(ed, ed);
       const V3 m = Sub(x, p0);
       // The foot is inside edge e's side where (ed x m) . n >= 0 (winding order).
       inside &= _mm512_cmp_pd_mask(Dot(Cross(ed, m), nrm), zero, _CMP_GE_OQ);
@@ -337,7 +340,7 @@ HS_AVX512_SWEEP std::int32_t WithinAvx512(const Eigen::Vector3d& x_in, double r,
       const V3 diff = SubScaled(m, t, ed);
       d2 = _mm512_min_pd(d2, Dot(diff, diff));
     }
-    const __m512d h = Dot(nrm, Sub(x, vec(offsetof(SweepTriangle, v))));
+    const __m512d h = Dot(nrm, Sub(x, v[0]));
     d2 = _mm512_mask_mov_pd(d2, inside, _mm512_mul_pd(h, h));
     // Kept: within r (with the slack), and any lane whose distance is NaN.
     const auto keep = static_cast<__mmask8>(live & _mm512_cmp_pd_mask(d2, r2, _CMP_NGT_UQ));
