@@ -224,8 +224,8 @@ MeshCollider::~MeshCollider() = default;
 MeshCollider::MeshCollider(MeshCollider&&) noexcept = default;
 MeshCollider& MeshCollider::operator=(MeshCollider&&) noexcept = default;
 
-BallQueryResult MeshCollider::QueryBall(const Eigen::Vector3d& c, double r_m,
-                                        std::span<std::int32_t> ids) const noexcept {
+BallQueryResult MeshCollider::QueryBall(const Eigen::Vector3d& c, double r_m, std::span<std::int32_t> ids,
+                                        bool exact) const noexcept {
   BallQueryResult out;
   if (!c.allFinite() || !(r_m > 0.0) || !std::isfinite(r_m)) return out;
   const double r2 = r_m * r_m;
@@ -250,7 +250,14 @@ BallQueryResult MeshCollider::QueryBall(const Eigen::Vector3d& c, double r_m,
     if (item < 0) {
       const auto t = static_cast<std::size_t>(-1 - item);
       if (BeyondTriangle(tri_disc_[t], c, PlaneDistance(tri_plane_[t], c), far)) continue;
-      if (!AddIfReached(tri_[t], -1 - item, c, r2, ids, out)) return out;
+      if (exact) {
+        if (!AddIfReached(tri_[t], -1 - item, c, r2, ids, out)) return out;
+      } else if (out.count == static_cast<std::int32_t>(ids.size())) {
+        out.truncated = true;
+        return out;
+      } else {
+        ids[static_cast<std::size_t>(out.count++)] = -1 - item;
+      }
       continue;
     }
     const WideNode& n = wide[item];

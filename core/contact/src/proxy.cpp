@@ -188,7 +188,8 @@ bool ProxySolver::FillNeighbourhood(const MeshCollider& collider, const Eigen::V
   h->collider_id = 0;
   const std::int32_t cap = std::min<std::int32_t>(static_cast<std::int32_t>(h->ids.size()), collider.max_candidates());
   const BallQueryResult q =
-      collider.QueryBall(c, r + kNeighbourSlack_m, std::span<std::int32_t>(h->ids.data(), static_cast<std::size_t>(cap)));
+      collider.QueryBall(c, r + kNeighbourSlack_m, std::span<std::int32_t>(h->ids.data(), static_cast<std::size_t>(cap)),
+                         /*exact=*/false);
   if (q.truncated) return false;
   for (std::int32_t i = 0; i < q.count; ++i) {
     const std::int32_t t = h->ids[static_cast<std::size_t>(i)];

@@ -261,6 +261,40 @@ TEST(Shortcuts, SweepingEachVertexOnceByItsOwnerFindsTheSameFirstTouch) {
   EXPECT_GT(vertex_hits, 20);  // and some first at a vertex, where the owners matter
 }
 
+// The walk without the leaves' exact distance (what the proxy's neighbourhoods are filled with)
+// returns every triangle the exact walk returns, in the same order, and only triangles whose
+// plane-and-disc bound reaches the ball.
+TEST(Shortcuts, TheInexactWalkHoldsTheExactOneInItsOrder) {
+  const auto mesh = std::make_shared<const TriMesh>(MakeBumpySphere(0.05, 0.003, 5));
+  const MeshCollider collider(mesh, 4096);
+  std::mt19937 rng(31);
+  std::normal_distribution<double> g(0.0, 1.0);
+  std::vector<std::int32_t> exact(4096), loose(4096);
+  long extra = 0, found = 0;
+  for (int trial = 0; trial < 2000; ++trial) {
+    const Eigen::Vector3d c = Eigen::Vector3d(g(rng), g(rng), g(rng)).normalized() * (0.05 + 0.01 * g(rng));
+    const double r = 0.002 + 0.01 * std::abs(g(rng));
+    const BallQueryResult e = collider.QueryBall(c, r, exact);
+    const BallQueryResult l = collider.QueryBall(c, r, loose, /*exact=*/false);
+    ASSERT_FALSE(e.truncated || l.truncated);
+    std::int32_t k = 0;  // exact's ids as a subsequence of loose's
+    for (std::int32_t i = 0; i < l.count; ++i) {
+      const std::int32_t t = loose[static_cast<std::size_t>(i)];
+      if (k < e.count && exact[static_cast<std::size_t>(k)] == t) {
+        ++k;
+        continue;
+      }
+      ++extra;
+      const double h = PlaneDistance(collider.triangle_plane(t), c);
+      EXPECT_FALSE(BeyondTriangle(collider.triangle_disc(t), c, h, r)) << "trial " << trial << " triangle " << t;
+    }
+    ASSERT_EQ(k, e.count) << "trial " << trial;
+    found += e.count;
+  }
+  EXPECT_GT(found, 10000);
+  EXPECT_GT(extra, 0);
+}
+
 // The smallest trees: one triangle (the wide root holds the leaf itself), two and three.
 TEST(Shortcuts, TheWalkFindsTheTrianglesOfTinyMeshes) {
   for (int n = 1; n <= 3; ++n) {

@@ -46,9 +46,11 @@ class MeshCollider {
   MeshCollider& operator=(MeshCollider&&) noexcept;
 
   /// Ids of the triangles within distance r of c_O (mesh frame O), in BVH order.
-  /// Real-time: noexcept, no allocation.
-  BallQueryResult QueryBall(const Eigen::Vector3d& c_O_m, double r_m,
-                            std::span<std::int32_t> triangle_ids) const noexcept;
+  /// Real-time: noexcept, no allocation. exact = false: without the leaves' exact distance, every
+  /// triangle whose plane and bounding disc do not put it beyond r (a superset, in the same
+  /// order; for callers that test each triangle anyway).
+  BallQueryResult QueryBall(const Eigen::Vector3d& c_O_m, double r_m, std::span<std::int32_t> triangle_ids,
+                            bool exact = true) const noexcept;
   /// The same answer by walking FCL's own nodes (ball against each node's OBB): the previous
   /// real-time path, kept as the reference for tests. Real-time safe as well.
   BallQueryResult QueryBallObb(const Eigen::Vector3d& c_O_m, double r_m,

@@ -192,7 +192,8 @@ class ProxySolver {
   static constexpr std::size_t kEndEntries = 64;
   std::vector<EndEntry> ends_;
   static std::size_t EndSlot(const Eigen::Vector3d& x) noexcept;
-  // Neighbourhoods: the triangles within a ball (an untruncated QueryBall, in its order) with
+  // Neighbourhoods: the triangles within a ball (at least: an untruncated QueryBall without the
+  // leaves' exact distance, in its order) with
   // their planes and bounding discs. A gather whose ball lies inside one is served from it: the
   // triangles whose plane-and-disc bound (SegmentDiscBound2) comes within the gather's radius of
   // its segment, a superset of what the sweep can hit and of what lies within the touch band of
