@@ -210,39 +210,56 @@ HS_AVX512_SWEEP inline __m512d SweepPointLanes(const V3& m, const V3& d, double 
   return _mm512_mask_mov_pd(two, ok, root);
 }
 
+// Eight triangles tris[ids[i..i+8)] gathered field by field (lanes past n read nothing, hold 0).
+struct TriangleLanes {
+  static_assert(sizeof(SweepTriangle) % sizeof(double) == 0, "triangles gathered as doubles");
+  static constexpr int kStride = static_cast<int>(sizeof(SweepTriangle) / sizeof(double));
+  const double* base;
+  __mmask8 live;
+  __m256i id;
+  __m256i idx;
+  __mmask8 has_face = 0;
+
+  HS_AVX512_SWEEP TriangleLanes(const SweepTriangle* tris, const std::int32_t* ids, std::int32_t n, std::int32_t i)
+      : base(reinterpret_cast<const double*>(tris)),
+        live(static_cast<__mmask8>(n - i >= 8 ? 0xFF : (1u << (n - i)) - 1u)),
+        id(_mm256_maskz_loadu_epi32(live, ids + i)),
+        idx(_mm256_mullo_epi32(id, _mm256_set1_epi32(kStride))) {
+    for (int q = 0; q < 8; ++q) {
+      if (live & (1u << q)) has_face |= static_cast<__mmask8>(tris[ids[i + q]].has_face ? 1u << q : 0u);
+    }
+  }
+  HS_AVX512_SWEEP __m512d Field(std::size_t offset_bytes) const {
+    return _mm512_mask_i32gather_pd(_mm512_setzero_pd(), live, idx, base + offset_bytes / sizeof(double), 8);
+  }
+  HS_AVX512_SWEEP V3 Vec(std::size_t offset_bytes) const {
+    return V3{Field(offset_bytes), Field(offset_bytes + 8), Field(offset_bytes + 16)};
+  }
+  HS_AVX512_SWEEP V3 Vertex(int k) const { return Vec(offsetof(SweepTriangle, v) + 24 * static_cast<std::size_t>(k)); }
+  HS_AVX512_SWEEP V3 Normal() const { return Vec(offsetof(SweepTriangle, n)); }
+};
+
 HS_AVX512_SWEEP double SweepOwnedAvx512(const Eigen::Vector3d& x_in, const Eigen::Vector3d& d_in, double R,
                                         const SweepTriangle* tris, const std::int32_t* ids, std::int32_t n) {
-  static_assert(sizeof(SweepTriangle) % sizeof(double) == 0, "triangles gathered as doubles");
-  constexpr int kStride = static_cast<int>(sizeof(SweepTriangle) / sizeof(double));
-  const auto* base = reinterpret_cast<const double*>(tris);
   const V3 x{_mm512_set1_pd(x_in.x()), _mm512_set1_pd(x_in.y()), _mm512_set1_pd(x_in.z())};
   const V3 d{_mm512_set1_pd(d_in.x()), _mm512_set1_pd(d_in.y()), _mm512_set1_pd(d_in.z())};
   const __m512d vR = _mm512_set1_pd(R), zero = _mm512_setzero_pd(), one = _mm512_set1_pd(1.0);
   __m512d best_all = _mm512_set1_pd(2.0);
   for (std::int32_t i = 0; i < n; i += 8) {
-    const auto live = static_cast<__mmask8>(n - i >= 8 ? 0xFF : (1u << (n - i)) - 1u);
-    const __m256i id = _mm256_maskz_loadu_epi32(live, ids + i);
-    const __m256i idx = _mm256_mullo_epi32(id, _mm256_set1_epi32(kStride));
-    auto field = [&](std::size_t offset_bytes) HS_AVX512_SWEEP {
-      return _mm512_mask_i32gather_pd(zero, live, idx, base + offset_bytes / sizeof(double), 8);
-    };
-    auto vec = [&](std::size_t offset_bytes) HS_AVX512_SWEEP {
-      return V3{field(offset_bytes), field(offset_bytes + 8), field(offset_bytes + 16)};
-    };
-    const V3 v[3] = {vec(offsetof(SweepTriangle, v)), vec(offsetof(SweepTriangle, v) + 24),
-                     vec(offsetof(SweepTriangle, v) + 48)};
-    // The flags, lane by lane.
-    __mmask8 has_face = 0, own[3] = {0, 0, 0};
+    const TriangleLanes lanes(tris, ids, n, i);
+    const __mmask8 live = lanes.live, has_face = lanes.has_face;
+    const V3 v[3] = {lanes.Vertex(0), lanes.Vertex(1), lanes.Vertex(2)};
+    // The owned vertices, lane by lane.
+    __mmask8 own[3] = {0, 0, 0};
     for (int q = 0; q < 8; ++q) {
       if (!(live & (1u << q))) continue;
       const SweepTriangle& t = tris[ids[i + q]];
-      has_face |= static_cast<__mmask8>(t.has_face ? 1u << q : 0u);
       for (int k = 0; k < 3; ++k) own[k] |= static_cast<__mmask8>(t.own_vertices & (1u << k) ? 1u << q : 0u);
     }
     __m512d best = _mm512_set1_pd(2.0);
     // Face interior.
     {
-      const V3 n_tri = vec(offsetof(SweepTriangle, n));
+      const V3 n_tri = lanes.Normal();
       __m512d h0 = Dot(n_tri, Sub(x, v[0]));
       const __mmask8 flip = _mm512_cmp_pd_mask(h0, zero, _CMP_LT_OQ);
       // n = -n, h0 = -h0 where h0 < 0 (the sign bit flipped, as unary minus does).
@@ -300,32 +317,18 @@ HS_AVX512_SWEEP double SweepOwnedAvx512(const Eigen::Vector3d& x_in, const Eigen
 // edges (or the triangle is degenerate: then the edges' only), else the nearest edge segment's.
 HS_AVX512_SWEEP std::int32_t WithinAvx512(const Eigen::Vector3d& x_in, double r, const SweepTriangle* tris,
                                           const std::int32_t* ids, std::int32_t n, std::int32_t* out) {
-  constexpr int kStride = static_cast<int>(sizeof(SweepTriangle) / sizeof(double));
-  const auto* base = reinterpret_cast<const double*>(tris);
   const V3 x{_mm512_set1_pd(x_in.x()), _mm512_set1_pd(x_in.y()), _mm512_set1_pd(x_in.z())};
   const __m512d zero = _mm512_setzero_pd(), one = _mm512_set1_pd(1.0);
   const double rs = r * (1.0 + 1e-9);
   const __m512d r2 = _mm512_set1_pd(rs * rs);
   std::int32_t k = 0;
   for (std::int32_t i = 0; i < n; i += 8) {
-    const auto live = static_cast<__mmask8>(n - i >= 8 ? 0xFF : (1u << (n - i)) - 1u);
-    const __m256i id = _mm256_maskz_loadu_epi32(live, ids + i);
-    const __m256i idx = _mm256_mullo_epi32(id, _mm256_set1_epi32(kStride));
-    auto field = [&](std::size_t offset_bytes) HS_AVX512_SWEEP {
-      return _mm512_mask_i32gather_pd(zero, live, idx, base + offset_bytes / sizeof(double), 8);
-    };
-    auto vec = [&](std::size_t offset_bytes) HS_AVX512_SWEEP {
-      return V3{field(offset_bytes), field(offset_bytes + 8), field(offset_bytes + 16)};
-    };
-    __mmask8 has_face = 0;
-    for (int q = 0; q < 8; ++q) {
-      if (live & (1u << q)) has_face |= static_cast<__mmask8>(tris[ids[i + q]].has_face ? 1u << q : 0u);
-    }
-    const V3 nrm = vec(offsetof(SweepTriangle, n));
+    const TriangleLanes lanes(tris, ids, n, i);
+    const __mmask8 live = lanes.live;
+    const V3 nrm = lanes.Normal();
+    const V3 v[3] = {lanes.Vertex(0), lanes.Vertex(1), lanes.Vertex(2)};
     __m512d d2 = _mm512_set1_pd(std::numeric_limits<double>::infinity());
-    __mmask8 inside = has_face;
-    const V3 v[3] = {vec(offsetof(SweepTriangle, v)), vec(offsetof(SweepTriangle, v) + 24),
-                     vec(offsetof(SweepTriangle, v) + 48)};
+    __mmask8 inside = lanes.has_face;
     for (int e = 0; e < 3; ++e) {
       const V3& p0 = v[e];
       const V3 ed = Sub(v[(e + 1) % 3], v[e]);
@@ -344,7 +347,7 @@ HS_AVX512_SWEEP std::int32_t WithinAvx512(const Eigen::Vector3d& x_in, double r,
     d2 = _mm512_mask_mov_pd(d2, inside, _mm512_mul_pd(h, h));
     // Kept: within r (with the slack), and any lane whose distance is NaN.
     const auto keep = static_cast<__mmask8>(live & _mm512_cmp_pd_mask(d2, r2, _CMP_NGT_UQ));
-    const __m256i kept = _mm256_maskz_compress_epi32(keep, id);
+    const __m256i kept = _mm256_maskz_compress_epi32(keep, lanes.id);
     _mm256_storeu_si256(reinterpret_cast<__m256i*>(out + k), kept);
     k += __builtin_popcount(keep);
   }
