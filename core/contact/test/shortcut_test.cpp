@@ -139,22 +139,29 @@ TEST(Shortcuts, PreparedTriangleSweepEqualsTheOldSweepBitForBit) {
   EXPECT_GT(grazing, 40000);
 }
 
+// Random triangles within 1 cm of the origin, nearly flat in z, with degenerate (collinear)
+// ones and ones with a zero-length edge among them: the lane passes' inputs.
+std::vector<SweepTriangle> RandomLaneTriangles(std::mt19937& rng, int count) {
+  std::uniform_real_distribution<double> u(-0.01, 0.01);
+  std::vector<SweepTriangle> tris;
+  for (int i = 0; i < count; ++i) {
+    const Eigen::Vector3d a(u(rng), u(rng), 0.2 * u(rng)), c(u(rng), u(rng), 0.2 * u(rng));
+    Eigen::Vector3d b(u(rng), u(rng), 0.2 * u(rng));
+    if (i % 50 == 3) b = a + 0.5 * (c - a);  // degenerate (collinear)
+    if (i % 97 == 5) b = a;                  // a zero-length edge
+    tris.push_back(MakeSweepTriangle(a, b, c));
+  }
+  return tris;
+}
+
 // The batch sweep (eight triangles per AVX-512 pass) is the fold of the one-triangle sweep bit
 // for bit: random triangles around random moves (grazing, short, degenerate, with any owned
 // vertices), in batches of 1 to 19 so that partial groups of lanes are exercised.
 TEST(Shortcuts, BatchSweepEqualsTheOneAtATimeFoldBitForBit) {
   std::mt19937 rng(23);
   std::uniform_real_distribution<double> u(-0.01, 0.01);
-  std::vector<SweepTriangle> tris;
-  for (int i = 0; i < 4000; ++i) {
-    const Eigen::Vector3d a(u(rng), u(rng), 0.2 * u(rng)), c(u(rng), u(rng), 0.2 * u(rng));
-    Eigen::Vector3d b(u(rng), u(rng), 0.2 * u(rng));
-    if (i % 50 == 3) b = a + 0.5 * (c - a);  // degenerate (collinear)
-    if (i % 97 == 5) b = a;                  // a zero-length edge
-    SweepTriangle t = MakeSweepTriangle(a, b, c);
-    t.own_vertices = static_cast<std::uint8_t>(rng() % 8);
-    tris.push_back(t);
-  }
+  std::vector<SweepTriangle> tris = RandomLaneTriangles(rng, 4000);
+  for (SweepTriangle& t : tris) t.own_vertices = static_cast<std::uint8_t>(rng() % 8);
   std::vector<std::int32_t> ids(19);
   int hits = 0, batches = 0;
   for (int trial = 0; trial < 30000; ++trial) {
@@ -181,14 +188,7 @@ TEST(Shortcuts, BatchSweepEqualsTheOneAtATimeFoldBitForBit) {
 TEST(Shortcuts, TrianglesWithinKeepsEveryTriangleInReachAndDropsTheRest) {
   std::mt19937 rng(29);
   std::uniform_real_distribution<double> u(-0.01, 0.01);
-  std::vector<SweepTriangle> tris;
-  for (int i = 0; i < 2000; ++i) {
-    const Eigen::Vector3d a(u(rng), u(rng), 0.2 * u(rng)), c(u(rng), u(rng), 0.2 * u(rng));
-    Eigen::Vector3d b(u(rng), u(rng), 0.2 * u(rng));
-    if (i % 50 == 3) b = a + 0.5 * (c - a);  // degenerate (collinear)
-    if (i % 97 == 5) b = a;                  // a zero-length edge
-    tris.push_back(MakeSweepTriangle(a, b, c));
-  }
+  const std::vector<SweepTriangle> tris = RandomLaneTriangles(rng, 2000);
   std::vector<std::int32_t> ids(21), out(21 + 8);
   long kept = 0, dropped = 0;
   for (int trial = 0; trial < 20000; ++trial) {
