@@ -37,10 +37,13 @@ constexpr double kNeighbourSlack_m = 2e-3;
 // Slack of the neighbourhood's containment test [m]: far above the round-off of distances at
 // these sizes (1e-17 m), far below anything it decides.
 constexpr double kNeighbourRoundoff_m = 1e-9;
-// Slack of the neighbourhood's cull [m]: its float planes and discs, relative to the centre
-// (within about 15 mm), and its float arithmetic are off by less than 1e-8 m; the triangles it
-// keeps beyond the touch band (by up to this) only cost the exact tests that reject them.
+// Slack of the neighbourhood's cull [m]: its float planes and discs, relative to the centre,
+// and its float arithmetic (a few dozen roundings of 2^-24) are off by less than
+// kCullFloatSlackPerExtent times the largest magnitude among them (about 1e-8 m for a
+// fingertip's neighbourhood on a table-top mesh); the triangles it keeps beyond the touch band
+// (by up to this) only cost the exact tests that reject them.
 constexpr double kCullFloatSlack_m = 1e-6;
+constexpr double kCullFloatSlackPerExtent = 4e-6;
 
 // DiscDistanceBound2 for every point of the segment x + s d, s in [0, 1], with plane distances h0
 // at x and h1 at x + d: the smallest |h| on it, and the foot of the segment nearest to the
@@ -72,9 +75,9 @@ ProxySolver::ProxySolver(std::int32_t max_candidates)
 namespace {
 // The segment cull of a neighbourhood's triangles (SegmentDiscBound2 against lim), written to
 // keep: out[k] = ids[i] for each triangle kept. The triangles' planes and discs are floats
-// relative to the neighbourhood's centre (as are x and d here), whose round-off (below 1e-8 m
-// at the sizes a neighbourhood has) the caller's lim covers with kCullFloatSlack_m. Keeps every
-// triangle whose bound is not beyond lim (a NaN one too: every comparison is false for it).
+// relative to the neighbourhood's centre (as are x and d here), whose round-off the caller's
+// lim covers with the neighbourhood's slack. Keeps every triangle whose bound is not beyond lim
+// (a NaN one too: every comparison is false for it).
 std::int32_t CullScalar(const std::array<const float*, 8>& q, const std::int32_t* ids, std::int32_t n,
                         const Eigen::Vector3d& x, const Eigen::Vector3d& d, double lim, std::int32_t* out) noexcept {
   std::int32_t k = 0;
@@ -173,7 +176,7 @@ bool ProxySolver::GatherFromNeighbourhood(const MeshCollider& collider, const Ei
     h.used = ++hood_clock_;
     std::array<const float*, 8> q{};
     for (std::size_t a = 0; a < q.size(); ++a) q[a] = h.soa[a].data();
-    num_candidates_ = Cull(q, h.ids.data(), h.n, x - h.c, d, r + kCullFloatSlack_m, candidates_.data(), vector_cull_);
+    num_candidates_ = Cull(q, h.ids.data(), h.n, x - h.c, d, r + h.slack, candidates_.data(), vector_cull_);
     last_gather_truncated_ = false;
     return true;
   }
@@ -191,6 +194,7 @@ bool ProxySolver::FillNeighbourhood(const MeshCollider& collider, const Eigen::V
       collider.QueryBall(c, r + kNeighbourSlack_m, std::span<std::int32_t>(h->ids.data(), static_cast<std::size_t>(cap)),
                          /*exact=*/false);
   if (q.truncated) return false;
+  double extent = r + kNeighbourSlack_m;  // the largest magnitude the cull meets
   for (std::int32_t i = 0; i < q.count; ++i) {
     const std::int32_t t = h->ids[static_cast<std::size_t>(i)];
     const auto u = static_cast<std::size_t>(i);
@@ -204,8 +208,11 @@ bool ProxySolver::FillNeighbourhood(const MeshCollider& collider, const Eigen::V
                           static_cast<float>(dc.y()), static_cast<float>(dc.z()),
                           std::nextafter(static_cast<float>(di.w()), std::numeric_limits<float>::infinity())};
     for (std::size_t a = 0; a < 8; ++a) h->soa[a][u] = rel[a];
+    const double e = std::abs(pl.w() - pl.head<3>().dot(c)) + dc.norm() + di.w();
+    if (e > extent) extent = e;  // (a NaN one, of a degenerate triangle, is kept by the cull anyway)
   }
   h->collider_id = collider.id();
+  h->slack = kCullFloatSlack_m + kCullFloatSlackPerExtent * extent;
   h->c = c;
   h->r = r + kNeighbourSlack_m;
   h->n = q.count;

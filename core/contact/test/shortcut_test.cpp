@@ -421,5 +421,42 @@ TEST(Shortcuts, ProxyStepsEqualTheExactPathOnRandomPaths) {
   EXPECT_GT(iterations, steps);
 }
 
+// Meshes of any size: a 20 m box and a 2 m icosphere (triangles metres across, whose discs'
+// float round-off is far above a table-top mesh's), fingertips sliding over their corners, edges
+// and faces: every step equals the reference path's.
+TEST(Shortcuts, ProxyStepsOnLargeMeshesEqualTheExactPath) {
+  const std::shared_ptr<const TriMesh> meshes[] = {
+      std::make_shared<const TriMesh>(MakeBoxMesh(Eigen::Vector3d(20.0, 20.0, 20.0))),
+      std::make_shared<const TriMesh>(MakeIcosphere(2.0, 1))};
+  ProxySolver fast(512), ref(512);
+  ref.set_reference_path(true);
+  ProxyParams params;
+  const FrictionParams friction{0.6, 0.5};
+  std::mt19937 rng(37);
+  std::normal_distribution<double> g(0.0, 1.0);
+  long touching = 0, steps = 0;
+  for (const auto& mesh : meshes) {
+    MeshCollider collider(mesh, 512);
+    for (int path = 0; path < 60; ++path) {
+      // From just outside a random vertex, drifting in and sliding along the surface.
+      const Eigen::Vector3d& v = mesh->p_O_m[static_cast<std::size_t>(rng() % mesh->p_O_m.size())];
+      const Eigen::Vector3d out = v.normalized();
+      Eigen::Vector3d goal = v + (params.radius_m + 0.002) * out + 0.004 * Eigen::Vector3d(g(rng), g(rng), g(rng));
+      ProxyState sf, sr;
+      for (int k = 0; k < 200; ++k) {
+        goal += 1e-4 * Eigen::Vector3d(g(rng), g(rng), g(rng)) - 3e-5 * out;
+        const ProxyContact cf = fast.Step(collider, params, friction, goal, sf);
+        const ProxyContact cr = ref.Step(collider, params, friction, goal, sr);
+        ASSERT_TRUE(SameBits(cf.x_O_m, cr.x_O_m)) << "path " << path << " step " << k;
+        ASSERT_EQ(cf.touching, cr.touching);
+        ASSERT_EQ(cf.triangle, cr.triangle);
+        touching += cf.touching ? 1 : 0;
+        ++steps;
+      }
+    }
+  }
+  EXPECT_GT(touching, steps / 4);
+}
+
 }  // namespace
 }  // namespace handshare::contact

@@ -204,6 +204,7 @@ class ProxySolver {
     std::uint64_t collider_id = 0;  // 0: empty
     Eigen::Vector3d c = Eigen::Vector3d::Zero();
     double r = 0.0;
+    double slack = 0.0;  // of the cull: covers the float round-off at this neighbourhood's sizes
     std::int32_t n = 0;
     std::uint64_t used = 0;
     std::vector<std::int32_t> ids;  // capacity: the candidate buffer's
