@@ -143,6 +143,10 @@ ContactSolver::ContactSolver(std::shared_ptr<const Compliance> compliance,
   slip_begin_.assign(P + 1, 0);
   slip_wn_.assign(M, Eigen::Vector2d::Zero());
   slip_w_.assign(2 * P, Eigen::Vector3d::Zero());
+  slip_row_.assign(3 * M, 0);
+  slip_row_begin_.assign(P + 1, 0);
+  slip_row_w0_.assign(3 * M, 0.0);
+  slip_row_w1_.assign(3 * M, 0.0);
 }
 
 void ContactSolver::ZeroOutputs() noexcept {
@@ -604,15 +608,19 @@ int ContactSolver::AssembleHeld(bool fill_matrix, int from_row) noexcept {
     row_of_[j] = r;
     r += mode_[j] == ContactMode::kFull3d ? 3 : 1;
   }
+  // The nodes whose rows are refilled: from the first at or after from_row in the order (rows
+  // grow along it).
+  std::int32_t q_from = 0;
+  while (q_from < num_unique_ && !(active_[perm_[q_from]] && row_of_[perm_[q_from]] >= from_row)) ++q_from;
   for (std::int32_t q = 0; q < num_unique_; ++q) {
     const std::int32_t j = perm_[q];
     if (!active_[j]) continue;
     const bool fj = mode_[j] == ContactMode::kFull3d;
     // The lower triangle only (blocks of the nodes at or after j in the order, whole diagonal
     // blocks): every factor and solve here reads rows >= column.
-    for (std::int32_t qi = q; qi < num_unique_ && fill_matrix; ++qi) {
+    for (std::int32_t qi = std::max(q, q_from); qi < num_unique_ && fill_matrix; ++qi) {
       const std::int32_t i = perm_[qi];
-      if (!active_[i] || row_of_[i] < from_row) continue;
+      if (!active_[i]) continue;
       const bool fi = mode_[i] == ContactMode::kFull3d;
       Eigen::Map<const Eigen::Matrix3d, 0, Eigen::OuterStride<>> Cij(
           Ccc_.data() + static_cast<std::ptrdiff_t>(3 * j) * ld + 3 * i, 3, 3, Eigen::OuterStride<>(ld));
@@ -761,29 +769,45 @@ bool ContactSolver::SolvePatchedSystem(bool refactor) noexcept {
   std::copy(Z_.begin(), Z_.begin() + r, rhs_.begin());
   if (ns > 0) {
     const int n2 = 2 * ns;
-    // Phi_a applied to a row vector v (the patch's held nodes' rows). With given forces the
-    // equations are T^T F = g instead (symmetric: Phi Z = B^T A^-1 B).
-    auto phi = [&](std::int32_t a, int k, const double* v) {
-      const Eigen::Vector3d& w = slip_w_[2 * a + k];
-      double s = 0.0;
+    // Phi_a applied to the columns (the patch's held nodes' rows), both equations of a patch
+    // from one read of each row. With given forces the equations are T^T F = g instead
+    // (symmetric: Phi Z = B^T A^-1 B).
+    std::int32_t t = 0;
+    for (std::int32_t a = 0; a < ns; ++a) {
+      slip_row_begin_[a] = t;
       for (std::int32_t m = slip_begin_[a]; m < slip_begin_[a + 1]; ++m) {
         const std::int32_t j = slip_members_[m];
-        const double* vj = v + row_of_[j];
         if (mode_[j] == ContactMode::kFull3d) {
-          s += w[0] * vj[0] + w[1] * vj[1] + w[2] * vj[2];
-        } else {
-          s += slip_wn_[m][k] * vj[0];  // a frictionless patch node: f = lambda n
+          for (int c = 0; c < 3; ++c) {
+            slip_row_[t] = row_of_[j] + c;
+            slip_row_w0_[t] = slip_w_[2 * a][c];
+            slip_row_w1_[t++] = slip_w_[2 * a + 1][c];
+          }
+        } else {  // a frictionless patch node: f = lambda n
+          slip_row_[t] = row_of_[j];
+          slip_row_w0_[t] = slip_wn_[m][0];
+          slip_row_w1_[t++] = slip_wn_[m][1];
         }
       }
-      return s;
-    };
-    for (std::int32_t a = 0; a < ns; ++a) {
-      for (int k = 0; k < 2; ++k) {
-        const int row = 2 * a + k;
-        slip_rhs_[row] = (given_force_ ? slip_force_[slipping_list_[a]][k] : 0.0) - phi(a, k, rhs_.data());
-        for (int col = 0; col < n2; ++col) {
-          slip_M_[static_cast<std::ptrdiff_t>(col) * n2 + row] =
-              phi(a, k, Zcol(col));
+    }
+    slip_row_begin_[ns] = t;
+    const std::ptrdiff_t ldz = 3 * static_cast<std::ptrdiff_t>(options_.max_contacts);
+    for (int col = 0; col <= n2; ++col) {  // column 0: z0 (as rhs_), then Z
+      const double* v = Z_.data() + col * ldz;
+      for (std::int32_t a = 0; a < ns; ++a) {
+        double s0 = 0.0, s1 = 0.0;
+        for (std::int32_t m = slip_row_begin_[a]; m < slip_row_begin_[a + 1]; ++m) {
+          const double x = v[slip_row_[m]];
+          s0 += slip_row_w0_[m] * x;
+          s1 += slip_row_w1_[m] * x;
+        }
+        if (col == 0) {
+          const Eigen::Vector2d g = given_force_ ? slip_force_[slipping_list_[a]] : Eigen::Vector2d::Zero();
+          slip_rhs_[2 * a] = g[0] - s0;
+          slip_rhs_[2 * a + 1] = g[1] - s1;
+        } else {
+          slip_M_[static_cast<std::ptrdiff_t>(col - 1) * n2 + 2 * a] = s0;
+          slip_M_[static_cast<std::ptrdiff_t>(col - 1) * n2 + 2 * a + 1] = s1;
         }
       }
     }
@@ -792,8 +816,9 @@ bool ContactSolver::SolvePatchedSystem(bool refactor) noexcept {
     for (int col = 0; col < n2; ++col) {
       const double s = slip_rhs_[col];
       if (!std::isfinite(s)) return false;
-      const double* z = Zcol(col);
-      for (int k = 0; k < r; ++k) rhs_[k] += s * z[k];
+      const double* __restrict z = Zcol(col);
+      double* __restrict y = rhs_.data();
+      for (int k = 0; k < r; ++k) y[k] += s * z[k];
     }
     for (std::int32_t a = 0; a < ns; ++a) {
       const std::int32_t p = slipping_list_[a];

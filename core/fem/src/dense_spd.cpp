@@ -127,11 +127,13 @@ HS_AVX512 bool FactorAvx512(double* A, int n, int ld, int p0 = 0) noexcept {
 // by the diagonal's reciprocal (computed off that chain) only.
 constexpr int kLanesMaxRows = 256;  // 16 kB of stack; larger systems take Eigen's solve
 
-// Row `row` of Y (8 lanes) solved in place: Y[row] less l[k stride] Y[k] over the rows k in
-// [from, to), then over the row `last` solved just before it (-1: none), divided by
-// l[row stride] (the diagonal).
-HS_AVX512 inline void SolveLanesRow(double* Y, const double* l, std::ptrdiff_t stride, int row, int from, int to,
-                                    int last) noexcept {
+// Row `row` of Y (8 lanes) solved in place and returned: Y[row] less l[k stride] Y[k] over the
+// rows k in [from, to), then less l[last stride] times `prev` (the row solved just before it, still
+// in a register: `last` < 0 for none), times 1 / l[row stride] (the diagonal). The chain from one
+// row to the next is that one FMA and the multiply; the store of a row is read back only by rows
+// two or more later, long after it has left the store buffer.
+HS_AVX512 inline __m512d SolveLanesRow(double* Y, const double* l, std::ptrdiff_t stride, int row, int from, int to,
+                                       int last, __m512d prev) noexcept {
   __m512d a0 = _mm512_load_pd(Y + 8 * row), a1 = _mm512_setzero_pd(), a2 = _mm512_setzero_pd(),
           a3 = _mm512_setzero_pd();
   int k = from;
@@ -143,8 +145,10 @@ HS_AVX512 inline void SolveLanesRow(double* Y, const double* l, std::ptrdiff_t s
   }
   for (; k < to; ++k) a0 = _mm512_fnmadd_pd(_mm512_set1_pd(l[k * stride]), _mm512_load_pd(Y + 8 * k), a0);
   __m512d sum = _mm512_add_pd(_mm512_add_pd(a0, a1), _mm512_add_pd(a2, a3));
-  if (last >= 0) sum = _mm512_fnmadd_pd(_mm512_set1_pd(l[last * stride]), _mm512_load_pd(Y + 8 * last), sum);
-  _mm512_store_pd(Y + 8 * row, _mm512_mul_pd(sum, _mm512_set1_pd(1.0 / l[row * stride])));
+  if (last >= 0) sum = _mm512_fnmadd_pd(_mm512_set1_pd(l[last * stride]), prev, sum);
+  const __m512d y = _mm512_mul_pd(sum, _mm512_set1_pd(1.0 / l[row * stride]));
+  _mm512_store_pd(Y + 8 * row, y);
+  return y;
 }
 
 HS_AVX512 void SolveLanesAvx512(const double* L, int n, int ld, double* B, int nrhs, int ldb) noexcept {
@@ -157,10 +161,12 @@ HS_AVX512 void SolveLanesAvx512(const double* L, int n, int ld, double* B, int n
       for (int c = w; c < 8; ++c) y[c] = 0.0;
     }
     // L y = b, row by row: row i of L is L[i + k ld].
-    for (int i = 0; i < n; ++i) SolveLanesRow(Y, L + i, ld, i, 0, i - 1, i - 1);
+    __m512d prev = _mm512_setzero_pd();
+    for (int i = 0; i < n; ++i) prev = SolveLanesRow(Y, L + i, ld, i, 0, i - 1, i - 1, prev);
     // L^T x = y, from the last row up: column j of L below the diagonal, contiguous.
+    prev = _mm512_setzero_pd();
     for (int j = n - 1; j >= 0; --j) {
-      SolveLanesRow(Y, L + static_cast<std::ptrdiff_t>(j) * ld, 1, j, j + 2, n, j + 1 < n ? j + 1 : -1);
+      prev = SolveLanesRow(Y, L + static_cast<std::ptrdiff_t>(j) * ld, 1, j, j + 2, n, j + 1 < n ? j + 1 : -1, prev);
     }
     for (int i = 0; i < n; ++i) {
       const double* y = Y + 8 * i;

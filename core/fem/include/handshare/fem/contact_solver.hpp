@@ -332,6 +332,11 @@ class ContactSolver {
   std::vector<std::int32_t> slip_begin_;
   std::vector<Eigen::Vector2d> slip_wn_;
   std::vector<Eigen::Vector3d> slip_w_;
+  // The same as rows of A: per slipping patch (rows from slip_row_begin_[a]) the held rows it
+  // reads and their weights in its two equations, so Phi applies with one read per row.
+  std::vector<std::int32_t> slip_row_;
+  std::vector<std::int32_t> slip_row_begin_;
+  std::vector<double> slip_row_w0_, slip_row_w1_;
   std::int32_t num_patches_ = 0;
   mutable SurfaceField field_;
 };
