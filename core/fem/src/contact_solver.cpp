@@ -147,6 +147,7 @@ ContactSolver::ContactSolver(std::shared_ptr<const Compliance> compliance,
   slip_row_begin_.assign(P + 1, 0);
   slip_row_w0_.assign(3 * M, 0.0);
   slip_row_w1_.assign(3 * M, 0.0);
+  slip_sum_.assign(2 * (2 * P + 1), 0.0);
 }
 
 void ContactSolver::ZeroOutputs() noexcept {
@@ -791,35 +792,39 @@ bool ContactSolver::SolvePatchedSystem(bool refactor) noexcept {
       }
     }
     slip_row_begin_[ns] = t;
+    // Row by row across the columns (column 0: z0, as rhs_; then Z): the sums of different
+    // columns are independent, where a sum down one column waited on each add.
     const std::ptrdiff_t ldz = 3 * static_cast<std::ptrdiff_t>(options_.max_contacts);
-    for (int col = 0; col <= n2; ++col) {  // column 0: z0 (as rhs_), then Z
-      const double* v = Z_.data() + col * ldz;
-      for (std::int32_t a = 0; a < ns; ++a) {
-        double s0 = 0.0, s1 = 0.0;
-        for (std::int32_t m = slip_row_begin_[a]; m < slip_row_begin_[a + 1]; ++m) {
-          const double x = v[slip_row_[m]];
-          s0 += slip_row_w0_[m] * x;
-          s1 += slip_row_w1_[m] * x;
+    double* s0 = slip_sum_.data();
+    double* s1 = s0 + (n2 + 1);
+    for (std::int32_t a = 0; a < ns; ++a) {
+      std::fill(s0, s0 + 2 * (n2 + 1), 0.0);
+      for (std::int32_t m = slip_row_begin_[a]; m < slip_row_begin_[a + 1]; ++m) {
+        const double* v = Z_.data() + slip_row_[m];
+        const double w0 = slip_row_w0_[m], w1 = slip_row_w1_[m];
+        for (int col = 0; col <= n2; ++col) {
+          const double x = v[col * ldz];
+          s0[col] += w0 * x;
+          s1[col] += w1 * x;
         }
-        if (col == 0) {
-          const Eigen::Vector2d g = given_force_ ? slip_force_[slipping_list_[a]] : Eigen::Vector2d::Zero();
-          slip_rhs_[2 * a] = g[0] - s0;
-          slip_rhs_[2 * a + 1] = g[1] - s1;
-        } else {
-          slip_M_[static_cast<std::ptrdiff_t>(col - 1) * n2 + 2 * a] = s0;
-          slip_M_[static_cast<std::ptrdiff_t>(col - 1) * n2 + 2 * a + 1] = s1;
-        }
+      }
+      const Eigen::Vector2d g = given_force_ ? slip_force_[slipping_list_[a]] : Eigen::Vector2d::Zero();
+      slip_rhs_[2 * a] = g[0] - s0[0];
+      slip_rhs_[2 * a + 1] = g[1] - s1[0];
+      for (int col = 1; col <= n2; ++col) {
+        slip_M_[static_cast<std::ptrdiff_t>(col - 1) * n2 + 2 * a] = s0[col];
+        slip_M_[static_cast<std::ptrdiff_t>(col - 1) * n2 + 2 * a + 1] = s1[col];
       }
     }
     if (!detail::LuInPlace(slip_M_.data(), n2, n2, slip_piv_.data())) return false;
     detail::LuSolveInPlace(slip_M_.data(), n2, n2, slip_piv_.data(), slip_rhs_.data());
     for (int col = 0; col < n2; ++col) {
-      const double s = slip_rhs_[col];
-      if (!std::isfinite(s)) return false;
-      const double* __restrict z = Zcol(col);
-      double* __restrict y = rhs_.data();
-      for (int k = 0; k < r; ++k) y[k] += s * z[k];
+      if (!std::isfinite(slip_rhs_[col])) return false;
     }
+    // y = z0 + Z s, a matrix-vector product over Z's columns.
+    Eigen::Map<Eigen::VectorXd>(rhs_.data(), r).noalias() +=
+        Eigen::Map<const Eigen::MatrixXd, 0, Eigen::OuterStride<>>(Zcol(0), r, n2, Eigen::OuterStride<>(ldz)) *
+        Eigen::Map<const Eigen::VectorXd>(slip_rhs_.data(), n2);
     for (std::int32_t a = 0; a < ns; ++a) {
       const std::int32_t p = slipping_list_[a];
       patch_state_[p].slide_m = tangent_[p] * Eigen::Vector2d(slip_rhs_[2 * a], slip_rhs_[2 * a + 1]);

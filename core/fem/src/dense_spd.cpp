@@ -58,22 +58,47 @@ inline __mmask8 Lanes(int rows, int offset) noexcept {
 }
 
 // Column j's rows [i0, i0 + rows) (rows <= 8 V) less sum_k L[j,k] L[i0.., k] over the columns
-// k < j to its left: the accumulators stay in registers while those columns stream past.
+// k < j to its left: the accumulators stay in registers while those columns stream past. Four
+// accumulators per vector of rows (column k goes to k mod 4, the last j mod 4 to the first):
+// with one, a column's rows waited four cycles on each column to their left. Every row's sum is
+// split the same way whatever chunk it falls in, so a resumed factor stays bit for bit a whole
+// one.
 template <int V>
 HS_AVX512 void UpdateRows(double* A, int ld, int j, int i0, int rows) noexcept {
   double* cj = A + static_cast<std::ptrdiff_t>(j) * ld + i0;
   __mmask8 m[V];
-  __m512d acc[V];
+  __m512d a0[V], a1[V], a2[V], a3[V];
   for (int q = 0; q < V; ++q) {
     m[q] = Lanes(rows, 8 * q);
-    acc[q] = _mm512_maskz_loadu_pd(m[q], cj + 8 * q);
+    a0[q] = _mm512_maskz_loadu_pd(m[q], cj + 8 * q);
+    a1[q] = _mm512_setzero_pd();
+    a2[q] = _mm512_setzero_pd();
+    a3[q] = _mm512_setzero_pd();
   }
-  for (int k = 0; k < j; ++k) {
+  int k = 0;
+  for (; k + 4 <= j; k += 4) {
+    const double* c0 = A + static_cast<std::ptrdiff_t>(k) * ld;
+    const double* c1 = c0 + ld;
+    const double* c2 = c1 + ld;
+    const double* c3 = c2 + ld;
+    const __m512d l0 = _mm512_set1_pd(c0[j]), l1 = _mm512_set1_pd(c1[j]), l2 = _mm512_set1_pd(c2[j]),
+                  l3 = _mm512_set1_pd(c3[j]);
+    for (int q = 0; q < V; ++q) {
+      a0[q] = _mm512_fnmadd_pd(l0, _mm512_maskz_loadu_pd(m[q], c0 + i0 + 8 * q), a0[q]);
+      a1[q] = _mm512_fnmadd_pd(l1, _mm512_maskz_loadu_pd(m[q], c1 + i0 + 8 * q), a1[q]);
+      a2[q] = _mm512_fnmadd_pd(l2, _mm512_maskz_loadu_pd(m[q], c2 + i0 + 8 * q), a2[q]);
+      a3[q] = _mm512_fnmadd_pd(l3, _mm512_maskz_loadu_pd(m[q], c3 + i0 + 8 * q), a3[q]);
+    }
+  }
+  for (; k < j; ++k) {
     const double* ck = A + static_cast<std::ptrdiff_t>(k) * ld;
     const __m512d l = _mm512_set1_pd(ck[j]);
-    for (int q = 0; q < V; ++q) acc[q] = _mm512_fnmadd_pd(l, _mm512_maskz_loadu_pd(m[q], ck + i0 + 8 * q), acc[q]);
+    for (int q = 0; q < V; ++q) a0[q] = _mm512_fnmadd_pd(l, _mm512_maskz_loadu_pd(m[q], ck + i0 + 8 * q), a0[q]);
   }
-  for (int q = 0; q < V; ++q) _mm512_mask_storeu_pd(cj + 8 * q, m[q], acc[q]);
+  for (int q = 0; q < V; ++q) {
+    _mm512_mask_storeu_pd(cj + 8 * q, m[q],
+                          _mm512_add_pd(_mm512_add_pd(a0[q], a1[q]), _mm512_add_pd(a2[q], a3[q])));
+  }
 }
 
 // Column j's rows [from, n) less the columns to its left (UpdateRows, 32 rows at a time).
@@ -125,7 +150,7 @@ HS_AVX512 bool FactorAvx512(double* A, int n, int ld, int p0 = 0) noexcept {
 // accumulators split the sum of each row over the rows solved before the last; the last one's
 // term is added after, so that a row waits on the one before it for one FMA and the multiply
 // by the diagonal's reciprocal (computed off that chain) only.
-constexpr int kLanesMaxRows = 256;  // 16 kB of stack; larger systems take Eigen's solve
+constexpr int kLanesMaxRows = 256;  // 32 kB of stack (16 lanes); larger systems take Eigen's solve
 
 // Row `row` of Y (8 lanes) solved in place and returned: Y[row] less l[k stride] Y[k] over the
 // rows k in [from, to), then less l[last stride] times `prev` (the row solved just before it, still
@@ -151,27 +176,77 @@ HS_AVX512 inline __m512d SolveLanesRow(double* Y, const double* l, std::ptrdiff_
   return y;
 }
 
+// The same over 16 lanes (two vectors a row): each entry of L is broadcast once for both, and
+// the two halves' chains run side by side. For 9-16 right-hand sides: one pass instead of two.
+HS_AVX512 inline void SolveLanesRow16(double* Y, const double* l, std::ptrdiff_t stride, int row, int from, int to,
+                                      int last, __m512d& prev0, __m512d& prev1) noexcept {
+  __m512d a0 = _mm512_load_pd(Y + 16 * row), b0 = _mm512_load_pd(Y + 16 * row + 8);
+  __m512d a1 = _mm512_setzero_pd(), b1 = _mm512_setzero_pd(), a2 = _mm512_setzero_pd(), b2 = _mm512_setzero_pd(),
+          a3 = _mm512_setzero_pd(), b3 = _mm512_setzero_pd();
+  int k = from;
+  for (; k + 4 <= to; k += 4) {
+    const __m512d l0 = _mm512_set1_pd(l[k * stride]), l1 = _mm512_set1_pd(l[(k + 1) * stride]),
+                  l2 = _mm512_set1_pd(l[(k + 2) * stride]), l3 = _mm512_set1_pd(l[(k + 3) * stride]);
+    a0 = _mm512_fnmadd_pd(l0, _mm512_load_pd(Y + 16 * k), a0);
+    b0 = _mm512_fnmadd_pd(l0, _mm512_load_pd(Y + 16 * k + 8), b0);
+    a1 = _mm512_fnmadd_pd(l1, _mm512_load_pd(Y + 16 * (k + 1)), a1);
+    b1 = _mm512_fnmadd_pd(l1, _mm512_load_pd(Y + 16 * (k + 1) + 8), b1);
+    a2 = _mm512_fnmadd_pd(l2, _mm512_load_pd(Y + 16 * (k + 2)), a2);
+    b2 = _mm512_fnmadd_pd(l2, _mm512_load_pd(Y + 16 * (k + 2) + 8), b2);
+    a3 = _mm512_fnmadd_pd(l3, _mm512_load_pd(Y + 16 * (k + 3)), a3);
+    b3 = _mm512_fnmadd_pd(l3, _mm512_load_pd(Y + 16 * (k + 3) + 8), b3);
+  }
+  for (; k < to; ++k) {
+    const __m512d lk = _mm512_set1_pd(l[k * stride]);
+    a0 = _mm512_fnmadd_pd(lk, _mm512_load_pd(Y + 16 * k), a0);
+    b0 = _mm512_fnmadd_pd(lk, _mm512_load_pd(Y + 16 * k + 8), b0);
+  }
+  __m512d sa = _mm512_add_pd(_mm512_add_pd(a0, a1), _mm512_add_pd(a2, a3));
+  __m512d sb = _mm512_add_pd(_mm512_add_pd(b0, b1), _mm512_add_pd(b2, b3));
+  if (last >= 0) {
+    const __m512d ll = _mm512_set1_pd(l[last * stride]);
+    sa = _mm512_fnmadd_pd(ll, prev0, sa);
+    sb = _mm512_fnmadd_pd(ll, prev1, sb);
+  }
+  const __m512d inv = _mm512_set1_pd(1.0 / l[row * stride]);
+  prev0 = _mm512_mul_pd(sa, inv);
+  prev1 = _mm512_mul_pd(sb, inv);
+  _mm512_store_pd(Y + 16 * row, prev0);
+  _mm512_store_pd(Y + 16 * row + 8, prev1);
+}
+
 HS_AVX512 void SolveLanesAvx512(const double* L, int n, int ld, double* B, int nrhs, int ldb) noexcept {
-  alignas(64) double Y[kLanesMaxRows * 8];
-  for (int c0 = 0; c0 < nrhs; c0 += 8) {
-    const int w = std::min(8, nrhs - c0);
+  alignas(64) double Y[kLanesMaxRows * 16];
+  for (int c0 = 0; c0 < nrhs;) {
+    const int left = nrhs - c0;
+    const int lanes = left > 8 ? 16 : 8;
+    const int w = std::min(lanes, left);
     for (int i = 0; i < n; ++i) {
-      double* y = Y + 8 * i;
+      double* y = Y + lanes * i;
       for (int c = 0; c < w; ++c) y[c] = B[static_cast<std::ptrdiff_t>(c0 + c) * ldb + i];
-      for (int c = w; c < 8; ++c) y[c] = 0.0;
+      for (int c = w; c < lanes; ++c) y[c] = 0.0;
     }
-    // L y = b, row by row: row i of L is L[i + k ld].
-    __m512d prev = _mm512_setzero_pd();
-    for (int i = 0; i < n; ++i) prev = SolveLanesRow(Y, L + i, ld, i, 0, i - 1, i - 1, prev);
-    // L^T x = y, from the last row up: column j of L below the diagonal, contiguous.
-    prev = _mm512_setzero_pd();
-    for (int j = n - 1; j >= 0; --j) {
-      prev = SolveLanesRow(Y, L + static_cast<std::ptrdiff_t>(j) * ld, 1, j, j + 2, n, j + 1 < n ? j + 1 : -1, prev);
+    __m512d prev = _mm512_setzero_pd(), prev1 = _mm512_setzero_pd();
+    if (lanes == 8) {
+      // L y = b, row by row: row i of L is L[i + k ld].
+      for (int i = 0; i < n; ++i) prev = SolveLanesRow(Y, L + i, ld, i, 0, i - 1, i - 1, prev);
+      // L^T x = y, from the last row up: column j of L below the diagonal, contiguous.
+      prev = _mm512_setzero_pd();
+      for (int j = n - 1; j >= 0; --j) {
+        prev = SolveLanesRow(Y, L + static_cast<std::ptrdiff_t>(j) * ld, 1, j, j + 2, n, j + 1 < n ? j + 1 : -1, prev);
+      }
+    } else {
+      for (int i = 0; i < n; ++i) SolveLanesRow16(Y, L + i, ld, i, 0, i - 1, i - 1, prev, prev1);
+      for (int j = n - 1; j >= 0; --j) {
+        SolveLanesRow16(Y, L + static_cast<std::ptrdiff_t>(j) * ld, 1, j, j + 2, n, j + 1 < n ? j + 1 : -1, prev,
+                        prev1);
+      }
     }
     for (int i = 0; i < n; ++i) {
-      const double* y = Y + 8 * i;
+      const double* y = Y + lanes * i;
       for (int c = 0; c < w; ++c) B[static_cast<std::ptrdiff_t>(c0 + c) * ldb + i] = y[c];
     }
+    c0 += w;
   }
 }
 

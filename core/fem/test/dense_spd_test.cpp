@@ -55,20 +55,24 @@ TEST(DenseSpd, FactorAndSolveMatchEigenLltForManySizes) {
       EXPECT_LE((L - Le).norm(), 1e-12 * std::sqrt(A.norm()) * n) << IsaName(isa) << " n=" << n;
       EXPECT_LE((L * L.transpose() - A).norm(), 1e-14 * A.norm() * n) << IsaName(isa) << " n=" << n;
       // 1-11 right-hand sides (the solver's 1 and 2 per slipping patch) in a buffer of its own
-      // leading dimension.
-      const int nrhs = 1 + n % 11, ldb = n + 2;
-      Eigen::MatrixXd B(n, nrhs);
-      for (int i = 0; i < n; ++i)
-        for (int c = 0; c < nrhs; ++c) B(i, c) = g(rng);
-      std::vector<double> x(static_cast<std::size_t>(ldb) * nrhs, 0.0);
-      for (int c = 0; c < nrhs; ++c)
-        for (int i = 0; i < n; ++i) x[static_cast<std::size_t>(c) * ldb + i] = B(i, c);
-      SolveFactoredSpd(buf.data(), n, ld, x.data(), nrhs, ldb, isa);
-      const Eigen::MatrixXd want = A.llt().solve(B);
-      const double cond_bound = 1e-13 * A.norm() * A.inverse().norm();
-      for (int c = 0; c < nrhs; ++c) {
-        const Eigen::VectorXd got = Eigen::Map<const Eigen::VectorXd>(x.data() + static_cast<std::ptrdiff_t>(c) * ldb, n);
-        EXPECT_LE((got - want.col(c)).norm(), cond_bound * want.col(c).norm()) << IsaName(isa) << " n=" << n;
+      // leading dimension, and widths that fill one and two passes of 8 and 16 lanes exactly
+      // and one past.
+      for (const int nrhs : {1 + n % 11, 16, 17, 24, 25, 33}) {
+        const int ldb = n + 2;
+        Eigen::MatrixXd B(n, nrhs);
+        for (int i = 0; i < n; ++i)
+          for (int c = 0; c < nrhs; ++c) B(i, c) = g(rng);
+        std::vector<double> x(static_cast<std::size_t>(ldb) * nrhs, 0.0);
+        for (int c = 0; c < nrhs; ++c)
+          for (int i = 0; i < n; ++i) x[static_cast<std::size_t>(c) * ldb + i] = B(i, c);
+        SolveFactoredSpd(buf.data(), n, ld, x.data(), nrhs, ldb, isa);
+        const Eigen::MatrixXd want = A.llt().solve(B);
+        const double cond_bound = 1e-13 * A.norm() * A.inverse().norm();
+        for (int c = 0; c < nrhs; ++c) {
+          const Eigen::VectorXd got = Eigen::Map<const Eigen::VectorXd>(x.data() + static_cast<std::ptrdiff_t>(c) * ldb, n);
+          EXPECT_LE((got - want.col(c)).norm(), cond_bound * want.col(c).norm())
+              << IsaName(isa) << " n=" << n << " nrhs=" << nrhs << " column " << c;
+        }
       }
     }
   }

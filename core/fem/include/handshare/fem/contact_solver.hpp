@@ -337,6 +337,7 @@ class ContactSolver {
   std::vector<std::int32_t> slip_row_;
   std::vector<std::int32_t> slip_row_begin_;
   std::vector<double> slip_row_w0_, slip_row_w1_;
+  std::vector<double> slip_sum_;  // a patch's two sums over every column
   std::int32_t num_patches_ = 0;
   mutable SurfaceField field_;
 };
