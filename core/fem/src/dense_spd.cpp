@@ -58,11 +58,12 @@ inline __mmask8 Lanes(int rows, int offset) noexcept {
 }
 
 // Column j's rows [i0, i0 + rows) (rows <= 8 V) less sum_k L[j,k] L[i0.., k] over the columns
-// k < j to its left: the accumulators stay in registers while those columns stream past. Four
-// accumulators per vector of rows (column k goes to k mod 4, the last j mod 4 to the first):
-// with one, a column's rows waited four cycles on each column to their left. Every row's sum is
-// split the same way whatever chunk it falls in, so a resumed factor stays bit for bit a whole
-// one.
+// k < j to its left: the accumulators stay in registers while those columns stream past. The
+// sum is taken in the order of the lane solve below (SolveLanesRow): four accumulators over the
+// columns before the last (column k to k mod 4, the few left over to the first), added in
+// pairs, then the last column's term. So every row's sum is the same whatever chunk it falls
+// in, and the rows below a resumed factor's leading block, which are one lane solve
+// (FactorAvx512), are bit for bit those of a whole factor.
 template <int V>
 HS_AVX512 void UpdateRows(double* A, int ld, int j, int i0, int rows) noexcept {
   double* cj = A + static_cast<std::ptrdiff_t>(j) * ld + i0;
@@ -75,8 +76,9 @@ HS_AVX512 void UpdateRows(double* A, int ld, int j, int i0, int rows) noexcept {
     a2[q] = _mm512_setzero_pd();
     a3[q] = _mm512_setzero_pd();
   }
+  const int to = j - 1;  // the columns before the last
   int k = 0;
-  for (; k + 4 <= j; k += 4) {
+  for (; k + 4 <= to; k += 4) {
     const double* c0 = A + static_cast<std::ptrdiff_t>(k) * ld;
     const double* c1 = c0 + ld;
     const double* c2 = c1 + ld;
@@ -90,14 +92,18 @@ HS_AVX512 void UpdateRows(double* A, int ld, int j, int i0, int rows) noexcept {
       a3[q] = _mm512_fnmadd_pd(l3, _mm512_maskz_loadu_pd(m[q], c3 + i0 + 8 * q), a3[q]);
     }
   }
-  for (; k < j; ++k) {
+  for (; k < to; ++k) {
     const double* ck = A + static_cast<std::ptrdiff_t>(k) * ld;
     const __m512d l = _mm512_set1_pd(ck[j]);
     for (int q = 0; q < V; ++q) a0[q] = _mm512_fnmadd_pd(l, _mm512_maskz_loadu_pd(m[q], ck + i0 + 8 * q), a0[q]);
   }
   for (int q = 0; q < V; ++q) {
-    _mm512_mask_storeu_pd(cj + 8 * q, m[q],
-                          _mm512_add_pd(_mm512_add_pd(a0[q], a1[q]), _mm512_add_pd(a2[q], a3[q])));
+    __m512d sum = _mm512_add_pd(_mm512_add_pd(a0[q], a1[q]), _mm512_add_pd(a2[q], a3[q]));
+    if (to >= 0) {
+      const double* cl = A + static_cast<std::ptrdiff_t>(to) * ld;
+      sum = _mm512_fnmadd_pd(_mm512_set1_pd(cl[j]), _mm512_maskz_loadu_pd(m[q], cl + i0 + 8 * q), sum);
+    }
+    _mm512_mask_storeu_pd(cj + 8 * q, m[q], sum);
   }
 }
 
@@ -121,26 +127,6 @@ HS_AVX512 __attribute__((always_inline)) inline void ScaleRows(double* c, int be
     const __mmask8 m = Lanes(end - begin, i - begin);
     _mm512_mask_storeu_pd(c + i, m, _mm512_mul_pd(_mm512_maskz_loadu_pd(m, c + i), inv));
   }
-}
-
-// Columns [0, p0) are already factored down to row p0 (see ResumeFactorSpd): only their rows
-// from p0 on are computed, each from the same sums in the same order as a whole factor would.
-HS_AVX512 bool FactorAvx512(double* A, int n, int ld, int p0 = 0) noexcept {
-  for (int j = 0; j < n; ++j) {
-    double* cj = A + static_cast<std::ptrdiff_t>(j) * ld;
-    if (j < p0) {
-      UpdateColumn(A, n, ld, j, p0);
-      ScaleRows(cj, p0, n, cj[j]);
-      continue;
-    }
-    UpdateColumn(A, n, ld, j, j);
-    const double d = cj[j];
-    if (!(d > 0.0) || !std::isfinite(d)) return false;
-    const double s = std::sqrt(d);
-    cj[j] = s;
-    ScaleRows(cj, j + 1, n, s);
-  }
-  return true;
 }
 
 // Up to 8 right-hand sides at once, one per lane: B's columns are copied into rows of 8 lanes
@@ -174,6 +160,45 @@ HS_AVX512 inline __m512d SolveLanesRow(double* Y, const double* l, std::ptrdiff_
   const __m512d y = _mm512_mul_pd(sum, _mm512_set1_pd(1.0 / l[row * stride]));
   _mm512_store_pd(Y + 8 * row, y);
   return y;
+}
+
+// Columns [0, p0) are already factored down to row p0 (see ResumeFactorSpd): only their rows
+// from p0 on are computed, each from the same sums in the same order as a whole factor would.
+// Those rows are L21 = A21 L11^-T, a forward substitution through L11 with the rows as right-hand
+// sides: eight rows a lane pass (SolveLanesRow, the order UpdateRows sums in), instead of an
+// update and a division per column of the leading block.
+HS_AVX512 bool FactorAvx512(double* A, int n, int ld, int p0 = 0) noexcept {
+  if (p0 > 0 && p0 <= kLanesMaxRows) {
+    alignas(64) double Y[kLanesMaxRows * 8];
+    for (int i0 = p0; i0 < n; i0 += 8) {
+      const __mmask8 m = Lanes(n - i0, 0);
+      for (int j = 0; j < p0; ++j) {
+        _mm512_store_pd(Y + 8 * j, _mm512_maskz_loadu_pd(m, A + static_cast<std::ptrdiff_t>(j) * ld + i0));
+      }
+      __m512d prev = _mm512_setzero_pd();
+      for (int j = 0; j < p0; ++j) prev = SolveLanesRow(Y, A + j, ld, j, 0, j - 1, j - 1, prev);
+      for (int j = 0; j < p0; ++j) {
+        _mm512_mask_storeu_pd(A + static_cast<std::ptrdiff_t>(j) * ld + i0, m, _mm512_load_pd(Y + 8 * j));
+      }
+    }
+  }
+  for (int j = 0; j < n; ++j) {
+    double* cj = A + static_cast<std::ptrdiff_t>(j) * ld;
+    if (j < p0) {
+      if (p0 > kLanesMaxRows) {
+        UpdateColumn(A, n, ld, j, p0);
+        ScaleRows(cj, p0, n, cj[j]);
+      }
+      continue;
+    }
+    UpdateColumn(A, n, ld, j, j);
+    const double d = cj[j];
+    if (!(d > 0.0) || !std::isfinite(d)) return false;
+    const double s = std::sqrt(d);
+    cj[j] = s;
+    ScaleRows(cj, j + 1, n, s);
+  }
+  return true;
 }
 
 // The same over 16 lanes (two vectors a row): each entry of L is broadcast once for both, and
