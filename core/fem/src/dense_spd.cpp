@@ -246,10 +246,17 @@ HS_AVX512 void SolveLanesAvx512(const double* L, int n, int ld, double* B, int n
     const int left = nrhs - c0;
     const int lanes = left > 8 ? 16 : 8;
     const int w = std::min(lanes, left);
+    // Row i of the pass's columns: a gather per 8 lanes (lane c reads column c0 + c), zeros in
+    // the lanes past the last column; and a scatter back below.
+    const long long lb = ldb;
+    const __m512i idx = _mm512_set_epi64(7 * lb, 6 * lb, 5 * lb, 4 * lb, 3 * lb, 2 * lb, lb, 0);
+    const __mmask8 m0 = Lanes(w, 0), m1 = Lanes(w, 8);
+    const double* b0 = B + static_cast<std::ptrdiff_t>(c0) * ldb;
+    const double* b1 = b0 + static_cast<std::ptrdiff_t>(8) * ldb;
     for (int i = 0; i < n; ++i) {
       double* y = Y + lanes * i;
-      for (int c = 0; c < w; ++c) y[c] = B[static_cast<std::ptrdiff_t>(c0 + c) * ldb + i];
-      for (int c = w; c < lanes; ++c) y[c] = 0.0;
+      _mm512_store_pd(y, _mm512_mask_i64gather_pd(_mm512_setzero_pd(), m0, idx, b0 + i, 8));
+      if (lanes == 16) _mm512_store_pd(y + 8, _mm512_mask_i64gather_pd(_mm512_setzero_pd(), m1, idx, b1 + i, 8));
     }
     __m512d prev = _mm512_setzero_pd(), prev1 = _mm512_setzero_pd();
     if (lanes == 8) {
@@ -269,7 +276,8 @@ HS_AVX512 void SolveLanesAvx512(const double* L, int n, int ld, double* B, int n
     }
     for (int i = 0; i < n; ++i) {
       const double* y = Y + lanes * i;
-      for (int c = 0; c < w; ++c) B[static_cast<std::ptrdiff_t>(c0 + c) * ldb + i] = y[c];
+      _mm512_mask_i64scatter_pd(const_cast<double*>(b0) + i, m0, idx, _mm512_load_pd(y), 8);
+      if (lanes == 16) _mm512_mask_i64scatter_pd(const_cast<double*>(b1) + i, m1, idx, _mm512_load_pd(y + 8), 8);
     }
     c0 += w;
   }
