@@ -792,22 +792,14 @@ bool ContactSolver::SolvePatchedSystem(bool refactor) noexcept {
       }
     }
     slip_row_begin_[ns] = t;
-    // Row by row across the columns (column 0: z0, as rhs_; then Z): the sums of different
-    // columns are independent, where a sum down one column waited on each add.
+    // Every column's sums at once (column 0: z0, as rhs_; then Z).
     const std::ptrdiff_t ldz = 3 * static_cast<std::ptrdiff_t>(options_.max_contacts);
     double* s0 = slip_sum_.data();
     double* s1 = s0 + (n2 + 1);
     for (std::int32_t a = 0; a < ns; ++a) {
-      std::fill(s0, s0 + 2 * (n2 + 1), 0.0);
-      for (std::int32_t m = slip_row_begin_[a]; m < slip_row_begin_[a + 1]; ++m) {
-        const double* v = Z_.data() + slip_row_[m];
-        const double w0 = slip_row_w0_[m], w1 = slip_row_w1_[m];
-        for (int col = 0; col <= n2; ++col) {
-          const double x = v[col * ldz];
-          s0[col] += w0 * x;
-          s1[col] += w1 * x;
-        }
-      }
+      const std::int32_t b = slip_row_begin_[a];
+      detail::WeightedRowSums(Z_.data(), ldz, n2 + 1, slip_row_.data() + b, slip_row_w0_.data() + b,
+                              slip_row_w1_.data() + b, slip_row_begin_[a + 1] - b, s0, s1, detail::BestIsa());
       const Eigen::Vector2d g = given_force_ ? slip_force_[slipping_list_[a]] : Eigen::Vector2d::Zero();
       slip_rhs_[2 * a] = g[0] - s0[0];
       slip_rhs_[2 * a + 1] = g[1] - s1[0];

@@ -283,6 +283,28 @@ HS_AVX512 void SolveLanesAvx512(const double* L, int n, int ld, double* B, int n
   }
 }
 
+HS_AVX512 void WeightedRowSumsAvx512(const double* Z, std::ptrdiff_t ldz, int ncols, const std::int32_t* rows,
+                                     const double* w0, const double* w1, int count, double* s0, double* s1) noexcept {
+  const long long lz = ldz;
+  const __m512i idx = _mm512_set_epi64(7 * lz, 6 * lz, 5 * lz, 4 * lz, 3 * lz, 2 * lz, lz, 0);
+  const __mmask8 m0 = Lanes(ncols, 0), m1 = Lanes(ncols, 8);
+  const double* z1 = Z + 8 * ldz;
+  __m512d a00 = _mm512_setzero_pd(), a01 = _mm512_setzero_pd(), a10 = _mm512_setzero_pd(), a11 = _mm512_setzero_pd();
+  for (int m = 0; m < count; ++m) {
+    const __m512d x0 = _mm512_mask_i64gather_pd(_mm512_setzero_pd(), m0, idx, Z + rows[m], 8);
+    const __m512d x1 = _mm512_mask_i64gather_pd(_mm512_setzero_pd(), m1, idx, z1 + rows[m], 8);
+    const __m512d u = _mm512_set1_pd(w0[m]), v = _mm512_set1_pd(w1[m]);
+    a00 = _mm512_fmadd_pd(u, x0, a00);
+    a01 = _mm512_fmadd_pd(u, x1, a01);
+    a10 = _mm512_fmadd_pd(v, x0, a10);
+    a11 = _mm512_fmadd_pd(v, x1, a11);
+  }
+  _mm512_mask_storeu_pd(s0, m0, a00);
+  _mm512_mask_storeu_pd(s0 + 8, m1, a01);
+  _mm512_mask_storeu_pd(s1, m0, a10);
+  _mm512_mask_storeu_pd(s1 + 8, m1, a11);
+}
+
 #pragma GCC diagnostic pop
 
 }  // namespace
@@ -307,6 +329,24 @@ void SolveFactoredSpd(const double* L, int n, int ld, double* B, int nrhs, int l
     SolveLanesAvx512(L, n, ld, B, nrhs, ldb);
   } else {
     SolveEigen(L, n, ld, B, nrhs, ldb);
+  }
+}
+
+void WeightedRowSums(const double* Z, std::ptrdiff_t ldz, int ncols, const std::int32_t* rows, const double* w0,
+                     const double* w1, int count, double* s0, double* s1, Isa isa) noexcept {
+  if (isa == Isa::kAvx512 && ncols <= 16) {
+    WeightedRowSumsAvx512(Z, ldz, ncols, rows, w0, w1, count, s0, s1);
+    return;
+  }
+  std::fill(s0, s0 + ncols, 0.0);
+  std::fill(s1, s1 + ncols, 0.0);
+  for (int m = 0; m < count; ++m) {
+    const double* v = Z + rows[m];
+    for (int c = 0; c < ncols; ++c) {
+      const double x = v[c * ldz];
+      s0[c] += w0[m] * x;
+      s1[c] += w1[m] * x;
+    }
   }
 }
 

@@ -36,4 +36,11 @@ bool ResumeFactorSpd(double* A, int n, int ld, int p0, Isa isa) noexcept;
 /// AVX-512, the columns are solved eight at a time, one per lane.
 void SolveFactoredSpd(const double* L, int n, int ld, double* B, int nrhs, int ldb, Isa isa) noexcept;
 
+/// s0[c] = sum_m w0[m] Z[c ldz + rows[m]] and s1 likewise with w1, for the columns c < ncols of
+/// Z (column-major, leading dimension ldz) and the count rows listed: a weighted sum of a few
+/// rows of every column (the friction solve's cone equations). With AVX-512 and up to 16
+/// columns, a row of the columns is gathered at once and the sums stay in registers.
+void WeightedRowSums(const double* Z, std::ptrdiff_t ldz, int ncols, const std::int32_t* rows, const double* w0,
+                     const double* w1, int count, double* s0, double* s1, Isa isa) noexcept;
+
 }  // namespace handshare::fem::detail

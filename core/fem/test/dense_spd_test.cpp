@@ -158,5 +158,41 @@ TEST(DenseSpd, AResumedFactorIsTheWholeFactorBitForBit) {
   if (!ran) GTEST_SKIP() << "no AVX-512 here: the resumed factor is declined (checked above)";
 }
 
+TEST(DenseSpd, WeightedRowSumsAreTheSumsOfTheListedRowsOfEveryColumn) {
+  // The friction solve's cone equations: a patch's rows (any order, a row listed twice adds
+  // twice) of 1..20 columns, against the sums written out; the columns past ncols and the
+  // entries past the sums are left alone.
+  std::mt19937 rng(31);
+  std::normal_distribution<double> g;
+  const int rows_total = 40;
+  const std::ptrdiff_t ldz = 45;
+  for (Isa isa : IsasToTest()) {
+    for (int ncols : {1, 2, 7, 8, 9, 15, 16, 17, 20}) {
+      std::vector<double> Z(static_cast<std::size_t>(ldz) * (ncols + 1));
+      for (double& z : Z) z = g(rng);
+      const std::vector<std::int32_t> rows = {3, 4, 5, 17, 39, 0, 22, 17};
+      std::vector<double> w0(rows.size()), w1(rows.size());
+      for (std::size_t m = 0; m < rows.size(); ++m) {
+        w0[m] = g(rng);
+        w1[m] = g(rng);
+      }
+      std::vector<double> s(2 * static_cast<std::size_t>(ncols) + 1, std::numeric_limits<double>::quiet_NaN());
+      WeightedRowSums(Z.data(), ldz, ncols, rows.data(), w0.data(), w1.data(), static_cast<int>(rows.size()), s.data(),
+                      s.data() + ncols, isa);
+      for (int c = 0; c < ncols; ++c) {
+        double want0 = 0.0, want1 = 0.0;
+        for (std::size_t m = 0; m < rows.size(); ++m) {
+          ASSERT_LT(rows[m], rows_total);
+          want0 += w0[m] * Z[static_cast<std::size_t>(c * ldz + rows[m])];
+          want1 += w1[m] * Z[static_cast<std::size_t>(c * ldz + rows[m])];
+        }
+        EXPECT_NEAR(s[static_cast<std::size_t>(c)], want0, 1e-13) << IsaName(isa) << " ncols=" << ncols << " column " << c;
+        EXPECT_NEAR(s[static_cast<std::size_t>(ncols + c)], want1, 1e-13) << IsaName(isa) << " ncols=" << ncols << " column " << c;
+      }
+      EXPECT_TRUE(std::isnan(s.back())) << IsaName(isa) << " ncols=" << ncols << ": wrote past the sums";
+    }
+  }
+}
+
 }  // namespace
 }  // namespace handshare::fem::detail
