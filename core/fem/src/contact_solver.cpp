@@ -121,6 +121,7 @@ ContactSolver::ContactSolver(std::shared_ptr<const Compliance> compliance,
   prev_slot_.assign(M, -1);
   prev_active_.assign(M, 0);
   perm_.assign(M, 0);
+  perm_scratch_.assign(M, 0);
   in_perm_.assign(M, 0);
   fac_slot_.assign(M, -1);
   fac_full3d_.assign(M, 0);
@@ -841,6 +842,22 @@ int ContactSolver::ResumableRows() const noexcept {
   return rows;
 }
 
+void ContactSolver::MoveViolatorsLast() noexcept {
+  // A node that violates now is the one likely to change again in this call (a sticking node
+  // that pulls turns frictionless, then is mostly released the round after): last in the order,
+  // its next change leaves every row before it factored.
+  std::int32_t k = 0;
+  for (std::int32_t q = 0; q < num_unique_; ++q) {
+    if (violates_[perm_[q]]) perm_scratch_[k++] = perm_[q];
+  }
+  if (k == 0) return;
+  std::int32_t w = 0;
+  for (std::int32_t q = 0; q < num_unique_; ++q) {
+    if (!violates_[perm_[q]]) perm_[w++] = perm_[q];
+  }
+  std::copy(perm_scratch_.begin(), perm_scratch_.begin() + k, perm_.begin() + w);
+}
+
 void ContactSolver::RememberFactored() noexcept {
   fac_count_ = 0;
   for (std::int32_t q = 0; q < num_unique_; ++q) {
@@ -1076,6 +1093,7 @@ bool ContactSolver::SolveWithPatches(StepStatus& status) noexcept {
       ++iterations_;
       refactor = true;  // nodes change held set or mode below (or did above: slipped)
       direction_rounds = 0;  // a new held set: the directions settle again
+      MoveViolatorsLast();
       if (slipped) continue;
       const bool block = pivoting.Block(violations);
       for (std::int32_t j = 0; j < num_unique_; ++j) {

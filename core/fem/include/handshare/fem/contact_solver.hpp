@@ -194,6 +194,7 @@ class ContactSolver {
   // The rows of the held set (in perm_ order, with their modes) that are those of the factor in
   // A_ (fac_*), so that a refactor resumes after them; 0 where none are, or it cannot resume.
   int ResumableRows() const noexcept;
+  void MoveViolatorsLast() noexcept;
   void RememberFactored() noexcept;
   // f_N_ of the held contacts from the solved rows in rhs_; false if one is not finite.
   bool ForcesFromRows() noexcept;
@@ -280,6 +281,7 @@ class ContactSolver {
   // compliance blocks, normals and regularization). fac_*: the held nodes of the factor in A_
   // in row order, by compliance slot, whether in 3-D, and the normal of the others.
   std::vector<std::int32_t> perm_;
+  std::vector<std::int32_t> perm_scratch_;
   std::vector<std::uint8_t> in_perm_;
   std::vector<std::int32_t> fac_slot_;
   std::vector<std::uint8_t> fac_full3d_;
