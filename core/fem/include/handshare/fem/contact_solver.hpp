@@ -275,7 +275,8 @@ class ContactSolver {
   std::vector<std::uint8_t> prev_active_;
   // The order of the held rows (node indices): identity, except with friction patches, where the
   // nodes of the factor in A_ come first, in its row order, and the others (new ones) after
-  // them. A factor's rows are those of the held set that stayed, then the ones a pivot changed,
+  // them; a pivot moves the nodes it found violating to the end (MoveViolatorsLast). A factor's
+  // rows are those of the held set that stayed, then the ones a pivot changed,
   // so a refactor after the next pivot, or the next step's first factor, resumes after the rows
   // that stayed (ResumeFactorSpd): their block of G C_cc G^T is the same numbers (the same
   // compliance blocks, normals and regularization). fac_*: the held nodes of the factor in A_
