@@ -129,7 +129,7 @@ HS_AVX512 __attribute__((always_inline)) inline void ScaleRows(double* c, int be
   }
 }
 
-// Up to 8 right-hand sides at once, one per lane: B's columns are copied into rows of 8 lanes
+// Up to 8 (or 16) right-hand sides at once, one per lane: B's columns are copied into rows of lanes
 // (Y[i] holds row i of every column), so each substitution step is a broadcast of one entry of
 // L times a whole row of Y, and a row of Y is complete long before it is read again (the column
 // form read each unknown back right after its vector store, which is not forwarded). Four
@@ -252,7 +252,7 @@ HS_AVX512 void SolveLanesAvx512(const double* L, int n, int ld, double* B, int n
     const __m512i idx = _mm512_set_epi64(7 * lb, 6 * lb, 5 * lb, 4 * lb, 3 * lb, 2 * lb, lb, 0);
     const __mmask8 m0 = Lanes(w, 0), m1 = Lanes(w, 8);
     const double* b0 = B + static_cast<std::ptrdiff_t>(c0) * ldb;
-    const double* b1 = b0 + static_cast<std::ptrdiff_t>(8) * ldb;
+    const double* b1 = lanes == 16 ? b0 + static_cast<std::ptrdiff_t>(8) * ldb : b0;  // columns c0 + 8 on
     for (int i = 0; i < n; ++i) {
       double* y = Y + lanes * i;
       _mm512_store_pd(y, _mm512_mask_i64gather_pd(_mm512_setzero_pd(), m0, idx, b0 + i, 8));
@@ -288,7 +288,7 @@ HS_AVX512 void WeightedRowSumsAvx512(const double* Z, std::ptrdiff_t ldz, int nc
   const long long lz = ldz;
   const __m512i idx = _mm512_set_epi64(7 * lz, 6 * lz, 5 * lz, 4 * lz, 3 * lz, 2 * lz, lz, 0);
   const __mmask8 m0 = Lanes(ncols, 0), m1 = Lanes(ncols, 8);
-  const double* z1 = Z + 8 * ldz;
+  const double* z1 = ncols > 8 ? Z + 8 * ldz : Z;  // columns 8 on (none: its lanes are masked off)
   __m512d a00 = _mm512_setzero_pd(), a01 = _mm512_setzero_pd(), a10 = _mm512_setzero_pd(), a11 = _mm512_setzero_pd();
   for (int m = 0; m < count; ++m) {
     const __m512d x0 = _mm512_mask_i64gather_pd(_mm512_setzero_pd(), m0, idx, Z + rows[m], 8);
