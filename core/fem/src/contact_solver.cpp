@@ -131,6 +131,7 @@ ContactSolver::ContactSolver(std::shared_ptr<const Compliance> compliance,
   releases_.assign(M, 0);
   slip_force_.assign(P, Eigen::Vector2d::Zero());
   warm_slip_.assign(P, 0);
+  at_rest_.assign(P, 0);
   patch_in_.assign(P, FrictionPatch{});
   tangent_.assign(P, Eigen::Matrix<double, 3, 2>::Zero());
   slip_dir_.assign(P, Eigen::Vector2d::Zero());
@@ -943,7 +944,8 @@ bool ContactSolver::SolveWithPatches(StepStatus& status) noexcept {
   // 1 kHz, where a stroke is 10-100 um a step and a device's noise well under 1 um.
   constexpr double kRestMotion_m = 1e-6;
   auto moved = [&](std::int32_t p) -> Eigen::Vector2d { return tangent_[p].transpose() * patch_in_[p].motion_m; };
-  auto at_rest = [&](std::int32_t p) { return moved(p).norm() <= kRestMotion_m; };
+  for (std::int32_t p = 0; p < num_patches_; ++p) at_rest_[p] = moved(p).norm() <= kRestMotion_m ? 1 : 0;
+  auto at_rest = [&](std::int32_t p) { return at_rest_[p] != 0; };  // asked every round: once a call
   // A patch that slipped in the previous step and whose fingertip still moves along the surface
   // starts slipping, that way: after the first solve WouldStick() checks it against sticking,
   // which the same factor answers, and it sticks if that is inside its cone. (At rest it starts
@@ -1007,19 +1009,19 @@ bool ContactSolver::SolveWithPatches(StepStatus& status) noexcept {
     }
     return any;
   };
+  // The scales of the tolerances: the largest imposed displacement or slide (fixed in this call)
+  // and, each round, the largest force. A largest norm is the root of the largest squared norm,
+  // bit for bit (the root is monotonic and correctly rounded): one root, not one per node.
+  double d_scale2 = 0.0;
+  for (std::int32_t j = 0; j < num_unique_; ++j) d_scale2 = std::max(d_scale2, d_m_[j].squaredNorm());
+  for (std::int32_t p = 0; p < num_patches_; ++p) d_scale2 = std::max(d_scale2, patch_in_[p].slide_m.squaredNorm());
+  const double d_scale = d_scale2 == 0.0 ? 1.0 : std::sqrt(d_scale2);
   while (true) {
     if (!SolvePatchedSystem(refactor)) return false;
     refactor = false;
-    double f_scale = 0.0, d_scale = 0.0;
-    for (std::int32_t j = 0; j < num_unique_; ++j) {
-      f_scale = std::max(f_scale, f_N_[j].norm());
-      d_scale = std::max(d_scale, d_m_[j].norm());
-    }
-    for (std::int32_t p = 0; p < num_patches_; ++p) {
-      d_scale = std::max(d_scale, patch_in_[p].slide_m.norm());
-    }
-    if (f_scale == 0.0) f_scale = 1.0;
-    if (d_scale == 0.0) d_scale = 1.0;
+    double f_scale2 = 0.0;
+    for (std::int32_t j = 0; j < num_unique_; ++j) f_scale2 = std::max(f_scale2, f_N_[j].squaredNorm());
+    const double f_scale = f_scale2 == 0.0 ? 1.0 : std::sqrt(f_scale2);
     patch_forces();
     // A slipping patch under a fingertip at rest: kinetic friction opposes the sliding, so its
     // force runs along the way the fingertip slid over the material, stick - s (tangent

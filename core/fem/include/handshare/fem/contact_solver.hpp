@@ -315,6 +315,7 @@ class ContactSolver {
   std::vector<Eigen::Vector2d> slip_dir_;
   std::vector<Eigen::Vector2d> slip_force_;  // the given tangential force (given_force_)
   std::vector<std::uint8_t> warm_slip_;      // slipping by the warm start, not yet checked
+  std::vector<std::uint8_t> at_rest_;        // the fingertip moved under 1 um along the surface
   bool given_force_ = false;
   std::vector<FrictionPatchState> patch_state_;
   std::vector<std::int32_t> slipping_list_;
