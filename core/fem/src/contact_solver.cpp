@@ -143,8 +143,6 @@ ContactSolver::ContactSolver(std::shared_ptr<const Compliance> compliance,
   slip_piv_.assign(2 * P, 0);
   slip_members_.assign(M, -1);
   slip_begin_.assign(P + 1, 0);
-  slip_wn_.assign(M, Eigen::Vector2d::Zero());
-  slip_w_.assign(2 * P, Eigen::Vector3d::Zero());
   slip_row_.assign(3 * M, 0);
   slip_row_begin_.assign(P + 1, 0);
   slip_row_w0_.assign(3 * M, 0.0);
@@ -727,29 +725,45 @@ bool ContactSolver::SolvePatchedSystem(bool refactor) noexcept {
   }
   // The slipping patches that hold a node in 3-D (a patch whose nodes all went frictionless
   // has no tangential force and no slide to find), each with its active nodes (members from
-  // slip_begin_[a] to slip_begin_[a + 1]) and the weights of its cone equations: one scan of
-  // the contacts per slipping patch, for the slide's columns and the equations below.
-  std::int32_t ns = 0, q = 0;
+  // slip_begin_[a] to slip_begin_[a + 1]) and its cone equations as weights on the held rows
+  // (from slip_row_begin_[a]): w_k = t_k + mu e_k n on a 3-D node's three rows, w_k . n_j on a
+  // frictionless node's one row (f = lambda n). One scan of the contacts per slipping patch,
+  // for the slide's columns and the equations below.
+  std::int32_t ns = 0, q = 0, t = 0;
   for (std::int32_t p = 0; p < num_patches_; ++p) {
     if (!patch_state_[p].slipping) continue;
     const double mu = given_force_ ? 0.0 : patch_in_[p].mu_kinetic;
-    for (int k = 0; k < 2; ++k) slip_w_[2 * ns + k] = tangent_[p].col(k) + mu * slip_dir_[p][k] * patch_in_[p].n_out;
-    const std::int32_t begin = q;
+    const Eigen::Vector3d w0 = tangent_[p].col(0) + mu * slip_dir_[p][0] * patch_in_[p].n_out;
+    const Eigen::Vector3d w1 = tangent_[p].col(1) + mu * slip_dir_[p][1] * patch_in_[p].n_out;
+    const std::int32_t begin = q, row_begin = t;
     bool holds = false;
     for (std::int32_t j = 0; j < num_unique_; ++j) {
       if (!active_[j] || patch_of_[j] != p) continue;
-      holds = holds || mode_[j] == ContactMode::kFull3d;
-      slip_wn_[q] = Eigen::Vector2d(slip_w_[2 * ns].dot(n_[j]), slip_w_[2 * ns + 1].dot(n_[j]));
       slip_members_[q++] = j;
+      if (mode_[j] == ContactMode::kFull3d) {
+        holds = true;
+        for (int c = 0; c < 3; ++c) {
+          slip_row_[t] = row_of_[j] + c;
+          slip_row_w0_[t] = w0[c];
+          slip_row_w1_[t++] = w1[c];
+        }
+      } else {
+        slip_row_[t] = row_of_[j];
+        slip_row_w0_[t] = w0.dot(n_[j]);
+        slip_row_w1_[t++] = w1.dot(n_[j]);
+      }
     }
     if (!holds) {
       q = begin;
+      t = row_begin;
       continue;
     }
     slip_begin_[ns] = begin;
+    slip_row_begin_[ns] = row_begin;
     slipping_list_[ns++] = p;
   }
   slip_begin_[ns] = q;
+  slip_row_begin_[ns] = t;
   num_slipping_ = ns;
   // Z = A^-1 B: B puts the tangent basis into the rows of each slipping patch's held nodes.
   // z0 and Z are solved together, b0 in the column before Z's (Z_'s column 0): one pass of the
@@ -775,25 +789,6 @@ bool ContactSolver::SolvePatchedSystem(bool refactor) noexcept {
     // Phi_a applied to the columns (the patch's held nodes' rows), both equations of a patch
     // from one read of each row. With given forces the equations are T^T F = g instead
     // (symmetric: Phi Z = B^T A^-1 B).
-    std::int32_t t = 0;
-    for (std::int32_t a = 0; a < ns; ++a) {
-      slip_row_begin_[a] = t;
-      for (std::int32_t m = slip_begin_[a]; m < slip_begin_[a + 1]; ++m) {
-        const std::int32_t j = slip_members_[m];
-        if (mode_[j] == ContactMode::kFull3d) {
-          for (int c = 0; c < 3; ++c) {
-            slip_row_[t] = row_of_[j] + c;
-            slip_row_w0_[t] = slip_w_[2 * a][c];
-            slip_row_w1_[t++] = slip_w_[2 * a + 1][c];
-          }
-        } else {  // a frictionless patch node: f = lambda n
-          slip_row_[t] = row_of_[j];
-          slip_row_w0_[t] = slip_wn_[m][0];
-          slip_row_w1_[t++] = slip_wn_[m][1];
-        }
-      }
-    }
-    slip_row_begin_[ns] = t;
     // Every column's sums at once (column 0: z0, as rhs_; then Z).
     const std::ptrdiff_t ldz = 3 * static_cast<std::ptrdiff_t>(options_.max_contacts);
     double* s0 = slip_sum_.data();

@@ -57,6 +57,13 @@ inline __mmask8 Lanes(int rows, int offset) noexcept {
                                                              : static_cast<__mmask8>((1u << left) - 1u);
 }
 
+// The offsets of eight consecutive columns of leading dimension ld, for a gather or scatter of
+// one row across them.
+HS_AVX512 inline __m512i ColumnOffsets(std::ptrdiff_t ld) noexcept {
+  const long long l = ld;
+  return _mm512_set_epi64(7 * l, 6 * l, 5 * l, 4 * l, 3 * l, 2 * l, l, 0);
+}
+
 // Column j's rows [i0, i0 + rows) (rows <= 8 V) less sum_k L[j,k] L[i0.., k] over the columns
 // k < j to its left: the accumulators stay in registers while those columns stream past. The
 // sum is taken in the order of the lane solve below (SolveLanesRow): four accumulators over the
@@ -248,11 +255,10 @@ HS_AVX512 void SolveLanesAvx512(const double* L, int n, int ld, double* B, int n
     const int w = std::min(lanes, left);
     // Row i of the pass's columns: a gather per 8 lanes (lane c reads column c0 + c), zeros in
     // the lanes past the last column; and a scatter back below.
-    const long long lb = ldb;
-    const __m512i idx = _mm512_set_epi64(7 * lb, 6 * lb, 5 * lb, 4 * lb, 3 * lb, 2 * lb, lb, 0);
+    const __m512i idx = ColumnOffsets(ldb);
     const __mmask8 m0 = Lanes(w, 0), m1 = Lanes(w, 8);
-    const double* b0 = B + static_cast<std::ptrdiff_t>(c0) * ldb;
-    const double* b1 = lanes == 16 ? b0 + static_cast<std::ptrdiff_t>(8) * ldb : b0;  // columns c0 + 8 on
+    double* b0 = B + static_cast<std::ptrdiff_t>(c0) * ldb;
+    double* b1 = lanes == 16 ? b0 + static_cast<std::ptrdiff_t>(8) * ldb : b0;  // columns c0 + 8 on
     for (int i = 0; i < n; ++i) {
       double* y = Y + lanes * i;
       _mm512_store_pd(y, _mm512_mask_i64gather_pd(_mm512_setzero_pd(), m0, idx, b0 + i, 8));
@@ -276,8 +282,8 @@ HS_AVX512 void SolveLanesAvx512(const double* L, int n, int ld, double* B, int n
     }
     for (int i = 0; i < n; ++i) {
       const double* y = Y + lanes * i;
-      _mm512_mask_i64scatter_pd(const_cast<double*>(b0) + i, m0, idx, _mm512_load_pd(y), 8);
-      if (lanes == 16) _mm512_mask_i64scatter_pd(const_cast<double*>(b1) + i, m1, idx, _mm512_load_pd(y + 8), 8);
+      _mm512_mask_i64scatter_pd(b0 + i, m0, idx, _mm512_load_pd(y), 8);
+      if (lanes == 16) _mm512_mask_i64scatter_pd(b1 + i, m1, idx, _mm512_load_pd(y + 8), 8);
     }
     c0 += w;
   }
@@ -285,8 +291,7 @@ HS_AVX512 void SolveLanesAvx512(const double* L, int n, int ld, double* B, int n
 
 HS_AVX512 void WeightedRowSumsAvx512(const double* Z, std::ptrdiff_t ldz, int ncols, const std::int32_t* rows,
                                      const double* w0, const double* w1, int count, double* s0, double* s1) noexcept {
-  const long long lz = ldz;
-  const __m512i idx = _mm512_set_epi64(7 * lz, 6 * lz, 5 * lz, 4 * lz, 3 * lz, 2 * lz, lz, 0);
+  const __m512i idx = ColumnOffsets(ldz);
   const __mmask8 m0 = Lanes(ncols, 0), m1 = Lanes(ncols, 8);
   const double* z1 = ncols > 8 ? Z + 8 * ldz : Z;  // columns 8 on (none: its lanes are masked off)
   __m512d a00 = _mm512_setzero_pd(), a01 = _mm512_setzero_pd(), a10 = _mm512_setzero_pd(), a11 = _mm512_setzero_pd();

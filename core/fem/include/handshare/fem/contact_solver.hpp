@@ -329,15 +329,11 @@ class ContactSolver {
   std::vector<double> slip_M_;
   std::vector<double> slip_rhs_;
   std::vector<std::int32_t> slip_piv_;
-  // The cone equations' rows (SolvePatchedSystem): per slipping patch its nodes (members from
-  // slip_begin_[a] to slip_begin_[a + 1]), each with its two weights on a frictionless node's
-  // one row, and the two 3-D weights w_k of a held node's rows.
+  // The cone equations (SolvePatchedSystem): per slipping patch its nodes (members from
+  // slip_begin_[a] to slip_begin_[a + 1]), and the held rows it reads (from slip_row_begin_[a])
+  // with their weights in its two equations, so Phi applies with one read per row.
   std::vector<std::int32_t> slip_members_;
   std::vector<std::int32_t> slip_begin_;
-  std::vector<Eigen::Vector2d> slip_wn_;
-  std::vector<Eigen::Vector3d> slip_w_;
-  // The same as rows of A: per slipping patch (rows from slip_row_begin_[a]) the held rows it
-  // reads and their weights in its two equations, so Phi applies with one read per row.
   std::vector<std::int32_t> slip_row_;
   std::vector<std::int32_t> slip_row_begin_;
   std::vector<double> slip_row_w0_, slip_row_w1_;
