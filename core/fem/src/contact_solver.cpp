@@ -132,6 +132,7 @@ ContactSolver::ContactSolver(std::shared_ptr<const Compliance> compliance,
   slip_force_.assign(P, Eigen::Vector2d::Zero());
   warm_slip_.assign(P, 0);
   at_rest_.assign(P, 0);
+  restuck_.assign(P, 0);
   patch_in_.assign(P, FrictionPatch{});
   tangent_.assign(P, Eigen::Matrix<double, 3, 2>::Zero());
   slip_dir_.assign(P, Eigen::Vector2d::Zero());
@@ -694,18 +695,22 @@ bool ContactSolver::SolveActiveSet() noexcept {
   return ForcesFromRows();
 }
 
-bool ContactSolver::SolvePatchedSystem(bool refactor) noexcept {
+bool ContactSolver::SolvePatchedSystem(bool refactor, bool same_columns) noexcept {
   // Held rows as in SolveActiveSet; a sticking patch's nodes are held at d* + its slide. A
   // slipping patch's slide s (2 tangent coordinates) is unknown: with A y = b0 + B s
   // (B puts the tangent basis T into the rows of the patch's held nodes), y = z0 + Z s with
   // z0 = A^-1 b0 and Z = A^-1 B, and its two cone equations
   //   Phi y = sum_j (T^T + mu_k e n^T) f_j = F_t - mu_k F_n e = 0   (F_n = -n . sum f_j)
   // give the 2P x 2P system (Phi Z) s = -Phi z0. The columns of Z share A's factor.
+  // same_columns: only the slipping patches' directions changed since the last call (the held
+  // set, the modes, the slipping patches and the sticking slides did not): z0 and Z stand, and
+  // only the cone equations are formed and solved again (bit for bit what a whole call gives).
   const int ld = 3 * options_.max_contacts;
-  const int p0 = refactor ? ResumableRows() : 0;
-  const int r = AssembleHeld(refactor, p0);
+  const int p0 = refactor && !same_columns ? ResumableRows() : 0;
+  const int r = same_columns ? patched_rows_ : AssembleHeld(refactor, p0);
+  patched_rows_ = r;
   num_slipping_ = 0;
-  for (std::int32_t j = 0; j < num_unique_; ++j) {
+  for (std::int32_t j = 0; j < num_unique_ && !same_columns; ++j) {
     const std::int32_t p = patch_of_[j];
     if (!active_[j] || p < 0 || mode_[j] != ContactMode::kFull3d || patch_state_[p].slipping) continue;
     for (int c = 0; c < 3; ++c) rhs_[row_of_[j] + c] += patch_in_[p].slide_m[c];
@@ -714,7 +719,7 @@ bool ContactSolver::SolvePatchedSystem(bool refactor) noexcept {
     fac_valid_ = false;
     return true;
   }
-  if (refactor) {
+  if (refactor && !same_columns) {
     if (eps_m_per_N_ > 0.0) {
       for (int k = p0; k < r; ++k) A_[static_cast<std::ptrdiff_t>(k) * ld + k] += eps_m_per_N_;
     }
@@ -769,21 +774,25 @@ bool ContactSolver::SolvePatchedSystem(bool refactor) noexcept {
   // z0 and Z are solved together, b0 in the column before Z's (Z_'s column 0): one pass of the
   // lane solve takes eight columns, so the right-hand side rides along with up to three
   // slipping patches instead of a pass of its own.
-  for (std::int32_t a = 0; a < ns; ++a) {
-    const std::int32_t p = slipping_list_[a];
-    for (int c = 0; c < 2; ++c) {
-      double* z = Zcol(2 * a + c);
-      std::fill(z, z + r, 0.0);
-      for (std::int32_t m = slip_begin_[a]; m < slip_begin_[a + 1]; ++m) {
-        const std::int32_t j = slip_members_[m];
-        if (mode_[j] != ContactMode::kFull3d) continue;
-        for (int k = 0; k < 3; ++k) z[row_of_[j] + k] = tangent_[p](k, c);
+  if (same_columns) {
+    std::copy(Z_.begin(), Z_.begin() + r, rhs_.begin());  // z0, kept in Z_'s column 0
+  } else {
+    for (std::int32_t a = 0; a < ns; ++a) {
+      const std::int32_t p = slipping_list_[a];
+      for (int c = 0; c < 2; ++c) {
+        double* z = Zcol(2 * a + c);
+        std::fill(z, z + r, 0.0);
+        for (std::int32_t m = slip_begin_[a]; m < slip_begin_[a + 1]; ++m) {
+          const std::int32_t j = slip_members_[m];
+          if (mode_[j] != ContactMode::kFull3d) continue;
+          for (int k = 0; k < 3; ++k) z[row_of_[j] + k] = tangent_[p](k, c);
+        }
       }
     }
+    std::copy(rhs_.begin(), rhs_.begin() + r, Z_.begin());
+    SolveFactored(A_.data(), r, ld, Z_.data(), 1 + 2 * ns, ld);
+    std::copy(Z_.begin(), Z_.begin() + r, rhs_.begin());
   }
-  std::copy(rhs_.begin(), rhs_.begin() + r, Z_.begin());
-  SolveFactored(A_.data(), r, ld, Z_.data(), 1 + 2 * ns, ld);
-  std::copy(Z_.begin(), Z_.begin() + r, rhs_.begin());
   if (ns > 0) {
     const int n2 = 2 * ns;
     // Phi_a applied to the columns (the patch's held nodes' rows), both equations of a patch
@@ -892,6 +901,85 @@ bool ContactSolver::WouldStick(std::int32_t a) const noexcept {
   return f_t.norm() <= in.mu_kinetic * std::max(f_n, 0.0);
 }
 
+int ContactSolver::TurnTowardTheSlide(std::int32_t a, double tol) noexcept {
+  // Kinetic friction opposes the sliding: a slipping patch's force on the body runs along the
+  // way the fingertip slid over the material, w = stick - s = lambda e (lambda >= 0). With the
+  // held set fixed, the patch's force is affine in its slide (the columns Z of its slide):
+  // F_t(s) = F_sigma + G (s - sigma), F_n(s) = N_sigma + h . (s - sigma), sigma the stick and
+  // G its tangential stiffness (SPD). The cone F_t = mu F_n e then reads
+  //   (lambda G + mu N I) e = F_sigma,  N = N_sigma - lambda h . e,
+  // and for a given N, |(lambda G + mu N I)^-1 F_sigma| falls from |F_sigma| / (mu N) > 1 (the
+  // stick is outside the cone) to 0 as lambda grows: one root, found by safeguarded Newton,
+  // and N follows in a few passes. The other patches' slides are held as they are; the rounds
+  // of SolveWithPatches take them along. Taking the slide's direction as the next one (a fixed
+  // point) diverges where the slip is small against what a turn of the force moves the slide:
+  // a fingertip that just left its cone got an arbitrary direction when the rounds ran out, and
+  // a stroke that started from a press jumped by up to 1.1 N (docs/fem.md).
+  // Returns 1 if the direction turned by more than tol, 0 if it agrees, -1 if the stick is
+  // inside the cone (no slip).
+  const std::int32_t p = slipping_list_[a];
+  const FrictionPatch& in = patch_in_[p];
+  const double* z0 = Zcol(2 * a);
+  const double* z1 = Zcol(2 * a + 1);
+  Eigen::Vector3d dF0 = Eigen::Vector3d::Zero(), dF1 = Eigen::Vector3d::Zero();
+  for (std::int32_t m = slip_begin_[a]; m < slip_begin_[a + 1]; ++m) {
+    const std::int32_t j = slip_members_[m];
+    const int k = row_of_[j];
+    if (mode_[j] == ContactMode::kFull3d) {
+      dF0 += Eigen::Vector3d(z0[k], z0[k + 1], z0[k + 2]);
+      dF1 += Eigen::Vector3d(z1[k], z1[k + 1], z1[k + 2]);
+    } else {
+      dF0 += z0[k] * n_[j];
+      dF1 += z1[k] * n_[j];
+    }
+  }
+  const Eigen::Vector2d sigma = tangent_[p].transpose() * in.slide_m;
+  const Eigen::Vector2d s_now(slip_rhs_[2 * a], slip_rhs_[2 * a + 1]);
+  const Eigen::Vector3d F3 = patch_state_[p].force_N + dF0 * (sigma[0] - s_now[0]) + dF1 * (sigma[1] - s_now[1]);
+  const Eigen::Vector2d F_sigma = tangent_[p].transpose() * F3;
+  const double N_sigma = -in.n_out.dot(F3);
+  Eigen::Matrix2d G;
+  G.col(0) = tangent_[p].transpose() * dF0;
+  G.col(1) = tangent_[p].transpose() * dF1;
+  G = 0.5 * (G + G.transpose()).eval();
+  const Eigen::Vector2d h(-in.n_out.dot(dF0), -in.n_out.dot(dF1));
+  const double mu = in.mu_kinetic;
+  if (!(mu * N_sigma > 0.0)) return 0;  // no pressure: no friction to direct
+  if (F_sigma.norm() <= mu * N_sigma) return -1;
+  Eigen::Vector2d e = slip_dir_[p];
+  double lambda = 0.0, N = N_sigma;
+  for (int pass = 0; pass < 4; ++pass) {
+    const double c = mu * N;
+    if (!(c > 0.0)) break;
+    auto x_of = [&](double l) -> Eigen::Vector2d { return (l * G + c * Eigen::Matrix2d::Identity()).inverse() * F_sigma; };
+    // Newton from below on |x(l)| = 1 (convex, decreasing for SPD G: never overshoots the root
+    // from below); bisection keeps it inside [lo, hi] should G be less than SPD.
+    double lo = 0.0, hi = std::numeric_limits<double>::infinity(), l = lambda;
+    for (int it = 0; it < 40; ++it) {
+      const Eigen::Vector2d x = x_of(l);
+      const double f = x.norm() - 1.0;
+      if (std::abs(f) <= 1e-13) break;
+      if (f > 0.0) lo = l; else hi = l;
+      const Eigen::Matrix2d Minv = (l * G + c * Eigen::Matrix2d::Identity()).inverse();
+      const double df = x.dot(-(Minv * (G * x))) / x.norm();
+      double next = df < 0.0 ? l - f / df : lo + 1.0;
+      if (!(next > lo && next < hi)) next = std::isfinite(hi) ? 0.5 * (lo + hi) : 2.0 * lo + 1e-9;
+      l = next;
+    }
+    lambda = l;
+    const Eigen::Vector2d x = x_of(lambda);
+    if (!(x.norm() > 0.0) || !x.allFinite()) break;
+    e = x.normalized();
+    const double N_next = N_sigma - lambda * h.dot(e);
+    if (std::abs(N_next - N) <= 1e-12 * std::abs(N_sigma)) break;
+    N = N_next;
+  }
+  if (!e.allFinite()) return 0;
+  if ((e - slip_dir_[p]).norm() <= tol) return 0;
+  slip_dir_[p] = e;
+  return 1;
+}
+
 bool ContactSolver::SolveWithPatches(StepStatus& status) noexcept {
   // Like the general path's iteration, with one more kind of change: a sticking patch whose
   // force leaves its cone starts to slip, in the direction e of that force (and never sticks
@@ -952,6 +1040,7 @@ bool ContactSolver::SolveWithPatches(StepStatus& status) noexcept {
     slip_dir_[p] = moved(p).normalized();
   }
   given_force_ = false;
+  std::fill(restuck_.begin(), restuck_.end(), std::uint8_t{0});
   bool refactor = true;
   std::int32_t direction_rounds = 0;  // since the held set last changed (converges in about 6)
   constexpr std::int32_t kMaxDirectionRounds = 16;
@@ -1011,9 +1100,11 @@ bool ContactSolver::SolveWithPatches(StepStatus& status) noexcept {
   for (std::int32_t j = 0; j < num_unique_; ++j) d_scale2 = std::max(d_scale2, d_m_[j].squaredNorm());
   for (std::int32_t p = 0; p < num_patches_; ++p) d_scale2 = std::max(d_scale2, patch_in_[p].slide_m.squaredNorm());
   const double d_scale = d_scale2 == 0.0 ? 1.0 : std::sqrt(d_scale2);
+  bool same_columns = false;  // the last round turned directions only
   while (true) {
-    if (!SolvePatchedSystem(refactor)) return false;
+    if (!SolvePatchedSystem(refactor, same_columns)) return false;
     refactor = false;
+    same_columns = false;
     double f_scale2 = 0.0;
     for (std::int32_t j = 0; j < num_unique_; ++j) f_scale2 = std::max(f_scale2, f_N_[j].squaredNorm());
     const double f_scale = f_scale2 == 0.0 ? 1.0 : std::sqrt(f_scale2);
@@ -1022,22 +1113,27 @@ bool ContactSolver::SolveWithPatches(StepStatus& status) noexcept {
     // force runs along the way the fingertip slid over the material, stick - s (tangent
     // coordinates). Holding the trial force's direction instead needs large sideways slides
     // where the patch's tangential stiffness is anisotropic, and a held fingertip crept: its
-    // patch changed nodes with every slide and slipped again (docs/fem.md). A few rounds with
-    // the same factor: only the cone equations change.
-    bool turned = false;
+    // patch changed nodes with every slide and slipped again (docs/fem.md). The direction in
+    // which force and slide agree is found per patch (TurnTowardTheSlide); the rounds take the
+    // other patches along, with the same factor and columns: only the cone equations change.
+    bool turned = false, restuck = false;
     for (std::int32_t a = 0; a < num_slipping_ && !given_force_; ++a) {
       const std::int32_t p = slipping_list_[a];
       if (!at_rest(p)) continue;  // a moving fingertip slips the way it moves
-      const Eigen::Vector2d slid = SlidOver(a);
-      if (!(slid.norm() > 1e-12)) continue;
-      const Eigen::Vector2d e = slid.normalized();
-      if ((e - slip_dir_[p]).norm() <= 1e-6) continue;
-      slip_dir_[p] = e;
-      turned = true;
+      const int turn = TurnTowardTheSlide(a, 1e-9);
+      if (turn > 0) turned = true;
+      if (turn < 0 && !restuck_[p]) {  // no direction: held at its stick it is inside its cone
+        restuck_[p] = 1;
+        patch_state_[p].slipping = false;
+        patch_state_[p].slide_m = patch_in_[p].slide_m;
+        turned = true;
+        restuck = true;
+      }
     }
-    if (turned && direction_rounds < kMaxDirectionRounds) {
+    if (restuck || (turned && direction_rounds < kMaxDirectionRounds)) {  // a patch stuck again: re-solved
       ++direction_rounds;
       ++iterations_;
+      same_columns = !restuck;
       continue;
     }
     bool sticks_again = false;

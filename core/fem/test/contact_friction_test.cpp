@@ -142,6 +142,43 @@ TEST(ContactFriction, SlippingPatchEndsOnTheConeAgainstItsSlide) {
   }
 }
 
+// A stick just outside its cone slips a little, and its force still runs along its slide: the
+// direction is found exactly (ContactSolver::TurnTowardTheSlide), checked against the direct
+// solve at the slide it reports. Taking the slide's direction as the next one instead (a fixed
+// point) diverges where the slip is small against what a turn of the force moves the slide,
+// and it stopped wherever its rounds ran out.
+TEST(ContactFriction, AStickJustOutsideItsConeSlipsAlongItsSlide) {
+  const Model& m = BoxModel();
+  const auto in = TopPatch(m, 0.017, 0.022, 0.006, 1e-3);
+  ContactSolver solver(m.c64, {.max_contacts = 32});
+  int checked = 0;
+  for (double angle : {0.3, 1.1, 2.0, 2.9, 4.2, 5.5}) {
+    const Eigen::Vector3d stick = 1e-3 * Eigen::Vector3d(std::cos(angle), std::sin(angle), 0.0);
+    const FrictionPatch probe{Eigen::Vector3d::UnitZ(), stick, 100.0, 100.0, false};
+    ASSERT_EQ(solver.Solve(in, std::span(&probe, 1)), StepStatus::kOk);
+    const Eigen::Vector3d F0 = solver.patch_states()[0].force_N;
+    const double ratio = F0.head<2>().norm() / -F0.z();  // the cone the stick needs
+    for (double outside : {1e-3, 1e-2}) {
+      const double mu = ratio / (1.0 + outside);
+      const FrictionPatch patch{Eigen::Vector3d::UnitZ(), stick, mu, mu, false};
+      ASSERT_EQ(solver.Solve(in, std::span(&patch, 1)), StepStatus::kOk) << angle;
+      const FrictionPatchState st = solver.patch_states()[0];
+      ASSERT_TRUE(st.slipping) << angle << " " << outside;
+      const test::DirectContact at = test::SolveDirect(m.block.mesh, kMat, m.block.fixed, Held(in, st.slide_m));
+      EXPECT_LT(test::RelError(Forces(solver), at.forces_N), 1e-9) << angle << " " << outside;
+      const Eigen::Vector3d F = Sum(at.forces_N);
+      const double Fn = -F.z();
+      const Eigen::Vector3d Ft(F.x(), F.y(), 0.0);
+      EXPECT_NEAR(Ft.norm(), mu * Fn, 1e-9 * Fn) << angle << " " << outside;
+      const Eigen::Vector3d slid = stick - st.slide_m;
+      EXPECT_LT(slid.norm(), 0.5 * stick.norm()) << angle << " " << outside;  // a small slip
+      EXPECT_GT(Ft.normalized().dot(slid.normalized()), 1.0 - 1e-9) << angle << " " << outside;
+      ++checked;
+    }
+  }
+  EXPECT_EQ(checked, 12);
+}
+
 // With mu_kinetic < mu_static a patch that slipped in the previous step sticks again only
 // inside the smaller cone: between the two it goes on slipping.
 TEST(ContactFriction, APatchThatSlippedNeedsTheKineticConeToStick) {

@@ -205,10 +205,14 @@ class ContactSolver {
   // the slipping patches' slides. refactor: the held set or a node's mode changed since the
   // last call (else A_ still holds the factor of G C_cc G^T). Returns false on a numerical
   // failure.
-  bool SolvePatchedSystem(bool refactor) noexcept;
+  bool SolvePatchedSystem(bool refactor, bool same_columns = false) noexcept;
   // For a patch the warm start made slip (list index a of the last SolvePatchedSystem): true if
   // held at its stick instead it would be inside its cone (the forces from z0 + Z s, no solve).
   bool WouldStick(std::int32_t a) const noexcept;
+  // For list index a of the last SolvePatchedSystem: its direction set to the one in which its
+  // force and its slide agree (exact for the patch, the others' slides held); 1 if that turned
+  // it by more than tol, 0 if not, -1 if held at its stick it would be inside its cone.
+  int TurnTowardTheSlide(std::int32_t a, double tol) noexcept;
   // For list index a of the last SolvePatchedSystem: how far its fingertip slid over the
   // material, the stick minus the slide it solved (tangent coordinates).
   Eigen::Vector2d SlidOver(std::int32_t a) const noexcept;
@@ -316,10 +320,12 @@ class ContactSolver {
   std::vector<Eigen::Vector2d> slip_force_;  // the given tangential force (given_force_)
   std::vector<std::uint8_t> warm_slip_;      // slipping by the warm start, not yet checked
   std::vector<std::uint8_t> at_rest_;        // the fingertip moved under 1 um along the surface
+  std::vector<std::uint8_t> restuck_;  // stuck again this call because no direction agreed
   bool given_force_ = false;
   std::vector<FrictionPatchState> patch_state_;
   std::vector<std::int32_t> slipping_list_;
   std::int32_t num_slipping_ = 0;  // in slipping_list_, as the last SolvePatchedSystem left it
+  int patched_rows_ = 0;           // the held rows of the last SolvePatchedSystem
   // z0 (column 0) and the slipping patches' columns Z = A^-1 B (3M x (1 + 2P), ld 3M).
   std::vector<double> Z_;
   double* Zcol(int col) noexcept { return Z_.data() + static_cast<std::ptrdiff_t>(1 + col) * 3 * options_.max_contacts; }
