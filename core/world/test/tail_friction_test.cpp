@@ -21,11 +21,17 @@
 namespace handshare::world {
 namespace {
 
-// The dinosaur scene reduced to its tail, with these friction coefficients on its material.
-scene::Scene TailScene(double mu_static, double mu_kinetic) {
+// The dinosaur scene reduced to its tail, as the scene file has it.
+scene::Scene ScenesTail() {
   scene::Scene s = scene::LoadScene(std::filesystem::path(HANDSHARE_SOURCE_ASSETS) / "scenes" / "dinosaur.json");
   std::erase_if(s.objects, [](const scene::SceneObject& o) { return o.id != "triceratops_tail"; });
   if (s.objects.size() != 1) throw std::runtime_error("dinosaur.json has no single triceratops_tail");
+  return s;
+}
+
+// The same with these friction coefficients on its material.
+scene::Scene TailScene(double mu_static, double mu_kinetic) {
+  scene::Scene s = ScenesTail();
   s.objects[0].deformable.mu_static = mu_static;
   s.objects[0].deformable.mu_kinetic = mu_kinetic;
   return s;
@@ -38,6 +44,26 @@ SceneModels BuildTail(const scene::Scene& s) {
   options.cache_dir = cache != nullptr ? std::filesystem::path(cache)
                                        : std::filesystem::temp_directory_path() / "handshare_tail_friction_cache";
   return BuildSceneModels(s, options);
+}
+
+// A fingertip centre (frame O) 3 mm above the highest surface node of the tail near `fraction`
+// of the way from its attached base to its tip.
+Eigen::Vector3d AboveTheTop(const SceneModels& sw, double fraction) {
+  const PreparedDeformable& tail = sw.deformables[0];
+  double x_min = 0.0;
+  for (const auto& p : tail.mesh->positions_m()) x_min = std::min(x_min, p.x());
+  Eigen::Vector3d at = Eigen::Vector3d::Zero();
+  double z_top = -std::numeric_limits<double>::infinity();
+  for (std::int32_t v : tail.surface->nodes) {
+    const Eigen::Vector3d& p = tail.mesh->positions_m()[static_cast<std::size_t>(v)];
+    if (std::abs(p.x() - fraction * x_min) < 0.004 && p.z() > z_top) {
+      z_top = p.z();
+      at = p;
+    }
+  }
+  if (!std::isfinite(z_top)) throw std::runtime_error("no surface node of the tail there");
+  at.z() += sw.world->config().fingertip_radius_m + 0.003;
+  return at;
 }
 
 TEST(TailFriction, AFingerStrokingTheTailDragsWithMuTimesTheNormalForce) {
@@ -136,30 +162,12 @@ TEST(TailFriction, AFingerStrokingTheTailDragsWithMuTimesTheNormalForce) {
 // point that diverges when the slip is small: when its 16 rounds ran out it was anywhere, and
 // the same creep jumped by 0.3 to 1.1 N (up to 112 % of F_n) in single steps.
 TEST(TailFriction, AFingertipCreepingOverTheScenesTailSlipsWithoutAJump) {
-  const scene::Scene s = [] {
-    scene::Scene all = scene::LoadScene(std::filesystem::path(HANDSHARE_SOURCE_ASSETS) / "scenes" / "dinosaur.json");
-    std::erase_if(all.objects, [](const scene::SceneObject& o) { return o.id != "triceratops_tail"; });
-    return all;
-  }();
-  ASSERT_EQ(s.objects.size(), 1u);
+  const scene::Scene s = ScenesTail();
   const double mu_s = s.objects[0].deformable.mu_static, mu_k = s.objects[0].deformable.mu_kinetic;
   ASSERT_GT(mu_k, 0.0) << "the scene's tail is frictionless";
   SceneModels sw = BuildTail(s);
-  const PreparedDeformable& tail = sw.deformables[0];
   const Eigen::Isometry3d X_WO = s.objects[0].X_WO();
-  double x_min = 0.0;
-  for (const auto& p : tail.mesh->positions_m()) x_min = std::min(x_min, p.x());
-  Eigen::Vector3d tip_O = Eigen::Vector3d::Zero();  // above the highest surface node at 40 %
-  double z_top = -std::numeric_limits<double>::infinity();
-  for (std::int32_t v : tail.surface->nodes) {
-    const Eigen::Vector3d& p = tail.mesh->positions_m()[static_cast<std::size_t>(v)];
-    if (std::abs(p.x() - 0.4 * x_min) < 0.004 && p.z() > z_top) {
-      z_top = p.z();
-      tip_O = p;
-    }
-  }
-  ASSERT_TRUE(std::isfinite(z_top));
-  tip_O.z() += sw.world->config().fingertip_radius_m + 0.003;
+  Eigen::Vector3d tip_O = AboveTheTop(sw, 0.4);
   std::array<Eigen::Vector3d, 5> tips;
   for (auto& p : tips) p = Eigen::Vector3d(5, 5, 5);
   for (int k = 0; k < 300; ++k) {  // down 7 mm in 100 steps (4 mm in), held for 0.2 s
@@ -199,22 +207,8 @@ TEST(TailFriction, AFingertipCreepingOverTheScenesTailSlipsWithoutAJump) {
 TEST(TailFriction, AFingertipHeldStillOnTheTailComesToRest) {
   const scene::Scene s = TailScene(0.8, 0.6);
   SceneModels sw = BuildTail(s);
-  const PreparedDeformable& tail = sw.deformables[0];
   const Eigen::Isometry3d X_WO = s.objects[0].X_WO();
-  double x_min = 0.0;
-  for (const auto& p : tail.mesh->positions_m()) x_min = std::min(x_min, p.x());
-  // Above the highest surface node near 35% of the way to the tail's tip.
-  Eigen::Vector3d tip_O = Eigen::Vector3d::Zero();
-  double z_top = -std::numeric_limits<double>::infinity();
-  for (std::int32_t v : tail.surface->nodes) {
-    const Eigen::Vector3d& p = tail.mesh->positions_m()[static_cast<std::size_t>(v)];
-    if (std::abs(p.x() - 0.35 * x_min) < 0.004 && p.z() > z_top) {
-      z_top = p.z();
-      tip_O = p;
-    }
-  }
-  ASSERT_TRUE(std::isfinite(z_top));
-  tip_O.z() += sw.world->config().fingertip_radius_m + 0.003;
+  Eigen::Vector3d tip_O = AboveTheTop(sw, 0.35);  // 35 % of the way to the tip
   std::array<Eigen::Vector3d, 5> tips;
   for (auto& p : tips) p = Eigen::Vector3d(5, 5, 5);
   // Down 7 mm in 100 steps (4 mm into the tail), then held still for 2 s.
@@ -257,24 +251,9 @@ TwoHandsResult HoldTheTailWithTwoHands(double mu_static, double mu_kinetic, doub
   const scene::Scene s = TailScene(mu_static, mu_kinetic);
   SceneModels alice = BuildTail(s);
   SceneModels bob = BuildTail(s);
-  const PreparedDeformable& tail = alice.deformables[0];
   const Eigen::Isometry3d X_WO = s.objects[0].X_WO();
-  double x_min = 0.0;
-  for (const auto& p : tail.mesh->positions_m()) x_min = std::min(x_min, p.x());
-  auto above_top = [&](double x0) {  // above the highest surface node near x0
-    double z_top = -std::numeric_limits<double>::infinity();
-    Eigen::Vector3d at = Eigen::Vector3d::Zero();
-    for (std::int32_t v : tail.surface->nodes) {
-      const Eigen::Vector3d& p = tail.mesh->positions_m()[static_cast<std::size_t>(v)];
-      if (std::abs(p.x() - x0) < 0.004 && p.z() > z_top) {
-        z_top = p.z();
-        at = p;
-      }
-    }
-    at.z() += alice.world->config().fingertip_radius_m + 0.003;
-    return at;
-  };
-  Eigen::Vector3d tip_a = above_top(at_a * x_min), tip_b = above_top(at_b * x_min);
+  Eigen::Vector3d tip_a = AboveTheTop(alice, at_a);
+  Eigen::Vector3d tip_b = at_b < 0.0 ? Eigen::Vector3d::Zero() : AboveTheTop(alice, at_b);  // bob away: unused
   std::array<Eigen::Vector3d, 5> tips_a, tips_b;
   tips_a.fill(Eigen::Vector3d(5, 5, 5));
   tips_b.fill(Eigen::Vector3d(5, 5, 5));
