@@ -951,23 +951,23 @@ int ContactSolver::TurnTowardTheSlide(std::int32_t a, double tol) noexcept {
   for (int pass = 0; pass < 4; ++pass) {
     const double c = mu * N;
     if (!(c > 0.0)) break;
-    auto x_of = [&](double l) -> Eigen::Vector2d { return (l * G + c * Eigen::Matrix2d::Identity()).inverse() * F_sigma; };
+    auto inverse_at = [&](double l) -> Eigen::Matrix2d { return (l * G + c * Eigen::Matrix2d::Identity()).inverse(); };
     // Newton from below on |x(l)| = 1 (convex, decreasing for SPD G: never overshoots the root
     // from below); bisection keeps it inside [lo, hi] should G be less than SPD.
     double lo = 0.0, hi = std::numeric_limits<double>::infinity(), l = lambda;
     for (int it = 0; it < 40; ++it) {
-      const Eigen::Vector2d x = x_of(l);
+      const Eigen::Matrix2d Minv = inverse_at(l);  // one inverse a step, for x and its slope
+      const Eigen::Vector2d x = Minv * F_sigma;
       const double f = x.norm() - 1.0;
       if (std::abs(f) <= 1e-13) break;
       if (f > 0.0) lo = l; else hi = l;
-      const Eigen::Matrix2d Minv = (l * G + c * Eigen::Matrix2d::Identity()).inverse();
       const double df = x.dot(-(Minv * (G * x))) / x.norm();
       double next = df < 0.0 ? l - f / df : lo + 1.0;
       if (!(next > lo && next < hi)) next = std::isfinite(hi) ? 0.5 * (lo + hi) : 2.0 * lo + 1e-9;
       l = next;
     }
     lambda = l;
-    const Eigen::Vector2d x = x_of(lambda);
+    const Eigen::Vector2d x = inverse_at(lambda) * F_sigma;
     if (!(x.norm() > 0.0) || !x.allFinite()) break;
     e = x.normalized();
     const double N_next = N_sigma - lambda * h.dot(e);
