@@ -23,11 +23,9 @@
 // window and aborts without this guard, in about a second.
 #include "lease_race_guard.hpp"
 
-#include <dlfcn.h>
-
-#include <cstdio>
-#include <cstdlib>
 #include <fastdds/rtps/builtin/data/ParticipantProxyData.h>
+
+#include "library_override.hpp"
 
 namespace {
 
@@ -35,16 +33,10 @@ constexpr const char* kClearSymbol = "_ZN8eprosima8fastrtps4rtps20ParticipantPro
 
 using ClearFn = void (*)(eprosima::fastrtps::rtps::ParticipantProxyData*);
 
+// Without the library's clear a proxy would keep its last participant: LibraryDefinition stops.
 ClearFn LibraryClear() {
-  static const ClearFn library = [] {
-    auto* found = reinterpret_cast<ClearFn>(dlsym(RTLD_NEXT, kClearSymbol));
-    if (found == nullptr) {
-      // Without the library's clear a proxy would keep its last participant: stop here, loudly.
-      std::fprintf(stderr, "handshare: Fast DDS's ParticipantProxyData::clear not found (%s)\n", dlerror());
-      std::abort();
-    }
-    return found;
-  }();
+  static const ClearFn library = reinterpret_cast<ClearFn>(
+      handshare::dds::detail::LibraryDefinition(kClearSymbol, "ParticipantProxyData::clear"));
   return library;
 }
 
@@ -61,16 +53,6 @@ void ParticipantProxyData::clear() {
 
 namespace handshare::dds::detail {
 
-bool LeaseRaceGuardActive() {
-  void* resolved = dlsym(RTLD_DEFAULT, kClearSymbol);
-  Dl_info where{};
-  Dl_info library{};
-  if (resolved == nullptr || dladdr(resolved, &where) == 0) return false;
-  // The library's clear is the next one after this object's; the guard is active when the one
-  // the process resolves lies in another object (this executable).
-  void* next = reinterpret_cast<void*>(LibraryClear());
-  if (dladdr(next, &library) == 0) return false;
-  return where.dli_fbase != library.dli_fbase;
-}
+bool LeaseRaceGuardActive() { return OverrideInEffect(kClearSymbol, reinterpret_cast<void*>(LibraryClear())); }
 
 }  // namespace handshare::dds::detail
