@@ -364,26 +364,21 @@ Participant::Participant(const common::SessionOptions& where, const std::string&
   const std::string file = qos_file.empty() ? DefaultQosFile() : qos_file;
   LoadProfilesOnce(file);
 
-  static const bool guarded = [] {
-    const bool active = detail::LeaseRaceGuardActive();
-    if (!active) {
+  // The executable's definitions in place of Fast DDS's (library_override.hpp): said once when absent.
+  static const bool overrides_checked = [] {
+    if (!detail::LeaseRaceGuardActive()) {
       std::fprintf(stderr, "handshare: warning: the guard against Fast DDS's lease-check race is not in effect "
                            "(this executable does not export ParticipantProxyData::clear): a peer leaving may "
                            "abort this process\n");
     }
-    return active;
-  }();
-  (void)guarded;
-  static const bool repaired_fast = [] {
-    const bool active = detail::EdpHeartbeatShortened();
-    if (!active) {
+    if (!detail::EdpHeartbeatShortened()) {
       std::fprintf(stderr, "handshare: warning: Fast DDS's endpoint discovery keeps its 1 s heartbeat (this "
                            "executable does not export EDPSimple::set_builtin_writer_attributes): a lost discovery "
                            "datagram may delay a match by a second\n");
     }
-    return active;
+    return true;
   }();
-  (void)repaired_fast;
+  (void)overrides_checked;
   auto* factory = fdds::DomainParticipantFactory::get_instance();
   fdds::DomainParticipantQos pqos;
   Check(factory->get_participant_qos_from_profile(kParticipantProfile, pqos),
