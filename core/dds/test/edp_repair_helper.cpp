@@ -145,8 +145,6 @@ int main(int argc, char** argv) {
   const auto end = Clock::now() + std::chrono::seconds(10);
   while (matched_ns.load() == 0 && Clock::now() < end) std::this_thread::sleep_for(std::chrono::milliseconds(5));
   const std::int64_t first = first_drop_ns.load(), matched = matched_ns.load();
-  pub->delete_datawriter(writer);
-  sub->delete_datareader(reader);
   writer_side->delete_contained_entities();
   reader_side->delete_contained_entities();
   factory->delete_participant(writer_side);

@@ -933,9 +933,8 @@ int ContactSolver::TurnTowardTheSlide(std::int32_t a, double tol) noexcept {
       dF1 += z1[k] * n_[j];
     }
   }
-  const Eigen::Vector2d sigma = tangent_[p].transpose() * in.slide_m;
-  const Eigen::Vector2d s_now(slip_rhs_[2 * a], slip_rhs_[2 * a + 1]);
-  const Eigen::Vector3d F3 = patch_state_[p].force_N + dF0 * (sigma[0] - s_now[0]) + dF1 * (sigma[1] - s_now[1]);
+  const Eigen::Vector2d slid = SlidOver(a);  // sigma - s
+  const Eigen::Vector3d F3 = patch_state_[p].force_N + dF0 * slid[0] + dF1 * slid[1];
   const Eigen::Vector2d F_sigma = tangent_[p].transpose() * F3;
   const double N_sigma = -in.n_out.dot(F3);
   Eigen::Matrix2d G;
