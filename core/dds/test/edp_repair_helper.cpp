@@ -10,6 +10,7 @@
 // usage: edp_repair_helper DOMAIN
 // prints "heartbeat shortened" or "heartbeat the library's", then
 // "dropped N datagrams; matched S s after the first", exits 0; exits 1 when nothing matched in 10 s.
+#include <algorithm>
 #include <atomic>
 #include <chrono>
 #include <cstdio>
@@ -24,11 +25,11 @@
 #include <fastdds/rtps/common/EntityId_t.hpp>
 #include <fastdds/rtps/transport/UDPv4TransportDescriptor.h>
 #include <fastdds/rtps/transport/test_UDPv4TransportDescriptor.h>
-#include <fastrtps/xmlparser/XMLProfileManager.h>
 #include <memory>
 #include <thread>
 
 #include "handshare/idl/handsharePubSubTypes.h"
+#include "rtps_test_support.hpp"
 
 #ifndef HANDSHARE_LIBRARY_TIMES
 #include "../src/edp_heartbeat.hpp"
@@ -36,6 +37,7 @@
 
 namespace fdds = eprosima::fastdds::dds;
 namespace rtps = eprosima::fastrtps::rtps;
+namespace ts = handshare::dds::test_support;
 using Clock = std::chrono::steady_clock;
 
 namespace {
@@ -52,25 +54,10 @@ std::int64_t Now() {
 
 // True when the RTPS message holds a DATA submessage from the SEDP publications writer.
 bool CarriesAnAnnouncement(const rtps::CDRMessage_t& msg) {
-  constexpr std::uint32_t kHeader = 20;  // "RTPS", version, vendor, GUID prefix
-  if (msg.length < kHeader || msg.buffer[0] != 'R' || msg.buffer[1] != 'T') return false;
-  std::uint32_t pos = kHeader;
-  while (pos + 4 <= msg.length) {
-    const std::uint8_t id = msg.buffer[pos];
-    const bool little = (msg.buffer[pos + 1] & 0x01) != 0;
-    const std::uint16_t length = little ? static_cast<std::uint16_t>(msg.buffer[pos + 2] | (msg.buffer[pos + 3] << 8))
-                                        : static_cast<std::uint16_t>((msg.buffer[pos + 2] << 8) | msg.buffer[pos + 3]);
-    const std::uint32_t body = pos + 4;
-    // DATA: extra flags (2), octets to inline QoS (2), reader id (4), writer id (4).
-    if (id == 0x15 && body + 12 <= msg.length) {
-      const rtps::octet* w = msg.buffer + body + 8;
-      const rtps::EntityId_t pub = rtps::c_EntityId_SEDPPubWriter;
-      if (w[0] == pub.value[0] && w[1] == pub.value[1] && w[2] == pub.value[2] && w[3] == pub.value[3]) return true;
-    }
-    if (length == 0) break;  // the last submessage runs to the end
-    pos = body + length;
-  }
-  return false;
+  const rtps::EntityId_t pub = rtps::c_EntityId_SEDPPubWriter;
+  return ts::AnyData(msg, [&](const ts::DataSubmessage& data) {
+    return std::equal(pub.value, pub.value + 4, data.writer_id);
+  });
 }
 
 bool DropWhileTheWindowLasts(rtps::CDRMessage_t& msg) {
@@ -92,13 +79,6 @@ class MatchListener final : public fdds::DataReaderListener {
   }
 };
 
-fdds::DomainParticipantQos QosWith(std::shared_ptr<eprosima::fastdds::rtps::TransportDescriptorInterface> transport) {
-  fdds::DomainParticipantQos qos = fdds::PARTICIPANT_QOS_DEFAULT;
-  qos.transport().use_builtin_transports = false;
-  qos.transport().user_transports.push_back(std::move(transport));
-  return qos;
-}
-
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -113,17 +93,14 @@ int main(int argc, char** argv) {
   std::printf("heartbeat %s\n", handshare::dds::detail::EdpHeartbeatShortened() ? "shortened" : "the library's");
 #endif
   std::fflush(stdout);
-  // Both participants talk over their transports, as two processes would.
-  eprosima::fastrtps::LibrarySettingsAttributes library;
-  library.intraprocess_delivery = eprosima::fastrtps::INTRAPROCESS_OFF;
-  eprosima::fastrtps::xmlparser::XMLProfileManager::library_settings(library);
+  ts::TalkOverTransports();
 
   auto* factory = fdds::DomainParticipantFactory::get_instance();
   fdds::DomainParticipant* reader_side =
-      factory->create_participant(domain, QosWith(std::make_shared<eprosima::fastdds::rtps::UDPv4TransportDescriptor>()));
+      factory->create_participant(domain, ts::OnlyOver(std::make_shared<eprosima::fastdds::rtps::UDPv4TransportDescriptor>()));
   auto lossy = std::make_shared<eprosima::fastdds::rtps::test_UDPv4TransportDescriptor>();
   lossy->messages_filter_ = DropWhileTheWindowLasts;
-  fdds::DomainParticipant* writer_side = factory->create_participant(domain, QosWith(lossy));
+  fdds::DomainParticipant* writer_side = factory->create_participant(domain, ts::OnlyOver(lossy));
   if (reader_side == nullptr || writer_side == nullptr) {
     std::fprintf(stderr, "edp_repair_helper: could not create the participants on domain %d\n", domain);
     return 1;

@@ -24,6 +24,7 @@
 #ifndef HANDSHARE_UNGUARDED
 #include "../src/lease_race_guard.hpp"
 #endif
+#include "rtps_test_support.hpp"
 
 namespace eprosima::fastrtps::rtps {
 
@@ -61,14 +62,13 @@ int main(int argc, char** argv) {
   std::fflush(stdout);
 
   auto* factory = fdds::DomainParticipantFactory::get_instance();
-  fdds::DomainParticipantQos qos = fdds::PARTICIPANT_QOS_DEFAULT;
+  // UDP only: the control aborts, and would leave shared-memory segments behind.
+  fdds::DomainParticipantQos qos =
+      handshare::dds::test_support::OnlyOver(std::make_shared<eprosima::fastdds::rtps::UDPv4TransportDescriptor>());
   // A 30 ms lease announced every 10 ms: each observer checks each peer about 30 times a second.
   qos.wire_protocol().builtin.discovery_config.leaseDuration = eprosima::fastrtps::Duration_t(0, 30000000);
   qos.wire_protocol().builtin.discovery_config.leaseDuration_announcementperiod =
       eprosima::fastrtps::Duration_t(0, 10000000);
-  // UDP only: the control aborts, and would leave shared-memory segments behind.
-  qos.transport().use_builtin_transports = false;
-  qos.transport().user_transports.push_back(std::make_shared<eprosima::fastdds::rtps::UDPv4TransportDescriptor>());
 
   std::vector<fdds::DomainParticipant*> observers;
   for (int i = 0; i < 3; ++i) {

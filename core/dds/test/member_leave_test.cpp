@@ -20,7 +20,6 @@
 #include <fastdds/dds/subscriber/Subscriber.hpp>
 #include <fastdds/rtps/transport/UDPv4TransportDescriptor.h>
 #include <fastdds/rtps/transport/test_UDPv4TransportDescriptor.h>
-#include <fastrtps/xmlparser/XMLProfileManager.h>
 #include <functional>
 #include <memory>
 #include <mutex>
@@ -32,6 +31,7 @@
 #include "handshare/common/data_dir.hpp"
 #include "handshare/dds/topics.hpp"
 #include "handshare/idl/handsharePubSubTypes.h"
+#include "rtps_test_support.hpp"
 
 namespace handshare::dds {
 namespace {
@@ -49,40 +49,12 @@ std::set<std::uint32_t> dropped_from;  // the writers (entity keys) whose leavin
 // True for the first datagram of each user writer with a key (entity kind 0x02) holding a DATA
 // submessage of sequence number 2: that member's "leaving" sample. Its repairs pass.
 bool DropEachFirstLeavingSample(rtps::CDRMessage_t& msg) {
-  constexpr std::uint32_t kHeader = 20;  // "RTPS", version, vendor, GUID prefix
-  if (msg.length < kHeader || msg.buffer[0] != 'R' || msg.buffer[1] != 'T') return false;
-  std::uint32_t pos = kHeader;
-  while (pos + 4 <= msg.length) {
-    const std::uint8_t id = msg.buffer[pos];
-    const bool little = (msg.buffer[pos + 1] & 0x01) != 0;
-    const auto u16 = [&](std::uint32_t at) {
-      return little ? static_cast<std::uint32_t>(msg.buffer[at] | (msg.buffer[at + 1] << 8))
-                    : static_cast<std::uint32_t>((msg.buffer[at] << 8) | msg.buffer[at + 1]);
-    };
-    const auto u32 = [&](std::uint32_t at) {
-      return little ? (u16(at) | (u16(at + 2) << 16)) : ((u16(at) << 16) | u16(at + 2));
-    };
-    const std::uint32_t length = u16(pos + 2);
-    const std::uint32_t body = pos + 4;
-    // DATA: extra flags (2), octets to inline QoS (2), reader id (4), writer id (4), SN (4 + 4).
-    if (id == 0x15 && body + 20 <= msg.length && msg.buffer[body + 11] == 0x02 && u32(body + 12) == 0 &&
-        u32(body + 16) == 2) {
-      const std::uint32_t writer = static_cast<std::uint32_t>(msg.buffer[body + 8] << 16 |
-                                                              msg.buffer[body + 9] << 8 | msg.buffer[body + 10]);
-      std::lock_guard<std::mutex> lock(drops_mutex);
-      return dropped_from.insert(writer).second;
-    }
-    if (length == 0) break;  // the last submessage runs to the end
-    pos = body + length;
-  }
-  return false;
-}
-
-fdds::DomainParticipantQos QosWith(std::shared_ptr<eprosima::fastdds::rtps::TransportDescriptorInterface> transport) {
-  fdds::DomainParticipantQos qos = fdds::PARTICIPANT_QOS_DEFAULT;
-  qos.transport().use_builtin_transports = false;
-  qos.transport().user_transports.push_back(std::move(transport));
-  return qos;
+  return test_support::AnyData(msg, [](const test_support::DataSubmessage& data) {
+    if (data.writer_id[3] != 0x02 || data.sequence != 2) return false;
+    const auto writer = static_cast<std::uint32_t>(data.writer_id[0] << 16 | data.writer_id[1] << 8 | data.writer_id[2]);
+    std::lock_guard<std::mutex> lock(drops_mutex);
+    return dropped_from.insert(writer).second;
+  });
 }
 
 bool WaitUntil(const std::function<bool()>& done, std::chrono::seconds timeout) {
@@ -98,20 +70,17 @@ bool WaitUntil(const std::function<bool()>& done, std::chrono::seconds timeout) 
 // Every "leaving" must still arrive, and no reader may count a loss. With the writer's history
 // depth 1 no "leaving" arrived, in every run, and the reader counted losses in most runs.
 TEST(MemberLeave, LostLeavingSamplesAreRepairedNotCountedLost) {
-  // Both participants talk over their transports, as two processes would.
-  eprosima::fastrtps::LibrarySettingsAttributes library;
-  library.intraprocess_delivery = eprosima::fastrtps::INTRAPROCESS_OFF;
-  eprosima::fastrtps::xmlparser::XMLProfileManager::library_settings(library);
+  test_support::TalkOverTransports();
   auto* factory = fdds::DomainParticipantFactory::get_instance();
   const std::string profiles = (common::QosDir() / "handshare_qos.xml").string();
   ASSERT_TRUE(factory->load_XML_profiles_file(profiles) == ReturnCode_t::RETCODE_OK) << profiles;
 
   constexpr int kDomain = 164;
   fdds::DomainParticipant* reader_side =
-      factory->create_participant(kDomain, QosWith(std::make_shared<eprosima::fastdds::rtps::UDPv4TransportDescriptor>()));
+      factory->create_participant(kDomain, test_support::OnlyOver(std::make_shared<eprosima::fastdds::rtps::UDPv4TransportDescriptor>()));
   auto lossy = std::make_shared<eprosima::fastdds::rtps::test_UDPv4TransportDescriptor>();
   lossy->messages_filter_ = DropEachFirstLeavingSample;
-  fdds::DomainParticipant* writer_side = factory->create_participant(kDomain, QosWith(lossy));
+  fdds::DomainParticipant* writer_side = factory->create_participant(kDomain, test_support::OnlyOver(lossy));
   ASSERT_NE(reader_side, nullptr);
   ASSERT_NE(writer_side, nullptr);
   fdds::TypeSupport type(new msg::MemberInfoPubSubType());
