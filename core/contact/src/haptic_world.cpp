@@ -606,7 +606,7 @@ void HapticWorld::StepDeformable(Object& o, std::span<const RemoteContact> remot
     constexpr double kMotionSmoothing = 1.0 / 16.0;
     fo.motion_O_m += kMotionSmoothing * ((stick - fo.slide_O_m) - fo.motion_O_m);
     o.friction[static_cast<std::size_t>(num_friction)] = {n, stick, o.mu_static, o.mu_kinetic, fo.slipped,
-                                                          fo.motion_O_m};
+                                                          fo.motion_O_m, /*peer=*/false};
     fo.friction_patch = num_friction++;
   }
   // Remote fingers: the same patch rebuilt from their contact point, normal and imposed
@@ -644,7 +644,7 @@ void HapticWorld::StepDeformable(Object& o, std::span<const RemoteContact> remot
     if (!sticks || count == 0) continue;
     for (std::int32_t q = 0; q < count; ++q) o.inputs[static_cast<std::size_t>(begin + q)].patch = num_friction;
     o.friction[static_cast<std::size_t>(num_friction++)] = {n_O, stick_O, kHeldAsSent, kHeldAsSent, false,
-                                                            Eigen::Vector3d::Zero()};
+                                                            Eigen::Vector3d::Zero(), /*peer=*/true};
   }
   o.num_inputs = m;
   const fem::StepStatus st = o.solver->Solve(

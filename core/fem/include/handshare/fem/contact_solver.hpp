@@ -67,6 +67,10 @@ struct FrictionPatch {
   /// the way the fingertip slid over the material, stick minus slide, found in a few rounds
   /// from the sticking trial force's; and the cone is checked once the held set has settled.
   Eigen::Vector3d motion_m = Eigen::Vector3d::Zero();
+  /// A peer's fingertip (held as its own solve decided). When every node of a peer's patch ends
+  /// released, the call solves again with that patch released from the start: a patch that
+  /// carries nothing then cannot decide, by the path of the pivoting, how the others hold.
+  bool peer = false;
 };
 
 /// What became of a FrictionPatch in the last Solve().
@@ -248,6 +252,8 @@ class ContactSolver {
   std::vector<Eigen::Vector3d> d_m_;
   std::vector<Eigen::Vector3d> n_;
   std::vector<ContactMode> mode_;
+  std::vector<ContactMode> mode_in_;  // as the inputs ask (patch nodes in 3-D)
+  std::vector<std::uint8_t> frozen_;  // released for a whole pass of SolveWithPatches
   std::vector<std::uint8_t> active_;
   std::vector<std::uint8_t> slipping_;
   std::vector<Eigen::Vector3d> f_N_;
