@@ -25,8 +25,8 @@
 #include <mutex>
 #include <set>
 #include <string>
-#include <vector>
 #include <thread>
+#include <vector>
 
 #include "handshare/common/data_dir.hpp"
 #include "handshare/dds/topics.hpp"

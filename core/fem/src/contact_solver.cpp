@@ -997,10 +997,6 @@ bool ContactSolver::SolveWithPatches(StepStatus& status) noexcept {
   // a given tangential force g = mu_k F_n e from the last iterate: for a given g the held set is
   // the solution of a convex problem (pivoting settles it), and g is updated from the new F_n
   // until it no longer changes (a fixed point; the answer satisfies the same equations).
-  for (std::int32_t j = 0; j < num_unique_; ++j) {
-    active_[j] = 1;
-    releases_[j] = 0;
-  }
   // The held rows' order (perm_): the nodes of the factor in A_ (the last held set factored,
   // this step's or an earlier one's) in its row order, then the new ones, where pivots mostly
   // happen; so the first factor resumes after the rows of the nodes that stayed, and so does a
@@ -1031,21 +1027,6 @@ bool ContactSolver::SolveWithPatches(StepStatus& status) noexcept {
   auto moved = [&](std::int32_t p) -> Eigen::Vector2d { return tangent_[p].transpose() * patch_in_[p].motion_m; };
   for (std::int32_t p = 0; p < num_patches_; ++p) at_rest_[p] = moved(p).norm() <= kRestMotion_m ? 1 : 0;
   auto at_rest = [&](std::int32_t p) { return at_rest_[p] != 0; };  // asked every round: once a call
-  // A patch that slipped in the previous step and whose fingertip still moves along the surface
-  // starts slipping, that way: after the first solve WouldStick() checks it against sticking,
-  // which the same factor answers, and it sticks if that is inside its cone. (At rest it starts
-  // sticking: a slip's direction then comes from its slide, below.)
-  auto warm_slips = [&] {
-    for (std::int32_t p = 0; p < num_patches_; ++p) {
-      warm_slip_[p] = patch_in_[p].slipped_before && !at_rest(p) ? 1 : 0;
-      if (!warm_slip_[p]) continue;
-      patch_state_[p].slipping = true;
-      slip_dir_[p] = moved(p).normalized();
-    }
-  };
-  warm_slips();
-  given_force_ = false;
-  std::fill(restuck_.begin(), restuck_.end(), std::uint8_t{0});
   bool refactor = true;
   std::int32_t direction_rounds = 0;  // since the held set last changed (converges in about 6)
   constexpr std::int32_t kMaxDirectionRounds = 16;
@@ -1116,6 +1097,11 @@ bool ContactSolver::SolveWithPatches(StepStatus& status) noexcept {
   // its tip, the second pass does not hold, and a third repeats the first. Only peers' patches:
   // a user's own fingertip that lifts off changes what the user feels anyway, and a second pass
   // on every such step cost the friction row of haptic_bench half again at p99.
+  // A pass starts with every node held but the frozen ones, in the mode its input asks, and every
+  // patch at its stick. A patch that slipped in the previous step and whose fingertip still moves
+  // along the surface starts slipping, that way: after the first solve WouldStick() checks it
+  // against sticking, which the same factor answers, and it sticks if that is inside its cone.
+  // (At rest it starts sticking: a slip's direction then comes from its slide, below.)
   auto restart = [&] {
     for (std::int32_t j = 0; j < num_unique_; ++j) {
       active_[j] = frozen_[j] ? 0 : 1;
@@ -1124,10 +1110,11 @@ bool ContactSolver::SolveWithPatches(StepStatus& status) noexcept {
       slipping_[j] = 0;
     }
     for (std::int32_t p = 0; p < num_patches_; ++p) {
-      patch_state_[p].slipping = false;
+      warm_slip_[p] = patch_in_[p].slipped_before && !at_rest(p) ? 1 : 0;
+      patch_state_[p].slipping = warm_slip_[p] != 0;
       patch_state_[p].slide_m = patch_in_[p].slide_m;
+      if (warm_slip_[p]) slip_dir_[p] = moved(p).normalized();
     }
-    warm_slips();
     given_force_ = false;
     std::fill(restuck_.begin(), restuck_.end(), std::uint8_t{0});
     refactor = true;
@@ -1138,19 +1125,22 @@ bool ContactSolver::SolveWithPatches(StepStatus& status) noexcept {
     same_columns = false;
   };
   std::fill(frozen_.begin(), frozen_.begin() + num_unique_, std::uint8_t{0});
+  restart();
   bool frozen_pushed = false;  // a let-go node the surface pushes into its tip (last round)
   for (int pass = 0; pass < 3; ++pass) {
     if (pass == 1) {
       if (status == StepStatus::kNotConverged) break;
-      // The patches that ended with every node released (restuck_ as scratch: 1 = holds a node).
-      std::fill(restuck_.begin(), restuck_.end(), std::uint8_t{0});
-      for (std::int32_t j = 0; j < num_unique_; ++j) {
-        if (patch_of_[j] >= 0 && active_[j]) restuck_[patch_of_[j]] = 1;
-      }
+      // The peers' patches that ended with every node released.
       bool any_let_go = false;
-      for (std::int32_t j = 0; j < num_unique_; ++j) {
-        frozen_[j] = patch_of_[j] >= 0 && patch_in_[patch_of_[j]].peer && !restuck_[patch_of_[j]] ? 1 : 0;
-        any_let_go = any_let_go || frozen_[j];
+      for (std::int32_t p = 0; p < num_patches_; ++p) {
+        if (!patch_in_[p].peer) continue;
+        bool holds = false;
+        for (std::int32_t j = 0; j < num_unique_ && !holds; ++j) holds = patch_of_[j] == p && active_[j];
+        if (holds) continue;
+        for (std::int32_t j = 0; j < num_unique_; ++j) {
+          if (patch_of_[j] == p) frozen_[j] = 1;
+        }
+        any_let_go = true;
       }
       if (!any_let_go) break;
       restart();
