@@ -133,7 +133,7 @@ ContactSolver::ContactSolver(std::shared_ptr<const Compliance> compliance,
   releases_.assign(M, 0);
   slip_force_.assign(P, Eigen::Vector2d::Zero());
   warm_slip_.assign(P, 0);
-  at_rest_.assign(P, 0);
+  settles_.assign(P, 0);
   restuck_.assign(P, 0);
   patch_in_.assign(P, FrictionPatch{});
   tangent_.assign(P, Eigen::Matrix<double, 3, 2>::Zero());
@@ -1025,8 +1025,19 @@ bool ContactSolver::SolveWithPatches(StepStatus& status) noexcept {
   // 1 kHz, where a stroke is 10-100 um a step and a device's noise well under 1 um.
   constexpr double kRestMotion_m = 1e-6;
   auto moved = [&](std::int32_t p) -> Eigen::Vector2d { return tangent_[p].transpose() * patch_in_[p].motion_m; };
-  for (std::int32_t p = 0; p < num_patches_; ++p) at_rest_[p] = moved(p).norm() <= kRestMotion_m ? 1 : 0;
-  auto at_rest = [&](std::int32_t p) { return at_rest_[p] != 0; };  // asked every round: once a call
+  // Which patches decide on the settled held set, with the direction their slide agrees with
+  // (found exactly): every patch but one that slipped in the previous step under a fingertip
+  // that still moves along the surface, which slips on the way the fingertip moves from the
+  // start (a stroke). A sticking patch under a moving fingertip used to be checked on every
+  // solve as well, and to take the motion's direction: the first trial holds the nodes that
+  // pull, which carry more tangential force than the patch can, so a press or a drag that
+  // added a node to a patch 30 % inside its cone slipped it, and its force turned to the
+  // motion's in one step (0.49 N at 0.75 N pressing, docs/fem.md, "A sticking patch under a
+  // moving fingertip").
+  for (std::int32_t p = 0; p < num_patches_; ++p) {
+    settles_[p] = moved(p).norm() <= kRestMotion_m || !patch_in_[p].slipped_before ? 1 : 0;
+  }
+  auto settles = [&](std::int32_t p) { return settles_[p] != 0; };  // asked every round: once a call
   bool refactor = true;
   std::int32_t direction_rounds = 0;  // since the held set last changed (converges in about 6)
   constexpr std::int32_t kMaxDirectionRounds = 16;
@@ -1045,26 +1056,27 @@ bool ContactSolver::SolveWithPatches(StepStatus& status) noexcept {
     const double f_n = -patch_in_[p].n_out.dot(patch_state_[p].force_N);
     return patch_in_[p].mu_kinetic * std::max(f_n, 0.0) * slip_dir_[p];
   };
-  // A sticking patch whose force leaves its cone starts to slip. Under a moving fingertip that
-  // is checked on every solve, as the held set settles; under a fingertip at rest only once it
-  // has settled (no node pulls or is pushed in while released). A trial with nodes that pull
-  // holds more tangential force than the patch can: at rest that slipped a patch every step
-  // although the previous step's slide, held, was on its kinetic cone, and it never came to
-  // rest (docs/fem.md). Such a patch's nodes then start again held in 3-D: what the sticking
-  // trial's pivoting decided about them no longer holds.
+  // A sticking patch whose force leaves its cone starts to slip, checked once its held set has
+  // settled (no node pulls or is pushed in while released); a patch that carries a stroke's slip
+  // on (not settles()) is checked on every solve, as before. A trial with nodes that pull holds
+  // more tangential force than the patch can: at rest that slipped a patch every step although
+  // the previous step's slide, held, was on its kinetic cone, and it never came to rest; under
+  // a moving fingertip it slipped patches well inside their cone (docs/fem.md). Such a patch's
+  // nodes then start again held in 3-D: what the sticking trial's pivoting decided about them
+  // no longer holds.
   auto start_slipping = [&](bool settled, double f_scale) {
     bool any = false;
     for (std::int32_t p = 0; p < num_patches_; ++p) {
       FrictionPatchState& st = patch_state_[p];
-      if (st.slipping || at_rest(p) != settled) continue;
+      if (st.slipping || settles(p) != settled) continue;
       const FrictionPatch& in = patch_in_[p];
       const double f_n = -in.n_out.dot(st.force_N);
       const Eigen::Vector2d f_t = tangent_[p].transpose() * st.force_N;
       const double mu = in.slipped_before ? in.mu_kinetic : in.mu_static;
       if (f_t.norm() <= mu * std::max(f_n, 0.0) + kTol * f_scale) continue;
       st.slipping = true;
-      // The way it slides: the fingertip's motion along the surface; a fingertip at rest starts
-      // from the trial force's and then follows the slide.
+      // The way it slides: on the settled held set it starts from the trial force's and then
+      // follows the slide; a stroke's slip carried on, the fingertip's motion along the surface.
       slip_dir_[p] = settled ? Eigen::Vector2d(f_t / f_t.norm()) : Eigen::Vector2d(moved(p).normalized());
       slip_force_[p] = cone_force(p);
       any = true;
@@ -1101,7 +1113,7 @@ bool ContactSolver::SolveWithPatches(StepStatus& status) noexcept {
   // patch at its stick. A patch that slipped in the previous step and whose fingertip still moves
   // along the surface starts slipping, that way: after the first solve WouldStick() checks it
   // against sticking, which the same factor answers, and it sticks if that is inside its cone.
-  // (At rest it starts sticking: a slip's direction then comes from its slide, below.)
+  // (Every other patch starts sticking: a slip's direction then comes from its slide, below.)
   auto restart = [&] {
     for (std::int32_t j = 0; j < num_unique_; ++j) {
       active_[j] = frozen_[j] ? 0 : 1;
@@ -1110,7 +1122,7 @@ bool ContactSolver::SolveWithPatches(StepStatus& status) noexcept {
       slipping_[j] = 0;
     }
     for (std::int32_t p = 0; p < num_patches_; ++p) {
-      warm_slip_[p] = patch_in_[p].slipped_before && !at_rest(p) ? 1 : 0;
+      warm_slip_[p] = settles(p) ? 0 : 1;
       patch_state_[p].slipping = warm_slip_[p] != 0;
       patch_state_[p].slide_m = patch_in_[p].slide_m;
       if (warm_slip_[p]) slip_dir_[p] = moved(p).normalized();
@@ -1160,7 +1172,7 @@ bool ContactSolver::SolveWithPatches(StepStatus& status) noexcept {
       for (std::int32_t j = 0; j < num_unique_; ++j) f_scale2 = std::max(f_scale2, f_N_[j].squaredNorm());
       const double f_scale = f_scale2 == 0.0 ? 1.0 : std::sqrt(f_scale2);
       patch_forces();
-      // A slipping patch under a fingertip at rest: kinetic friction opposes the sliding, so its
+      // A slipping patch (but a stroke's slip carried on): kinetic friction opposes the sliding, so its
       // force runs along the way the fingertip slid over the material, stick - s (tangent
       // coordinates). Holding the trial force's direction instead needs large sideways slides
       // where the patch's tangential stiffness is anisotropic, and a held fingertip crept: its
@@ -1170,7 +1182,7 @@ bool ContactSolver::SolveWithPatches(StepStatus& status) noexcept {
       bool turned = false, restuck = false;
       for (std::int32_t a = 0; a < num_slipping_ && !given_force_; ++a) {
         const std::int32_t p = slipping_list_[a];
-        if (!at_rest(p)) continue;  // a moving fingertip slips the way it moves
+        if (!settles(p)) continue;  // a stroke's slip carried on goes the way the fingertip moves
         const int turn = TurnTowardTheSlide(a, 1e-9);
         if (turn > 0) turned = true;
         if (turn < 0 && !restuck_[p]) {  // no direction: held at its stick it is inside its cone

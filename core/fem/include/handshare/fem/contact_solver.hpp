@@ -14,7 +14,8 @@
 /// displacement s, the patch's stick. While the tangential force on the patch stays inside the
 /// cone |F_t| <= mu F_n the patch sticks (s as given); outside it the patch slips: s becomes
 /// two unknowns and two equations put the force on the cone, F_t = mu_k F_n e, in the direction
-/// e the fingertip slides (or, at rest, that of the sticking trial force). Both states are
+/// e in which the force and the slide agree (a stroke's slip carried on: the way the fingertip
+/// moves), checked once the push-only held set has settled. Both states are
 /// linear solves on C_cc, so each is the exact static FEM solution for its displacements;
 /// docs/fem.md ("Friction") gives the equations.
 /// Solve() and the displacement queries are noexcept and do not allocate: everything is sized by
@@ -62,10 +63,11 @@ struct FrictionPatch {
   bool slipped_before = false;  ///< slipping in the previous step: it sticks again only once
                                 ///< |F_t| <= mu_kinetic F_n.
   /// How the fingertip moves along the surface per step (the stick minus the last slide;
-  /// HapticWorld smooths it over about 16 steps, so a device's jitter is no motion) [m]: a slip
-  /// goes this way (kinetic friction opposes the sliding). Under 1 um (a fingertip at rest):
-  /// the way the fingertip slid over the material, stick minus slide, found in a few rounds
-  /// from the sticking trial force's; and the cone is checked once the held set has settled.
+  /// HapticWorld smooths it over about 16 steps, so a device's jitter is no motion) [m]. A patch
+  /// that slipped_before under a fingertip moving 1 um a step or more carries its slip on this
+  /// way (kinetic friction opposes the sliding: a stroke). Any other patch is checked against
+  /// its cone once the held set has settled and slips the way the fingertip slid over the
+  /// material, stick minus slide, found in a few rounds from the sticking trial force's.
   Eigen::Vector3d motion_m = Eigen::Vector3d::Zero();
   /// A peer's fingertip (held as its own solve decided). When every node of a peer's patch ends
   /// released, the call solves again with that patch released from the start: a patch that
@@ -325,7 +327,7 @@ class ContactSolver {
   std::vector<Eigen::Vector2d> slip_dir_;
   std::vector<Eigen::Vector2d> slip_force_;  // the given tangential force (given_force_)
   std::vector<std::uint8_t> warm_slip_;      // slipping by the warm start, not yet checked
-  std::vector<std::uint8_t> at_rest_;        // the fingertip moved under 1 um along the surface
+  std::vector<std::uint8_t> settles_;  // decides on the settled held set (not a stroke carried on)
   std::vector<std::uint8_t> restuck_;  // stuck again this call because no direction agreed
   bool given_force_ = false;
   std::vector<FrictionPatchState> patch_state_;
