@@ -610,10 +610,14 @@ void HapticWorld::StepDeformable(Object& o, std::span<const RemoteContact> remot
     fo.friction_patch = num_friction++;
   }
   // Remote fingers: the same patch rebuilt from their contact point, normal and imposed
-  // displacement. A peer's stick (the part of u along the surface) is held as it sent it: its
-  // own solve decided whether it sticks or slips, so here the cone never lets it go.
+  // displacement. A peer's stick (the part of u along the surface) is held as it sent it while
+  // the patch's force here stays inside the material's cone (its own solve decided that it
+  // sticks there, on about the same field); outside it, the patch slips to the cone, afresh
+  // each step. A peer's patch held as sent whatever its force (the cone it had before) kept
+  // the whole tangential force while its press faded out, on a node with almost no push left,
+  // and dropped it in one step when that node let go: 0.063 N (docs/fem.md, "Across the
+  // network").
   const Eigen::Isometry3d X_OW = o.X_WO.inverse();
-  constexpr double kHeldAsSent = 1e6;
   // Each remote contact's patch in the inputs (the coupling's force on the body, after the solve).
   std::array<std::pair<std::int32_t, std::int32_t>, kMaxRemoteForces> remote_patch{};
   for (std::size_t r = 0; r < remote.size(); ++r) {
@@ -643,7 +647,7 @@ void HapticWorld::StepDeformable(Object& o, std::span<const RemoteContact> remot
     if (r < kMaxRemoteForces) remote_patch[r] = {begin, count};
     if (!sticks || count == 0) continue;
     for (std::int32_t q = 0; q < count; ++q) o.inputs[static_cast<std::size_t>(begin + q)].patch = num_friction;
-    o.friction[static_cast<std::size_t>(num_friction++)] = {n_O, stick_O, kHeldAsSent, kHeldAsSent, false,
+    o.friction[static_cast<std::size_t>(num_friction++)] = {n_O, stick_O, o.mu_static, o.mu_kinetic, false,
                                                             Eigen::Vector3d::Zero(), /*peer=*/true};
   }
   o.num_inputs = m;

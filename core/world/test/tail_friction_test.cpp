@@ -338,6 +338,54 @@ TEST(TailFriction, AFingertipHeldStillOnTheTailComesToRest) {
 }
 
 
+// The network between two haptic nodes, one way: the sender's contacts every 10 ms, delivered
+// delay_ms later and held until the next (zero-order hold), faded as they age (PeerFade),
+// through the receiver's coupling passivity controller (contact::CouplingPassivity, on as by
+// default). From a cut on nothing more arrives: what is held fades out.
+struct DelayedLink {
+  std::vector<std::pair<int, std::vector<contact::RemoteContact>>> in_flight;
+  std::vector<contact::PeerContact> held;
+  contact::CouplingPassivity passivity;
+  std::vector<contact::RemoteContact> Deliver(int k, const std::vector<contact::RemoteContact>& sent, int delay_ms,
+                                              bool cut = false) {
+    const std::uint64_t now_ns = 1'000'000ull * static_cast<std::uint64_t>(k + 1);
+    if (cut) in_flight.clear();
+    if (k % 10 == 0 && !cut) in_flight.emplace_back(k + delay_ms, sent);
+    while (!in_flight.empty() && in_flight.front().first <= k) {
+      held.clear();
+      for (const auto& r : in_flight.front().second) {
+        contact::PeerContact c;
+        c.hand = r.hand;
+        c.finger = r.finger;
+        c.object = r.object;
+        for (int i = 0; i < 3; ++i) {
+          c.p_WC_m[i] = r.p_WC_m[i];
+          c.u_W_m[i] = r.u_W_m[i];
+          c.n_W[i] = r.n_W[i];
+          c.f_E_W_N[i] = r.f_E_W_N[i];
+        }
+        c.received_ns = now_ns;
+        held.push_back(c);
+      }
+      in_flight.erase(in_flight.begin());
+    }
+    std::vector<contact::RemoteContact> out;
+    passivity.BeginStep(1e-3);
+    for (const auto& c : held) {
+      out.push_back(contact::ToRemoteContact(c, contact::PeerFade{}, now_ns));
+      passivity.Admit(c, out.back());
+    }
+    return out;
+  }
+};
+
+// What a contact set carries of a fingertip that touches (one contact, hand 1, finger 1).
+std::vector<contact::RemoteContact> Sent(const contact::FingerResult& r) {
+  std::vector<contact::RemoteContact> v;
+  if (r.in_contact) v.push_back({1, 1, r.object, r.p_WC_m, r.u_W_m, r.f_E_W_N, r.n_W});
+  return v;
+}
+
 // Two worlds, as two haptic nodes on one tail, each with one fingertip held still in it,
 // exchange their contacts every step (what their contact sets carry).
 struct TwoHandsResult {
@@ -366,47 +414,8 @@ TwoHandsResult HoldTheTailWithTwoHands(double mu_static, double mu_kinetic, doub
   std::array<Eigen::Vector3d, 5> tips_a, tips_b;
   tips_a.fill(Eigen::Vector3d(5, 5, 5));
   tips_b.fill(Eigen::Vector3d(5, 5, 5));
-  auto sent = [](const contact::FingerResult& r) {
-    std::vector<contact::RemoteContact> v;
-    if (r.in_contact) v.push_back({1, 1, r.object, r.p_WC_m, r.u_W_m, r.f_E_W_N, r.n_W});
-    return v;
-  };
   std::vector<contact::RemoteContact> from_alice, from_bob;
-  // The network: samples in flight (delivery step, sample) and each receiver's controller.
-  struct Link {
-    std::vector<std::pair<int, std::vector<contact::RemoteContact>>> in_flight;
-    std::vector<contact::PeerContact> held;
-    contact::CouplingPassivity passivity;
-    std::vector<contact::RemoteContact> Deliver(int k, const std::vector<contact::RemoteContact>& sent, int delay_ms) {
-      const std::uint64_t now_ns = 1'000'000ull * static_cast<std::uint64_t>(k + 1);
-      if (k % 10 == 0) in_flight.emplace_back(k + delay_ms, sent);
-      while (!in_flight.empty() && in_flight.front().first <= k) {
-        held.clear();
-        for (const auto& r : in_flight.front().second) {
-          contact::PeerContact c;
-          c.hand = r.hand;
-          c.finger = r.finger;
-          c.object = r.object;
-          for (int i = 0; i < 3; ++i) {
-            c.p_WC_m[i] = r.p_WC_m[i];
-            c.u_W_m[i] = r.u_W_m[i];
-            c.n_W[i] = r.n_W[i];
-            c.f_E_W_N[i] = r.f_E_W_N[i];
-          }
-          c.received_ns = now_ns;
-          held.push_back(c);
-        }
-        in_flight.erase(in_flight.begin());
-      }
-      std::vector<contact::RemoteContact> out;
-      passivity.BeginStep(1e-3);
-      for (const auto& c : held) {
-        out.push_back(contact::ToRemoteContact(c, contact::PeerFade{}, now_ns));
-        passivity.Admit(c, out.back());
-      }
-      return out;
-    }
-  } at_alice, at_bob;
+  DelayedLink at_alice, at_bob;
   TwoHandsResult out;
   contact::FingerResult a_prev, b_prev;
   for (int k = 0; k < 2100; ++k) {  // down 7 mm in 100 steps (4 mm in), then held for 2 s
@@ -429,8 +438,8 @@ TwoHandsResult HoldTheTailWithTwoHands(double mu_static, double mu_kinetic, doub
     }
     const contact::FingerResult& a = alice.world->fingers()[1];
     const contact::FingerResult& b = bob.world->fingers()[1];
-    from_alice = sent(a);
-    from_bob = sent(b);
+    from_alice = Sent(a);
+    from_bob = Sent(b);
     if (k >= 1100) {  // the last second
       out.largest_late_change_m = std::max({out.largest_late_change_m, (a.u_W_m - a_prev.u_W_m).norm(),
                                             (b.u_W_m - b_prev.u_W_m).norm()});
@@ -528,6 +537,66 @@ TEST(TailFriction, HandsHeldStillAcrossADelayComeToRest) {
       }
     }
   }
+}
+
+// net.partitioned_user in process: alice's and bob's index fingertips come in as the simulated
+// hands bring them (minimum jerk over 1.5 s, alice 0.2 s ahead) and press the scene's tail
+// (0.7) together, their contacts crossing a 15 ms link every 10 ms; then the link is cut and
+// each one's copy of the other's contact fades out over 0.3 s. Both forces move to their
+// alone-values as ramps: no 1 ms step over 0.01 N (the fade moves them by up to 3 mN a step).
+// Before a peer's patch had the material's cone, it held its sent stick whatever the force:
+// bob's fading patch in alice's world kept 0.29 N along the surface on one node with 0.07 N of
+// push left, and when that node let go, alice's force stepped by 0.063 N in one step.
+TEST(TailFriction, APeersFadingPressLetsGoWithoutAStep) {
+  const scene::Scene s = TailScene(0.7, 0.7);
+  SceneModels alice = BuildTail(s);
+  SceneModels bob = BuildTail(s);
+  std::array<Eigen::Vector3d, 5> tips_a, tips_b;
+  tips_a.fill(Eigen::Vector3d(5, 5, 5));
+  tips_b.fill(Eigen::Vector3d(5, 5, 5));
+  // Where the cross-process case's scripts bring the index fingertips (frame W).
+  const Eigen::Vector3d a0(0.189, 0.18, 0.10), a1(0.225, 0.08, 0.0649);
+  const Eigen::Vector3d b0(0.234, 0.18, 0.11), b1(0.27, 0.08, 0.0785);
+  auto min_jerk = [](double t) { return t <= 0 ? 0 : (t >= 1 ? 1 : t * t * t * (10 - 15 * t + 6 * t * t)); };
+  constexpr int kCut = 4000, kEnd = 5200, kDelay = 15;
+  std::vector<contact::RemoteContact> from_alice, from_bob;
+  DelayedLink at_alice, at_bob;
+  std::vector<double> fa(kEnd), fb(kEnd);
+  for (int k = 0; k < kEnd; ++k) {
+    tips_a[1] = a0 + min_jerk((k + 200) / 1500.0) * (a1 - a0);
+    tips_b[1] = b0 + min_jerk(k / 1500.0) * (b1 - b0);
+    const auto in_a = at_alice.Deliver(k, from_bob, kDelay, k >= kCut);
+    const auto in_b = at_bob.Deliver(k, from_alice, kDelay, k >= kCut);
+    alice.world->Step(1e-3, tips_a, in_a);
+    at_alice.passivity.Observe(alice.world->remote_forces_W());
+    bob.world->Step(1e-3, tips_b, in_b);
+    at_bob.passivity.Observe(bob.world->remote_forces_W());
+    from_alice = Sent(alice.world->fingers()[1]);
+    from_bob = Sent(bob.world->fingers()[1]);
+    fa[k] = alice.world->fingers()[1].f_E_W_N.z();
+    fb[k] = bob.world->fingers()[1].f_E_W_N.z();
+  }
+  auto mean = [](const std::vector<double>& f, int from, int to) {
+    double m = 0.0;
+    for (int k = from; k < to; ++k) m += f[k];
+    return m / (to - from);
+  };
+  auto largest_step = [&](const std::vector<double>& f) {
+    double w = 0.0;
+    for (int k = kCut - 500; k + 1 < kEnd; ++k) w = std::max(w, std::abs(f[k + 1] - f[k]));
+    return w;
+  };
+  const double a_before = mean(fa, kCut - 1000, kCut - 100), a_alone = mean(fa, kEnd - 300, kEnd);
+  const double b_before = mean(fb, kCut - 1000, kCut - 100), b_alone = mean(fb, kEnd - 300, kEnd);
+  RecordProperty("alice_N", std::to_string(a_before) + " -> " + std::to_string(a_alone));
+  RecordProperty("bob_N", std::to_string(b_before) + " -> " + std::to_string(b_alone));
+  RecordProperty("alice_largest_step_N", std::to_string(largest_step(fa)));
+  RecordProperty("bob_largest_step_N", std::to_string(largest_step(fb)));
+  // Each felt the other: the cut changes both forces by far more than a step may.
+  ASSERT_GT(std::abs(a_alone - a_before), 0.1);
+  ASSERT_GT(std::abs(b_alone - b_before), 0.1);
+  EXPECT_LT(largest_step(fa), 0.01);
+  EXPECT_LT(largest_step(fb), 0.01);
 }
 
 }  // namespace

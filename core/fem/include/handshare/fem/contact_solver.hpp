@@ -69,7 +69,7 @@ struct FrictionPatch {
   /// its cone once the held set has settled and slips the way the fingertip slid over the
   /// material, stick minus slide, found in a few rounds from the sticking trial force's.
   Eigen::Vector3d motion_m = Eigen::Vector3d::Zero();
-  /// A peer's fingertip (held as its own solve decided). When every node of a peer's patch ends
+  /// A peer's fingertip (its stick as its contact set sent it). When every node of a peer's patch ends
   /// released, the call solves again with that patch released from the start: a patch that
   /// carries nothing then cannot decide, by the path of the pivoting, how the others hold.
   bool peer = false;
