@@ -61,6 +61,28 @@ Eigen::Vector3d AboveTheTop(const SceneModels& sw, double fraction) {
   return at;
 }
 
+// One fingertip (the index) over the tail with these coefficients, its centre tip_O (frame O)
+// starting 3 mm above the top at `fraction` of the way to the tip (AboveTheTop); the other
+// fingertips far away.
+struct OneFingertipOnTheTail {
+  OneFingertipOnTheTail(double mu_static, double mu_kinetic, double fraction)
+      : scene(TailScene(mu_static, mu_kinetic)), models(BuildTail(scene)), X_WO(scene.objects[0].X_WO()),
+        tip_O(AboveTheTop(models, fraction)) {
+    tips.fill(Eigen::Vector3d(5, 5, 5));
+  }
+  // One 1 ms step with the index at tip_O; what it feels.
+  const contact::FingerResult& Step() {
+    tips[1] = X_WO * tip_O;
+    models.world->Step(1e-3, tips);
+    return models.world->fingers()[1];
+  }
+  scene::Scene scene;
+  SceneModels models;
+  Eigen::Isometry3d X_WO;
+  Eigen::Vector3d tip_O;
+  std::array<Eigen::Vector3d, 5> tips;
+};
+
 TEST(TailFriction, AFingerStrokingTheTailDragsWithMuTimesTheNormalForce) {
   const double mu_s = 0.8, mu_k = 0.6;
   const scene::Scene s = TailScene(mu_s, mu_k);
@@ -161,29 +183,21 @@ TEST(TailFriction, AFingerStrokingTheTailDragsWithMuTimesTheNormalForce) {
 // (docs/fem.md, "Limits"); the largest such step is recorded.
 TEST(TailFriction, AFingertipCreepingOverTheTailSlipsWithoutAJump) {
   const double mu_s = 0.7, mu_k = 0.7;
-  const scene::Scene s = TailScene(mu_s, mu_k);
-  SceneModels sw = BuildTail(s);
-  const Eigen::Isometry3d X_WO = s.objects[0].X_WO();
-  Eigen::Vector3d tip_O = AboveTheTop(sw, 0.4);
-  std::array<Eigen::Vector3d, 5> tips;
-  for (auto& p : tips) p = Eigen::Vector3d(5, 5, 5);
+  OneFingertipOnTheTail t(mu_s, mu_k, 0.4);
   for (int k = 0; k < 300; ++k) {  // down 7 mm in 100 steps (4 mm in), held for 0.2 s
-    if (k < 100) tip_O.z() -= 0.007 / 100;
-    tips[1] = X_WO * tip_O;
-    sw.world->Step(1e-3, tips);
+    if (k < 100) t.tip_O.z() -= 0.007 / 100;
+    t.Step();
   }
-  ASSERT_TRUE(sw.world->fingers()[1].in_contact);
-  Eigen::Vector3d f_prev = sw.world->fingers()[1].f_E_W_N;
+  ASSERT_TRUE(t.models.world->fingers()[1].in_contact);
+  Eigen::Vector3d f_prev = t.models.world->fingers()[1].f_E_W_N;
   double worst = 0.0;  // the largest step's share of the normal force
-  bool stuck = sw.world->fingers()[1].sticking, slipped = false;
+  bool stuck = t.models.world->fingers()[1].sticking, slipped = false;
   double worst_restick = 0.0;  // the same, over the steps in which a slipping patch sticks again
   int slipping_steps = 0;
   for (int k = 0; k < 5000; ++k) {  // 2.5 mm toward the tip at 0.5 mm/s
-    tip_O.x() -= 0.5e-6;
-    tips[1] = X_WO * tip_O;
-    const bool was_sticking = sw.world->fingers()[1].sticking;
-    sw.world->Step(1e-3, tips);
-    const contact::FingerResult& r = sw.world->fingers()[1];
+    t.tip_O.x() -= 0.5e-6;
+    const bool was_sticking = t.models.world->fingers()[1].sticking;
+    const contact::FingerResult& r = t.Step();
     ASSERT_TRUE(r.in_contact) << k;
     const double fn = r.f_E_W_N.dot(r.n_W);
     ASSERT_GT(fn, 0.1) << k;
@@ -216,26 +230,19 @@ TEST(TailFriction, AFingertipCreepingOverTheTailSlipsWithoutAJump) {
 // to the fingertip's motion in one step, 0.49 N at 0.75 N pressing (65 % of F_n).
 TEST(TailFriction, NodesJoiningAStickingPatchUnderAMovingFingertipDoNotSlipIt) {
   const double mu = 0.7;
-  const scene::Scene s = TailScene(mu, mu);
-  SceneModels sw = BuildTail(s);
-  const Eigen::Isometry3d X_WO = s.objects[0].X_WO();
-  Eigen::Vector3d tip_O = AboveTheTop(sw, 0.4);
-  std::array<Eigen::Vector3d, 5> tips;
-  for (auto& p : tips) p = Eigen::Vector3d(5, 5, 5);
+  OneFingertipOnTheTail t(mu, mu, 0.4);
   Eigen::Vector3d f_prev = Eigen::Vector3d::Zero();
   int nodes_before = 0, nodes_after = 0;
   double worst = 0.0, largest_cone_share = 0.0;
   for (int k = 0; k < 800; ++k) {
     if (k < 100) {
-      tip_O.z() -= 0.005 / 100;  // 2 mm in
+      t.tip_O.z() -= 0.005 / 100;  // 2 mm in
     } else if (k >= 200 && k < 500) {
-      tip_O.y() += 1.5e-3 / 300;  // 1.5 mm sideways at 5 mm/s
+      t.tip_O.y() += 1.5e-3 / 300;  // 1.5 mm sideways at 5 mm/s
     } else if (k >= 500) {
-      tip_O.z() -= 3e-3 / 300;  // 3 mm deeper at 10 mm/s
+      t.tip_O.z() -= 3e-3 / 300;  // 3 mm deeper at 10 mm/s
     }
-    tips[1] = X_WO * tip_O;
-    sw.world->Step(1e-3, tips);
-    const contact::FingerResult& r = sw.world->fingers()[1];
+    const contact::FingerResult& r = t.Step();
     ASSERT_TRUE(k < 100 || r.in_contact) << k;
     const double fn = r.f_E_W_N.dot(r.n_W);
     if (k == 499) nodes_before = r.patch_nodes;
@@ -265,33 +272,26 @@ TEST(TailFriction, NodesJoiningAStickingPatchUnderAMovingFingertipDoNotSlipIt) {
 // share is recorded.
 TEST(TailFriction, RandomStrokesOverTheTailMostlyGlide) {
   const double mu = 0.7;
-  const scene::Scene s = TailScene(mu, mu);
   std::mt19937 rng(11);
   std::uniform_real_distribution<double> uniform(0.0, 1.0);
   constexpr int kStrokes = 30;
   std::vector<double> worsts;
   for (int c = 0; c < kStrokes; ++c) {
-    SceneModels sw = BuildTail(s);
-    const Eigen::Isometry3d X_WO = s.objects[0].X_WO();
-    Eigen::Vector3d tip_O = AboveTheTop(sw, 0.2 + 0.4 * uniform(rng));
-    tip_O.y() += 0.004 * (uniform(rng) - 0.5);
+    OneFingertipOnTheTail t(mu, mu, 0.2 + 0.4 * uniform(rng));
+    t.tip_O.y() += 0.004 * (uniform(rng) - 0.5);
     const double depth = 0.003 + 0.003 * uniform(rng);
     const double angle = 2 * M_PI * uniform(rng);
     const double speed = std::pow(10.0, -0.5 + 1.8 * uniform(rng)) * 1e-6;  // per step
     const double sink = (uniform(rng) - 0.3) * 3e-6;                        // per step
-    std::array<Eigen::Vector3d, 5> tips;
-    for (auto& p : tips) p = Eigen::Vector3d(5, 5, 5);
     Eigen::Vector3d f_prev = Eigen::Vector3d::Zero();
     double worst = 0.0;
     for (int k = 0; k < 1400; ++k) {
       if (k < 100) {
-        tip_O.z() -= (0.003 + depth) / 100;
+        t.tip_O.z() -= (0.003 + depth) / 100;
       } else if (k >= 300 && k < 1100) {
-        tip_O += Eigen::Vector3d(speed * std::cos(angle), speed * std::sin(angle), -sink);
+        t.tip_O += Eigen::Vector3d(speed * std::cos(angle), speed * std::sin(angle), -sink);
       }
-      tips[1] = X_WO * tip_O;
-      sw.world->Step(1e-3, tips);
-      const contact::FingerResult& r = sw.world->fingers()[1];
+      const contact::FingerResult& r = t.Step();
       if (k >= 150 && r.in_contact) {
         const double fn = r.f_E_W_N.dot(r.n_W);
         worst = std::max(worst, (r.f_E_W_N - f_prev).norm() / std::max(fn, 0.1));
