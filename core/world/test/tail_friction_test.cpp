@@ -266,8 +266,8 @@ TEST(TailFriction, NodesJoiningAStickingPatchUnderAMovingFingertipDoNotSlipIt) {
 // held for 0.3 s, each alone on a fresh tail with the scene's coefficient (0.7). Each stroke's
 // largest step (1 ms, after the press) over the normal force is measured; in the median stroke
 // it stays under 1 % of F_n. Before a sticking patch under a moving fingertip decided on its
-// settled held set, the median stroke's largest step was 44 % of F_n (42 of 60 strokes over
-// 5 %). Strokes still step by more than 5 % (docs/fem.md, "Limits": a node that carries
+// settled held set, the median stroke's largest step was 34 % of F_n (18 of these 30 strokes
+// over 5 %). Strokes still step by more than 5 % (docs/fem.md, "Limits": a node that carries
 // tangential force but no pressure, a stroke's slip turning to the motion's direction): their
 // share is recorded.
 TEST(TailFriction, RandomStrokesOverTheTailMostlyGlide) {
