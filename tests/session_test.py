@@ -1134,6 +1134,8 @@ def check_beating_solve(h, held, vertex_count, user):
     check(held["driven_nodes"] > 10, f"the belly's beat drives {held['driven_nodes']} nodes")
     check(len(held["imposed"]) == len(held["loads"]) + held["driven_nodes"],
           f"{len(held['imposed'])} imposed nodes: not the {len(held['loads'])} touched and {held['driven_nodes']} driven")
+    with open(os.path.join(h.work, f"belly_dump_{held['revision']}.json"), "w") as f:
+        json.dump(held, f)  # the instant checked, kept for a look after a failure
     oracle, to_W = solve_dumped(h, held, mesh, os.path.join(h.work, f"belly_loadcase_{held['revision']}.json"))
     line = f"beat {held['beat_scale']:+.3f} (revision {held['revision']})"
     if user:

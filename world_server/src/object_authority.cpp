@@ -434,7 +434,9 @@ void ObjectAuthority::Dump(const Deformable& d, std::uint32_t revision, Clock::t
     users.insert(set.user().to_string());
     contacts << (first_contact ? "" : ",\n  ") << "{\"user\": \""
              << set.user().to_string() << "\", \"finger\": " << c.finger << ", \"f_E_W_N\": [" << c.f_E_W_N[0] << ", "
-             << c.f_E_W_N[1] << ", " << c.f_E_W_N[2] << "], \"weight\": "
+             << c.f_E_W_N[1] << ", " << c.f_E_W_N[2] << "], \"p_W_m\": [" << c.p_WC_m[0] << ", " << c.p_WC_m[1] << ", "
+             << c.p_WC_m[2] << "], \"u_W_m\": [" << c.u_W_m[0] << ", " << c.u_W_m[1] << ", " << c.u_W_m[2]
+             << "], \"n_W\": [" << c.n_W[0] << ", " << c.n_W[1] << ", " << c.n_W[2] << "], \"weight\": "
              << peers_.fade().WeightAt(session::PeerContacts::SteadyNs(now), c.received_ns) << "}";
     first_contact = false;
   });

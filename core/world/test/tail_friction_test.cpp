@@ -270,27 +270,49 @@ TEST(TailFriction, NodesJoiningAStickingPatchUnderAMovingFingertipDoNotSlipIt) {
 // over 5 %). Strokes still step by more than 5 % (docs/fem.md, "Limits": a node that carries
 // tangential force but no pressure, a stroke's slip turning to the motion's direction): their
 // share is recorded.
+// One random stroke (RandomStrokesOverTheTailMostlyGlide): where along the tail's top the
+// fingertip presses, how deep, and how it is drawn over it.
+struct RandomStroke {
+  explicit RandomStroke(std::mt19937& rng) {
+    std::uniform_real_distribution<double> uniform(0.0, 1.0);
+    fraction = 0.2 + 0.4 * uniform(rng);
+    dy = 0.004 * (uniform(rng) - 0.5);
+    depth = 0.003 + 0.003 * uniform(rng);
+    angle = 2 * M_PI * uniform(rng);
+    speed = std::pow(10.0, -0.5 + 1.8 * uniform(rng)) * 1e-6;  // per step
+    sink = (uniform(rng) - 0.3) * 3e-6;                        // per step
+  }
+  // A fingertip on a fresh tail where this stroke starts.
+  OneFingertipOnTheTail Fingertip(double mu) const {
+    OneFingertipOnTheTail t(mu, mu, fraction);
+    t.tip_O.y() += dy;
+    return t;
+  }
+  // Moves the fingertip for step k of kSteps: pressed in over 100 steps, held, drawn over the
+  // tail from step 300 to 1100, held again.
+  static constexpr int kSteps = 1400;
+  void Move(OneFingertipOnTheTail& t, int k) const {
+    if (k < 100) {
+      t.tip_O.z() -= (0.003 + depth) / 100;
+    } else if (k >= 300 && k < 1100) {
+      t.tip_O += Eigen::Vector3d(speed * std::cos(angle), speed * std::sin(angle), -sink);
+    }
+  }
+  double fraction, dy, depth, angle, speed, sink;
+};
+
 TEST(TailFriction, RandomStrokesOverTheTailMostlyGlide) {
   const double mu = 0.7;
   std::mt19937 rng(11);
-  std::uniform_real_distribution<double> uniform(0.0, 1.0);
   constexpr int kStrokes = 30;
   std::vector<double> worsts;
   for (int c = 0; c < kStrokes; ++c) {
-    OneFingertipOnTheTail t(mu, mu, 0.2 + 0.4 * uniform(rng));
-    t.tip_O.y() += 0.004 * (uniform(rng) - 0.5);
-    const double depth = 0.003 + 0.003 * uniform(rng);
-    const double angle = 2 * M_PI * uniform(rng);
-    const double speed = std::pow(10.0, -0.5 + 1.8 * uniform(rng)) * 1e-6;  // per step
-    const double sink = (uniform(rng) - 0.3) * 3e-6;                        // per step
+    const RandomStroke stroke(rng);
+    OneFingertipOnTheTail t = stroke.Fingertip(mu);
     Eigen::Vector3d f_prev = Eigen::Vector3d::Zero();
     double worst = 0.0;
-    for (int k = 0; k < 1400; ++k) {
-      if (k < 100) {
-        t.tip_O.z() -= (0.003 + depth) / 100;
-      } else if (k >= 300 && k < 1100) {
-        t.tip_O += Eigen::Vector3d(speed * std::cos(angle), speed * std::sin(angle), -sink);
-      }
+    for (int k = 0; k < RandomStroke::kSteps; ++k) {
+      stroke.Move(t, k);
       const contact::FingerResult& r = t.Step();
       if (k >= 150 && r.in_contact) {
         const double fn = r.f_E_W_N.dot(r.n_W);
@@ -597,6 +619,44 @@ TEST(TailFriction, APeersFadingPressLetsGoWithoutAStep) {
   ASSERT_GT(std::abs(b_alone - b_before), 0.1);
   EXPECT_LT(largest_step(fa), 0.01);
   EXPECT_LT(largest_step(fb), 0.01);
+}
+
+// What a peer or the world server solves from a contact set is what its sender felt: 30
+// random strokes over the tail (RandomStroke), each sent every step to a second tail that has no
+// fingertip of its own. On a step where the sender's patch slipped, its solve had found the patch
+// where its anchor was before the slip; the set gave the proxy's point, where the anchor is after
+// it, and the receiver found other nodes there. Measured: the share of steps (in contact, force
+// under the device's clamp) where the receiver's force on the body differs from the sender's by
+// more than 1 % of it.
+TEST(TailFriction, APeersSolveOfAContactSetGivesTheForceItsSenderFelt) {
+  const double mu = 0.7;
+  std::mt19937 rng(11);
+  constexpr int kStrokes = 30;
+  std::array<Eigen::Vector3d, 5> none;
+  none.fill(Eigen::Vector3d::Constant(std::numeric_limits<double>::quiet_NaN()));
+  int steps = 0, off = 0;
+  double worst = 0.0;
+  for (int c = 0; c < kStrokes; ++c) {
+    const RandomStroke stroke(rng);
+    OneFingertipOnTheTail t = stroke.Fingertip(mu);
+    SceneModels peer = BuildTail(t.scene);
+    const double clamp = 0.99 * t.models.world->config().max_force_N;
+    for (int k = 0; k < RandomStroke::kSteps; ++k) {
+      stroke.Move(t, k);
+      const contact::FingerResult r = t.Step();
+      peer.world->Step(1e-3, none, Sent(r));
+      if (!r.in_contact || r.f_E_W_N.norm() >= clamp) continue;
+      const double e = (peer.world->remote_forces_W()[0] + r.f_E_W_N).norm() / std::max(r.f_E_W_N.norm(), 0.1);
+      ++steps;
+      off += e > 0.01 ? 1 : 0;
+      worst = std::max(worst, e);
+    }
+  }
+  RecordProperty("steps_compared", std::to_string(steps));
+  RecordProperty("steps_over_1_percent", std::to_string(off));
+  RecordProperty("largest_difference_over_the_force", std::to_string(worst));
+  ASSERT_GT(steps, kStrokes * 1000);
+  EXPECT_LE(off, steps / 1000);
 }
 
 }  // namespace

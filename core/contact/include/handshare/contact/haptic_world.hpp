@@ -147,7 +147,10 @@ struct FingerResult {
   Eigen::Vector3d p_WP_m = Eigen::Vector3d::Zero();   ///< proxy (IHIP) centre; fingertip if free.
   Eigen::Vector3d e_PE_W_m = Eigen::Vector3d::Zero(); ///< penetration vector, proxy -> fingertip.
   Eigen::Vector3d p_WC_m = Eigen::Vector3d::Zero();   ///< contact point on the surface (a
-                                                      ///< deformable's: undeformed, at rest).
+                                                      ///< deformable's: undeformed, at rest; with
+                                                      ///< friction, where this step's patch was
+                                                      ///< found plus its slide, so that a peer
+                                                      ///< rebuilds that patch: p_WC - stick).
   Eigen::Vector3d n_W = Eigen::Vector3d::Zero();      ///< outward unit normal there.
   Eigen::Vector3d u_W_m = Eigen::Vector3d::Zero();    ///< deformable: imposed displacement (the
                                                       ///< indentation -depth n_W plus the stick).
@@ -277,6 +280,9 @@ class HapticWorld {
     // undeformed surface), whether it holds one, and whether it slipped in the last step.
     Eigen::Vector3d anchor_O_m = Eigen::Vector3d::Zero();
     Eigen::Vector3d slide_O_m = Eigen::Vector3d::Zero();  // the stick the last step held
+    // Where this step's patch was found (the anchor on the contact's tangent plane): peers
+    // rebuild it from the contact point a report gives, center + slide (FingerResult::p_WC_m).
+    Eigen::Vector3d patch_center_O_m = Eigen::Vector3d::Zero();
     // The fingertip's motion along the surface per step, smoothed (FrictionPatch::motion_m).
     Eigen::Vector3d motion_O_m = Eigen::Vector3d::Zero();
     bool anchored = false;
