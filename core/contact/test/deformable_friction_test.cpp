@@ -167,10 +167,12 @@ TEST(DeformableFriction, FrictionlessStrokeDragsNothingAndLiftingForgetsTheAncho
 
 // A peer's fingertip arrives as a RemoteContact (its contact point, normal and imposed
 // displacement: the indentation plus its stick). The station that receives it holds the same
-// patch at the same stick, so its loads on the object are the ones the stroking station solved:
-// exactly while the stroke sticks; while it slips, the stroking station's patch was found
-// around the anchor before the slip and the peer's around the one after it, a node spacing
-// apart at most. A peer that sends no normal (an older node) is imposed along -u, no stick.
+// patch at the same stick, so its loads on the object are the ones the stroking station solved,
+// to 1e-9, while the stroke sticks and while it slips, but for a step or two (the step the
+// slip starts: 1.7 %). Before a contact set gave the point the slipping patch was found at
+// (slid), the peer found it around the anchor after that step's slip: all 256 slipping steps
+// were apart, by up to 3.8 %. A peer that sends no normal (an older node) is imposed
+// along -u, no stick.
 TEST(DeformableFriction, APeersStickIsHeldWhereItIsSolved) {
   const Block& b = TheBlock();
   auto a = MakeWorld(b, 0.6, 0.5);
@@ -183,7 +185,7 @@ TEST(DeformableFriction, APeersStickIsHeldWhereItIsSolved) {
     return f;
   };
   Eigen::Vector3d p = Press(*a, b, 0.02, 0.03, 0.002);
-  int sticking_steps = 0, slipping_steps = 0;
+  int sticking_steps = 0, slipping_steps = 0, slipping_apart = 0;
   double worst_slip = 0.0;
   for (int k = 1; k <= 300; ++k) {
     p.x() += 20e-6;
@@ -197,12 +199,15 @@ TEST(DeformableFriction, APeersStickIsHeldWhereItIsSolved) {
     } else {
       ++slipping_steps;
       worst_slip = std::max(worst_slip, (fp - fa).norm() / fa.norm());
+      slipping_apart += (fp - fa).norm() > 1e-9 * fa.norm() ? 1 : 0;
     }
   }
   RecordProperty("slipping_load_difference", std::to_string(worst_slip));
+  RecordProperty("slipping_steps_apart", std::to_string(slipping_apart) + " of " + std::to_string(slipping_steps));
   EXPECT_GT(sticking_steps, 10);
   EXPECT_GT(slipping_steps, 100);
-  EXPECT_LT(worst_slip, 0.1);
+  EXPECT_LE(slipping_apart, 2);
+  EXPECT_LT(worst_slip, 0.05);
   // The stick really crossed: the peer's loads drag +x as the stroking station's do.
   EXPECT_GT(load_sum(*peer).x(), 0.4 * -load_sum(*peer).z());
   // Without a normal the same contact is a frictionless press along -u (as before there was
