@@ -11,7 +11,6 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
-#include <cstdlib>
 #include <random>
 #include <stdexcept>
 #include <string>
@@ -19,6 +18,7 @@
 
 #include "handshare/scene/scene.hpp"
 #include "handshare/world/scene_models.hpp"
+#include "test_models.hpp"
 
 namespace handshare::world {
 namespace {
@@ -38,13 +38,7 @@ scene::Scene BellyScene(double mu) {
   return s;
 }
 
-SceneModels BuildBelly(const scene::Scene& s) {
-  SceneModelsOptions options;
-  const char* cache = std::getenv("HANDSHARE_CACHE");
-  options.cache_dir = cache != nullptr ? std::filesystem::path(cache)
-                                       : std::filesystem::temp_directory_path() / "handshare_belly_friction_cache";
-  return BuildSceneModels(s, options);
-}
+SceneModels BuildBelly(const scene::Scene& s) { return test::BuildCached(s, "handshare_belly_friction_cache"); }
 
 struct Strokes {
   std::vector<double> largest_step;        // per stroke, over the normal force

@@ -8,7 +8,6 @@
 #include <array>
 #include <cmath>
 #include <cstdio>
-#include <cstdlib>
 #include <limits>
 #include <random>
 #include <stdexcept>
@@ -18,6 +17,7 @@
 #include "handshare/contact/coupling_passivity.hpp"
 #include "handshare/scene/scene.hpp"
 #include "handshare/world/scene_models.hpp"
+#include "test_models.hpp"
 
 namespace handshare::world {
 namespace {
@@ -33,13 +33,7 @@ scene::Scene TailScene(double mu_static, double mu_kinetic) {
 }
 
 // The tail's models, prepared once into HANDSHARE_CACHE (else a folder of the temp dir).
-SceneModels BuildTail(const scene::Scene& s) {
-  SceneModelsOptions options;
-  const char* cache = std::getenv("HANDSHARE_CACHE");
-  options.cache_dir = cache != nullptr ? std::filesystem::path(cache)
-                                       : std::filesystem::temp_directory_path() / "handshare_tail_friction_cache";
-  return BuildSceneModels(s, options);
-}
+SceneModels BuildTail(const scene::Scene& s) { return test::BuildCached(s, "handshare_tail_friction_cache"); }
 
 // A fingertip centre (frame O) 3 mm above the highest surface node of the tail near `fraction`
 // of the way from its attached base to its tip.
