@@ -425,19 +425,24 @@ void ObjectAuthority::Dump(const Deformable& d, std::uint32_t revision, Clock::t
   const Eigen::Matrix3d R = models_->world->pose(d.object).linear();
   std::set<std::string> users;
   // The fingertips on it as the solve took them: the force each user's own solve gave its
-  // fingertip (what it felt, before the device's clamp) and the fade's weight on it.
+  // fingertip (what it felt, before the device's clamp), the contact point, imposed displacement
+  // and normal its set carried, and the fade's weight on it.
   std::ostringstream contacts;
   contacts.precision(17);
   bool first_contact = true;
   peers_.ForEach(*models_, now, [&](const contact::PeerContact& c, const msg::ContactSet& set) {
     if (c.object != d.object) return;
     users.insert(set.user().to_string());
-    contacts << (first_contact ? "" : ",\n  ") << "{\"user\": \""
-             << set.user().to_string() << "\", \"finger\": " << c.finger << ", \"f_E_W_N\": [" << c.f_E_W_N[0] << ", "
-             << c.f_E_W_N[1] << ", " << c.f_E_W_N[2] << "], \"p_W_m\": [" << c.p_WC_m[0] << ", " << c.p_WC_m[1] << ", "
-             << c.p_WC_m[2] << "], \"u_W_m\": [" << c.u_W_m[0] << ", " << c.u_W_m[1] << ", " << c.u_W_m[2]
-             << "], \"n_W\": [" << c.n_W[0] << ", " << c.n_W[1] << ", " << c.n_W[2] << "], \"weight\": "
-             << peers_.fade().WeightAt(session::PeerContacts::SteadyNs(now), c.received_ns) << "}";
+    const auto triple = [&](const char* name, const double (&v)[3]) {
+      contacts << ", \"" << name << "\": [" << v[0] << ", " << v[1] << ", " << v[2] << "]";
+    };
+    contacts << (first_contact ? "" : ",\n  ") << "{\"user\": \"" << set.user().to_string()
+             << "\", \"finger\": " << c.finger;
+    triple("f_E_W_N", c.f_E_W_N);
+    triple("p_W_m", c.p_WC_m);
+    triple("u_W_m", c.u_W_m);
+    triple("n_W", c.n_W);
+    contacts << ", \"weight\": " << peers_.fade().WeightAt(session::PeerContacts::SteadyNs(now), c.received_ns) << "}";
     first_contact = false;
   });
   std::ostringstream j;

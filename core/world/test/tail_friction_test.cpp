@@ -255,15 +255,6 @@ TEST(TailFriction, NodesJoiningAStickingPatchUnderAMovingFingertipDoNotSlipIt) {
   EXPECT_LT(worst, 0.05);
 }
 
-// Thirty fingertips pressed 3-6 mm into the tail's top at random places along it and drawn
-// over it at random (a direction, 0.3-20 mm/s, sinking or rising a little) for 0.8 s, then
-// held for 0.3 s, each alone on a fresh tail with the scene's coefficient (0.7). Each stroke's
-// largest step (1 ms, after the press) over the normal force is measured; in the median stroke
-// it stays under 1 % of F_n. Before a sticking patch under a moving fingertip decided on its
-// settled held set, the median stroke's largest step was 34 % of F_n (18 of these 30 strokes
-// over 5 %). Strokes still step by more than 5 % (docs/fem.md, "Limits": a node that carries
-// tangential force but no pressure, a stroke's slip turning to the motion's direction): their
-// share is recorded.
 // One random stroke (RandomStrokesOverTheTailMostlyGlide): where along the tail's top the
 // fingertip presses, how deep, and how it is drawn over it.
 struct RandomStroke {
@@ -295,6 +286,15 @@ struct RandomStroke {
   double fraction, dy, depth, angle, speed, sink;
 };
 
+// Thirty fingertips pressed 3-6 mm into the tail's top at random places along it and drawn
+// over it at random (a direction, 0.3-20 mm/s, sinking or rising a little) for 0.8 s, then
+// held for 0.3 s, each alone on a fresh tail with the scene's coefficient (0.7). Each stroke's
+// largest step (1 ms, after the press) over the normal force is measured; in the median stroke
+// it stays under 1 % of F_n. Before a sticking patch under a moving fingertip decided on its
+// settled held set, the median stroke's largest step was 34 % of F_n (18 of these 30 strokes
+// over 5 %). Strokes still step by more than 5 % (docs/fem.md, "Limits": a node that carries
+// tangential force but no pressure, a stroke's slip turning to the motion's direction): their
+// share is recorded.
 TEST(TailFriction, RandomStrokesOverTheTailMostlyGlide) {
   const double mu = 0.7;
   std::mt19937 rng(11);
@@ -330,20 +330,13 @@ TEST(TailFriction, RandomStrokesOverTheTailMostlyGlide) {
 // trial force's direction and never came to rest: its stick crept about 0.7 mm a step and
 // jumped back, 1.35 mm in one step within the last second of holding (docs/fem.md).
 TEST(TailFriction, AFingertipHeldStillOnTheTailComesToRest) {
-  const scene::Scene s = TailScene(0.8, 0.6);
-  SceneModels sw = BuildTail(s);
-  const Eigen::Isometry3d X_WO = s.objects[0].X_WO();
-  Eigen::Vector3d tip_O = AboveTheTop(sw, 0.35);  // 35 % of the way to the tip
-  std::array<Eigen::Vector3d, 5> tips;
-  for (auto& p : tips) p = Eigen::Vector3d(5, 5, 5);
+  OneFingertipOnTheTail t(0.8, 0.6, 0.35);  // 35 % of the way to the tip
   // Down 7 mm in 100 steps (4 mm into the tail), then held still for 2 s.
   Eigen::Vector3d u_prev = Eigen::Vector3d::Zero();
   double largest_late_change_m = 0.0;
   for (int k = 0; k < 2100; ++k) {
-    if (k < 100) tip_O.z() -= 0.007 / 100;
-    tips[1] = X_WO * tip_O;
-    sw.world->Step(1e-3, tips);
-    const contact::FingerResult& r = sw.world->fingers()[1];
+    if (k < 100) t.tip_O.z() -= 0.007 / 100;
+    const contact::FingerResult& r = t.Step();
     ASSERT_TRUE(k < 100 || r.in_contact) << k;
     if (k >= 1100) largest_late_change_m = std::max(largest_late_change_m, (r.u_W_m - u_prev).norm());
     u_prev = r.u_W_m;
