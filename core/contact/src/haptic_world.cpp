@@ -462,12 +462,12 @@ StepReport HapticWorld::Step(double dt_s, std::span<const Eigen::Vector3d> p_WE,
         res.sticking = fo.friction_patch >= 0 && !fo.slipped;  // the patch's Coulomb state
         res.u_W_m = -fo.contact.depth_m * res.n_W;
         if (fo.friction_patch >= 0) {
-          res.u_W_m += o.X_WO.linear() * fo.slide_O_m;  // and its stick
+          res.u_W_m += o.X_WO.linear() * fo.solved_slide_O_m;  // and its stick
           // The contact point a peer rebuilds this step's patch from: its center, slid. A patch
           // that slipped was found at the anchor it had before the slip; from the proxy's point
           // (the anchor after it) a peer's patch took other nodes and solved another force:
           // on the beating belly, 0.74 N where the user felt 0.89 N (docs/fem.md).
-          res.p_WC_m = o.X_WO * (fo.patch_center_O_m + fo.slide_O_m);
+          res.p_WC_m = o.X_WO * (fo.patch_center_O_m + fo.solved_slide_O_m);
         }
         res.patch_nodes = fo.patch_count;
         double best_d = std::numeric_limits<double>::infinity();
@@ -583,6 +583,7 @@ void HapticWorld::StepDeformable(Object& o, std::span<const RemoteContact> remot
     auto anchor_here = [&] {  // the fingertip holds the material under it now
       fo.anchor_O_m = p;
       fo.slide_O_m.setZero();
+      fo.solved_slide_O_m.setZero();
       fo.motion_O_m.setZero();
       fo.anchored = true;
       fo.slipped = false;
@@ -614,8 +615,29 @@ void HapticWorld::StepDeformable(Object& o, std::span<const RemoteContact> remot
     // it never came to rest; smoothed, that jitter stays under 0.5 um, a stroke keeps its speed.
     constexpr double kMotionSmoothing = 1.0 / 16.0;
     fo.motion_O_m += kMotionSmoothing * ((stick - fo.slide_O_m) - fo.motion_O_m);
+    // A stroke's slip carried on slides the way the solve's FrictionPatch::motion_m says. Right
+    // after a slip starts, the material is still springing back from the stick, and the way the
+    // fingertip slides over it is the way its force ran when it started (the solve found it),
+    // not the way the fingertip moves: on the belly a stick built up across the stroke turned
+    // by 90 degrees in the step after the slip started (0.7 N). So the way is carried from the
+    // start and turned toward the fingertip's motion by kSlipTurn a step (about 50 ms to follow
+    // it), and the solve gets the motion's speed in it.
+    Eigen::Vector3d motion = fo.motion_O_m;
+    if (fo.slipped && fo.slip_dir_O.squaredNorm() > 0.0) {
+      constexpr double kSlipTurn = 0.02;
+      const Eigen::Vector3d m_t = motion - motion.dot(n) * n;
+      const double speed = m_t.norm();
+      const Eigen::Vector3d d = fo.slip_dir_O - fo.slip_dir_O.dot(n) * n;
+      if (speed > 0.0 && d.squaredNorm() > 0.0) {
+        const Eigen::Vector3d turned = d.normalized() + kSlipTurn * (m_t / speed);
+        if (turned.squaredNorm() > 1e-12) {
+          fo.slip_dir_O = turned.normalized();
+          motion = speed * fo.slip_dir_O;
+        }
+      }
+    }
     o.friction[static_cast<std::size_t>(num_friction)] = {n, stick, o.mu_static, o.mu_kinetic, fo.slipped,
-                                                          fo.motion_O_m, /*peer=*/false};
+                                                          motion, /*peer=*/false};
     fo.friction_patch = num_friction++;
   }
   // Remote fingers: the same patch rebuilt from their contact point, normal and imposed
@@ -681,9 +703,28 @@ void HapticWorld::StepDeformable(Object& o, std::span<const RemoteContact> remot
     fo.f_W_N = -(o.X_WO.linear() * f_obj);  // the fingertip feels minus the force on the object
     if (fo.friction_patch >= 0) {
       const fem::FrictionPatchState& ps = o.solver->patch_states()[static_cast<std::size_t>(fo.friction_patch)];
+      if (ps.slipping && !fo.slipped) {  // the way it starts to slide: its force's
+        const Eigen::Vector3d& n = fo.contact.n_O;
+        const Eigen::Vector3d ft = ps.force_N - ps.force_N.dot(n) * n;
+        fo.slip_dir_O = ft.squaredNorm() > 0.0 ? Eigen::Vector3d(ft.normalized()) : Eigen::Vector3d::Zero();
+      } else if (!ps.slipping) {
+        fo.slip_dir_O.setZero();
+      }
+      // The slide a peer rebuilds this step's patch with is the one solved. The anchor the next
+      // step starts from follows a slip carried on half way: where a few nodes hold a patch
+      // (the belly's 1-4), the slide solved on one held set moves the patch onto another, whose
+      // slide moves it back: the anchor swung 0.6 mm every step and the force with it, growing,
+      // for as long as the stroke lasted. Half way damps that swing; a steady slide is reached
+      // as before (the anchor lags the slide by about one step).
+      fo.solved_slide_O_m = ps.slide_m;
+      constexpr double kSlideFollow = 0.5;
+      if (ps.slipping && fo.slipped) {
+        fo.slide_O_m += kSlideFollow * (ps.slide_m - fo.slide_O_m);
+      } else {
+        fo.slide_O_m = ps.slide_m;
+      }
       fo.slipped = ps.slipping;
-      fo.slide_O_m = ps.slide_m;
-      fo.anchor_O_m = fo.contact.p_O_m - ps.slide_m;
+      fo.anchor_O_m = fo.contact.p_O_m - fo.slide_O_m;
     }
   }
 }

@@ -279,12 +279,18 @@ class HapticWorld {
     // Friction on a deformable: the material point the fingertip holds (frame O, on the
     // undeformed surface), whether it holds one, and whether it slipped in the last step.
     Eigen::Vector3d anchor_O_m = Eigen::Vector3d::Zero();
-    Eigen::Vector3d slide_O_m = Eigen::Vector3d::Zero();  // the stick the last step held
+    // The slide the anchor keeps (a slip carried on follows the solved one half way) and the
+    // slide the last step's solve held (what its report gives peers).
+    Eigen::Vector3d slide_O_m = Eigen::Vector3d::Zero();
+    Eigen::Vector3d solved_slide_O_m = Eigen::Vector3d::Zero();
     // Where this step's patch was found (the anchor on the contact's tangent plane): peers
     // rebuild it from the contact point a report gives, center + slide (FingerResult::p_WC_m).
     Eigen::Vector3d patch_center_O_m = Eigen::Vector3d::Zero();
     // The fingertip's motion along the surface per step, smoothed (FrictionPatch::motion_m).
     Eigen::Vector3d motion_O_m = Eigen::Vector3d::Zero();
+    // The way a slipping patch slides (unit, frame O; zero while it sticks): its force's when it
+    // started, turned toward the fingertip's motion a little each step.
+    Eigen::Vector3d slip_dir_O = Eigen::Vector3d::Zero();
     bool anchored = false;
     bool slipped = false;
     std::int16_t friction_patch = -1;  // this step's patch index in the solve, -1: none
