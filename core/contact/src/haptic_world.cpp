@@ -711,13 +711,15 @@ void HapticWorld::StepDeformable(Object& o, std::span<const RemoteContact> remot
         fo.slip_dir_O.setZero();
       }
       // The slide a peer rebuilds this step's patch with is the one solved. The anchor the next
-      // step starts from follows a slip carried on half way: where a few nodes hold a patch
-      // (the belly's 1-4), the slide solved on one held set moves the patch onto another, whose
-      // slide moves it back: the anchor swung 0.6 mm every step and the force with it, growing,
-      // for as long as the stroke lasted. Half way damps that swing; a steady slide is reached
-      // as before (the anchor lags the slide by about one step).
+      // step starts from follows a slip carried on a quarter of the way: where a few nodes hold
+      // a patch (the belly's 1-4), the slide solved on one held set moves the patch onto
+      // another, whose slide moves it back: the anchor swung 0.6-1.5 mm every step and the
+      // force with it, growing, for as long as the slip lasted. A quarter damps a swing whose
+      // gain is up to 7 (half way left the belly's worst stroke humming for 30 steps, a fifth
+      // of the way kept a tail held still from coming to rest); a steady slide is reached as
+      // before, the anchor lagging it by about three steps (60 um at 20 mm/s).
       fo.solved_slide_O_m = ps.slide_m;
-      constexpr double kSlideFollow = 0.5;
+      constexpr double kSlideFollow = 0.25;
       if (ps.slipping && fo.slipped) {
         fo.slide_O_m += kSlideFollow * (ps.slide_m - fo.slide_O_m);
       } else {

@@ -279,8 +279,8 @@ class HapticWorld {
     // Friction on a deformable: the material point the fingertip holds (frame O, on the
     // undeformed surface), whether it holds one, and whether it slipped in the last step.
     Eigen::Vector3d anchor_O_m = Eigen::Vector3d::Zero();
-    // The slide the anchor keeps (a slip carried on follows the solved one half way) and the
-    // slide the last step's solve held (what its report gives peers).
+    // The slide the anchor keeps (a slip carried on follows the solved one a quarter of the
+    // way) and the slide the last step's solve held (what its report gives peers).
     Eigen::Vector3d slide_O_m = Eigen::Vector3d::Zero();
     Eigen::Vector3d solved_slide_O_m = Eigen::Vector3d::Zero();
     // Where this step's patch was found (the anchor on the contact's tangent plane): peers
