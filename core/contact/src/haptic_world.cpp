@@ -628,12 +628,9 @@ void HapticWorld::StepDeformable(Object& o, std::span<const RemoteContact> remot
       const Eigen::Vector3d m_t = motion - motion.dot(n) * n;
       const double speed = m_t.norm();
       const Eigen::Vector3d d = fo.slip_dir_O - fo.slip_dir_O.dot(n) * n;
-      if (speed > 0.0 && d.squaredNorm() > 0.0) {
-        const Eigen::Vector3d turned = d.normalized() + kSlipTurn * (m_t / speed);
-        if (turned.squaredNorm() > 1e-12) {
-          fo.slip_dir_O = turned.normalized();
-          motion = speed * fo.slip_dir_O;
-        }
+      if (speed > 0.0 && d.squaredNorm() > 0.0) {  // a unit vector plus 2 % of one: never short
+        fo.slip_dir_O = (d.normalized() + kSlipTurn * (m_t / speed)).normalized();
+        motion = speed * fo.slip_dir_O;
       }
     }
     o.friction[static_cast<std::size_t>(num_friction)] = {n, stick, o.mu_static, o.mu_kinetic, fo.slipped,

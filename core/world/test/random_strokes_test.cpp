@@ -25,11 +25,7 @@ namespace {
 
 // A scene reduced to one of its deformables; mu < 0 keeps the scene's own coefficients.
 scene::Scene OneBody(const char* scene_file, const char* id, double mu) {
-  scene::Scene s = scene::LoadScene(std::filesystem::path(HANDSHARE_SOURCE_ASSETS) / "scenes" / scene_file);
-  std::erase_if(s.objects, [&](const scene::SceneObject& o) { return o.id != id; });
-  if (s.objects.size() != 1 || s.objects[0].kind != scene::ObjectKind::kDeformable) {
-    throw std::runtime_error(std::string(scene_file) + " has no single deformable " + id);
-  }
+  scene::Scene s = test::OneDeformable(scene_file, id);
   if (mu >= 0.0) {
     s.objects[0].deformable.mu_static = mu;
     s.objects[0].deformable.mu_kinetic = mu;

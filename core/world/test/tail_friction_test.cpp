@@ -24,9 +24,7 @@ namespace {
 
 // The dinosaur scene reduced to its tail, with these friction coefficients on its material.
 scene::Scene TailScene(double mu_static, double mu_kinetic) {
-  scene::Scene s = scene::LoadScene(std::filesystem::path(HANDSHARE_SOURCE_ASSETS) / "scenes" / "dinosaur.json");
-  std::erase_if(s.objects, [](const scene::SceneObject& o) { return o.id != "triceratops_tail"; });
-  if (s.objects.size() != 1) throw std::runtime_error("dinosaur.json has no single triceratops_tail");
+  scene::Scene s = test::OneDeformable("dinosaur.json", "triceratops_tail");
   s.objects[0].deformable.mu_static = mu_static;
   s.objects[0].deformable.mu_kinetic = mu_kinetic;
   return s;
