@@ -3,13 +3,16 @@
 #include "discovery.hpp"
 
 #include <arpa/inet.h>
+#include <fcntl.h>
 #include <netinet/in.h>
+#include <sys/file.h>
 #include <sys/socket.h>
 #include <unistd.h>
 
 #include <fastdds/rtps/common/Locator.h>
 #include <fastrtps/utils/IPLocator.h>
 
+#include <cstdint>
 #include <random>
 #include <string>
 
@@ -58,19 +61,42 @@ Locator_t Udp(const std::string& ipv4, int port) {
 // Fast DDS takes the lowest free id: a process restarted at once (a killed server, a crashed
 // haptic node) then gets the id, and the ports, of the participant it replaces, and the others,
 // who still hold that dead participant until its lease ends, took 2.2-3.6 s to match the new
-// one (0.3 s with other ports; tests/server_crash_test.py). Ids whose ports would pass 65535
-// (high domains) are never taken: Fast DDS exits the process on those.
-int FreshParticipantId(int domain_id, int ids, const PortParameters& ports) {
-  std::random_device seed;
-  const int start = static_cast<int>(seed() % static_cast<unsigned>(ids));
-  for (int k = 0; k < ids; ++k) {
+// one (0.3 s with other ports; tests/server_crash_test.py). A random start left that to chance:
+// about one restart in 16 with --peers (one in 120 without, where session.server_crash once
+// took 2.8 s). So this host's participants take ids in turn: the ledger keeps, per domain, the
+// id after the last one taken, under a lock, and the search starts there; a restarted process
+// gets another id until all of them have been handed out since. Without the ledger (it cannot
+// be opened or locked), a random start as before. Ids whose ports would pass 65535 (high
+// domains) are never taken: Fast DDS exits the process on those.
+int FreshParticipantId(int domain_id, int ids, const PortParameters& ports, const std::string& ledger) {
+  constexpr int kLedgerDomains = 1024;  // the RTPS port formula allows 0..232 with default ports
+  const bool noted = domain_id >= 0 && domain_id < kLedgerDomains && !ledger.empty();
+  const int fd = noted ? open(ledger.c_str(), O_RDWR | O_CREAT | O_CLOEXEC, 0666) : -1;
+  const bool locked = fd >= 0 && flock(fd, LOCK_EX) == 0;
+  const off_t at = static_cast<off_t>(sizeof(std::int32_t)) * domain_id;
+  std::int32_t next = 0;  // the id after the last one taken, plus one; 0: none noted
+  if (!locked || pread(fd, &next, sizeof next, at) != static_cast<ssize_t>(sizeof next) || next <= 0) next = 0;
+  int start = 0;
+  if (next > 0) {
+    start = (next - 1) % ids;
+  } else {
+    std::random_device seed;
+    start = static_cast<int>(seed() % static_cast<unsigned>(ids));
+  }
+  int taken = -1;
+  for (int k = 0; k < ids && taken < 0; ++k) {
     const int id = (start + k) % ids;
     const int metatraffic = MetatrafficPort(ports, domain_id, id);
     const int user = UserPort(ports, domain_id, id);
     if (metatraffic > 65535 || user > 65535) continue;
-    if (UdpPortFree(metatraffic) && UdpPortFree(user)) return id;
+    if (UdpPortFree(metatraffic) && UdpPortFree(user)) taken = id;
   }
-  return -1;
+  if (taken >= 0 && locked) {
+    const std::int32_t after = (taken + 1) % ids + 1;
+    (void)!pwrite(fd, &after, sizeof after, at);  // unwritten: the next search starts at random
+  }
+  if (fd >= 0) close(fd);  // and the lock with it
+  return taken;
 }
 
 void ConfigureDiscovery(const common::SessionOptions& where, fdds::DomainParticipantQos& qos) {
@@ -80,7 +106,7 @@ void ConfigureDiscovery(const common::SessionOptions& where, fdds::DomainPartici
   // exactly those ports.
   if (qos.wire_protocol().participant_id < 0) {
     qos.wire_protocol().participant_id =
-        FreshParticipantId(where.domain_id, unicast ? kPeerParticipantIds : kParticipantIds, ports);
+        FreshParticipantId(where.domain_id, unicast ? kPeerParticipantIds : kParticipantIds, ports, kParticipantIdLedger);
     if (unicast && qos.wire_protocol().participant_id < 0) {
       throw DdsError("DDS: --peers: no free participant id in 0.." + std::to_string(kPeerParticipantIds - 1) +
                      " on this host for domain " + std::to_string(where.domain_id) + " (at most " +

@@ -3,6 +3,8 @@
 // initial peers of --peers). Includes Fast DDS headers, so only core/dds/src includes it.
 #include <fastdds/dds/domain/qos/DomainParticipantQos.hpp>
 
+#include <string>
+
 #include "handshare/common/node_main.hpp"
 
 namespace handshare::dds::detail {
@@ -20,8 +22,14 @@ constexpr int kParticipantIds = 120;
 /// DdsError when a peer's port range does not fit the domain.
 void ConfigureDiscovery(const common::SessionOptions& where, eprosima::fastdds::dds::DomainParticipantQos& qos);
 
-/// A participant id in [0, ids) whose two unicast ports are free, starting the search at a
-/// random id; -1 (Fast DDS picks) if none is.
-int FreshParticipantId(int domain_id, int ids, const eprosima::fastrtps::rtps::PortParameters& ports);
+/// Where this host's participants note, per domain, the id after the last one they took (a
+/// lock-guarded file of one 32-bit integer per domain; tmpfs, gone at reboot).
+inline constexpr const char* kParticipantIdLedger = "/dev/shm/handshare_participant_ids";
+
+/// A participant id in [0, ids) whose two unicast ports are free, searching from the id after
+/// the last one the ledger notes for this domain (at random if it notes none or cannot be
+/// used), and noting the one taken; -1 (Fast DDS picks) if none is free.
+int FreshParticipantId(int domain_id, int ids, const eprosima::fastrtps::rtps::PortParameters& ports,
+                       const std::string& ledger);
 
 }  // namespace handshare::dds::detail
