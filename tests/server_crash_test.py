@@ -6,11 +6,13 @@ it the server is killed. Her haptic node runs on: she keeps the ball's weight in
 force jump, the ball is not dropped), and keeps her world. The restarted server resumes the
 session from its log within 2 s: the same world and revision (alice's node builds nothing
 new), the same board message (the audio guide speaks nothing twice), the ball given back to
-alice from her claim; no row the killed server committed is lost.
+alice from her claim, the lever where she left it for a screen that joins only after the
+restart; no row the killed server committed is lost.
 
 usage: server_crash_test.py --bin-dir DIR --domain D --work DIR
 """
 import csv
+import json
 import os
 import re
 import signal
@@ -120,6 +122,17 @@ def run(h, domain):
     h.start("world_server2", "world_server", *server_args)
     resumed_at = h.wait_for_line("world_server2", "resuming session #1", 10)
     owned_at = h.wait_for_line("world_server2", "object 'ball': owner '' -> 'alice'", 10)
+    # A screen that joins only now draws the lever where alice left it (Mars' detent): the
+    # restarted server publishes where its log says each control settled.
+    state_file = os.path.join(h.work, "spectator_state.json")
+    h.start("spectator", "graphics_node", "--domain", domain, "--session", session, "--headless",
+            "--frames", 100000, "--fps", 2, "--out", os.path.join(h.work, "frames"), "--state-out", state_file)
+    h.wait_for_line("spectator", "control 'lever_planet' of 'solar_system' at index 1 (by alice)", 60)
+    check(h.stop("spectator", 20) == 0, "the spectator did not end cleanly")
+    with open(state_file) as f:
+        shown = json.load(f)["controls"]
+    check(shown.get("lever_planet") == {"index": 1, "engaged": False},
+          f"a screen joining after the resume should show the lever in Mars' detent: {shown}")
     rows = wait_for_trace_time(alice_csv, t_kill + 6.0, 30)
     for label in ("alice", "audio_guide", "world_server2"):
         check(h.procs[label][0].poll() is None, f"{label} ended:\n{h.log(label)}")

@@ -69,7 +69,7 @@ ServerSession::ServerSession(WorldServer& server, const WorldServerConfig& confi
               scene_.name + "' (" + std::to_string(scene_.objects.size()) + " objects)");
   server_.OnSceneChange(scene_.name, scene_.title);
   objects_.SetScene(scene_);
-  ResetControlStates(resume != nullptr);
+  ResetControlStates(resume);
   ShowMessage(resume != nullptr && !resume->state.board.empty() ? resume->state.board : scene_.messages);
 }
 
@@ -155,6 +155,7 @@ void ServerSession::TakeControlEvents() {
     // Where the event left its control, before its action (which may leave the world).
     if (const ControlStateRecord* changed = UpdateControlState(control_states_, *input)) {
       control_state_writer_.Write(ToControlState(*changed, session_));
+      LogControlPlace(*changed);
     }
     const ControlOutcome outcome = ApplyControlAction(scene_, *input, LoadWorld);
     if (outcome.world_changed) {
@@ -202,10 +203,42 @@ void ServerSession::StepObjects(Clock::time_point now, double dt_s) {
   }
 }
 
-void ServerSession::ResetControlStates(bool resumed) {
-  control_states_ = InitialControlStates(scene_, /*known=*/!resumed);
-  if (resumed) return;
-  for (const auto& r : control_states_) control_state_writer_.Write(ToControlState(r, session_));
+void ServerSession::ResetControlStates(const ResumePoint* resume) {
+  control_states_ = InitialControlStates(scene_, /*known=*/resume == nullptr);
+  if (resume != nullptr) {
+    for (const ControlPlace& place : resume->controls) {
+      if (place.scene != scene_.name) continue;
+      for (ControlStateRecord& r : control_states_) {
+        if (r.control_id != place.control_id) continue;
+        r.index = place.index;
+        r.engaged = place.engaged;
+        r.user = place.user;
+        r.changes = place.changes;
+        r.known = true;
+      }
+    }
+  } else if (SessionLog* log = server_.session_log()) {
+    log->ForgetControlPlaces();  // the last world's
+  }
+  for (const auto& r : control_states_) {
+    if (!r.known) continue;
+    control_state_writer_.Write(ToControlState(r, session_));
+    LogControlPlace(r);
+  }
+}
+
+void ServerSession::LogControlPlace(const ControlStateRecord& record) {
+  SessionLog* log = server_.session_log();
+  if (log == nullptr || !record.known) return;
+  ControlPlace p;
+  p.control_id = record.control_id;
+  p.scene = record.scene;
+  p.unix_ns = common::UnixNowNs();
+  p.index = record.index;
+  p.engaged = record.engaged;
+  p.user = record.user;
+  p.changes = record.changes;
+  log->OnControlPlace(p);
 }
 
 void ServerSession::PublishScene() {

@@ -69,10 +69,14 @@ class ServerSession {
   /// Shows one board message (the board shows English for now; every scene file also holds
   /// Japanese). Transient-local keeps the newest for late joiners.
   void ShowMessage(const std::vector<scene::Message>& messages);
-  /// Every control of the current world at rest, published (a new world, or the session's
-  /// start); or, resuming a killed server's session, unknown and not published (the nodes keep
-  /// what that server published until an event changes a control).
-  void ResetControlStates(bool resumed = false);
+  /// Every control of the current world at rest, published and logged (a new world, or the
+  /// session's start). Resuming a killed server's session: where its log says each control
+  /// settled, published and logged again, so that a node joining later builds them there; a
+  /// control the log does not place (a log written before schema version 3) stays unknown and
+  /// unpublished (the nodes keep what that server published until an event changes it).
+  void ResetControlStates(const ResumePoint* resume = nullptr);
+  /// Records where a control settled in the session log.
+  void LogControlPlace(const ControlStateRecord& record);
 
   WorldServer& server_;
   std::string session_;

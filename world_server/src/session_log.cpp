@@ -62,7 +62,9 @@ struct EndRow {
   std::uint64_t unix_ns;
 };
 struct ForgetPosesRow {};
-using Row = std::variant<MemberRow, SceneRow, ControlRecord, OwnershipRow, EndRow, SessionState, ObjectPose, ForgetPosesRow>;
+struct ForgetPlacesRow {};
+using Row = std::variant<MemberRow, SceneRow, ControlRecord, OwnershipRow, EndRow, SessionState, ObjectPose, ForgetPosesRow,
+                         ControlPlace, ForgetPlacesRow>;
 
 std::string BoardJson(const std::vector<scene::Message>& board) {
   nlohmann::json j = nlohmann::json::array();
@@ -100,6 +102,7 @@ void OpenSchema(sqlite::Db& db) {
       db.Exec(schema::kCreateV1, "creating the schema");
       db.Exec(schema::kStampV1, "writing the schema version");
       db.Exec(schema::kMigrateV1ToV2, "creating the schema's version 2");
+      db.Exec(schema::kMigrateV2ToV3, "creating the schema's version 3");
       db.Exec("COMMIT", "committing the schema");
     } catch (...) {
       sqlite3_exec(db.get(), "ROLLBACK", nullptr, nullptr, nullptr);  // the first error is the one to report
@@ -118,15 +121,15 @@ void OpenSchema(sqlite::Db& db) {
   if (version < 1) throw SessionLogError(db.file_name() + ": session log without a schema version");
   const std::string mode = db.QueryText("PRAGMA journal_mode=WAL", "switching to WAL journal mode");
   if (mode != "wal") throw SessionLogError(db.file_name() + ": cannot use WAL journal mode (got '" + mode + "')");
-  if (version == 1) {
+  if (version < SessionLog::kSchemaVersion) {
     // Every row stays; the version is read again inside the transaction, so two servers
     // opening one old log at once migrate it once.
-    db.Exec("BEGIN IMMEDIATE", "starting the migration to schema version 2");
+    db.Exec("BEGIN IMMEDIATE", "starting the migration to schema version 3");
     try {
-      if (db.QueryInt("PRAGMA user_version", "reading the schema version") == 1) {
-        db.Exec(schema::kMigrateV1ToV2, "migrating the session log to schema version 2");
-      }
-      db.Exec("COMMIT", "committing the migration to schema version 2");
+      const std::int64_t now = db.QueryInt("PRAGMA user_version", "reading the schema version");
+      if (now == 1) db.Exec(schema::kMigrateV1ToV2, "migrating the session log to schema version 2");
+      if (now <= 2) db.Exec(schema::kMigrateV2ToV3, "migrating the session log to schema version 3");
+      db.Exec("COMMIT", "committing the migration to schema version 3");
     } catch (...) {
       sqlite3_exec(db.get(), "ROLLBACK", nullptr, nullptr, nullptr);
       throw;
@@ -170,7 +173,7 @@ struct SessionLog::Impl {
 
   // Prepared in the constructor, in the caller's thread, so a broken file fails there; the
   // writer thread owns the connection from then on.
-  std::optional<sqlite::Statement> member, scene, control, owner, end, seen, state, pose, forget;
+  std::optional<sqlite::Statement> member, scene, control, owner, end, seen, state, pose, forget, place, forget_places;
 
   void Prepare() {
     member.emplace(db, schema::kInsertMember, "inserting a member event");
@@ -182,6 +185,8 @@ struct SessionLog::Impl {
     state.emplace(db, schema::kUpsertState, "writing the session state");
     pose.emplace(db, schema::kUpsertPose, "writing an object pose");
     forget.emplace(db, "DELETE FROM object_poses WHERE session_id = ?1", "forgetting the object poses");
+    place.emplace(db, schema::kUpsertControlState, "writing a control's place");
+    forget_places.emplace(db, "DELETE FROM control_states WHERE session_id = ?1", "forgetting the controls' places");
   }
 
   void WriterLoop() {
@@ -260,6 +265,16 @@ struct SessionLog::Impl {
           forget->Bind(1, session_id);
           forget->Step();
           forget->Reset();
+        } else if (const auto* cp = std::get_if<ControlPlace>(&row)) {
+          place->Bind(1, session_id).Bind(2, cp->control_id).Bind(3, Ns(cp->unix_ns)).Bind(4, cp->scene)
+              .Bind(5, static_cast<std::int64_t>(cp->index)).Bind(6, static_cast<std::int64_t>(cp->engaged ? 1 : 0))
+              .Bind(7, cp->user).Bind(8, static_cast<std::int64_t>(cp->changes));
+          place->Step();
+          place->Reset();
+        } else if (std::holds_alternative<ForgetPlacesRow>(row)) {
+          forget_places->Bind(1, session_id);
+          forget_places->Step();
+          forget_places->Reset();
         } else if (const auto* e = std::get_if<EndRow>(&row)) {
           end->Bind(1, Ns(e->unix_ns)).Bind(2, session_id);
           end->Step();
@@ -362,6 +377,10 @@ void SessionLog::OnObjectPose(const ObjectPose& pose) { impl_->Push(pose); }
 
 void SessionLog::ForgetObjectPoses() { impl_->Push(ForgetPosesRow{}); }
 
+void SessionLog::OnControlPlace(const ControlPlace& place) { impl_->Push(place); }
+
+void SessionLog::ForgetControlPlaces() { impl_->Push(ForgetPlacesRow{}); }
+
 void SessionLog::End(std::uint64_t unix_ns) { impl_->Push(EndRow{unix_ns}); }
 
 std::optional<ResumePoint> FindResumePoint(const std::filesystem::path& file, const std::string& session,
@@ -428,6 +447,23 @@ std::optional<ResumePoint> FindResumePoint(const std::filesystem::path& file, co
     for (int k = 0; k < 3; ++k) p.p_WO_m[k] = s.Double(3 + k);
     for (int k = 0; k < 4; ++k) p.q_WO_wxyz[k] = s.Double(6 + k);
     r.poses.push_back(std::move(p));
+  }
+  if (db.QueryInt("PRAGMA user_version", "reading the schema version") < 3) return r;  // no places
+  sqlite::Statement c(db,
+                      "SELECT control_id, scene, unix_ns, idx, engaged, user, changes FROM control_states "
+                      "WHERE session_id = ?1 ORDER BY control_id",
+                      "reading the controls' places");
+  c.Bind(1, r.session_id);
+  while (c.Step()) {
+    ControlPlace p;
+    p.control_id = c.Text(0);
+    p.scene = c.Text(1);
+    p.unix_ns = static_cast<std::uint64_t>(c.Int(2));
+    p.index = static_cast<std::int32_t>(c.Int(3));
+    p.engaged = c.Int(4) != 0;
+    p.user = c.Text(5);
+    p.changes = static_cast<std::uint32_t>(c.Int(6));
+    r.controls.push_back(std::move(p));
   }
   return r;
 }

@@ -6,6 +6,8 @@
 //   version 2: control_events may say 'opened' (a book's cover); session_state and
 //              object_poses hold where a session is, so a restarted server resumes it;
 //              sessions.resumed_from names the session a resumed one continues.
+//   version 3: control_states holds where each control of the current world settled, so a
+//              restarted server publishes them again (a node joining later builds them there).
 namespace handshare::server::schema {
 
 inline constexpr const char* kCreateV1 = R"sql(
@@ -108,6 +110,22 @@ CREATE TABLE object_poses(                       -- the newest pose of each rigi
 PRAGMA user_version = 2;
 )sql";
 
+// Version 3 on top of version 2.
+inline constexpr const char* kMigrateV2ToV3 = R"sql(
+CREATE TABLE control_states(                     -- where each control of the current world settled
+  session_id INTEGER NOT NULL REFERENCES sessions(id),
+  control_id TEXT    NOT NULL,
+  unix_ns    INTEGER NOT NULL,
+  scene      TEXT    NOT NULL,                   -- the world it belongs to
+  idx        INTEGER NOT NULL,                   -- lever: detent; book: page (-1 shut); else -1
+  engaged    INTEGER NOT NULL,                   -- button, arrow: pressed; book: open
+  user       TEXT    NOT NULL,                   -- who changed it last ('' : nobody yet)
+  changes    INTEGER NOT NULL,                   -- events that changed it
+  PRIMARY KEY(session_id, control_id)
+);
+PRAGMA user_version = 3;
+)sql";
+
 // 0x48534C47 = "HSLG"; PRAGMAs take no parameters, so the numbers are spelled out.
 inline constexpr const char* kStampV1 = "PRAGMA application_id = 1213418567; PRAGMA user_version = 1;";
 
@@ -130,6 +148,9 @@ inline constexpr const char* kUpsertState =
 inline constexpr const char* kUpsertPose =
     "INSERT OR REPLACE INTO object_poses(session_id, object_id, unix_ns, owner, px, py, pz, qw, qx, qy, qz) "
     "VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8, ?9, ?10, ?11)";
+inline constexpr const char* kUpsertControlState =
+    "INSERT OR REPLACE INTO control_states(session_id, control_id, unix_ns, scene, idx, engaged, user, changes) "
+    "VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8)";
 inline constexpr const char* kUpdateResumedFrom = "UPDATE sessions SET resumed_from = ?1 WHERE id = ?2";
 inline constexpr const char* kUpdateEnd = "UPDATE sessions SET ended_unix_ns = ?1 WHERE id = ?2";
 inline constexpr const char* kUpdateSeen =

@@ -114,7 +114,7 @@ int WorldServer::Run() {
         std::to_string((common::UnixNowNs() - std::min(common::UnixNowNs(), resume->last_seen_unix_ns)) / 1000000) +
         " ms ago: world '" + resume->state.scene + "' revision " + std::to_string(resume->state.revision) + ", " +
         std::to_string(resume->poses.size()) + " body poses, board message #" +
-        std::to_string(resume->state.message_id));
+        std::to_string(resume->state.message_id) + ", " + std::to_string(resume->controls.size()) + " control places");
   }
   ServerSession session(*this, config_, participant, std::move(scene), resume ? &*resume : nullptr);
 

@@ -134,6 +134,98 @@ TEST(SessionResume, AnotherWorldForgetsTheLastWorldsPoses) {
   }
 }
 
+ControlPlace Place(const std::string& id, std::int32_t index, bool engaged, const std::string& user,
+                   std::uint32_t changes) {
+  ControlPlace p;
+  p.control_id = id;
+  p.scene = "solar_system";
+  p.unix_ns = kT0 + 4 * kSecond;
+  p.index = index;
+  p.engaged = engaged;
+  p.user = user;
+  p.changes = changes;
+  return p;
+}
+
+// Where the controls settled comes back with the session: the lever in Mars' detent, a book
+// open at its page, a button at rest that nobody touched (every control of the world has a
+// place from the moment the world appears). A control's newest place replaces the last.
+TEST(SessionResume, WhereTheControlsSettledIsResumed) {
+  TempDir dir;
+  const auto file = dir / "log.sqlite";
+  std::int64_t id = 0;
+  {
+    SessionLog log(file, SessionStart{"museum", 5, "h", 1, kT0});
+    log.OnState(MarsState());
+    log.OnControlPlace(Place("lever_planet", 0, false, "", 0));
+    log.OnControlPlace(Place("book_solar_system", -1, false, "", 0));
+    log.OnControlPlace(Place("button_reset", -1, false, "", 0));
+    log.OnControlPlace(Place("lever_planet", 1, false, "alice", 1));
+    log.OnControlPlace(Place("book_solar_system", 2, true, "bob", 3));
+    log.Flush();
+    id = log.session_id();
+  }
+  Exec(file, "UPDATE sessions SET ended_unix_ns = NULL, last_seen_unix_ns = " + std::to_string(kT0 + 6 * kSecond) +
+                 " WHERE id = " + std::to_string(id));
+  const auto r = FindResumePoint(file, "museum", kT0 + 7 * kSecond, 600 * kSecond);
+  ASSERT_TRUE(r.has_value());
+  ASSERT_EQ(r->controls.size(), 3u);  // by id
+  EXPECT_EQ(r->controls[0].control_id, "book_solar_system");
+  EXPECT_EQ(r->controls[0].index, 2);
+  EXPECT_TRUE(r->controls[0].engaged);
+  EXPECT_EQ(r->controls[0].user, "bob");
+  EXPECT_EQ(r->controls[0].changes, 3u);
+  EXPECT_EQ(r->controls[1].control_id, "button_reset");
+  EXPECT_EQ(r->controls[1].index, -1);
+  EXPECT_FALSE(r->controls[1].engaged);
+  EXPECT_EQ(r->controls[1].user, "");
+  EXPECT_EQ(r->controls[2].control_id, "lever_planet");
+  EXPECT_EQ(r->controls[2].scene, "solar_system");
+  EXPECT_EQ(r->controls[2].index, 1);
+  EXPECT_EQ(r->controls[2].user, "alice");
+  EXPECT_EQ(r->controls[2].changes, 1u);
+}
+
+TEST(SessionResume, AnotherWorldForgetsTheLastWorldsControls) {
+  TempDir dir;
+  const auto file = dir / "log.sqlite";
+  SessionLog log(file, SessionStart{"museum", 5, "h", 1, kT0});
+  log.OnControlPlace(Place("lever_planet", 1, false, "alice", 1));
+  log.ForgetControlPlaces();
+  log.OnControlPlace(Place("arrow_next", -1, false, "", 0));
+  log.Flush();
+  EXPECT_EQ(QueryInt(file, "SELECT count(*) FROM control_states"), 1);
+  EXPECT_EQ(QueryInt(file, "SELECT count(*) FROM control_states WHERE control_id = 'arrow_next'"), 1);
+}
+
+// A log a version-2 server wrote (no control places) is migrated with its rows, and its
+// killed session resumes with no places: the resumed server leaves those controls unknown,
+// as before.
+TEST(SessionResume, AVersionTwoLogIsMigratedAndResumesWithoutPlaces) {
+  TempDir dir;
+  const auto file = dir / "v2.sqlite";
+  Exec(file, std::string("PRAGMA journal_mode=WAL;") + schema::kCreateV1 + schema::kStampV1 + schema::kMigrateV1ToV2);
+  Exec(file,
+       "INSERT INTO sessions(id, name, domain_id, host, pid, schema_version, started_unix_ns, last_seen_unix_ns) "
+       "VALUES (1, 'museum', 5, 'h', 1, 2, " + std::to_string(kT0) + ", " + std::to_string(kT0 + 6 * kSecond) + ");"
+       "INSERT INTO session_state(session_id, unix_ns, scene, title, revision, gravity_x, gravity_y, gravity_z, "
+       "epoch_unix_ns, message_id, board_json) VALUES (1, " + std::to_string(kT0 + 5 * kSecond) +
+       ", 'solar_system', 'Mars', 3, 0, 0, -3.71, " + std::to_string(kT0) + ", 4, '[]');");
+  EXPECT_EQ(QueryInt(file, "PRAGMA user_version"), 2);
+  const auto before = FindResumePoint(file, "museum", kT0 + 7 * kSecond, 600 * kSecond);
+  ASSERT_TRUE(before.has_value());  // read as it is, no places
+  EXPECT_TRUE(before->controls.empty());
+  {
+    SessionLog log(file, SessionStart{"museum", 5, "h", 2, kT0 + 7 * kSecond, before->session_id});
+    log.OnControlPlace(Place("lever_planet", 1, false, "alice", 1));
+    log.Flush();
+    EXPECT_TRUE(log.error().empty()) << log.error();
+  }
+  EXPECT_EQ(QueryInt(file, "PRAGMA user_version"), 3);
+  EXPECT_EQ(QueryInt(file, "SELECT count(*) FROM session_state WHERE session_id = 1"), 1);
+  EXPECT_EQ(QueryInt(file, "SELECT count(*) FROM control_states WHERE session_id = 2"), 1);
+}
+
 TEST(SessionResume, AVersionOneLogIsMigratedWithEveryRowAndThenTakesOpenedBooks) {
   TempDir dir;
   const auto file = dir / "old.sqlite";
@@ -164,7 +256,7 @@ TEST(SessionResume, AVersionOneLogIsMigratedWithEveryRowAndThenTakesOpenedBooks)
     log.Flush();
     EXPECT_TRUE(log.error().empty()) << log.error();
   }
-  EXPECT_EQ(QueryInt(file, "PRAGMA user_version"), 2);
+  EXPECT_EQ(QueryInt(file, "PRAGMA user_version"), SessionLog::kSchemaVersion);
   EXPECT_EQ(QueryInt(file, "SELECT count(*) FROM control_events WHERE kind = 'moved' AND session_id = 1"), 1);
   EXPECT_EQ(QueryInt(file, "SELECT count(*) FROM control_events WHERE kind = 'opened'"), 1);
   EXPECT_EQ(QueryInt(file, "SELECT count(*) FROM session_state"), 1);

@@ -80,12 +80,24 @@ struct ObjectPose {
   double q_WO_wxyz[4] = {1.0, 0.0, 0.0, 0.0};
 };
 
+/// Where a control of the current world settled (its events; a hand's motion is not kept).
+struct ControlPlace {
+  std::string control_id;
+  std::string scene;                      // the world it belongs to
+  std::uint64_t unix_ns = 0;
+  std::int32_t index = -1;                // lever: detent; book: page (-1 shut); else -1
+  bool engaged = false;                   // button, arrow: pressed; book: open
+  std::string user;                       // who changed it last ("" nobody yet)
+  std::uint32_t changes = 0;              // events that changed it
+};
+
 /// A session a killed server left behind (never ended), with the state it last committed.
 struct ResumePoint {
   std::int64_t session_id = 0;
   std::uint64_t last_seen_unix_ns = 0;    // the killed server's last commit
   SessionState state;
   std::vector<ObjectPose> poses;
+  std::vector<ControlPlace> controls;     // none from a session logged before schema version 3
 };
 
 /// The newest session named `session` in `file` that did not end (its server was killed or
@@ -104,7 +116,7 @@ struct SessionLogConfig {
 class SessionLog {
  public:
   /// Schema version (PRAGMA user_version); the file also carries kApplicationId.
-  static constexpr int kSchemaVersion = 2;
+  static constexpr int kSchemaVersion = 3;
   static constexpr std::int32_t kApplicationId = 0x48534C47;  // "HSLG"
 
   /// Opens `file` (created with the schema if absent or empty), checks it is a handshare log
@@ -133,6 +145,10 @@ class SessionLog {
   void OnObjectPose(const ObjectPose& pose);
   /// Another world: the poses of the last one are forgotten.
   void ForgetObjectPoses();
+  /// Where a control settled (replaces its previous place).
+  void OnControlPlace(const ControlPlace& place);
+  /// Another world: the places of the last one's controls are forgotten.
+  void ForgetControlPlaces();
   /// Marks the session as ended at unix_ns (once; later calls are ignored).
   void End(std::uint64_t unix_ns);
 
