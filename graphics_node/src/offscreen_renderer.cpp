@@ -66,4 +66,6 @@ ImageRgb8 OffscreenRenderer::Render(const SceneView& scene, const Camera& camera
 
 const CaptionStats& OffscreenRenderer::last_caption() const { return impl_->text.captions.stats(); }
 
+std::uint64_t OffscreenRenderer::page_uploads() const { return impl_->text.page_objects.uploads; }
+
 }  // namespace handshare::render

@@ -106,7 +106,7 @@ const PageTexture& PageCache::For(const Page& page) {
   if (!font_ && !page.text.empty()) font_ = std::make_unique<CaptionFont>(font_file_);
   Entry fresh{page.text, page.image, page.paper, page.ink, height_px, clock_, {}};
   fresh.texture = ComposePage(font_.get(), page, kPageTextureWidth, height_px);  // no text: no font needed
-  ++composed_;
+  fresh.texture.serial = ++composed_;
   if (entries_.size() < kEntries) {
     entries_.push_back(std::move(fresh));
     return entries_.back().texture;

@@ -199,24 +199,48 @@ void DrawMeshes(const GlApi& gl, const std::vector<TriangleMesh>& meshes, Pass p
 }
 
 // Pages: each a texture on its quad, unlit (the paper's and the ink's own colours), tested
-// against depth like the scene. One texture object, filled again for each page.
-void DrawPages(const GlApi& gl, const std::vector<Page>& pages, PageCache& cache) {
-  if (pages.empty()) return;
-  GLuint texture = 0;
-  gl.GenTextures(1, &texture);
-  gl.BindTexture(GL_TEXTURE_2D, texture);
-  gl.TexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_LINEAR);
-  gl.TexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_LINEAR);
-  gl.TexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_S, GL_CLAMP_TO_EDGE);
-  gl.TexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_T, GL_CLAMP_TO_EDGE);
-  gl.TexEnvi(GL_TEXTURE_ENV, GL_TEXTURE_ENV_MODE, GL_REPLACE);
+// against depth like the scene. Each page's texture object is filled once and bound again while
+// the page shows the same content (PageTextureObjects).
+GLuint PageTextureObject(const GlApi& gl, const PageTexture& t, PageTextureObjects& objects) {
+  ++objects.clock;
+  for (auto& e : objects.entries) {
+    if (e.serial == t.serial) {
+      e.used = objects.clock;
+      gl.BindTexture(GL_TEXTURE_2D, e.name);
+      return e.name;
+    }
+  }
+  PageTextureObjects::Entry* slot = nullptr;
+  if (objects.entries.size() < PageCache::kEntries) {
+    objects.entries.push_back({});
+    slot = &objects.entries.back();
+    gl.GenTextures(1, &slot->name);
+    gl.BindTexture(GL_TEXTURE_2D, slot->name);
+    gl.TexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_LINEAR);
+    gl.TexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_LINEAR);
+    gl.TexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_S, GL_CLAMP_TO_EDGE);
+    gl.TexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_T, GL_CLAMP_TO_EDGE);
+  } else {
+    slot = &*std::min_element(objects.entries.begin(), objects.entries.end(),
+                              [](const auto& a, const auto& b) { return a.used < b.used; });
+    gl.BindTexture(GL_TEXTURE_2D, slot->name);
+  }
+  slot->serial = t.serial;
+  slot->used = objects.clock;
   gl.PixelStorei(GL_UNPACK_ALIGNMENT, 1);
+  // Row 0 of the texture image is its top edge: uploaded first, it is t = 0.
+  gl.TexImage2D(GL_TEXTURE_2D, 0, GL_RGB, t.width_px, t.height_px, 0, GL_RGB, GL_UNSIGNED_BYTE, t.rgb.data());
+  ++objects.uploads;
+  return slot->name;
+}
+
+void DrawPages(const GlApi& gl, const std::vector<Page>& pages, PageCache& cache, PageTextureObjects& objects) {
+  if (pages.empty()) return;
+  gl.TexEnvi(GL_TEXTURE_ENV, GL_TEXTURE_ENV_MODE, GL_REPLACE);
   gl.Disable(GL_LIGHTING);
   gl.Enable(GL_TEXTURE_2D);
   for (const Page& page : pages) {
-    const PageTexture& t = cache.For(page);
-    // Row 0 of the texture image is its top edge: uploaded first, it is t = 0.
-    gl.TexImage2D(GL_TEXTURE_2D, 0, GL_RGB, t.width_px, t.height_px, 0, GL_RGB, GL_UNSIGNED_BYTE, t.rgb.data());
+    PageTextureObject(gl, cache.For(page), objects);
     constexpr double kTexCoords[4][2] = {{0.0, 1.0}, {1.0, 1.0}, {1.0, 0.0}, {0.0, 0.0}};
     gl.Begin(GL_QUADS);
     for (int k = 0; k < 4; ++k) {
@@ -228,7 +252,6 @@ void DrawPages(const GlApi& gl, const std::vector<Page>& pages, PageCache& cache
   }
   gl.Disable(GL_TEXTURE_2D);
   gl.BindTexture(GL_TEXTURE_2D, 0);
-  gl.DeleteTextures(1, &texture);
   gl.Enable(GL_LIGHTING);
 }
 
@@ -361,7 +384,7 @@ void DrawEye(const GlApi& gl, const SceneView& scene, const Camera& camera, Eye 
   DrawSpheres(gl, scene.spheres);
   DrawBoxes(gl, scene.boxes);
   DrawMeshes(gl, scene.meshes);
-  DrawPages(gl, scene.pages, text.pages);
+  DrawPages(gl, scene.pages, text.pages, text.page_objects);
   // What shows what is behind it: after everything opaque, blended, writing no depth.
   gl.Enable(GL_BLEND);
   gl.BlendFunc(GL_SRC_ALPHA, GL_ONE_MINUS_SRC_ALPHA);

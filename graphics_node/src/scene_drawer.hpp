@@ -4,6 +4,7 @@
 
 #include <atomic>
 #include <cstdint>
+#include <vector>
 
 #include "caption_text.hpp"
 #include "gl_api.hpp"
@@ -15,12 +16,27 @@ namespace handshare::render::detail {
 /// Throws std::invalid_argument if the camera or any mesh of `scene` is malformed.
 void ValidateScene(const SceneView& scene, const Camera& camera);
 
+/// The pages' textures as GL texture objects of the renderer's context, each uploaded once:
+/// the start menu's two pages uploaded every frame were most of its p99. At most
+/// PageCache::kEntries, the one drawn longest ago refilled; they go with the context.
+struct PageTextureObjects {
+  struct Entry {
+    std::uint64_t serial = 0;  ///< PageTexture::serial it holds
+    GLuint name = 0;
+    std::uint64_t used = 0;
+  };
+  std::vector<Entry> entries;
+  std::uint64_t clock = 0;
+  std::uint64_t uploads = 0;  ///< textures uploaded so far
+};
+
 /// What a renderer keeps between frames: the caption's and the labels' layouts, the pages'
-/// textures.
+/// textures (composed, and as texture objects of its context).
 struct TextCaches {
   CaptionCache captions;
   PageCache pages;
   LabelCache labels;
+  PageTextureObjects page_objects;
 };
 
 /// Clears and draws the whole framebuffer (fb_width_px x fb_height_px, GL origin bottom-left)

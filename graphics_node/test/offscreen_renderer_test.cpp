@@ -414,6 +414,52 @@ TEST_F(RenderOffscreen, APageShowsItsPictureAboveItsTextWhereItsQuadProjects) {
   EXPECT_LT(hidden[0], kLow) << Describe(hidden);
 }
 
+// A page's texture is uploaded once and drawn again from the renderer's texture object while
+// the page shows the same content (the start menu's two pages were uploaded every frame, most of
+// its p99). What is drawn stays what a fresh renderer draws: a page turned shows its new
+// content, and turned back its old one, from the kept object.
+TEST_F(RenderOffscreen, APageIsUploadedOnceAndDrawnAgainAsAFreshRendererDrawsIt) {
+  Camera camera;
+  camera.eye_W = {0.0, 0.0, 0.2};
+  camera.target_W = {0.0, 0.0, 0.0};
+  camera.up_W = {0.0, 1.0, 0.0};
+  camera.width_px = 200;
+  camera.height_px = 200;
+  camera.near_m = 0.01;
+  camera.far_m = 10.0;
+  SceneView scene;
+  scene.grid.visible = false;
+  Page left, right;
+  left.corners_W = {Eigen::Vector3d(-0.1, -0.07, 0.0), Eigen::Vector3d(0.0, -0.07, 0.0),
+                    Eigen::Vector3d(0.0, 0.07, 0.0), Eigen::Vector3d(-0.1, 0.07, 0.0)};
+  right.corners_W = {Eigen::Vector3d(0.0, -0.07, 0.0), Eigen::Vector3d(0.1, -0.07, 0.0),
+                     Eigen::Vector3d(0.1, 0.07, 0.0), Eigen::Vector3d(0.0, 0.07, 0.0)};
+  left.text = "Page one: the Moon.";
+  right.text = "Page two: Mars.";
+  scene.pages = {left, right};
+  const auto fresh = [&](const SceneView& s) {
+    OffscreenRenderer r;
+    return r.Render(s, camera);
+  };
+  const ImageRgb8 first = renderer_.Render(scene, camera);
+  EXPECT_EQ(renderer_.page_uploads(), 2u);
+  for (int frame = 0; frame < 3; ++frame) {
+    const ImageRgb8 again = renderer_.Render(scene, camera);
+    EXPECT_EQ(again.rgb, first.rgb) << "frame " << frame;
+  }
+  EXPECT_EQ(renderer_.page_uploads(), 2u) << "drawn again, not uploaded again";
+  EXPECT_EQ(first.rgb, fresh(scene).rgb);
+
+  SceneView turned = scene;
+  turned.pages[1].text = "Page three: the triceratops.";
+  const ImageRgb8 after = renderer_.Render(turned, camera);
+  EXPECT_EQ(renderer_.page_uploads(), 3u);
+  EXPECT_NE(after.rgb, first.rgb);
+  EXPECT_EQ(after.rgb, fresh(turned).rgb) << "the turned page shows its new text";
+  EXPECT_EQ(renderer_.Render(scene, camera).rgb, first.rgb) << "turned back: the old page, from its object";
+  EXPECT_EQ(renderer_.page_uploads(), 3u);
+}
+
 // A label is drawn just above its point's projection, in its colour on a darkened box; not at
 // all when its point is behind the eye or outside the image; a fingertip marker in front of it
 // stays visible (markers are drawn after the labels).

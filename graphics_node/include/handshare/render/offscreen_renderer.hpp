@@ -2,6 +2,7 @@
 /// @file
 /// Headless software rendering (Mesa OSMesa, llvmpipe) of a SceneView into an RGB8 image.
 
+#include <cstdint>
 #include <memory>
 
 #include "handshare/render/image.hpp"
@@ -32,6 +33,10 @@ class OffscreenRenderer {
 
   /// What the caption of the last rendered frame held (zeros without a caption).
   [[nodiscard]] const CaptionStats& last_caption() const;
+
+  /// How many page textures were uploaded so far: a page is uploaded when its content first
+  /// shows (or shows again after 8 others), not every frame.
+  [[nodiscard]] std::uint64_t page_uploads() const;
 
  private:
   struct Impl;
