@@ -164,12 +164,16 @@ CaptionBitmap CaptionFont::Layout(std::string_view text, int pixel_size, int max
     out.stats.cut = true;
   }
 
-  // Draw each line's glyphs on a common baseline.
+  // Draw each line's glyphs on a common baseline, on a canvas a line taller above and below:
+  // a glyph may reach past its line (IPA Gothic's line height is exactly its em, and a
+  // descender or a ring goes beyond it), and the first and last lines' were cut there.
   const FT_Size_Metrics& m = impl_->face->size->metrics;
   const int ascender = static_cast<int>(m.ascender >> 6);
   const int line_height = std::max(1, static_cast<int>(m.height >> 6));
+  const int lines_px = line_height * static_cast<int>(lines.size());
+  const int room_px = line_height;
   out.width_px = max_width_px;
-  out.height_px = line_height * static_cast<int>(lines.size());
+  out.height_px = lines_px + 2 * room_px;
   out.coverage.assign(static_cast<std::size_t>(out.width_px) * static_cast<std::size_t>(out.height_px), 0);
   int widest = 0;
   const auto blit = [&](const Impl::Glyph& g, int pen_x, int baseline) {
@@ -187,7 +191,7 @@ CaptionBitmap CaptionFont::Layout(std::string_view text, int pixel_size, int max
   };
   const Impl::Glyph dots = impl_->Render(U'…');
   for (std::size_t l = 0; l < lines.size(); ++l) {
-    const int baseline = static_cast<int>(l) * line_height + ascender;
+    const int baseline = room_px + static_cast<int>(l) * line_height + ascender;
     int pen = 0;
     std::size_t end = lines[l].end;
     if (lines[l].ellipsis) {  // make room for the ellipsis
@@ -212,6 +216,20 @@ CaptionBitmap CaptionFont::Layout(std::string_view text, int pixel_size, int max
     widest = std::max(widest, std::min(pen, max_width_px));
   }
   out.stats.lines = static_cast<int>(lines.size());
+  // Keep the lines' rows and whatever ink reaches beyond them.
+  const auto inked = [&](int y) {
+    const auto row = out.coverage.begin() + static_cast<std::ptrdiff_t>(y) * out.width_px;
+    return std::any_of(row, row + out.width_px, [](std::uint8_t c) { return c != 0; });
+  };
+  int first = 0;  // rows [first, last)
+  while (first < room_px && !inked(first)) ++first;
+  int last = out.height_px;
+  while (last > room_px + lines_px && !inked(last - 1)) --last;
+  if (first > 0 || last < out.height_px) {
+    out.coverage.erase(out.coverage.begin() + static_cast<std::ptrdiff_t>(last) * out.width_px, out.coverage.end());
+    out.coverage.erase(out.coverage.begin(), out.coverage.begin() + static_cast<std::ptrdiff_t>(first) * out.width_px);
+    out.height_px = last - first;
+  }
   // Trim to the widest line.
   if (widest < out.width_px) {
     std::vector<std::uint8_t> trimmed(static_cast<std::size_t>(widest) * static_cast<std::size_t>(out.height_px));

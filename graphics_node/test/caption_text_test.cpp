@@ -74,7 +74,10 @@ TEST_F(CaptionText, WrapsAtSpacesAndBetweenJapaneseCharacters) {
   EXPECT_GE(wrapped.stats.lines, 3);
   EXPECT_LE(wrapped.width_px, 200);
   EXPECT_EQ(wrapped.stats.glyphs, one.stats.glyphs) << "wrapping loses no character";
-  EXPECT_EQ(wrapped.height_px, wrapped.stats.lines * one.height_px);
+  // Its lines' height, and what the last line's descenders reach below it (less than a line).
+  const int line_px = font_.Layout("ace", 20, 2000, 10).height_px;
+  EXPECT_GE(wrapped.height_px, wrapped.stats.lines * line_px);
+  EXPECT_LT(wrapped.height_px, (wrapped.stats.lines + 1) * line_px);
 
   // Japanese has no spaces: it wraps between any two characters, never before 、 or 。.
   const std::string japanese = "パートナーと一緒にトリケラトプスを押すか、ボールを渡してください。";
@@ -109,6 +112,32 @@ TEST_F(CaptionText, ACharacterTheFontLacksIsAVisibleBox) {
   const CaptionBitmap ab = font_.Layout("ab", 24, 900, 2);
   EXPECT_GT(b.width_px, ab.width_px + 10);
   EXPECT_GT(Ink(b), Ink(ab) + 30) << "the box has ink";
+}
+
+int TotalCoverage(const CaptionBitmap& b) {
+  int n = 0;
+  for (const std::uint8_t c : b.coverage) n += c;
+  return n;
+}
+
+// A glyph that reaches past its line (a descender below the font's descent, a ring above its
+// ascent: IPA Gothic's line height is exactly its em) is drawn whole: the bitmap grows to hold
+// it. The oracle: the same line between two blank lines, where there is room, has the same ink.
+// Before, the first and last lines were cut at the bitmap's edges (the caption's last line
+// then seemed to sit on the bottom of its band).
+TEST_F(CaptionText, GlyphsReachingPastTheirLineAreDrawnWhole) {
+  for (const int pixel_size : {12, 16, 20, 27, 36}) {
+    for (const std::string text : {"Ågjpqy", "ÅÉ|", "gjpqy()", "ぎゃ、。Åg"}) {
+      const CaptionBitmap alone = font_.Layout(text, pixel_size, 4000, 3);
+      const CaptionBitmap roomy = font_.Layout(" \n" + text + "\n ", pixel_size, 4000, 3);
+      ASSERT_EQ(roomy.stats.lines, 3);
+      EXPECT_EQ(TotalCoverage(alone), TotalCoverage(roomy)) << "'" << text << "' at " << pixel_size << " px";
+      EXPECT_GE(alone.height_px, pixel_size);  // at least its line
+    }
+  }
+  // Where nothing reaches past its lines, the bitmap is the lines' height, as before.
+  const CaptionBitmap plain = font_.Layout("ace", 16, 4000, 3);
+  EXPECT_EQ(plain.height_px, 16);
 }
 
 TEST_F(CaptionText, EmptyTextIsNoBitmap) {
