@@ -73,6 +73,14 @@ std::vector<ControlStateRecord> InitialControlStates(const scene::Scene& scene, 
   return out;
 }
 
+bool IndexFits(const scene::ControlSpec& control, std::int32_t index) {
+  switch (control.type) {
+    case scene::ControlType::kLever: return index >= 0 && index < std::max(1, control.lever.detents);
+    case scene::ControlType::kBook: return index >= -1 && index < control.book.pages;
+    default: return index == -1;
+  }
+}
+
 const ControlStateRecord* UpdateControlState(std::vector<ControlStateRecord>& states, const ControlInput& input) {
   auto it = std::find_if(states.begin(), states.end(), [&](const auto& r) { return r.control_id == input.control_id; });
   if (it == states.end()) return nullptr;

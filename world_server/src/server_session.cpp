@@ -208,6 +208,16 @@ void ServerSession::ResetControlStates(const ResumePoint* resume) {
   if (resume != nullptr) {
     for (const ControlPlace& place : resume->controls) {
       if (place.scene != scene_.name) continue;
+      // A place the control cannot have (the scene file changed since, or the log was edited)
+      // leaves it unknown, as a log without places does.
+      const auto spec = std::find_if(scene_.controls.begin(), scene_.controls.end(),
+                                     [&](const scene::ControlSpec& c) { return c.id == place.control_id; });
+      if (spec == scene_.controls.end()) continue;
+      if (!IndexFits(*spec, place.index)) {
+        server_.Say("control '" + place.control_id + "': the session log places it at index " +
+                    std::to_string(place.index) + ", which it does not have: left where the nodes have it");
+        continue;
+      }
       for (ControlStateRecord& r : control_states_) {
         if (r.control_id != place.control_id) continue;
         r.index = place.index;

@@ -349,5 +349,31 @@ TEST_F(ControlActions, ABookOpensAtItsFirstPageAndTurns) {
   EXPECT_TRUE(r->engaged);
 }
 
+// What a resumed server accepts from its log (a scene file may have changed since): a lever
+// only in its detents, a book shut or at one of its pages, a button or an arrow at -1.
+TEST(ControlIndex, APlaceFitsOnlyWhereTheControlCanBe) {
+  scene::ControlSpec lever;
+  lever.type = scene::ControlType::kLever;
+  lever.lever.detents = 2;
+  EXPECT_TRUE(IndexFits(lever, 0));
+  EXPECT_TRUE(IndexFits(lever, 1));
+  EXPECT_FALSE(IndexFits(lever, 2));
+  EXPECT_FALSE(IndexFits(lever, -1));
+  scene::ControlSpec book;
+  book.type = scene::ControlType::kBook;
+  book.book.pages = 6;
+  EXPECT_TRUE(IndexFits(book, -1));
+  EXPECT_TRUE(IndexFits(book, 5));
+  EXPECT_FALSE(IndexFits(book, 6));
+  EXPECT_FALSE(IndexFits(book, -2));
+  scene::ControlSpec button;
+  button.type = scene::ControlType::kButton;
+  EXPECT_TRUE(IndexFits(button, -1));
+  EXPECT_FALSE(IndexFits(button, 0));
+  scene::ControlSpec arrow;
+  arrow.type = scene::ControlType::kArrow;
+  EXPECT_FALSE(IndexFits(arrow, 3));
+}
+
 }  // namespace
 }  // namespace handshare::server

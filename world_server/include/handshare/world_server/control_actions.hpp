@@ -62,6 +62,10 @@ struct ControlStateRecord {
 /// (known = false: the same records, their state unknown).
 std::vector<ControlStateRecord> InitialControlStates(const scene::Scene& scene, bool known = true);
 
+/// Whether `control` can be at `index` (ControlStateRecord::index): a lever in one of its
+/// detents, a book shut (-1) or at one of its pages, any other control -1.
+bool IndexFits(const scene::ControlSpec& control, std::int32_t index);
+
 /// Applies `input` to the record of its control in `states` (events of controls not there, of
 /// a world already left, change nothing; so do misses). A motion report (kMoving) sets where a
 /// hand has the control (moving, position) or, at rest, clears it; a settled event clears it
