@@ -345,18 +345,24 @@ TEST_F(RenderOffscreen, AJapaneseCaptionHasGlyphsAndDiffersFromTheEnglishOne) {
   EXPECT_EQ(renderer_.last_caption().missing_glyphs, 1);
 }
 
-// A page (a book's open spread) lies flat on the table, seen from above: its picture is drawn
-// where its quad projects, above its text, on paper; without text the text band is blank; a box
-// in front of it hides it.
-TEST_F(RenderOffscreen, APageShowsItsPictureAboveItsTextWhereItsQuadProjects) {
+// Looking straight down at the table (z = 0) from 20 cm, y up in the image.
+Camera AboveTheTable(int size_px) {
   Camera camera;
   camera.eye_W = {0.0, 0.0, 0.2};
   camera.target_W = {0.0, 0.0, 0.0};
   camera.up_W = {0.0, 1.0, 0.0};
-  camera.width_px = 400;
-  camera.height_px = 400;
+  camera.width_px = size_px;
+  camera.height_px = size_px;
   camera.near_m = 0.01;
   camera.far_m = 10.0;
+  return camera;
+}
+
+// A page (a book's open spread) lies flat on the table, seen from above: its picture is drawn
+// where its quad projects, above its text, on paper; without text the text band is blank; a box
+// in front of it hides it.
+TEST_F(RenderOffscreen, APageShowsItsPictureAboveItsTextWhereItsQuadProjects) {
+  const Camera camera = AboveTheTable(400);
   SceneView scene;
   scene.grid.visible = false;
   scene.background_rgb = {0.0F, 0.0F, 0.3F};
@@ -419,14 +425,7 @@ TEST_F(RenderOffscreen, APageShowsItsPictureAboveItsTextWhereItsQuadProjects) {
 // its p99). What is drawn stays what a fresh renderer draws: a page turned shows its new
 // content, and turned back its old one, from the kept object.
 TEST_F(RenderOffscreen, APageIsUploadedOnceAndDrawnAgainAsAFreshRendererDrawsIt) {
-  Camera camera;
-  camera.eye_W = {0.0, 0.0, 0.2};
-  camera.target_W = {0.0, 0.0, 0.0};
-  camera.up_W = {0.0, 1.0, 0.0};
-  camera.width_px = 200;
-  camera.height_px = 200;
-  camera.near_m = 0.01;
-  camera.far_m = 10.0;
+  const Camera camera = AboveTheTable(200);
   SceneView scene;
   scene.grid.visible = false;
   Page left, right;
