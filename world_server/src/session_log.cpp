@@ -392,7 +392,8 @@ std::optional<ResumePoint> FindResumePoint(const std::filesystem::path& file, co
   if (db.QueryInt("PRAGMA application_id", "reading the application id") != SessionLog::kApplicationId) {
     throw SessionLogError(file.string() + ": not a handshare session log");
   }
-  if (db.QueryInt("PRAGMA user_version", "reading the schema version") < 2) return std::nullopt;  // no states
+  const std::int64_t version = db.QueryInt("PRAGMA user_version", "reading the schema version");
+  if (version < 2) return std::nullopt;  // no states
   ResumePoint r;
   {
     sqlite::Statement s(db,
@@ -448,7 +449,7 @@ std::optional<ResumePoint> FindResumePoint(const std::filesystem::path& file, co
     for (int k = 0; k < 4; ++k) p.q_WO_wxyz[k] = s.Double(6 + k);
     r.poses.push_back(std::move(p));
   }
-  if (db.QueryInt("PRAGMA user_version", "reading the schema version") < 3) return r;  // no places
+  if (version < 3) return r;  // no places
   sqlite::Statement c(db,
                       "SELECT control_id, scene, unix_ns, idx, engaged, user, changes FROM control_states "
                       "WHERE session_id = ?1 ORDER BY control_id",
