@@ -108,10 +108,12 @@ const PageTexture& PageCache::For(const Page& page) {
   fresh.texture = ComposePage(font_.get(), page, kPageTextureWidth, height_px);  // no text: no font needed
   fresh.texture.serial = ++composed_;
   if (entries_.size() < kEntries) {
+    fresh.texture.slot = entries_.size();
     entries_.push_back(std::move(fresh));
     return entries_.back().texture;
   }
   auto oldest = std::min_element(entries_.begin(), entries_.end(), [](const Entry& a, const Entry& b) { return a.used < b.used; });
+  fresh.texture.slot = static_cast<std::size_t>(oldest - entries_.begin());
   *oldest = std::move(fresh);
   return oldest->texture;
 }

@@ -20,6 +20,7 @@ struct PageTexture {
   std::vector<std::uint8_t> rgb;
   CaptionStats text;  ///< how the page's text was laid out
   std::uint64_t serial = 0;  ///< PageCache: which composition this is (1, 2, ...; never reused)
+  std::size_t slot = 0;      ///< PageCache: where it is kept (0 .. kEntries - 1) while it is kept
 
   [[nodiscard]] const std::uint8_t* At(int x, int y) const { return rgb.data() + Offset(x, y); }
   [[nodiscard]] std::uint8_t* At(int x, int y) { return rgb.data() + Offset(x, y); }

@@ -201,37 +201,24 @@ void DrawMeshes(const GlApi& gl, const std::vector<TriangleMesh>& meshes, Pass p
 // Pages: each a texture on its quad, unlit (the paper's and the ink's own colours), tested
 // against depth like the scene. Each page's texture object is filled once and bound again while
 // the page shows the same content (PageTextureObjects).
-GLuint PageTextureObject(const GlApi& gl, const PageTexture& t, PageTextureObjects& objects) {
-  ++objects.clock;
-  for (auto& e : objects.entries) {
-    if (e.serial == t.serial) {
-      e.used = objects.clock;
-      gl.BindTexture(GL_TEXTURE_2D, e.name);
-      return e.name;
-    }
-  }
-  PageTextureObjects::Entry* slot = nullptr;
-  if (objects.entries.size() < PageCache::kEntries) {
-    objects.entries.push_back({});
-    slot = &objects.entries.back();
-    gl.GenTextures(1, &slot->name);
-    gl.BindTexture(GL_TEXTURE_2D, slot->name);
+void BindPageTexture(const GlApi& gl, const PageTexture& t, PageTextureObjects& objects) {
+  PageTextureObjects::Slot& slot = objects.slots[t.slot];
+  if (slot.name == 0) {
+    gl.GenTextures(1, &slot.name);
+    gl.BindTexture(GL_TEXTURE_2D, slot.name);
     gl.TexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_LINEAR);
     gl.TexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_LINEAR);
     gl.TexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_S, GL_CLAMP_TO_EDGE);
     gl.TexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_T, GL_CLAMP_TO_EDGE);
   } else {
-    slot = &*std::min_element(objects.entries.begin(), objects.entries.end(),
-                              [](const auto& a, const auto& b) { return a.used < b.used; });
-    gl.BindTexture(GL_TEXTURE_2D, slot->name);
+    gl.BindTexture(GL_TEXTURE_2D, slot.name);
   }
-  slot->serial = t.serial;
-  slot->used = objects.clock;
+  if (slot.serial == t.serial) return;
+  slot.serial = t.serial;
   gl.PixelStorei(GL_UNPACK_ALIGNMENT, 1);
   // Row 0 of the texture image is its top edge: uploaded first, it is t = 0.
   gl.TexImage2D(GL_TEXTURE_2D, 0, GL_RGB, t.width_px, t.height_px, 0, GL_RGB, GL_UNSIGNED_BYTE, t.rgb.data());
   ++objects.uploads;
-  return slot->name;
 }
 
 void DrawPages(const GlApi& gl, const std::vector<Page>& pages, PageCache& cache, PageTextureObjects& objects) {
@@ -240,7 +227,7 @@ void DrawPages(const GlApi& gl, const std::vector<Page>& pages, PageCache& cache
   gl.Disable(GL_LIGHTING);
   gl.Enable(GL_TEXTURE_2D);
   for (const Page& page : pages) {
-    PageTextureObject(gl, cache.For(page), objects);
+    BindPageTexture(gl, cache.For(page), objects);
     constexpr double kTexCoords[4][2] = {{0.0, 1.0}, {1.0, 1.0}, {1.0, 0.0}, {0.0, 0.0}};
     gl.Begin(GL_QUADS);
     for (int k = 0; k < 4; ++k) {

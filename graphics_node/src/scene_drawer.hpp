@@ -2,9 +2,9 @@
 // Draws a SceneView with fixed-function OpenGL through a GlApi table; shared by the offscreen
 // (OSMesa) and window (GLFW) renderers so both show exactly the same picture.
 
+#include <array>
 #include <atomic>
 #include <cstdint>
-#include <vector>
 
 #include "caption_text.hpp"
 #include "gl_api.hpp"
@@ -17,16 +17,15 @@ namespace handshare::render::detail {
 void ValidateScene(const SceneView& scene, const Camera& camera);
 
 /// The pages' textures as GL texture objects of the renderer's context, each uploaded once:
-/// the start menu's two pages uploaded every frame were most of its p99. At most
-/// PageCache::kEntries, the one drawn longest ago refilled; they go with the context.
+/// the start menu's two pages uploaded every frame were most of its p99. One object per
+/// PageCache slot, filled again when the cache keeps another page there; they go with the
+/// context.
 struct PageTextureObjects {
-  struct Entry {
-    std::uint64_t serial = 0;  ///< PageTexture::serial it holds
+  struct Slot {
+    std::uint64_t serial = 0;  ///< PageTexture::serial it holds (0: none yet)
     GLuint name = 0;
-    std::uint64_t used = 0;
   };
-  std::vector<Entry> entries;
-  std::uint64_t clock = 0;
+  std::array<Slot, PageCache::kEntries> slots{};
   std::uint64_t uploads = 0;  ///< textures uploaded so far
 };
 
