@@ -100,9 +100,9 @@ def run(h, domain):
 
     # Every node named and counted what it dropped.
     alice, server, spectator = h.log("alice"), h.log("world_server"), h.log("spectator")
-    for text in ("dropped a bad contact_set sample from 'mallory': fingers[1].u_imposed_W_m[2] is nan",
-                 "dropped a bad contact_set sample from 'mallory2': fingers[1].u_imposed_W_m has norm 5",
-                 "dropped a bad contact_set sample from 'mallory3': fingers[1].f_W_N[0] is inf",
+    for text in ("dropped a bad contact_set sample from 'mallory': fingers[1].u_O_m[2] is nan",
+                 "dropped a bad contact_set sample from 'mallory2': fingers[1].u_O_m has norm 5",
+                 "dropped a bad contact_set sample from 'mallory3': fingers[1].f_O_N[0] is inf",
                  "dropped a bad contact_set sample from 'mallory4': session 'another-session' is not this session",
                  "dropped a bad object_state sample"):
         check(text in alice, f"alice did not say '{text}':\n{alice}")

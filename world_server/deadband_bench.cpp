@@ -130,11 +130,11 @@ int main(int argc, char** argv) {
             // Receivers read a finger's force and displacement on deformables only (a finger on
             // a rigid body or a control, surface node -1, only claims it).
             if (!now.active() || now.surface_node() < 0) continue;
-            const double e = old.active() ? Distance(now.f_W_N(), old.f_W_N()) : Norm(now.f_W_N());
+            const double e = old.active() ? Distance(now.f_O_N(), old.f_O_N()) : Norm(now.f_O_N());
             force_err.push_back(e);
-            if (Norm(now.f_W_N()) > deadband.config().force_floor_N) force_rel.push_back(e / Norm(now.f_W_N()));
-            disp_err.push_back(old.active() ? Distance(now.u_imposed_W_m(), old.u_imposed_W_m())
-                                            : Norm(now.u_imposed_W_m()));
+            if (Norm(now.f_O_N()) > deadband.config().force_floor_N) force_rel.push_back(e / Norm(now.f_O_N()));
+            disp_err.push_back(old.active() ? Distance(now.u_O_m(), old.u_O_m())
+                                            : Norm(now.u_O_m()));
           }
         }
         const double span_s = stream.size() > 1 ? 1e-9 * static_cast<double>(stream.back().t_ns - stream.front().t_ns) : 0.0;

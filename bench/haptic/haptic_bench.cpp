@@ -73,7 +73,7 @@ struct Scenario {
   std::unique_ptr<HapticWorld> world;
   // Fingertip trajectory: circle centre, radius, surface point/normal model.
   std::function<std::array<Eigen::Vector3d, kFingers>(int)> tips;
-  std::vector<RemoteContact> remote;
+  std::vector<FingerContact> remote;
   std::function<void(int)> before_step = [](int) {};
 };
 
@@ -186,8 +186,8 @@ std::unique_ptr<Scenario> MakeDeformable(const std::string& name, bool plate, in
   if (two_hands) {
     // A remote hand's five fingertips pressing 1.5 mm at fixed points, as its ContactSet says.
     for (int i = 0; i < kFingers; ++i) {
-      s->remote.push_back(RemoteContact{1, i, 0, Eigen::Vector3d(0.15 * L + 0.17 * L * i, 0.9 * L, top),
-                                        Eigen::Vector3d(0, 0, -0.0015), Eigen::Vector3d(0, 0, 0.2)});
+      s->remote.push_back(ContactInObjectFrame(d.X_WO, i, 0, Eigen::Vector3d(0.15 * L + 0.17 * L * i, 0.9 * L, top),
+                                               Eigen::Vector3d(0, 0, -0.0015), Eigen::Vector3d(0, 0, 0.2)));
     }
   }
   return s;

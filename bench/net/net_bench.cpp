@@ -133,13 +133,13 @@ msg::ContactSet MakeContactSet(const std::string& session) {
     f.active(true);
     f.object_id("triceratops_tail");
     f.surface_node(100 + i);
-    f.p_W_m({0.2 + 0.01 * i, 0.08, 0.065});
-    f.n_W({0.0, 0.0, 1.0});
-    f.p_WE_m({0.2 + 0.01 * i, 0.08, 0.07});
+    f.p_OC_m({0.2 + 0.01 * i, 0.08, 0.065});
+    f.n_O({0.0, 0.0, 1.0});
+    f.p_OE_m({0.2 + 0.01 * i, 0.08, 0.07});
     f.radius_m(0.008);
     f.depth_m(0.003);
-    f.u_imposed_W_m({0.0, 0.0, -0.003});
-    f.f_W_N({0.0, 0.0, -0.7});
+    f.u_O_m({0.0, 0.0, -0.003});
+    f.f_O_N({0.0, 0.0, -0.7});
   }
   s.q_WO_wxyz({1.0, 0.0, 0.0, 0.0});
   return s;

@@ -1,6 +1,7 @@
 #include "handshare/graphics/scene_replica.hpp"
 
 #include "handshare/scene/scene.hpp"
+#include "handshare/contact/finger_contact.hpp"  // contact::ToPose
 
 #include <algorithm>
 #include <cmath>
@@ -15,14 +16,11 @@ namespace handshare::graphics {
 
 namespace {
 
-/// X_WO from a position and a (w, x, y, z) quaternion; empty if non-finite or |q| ~ 0.
+/// X_WO from a position and a (w, x, y, z) quaternion (contact::ToPose); empty if non-finite or
+/// |q| <= 0.5 (the sample checks refuse such a state before it gets here).
 std::optional<Eigen::Isometry3d> PoseOf(const std::array<double, 3>& p, const std::array<double, 4>& q) {
-  const Eigen::Vector3d p_WO(p[0], p[1], p[2]);
-  const Eigen::Vector4d q_wxyz(q[0], q[1], q[2], q[3]);
-  if (!p_WO.allFinite() || !q_wxyz.allFinite() || q_wxyz.norm() < 1e-9) return std::nullopt;
-  Eigen::Isometry3d X = Eigen::Isometry3d::Identity();
-  X.linear() = Eigen::Quaterniond(q[0], q[1], q[2], q[3]).normalized().toRotationMatrix();
-  X.translation() = p_WO;
+  Eigen::Isometry3d X;
+  if (!contact::ToPose(p, q, X)) return std::nullopt;
   return X;
 }
 

@@ -28,6 +28,7 @@
 #include "handshare/render/offscreen_renderer.hpp"
 #include "handshare/render/window_renderer.hpp"
 #include "handshare/scene/scene.hpp"
+#include "handshare/contact/finger_contact.hpp"  // contact::ToPose
 
 namespace handshare::graphics {
 
@@ -49,9 +50,7 @@ constexpr render::Rgb kHiroRgb{0.62F, 0.64F, 0.68F};  // the robot hand: brushed
 // The hand base pose of a device state (identity rotation where the quaternion is unusable).
 Eigen::Isometry3d HandPose(const msg::DeviceState& s) {
   Eigen::Isometry3d X = Eigen::Isometry3d::Identity();
-  const Eigen::Quaterniond q(s.q_WH_wxyz()[0], s.q_WH_wxyz()[1], s.q_WH_wxyz()[2], s.q_WH_wxyz()[3]);
-  if (q.coeffs().allFinite() && q.norm() > 0.5) X.linear() = q.normalized().toRotationMatrix();
-  X.translation() = Eigen::Vector3d(s.p_WH_m()[0], s.p_WH_m()[1], s.p_WH_m()[2]);
+  if (!contact::ToPose(s.p_WH_m(), s.q_WH_wxyz(), X)) X.translation() = contact::AsVector(s.p_WH_m());
   return X;
 }
 

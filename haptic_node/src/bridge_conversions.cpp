@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "handshare/dds/contact_codec.hpp"
 #include "handshare/dds/sample_checks.hpp"
 #include "handshare/world/grasp.hpp"
 
@@ -55,8 +56,8 @@ bool HandGrasps(const ContactReport& r, std::int32_t object) {
   world::FingerForce on_body[kFingers];
   for (int i = 0; i < kFingers; ++i) {
     const auto& f = r.fingers[i];
-    on_body[i].active = f.active && f.object == object;
-    for (int k = 0; k < 3; ++k) on_body[i].f_W_N[k] = f.f_W_N[k];
+    on_body[i].active = f.active() && f.object == object;
+    for (int k = 0; k < 3; ++k) on_body[i].f_W_N[k] = f.f_O_N[k];  // one frame (the body's) for all
   }
   return world::IsGrasp(on_body, kFingers);
 }
@@ -67,8 +68,8 @@ std::int32_t ClaimedBody(const ContactReport& r) {
   for (int b = 0; b < r.num_bodies; ++b) {
     if (HandGrasps(r, r.bodies[b].object)) return r.bodies[b].object;
     for (const auto& f : r.fingers) {
-      if (!f.active || f.object != r.bodies[b].object) continue;
-      const double norm = std::sqrt(f.f_W_N[0] * f.f_W_N[0] + f.f_W_N[1] * f.f_W_N[1] + f.f_W_N[2] * f.f_W_N[2]);
+      if (!f.active() || f.object != r.bodies[b].object) continue;
+      const double norm = contact::AsVector(f.f_O_N).norm();
       if (touched < 0 || norm > strongest) {
         touched = r.bodies[b].object;
         strongest = norm;
@@ -86,8 +87,9 @@ std::string PeerGrasping(const session::PeerContacts& peers, const std::string& 
     world::FingerForce on_body[kFingers];
     const auto& fingers = entry.set.fingers();
     for (int i = 0; i < kFingers && i < static_cast<int>(fingers.size()); ++i) {
-      on_body[i].active = fingers[i].active() && fingers[i].object_id().to_string() == object_id;
-      for (int k = 0; k < 3; ++k) on_body[i].f_W_N[k] = fingers[i].f_W_N()[k];
+      contact::FingerContact c;
+      on_body[i].active = fingers[i].object_id().to_string() == object_id && dds::DecodeFingerContact(fingers[i], i, 0, c);
+      for (int k = 0; k < 3; ++k) on_body[i].f_W_N[k] = c.f_O_N[k];  // one frame (the body's) for all
     }
     if (world::IsGrasp(on_body, kFingers)) return user;
   }
@@ -116,21 +118,14 @@ bool HandOverHold::Update(std::int32_t owned, const ContactReport& report, const
   if (followed.count >= kMaxReportedBodies) return began;
   auto& item = followed.items[followed.count++];
   item.object = object_;
-  for (int k = 0; k < 3; ++k) item.p_WO_m[k] = at_.p_WO_m[k];
-  for (int k = 0; k < 4; ++k) item.q_WO_wxyz[k] = at_.q_WO_wxyz[k];
-  for (int k = 0; k < 3; ++k) item.v_WO_m_per_s[k] = 0.0;
+  item.p_WO_m = at_.p_WO_m;
+  item.q_WO_wxyz = at_.q_WO_wxyz;
+  item.v_WO_m_per_s = {};
   item.received_ns = now_ns;
   return began;
 }
 
-Eigen::Isometry3d PoseOf(const ContactReport::Body& body) {
-  Eigen::Isometry3d X = Eigen::Isometry3d::Identity();
-  X.linear() = Eigen::Quaterniond(body.q_WO_wxyz[0], body.q_WO_wxyz[1], body.q_WO_wxyz[2], body.q_WO_wxyz[3])
-                   .normalized()
-                   .toRotationMatrix();
-  X.translation() = Eigen::Vector3d(body.p_WO_m[0], body.p_WO_m[1], body.p_WO_m[2]);
-  return X;
-}
+Eigen::Isometry3d PoseOf(const ContactReport::Body& body) { return contact::ToPose(body.p_WO_m, body.q_WO_wxyz); }
 
 FollowedBodies ToFollowedBodies(const ReceivedBodies& bodies, const std::string& user,
                                 const world::SceneModels& models) {
@@ -142,9 +137,9 @@ FollowedBodies ToFollowedBodies(const ReceivedBodies& bodies, const std::string&
     if (!IsDynamic(models, object)) continue;
     auto& item = followed.items[followed.count++];
     item.object = object;
-    for (int k = 0; k < 3; ++k) item.p_WO_m[k] = st.p_WO_m()[k];
-    for (int k = 0; k < 4; ++k) item.q_WO_wxyz[k] = st.q_WO_wxyz()[k];
-    for (int k = 0; k < 3; ++k) item.v_WO_m_per_s[k] = st.v_WO_m_per_s()[k];
+    item.p_WO_m = st.p_WO_m();
+    item.q_WO_wxyz = st.q_WO_wxyz();
+    item.v_WO_m_per_s = st.v_WO_m_per_s();
     item.received_ns = received.received_ns;
   }
   return followed;
@@ -163,7 +158,7 @@ RemoteContacts ToRemoteContacts(const session::PeerContacts& peers, const world:
   RemoteContacts remote;
   remote.fade = peers.fade();
   peers.ForEach(models, now, [&](const contact::PeerContact& c, const msg::ContactSet&) {
-    if (remote.count >= kMaxRemoteContacts || models.world->contact_solver(c.object) == nullptr) return;
+    if (remote.count >= kMaxRemoteContacts || models.world->contact_solver(c.contact.object) == nullptr) return;
     remote.items[remote.count++] = c;
   });
   return remote;
@@ -171,31 +166,14 @@ RemoteContacts ToRemoteContacts(const session::PeerContacts& peers, const world:
 
 bool ToContactSet(const ContactReport& report, const world::SceneModels& models, std::int32_t owned,
                   double radius_m, msg::ContactSet& out) {
-  // A fingertip far inside an object (pushed through it, or after a stall) reports a depth and
-  // an imposed displacement beyond what receivers accept (dds::CheckContactSet): they would
-  // drop the whole set, and with it the grasp and the body it carries. Both go out clamped to
-  // the accepted size, in their own direction.
+  // A fingertip far inside an object (pushed through it, or after a stall) goes out with its
+  // displacement and depth clamped to what receivers accept (dds::EncodeFingerContact).
   const double max_u_m = dds::SampleBounds{}.max_displacement_m;
   bool active = false;
   for (int i = 0; i < kFingers; ++i) {
     const auto& f = report.fingers[i];
-    auto& m = out.fingers()[i];
-    m.active(f.active);
-    active |= f.active;
-    m.object_id(f.active ? IdOf(models, f.object) : std::string());
-    m.surface_node(f.node);
-    const Eigen::Vector3d u_W_m(f.u_W_m[0], f.u_W_m[1], f.u_W_m[2]);
-    const double u_norm_m = u_W_m.norm();
-    const Eigen::Vector3d u_sent_W_m = u_norm_m > max_u_m ? Eigen::Vector3d(u_W_m * (max_u_m / u_norm_m)) : u_W_m;
-    for (int k = 0; k < 3; ++k) {
-      m.p_W_m()[k] = f.p_WC_m[k];
-      m.n_W()[k] = f.n_W[k];
-      m.p_WE_m()[k] = f.p_WE_m[k];
-      m.u_imposed_W_m()[k] = u_sent_W_m[k];
-      m.f_W_N()[k] = f.f_W_N[k];
-    }
-    m.radius_m(radius_m);
-    m.depth_m(std::clamp(f.depth_m, -max_u_m, max_u_m));
+    active |= f.active();
+    dds::EncodeFingerContact(f, IdOf(models, f.object), radius_m, max_u_m, out.fingers()[i]);
   }
   const std::int32_t grasped = ClaimedBody(report);
   out.grasped_object_id(grasped >= 0 ? IdOf(models, grasped) : std::string());
@@ -205,11 +183,9 @@ bool ToContactSet(const ContactReport& report, const world::SceneModels& models,
     if (owned < 0 || report.bodies[b].object != owned) continue;
     out.simulating(true);
     out.simulated_object_id(IdOf(models, owned));
-    for (int k = 0; k < 3; ++k) {
-      out.p_WO_m()[k] = report.bodies[b].p_WO_m[k];
-      out.v_WO_m_per_s()[k] = report.bodies[b].v_WO_m_per_s[k];
-    }
-    for (int k = 0; k < 4; ++k) out.q_WO_wxyz()[k] = report.bodies[b].q_WO_wxyz[k];
+    out.p_WO_m(report.bodies[b].p_WO_m);
+    out.v_WO_m_per_s(report.bodies[b].v_WO_m_per_s);
+    out.q_WO_wxyz(report.bodies[b].q_WO_wxyz);
   }
   return active || out.simulating() || grasped >= 0;
 }

@@ -6,12 +6,6 @@
 
 namespace handshare::haptic {
 
-namespace {
-void Put(double (&out)[3], const Eigen::Vector3d& v) noexcept {
-  for (int k = 0; k < 3; ++k) out[k] = v[k];
-}
-}  // namespace
-
 SceneRenderer::SceneRenderer(const scene::Scene& scene, const world::SceneModelsOptions& options,
                              common::SessionClock clock)
     : scene_(scene),
@@ -78,7 +72,7 @@ void SceneRenderer::WriteLoads(const contact::HapticWorld& world) noexcept {
     item.num_loads = static_cast<std::int32_t>(loads.size());
     for (std::size_t l = 0; l < loads.size(); ++l) {
       item.loads[l].slot = loads[l].slot;
-      Put(item.loads[l].f_N, loads[l].f_N);
+      item.loads[l].f_N = contact::ToVec3(loads[l].f_N);
     }
   }
   loads_.Publish();
@@ -111,13 +105,9 @@ void SceneRenderer::Render(double /*t_s*/, double dt_s, std::uint64_t now_ns, co
     for (int i = 0; i < std::min(followed_.count, kMaxReportedBodies); ++i) {
       const auto& b = followed_.items[i];
       if (b.object < 0 || b.object >= world.num_objects()) continue;
-      Eigen::Isometry3d X = Eigen::Isometry3d::Identity();
-      const Eigen::Quaterniond q(b.q_WO_wxyz[0], b.q_WO_wxyz[1], b.q_WO_wxyz[2], b.q_WO_wxyz[3]);
-      if (!(q.norm() > 0.5) || !q.coeffs().allFinite()) continue;
-      X.linear() = q.normalized().toRotationMatrix();
-      X.translation() = Eigen::Vector3d(b.p_WO_m[0], b.p_WO_m[1], b.p_WO_m[2]);
-      if (!X.translation().allFinite()) continue;
-      Eigen::Vector3d v(b.v_WO_m_per_s[0], b.v_WO_m_per_s[1], b.v_WO_m_per_s[2]);
+      Eigen::Isometry3d X;
+      if (!contact::ToPose(b.p_WO_m, b.q_WO_wxyz, X)) continue;
+      Eigen::Vector3d v = contact::AsVector(b.v_WO_m_per_s);
       if (!v.allFinite()) v.setZero();
       const double age_s = now_ns > b.received_ns ? 1e-9 * static_cast<double>(now_ns - b.received_ns) : 0.0;
       X.translation() += std::min(age_s, FollowedBodies::kMaxDeadReckoning_s) * v;
@@ -144,14 +134,14 @@ void SceneRenderer::Render(double /*t_s*/, double dt_s, std::uint64_t now_ns, co
     // the fade's rate, not in one step (contact::PeerWeights).
     const double w = peer_weights_.Weight(c, law, dt_s, remote_.fade.rate_per_s(), now_ns);
     if (w <= 0.0) continue;
-    contact::RemoteContact& r = remote_contacts_[static_cast<std::size_t>(n_remote++)];
-    r = contact::ToRemoteContact(c, w);
+    contact::FingerContact& r = remote_contacts_[static_cast<std::size_t>(n_remote++)];
+    r = contact::FadedContact(c, w);
     passivity_.Admit(c, r);
   }
   peer_weights_.EndStep(now_ns);
   // 3. Contacts: rigid, dynamic and deformable objects, all hands on a deformable together.
   world.Step(dt_s, reading.p_WE, {remote_contacts_.data(), static_cast<std::size_t>(n_remote)});
-  passivity_.Observe(world.remote_forces_W());
+  passivity_.Observe(world.remote_forces_O());
   coupling_stats_.Write(passivity_.stats());
   if (load_snapshots_ && ++steps_since_loads_ >= DeformableLoads::kEverySteps) {
     steps_since_loads_ = 0;
@@ -177,32 +167,14 @@ void SceneRenderer::Render(double /*t_s*/, double dt_s, std::uint64_t now_ns, co
   r.step_ns = common::SteadyNowNs();
   r.peer_stamp_ns = peer_stamp_ns_;
   r.peer_seen_ns = peer_seen_ns_;
-  for (int i = 0; i < kFingers; ++i) {
-    const auto& in = fingers[i];
-    auto& out = r.fingers[i];
-    out.active = in.in_contact;
-    out.object = in.object;
-    out.node = in.main_node;
-    Put(out.p_WC_m, in.p_WC_m);
-    Put(out.n_W, in.n_W);
-    Put(out.p_WE_m, reading.p_WE[i]);
-    Put(out.u_W_m, in.u_W_m);
-    Put(out.f_W_N, -in.f_E_W_N);  // on the object
-    out.depth_m = in.depth_m;
-  }
+  for (int i = 0; i < kFingers; ++i) r.fingers[i] = fingers[i].contact;
   r.num_bodies = 0;
   for (const auto body : models_.dynamic_bodies) {
     if (r.num_bodies >= kMaxReportedBodies) break;
     auto& b = r.bodies[r.num_bodies++];
-    const Eigen::Isometry3d X = world.pose(body);
-    const Eigen::Quaterniond q(X.linear());
     b.object = body;
-    Put(b.p_WO_m, X.translation());
-    b.q_WO_wxyz[0] = q.w();
-    b.q_WO_wxyz[1] = q.x();
-    b.q_WO_wxyz[2] = q.y();
-    b.q_WO_wxyz[3] = q.z();
-    Put(b.v_WO_m_per_s, world.body_velocity_W(body));
+    contact::FromPose(world.pose(body), b.p_WO_m, b.q_WO_wxyz);
+    b.v_WO_m_per_s = contact::ToVec3(world.body_velocity_W(body));
   }
   reports_.Publish();
 }

@@ -107,22 +107,19 @@ TEST_F(BridgeConversions, AHandClaimsTheBodyItGraspsElseTheOneItPushesHardest) {
   r.bodies[0].object = ball;
   EXPECT_EQ(ClaimedBody(r), -1);  // no finger on it
   // One finger pushes it: a touch is a claim too.
-  r.fingers[1].active = true;
   r.fingers[1].object = ball;
-  r.fingers[1].f_W_N[0] = 1.0;
+  r.fingers[1].f_O_N[0] = 1.0;
   EXPECT_EQ(ClaimedBody(r), ball);
   // A finger on another object does not claim the ball.
   ContactReport other;
   other.num_bodies = 1;
   other.bodies[0].object = ball;
-  other.fingers[0].active = true;
   other.fingers[0].object = models().Find("block");
-  other.fingers[0].f_W_N[2] = 2.0;
+  other.fingers[0].f_O_N[2] = 2.0;
   EXPECT_EQ(ClaimedBody(other), -1);
   // Thumb and index squeeze it from opposite sides: a grasp.
-  r.fingers[0].active = true;
   r.fingers[0].object = ball;
-  r.fingers[0].f_W_N[0] = -1.0;
+  r.fingers[0].f_O_N[0] = -1.0;
   EXPECT_EQ(ClaimedBody(r), ball);
 }
 
@@ -156,13 +153,13 @@ TEST_F(BridgeConversions, ABodyLetGoOfWhileAPeerGraspsItIsHeldStillUntilTheHandO
   bob.session("s");
   bob.fingers()[1].active(true);
   bob.fingers()[1].object_id("ball");
-  bob.fingers()[1].f_W_N({1.0, 0.0, 0.0});
+  bob.fingers()[1].f_O_N({1.0, 0.0, 0.0});
   session::PeerContacts peers;
   peers.Receive(bob, now, "alice");
   EXPECT_EQ(PeerGrasping(peers, "ball", now), "") << "one finger is a touch";
   bob.fingers()[0].active(true);
   bob.fingers()[0].object_id("ball");
-  bob.fingers()[0].f_W_N({-1.0, 0.0, 0.0});
+  bob.fingers()[0].f_O_N({-1.0, 0.0, 0.0});
   peers.Receive(bob, now, "alice");
   EXPECT_EQ(PeerGrasping(peers, "ball", now), "bob");
   EXPECT_EQ(PeerGrasping(peers, "block", now), "");
@@ -193,10 +190,10 @@ TEST_F(BridgeConversions, ABodyLetGoOfWhileAPeerGraspsItIsHeldStillUntilTheHandO
   EXPECT_EQ(hold.holds(), 1u);
   // Her hand grasps it again: she simulates it (nothing followed).
   ContactReport grasping = r;
-  grasping.fingers[0] = {.active = true, .object = ball};
-  grasping.fingers[0].f_W_N[0] = 1.0;
-  grasping.fingers[1] = {.active = true, .object = ball};
-  grasping.fingers[1].f_W_N[0] = -1.0;
+  grasping.fingers[0] = {.finger = 0, .object = ball};
+  grasping.fingers[0].f_O_N[0] = 1.0;
+  grasping.fingers[1] = {.finger = 1, .object = ball};
+  grasping.fingers[1].f_O_N[0] = -1.0;
   ASSERT_TRUE(HandGrasps(grasping, ball));
   followed = {};
   EXPECT_FALSE(hold.Update(ball, grasping, "bob", 3000, followed));
@@ -215,16 +212,15 @@ TEST_F(BridgeConversions, TheContactSetNamesObjectsAndReportsTheSimulatedBody) {
   ContactReport r;
   msg::ContactSet m;
   EXPECT_FALSE(ToContactSet(r, models(), -1, 0.008, m));  // nothing touched: nothing to say
-  r.fingers[2].active = true;
   r.fingers[2].object = block;
   r.fingers[2].node = 17;
-  r.fingers[2].u_W_m[2] = -0.002;
+  r.fingers[2].u_O_m[2] = -0.002;
   r.fingers[2].depth_m = 0.002;
   EXPECT_TRUE(ToContactSet(r, models(), -1, 0.008, m));
   EXPECT_TRUE(m.fingers()[2].active());
   EXPECT_EQ(m.fingers()[2].object_id().to_string(), "block");
   EXPECT_EQ(m.fingers()[2].surface_node(), 17);
-  EXPECT_EQ(m.fingers()[2].u_imposed_W_m()[2], -0.002);
+  EXPECT_EQ(m.fingers()[2].u_O_m()[2], -0.002);
   EXPECT_EQ(m.fingers()[2].radius_m(), 0.008);
   EXPECT_FALSE(m.fingers()[0].active());
   EXPECT_EQ(m.fingers()[0].object_id().to_string(), "");
@@ -247,19 +243,18 @@ TEST_F(BridgeConversions, TheContactSetNamesObjectsAndReportsTheSimulatedBody) {
 // receiver dropped the whole set. It goes out clamped to what receivers accept, same direction.
 TEST_F(BridgeConversions, ADepthBeyondWhatReceiversAcceptGoesOutClamped) {
   ContactReport r;
-  r.fingers[0].active = true;
   r.fingers[0].object = models().Find("block");
-  r.fingers[0].n_W[2] = 1.0;
+  r.fingers[0].n_O[2] = 1.0;
   r.fingers[0].depth_m = 0.117;
-  r.fingers[0].u_W_m[2] = -0.117;
-  r.fingers[0].u_W_m[0] = 0.05;
+  r.fingers[0].u_O_m[2] = -0.117;
+  r.fingers[0].u_O_m[0] = 0.05;
   msg::ContactSet m;
   ASSERT_TRUE(ToContactSet(r, models(), -1, 0.008, m));
   m.session("s");
   m.user("alice");
   EXPECT_EQ(dds::CheckContactSet(m, "s", dds::SampleBounds{}), "");
   EXPECT_DOUBLE_EQ(m.fingers()[0].depth_m(), 0.1);
-  const auto& u = m.fingers()[0].u_imposed_W_m();
+  const auto& u = m.fingers()[0].u_O_m();
   EXPECT_NEAR(std::sqrt(u[0] * u[0] + u[1] * u[1] + u[2] * u[2]), 0.1, 1e-12);
   EXPECT_NEAR(u[0] / u[2], 0.05 / -0.117, 1e-12);
   r.fingers[0].depth_m = -0.2;  // a gap, the same
@@ -275,7 +270,7 @@ TEST_F(BridgeConversions, PeersReachTheRendererOnlyOnDeformables) {
   bob.session("s");
   bob.fingers()[0].active(true);
   bob.fingers()[0].object_id("block");
-  bob.fingers()[0].u_imposed_W_m({0.0, 0.0, -0.001});
+  bob.fingers()[0].u_O_m({0.0, 0.0, -0.001});
   bob.fingers()[1].active(true);
   bob.fingers()[1].object_id("ball");   // a rigid body moves by its owner's pose instead
   bob.fingers()[2].active(true);
@@ -284,15 +279,15 @@ TEST_F(BridgeConversions, PeersReachTheRendererOnlyOnDeformables) {
   peers.Receive(bob, now, "alice");
   RemoteContacts remote = ToRemoteContacts(peers, models(), now);
   ASSERT_EQ(remote.count, 1);
-  EXPECT_EQ(remote.items[0].object, models().Find("block"));
-  EXPECT_EQ(remote.items[0].finger, 0);
-  EXPECT_EQ(remote.items[0].u_W_m[2], -0.001);
+  EXPECT_EQ(remote.items[0].contact.object, models().Find("block"));
+  EXPECT_EQ(remote.items[0].contact.finger, 0);
+  EXPECT_EQ(remote.items[0].contact.u_O_m[2], -0.001);
   EXPECT_EQ(remote.items[0].received_ns, session::PeerContacts::SteadyNs(now));
   // Fading at the bridge's tick: handed over as received, with the fade law, for the haptic
   // thread to fade at each of its steps.
   remote = ToRemoteContacts(peers, models(), now + std::chrono::milliseconds(350));
   ASSERT_EQ(remote.count, 1);
-  EXPECT_EQ(remote.items[0].u_W_m[2], -0.001);
+  EXPECT_EQ(remote.items[0].contact.u_O_m[2], -0.001);
   EXPECT_EQ(remote.fade.fade_after_ns, peers.fade().fade_after_ns);
   EXPECT_EQ(remote.fade.lifespan_ns, peers.fade().lifespan_ns);
   // Silent for longer than the lifespan: gone.

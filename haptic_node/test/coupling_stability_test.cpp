@@ -84,10 +84,10 @@ PairRun RunDelayedPair(Controllers on, double delay_s) {
       double x_other = 0.0;
       me.coupling.BeginStep(dt);
       if (me.have) {
-        contact::RemoteContact in =
-            contact::ToRemoteContact(me.held, contact::PeerFade{1'000'000'000'000, 2'000'000'000'000}, t_ns);
+        contact::FingerContact in =
+            contact::FadedContact(me.held, contact::PeerFade{1'000'000'000'000, 2'000'000'000'000}, t_ns);
         me.coupling.Admit(me.held, in);
-        x_other = -in.u_W_m.z();
+        x_other = -in.u_O_m[2];
       }
       const auto [F_mine, F_theirs] = forces(me.x, x_other);
       const std::array<Eigen::Vector3d, 1> F = {Eigen::Vector3d(0.0, 0.0, -F_theirs)};
@@ -109,10 +109,10 @@ PairRun RunDelayedPair(Controllers on, double delay_s) {
       if (n % static_cast<int>(sample_s / dt) == 0) {
         contact::PeerContact s;
         s.hand = 1;
-        s.object = 0;
-        s.u_W_m[2] = -me.x;
-        s.n_W[2] = 1.0;
-        s.f_E_W_N[2] = me.F_own;
+        s.contact.object = 0;
+        s.contact.u_O_m[2] = -me.x;
+        s.contact.n_O[2] = 1.0;
+        s.contact.f_O_N[2] = -me.F_own;  // on the body
         other.inbox.emplace_back(t + delay_s, s);
       }
       if (i == 0 && t >= duration_s - 2.0) {

@@ -136,16 +136,17 @@ constexpr const char* kGroundAndBlock = R"(
       {"id": "block", "kind": "deformable", "shape": "box", "position_m": [-0.1, 0, 0.01],
        "half_extent_m": [0.02, 0.02, 0.01], "material": {"E_Pa": 20000, "nu": 0.4}, "fixed": {"below_m": -0.0099}})";
 
-// Bob's fingertip on the block's top, 5 mm from alice's, 3 mm deep (u and f scaled by weight).
+// Bob's fingertip on the block's top, 5 mm from alice's, 3 mm deep (u and f scaled by weight),
+// in the block's frame O (at (-0.1, 0, 0.01) in W): (-0.095, 0, 0.02) in W.
 msg::ContactSet BobOnTheBlock(double weight) {
   msg::ContactSet s;
   s.user("bob");
   s.session("s");
   s.fingers()[0].active(true);
   s.fingers()[0].object_id("block");
-  s.fingers()[0].p_W_m({-0.095, 0.0, 0.02});
-  s.fingers()[0].u_imposed_W_m({0.0, 0.0, weight * -0.003});
-  s.fingers()[0].f_W_N({0.0, 0.0, weight * -0.5});
+  s.fingers()[0].p_OC_m({0.005, 0.0, 0.01});
+  s.fingers()[0].u_O_m({0.0, 0.0, weight * -0.003});
+  s.fingers()[0].f_O_N({0.0, 0.0, weight * -0.5});
   return s;
 }
 

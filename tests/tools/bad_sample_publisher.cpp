@@ -29,13 +29,13 @@ msg::ContactSet ContactSet(const std::string& session, const std::string& object
   auto& f = s.fingers()[1];
   f.active(true);
   f.object_id(object);
-  f.p_W_m({0.0, 0.0, 0.05});
-  f.n_W({0.0, 0.0, 1.0});
-  f.p_WE_m({0.0, 0.0, 0.05});
+  f.p_OC_m({0.0, 0.0, 0.05});
+  f.n_O({0.0, 0.0, 1.0});
+  f.p_OE_m({0.0, 0.0, 0.05});
   f.radius_m(0.008);
   f.depth_m(0.002);
-  f.u_imposed_W_m({0.0, 0.0, -0.002});
-  f.f_W_N({0.0, 0.0, -1.0});
+  f.u_O_m({0.0, 0.0, -0.002});
+  f.f_O_N({0.0, 0.0, -1.0});
   s.q_WO_wxyz({1.0, 0.0, 0.0, 0.0});
   return s;
 }
@@ -74,12 +74,12 @@ int Run(const common::Options& o) {
 
   // The round: one sample of each kind of damage.
   msg::ContactSet nan_u = ContactSet(where.session, object);
-  nan_u.fingers()[1].u_imposed_W_m()[2] = kNan;
+  nan_u.fingers()[1].u_O_m()[2] = kNan;
   msg::ContactSet huge_u = ContactSet(where.session, object);
-  huge_u.fingers()[1].u_imposed_W_m()[2] = -5.0;  // a 5 m dent
+  huge_u.fingers()[1].u_O_m()[2] = -5.0;  // a 5 m dent
   huge_u.user("mallory2");
   msg::ContactSet inf_f = ContactSet(where.session, object);
-  inf_f.fingers()[1].f_W_N()[0] = kInf;
+  inf_f.fingers()[1].f_O_N()[0] = kInf;
   inf_f.user("mallory3");
   msg::ContactSet foreign = ContactSet("another-session", object);  // forged: another session's
   foreign.user("mallory4");

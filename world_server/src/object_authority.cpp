@@ -177,7 +177,7 @@ void ObjectAuthority::Adopt(world::SceneModels models, TickOutput& out) {
   deformables_.clear();
   moving_.clear();
   last_published_.clear();
-  remote_.assign(static_cast<std::size_t>(64), contact::RemoteContact{});
+  remote_.assign(static_cast<std::size_t>(64), contact::FingerContact{});
   for (std::size_t i = 0; i < scene_.objects.size(); ++i) {
     const auto& o = scene_.objects[i];
     const auto object = models_->Find(o.id);
@@ -311,10 +311,10 @@ TickOutput ObjectAuthority::Tick(Clock::time_point now, double dt_s) {
   std::size_t n_all = 0;
   const std::uint64_t now_ns = session::PeerContacts::SteadyNs(now);
   peers_.ForEach(*models_, now, [&](const contact::PeerContact& c, const msg::ContactSet&) {
-    if (n_all >= remote_.size() || world.contact_solver(c.object) == nullptr) return;
+    if (n_all >= remote_.size() || world.contact_solver(c.contact.object) == nullptr) return;
     const double law = peers_.fade().WeightAt(now_ns, c.received_ns);
     const double w = peer_weights_.Weight(c, law, dt_s, peers_.fade().rate_per_s(), now_ns);
-    if (w > 0.0) remote_[n_all++] = contact::ToRemoteContact(c, w);
+    if (w > 0.0) remote_[n_all++] = contact::FadedContact(c, w);
   });
   peer_weights_.EndStep(now_ns);
 
@@ -347,7 +347,7 @@ TickOutput ObjectAuthority::Tick(Clock::time_point now, double dt_s) {
       world.SetVelocity(body, Velocity(who.second->set), Eigen::Vector3d::Zero());
     }
     const std::size_t n = s + 1 < substeps ? 0 : n_all;  // deformables: once per tick
-    world.Step(h, no_hand, std::span<const contact::RemoteContact>(remote_.data(), n));
+    world.Step(h, no_hand, std::span<const contact::FingerContact>(remote_.data(), n));
   }
 
   // Rigid bodies to publish: owned ones at their owner's pose, free ones while they move, and
@@ -422,7 +422,8 @@ TickOutput ObjectAuthority::Tick(Clock::time_point now, double dt_s) {
 
 void ObjectAuthority::Dump(const Deformable& d, std::uint32_t revision, Clock::time_point now) const {
   const fem::ContactSolver* solver = models_->world->contact_solver(d.object);
-  const Eigen::Matrix3d R = models_->world->pose(d.object).linear();
+  const Eigen::Isometry3d X_WO = models_->world->pose(d.object);
+  const Eigen::Matrix3d R = X_WO.linear();
   std::set<std::string> users;
   // The fingertips on it as the solve took them: the force each user's own solve gave its
   // fingertip (what it felt, before the device's clamp), the contact point, imposed displacement
@@ -431,17 +432,20 @@ void ObjectAuthority::Dump(const Deformable& d, std::uint32_t revision, Clock::t
   contacts.precision(17);
   bool first_contact = true;
   peers_.ForEach(*models_, now, [&](const contact::PeerContact& c, const msg::ContactSet& set) {
-    if (c.object != d.object) return;
+    const contact::FingerContact& fc = c.contact;
+    if (fc.object != d.object) return;
     users.insert(set.user().to_string());
-    const auto triple = [&](const char* name, const double (&v)[3]) {
+    const auto triple = [&](const char* name, const Eigen::Vector3d& v) {
       contacts << ", \"" << name << "\": [" << v[0] << ", " << v[1] << ", " << v[2] << "]";
     };
     contacts << (first_contact ? "" : ",\n  ") << "{\"user\": \"" << set.user().to_string()
-             << "\", \"finger\": " << c.finger;
-    triple("f_E_W_N", c.f_E_W_N);
-    triple("p_W_m", c.p_WC_m);
-    triple("u_W_m", c.u_W_m);
-    triple("n_W", c.n_W);
+             << "\", \"finger\": " << fc.finger;
+    // In W as the body is here now, as the file always gave them (the felt force: minus the
+    // force on the object).
+    triple("f_E_W_N", R * -contact::AsVector(fc.f_O_N));
+    triple("p_W_m", X_WO * contact::AsVector(fc.p_OC_m));
+    triple("u_W_m", R * contact::AsVector(fc.u_O_m));
+    triple("n_W", R * contact::AsVector(fc.n_O));
     contacts << ", \"weight\": " << peers_.fade().WeightAt(session::PeerContacts::SteadyNs(now), c.received_ns) << "}";
     first_contact = false;
   });

@@ -22,8 +22,6 @@ constexpr double kCaughtUp_m = 1e-7;
 constexpr double kStill_m = 20e-6;
 constexpr std::uint64_t kStillAfter_ns = 90'000'000;
 
-Eigen::Vector3d Vec(const double (&a)[3]) noexcept { return {a[0], a[1], a[2]}; }
-
 }  // namespace
 
 int CouplingPassivity::Find(std::uint64_t user_key, std::int32_t finger, std::int32_t object) const noexcept {
@@ -50,12 +48,12 @@ void CouplingPassivity::BeginStep(double dt_s, double catch_up_rate_per_s) noexc
   for (Channel& c : channels_) c.seen = false;
 }
 
-void CouplingPassivity::Admit(const PeerContact& sent, RemoteContact& input) noexcept {
+void CouplingPassivity::Admit(const PeerContact& sent, FingerContact& input) noexcept {
   if (num_admitted_ >= kMaxChannels) return;  // more than the renderer hands in: passed, unobserved
   std::int16_t& slot = admitted_[static_cast<std::size_t>(num_admitted_++)];
   slot = -1;
-  if (!input.u_W_m.allFinite()) return;
-  const int found = Find(sent.user_key, sent.finger, sent.object);
+  if (!AsVector(input.u_O_m).allFinite()) return;
+  const int found = Find(sent.user_key, sent.contact.finger, sent.contact.object);
   Channel* ch = found < 0 ? nullptr : &channels_[static_cast<std::size_t>(found)];
   if (ch == nullptr) {
     for (Channel& c : channels_) {
@@ -63,8 +61,8 @@ void CouplingPassivity::Admit(const PeerContact& sent, RemoteContact& input) noe
         c = Channel{};
         c.open = true;
         c.user_key = sent.user_key;
-        c.finger = sent.finger;
-        c.object = sent.object;
+        c.finger = sent.contact.finger;
+        c.object = sent.contact.object;
         ch = &c;
         ++stats_.channels_total;
         break;
@@ -79,7 +77,8 @@ void CouplingPassivity::Admit(const PeerContact& sent, RemoteContact& input) noe
   // The peer's end: the work its sample path did on its body (the body got minus the force on
   // the fingertip), once per sample.
   if (sent.received_ns != ch->sample_ns) {
-    const Eigen::Vector3d u = Vec(sent.u_W_m), f = Vec(sent.f_E_W_N);
+    // f: the force on the peer's fingertip (minus the force on the body).
+    const Eigen::Vector3d u = AsVector(sent.contact.u_O_m), f = -AsVector(sent.contact.f_O_N);
     if (u.allFinite() && f.allFinite()) {
       ch->e_tx += std::max(0.0, -0.5 * (f + ch->f_sent).dot(u - ch->u_sent));
       ch->u_sent = u;
@@ -96,7 +95,7 @@ void CouplingPassivity::Admit(const PeerContact& sent, RemoteContact& input) noe
   const bool still = ch->still_since_ns != 0 && sent.received_ns - ch->still_since_ns >= kStillAfter_ns;
 
   // This end: the displacement the solve will impose, within what the channel has brought.
-  const Eigen::Vector3d target = input.u_W_m;
+  const Eigen::Vector3d target = AsVector(input.u_O_m);
   Eigen::Vector3d u = target;
   if (enabled_) {
     // A sample's jump is taken at no more than a fingertip's speed: the step's energy is then
@@ -150,18 +149,18 @@ void CouplingPassivity::Admit(const PeerContact& sent, RemoteContact& input) noe
   }
   if (ch->held && (target - u).norm() <= kCaughtUp_m) ch->held = false;
   ch->target_prev = target;
-  input.u_W_m = u;
+  input.u_O_m = ToVec3(u);
   ch->du = u - ch->u_imposed;
   ch->u_imposed = u;
 }
 
-void CouplingPassivity::Observe(std::span<const Eigen::Vector3d> force_on_body_W) noexcept {
+void CouplingPassivity::Observe(std::span<const Eigen::Vector3d> force_on_body_O) noexcept {
   if (num_admitted_ > 0) ++stats_.steps;
   for (std::int32_t i = 0; i < num_admitted_; ++i) {
     const std::int16_t slot = admitted_[static_cast<std::size_t>(i)];
     if (slot < 0) continue;
     Channel& ch = channels_[static_cast<std::size_t>(slot)];
-    Eigen::Vector3d F = static_cast<std::size_t>(i) < force_on_body_W.size() ? force_on_body_W[static_cast<std::size_t>(i)]
+    Eigen::Vector3d F = static_cast<std::size_t>(i) < force_on_body_O.size() ? force_on_body_O[static_cast<std::size_t>(i)]
                                                                              : Eigen::Vector3d::Zero();
     if (!F.allFinite()) F.setZero();
     const Eigen::Vector3d& du = ch.du;

@@ -368,7 +368,7 @@ void HapticWorld::SetVelocity(ObjectId id, const Eigen::Vector3d& v_W, const Eig
 }
 
 StepReport HapticWorld::Step(double dt_s, std::span<const Eigen::Vector3d> p_WE,
-                             std::span<const RemoteContact> remote) noexcept {
+                             std::span<const FingerContact> remote) noexcept {
   StepReport report;
   const auto num_obj = static_cast<std::size_t>(objects_.size());
   for (auto& r : results_) r = FingerResult{};
@@ -379,7 +379,7 @@ StepReport HapticWorld::Step(double dt_s, std::span<const Eigen::Vector3d> p_WE,
   }
   for (auto& o : objects_) o->reaction_W_N.setZero();
   num_remote_forces_ = std::min(remote.size(), kMaxRemoteForces);
-  for (std::size_t r = 0; r < num_remote_forces_; ++r) remote_force_W_[r].setZero();
+  for (std::size_t r = 0; r < num_remote_forces_; ++r) remote_force_O_[r].setZero();
 
   // Stage 1: proxies of every valid finger on every object; rigid contact forces.
   for (int i = 0; i < kFingers; ++i) {
@@ -490,6 +490,7 @@ StepReport HapticWorld::Step(double dt_s, std::span<const Eigen::Vector3d> p_WE,
     }
     scale_[static_cast<std::size_t>(i)] = s;
     res.f_E_W_N = s * f;
+    res.contact = SharedContact(i, res, p_WE[static_cast<std::size_t>(i)]);
   }
 
   // Stage 4: dynamic bodies get minus what the fingertips feel (after the clamp), remote hands'
@@ -507,19 +508,20 @@ StepReport HapticWorld::Step(double dt_s, std::span<const Eigen::Vector3d> p_WE,
       }
     }
   }
-  for (const RemoteContact& rc : remote) {
+  for (const FingerContact& rc : remote) {
     if (rc.object < 0 || rc.object >= num_objects()) {
       ++report.remote_rejected;
       continue;
     }
     Object& o = *objects_[static_cast<std::size_t>(rc.object)];
     if (o.kind != ObjectKind::kDynamic) continue;
-    if (!rc.f_E_W_N.allFinite() || !rc.p_WC_m.allFinite()) {
+    if (!AsVector(rc.f_O_N).allFinite() || !AsVector(rc.p_OC_m).allFinite()) {
       ++report.remote_rejected;
       continue;
     }
-    o.force_W -= rc.f_E_W_N;
-    o.torque_W += (rc.p_WC_m - o.X_WO.translation()).cross(-rc.f_E_W_N);
+    const Eigen::Vector3d f_W = o.X_WO.linear() * AsVector(rc.f_O_N);  // on the body
+    o.force_W += f_W;
+    o.torque_W += (o.X_WO.linear() * AsVector(rc.p_OC_m)).cross(f_W);
   }
   for (auto& op : objects_) {
     if (op->kind == ObjectKind::kDynamic) StepBody(*op, dt_s);
@@ -527,7 +529,33 @@ StepReport HapticWorld::Step(double dt_s, std::span<const Eigen::Vector3d> p_WE,
   return report;
 }
 
-void HapticWorld::StepDeformable(Object& o, std::span<const RemoteContact> remote,
+FingerContact HapticWorld::SharedContact(int i, const FingerResult& res, const Eigen::Vector3d& p_WE) const noexcept {
+  FingerContact c;
+  c.finger = i;
+  if (!res.valid || !res.in_contact || res.object < 0) return c;
+  const Object& o = *objects_[static_cast<std::size_t>(res.object)];
+  const FingerObject& fo = fo_[static_cast<std::size_t>(i) * objects_.size() + static_cast<std::size_t>(res.object)];
+  const Eigen::Matrix3d R_OW = o.X_WO.linear().transpose();
+  c.object = res.object;
+  c.node = res.main_node;
+  c.depth_m = res.depth_m;
+  c.n_O = ToVec3(fo.contact.n_O);
+  c.p_OE_m = ToVec3(R_OW * (p_WE - o.X_WO.translation()));
+  c.f_O_N = ToVec3(R_OW * -res.f_E_W_N);  // on the object: minus what the fingertip feels
+  Eigen::Vector3d p_OC = fo.contact.p_O_m;
+  if (o.kind == ObjectKind::kDeformable) {
+    Eigen::Vector3d u_O = -fo.contact.depth_m * fo.contact.n_O;
+    if (fo.friction_patch >= 0) {
+      u_O += fo.solved_slide_O_m;                      // and its stick
+      p_OC = fo.patch_center_O_m + fo.solved_slide_O_m;  // where a peer rebuilds this patch (FingerResult::p_WC_m)
+    }
+    c.u_O_m = ToVec3(u_O);
+  }
+  c.p_OC_m = ToVec3(p_OC);
+  return c;
+}
+
+void HapticWorld::StepDeformable(Object& o, std::span<const FingerContact> remote,
                                  StepReport& report) noexcept {
   const auto num_obj = static_cast<std::size_t>(objects_.size());
   std::size_t k = 0;
@@ -645,31 +673,32 @@ void HapticWorld::StepDeformable(Object& o, std::span<const RemoteContact> remot
   // the whole tangential force while its press faded out, on a node with almost no push left,
   // and dropped it in one step when that node let go: 0.063 N (docs/fem.md, "Across the
   // network").
-  const Eigen::Isometry3d X_OW = o.X_WO.inverse();
   // Each remote contact's patch in the inputs (the coupling's force on the body, after the solve).
+  // The contact is in the body's frame O, as the hand that made it solved it: wherever this
+  // process has the body (a swimming one is a few milliseconds elsewhere here), the same patch.
   std::array<std::pair<std::int32_t, std::int32_t>, kMaxRemoteForces> remote_patch{};
   for (std::size_t r = 0; r < remote.size(); ++r) {
-    const RemoteContact& rc = remote[r];
+    const FingerContact& rc = remote[r];
     if (rc.object < 0 || rc.object >= num_objects() || objects_[static_cast<std::size_t>(rc.object)].get() != &o) continue;
-    if (!rc.p_WC_m.allFinite() || !rc.u_W_m.allFinite() || !rc.n_W.allFinite() || !(rc.u_W_m.norm() > 0.0)) {
+    const auto p_OC = AsVector(rc.p_OC_m), u_O = AsVector(rc.u_O_m), n_in = AsVector(rc.n_O);
+    if (!p_OC.allFinite() || !u_O.allFinite() || !n_in.allFinite() || !(u_O.norm() > 0.0)) {
       ++report.remote_rejected;
       continue;
     }
-    const double nn = rc.n_W.norm();
-    const Eigen::Vector3d n_W = (nn > 0.5 && nn < 2.0) ? Eigen::Vector3d(rc.n_W / nn) : Eigen::Vector3d(-rc.u_W_m / rc.u_W_m.norm());
-    const double depth = -rc.u_W_m.dot(n_W);
+    const double nn = n_in.norm();
+    const Eigen::Vector3d n_O = (nn > 0.5 && nn < 2.0) ? Eigen::Vector3d(n_in / nn) : Eigen::Vector3d(-u_O / u_O.norm());
+    const double depth = -u_O.dot(n_O);
     if (!(depth > 0.0)) {
       ++report.remote_rejected;  // pulls the surface out: not a press
       continue;
     }
-    const Eigen::Vector3d stick_O = X_OW.linear() * (rc.u_W_m + depth * n_W);
-    const Eigen::Vector3d n_O = X_OW.linear() * n_W;
+    const Eigen::Vector3d stick_O = u_O + depth * n_O;
     const bool sticks = stick_O.norm() > 1e-12 && num_friction < static_cast<std::int16_t>(o.friction.size());
     std::int32_t count = 0;
     bool trunc = false;
     const std::int32_t begin = m;
     const bool memo = r < kMaxRemoteForces;
-    add_patch(X_OW * rc.p_WC_m - (sticks ? stick_O : Eigen::Vector3d::Zero()), n_O, depth, count, trunc,
+    add_patch(p_OC - (sticks ? stick_O : Eigen::Vector3d::Zero()), n_O, depth, count, trunc,
               memo ? &o.remote_memo[r] : nullptr,
               memo ? o.remote_memo_inputs.data() + r * static_cast<std::size_t>(o.max_patch) : nullptr);
     if (r < kMaxRemoteForces) remote_patch[r] = {begin, count};
@@ -690,7 +719,7 @@ void HapticWorld::StepDeformable(Object& o, std::span<const RemoteContact> remot
     if (count == 0) continue;
     Eigen::Vector3d f_obj = Eigen::Vector3d::Zero();
     for (std::int32_t q = 0; q < count; ++q) f_obj += forces[static_cast<std::size_t>(begin + q)];
-    remote_force_W_[r] = o.X_WO.linear() * f_obj;
+    remote_force_O_[r] = f_obj;
   }
   for (int i = 0; i < kFingers; ++i) {
     FingerObject& fo = fo_[static_cast<std::size_t>(i) * num_obj + k];

@@ -32,8 +32,8 @@ TEST(RealTime, StepDoesNotAllocate) {
   const ObjectId block = w.AddDeformable(d);
   w.SetSupport(SupportPlane{});
   w.Init();
-  std::array<RemoteContact, 1> remote = {
-      RemoteContact{1, 0, block, Eigen::Vector3d(0.63, 0.03, 0.02), Eigen::Vector3d(0, 0, -0.001), Eigen::Vector3d(0, 0, 0.1)}};
+  std::array<FingerContact, 1> remote = {
+      ContactInObjectFrame(d.X_WO, 0, block, Eigen::Vector3d(0.63, 0.03, 0.02), Eigen::Vector3d(0, 0, -0.001), Eigen::Vector3d(0, 0, 0.1))};
   // Fingers sweep across every object, in and out of contact, with a NaN now and then.
   auto tips_at = [&](int k) {
     std::array<Eigen::Vector3d, kFingers> tips;

@@ -21,12 +21,12 @@ namespace {
 PeerContact Sample(double x_m, double F_N, std::uint64_t received_ns) {
   PeerContact c;
   c.hand = 1;
-  c.finger = 0;
-  c.object = 0;
-  c.p_WC_m[2] = 0.0;
-  c.u_W_m[2] = -x_m;
-  c.n_W[2] = 1.0;
-  c.f_E_W_N[2] = F_N;
+  c.contact.finger = 0;
+  c.contact.object = 0;
+  c.contact.p_OC_m[2] = 0.0;
+  c.contact.u_O_m[2] = -x_m;
+  c.contact.n_O[2] = 1.0;
+  c.contact.f_O_N[2] = -F_N;  // on the body
   c.received_ns = received_ns;
   return c;
 }
@@ -45,10 +45,10 @@ TEST(CouplingPassivity, ObserverIsExactOnALinearSpringWithoutDelay) {
     const PeerContact sent = Sample(x, k * x, static_cast<std::uint64_t>(s));
     for (int step = 0; step < 10; ++step) {  // ten haptic steps per sample (zero-order hold)
       pc.BeginStep(1e-3);
-      RemoteContact in = ToRemoteContact(sent, PeerFade{}, sent.received_ns);
+      FingerContact in = FadedContact(sent, PeerFade{}, sent.received_ns);
       pc.Admit(sent, in);
-      EXPECT_DOUBLE_EQ(in.u_W_m.z(), -x);  // passed as sent
-      const double imposed = -in.u_W_m.z();
+      EXPECT_DOUBLE_EQ(in.u_O_m[2], -x);  // passed as sent
+      const double imposed = -in.u_O_m[2];
       const std::array<Eigen::Vector3d, 1> F = {OnBody(k * imposed)};
       pc.Observe(F);
     }
@@ -79,9 +79,9 @@ StiffenedRun PressAStiffenedBody(bool passivity) {
     const PeerContact sent = Sample(x, k_peer * x, static_cast<std::uint64_t>(s));
     for (int step = 0; step < 10; ++step) {
       pc.BeginStep(1e-3);
-      RemoteContact in = ToRemoteContact(sent, PeerFade{}, sent.received_ns);
+      FingerContact in = FadedContact(sent, PeerFade{}, sent.received_ns);
       pc.Admit(sent, in);
-      run.imposed_m = -in.u_W_m.z();
+      run.imposed_m = -in.u_O_m[2];
       const std::array<Eigen::Vector3d, 1> F = {OnBody(k_here * run.imposed_m)};
       pc.Observe(F);
     }
@@ -136,9 +136,9 @@ ClockedRun PressOnAClock(After after, int end_ms, int sample_every_ms, double k_
       sent = Sample(x, k_peer_after * x, now_ns);
     }
     pc.BeginStep(1e-3);
-    RemoteContact in = ToRemoteContact(sent, PeerFade{}, now_ns);
+    FingerContact in = FadedContact(sent, PeerFade{}, now_ns);
     pc.Admit(sent, in);
-    run.imposed_m.push_back(-in.u_W_m.z());
+    run.imposed_m.push_back(-in.u_O_m[2]);
     const std::array<Eigen::Vector3d, 1> F = {OnBody(k_here * run.imposed_m.back())};
     pc.Observe(F);
   }
@@ -216,9 +216,9 @@ TEST(CouplingPassivity, AUsersChannelOutlivesAChangeOfItsHandIndex) {
   double imposed_m = 0.0;
   auto step = [&](const PeerContact& sent, std::uint64_t now_ns) {
     pc.BeginStep(1e-3);
-    RemoteContact in = ToRemoteContact(sent, PeerFade{}, now_ns);
+    FingerContact in = FadedContact(sent, PeerFade{}, now_ns);
     pc.Admit(sent, in);
-    imposed_m = -in.u_W_m.z();
+    imposed_m = -in.u_O_m[2];
     const std::array<Eigen::Vector3d, 1> F = {OnBody(400.0 * imposed_m)};
     pc.Observe(F);
   };
@@ -252,21 +252,22 @@ TEST(CouplingPassivity, TheWorldReportsEachRemoteContactsForceOnTheBody) {
   d.X_WO = Eigen::Translation3d(0.6, 0, 0) * Eigen::AngleAxisd(0.3, Eigen::Vector3d::UnitZ());
   const ObjectId block = w.AddDeformable(d);
   w.Init();
-  std::array<RemoteContact, 2> remote = {
-      RemoteContact{1, 0, block, d.X_WO * Eigen::Vector3d(0.03, 0.03, 0.03), Eigen::Vector3d(0, 0, -0.001),
-                    Eigen::Vector3d(0, 0, 0.1), Eigen::Vector3d(0, 0, 1)},
-      RemoteContact{1, 1, block, Eigen::Vector3d::Constant(NAN), Eigen::Vector3d(0, 0, -0.001)}};
+  std::array<FingerContact, 2> remote = {
+      ContactInObjectFrame(d.X_WO, 0, block, d.X_WO * Eigen::Vector3d(0.03, 0.03, 0.03), Eigen::Vector3d(0, 0, -0.001),
+                           Eigen::Vector3d(0, 0, 0.1), Eigen::Vector3d(0, 0, 1)),
+      ContactInObjectFrame(d.X_WO, 1, block, Eigen::Vector3d::Constant(NAN), Eigen::Vector3d(0, 0, -0.001))};
   std::array<Eigen::Vector3d, kFingers> far;
   far.fill(Eigen::Vector3d(0, 0, 1));
   w.Step(1e-3, far, remote);
-  ASSERT_EQ(w.remote_forces_W().size(), 2u);
+  ASSERT_EQ(w.remote_forces_O().size(), 2u);
+  const auto remote_forces_W = [&](std::size_t r) { return Eigen::Vector3d(d.X_WO.linear() * w.remote_forces_O()[r]); };
   Eigen::Vector3d held = Eigen::Vector3d::Zero();
   for (const auto& l : w.held_loads(block)) held += l.f_N;
   held = d.X_WO.linear() * held;
   EXPECT_GT(held.norm(), 0.01);
-  EXPECT_LT((w.remote_forces_W()[0] - held).norm(), 1e-12 * held.norm());
-  EXPECT_LT(w.remote_forces_W()[0].z(), 0.0);  // pushed in
-  EXPECT_EQ(w.remote_forces_W()[1], Eigen::Vector3d::Zero());  // rejected: not in the solve
+  EXPECT_LT((remote_forces_W(0) - held).norm(), 1e-12 * held.norm());
+  EXPECT_LT(remote_forces_W(0).z(), 0.0);  // pushed in
+  EXPECT_EQ(remote_forces_W(1), Eigen::Vector3d::Zero());  // rejected: not in the solve
 }
 
 // The weights a haptic step gives the peers' contacts (PeerWeights): the fade law's going down
@@ -277,8 +278,8 @@ TEST(PeerWeights, AContactComingBackRisesAtTheFadesRate) {
   PeerWeights weights;
   PeerContact c;
   c.user_key = UserKey("bob");
-  c.finger = 1;
-  c.object = 3;
+  c.contact.finger = 1;
+  c.contact.object = 3;
   const double rate = 1.0 / 0.3, dt = 1e-3;
   std::uint64_t now = 1'000'000'000;
   auto step = [&](double law) {
@@ -298,12 +299,12 @@ TEST(PeerWeights, AContactComingBackRisesAtTheFadesRate) {
   weights.EndStep(now);
   EXPECT_NEAR(step(1.0), rate * dt, 1e-12);
   // Another finger of the same user is another contact: new, at the law's weight.
-  c.finger = 2;
+  c.contact.finger = 2;
   EXPECT_EQ(step(0.7), 0.7);
   // Unseen for longer than the memory: new again.
   now += PeerWeights::kMemory_ns + 1'000'000;
   weights.EndStep(now);
-  c.finger = 1;
+  c.contact.finger = 1;
   EXPECT_EQ(step(1.0), 1.0);
 }
 
@@ -315,8 +316,8 @@ TEST(CouplingPassivity, AdmitAndObserveDoNotAllocate) {
     pc.BeginStep(1e-3);
     for (int f = 0; f < 2; ++f) {
       PeerContact sent = Sample(1e-4 * (s % 7), 0.1 * (s % 5), static_cast<std::uint64_t>(s / 3));
-      sent.finger = f;
-      RemoteContact in = ToRemoteContact(sent, PeerFade{}, sent.received_ns);
+      sent.contact.finger = f;
+      FingerContact in = FadedContact(sent, PeerFade{}, sent.received_ns);
       pc.Admit(sent, in);
     }
     pc.Observe(F);

@@ -165,7 +165,7 @@ TEST(DeformableFriction, FrictionlessStrokeDragsNothingAndLiftingForgetsTheAncho
   EXPECT_LT((f->fingers()[1].f_E_W_N - fresh->fingers()[1].f_E_W_N).norm(), 1e-12);
 }
 
-// A peer's fingertip arrives as a RemoteContact (its contact point, normal and imposed
+// A peer's fingertip arrives as its FingerContact (its contact point, normal and imposed
 // displacement: the indentation plus its stick). The station that receives it holds the same
 // patch at the same stick, so its loads on the object are the ones the stroking station solved,
 // to 1e-9, while the stroke sticks and while it slips, but for a step or two (the step the
@@ -190,7 +190,7 @@ TEST(DeformableFriction, APeersStickIsHeldWhereItIsSolved) {
   for (int k = 1; k <= 300; ++k) {
     p.x() += 20e-6;
     const FingerResult r = StepAt(*a, p);
-    const RemoteContact rc{1, 1, 0, r.p_WC_m, r.u_W_m, r.f_E_W_N, r.n_W};
+    const FingerContact rc = r.contact;  // a peer's contact is just the other hand's result
     peer->Step(1e-3, far, std::span(&rc, 1));
     const Eigen::Vector3d fa = load_sum(*a), fp = load_sum(*peer);
     if (r.sticking) {
@@ -213,7 +213,7 @@ TEST(DeformableFriction, APeersStickIsHeldWhereItIsSolved) {
   // Without a normal the same contact is a frictionless press along -u (as before there was
   // friction): no stick is held.
   const FingerResult r = a->fingers()[1];
-  const RemoteContact old{1, 1, 0, r.p_WC_m, -r.depth_m * r.n_W, r.f_E_W_N, Eigen::Vector3d::Zero()};
+  const FingerContact old = ContactInObjectFrame(a->pose(0), 1, 0, r.p_WC_m, -r.depth_m * r.n_W, r.f_E_W_N);
   peer->Step(1e-3, far, std::span(&old, 1));
   EXPECT_LT(std::abs(load_sum(*peer).x()), 1e-9 * load_sum(*peer).norm());
 }

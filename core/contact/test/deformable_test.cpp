@@ -91,7 +91,7 @@ std::unique_ptr<HapticWorld> MakeWorld(const Block& b, int max_patch, ObjectId* 
 
 // Lowers the given fingers from 2 mm above to their depths in 40 steps.
 void Lower(HapticWorld& w, const Block& b, const std::vector<Press>& presses,
-           std::span<const RemoteContact> remote = {}) {
+           std::span<const FingerContact> remote = {}) {
   for (int k = 0; k <= 40; ++k) {
     std::array<Eigen::Vector3d, kFingers> tips;
     for (int i = 0; i < kFingers; ++i) tips[static_cast<std::size_t>(i)] = Eigen::Vector3d(5.0, 5.0, 5.0 + i);
@@ -138,19 +138,19 @@ TEST(Deformable, TwoHandsOnOneObjectAreSolvedTogether) {
   const std::vector<Press> pa = {{0.02, 0.02, 0.002}, {0.035, 0.02, 0.0015}};
   const std::vector<Press> pb = {{0.03, 0.042, 0.0025}, {0.045, 0.035, 0.001}, {0.015, 0.04, 0.002}};
   // Both hands press; each world gets the other's last contacts (as the ContactSet carries).
-  auto contacts_of = [](const HapticWorld& w, int hand) {
-    std::vector<RemoteContact> out;
+  auto contacts_of = [](const HapticWorld& w) {
+    std::vector<FingerContact> out;
     for (int i = 0; i < kFingers; ++i) {
       const FingerResult& r = w.fingers()[static_cast<std::size_t>(i)];
-      if (r.in_contact) out.push_back({hand, i, r.object, r.p_WC_m, r.u_W_m, r.f_E_W_N});
+      if (r.in_contact) out.push_back(r.contact);  // a peer's contact is just the other hand's result
     }
     return out;
   };
   Lower(*h, b, pb);
-  const auto from_b = contacts_of(*h, 1);
+  const auto from_b = contacts_of(*h);
   ASSERT_EQ(from_b.size(), 3u);
   Lower(*a, b, pa, from_b);
-  const auto from_a = contacts_of(*a, 0);
+  const auto from_a = contacts_of(*a);
   ASSERT_EQ(from_a.size(), 2u);
   Lower(*h, b, pb, from_a);
   std::vector<Press> all = pa;
@@ -178,14 +178,15 @@ TEST(Deformable, APeersContactsAreFollowedThroughEveryChange) {
   const Block& b = TheBlock();
   const Eigen::Vector3d n_W = b.X_WO.linear() * Eigen::Vector3d::UnitZ();
   auto at = [&](int finger, double x, double y, double depth) {
-    return RemoteContact{1, finger, 0, b.X_WO * Eigen::Vector3d(x, y, b.top), -depth * n_W, Eigen::Vector3d::Zero(), n_W};
+    return ContactInObjectFrame(b.X_WO, finger, 0, b.X_WO * Eigen::Vector3d(x, y, b.top), -depth * n_W,
+                                Eigen::Vector3d::Zero(), n_W);
   };
-  const RemoteContact c0 = at(0, 0.02, 0.02, 0.0015), c1 = at(1, 0.04, 0.035, 0.001);
-  RemoteContact c0_deeper = c0;
-  c0_deeper.u_W_m = -0.0022 * n_W;
-  RemoteContact c1_moved = c1;
-  c1_moved.p_WC_m += b.X_WO.linear() * Eigen::Vector3d(0.001, 0.0, 0.0);
-  const std::vector<std::vector<RemoteContact>> schedule = {
+  const FingerContact c0 = at(0, 0.02, 0.02, 0.0015), c1 = at(1, 0.04, 0.035, 0.001);
+  FingerContact c0_deeper = c0;
+  AsVector(c0_deeper.u_O_m) = -0.0022 * Eigen::Vector3d::UnitZ();  // n_O
+  FingerContact c1_moved = c1;
+  c1_moved.p_OC_m[0] += 0.001;
+  const std::vector<std::vector<FingerContact>> schedule = {
       {c0, c1}, {c0, c1}, {c0, c1}, {c0_deeper, c1}, {c0_deeper, c1}, {c0_deeper, c1_moved},
       {c1_moved, c0_deeper}, {c1_moved, c0_deeper}, {c0, c1}, {c0}, {c0, c1}, {c1}, {c0, c1}};
   ObjectId id = -1;
@@ -198,15 +199,60 @@ TEST(Deformable, APeersContactsAreFollowedThroughEveryChange) {
     ObjectId id_fresh = -1;
     auto fresh = MakeWorld(b, 16, &id_fresh);
     fresh->Step(1e-3, away, schedule[k]);
-    ASSERT_EQ(w->remote_forces_W().size(), schedule[k].size());
-    ASSERT_EQ(fresh->remote_forces_W().size(), schedule[k].size());
+    ASSERT_EQ(w->remote_forces_O().size(), schedule[k].size());
+    ASSERT_EQ(fresh->remote_forces_O().size(), schedule[k].size());
     for (std::size_t r = 0; r < schedule[k].size(); ++r) {
-      const Eigen::Vector3d f = w->remote_forces_W()[r], g = fresh->remote_forces_W()[r];
+      const Eigen::Vector3d f = w->remote_forces_O()[r], g = fresh->remote_forces_O()[r];
       ASSERT_GT(g.norm(), 0.01) << "step " << k << " contact " << r;
       EXPECT_LT((f - g).norm(), 1e-12 * g.norm()) << "step " << k << " contact " << r << ": " << f.transpose()
                                                   << " against " << g.transpose();
     }
   }
+}
+
+// A deformable that moves as a rigid body (a swimming Daphnia, a bob): the hand that presses it
+// and a process that solves that hand's contact again (the world server, a peer) hold the body at
+// poses a few milliseconds apart. The contact travels in the body's frame O, so the receiver
+// rebuilds the patch the hand solved and puts the force the hand felt on the body, wherever it
+// has the body. Carried in the world frame (as contact sets did before), the receiver mapped
+// the point into the body with its own pose: another patch, another force (0.4-4 % for a 10 mm,
+// 2.5 s bob in the tour's terms); the second half of the test keeps that old path as the
+// counter-example, so the test fails if the contact were rebuilt from W again.
+TEST(Deformable, AMovingBodyIsSolvedAsTheHandFeltItWhereverTheReceiverHasIt) {
+  const Block& b = TheBlock();
+  ObjectId id = -1;
+  auto hand = MakeWorld(b, 16, &id);
+  Lower(*hand, b, {{0.03, 0.03, 0.002}});
+  const FingerResult& r = hand->fingers()[0];
+  ASSERT_TRUE(r.in_contact);
+  ASSERT_EQ(r.contact.object, id);
+  // The hand felt minus the force on the body (in O).
+  const Eigen::Vector3d f_on_body_O = AsVector(r.contact.f_O_N);
+  EXPECT_LT((b.X_WO.linear() * f_on_body_O + r.f_E_W_N).norm(), 1e-12 * r.f_E_W_N.norm());
+  std::array<Eigen::Vector3d, kFingers> away;
+  for (int i = 0; i < kFingers; ++i) away[static_cast<std::size_t>(i)] = Eigen::Vector3d(5.0, 5.0, 5.0 + i);
+  // The receiver has the body 0.4 mm further along its swim (10 mm amplitude, 2.5 s period:
+  // 25 mm/s at mid-swing, 16 ms apart) and turned a little.
+  const Eigen::Isometry3d X_moved =
+      Eigen::Translation3d(0.0003, -0.0002, 0.0002) * b.X_WO * Eigen::AngleAxisd(0.002, Eigen::Vector3d::UnitX());
+  auto receiver = [&](const FingerContact& c) {
+    ObjectId rid = -1;
+    auto w = MakeWorld(b, 16, &rid);
+    w->SetPose(rid, X_moved);
+    w->Step(1e-3, away, std::span(&c, 1));
+    return Eigen::Vector3d(w->remote_forces_O()[0]);
+  };
+  const Eigen::Vector3d f_here = receiver(r.contact);
+  EXPECT_LT((f_here - f_on_body_O).norm(), 1e-9 * f_on_body_O.norm())
+      << f_here.transpose() << " against the felt " << f_on_body_O.transpose();
+  // The old way: the point, normal and displacement in W as the hand had the body, mapped into
+  // the body with the receiver's pose.
+  const FingerContact in_W = ContactInObjectFrame(X_moved, 0, id, b.X_WO * AsVector(r.contact.p_OC_m),
+                                                  b.X_WO.linear() * AsVector(r.contact.u_O_m), r.f_E_W_N,
+                                                  b.X_WO.linear() * AsVector(r.contact.n_O));
+  const Eigen::Vector3d f_old = receiver(in_W);
+  RecordProperty("world_frame_error", std::to_string((f_old - f_on_body_O).norm() / f_on_body_O.norm()));
+  EXPECT_GT((f_old - f_on_body_O).norm(), 0.004 * f_on_body_O.norm()) << "the counter-example no longer differs";
 }
 
 }  // namespace

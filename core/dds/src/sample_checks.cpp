@@ -1,6 +1,7 @@
 #include "handshare/dds/sample_checks.hpp"
 
 #include "handshare/common/utf8.hpp"
+#include "handshare/dds/contact_codec.hpp"
 
 #include <cmath>
 #include <sstream>
@@ -76,13 +77,16 @@ std::string CheckContactSet(const msg::ContactSet& s, std::string_view session, 
     if (!f.active()) continue;
     const std::string at = "fingers[" + std::to_string(i) + "].";
     c.NonEmpty(at + "object_id", f.object_id().to_string());
-    c.Vector(at + "p_W_m", f.p_W_m(), 3, b.max_position_m);
-    c.Vector(at + "n_W", f.n_W(), 3, 2.0);
-    c.Vector(at + "p_WE_m", f.p_WE_m(), 3, b.max_position_m);
+    // The contact as every receiver reads it (the codec); its fields carry the wire's names.
+    contact::FingerContact fc;
+    DecodeFingerContact(f, i, 0, fc);
+    c.Vector(at + "p_OC_m", fc.p_OC_m, 3, b.max_position_m);
+    c.Vector(at + "n_O", fc.n_O, 3, 2.0);
+    c.Vector(at + "p_OE_m", fc.p_OE_m, 3, b.max_position_m);
     c.Range(at + "radius_m", f.radius_m(), 0.0, b.max_fingertip_radius_m);
-    c.Range(at + "depth_m", f.depth_m(), -b.max_displacement_m, b.max_displacement_m);
-    c.Vector(at + "u_imposed_W_m", f.u_imposed_W_m(), 3, b.max_displacement_m);
-    c.Vector(at + "f_W_N", f.f_W_N(), 3, b.max_force_N);
+    c.Range(at + "depth_m", fc.depth_m, -b.max_displacement_m, b.max_displacement_m);
+    c.Vector(at + "u_O_m", fc.u_O_m, 3, b.max_displacement_m);
+    c.Vector(at + "f_O_N", fc.f_O_N, 3, b.max_force_N);
   }
   if (s.simulating()) {
     c.NonEmpty("simulated_object_id", s.simulated_object_id().to_string());

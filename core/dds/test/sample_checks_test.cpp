@@ -23,13 +23,13 @@ msg::ContactSet GoodContacts() {
   auto& f = s.fingers()[1];
   f.active(true);
   f.object_id("tail");
-  f.p_W_m({0.1, 0.0, 0.05});
-  f.n_W({0.0, 0.0, 1.0});
-  f.p_WE_m({0.1, 0.0, 0.052});
+  f.p_OC_m({0.1, 0.0, 0.05});
+  f.n_O({0.0, 0.0, 1.0});
+  f.p_OE_m({0.1, 0.0, 0.052});
   f.radius_m(0.008);
   f.depth_m(0.002);
-  f.u_imposed_W_m({0.0, 0.0, -0.002});
-  f.f_W_N({0.0, 0.0, -1.0});
+  f.u_O_m({0.0, 0.0, -0.002});
+  f.f_O_N({0.0, 0.0, -1.0});
   s.q_WO_wxyz({1.0, 0.0, 0.0, 0.0});
   return s;
 }
@@ -38,14 +38,14 @@ TEST(SampleChecks, AGoodContactSetPasses) { EXPECT_EQ(CheckContactSet(GoodContac
 
 TEST(SampleChecks, ContactSetsWithBadNumbersAreNamed) {
   auto s = GoodContacts();
-  s.fingers()[1].u_imposed_W_m()[1] = kNan;
-  EXPECT_EQ(CheckContactSet(s, "museum"), "fingers[1].u_imposed_W_m[1] is nan");
+  s.fingers()[1].u_O_m()[1] = kNan;
+  EXPECT_EQ(CheckContactSet(s, "museum"), "fingers[1].u_O_m[1] is nan");
   s = GoodContacts();
-  s.fingers()[1].f_W_N()[0] = -kInf;
-  EXPECT_EQ(CheckContactSet(s, "museum"), "fingers[1].f_W_N[0] is -inf");
+  s.fingers()[1].f_O_N()[0] = -kInf;
+  EXPECT_EQ(CheckContactSet(s, "museum"), "fingers[1].f_O_N[0] is -inf");
   s = GoodContacts();
-  s.fingers()[1].u_imposed_W_m()[2] = -5.0;  // a 5 m dent: pushes a user's finger with no bound
-  EXPECT_NE(CheckContactSet(s, "museum").find("fingers[1].u_imposed_W_m has norm 5"), std::string::npos);
+  s.fingers()[1].u_O_m()[2] = -5.0;  // a 5 m dent: pushes a user's finger with no bound
+  EXPECT_NE(CheckContactSet(s, "museum").find("fingers[1].u_O_m has norm 5"), std::string::npos);
   s = GoodContacts();
   s.fingers()[1].radius_m(-0.01);
   EXPECT_NE(CheckContactSet(s, "museum").find("fingers[1].radius_m is -0.01"), std::string::npos);
@@ -54,7 +54,7 @@ TEST(SampleChecks, ContactSetsWithBadNumbersAreNamed) {
   EXPECT_EQ(CheckContactSet(s, "museum"), "fingers[1].object_id is empty");
   // An inactive finger's garbage is never read, so it is not checked.
   s = GoodContacts();
-  s.fingers()[3].u_imposed_W_m()[0] = kNan;
+  s.fingers()[3].u_O_m()[0] = kNan;
   EXPECT_EQ(CheckContactSet(s, "museum"), "");
 }
 

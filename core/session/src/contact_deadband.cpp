@@ -4,6 +4,8 @@
 #include <cmath>
 #include <stdexcept>
 
+#include "handshare/dds/contact_codec.hpp"
+
 namespace handshare::session {
 
 namespace {
@@ -34,12 +36,14 @@ DeadbandReason FingerChange(const msg::FingerContact& sent, const msg::FingerCon
   // there (whoever touches a body claims and simulates it); its force and point are not read.
   if (now.surface_node() < 0) return DeadbandReason::kNone;
   // On a deformable: the receivers' solves read the contact point, the imposed displacement
-  // and the force (contact::PeerContact); the fingertip centre, normal and depth ride along.
-  if (PastWeber(sent.f_W_N(), now.f_W_N(), c.weber, c.force_floor_N)) return DeadbandReason::kForce;
-  if (PastWeber(sent.u_imposed_W_m(), now.u_imposed_W_m(), c.weber, c.displacement_floor_m)) {
-    return DeadbandReason::kDisplacement;
-  }
-  if (Distance(sent.p_W_m(), now.p_W_m()) > c.position_m) return DeadbandReason::kPosition;
+  // and the force (contact::FingerContact, as the codec decodes it); the fingertip centre,
+  // normal and depth ride along. Same object on both sides: any index does for the compare.
+  contact::FingerContact a, b;
+  dds::DecodeFingerContact(sent, 0, 0, a);
+  dds::DecodeFingerContact(now, 0, 0, b);
+  if (PastWeber(a.f_O_N, b.f_O_N, c.weber, c.force_floor_N)) return DeadbandReason::kForce;
+  if (PastWeber(a.u_O_m, b.u_O_m, c.weber, c.displacement_floor_m)) return DeadbandReason::kDisplacement;
+  if (Distance(a.p_OC_m, b.p_OC_m) > c.position_m) return DeadbandReason::kPosition;
   return DeadbandReason::kNone;
 }
 }  // namespace

@@ -18,12 +18,12 @@ msg::ContactSet Press(double f_z, double u_z) {
   f.object_id("tail");
   f.surface_node(42);
   f.radius_m(0.008);
-  f.p_W_m({0.10, 0.20, 0.30});
-  f.p_WE_m({0.10, 0.20, 0.30 + 0.008 - 0.001});
-  f.n_W({0.0, 0.0, 1.0});
+  f.p_OC_m({0.10, 0.20, 0.30});
+  f.p_OE_m({0.10, 0.20, 0.30 + 0.008 - 0.001});
+  f.n_O({0.0, 0.0, 1.0});
   f.depth_m(0.001);
-  f.u_imposed_W_m({0.0, 0.0, u_z});
-  f.f_W_N({0.0, 0.0, f_z});
+  f.u_O_m({0.0, 0.0, u_z});
+  f.f_O_N({0.0, 0.0, f_z});
   return s;
 }
 
@@ -59,7 +59,7 @@ TEST(PerceptibleChange, ForceIsAVectorNotItsNorm) {
   const DeadbandConfig c;
   msg::ContactSet turned = Press(-2.0, -0.001);
   const double a = 10.0 * M_PI / 180.0;
-  turned.fingers()[1].f_W_N({2.0 * std::sin(a), 0.0, -2.0 * std::cos(a)});
+  turned.fingers()[1].f_O_N({2.0 * std::sin(a), 0.0, -2.0 * std::cos(a)});
   EXPECT_EQ(PerceptibleChange(Press(-2.0, -0.001), turned, 0.0, c), DeadbandReason::kForce);
 }
 
@@ -73,9 +73,9 @@ TEST(PerceptibleChange, ImposedDisplacement) {
 TEST(PerceptibleChange, TheContactPointUsesAnAbsoluteThreshold) {
   const DeadbandConfig c;  // 0.5 mm
   msg::ContactSet moved = Press(-2.0, -0.001);
-  moved.fingers()[1].p_W_m()[0] += 0.0004;
+  moved.fingers()[1].p_OC_m()[0] += 0.0004;
   EXPECT_EQ(PerceptibleChange(Press(-2.0, -0.001), moved, 0.0, c), DeadbandReason::kNone);
-  moved.fingers()[1].p_W_m()[0] += 0.0002;
+  moved.fingers()[1].p_OC_m()[0] += 0.0002;
   EXPECT_EQ(PerceptibleChange(Press(-2.0, -0.001), moved, 0.0, c), DeadbandReason::kPosition);
 }
 
@@ -84,8 +84,8 @@ TEST(PerceptibleChange, TheContactPointUsesAnAbsoluteThreshold) {
 TEST(PerceptibleChange, FieldsNoReceiverReadsRideAlong) {
   const DeadbandConfig c;
   msg::ContactSet other = Press(-2.0, -0.001);
-  other.fingers()[1].p_WE_m()[0] += 0.003;
-  other.fingers()[1].n_W({std::sin(0.2), 0.0, std::cos(0.2)});
+  other.fingers()[1].p_OE_m()[0] += 0.003;
+  other.fingers()[1].n_O({std::sin(0.2), 0.0, std::cos(0.2)});
   other.fingers()[1].depth_m(0.002);
   EXPECT_EQ(PerceptibleChange(Press(-2.0, -0.001), other, 0.0, c), DeadbandReason::kNone);
 }
@@ -96,7 +96,7 @@ TEST(PerceptibleChange, OnARigidBodyOnlyTheTouchCounts) {
   msg::ContactSet a = Press(-2.0, 0.0), b = Press(-4.0, 0.0);
   a.fingers()[1].surface_node(-1);
   b.fingers()[1].surface_node(-1);
-  b.fingers()[1].p_W_m()[0] += 0.01;
+  b.fingers()[1].p_OC_m()[0] += 0.01;
   EXPECT_EQ(PerceptibleChange(a, b, 0.0, c), DeadbandReason::kNone);
   b.fingers()[1].object_id("button");
   EXPECT_EQ(PerceptibleChange(a, b, 0.0, c), DeadbandReason::kStructure);
@@ -126,8 +126,8 @@ TEST(PerceptibleChange, WhatTheReceiverSolvesAlwaysGoesOut) {
   EXPECT_EQ(PerceptibleChange(grasp, owns, 0.0, c), DeadbandReason::kStructure);
   // A finger that is off and stays off: its stale fields are not read.
   msg::ContactSet off_a = sent, off_b = sent;
-  off_a.fingers()[3].f_W_N({0.0, 0.0, 5.0});
-  off_b.fingers()[3].f_W_N({0.0, 0.0, -5.0});
+  off_a.fingers()[3].f_O_N({0.0, 0.0, 5.0});
+  off_b.fingers()[3].f_O_N({0.0, 0.0, -5.0});
   EXPECT_EQ(PerceptibleChange(off_a, off_b, 0.0, c), DeadbandReason::kNone);
 }
 

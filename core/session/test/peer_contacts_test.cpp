@@ -15,10 +15,10 @@ msg::ContactSet Set(const std::string& user, const std::string& object, double u
   s.user(user);
   s.fingers()[1].active(true);
   s.fingers()[1].object_id(object);
-  s.fingers()[1].p_W_m({0.01, 0.02, 0.03});
-  s.fingers()[1].u_imposed_W_m({0.0, 0.0, u_z});
-  s.fingers()[1].n_W({0.0, 0.6, 0.8});
-  s.fingers()[1].f_W_N({0.0, 0.0, f_z});
+  s.fingers()[1].p_OC_m({0.01, 0.02, 0.03});
+  s.fingers()[1].u_O_m({0.0, 0.0, u_z});
+  s.fingers()[1].n_O({0.0, 0.6, 0.8});
+  s.fingers()[1].f_O_N({0.0, 0.0, f_z});
   s.fingers()[3].active(false);
   s.fingers()[3].object_id(object);
   return s;
@@ -30,13 +30,14 @@ struct Seen {
   Eigen::Vector3d n_W;
 };
 
-// The contacts as a solve at `now` takes them: faded by their age (contact::ToRemoteContact).
+// The contacts as a solve at `now` takes them: faded by their age (contact::FadedContact).
 std::vector<Seen> Collect(const PeerContacts& peers, const world::SceneModels& models, Clock::time_point now) {
   std::vector<Seen> out;
   const std::uint64_t now_ns = PeerContacts::SteadyNs(now);
   peers.ForEach(models, now, [&](const PeerContact& c, const msg::ContactSet&) {
-    const contact::RemoteContact r = contact::ToRemoteContact(c, peers.fade(), now_ns);
-    out.push_back({c.object, c.finger, c.hand, r.u_W_m.z(), r.f_E_W_N.z(), peers.fade().WeightAt(now_ns, c.received_ns), r.n_W});
+    const contact::FingerContact r = contact::FadedContact(c, peers.fade(), now_ns);
+    out.push_back({r.object, r.finger, c.hand, r.u_O_m[2], -r.f_O_N[2], peers.fade().WeightAt(now_ns, c.received_ns),
+                   contact::AsVector(r.n_O)});
   });
   return out;
 }
@@ -111,8 +112,8 @@ TEST_F(PeerContactsTest, ContactsComeOutUnfadedWithTheirArrivalTime) {
   peers.ForEach(*models_, t0 + 350ms, [&](const PeerContact& c, const msg::ContactSet&) {
     ++seen;
     EXPECT_EQ(c.received_ns, PeerContacts::SteadyNs(t0));
-    EXPECT_DOUBLE_EQ(c.u_W_m[2], -0.004);
-    EXPECT_DOUBLE_EQ(c.f_E_W_N[2], 2.0);
+    EXPECT_DOUBLE_EQ(c.contact.u_O_m[2], -0.004);
+    EXPECT_DOUBLE_EQ(-c.contact.f_O_N[2], 2.0);
   });
   EXPECT_EQ(seen, 1);
   EXPECT_EQ(peers.fade().fade_after_ns, 200'000'000);
@@ -129,33 +130,32 @@ TEST(PeerContactsConfig, RejectsAnEmptyFade) {
 
 namespace handshare::session {
 namespace {
-TEST(ToRemoteContact, CarriesEveryFieldFadedByItsAgeAtTheStep) {
+TEST(FadedContact, CarriesEveryFieldFadedByItsAgeAtTheStep) {
   PeerContact c;
   c.hand = 2;
-  c.finger = 4;
-  c.object = 7;
+  c.contact.finger = 4;
+  c.contact.object = 7;
   c.received_ns = 1'000'000'000;
   for (int k = 0; k < 3; ++k) {
-    c.p_WC_m[k] = 0.1 * (k + 1);
-    c.u_W_m[k] = -0.001 * (k + 1);
-    c.f_E_W_N[k] = 1.5 * (k + 1);
-    c.n_W[k] = 0.6 * k;
+    c.contact.p_OC_m[k] = 0.1 * (k + 1);
+    c.contact.u_O_m[k] = -0.001 * (k + 1);
+    c.contact.f_O_N[k] = 1.5 * (k + 1);
+    c.contact.n_O[k] = 0.6 * k;
   }
   const contact::PeerFade fade{200'000'000, 500'000'000};
-  const contact::RemoteContact r = ToRemoteContact(c, fade, c.received_ns + 200'000'000);
-  EXPECT_EQ(r.hand, 2);
+  const contact::FingerContact r = contact::FadedContact(c, fade, c.received_ns + 200'000'000);
   EXPECT_EQ(r.finger, 4);
   EXPECT_EQ(r.object, 7);
-  EXPECT_EQ(r.p_WC_m, Eigen::Vector3d(0.1, 0.2, 0.30000000000000004));
-  EXPECT_EQ(r.u_W_m, Eigen::Vector3d(-0.001, -0.002, -0.003));
-  EXPECT_EQ(r.f_E_W_N, Eigen::Vector3d(1.5, 3.0, 4.5));
-  EXPECT_EQ(r.n_W, Eigen::Vector3d(0.0, 0.6, 1.2));
+  EXPECT_EQ(contact::AsVector(r.p_OC_m), Eigen::Vector3d(0.1, 0.2, 0.30000000000000004));
+  EXPECT_EQ(contact::AsVector(r.u_O_m), Eigen::Vector3d(-0.001, -0.002, -0.003));
+  EXPECT_EQ(contact::AsVector(r.f_O_N), Eigen::Vector3d(1.5, 3.0, 4.5));
+  EXPECT_EQ(contact::AsVector(r.n_O), Eigen::Vector3d(0.0, 0.6, 1.2));
   // Half-way through the fade: u and f halved, the point kept.
-  const contact::RemoteContact half = ToRemoteContact(c, fade, c.received_ns + 350'000'000);
-  EXPECT_EQ(half.p_WC_m, r.p_WC_m);
-  EXPECT_TRUE(half.u_W_m.isApprox(0.5 * r.u_W_m, 1e-12));
-  EXPECT_TRUE(half.f_E_W_N.isApprox(0.5 * r.f_E_W_N, 1e-12));
-  EXPECT_EQ(half.n_W, r.n_W);  // a direction: not faded
+  const contact::FingerContact half = contact::FadedContact(c, fade, c.received_ns + 350'000'000);
+  EXPECT_EQ(contact::AsVector(half.p_OC_m), contact::AsVector(r.p_OC_m));
+  EXPECT_TRUE(contact::AsVector(half.u_O_m).isApprox(0.5 * contact::AsVector(r.u_O_m), 1e-12));
+  EXPECT_TRUE(contact::AsVector(half.f_O_N).isApprox(0.5 * contact::AsVector(r.f_O_N), 1e-12));
+  EXPECT_EQ(contact::AsVector(half.n_O), contact::AsVector(r.n_O));  // a direction: not faded
   // A step stamped before the set arrived (the hand-over raced the step's clock read): fresh.
   EXPECT_EQ(fade.WeightAt(c.received_ns - 1000, c.received_ns), 1.0);
   EXPECT_EQ(fade.WeightAt(c.received_ns + 500'000'000, c.received_ns), 0.0);

@@ -350,10 +350,10 @@ TEST(TailFriction, AFingertipHeldStillOnTheTailComesToRest) {
 // through the receiver's coupling passivity controller (contact::CouplingPassivity, on as by
 // default). From a cut on nothing more arrives: what is held fades out.
 struct DelayedLink {
-  std::vector<std::pair<int, std::vector<contact::RemoteContact>>> in_flight;
+  std::vector<std::pair<int, std::vector<contact::FingerContact>>> in_flight;
   std::vector<contact::PeerContact> held;
   contact::CouplingPassivity passivity;
-  std::vector<contact::RemoteContact> Deliver(int k, const std::vector<contact::RemoteContact>& sent, int delay_ms,
+  std::vector<contact::FingerContact> Deliver(int k, const std::vector<contact::FingerContact>& sent, int delay_ms,
                                               bool cut = false) {
     const std::uint64_t now_ns = 1'000'000ull * static_cast<std::uint64_t>(k + 1);
     if (cut) in_flight.clear();
@@ -362,24 +362,17 @@ struct DelayedLink {
       held.clear();
       for (const auto& r : in_flight.front().second) {
         contact::PeerContact c;
-        c.hand = r.hand;
-        c.finger = r.finger;
-        c.object = r.object;
-        for (int i = 0; i < 3; ++i) {
-          c.p_WC_m[i] = r.p_WC_m[i];
-          c.u_W_m[i] = r.u_W_m[i];
-          c.n_W[i] = r.n_W[i];
-          c.f_E_W_N[i] = r.f_E_W_N[i];
-        }
+        c.hand = 1;
+        c.contact = r;
         c.received_ns = now_ns;
         held.push_back(c);
       }
       in_flight.erase(in_flight.begin());
     }
-    std::vector<contact::RemoteContact> out;
+    std::vector<contact::FingerContact> out;
     passivity.BeginStep(1e-3);
     for (const auto& c : held) {
-      out.push_back(contact::ToRemoteContact(c, contact::PeerFade{}, now_ns));
+      out.push_back(contact::FadedContact(c, contact::PeerFade{}, now_ns));
       passivity.Admit(c, out.back());
     }
     return out;
@@ -387,9 +380,12 @@ struct DelayedLink {
 };
 
 // What a contact set carries of a fingertip that touches (one contact, hand 1, finger 1).
-std::vector<contact::RemoteContact> Sent(const contact::FingerResult& r) {
-  std::vector<contact::RemoteContact> v;
-  if (r.in_contact) v.push_back({1, 1, r.object, r.p_WC_m, r.u_W_m, r.f_E_W_N, r.n_W});
+std::vector<contact::FingerContact> Sent(const contact::FingerResult& r) {
+  std::vector<contact::FingerContact> v;
+  if (r.in_contact) {
+    v.push_back(r.contact);
+    v.back().finger = 1;
+  }
   return v;
 }
 
@@ -421,7 +417,7 @@ TwoHandsResult HoldTheTailWithTwoHands(double mu_static, double mu_kinetic, doub
   std::array<Eigen::Vector3d, 5> tips_a, tips_b;
   tips_a.fill(Eigen::Vector3d(5, 5, 5));
   tips_b.fill(Eigen::Vector3d(5, 5, 5));
-  std::vector<contact::RemoteContact> from_alice, from_bob;
+  std::vector<contact::FingerContact> from_alice, from_bob;
   DelayedLink at_alice, at_bob;
   TwoHandsResult out;
   contact::FingerResult a_prev, b_prev;
@@ -439,9 +435,9 @@ TwoHandsResult HoldTheTailWithTwoHands(double mu_static, double mu_kinetic, doub
       const auto in_a = at_alice.Deliver(k, from_bob, delay_ms);
       const auto in_b = at_bob.Deliver(k, from_alice, delay_ms);
       alice.world->Step(1e-3, tips_a, in_a);
-      at_alice.passivity.Observe(alice.world->remote_forces_W());
+      at_alice.passivity.Observe(alice.world->remote_forces_O());
       bob.world->Step(1e-3, tips_b, in_b);
-      at_bob.passivity.Observe(bob.world->remote_forces_W());
+      at_bob.passivity.Observe(bob.world->remote_forces_O());
     }
     const contact::FingerResult& a = alice.world->fingers()[1];
     const contact::FingerResult& b = bob.world->fingers()[1];
@@ -566,7 +562,7 @@ TEST(TailFriction, APeersFadingPressLetsGoWithoutAStep) {
   const Eigen::Vector3d b0(0.234, 0.18, 0.11), b1(0.27, 0.08, 0.0785);
   auto min_jerk = [](double t) { return t <= 0 ? 0 : (t >= 1 ? 1 : t * t * t * (10 - 15 * t + 6 * t * t)); };
   constexpr int kCut = 4000, kEnd = 5200, kDelay = 15;
-  std::vector<contact::RemoteContact> from_alice, from_bob;
+  std::vector<contact::FingerContact> from_alice, from_bob;
   DelayedLink at_alice, at_bob;
   std::vector<double> fa(kEnd), fb(kEnd);
   for (int k = 0; k < kEnd; ++k) {
@@ -575,9 +571,9 @@ TEST(TailFriction, APeersFadingPressLetsGoWithoutAStep) {
     const auto in_a = at_alice.Deliver(k, from_bob, kDelay, k >= kCut);
     const auto in_b = at_bob.Deliver(k, from_alice, kDelay, k >= kCut);
     alice.world->Step(1e-3, tips_a, in_a);
-    at_alice.passivity.Observe(alice.world->remote_forces_W());
+    at_alice.passivity.Observe(alice.world->remote_forces_O());
     bob.world->Step(1e-3, tips_b, in_b);
-    at_bob.passivity.Observe(bob.world->remote_forces_W());
+    at_bob.passivity.Observe(bob.world->remote_forces_O());
     from_alice = Sent(alice.world->fingers()[1]);
     from_bob = Sent(bob.world->fingers()[1]);
     fa[k] = alice.world->fingers()[1].f_E_W_N.z();
@@ -631,7 +627,7 @@ TEST(TailFriction, APeersSolveOfAContactSetGivesTheForceItsSenderFelt) {
       const contact::FingerResult r = t.Step();
       peer.world->Step(1e-3, none, Sent(r));
       if (!r.in_contact || r.f_E_W_N.norm() >= clamp) continue;
-      const double e = (peer.world->remote_forces_W()[0] + r.f_E_W_N).norm() / std::max(r.f_E_W_N.norm(), 0.1);
+      const double e = (peer.world->pose(r.object).linear() * peer.world->remote_forces_O()[0] + r.f_E_W_N).norm() / std::max(r.f_E_W_N.norm(), 0.1);
       ++steps;
       off += e > 0.01 ? 1 : 0;
       worst = std::max(worst, e);

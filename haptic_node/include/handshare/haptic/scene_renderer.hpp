@@ -29,18 +29,14 @@ inline constexpr int kMaxReportedBodies = 8;
 struct ContactReport {
   std::uint64_t seq = 0;
   std::uint64_t step_ns = 0;  ///< the step that made it (steady clock) [ns]
-  struct Finger {
-    bool active = false;
-    std::int32_t object = -1;       // world object index (SceneModels::ids)
-    std::int32_t node = -1;         // deformable: main surface node
-    double p_WC_m[3] = {}, n_W[3] = {}, p_WE_m[3] = {}, u_W_m[3] = {}, f_W_N[3] = {};
-    double depth_m = 0.0;
-  } fingers[kFingers];
+  /// Each finger's main contact as the hand shares it (contact::FingerContact: frame O, force
+  /// on the object; object -1: touching nothing).
+  contact::FingerContact fingers[kFingers];
   struct Body {
     std::int32_t object = -1;
-    double p_WO_m[3] = {};
-    double q_WO_wxyz[4] = {1, 0, 0, 0};
-    double v_WO_m_per_s[3] = {};
+    contact::Vec3 p_WO_m{};
+    contact::QuatWxyz q_WO_wxyz{1, 0, 0, 0};
+    contact::Vec3 v_WO_m_per_s{};
   } bodies[kMaxReportedBodies];
   std::int32_t num_bodies = 0;
   /// The newest peer contact set this loop has used: its sender's stamp (RemoteContacts::
@@ -71,9 +67,9 @@ struct FollowedBodies {
   std::int32_t count = 0;
   struct Item {
     std::int32_t object = -1;
-    double p_WO_m[3] = {};
-    double q_WO_wxyz[4] = {1, 0, 0, 0};
-    double v_WO_m_per_s[3] = {};
+    contact::Vec3 p_WO_m{};
+    contact::QuatWxyz q_WO_wxyz{1, 0, 0, 0};
+    contact::Vec3 v_WO_m_per_s{};
     std::uint64_t received_ns = 0;  ///< common::SteadyNowNs() when the sample arrived
   } items[kMaxReportedBodies];
 };
@@ -93,7 +89,7 @@ struct DeformableLoads {
     double R_WO[9] = {};         ///< the object's orientation, row-major
     struct Load {
       std::int32_t slot = -1;  ///< compliance slot (fem::NodeLoad)
-      double f_N[3] = {};      ///< force on the object, frame O [N]
+      contact::Vec3 f_N{};     ///< force on the object, frame O [N]
     } loads[kMaxLoads];
   } items[kMaxObjects];
 };
@@ -158,7 +154,7 @@ class SceneRenderer final : public ForceRenderer {
   controls::EventBuffer event_buffer_;
   RemoteContacts remote_;
   FollowedBodies followed_;
-  std::array<contact::RemoteContact, kMaxRemoteContacts> remote_contacts_{};
+  std::array<contact::FingerContact, kMaxRemoteContacts> remote_contacts_{};
   contact::CouplingPassivity passivity_;
   contact::PeerWeights peer_weights_;  // the fade's weights, rising again at its rate
   // Channels.

@@ -154,7 +154,7 @@ class ObjectAuthority {
   std::vector<Deformable> deformables_;
   std::vector<std::pair<contact::ObjectId, std::size_t>> moving_;  // object, scene index
   std::map<contact::ObjectId, Eigen::Vector3d> last_published_;     // free bodies
-  std::vector<contact::RemoteContact> remote_;
+  std::vector<contact::FingerContact> remote_;
   contact::PeerWeights peer_weights_;  // the fade's weights, rising again at its rate
   bool keyframes_requested_ = false;
   Clock::time_point next_pose_refresh_{};  // ObjectAuthorityOptions::pose_refresh_period

@@ -80,12 +80,13 @@ class CouplingPassivity {
   /// A peer contact on a deformable entering this step's solve (the haptic node hands in no
   /// other: ToRemoteContacts keeps the deformables' only). `sent` is the sample as it arrived
   /// (not faded: it feeds E_tx when its received_ns is new); `input` the solve's contact
-  /// (faded), whose u_W_m the controller may hold back. Admitted contacts are numbered in call
+  /// (faded), whose u_O_m the controller may hold back. Admitted contacts are numbered in call
   /// order for Observe.
-  void Admit(const PeerContact& sent, RemoteContact& input) noexcept;
+  void Admit(const PeerContact& sent, FingerContact& input) noexcept;
   /// After the step: the local solve's force of each admitted contact's patch on its body, in
-  /// admission order (HapticWorld::remote_forces_W). Ends the step: unseen channels close.
-  void Observe(std::span<const Eigen::Vector3d> force_on_body_W) noexcept;
+  /// admission order, in the body's frame O as the contacts' displacements
+  /// (HapticWorld::remote_forces_O). Ends the step: unseen channels close.
+  void Observe(std::span<const Eigen::Vector3d> force_on_body_O) noexcept;
 
   const CouplingPassivityStats& stats() const noexcept { return stats_; }
   /// E_obs of the channel of (user_key, finger, object), or 0 if none is open (tests).

@@ -31,6 +31,7 @@
 #include <Eigen/Core>
 #include <Eigen/Geometry>
 
+#include "handshare/contact/finger_contact.hpp"
 #include "handshare/contact/mesh_collider.hpp"
 #include "handshare/contact/proxy.hpp"
 #include "handshare/contact/tri_mesh.hpp"
@@ -49,8 +50,6 @@ using common::kFingers;
 inline constexpr double kEarthGravity_m_per_s2 = 9.81;
 inline constexpr double kMoonGravity_m_per_s2 = 1.62;
 inline constexpr double kMarsGravity_m_per_s2 = 3.71;
-
-using ObjectId = std::int32_t;
 
 /// Contact material of a rigid object (per object).
 struct RigidMaterial {
@@ -127,22 +126,13 @@ struct WorldConfig {
   std::int32_t max_candidates = 512;  ///< triangles per collision query.
 };
 
-/// One remote fingertip on a shared object, as carried by a peer's ContactSet. Plain data.
-struct RemoteContact {
-  std::int32_t hand = 0;     ///< remote hand index (informative).
-  std::int32_t finger = 0;
-  ObjectId object = -1;
-  Eigen::Vector3d p_WC_m = Eigen::Vector3d::Zero();  ///< contact point on the undeformed surface.
-  Eigen::Vector3d u_W_m = Eigen::Vector3d::Zero();   ///< imposed displacement: -depth * normal,
-                                                     ///< plus the fingertip's stick (friction).
-  Eigen::Vector3d f_E_W_N = Eigen::Vector3d::Zero(); ///< force on the remote fingertip (dynamic
-                                                     ///< bodies: the body gets minus this).
-  Eigen::Vector3d n_W = Eigen::Vector3d::Zero();     ///< outward normal at p_WC_m; zero (unknown):
-                                                     ///< -u / |u|, no stick.
-};
-
-/// What one local finger feels and touches this step. Plain data, trivially copyable.
+/// What one local finger feels and touches this step: in W what the device and this node's
+/// display use (force felt, proxy, the main contact), and in `contact` what the hand shares
+/// with the others (FingerContact, frame O). Plain data.
 struct FingerResult {
+  /// The main contact (largest force) as the hand shares it: frame O, force on the object
+  /// (finger_contact.hpp). contact.object -1: this finger touches nothing.
+  FingerContact contact;
   Eigen::Vector3d f_E_W_N = Eigen::Vector3d::Zero();  ///< force on the fingertip, clamped.
   Eigen::Vector3d p_WP_m = Eigen::Vector3d::Zero();   ///< proxy (IHIP) centre; fingertip if free.
   Eigen::Vector3d e_PE_W_m = Eigen::Vector3d::Zero(); ///< penetration vector, proxy -> fingertip.
@@ -200,20 +190,22 @@ class HapticWorld {
   /// @param dt_s    step [s] (> 0): damping velocities and body integration.
   /// @param p_WE_m  the local hand's kFingers fingertip centres in W [m]; non-finite entries
   ///                give that finger zero force and flag it invalid (its proxies are kept).
-  /// @param remote  other hands' contacts on shared objects (deformables: one solve with them;
-  ///                dynamic bodies: their reported forces push the body).
+  /// @param remote  other hands' contacts on shared objects, faded as the caller wants them
+  ///                (FadedContact): deformables: one solve with them; dynamic bodies: their
+  ///                forces push the body.
   StepReport Step(double dt_s, std::span<const Eigen::Vector3d> p_WE_m,
-                  std::span<const RemoteContact> remote = {}) noexcept;
+                  std::span<const FingerContact> remote = {}) noexcept;
 
   std::span<const FingerResult> fingers() const noexcept { return {results_.data(), results_.size()}; }
   /// Deformable: the held nodes' loads of the last solve (forces on the object, frame O), for
   /// the deformation the world server publishes. Empty for other objects.
   std::span<const fem::NodeLoad> held_loads(ObjectId id) const noexcept;
-  /// The last step's force of each remote contact's patch on its deformable [N], in W, by the
-  /// contact's index in Step's `remote` span (zero: not a deformable's, rejected, or beyond
-  /// kMaxRemoteForces): what the coupling's passivity observer reads (coupling_passivity.hpp).
-  std::span<const Eigen::Vector3d> remote_forces_W() const noexcept {
-    return {remote_force_W_.data(), num_remote_forces_};
+  /// The last step's force of each remote contact's patch on its deformable [N], in the
+  /// object's frame O (the frame of the contact's u_O_m), by the contact's index in Step's
+  /// `remote` span (zero: not a deformable's, rejected, or beyond kMaxRemoteForces): what the
+  /// coupling's passivity observer reads (coupling_passivity.hpp).
+  std::span<const Eigen::Vector3d> remote_forces_O() const noexcept {
+    return {remote_force_O_.data(), num_remote_forces_};
   }
   static constexpr std::size_t kMaxRemoteForces = 64;
   /// Deformable: its solver (last solve's per-input forces and states), or nullptr.
@@ -245,7 +237,10 @@ class HapticWorld {
  private:
   struct Object;
   void CheckSetup(const char* what) const;
-  void StepDeformable(Object& o, std::span<const RemoteContact> remote, StepReport& report) noexcept;
+  /// Finger i's main contact as the hand shares it (FingerResult::contact), frame O, from its
+  /// result and its fingertip centre p_WE.
+  FingerContact SharedContact(int i, const FingerResult& res, const Eigen::Vector3d& p_WE) const noexcept;
+  void StepDeformable(Object& o, std::span<const FingerContact> remote, StepReport& report) noexcept;
   /// A moded deformable: s mode at the surface point nearest g_O (interpolated over its
   /// triangle), zero if no surface is within reach of the fingertip.
   Eigen::Vector3d ModeShift(const Object& o, const Eigen::Vector3d& g_O) noexcept;
@@ -298,7 +293,7 @@ class HapticWorld {
   std::vector<FingerObject> fo_;  // [finger * num_objects + object]
   std::array<FingerResult, kFingers> results_{};
   std::vector<std::int32_t> mode_candidates_;  // ModeShift's ball query
-  std::array<Eigen::Vector3d, kMaxRemoteForces> remote_force_W_{};
+  std::array<Eigen::Vector3d, kMaxRemoteForces> remote_force_O_{};
   std::size_t num_remote_forces_ = 0;
   std::array<double, kFingers> scale_{};
 };

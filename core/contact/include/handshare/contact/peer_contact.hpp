@@ -1,15 +1,14 @@
 #pragma once
-/// Another hand's fingertip on an object of this process's models, as the haptic thread takes
-/// it: plain, trivially copyable data with no middleware type, so the haptic renderer's
-/// headers never reach the DDS layer. handshare::session turns received contact sets into
-/// these (the DDS boundary); the haptic renderer and the world server turn them into
-/// RemoteContacts for the solves, faded by the contact's age at their own step (PeerFade).
+/// How the other hands' contacts (PeerContact, finger_contact.hpp: a FingerContact with who
+/// sent it and when it came) enter a solve: faded by their age at the solver's own step
+/// (PeerFade, FadedContact), and rising again at the fade's rate (PeerWeights). The haptic
+/// renderer and the world server both step them through here. Plain data, no middleware.
 #include <algorithm>
 #include <array>
 #include <cstdint>
 #include <string_view>
 
-#include "handshare/contact/haptic_world.hpp"
+#include "handshare/contact/finger_contact.hpp"
 
 namespace handshare::contact {
 
@@ -38,21 +37,6 @@ struct PeerFade {
   double rate_per_s() const noexcept { return 1e9 / static_cast<double>(lifespan_ns - fade_after_ns); }
 };
 
-/// One peer fingertip on an object of the local models, as its set carried it (not faded).
-/// Plain data.
-struct PeerContact {
-  std::int32_t hand = 0;        ///< 1, 2, ... in user-name order (changes as users come and go)
-  std::uint64_t user_key = 0;   ///< the user's, for as long as the user is there (UserKey); 0: unknown
-  std::int32_t finger = 0;
-  std::int32_t object = -1;     ///< object index of the local models (world::SceneModels)
-  double p_WC_m[3] = {};        ///< contact point on the undeformed surface [m], in W
-  double u_W_m[3] = {};         ///< imposed displacement (deformables) [m], in W, not faded:
-                                ///< the indentation along -n_W plus the fingertip's stick
-  double n_W[3] = {};           ///< outward surface normal at the contact point (zero: unknown)
-  double f_E_W_N[3] = {};       ///< force on the peer's fingertip [N], in W, not faded
-  std::uint64_t received_ns = 0;  ///< when its set arrived here (steady clock, common::SteadyNowNs) [ns]
-};
-
 /// A user name's key for PeerContact::user_key: FNV-1a of its bytes, never 0.
 inline std::uint64_t UserKey(std::string_view user) noexcept {
   std::uint64_t h = 0xcbf29ce484222325ull;
@@ -60,24 +44,19 @@ inline std::uint64_t UserKey(std::string_view user) noexcept {
   return h == 0 ? 1 : h;
 }
 
-/// The contact as a solve takes it at `now_ns` (steady clock): u and f scaled by the fade's
-/// weight at the contact's age. Whoever steps the solve calls this with its own step time, so
+/// The contact as a solve takes it: u and f scaled by the fade's weight w. Whoever steps the
+/// solve calls this with the weight at its own step time (PeerFade::WeightAt, PeerWeights), so
 /// the fade moves with every step however late the contact was handed over. Real-time safe.
-inline RemoteContact ToRemoteContact(const PeerContact& c, double w) noexcept {
-  RemoteContact r;
-  r.hand = c.hand;
-  r.finger = c.finger;
-  r.object = c.object;
-  r.p_WC_m = Eigen::Vector3d(c.p_WC_m[0], c.p_WC_m[1], c.p_WC_m[2]);
-  r.u_W_m = w * Eigen::Vector3d(c.u_W_m[0], c.u_W_m[1], c.u_W_m[2]);
-  r.n_W = Eigen::Vector3d(c.n_W[0], c.n_W[1], c.n_W[2]);
-  r.f_E_W_N = w * Eigen::Vector3d(c.f_E_W_N[0], c.f_E_W_N[1], c.f_E_W_N[2]);
+inline FingerContact FadedContact(const PeerContact& c, double w) noexcept {
+  FingerContact r = c.contact;
+  AsVector(r.u_O_m) *= w;
+  AsVector(r.f_O_N) *= w;
   return r;
 }
 
-/// ToRemoteContact at the fade law's weight for its age at now_ns.
-inline RemoteContact ToRemoteContact(const PeerContact& c, const PeerFade& fade, std::uint64_t now_ns) noexcept {
-  return ToRemoteContact(c, fade.WeightAt(now_ns, c.received_ns));
+/// FadedContact at the fade law's weight for its age at now_ns.
+inline FingerContact FadedContact(const PeerContact& c, const PeerFade& fade, std::uint64_t now_ns) noexcept {
+  return FadedContact(c, fade.WeightAt(now_ns, c.received_ns));
 }
 
 /// The weights a haptic step gives the peers' contacts: the fade law's, except that a contact
@@ -97,12 +76,12 @@ class PeerWeights {
     Channel* ch = nullptr;
     for (int i = 0; i < count_ && ch == nullptr; ++i) {
       Channel& x = channels_[static_cast<std::size_t>(i)];
-      if (x.user_key == c.user_key && x.finger == c.finger && x.object == c.object) ch = &x;
+      if (x.user_key == c.user_key && x.finger == c.contact.finger && x.object == c.contact.object) ch = &x;
     }
     if (ch == nullptr) {
       if (count_ == kMaxChannels) return law;
       ch = &channels_[static_cast<std::size_t>(count_++)];
-      *ch = {c.user_key, c.finger, c.object, law, now_ns, true};
+      *ch = {c.user_key, c.contact.finger, c.contact.object, law, now_ns, true};
       return law;
     }
     const double w = law > ch->w ? std::min(law, ch->w + rate_per_s * dt_s) : law;

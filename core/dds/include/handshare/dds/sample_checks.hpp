@@ -2,7 +2,7 @@
 /// Received samples are checked before they touch a simulation: finite numbers, magnitudes a
 /// hand, a body or a deformation can have, sizes within bounds, the right session. A sample
 /// that fails is dropped whole, never applied, and counted (DroppedSamples); the check says
-/// what is wrong and where ("fingers[2].u_imposed_W_m[1] is nan"), for the node's log.
+/// what is wrong and where ("fingers[2].u_O_m[1] is nan"), for the node's log.
 ///
 /// What these checks do not decide: whether an object id exists in the local models. A
 /// contact set naming an object of another world is normal around a world change and is
@@ -23,7 +23,7 @@ namespace handshare::dds {
 /// Bounds of what a sample may say (SI). Generous: they reject corrupt or hostile values,
 /// not unusual motion.
 struct SampleBounds {
-  double max_position_m = 100.0;          ///< |p| of any point in W
+  double max_position_m = 100.0;          ///< |p| of any point in W (a contact's: in its object's frame)
   double max_displacement_m = 0.1;        ///< |u| imposed on or shown by a deformable
   double max_force_N = 1000.0;            ///< |f| of a contact force
   double max_speed_m_per_s = 100.0;       ///< |v| of a body

@@ -12,7 +12,7 @@
 /// own fingertips already came off smoothly).
 ///
 /// The contacts come out as received, each with its set's arrival time; whoever steps a solve
-/// fades them at its own step time (contact::ToRemoteContact with fade()): the world server at
+/// fades them at its own step time (contact::FadedContact with fade()): the world server at
 /// its tick, the haptic node on its haptic thread, so a stalled bridge thread cannot hold the
 /// weight still and then step it.
 #include <chrono>
@@ -21,6 +21,7 @@
 #include <string>
 
 #include "handshare/contact/peer_contact.hpp"
+#include "handshare/dds/contact_codec.hpp"
 #include "handshare/dds/messages.hpp"
 #include "handshare/world/scene_models.hpp"
 
@@ -31,7 +32,7 @@ struct PeerContactsConfig {
   std::chrono::nanoseconds lifespan = std::chrono::milliseconds(600);
 };
 
-using contact::PeerContact;  // handshare/contact/peer_contact.hpp: the plain, middleware-free type
+using contact::PeerContact;  // handshare/contact/finger_contact.hpp: the plain, middleware-free type
 
 class PeerContacts {
  public:
@@ -47,8 +48,8 @@ class PeerContacts {
 
   /// Calls fn(const PeerContact&, const msg::ContactSet&) for every active finger of every
   /// peer on an object of `models` (unknown objects are skipped) whose set has not faded out
-  /// at `now`. The contacts are not faded: fade them at the step that uses them
-  /// (contact::ToRemoteContact(c, fade(), now_ns)).
+  /// at `now`, decoded by the contact codec (dds::DecodeFingerContact). The contacts are not
+  /// faded: fade them at the step that uses them (contact::FadedContact(c, fade(), now_ns)).
   template <typename Fn>
   void ForEach(const world::SceneModels& models, Clock::time_point now, Fn&& fn) const {
     std::int32_t hand = 0;
@@ -61,18 +62,10 @@ class PeerContacts {
         const auto& f = entry.set.fingers()[i];
         if (!f.active()) continue;
         PeerContact c;
-        c.object = models.Find(f.object_id().to_string());
-        if (c.object < 0) continue;
+        if (!dds::DecodeFingerContact(f, i, models.Find(f.object_id().to_string()), c.contact)) continue;
         c.hand = hand;
         c.user_key = user_key;
-        c.finger = i;
         c.received_ns = received_ns;
-        for (int k = 0; k < 3; ++k) {
-          c.p_WC_m[k] = f.p_W_m()[k];
-          c.u_W_m[k] = f.u_imposed_W_m()[k];
-          c.n_W[k] = f.n_W()[k];
-          c.f_E_W_N[k] = -f.f_W_N()[k];
-        }
         fn(c, entry.set);
       }
     }
