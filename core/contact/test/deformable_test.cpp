@@ -210,6 +210,43 @@ TEST(Deformable, APeersContactsAreFollowedThroughEveryChange) {
   }
 }
 
+// A hand has 1 to 5 contact points: a one-point device (a stylus) hands in one fingertip, with no
+// NaN stand-ins for the fingers it lacks, and a process with no hand at all (the world server)
+// hands in none and still solves the others' contacts.
+TEST(Deformable, AOnePointHandAndAHandlessSolveNeedNoStandIns) {
+  const Block& b = TheBlock();
+  ObjectId id = -1;
+  auto five = MakeWorld(b, 16, &id);
+  Lower(*five, b, {{0.03, 0.03, 0.002}});  // finger 0 presses, the other four far away
+  auto one = MakeWorld(b, 16, &id);
+  StepReport rep;
+  for (int k = 0; k <= 40; ++k) {
+    const std::array<Eigen::Vector3d, 1> tip = {TipAbove(b, {0.03, 0.03, 0.002}, 0.002 - 0.004 * k / 40.0)};
+    rep = one->Step(1e-3, tip);
+  }
+  EXPECT_TRUE(rep.ok);
+  EXPECT_EQ(rep.invalid_fingers, 0);  // the missing fingers are not faults
+  const FingerResult& r = one->fingers()[0];
+  ASSERT_TRUE(r.in_contact);
+  EXPECT_LT((r.f_E_W_N - five->fingers()[0].f_E_W_N).norm(), 1e-12 * r.f_E_W_N.norm());
+  for (int i = 1; i < kFingers; ++i) {
+    const FingerResult& absent = one->fingers()[static_cast<std::size_t>(i)];
+    EXPECT_FALSE(absent.in_contact);
+    EXPECT_TRUE(absent.f_E_W_N.isZero(0.0));
+    EXPECT_FALSE(absent.contact.active());
+    EXPECT_EQ(absent.contact.finger, i);
+  }
+  // No hand: the one-point hand's contact alone, as the world server solves it.
+  auto server = MakeWorld(b, 16, &id);
+  const StepReport srep = server->Step(1e-3, std::span<const Eigen::Vector3d>{}, std::span(&r.contact, 1));
+  EXPECT_TRUE(srep.ok);
+  EXPECT_EQ(srep.invalid_fingers, 0);
+  EXPECT_LT((server->remote_forces_O()[0] - AsVector(r.contact.f_O_N)).norm(), 1e-9 * r.f_E_W_N.norm());
+  // More contact points than a hand has: refused, nothing felt.
+  const std::array<Eigen::Vector3d, kFingers + 1> six{};
+  EXPECT_FALSE(server->Step(1e-3, six).ok);
+}
+
 // A deformable that moves as a rigid body (a swimming Daphnia, a bob): the hand that presses it
 // and a process that solves that hand's contact again (the world server, a peer) hold the body at
 // poses a few milliseconds apart. The contact travels in the body's frame O, so the receiver

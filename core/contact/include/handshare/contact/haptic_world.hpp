@@ -188,8 +188,10 @@ class HapticWorld {
   // ---- Real time (noexcept, no allocation) ----
   /// One haptic step.
   /// @param dt_s    step [s] (> 0): damping velocities and body integration.
-  /// @param p_WE_m  the local hand's kFingers fingertip centres in W [m]; non-finite entries
-  ///                give that finger zero force and flag it invalid (its proxies are kept).
+  /// @param p_WE_m  the local hand's fingertip centres in W [m], thumb first: 0 to kFingers of
+  ///                them (a device with fewer contact points passes fewer; fingers beyond touch
+  ///                nothing; the world server, which has no hand, passes none). Non-finite
+  ///                entries give that finger zero force and flag it invalid (its proxies are kept).
   /// @param remote  other hands' contacts on shared objects, faded as the caller wants them
   ///                (FadedContact): deformables: one solve with them; dynamic bodies: their
   ///                forces push the body.
@@ -236,14 +238,46 @@ class HapticWorld {
 
  private:
   struct Object;
+  struct PatchMemo;
+  struct FingerObject;
+  /// A deformable's inputs as its stage gathers them: nodes so far, friction patches so far.
+  struct PatchGather {
+    std::int32_t m = 0;
+    std::int16_t num_friction = 0;
+  };
   void CheckSetup(const char* what) const;
+
+  // ---- The stages of Step, each in the file that says so ----
+  /// haptic_world.cpp: clears the last step's results; false (report not ok) for a bad dt or
+  /// more than kFingers fingertips.
+  bool BeginStep(double dt_s, std::span<const Eigen::Vector3d> p_WE, std::span<const FingerContact> remote,
+                 StepReport& report) noexcept;
+  /// finger_stages.cpp: fingertip i at p_WE against every object (ProxyStep each).
+  void CollideFinger(int i, const Eigen::Vector3d& p_WE, double dt_s, StepReport& report) noexcept;
+  /// finger_stages.cpp: finger i's proxy on object k (a fingertip not `valid` keeps its proxy
+  /// and touches nothing), and a rigid object's spring-damper force.
+  void ProxyStep(int i, std::size_t k, bool valid, const Eigen::Vector3d& p_WE, double dt_s) noexcept;
+  /// finger_stages.cpp: finger i's forces summed and clamped, its main contact in W and as it
+  /// shares it (SharedContact).
+  void ResolveFinger(int i, const Eigen::Vector3d& p_WE) noexcept;
   /// Finger i's main contact as the hand shares it (FingerResult::contact), frame O, from its
   /// result and its fingertip centre p_WE.
   FingerContact SharedContact(int i, const FingerResult& res, const Eigen::Vector3d& p_WE) const noexcept;
-  void StepDeformable(Object& o, std::span<const FingerContact> remote, StepReport& report) noexcept;
+  /// deformable_stage.cpp: every hand's patches on deformable o (object k) in one solve.
+  void StepDeformable(Object& o, std::size_t k, std::span<const FingerContact> remote, StepReport& report) noexcept;
+  void GatherLocalPatch(Object& o, std::size_t k, int i, PatchGather& g) noexcept;
+  void GatherRemotePatch(Object& o, std::size_t r, const FingerContact& rc, PatchGather& g, StepReport& report) noexcept;
+  void AddPatch(Object& o, PatchGather& g, const Eigen::Vector3d& p_O, const Eigen::Vector3d& n_O, double depth,
+                std::int32_t& count, bool& truncated, PatchMemo* memo = nullptr,
+                fem::ContactInput* kept = nullptr) noexcept;
+  void ApplyFingerPatch(Object& o, FingerObject& fo, std::span<const Eigen::Vector3d> forces) noexcept;
   /// A moded deformable: s mode at the surface point nearest g_O (interpolated over its
   /// triangle), zero if no surface is within reach of the fingertip.
   Eigen::Vector3d ModeShift(const Object& o, const Eigen::Vector3d& g_O) noexcept;
+  /// body_stage.cpp: the fingertips' reactions and the other hands' forces on the bodies.
+  void ApplyReactions(std::span<const FingerContact> remote, StepReport& report) noexcept;
+  /// body_stage.cpp: every dynamic body over dt_s (StepBody).
+  void IntegrateBodies(double dt_s) noexcept;
   /// A dynamic body over dt_s, in substeps of at most kMaxBodySubstep_s (the forces the
   /// fingers put on it held): a stalled loop hands in a long dt_s, and one explicit step of
   /// the support spring (5000 N/m under a 0.2 kg ball: stable below about 12 ms) over it
@@ -295,6 +329,8 @@ class HapticWorld {
   std::vector<std::int32_t> mode_candidates_;  // ModeShift's ball query
   std::array<Eigen::Vector3d, kMaxRemoteForces> remote_force_O_{};
   std::size_t num_remote_forces_ = 0;
+  // Each remote contact's patch in its deformable's inputs (begin, count), this step.
+  std::array<std::pair<std::int32_t, std::int32_t>, kMaxRemoteForces> remote_patch_{};
   std::array<double, kFingers> scale_{};
 };
 
