@@ -142,7 +142,7 @@ TEST(SessionLogWriter, AnotherWorldForgetsTheLastWorldsPosesAndPlaces) {
     SessionLog log(file, SessionStart{"s", 7, "h", 1, kT0});
     SessionLogWriter writer(log);
     writer.Take(std::vector<SessionEvent>{ControlStateChanged{Place("lever", 1), true},
-                                          BodyMoved{Body("ball", "", 0.1)}},
+                                          BodyMoved{Body("ball", "", 0.1)}, BodyMoved{Body("cube", "", 0.1)}},
                 t0);
     // Another world within the pose period: its ball's first pose is logged all the same.
     writer.Take(std::vector<SessionEvent>{WorldEntered{"dinosaur"}, BodyMoved{Body("egg", "", 0.2)},
@@ -151,7 +151,8 @@ TEST(SessionLogWriter, AnotherWorldForgetsTheLastWorldsPosesAndPlaces) {
     log.Flush();
   }
   EXPECT_EQ(Query(file, "SELECT COUNT(*) FROM control_states"), "0");
-  EXPECT_EQ(Query(file, "SELECT COUNT(*) FROM object_poses"), "2");
+  EXPECT_EQ(Query(file, "SELECT COUNT(*) FROM object_poses"), "2");  // the egg and the ball, not the cube
+  EXPECT_EQ(Query(file, "SELECT COUNT(*) FROM object_poses WHERE object_id = 'cube'"), "0");
   EXPECT_EQ(Query(file, "SELECT pz FROM object_poses WHERE object_id = 'ball'"), "0.3");
 }
 
