@@ -7,28 +7,11 @@
 #include <set>
 #include <sstream>
 
-#include "handshare/common/clock.hpp"
 #include "handshare/session/contact_deadband.hpp"
 
 namespace handshare::server {
 
 namespace {
-
-msg::ObjectState State(const std::string& session, const std::string& id, const std::string& owner,
-                       const Eigen::Isometry3d& X, const Eigen::Vector3d& v) {
-  msg::ObjectState s;
-  s.object_id(id);
-  s.session(session);
-  s.owner(owner);
-  s.stamp_ns(common::SteadyNowNs());
-  const Eigen::Quaterniond q(X.linear());
-  for (int k = 0; k < 3; ++k) {
-    s.p_WO_m()[k] = X.translation()[k];
-    s.v_WO_m_per_s()[k] = v[k];
-  }
-  s.q_WO_wxyz({q.w(), q.x(), q.y(), q.z()});
-  return s;
-}
 
 bool Finite(const msg::ContactSet& s) {
   for (int k = 0; k < 3; ++k) {
@@ -75,6 +58,24 @@ const session::PeerContacts::Entry* SimulatingSet(const session::PeerContacts& p
     return nullptr;
   }
   return &it->second;
+}
+
+// The tetrahedral mesh of a published deformable, for an independent solve (Abaqus subset;
+// ids = index + 1): DIR/<object>.inp (ObjectAuthorityOptions::dump_dir).
+void DumpMesh(const std::filesystem::path& dir, const world::PreparedDeformable& prepared) {
+  const auto& p = prepared.mesh->positions_m();
+  std::filesystem::create_directories(dir);
+  std::ofstream inp(dir / (prepared.object_id + ".inp"));
+  inp.precision(17);
+  inp << "*NODE\n";
+  for (std::size_t n = 0; n < p.size(); ++n) {
+    inp << n + 1 << ", " << p[n].x() << ", " << p[n].y() << ", " << p[n].z() << "\n";
+  }
+  inp << "*ELEMENT, TYPE=C3D4\n";
+  std::size_t e = 0;
+  for (const auto& t : prepared.mesh->tets()) {
+    inp << ++e << ", " << t[0] + 1 << ", " << t[1] + 1 << ", " << t[2] + 1 << ", " << t[3] + 1 << "\n";
+  }
 }
 
 }  // namespace
@@ -223,21 +224,7 @@ void ObjectAuthority::Adopt(world::SceneModels models, TickOutput& out) {
     d.u_O.assign(static_cast<std::size_t>(vertices), Eigen::Vector3d::Zero());
     d.delta = std::make_unique<DeformationDelta>(static_cast<std::size_t>(vertices), options_.delta);
     deformables_.push_back(std::move(d));
-    if (!options_.dump_dir.empty()) {
-      // The tetrahedral mesh, for an independent solve (Abaqus subset; ids = index + 1).
-      std::filesystem::create_directories(options_.dump_dir);
-      std::ofstream inp(options_.dump_dir / (prepared.object_id + ".inp"));
-      inp.precision(17);
-      inp << "*NODE\n";
-      for (std::size_t n = 0; n < p.size(); ++n) {
-        inp << n + 1 << ", " << p[n].x() << ", " << p[n].y() << ", " << p[n].z() << "\n";
-      }
-      inp << "*ELEMENT, TYPE=C3D4\n";
-      std::size_t e = 0;
-      for (const auto& t : prepared.mesh->tets()) {
-        inp << ++e << ", " << t[0] + 1 << ", " << t[1] + 1 << ", " << t[2] + 1 << ", " << t[3] + 1 << "\n";
-      }
-    }
+    if (!options_.dump_dir.empty()) DumpMesh(options_.dump_dir, prepared);
   }
   std::ostringstream note;
   note << "models of '" << scene_.name << "' ready in "
@@ -248,6 +235,20 @@ void ObjectAuthority::Adopt(world::SceneModels models, TickOutput& out) {
 
 TickOutput ObjectAuthority::Tick(Clock::time_point now, double dt_s) {
   TickOutput out;
+  AdoptModels(out);
+  ArbitrateOwnership(now, out);
+  if (!models_) return out;
+  const BodyPlan plan = PlanBodies(now, out);
+  const std::size_t remote = GatherPeerContacts(now, dt_s);
+  MoveScriptedObjects(now);
+  StepWorld(plan, now, dt_s, remote);
+  PublishBodies(plan, now, out);
+  PublishFields(now, out);
+  keyframes_requested_ = false;
+  return out;
+}
+
+void ObjectAuthority::AdoptModels(TickOutput& out) {
   ReapSuperseded(out);
   if (loading_.valid() && loading_.wait_for(std::chrono::seconds(0)) == std::future_status::ready) {
     try {
@@ -256,6 +257,9 @@ TickOutput ObjectAuthority::Tick(Clock::time_point now, double dt_s) {
       out.notes.push_back("cannot build the models of '" + loading_scene_ + "': " + e.what());
     }
   }
+}
+
+void ObjectAuthority::ArbitrateOwnership(Clock::time_point now, TickOutput& out) {
   peers_.Expire(now);
   out.ownership = arbiter_.Update(now);
   for (const auto& change : out.ownership) {
@@ -265,16 +269,13 @@ TickOutput ObjectAuthority::Tick(Clock::time_point now, double dt_s) {
       handing_over_.erase(change.object_id);
     }
   }
-  if (!models_) return out;
-  auto& world = *models_->world;
+}
 
-  // Who simulates what: owned bodies follow their owner's newest reported pose; a resumed
-  // session's bodies held for their owner's claim stay where the log left them.
-  std::map<contact::ObjectId, std::pair<std::string, const session::PeerContacts::Entry*>> owned;
-  // Held at rest this tick: a resumed session's body reserved for its owner's claim (not
-  // published: the claim decides), or a body handed over until its new owner simulates it.
-  std::map<contact::ObjectId, Eigen::Isometry3d> at_rest;
-  std::set<contact::ObjectId> reserved;
+ObjectAuthority::BodyPlan ObjectAuthority::PlanBodies(Clock::time_point now, TickOutput& out) {
+  // Owned bodies follow their owner's newest reported pose; a resumed session's bodies held for
+  // their owner's claim stay where the log left them.
+  const auto& world = *models_->world;
+  BodyPlan plan;
   for (const auto body : models_->dynamic_bodies) {
     const std::string& id = models_->ids[static_cast<std::size_t>(body)];
     const std::string owner = arbiter_.owner(id);
@@ -284,14 +285,14 @@ TickOutput ObjectAuthority::Tick(Clock::time_point now, double dt_s) {
         if (owner.empty()) out.notes.push_back("object '" + id + "': no claim from '" + r->second.owner + "', free");
         reserved_.erase(r);
       } else {
-        at_rest[body] = r->second.X_WO;
-        reserved.insert(body);
+        plan.at_rest[body] = r->second.X_WO;
+        plan.reserved.insert(body);
         continue;
       }
     }
     if (owner.empty()) continue;
     const session::PeerContacts::Entry* set = SimulatingSet(peers_, owner, id);
-    owned[body] = {owner, set};
+    plan.owned[body] = {owner, set};
     if (set != nullptr) {
       handing_over_.erase(id);  // the new owner simulates it
     } else if (const auto h = handing_over_.find(id); h != handing_over_.end()) {
@@ -301,9 +302,14 @@ TickOutput ObjectAuthority::Tick(Clock::time_point now, double dt_s) {
         const session::PeerContacts::Entry* last = SimulatingSet(peers_, h->second.from, id);
         h->second.X_WO = last != nullptr ? ReckonedPose(*last, now) : world.pose(body);
       }
-      at_rest[body] = *h->second.X_WO;
+      plan.at_rest[body] = *h->second.X_WO;
     }
   }
+  return plan;
+}
+
+std::size_t ObjectAuthority::GatherPeerContacts(Clock::time_point now, double dt_s) {
+  auto& world = *models_->world;
   // The users' fingertips on deformables: one solve with everybody. (Rigid bodies need none:
   // whoever touches a body claims it and simulates it; a free body only falls and rests.)
   // Faded as the haptic nodes fade them, and coming back at the fade's rate as they do
@@ -317,7 +323,11 @@ TickOutput ObjectAuthority::Tick(Clock::time_point now, double dt_s) {
     if (w > 0.0) remote_[n_all++] = contact::FadedContact(c, w);
   });
   peer_weights_.EndStep(now_ns);
+  return n_all;
+}
 
+void ObjectAuthority::MoveScriptedObjects(Clock::time_point now) {
+  auto& world = *models_->world;
   const double motion_t =
       clock_.At_s(static_cast<std::uint64_t>(std::chrono::nanoseconds(now.time_since_epoch()).count()));
   for (const auto& [object, i] : moving_) {
@@ -328,46 +338,50 @@ TickOutput ObjectAuthority::Tick(Clock::time_point now, double dt_s) {
   for (const auto& d : deformables_) {
     if (d.beat) world.SetModeScale(d.object, d.beat->Scale(motion_t));
   }
-  const double nan = std::numeric_limits<double>::quiet_NaN();
-  const std::array<Eigen::Vector3d, contact::kFingers> no_hand{
-      Eigen::Vector3d::Constant(nan), Eigen::Vector3d::Constant(nan), Eigen::Vector3d::Constant(nan),
-      Eigen::Vector3d::Constant(nan), Eigen::Vector3d::Constant(nan)};
+}
+
+void ObjectAuthority::StepWorld(const BodyPlan& plan, Clock::time_point now, double dt_s, std::size_t remote) {
+  auto& world = *models_->world;
   const int substeps = std::clamp(static_cast<int>(std::lround(dt_s / options_.physics_dt_s)), 1, 100);
   const double h = dt_s / substeps;
   for (int s = 0; s < substeps; ++s) {
-    for (const auto& [body, X] : at_rest) {
+    for (const auto& [body, X] : plan.at_rest) {
       world.SetPose(body, X);
       world.SetVelocity(body, Eigen::Vector3d::Zero(), Eigen::Vector3d::Zero());
     }
-    for (const auto& [body, who] : owned) {
+    for (const auto& [body, who] : plan.owned) {
       if (who.second == nullptr) continue;
       // At the owner's pose, with its velocity: when the owner lets go, the body flies on
       // from there instead of stopping in mid-air.
       world.SetPose(body, ReckonedPose(*who.second, now));
       world.SetVelocity(body, Velocity(who.second->set), Eigen::Vector3d::Zero());
     }
-    const std::size_t n = s + 1 < substeps ? 0 : n_all;  // deformables: once per tick
-    world.Step(h, no_hand, std::span<const contact::FingerContact>(remote_.data(), n));
+    const std::size_t n = s + 1 < substeps ? 0 : remote;  // deformables: once per tick
+    // No hand of its own: the server steps the others' contacts and its bodies only.
+    world.Step(h, std::span<const Eigen::Vector3d>{}, std::span<const contact::FingerContact>(remote_.data(), n));
   }
+}
 
+void ObjectAuthority::PublishBodies(const BodyPlan& plan, Clock::time_point now, TickOutput& out) {
+  const auto& world = *models_->world;
   // Rigid bodies to publish: owned ones at their owner's pose, free ones while they move, and
   // every one when a spectator joins and once per refresh period.
   const bool refresh = keyframes_requested_ || (options_.pose_refresh_period.count() > 0 && now >= next_pose_refresh_);
   if (refresh) next_pose_refresh_ = now + std::chrono::duration_cast<Clock::duration>(options_.pose_refresh_period);
   for (const auto body : models_->dynamic_bodies) {
     const std::string& id = models_->ids[static_cast<std::size_t>(body)];
-    if (reserved.count(body) != 0) continue;  // its owner's claim decides, not this server
-    if (const auto it = owned.find(body); it != owned.end()) {
+    if (plan.reserved.count(body) != 0) continue;  // its owner's claim decides, not this server
+    if (const auto it = plan.owned.find(body); it != plan.owned.end()) {
       if (it->second.second == nullptr) {
         // Granted, and the owner has not taken it over yet: tell it where the body is.
-        if (const auto still = at_rest.find(body); still != at_rest.end()) {
-          out.states.push_back(State(session_, id, it->second.first, still->second, Eigen::Vector3d::Zero()));
+        if (const auto still = plan.at_rest.find(body); still != plan.at_rest.end()) {
+          out.bodies.push_back({id, it->second.first, still->second, Eigen::Vector3d::Zero()});
         } else {
-          out.states.push_back(State(session_, id, it->second.first, world.pose(body), world.body_velocity_W(body)));
+          out.bodies.push_back({id, it->second.first, world.pose(body), world.body_velocity_W(body)});
         }
       } else {
         const auto& entry = *it->second.second;
-        out.states.push_back(State(session_, id, it->second.first, ReckonedPose(entry, now), Velocity(entry.set)));
+        out.bodies.push_back({id, it->second.first, ReckonedPose(entry, now), Velocity(entry.set)});
       }
       last_published_.erase(body);  // once free, its first pose is published
       continue;
@@ -379,14 +393,17 @@ TickOutput ObjectAuthority::Tick(Clock::time_point now, double dt_s) {
       continue;
     }
     last_published_[body] = X.translation();
-    out.states.push_back(State(session_, id, "", X, world.body_velocity_W(body)));
+    out.bodies.push_back({id, "", X, world.body_velocity_W(body)});
   }
   for (const auto& [object, i] : moving_) {
-    out.states.push_back(State(session_, scene_.objects[i].id, "", world.pose(object), Eigen::Vector3d::Zero()));
+    out.bodies.push_back({scene_.objects[i].id, "", world.pose(object), Eigen::Vector3d::Zero()});
   }
+}
 
-  // Deformations: the surface field of every touched or beating deformable (and once more
-  // after a touch): a beat's s M at every vertex plus the fingertips' field.
+void ObjectAuthority::PublishFields(Clock::time_point now, TickOutput& out) {
+  const auto& world = *models_->world;
+  // The surface field of every touched or beating deformable (and once more after a touch): a
+  // beat's s M at every vertex plus the fingertips' field.
   for (auto& d : deformables_) {
     const fem::ContactSolver* solver = world.contact_solver(d.object);
     if (solver == nullptr) continue;
@@ -416,8 +433,6 @@ TickOutput ObjectAuthority::Tick(Clock::time_point now, double dt_s) {
     }
     d.touched_before = touched;
   }
-  keyframes_requested_ = false;
-  return out;
 }
 
 void ObjectAuthority::Dump(const Deformable& d, std::uint32_t revision, Clock::time_point now) const {

@@ -67,4 +67,29 @@ msg::ControlState ToControlState(const ControlStateRecord& r, const std::string&
   return out;
 }
 
+msg::ObjectState ToObjectState(const BodyState& body, const std::string& session, std::uint64_t stamp_ns) {
+  msg::ObjectState s;
+  s.object_id(body.object_id);
+  s.session(session);
+  s.owner(body.owner);
+  s.stamp_ns(stamp_ns);
+  const Eigen::Quaterniond q(body.X_WO.linear());
+  for (int k = 0; k < 3; ++k) {
+    s.p_WO_m()[k] = body.X_WO.translation()[k];
+    s.v_WO_m_per_s()[k] = body.v_WO_m_per_s[k];
+  }
+  s.q_WO_wxyz({q.w(), q.x(), q.y(), q.z()});
+  return s;
+}
+
+msg::SessionRoster ToSessionRoster(const std::vector<std::string>& member_ids, const std::string& session) {
+  msg::SessionRoster roster;
+  roster.session(session);
+  for (const std::string& id : member_ids) {
+    if (roster.members().size() == kMaxRoster) break;
+    roster.members().push_back(id);
+  }
+  return roster;
+}
+
 }  // namespace handshare::server

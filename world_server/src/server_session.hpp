@@ -1,107 +1,154 @@
 #pragma once
-/// The world server's tick, as a list of stages over one session: members, control events,
-/// contact sets, the shared objects, and what each publishes. Private to the server library:
-/// it holds the DDS writers and readers; WorldServer::Run() builds it and ticks it.
+/// The world server's session as a function from its state and its inputs to domain events
+/// (session_events.hpp): members, control events, contact sets and the shared objects, a stage
+/// each. It reads no reader and writes no writer: SampleIntake (sample_intake.hpp) takes the
+/// samples into TickInputs, and the events go to the consumers (the DDS publisher, the session
+/// log writer, the pose trace, the console). WorldServer::Run() builds them and ticks it.
+/// Private to the server library. Not real-time.
 #include <chrono>
-#include <map>
 #include <cstdint>
+#include <optional>
 #include <string>
 #include <vector>
 
 #include "handshare/common/session_clock.hpp"
 #include "handshare/dds/messages.hpp"
-#include "handshare/scene/scene.hpp"
 #include "handshare/dds/sample_checks.hpp"
+#include "handshare/scene/scene.hpp"
 #include "handshare/world_server/control_actions.hpp"
 #include "handshare/world_server/member_registry.hpp"
 #include "handshare/world_server/object_authority.hpp"
-#include "handshare/world_server/world_server.hpp"
+#include "handshare/world_server/session_events.hpp"
+#include "handshare/world_server/session_log.hpp"
 
 namespace handshare::server {
+
+/// A member-info sample, or the change of its instance, as taken.
+struct MemberInput {
+  enum class Kind {
+    kAnnounced,  ///< valid data of an alive instance: `member` is who it announces
+    kLeaving,    ///< valid data saying "leaving": a clean leave, said in data
+    kDisposed,   ///< the instance was disposed (a clean leave)
+    kNoWriters,  ///< the instance lost its writers
+  };
+  Kind kind = Kind::kAnnounced;
+  InstanceKey instance{};
+  InstanceKey writer{};
+  Member member;        ///< kAnnounced only
+  std::string refused;  ///< kAnnounced: why the sample check refused it ("" accepted)
+};
+
+/// A writer of member info that went away (killed, lost) or came back (a partition healed).
+struct WriterInput {
+  InstanceKey writer{};
+  bool alive = false;
+};
+
+/// A control event as taken (valid data only).
+struct ControlEventInput {
+  std::string user;     ///< who it names (the sender, for the dropped-sample lines)
+  InstanceKey writer{};
+  std::string refused;  ///< why the sample check refused it ("" accepted)
+  ControlInput input;   ///< accepted samples only
+  ControlRecord record; ///< its row for the log, stamped when taken (accepted samples only)
+};
+
+/// A contact set as taken (valid data only). Still the wire's type: ObjectAuthority and
+/// session::PeerContacts take it as it is.
+struct ContactSetInput {
+  msg::ContactSet set;
+  InstanceKey writer{};
+  std::string refused;  ///< why the sample check refused it ("" accepted)
+};
+
+/// What one tick takes, in the order it takes it.
+struct TickInputs {
+  std::vector<MemberInput> members;
+  std::vector<WriterInput> member_writers;  ///< after the member samples
+  std::vector<ControlEventInput> controls;
+  std::vector<ContactSetInput> contacts;
+  void clear() {
+    members.clear();
+    member_writers.clear();
+    controls.clear();
+    contacts.clear();
+  }
+};
+
+struct ServerSessionConfig {
+  std::string session;
+  int domain_id = 0;       ///< for the session's first line only
+  double tick_Hz = 60.0;   ///< announced in the scene state: how often contact sets are read
+  ObjectAuthorityOptions objects;
+  SceneLoader load = LoadWorld;  ///< the worlds a control's action opens, and a resumed one
+};
 
 class ServerSession {
  public:
   using Clock = std::chrono::steady_clock;
+  using Events = std::vector<SessionEvent>;
 
-  /// Joins the session and publishes `scene` as revision 1 with its board, or, given a resume
-  /// point, the world, revision, session clock, board and body poses it holds (the nodes see
-  /// the revision they already have and keep their models). Events go to `server` (printed and
-  /// logged). Not real-time.
-  ServerSession(WorldServer& server, const WorldServerConfig& config, dds::Participant& participant,
-                scene::Scene scene, const ResumePoint* resume = nullptr);
+  /// A session on `scene`, or, given a resume point (a killed server's log), on the world,
+  /// revision, session clock, board, control places and body poses it holds. Emits nothing:
+  /// Start() does.
+  ServerSession(ServerSessionConfig config, scene::Scene scene, const ResumePoint* resume = nullptr);
+
+  /// The session's start: the scene as its next revision, the roster, the world's controls at
+  /// rest and the board. A resumed session takes this same path from the resume point's state:
+  /// the same revision and message number again and the controls where the log placed them, so
+  /// the consumers publish, log and print a resumed start as they do a fresh one (nodes that
+  /// already have that revision and message change nothing).
+  Events Start();
 
   /// One tick at `now`, dt_s after the last: the stages below, in this order.
-  void Tick(Clock::time_point now, double dt_s);
+  Events Tick(const TickInputs& in, Clock::time_point now, double dt_s);
 
   const MemberRegistry& members() const { return members_; }
-  std::uint64_t deformations_sent() const { return deformations_sent_; }
-  /// Received samples refused by the checks (session/sample_checks.hpp), per topic.
+  /// Received samples refused (the sample checks, or a user's name from another participant).
   const dds::DroppedSamples& dropped() const { return dropped_; }
+  const scene::Scene& scene() const { return scene_; }
+  const ObjectAuthority& objects() const { return objects_; }
 
  private:
   // ---- the stages of a tick ----
   /// Members joining, leaving and vanishing (writers lost without a dispose).
-  void TakeMembers(Clock::time_point now);
-  /// Control events: logged, and their scene actions applied (ApplyControlAction).
-  void TakeControlEvents();
+  void TakeMembers(const TickInputs& in, Clock::time_point now, Events& out);
+  /// Control events: their records, and their scene actions applied (ApplyControlAction).
+  void TakeControlEvents(const TickInputs& in, Events& out);
   /// The users' contact sets, for ownership claims and the shared deformables.
-  void TakeContactSets(Clock::time_point now);
+  void TakeContactSets(const TickInputs& in, Clock::time_point now, Events& out);
   /// One step of the shared objects, and what it publishes: owners, poses, deformations.
-  void StepObjects(Clock::time_point now, double dt_s);
+  void StepObjects(Clock::time_point now, double dt_s, Events& out);
 
   /// True when `reason` is empty; else the sample is dropped, counted and (rate-limited) named.
-  bool Accepted(std::string_view topic, std::string_view sender, const std::string& reason) {
-    return dropped_.Accept(topic, sender, reason, [this](const std::string& line) { server_.Say(line); });
-  }
-  /// Publishes the scene as its next revision.
-  void PublishScene();
-  /// Publishes the members present (SessionRoster): a node that hears this server but never
-  /// one of them can tell, and join again.
-  void PublishRoster();
-  static constexpr std::size_t kMaxRoster = 64;  // the IDL's bound
-  /// Records where the session is (world, revision, clock, board) in the session log.
-  void LogState();
-  /// Every published rigid-body state, a row each (--pose-trace).
-  void TracePoses(const std::vector<msg::ObjectState>& states);
-  /// Records the poses of the bodies just published (at most every kPoseLogPeriod a body).
-  void LogPoses(const std::vector<msg::ObjectState>& states, Clock::time_point now);
-  static constexpr std::chrono::milliseconds kPoseLogPeriod{100};
-  /// Shows one board message (the board shows English for now; every scene file also holds
-  /// Japanese). Transient-local keeps the newest for late joiners.
-  void ShowMessage(const std::vector<scene::Message>& messages);
-  /// Every control of the current world at rest, published and logged (a new world, or the
-  /// session's start). Resuming a killed server's session: where its log says each control
-  /// settled, published and logged again, so that a node joining later builds them there; a
-  /// control the log does not place (a log written before schema version 3) stays unknown and
-  /// unpublished (the nodes keep what that server published until an event changes it).
-  void ResetControlStates(const ResumePoint* resume = nullptr);
-  /// Records where a control settled in the session log.
-  void LogControlPlace(const ControlStateRecord& record);
+  bool Accepted(std::string_view topic, std::string_view sender, const std::string& reason, Events& out);
+  /// The scene as its next revision, and where the session is now.
+  void ReviseScene(Events& out);
+  /// The members present.
+  void SayRoster(Events& out);
+  /// One board message in every language the scene has, and where the session is now.
+  void ShowMessage(const std::vector<scene::Message>& messages, Events& out);
+  /// Where the session is (world, revision, clock, board).
+  SessionState State() const;
+  /// Every control of the current world at rest (a new world, or the session's start). Resuming
+  /// a killed server's session: where its log says each control settled; a control the log does
+  /// not place (a log written before schema version 3) stays unknown and unsaid (the nodes keep
+  /// what that server published until an event changes it).
+  void ResetControlStates(const std::vector<ControlPlace>* places, Events& out);
+  /// The controls where a killed server's log placed them (those the world has, at places
+  /// they can have).
+  void PlaceControls(const std::vector<ControlPlace>& places, Events& out);
 
-  WorldServer& server_;
-  std::string session_;
-  double tick_Hz_;  // announced in the scene state: how often contact sets are read
+  ServerSessionConfig config_;
   common::SessionClock clock_;
   scene::Scene scene_;
+  std::optional<ResumePoint> resume_;  // until Start()
   std::uint32_t revision_ = 0;
   std::uint32_t message_id_ = 0;
-  std::vector<scene::Message> board_;                  // the board's message, every language
-  std::vector<ControlStateRecord> control_states_;     // the current world's controls, as events left them
-  std::map<std::string, Clock::time_point> pose_logged_;  // body -> when its pose was last logged
+  std::vector<scene::Message> board_;              // the board's message, every language
+  std::vector<ControlStateRecord> control_states_; // the current world's controls, as events left them
   ObjectAuthority objects_;
   MemberRegistry members_;
-
-  dds::Writer<msg::SceneState> scene_writer_;
-  dds::Writer<msg::MessageBoard> board_writer_;
-  dds::Writer<msg::ControlState> control_state_writer_;
-  dds::Writer<msg::ObjectState> object_writer_;
-  dds::Writer<msg::Deformation> deformation_writer_;
-  dds::Writer<msg::SessionRoster> roster_writer_;
-  dds::Reader<msg::MemberInfo> member_reader_;
-  dds::Reader<msg::ContactSet> contact_reader_;
-  dds::Reader<msg::ControlEvent> control_reader_;
-
-  std::uint64_t deformations_sent_ = 0;
   dds::DroppedSamples dropped_;
 };
 

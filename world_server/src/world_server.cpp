@@ -5,7 +5,6 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
-#include <iomanip>
 #include <iostream>
 #include <stdexcept>
 #include <sstream>
@@ -14,15 +13,29 @@
 #include "handshare/common/clock.hpp"
 #include "handshare/common/latency_histogram.hpp"
 #include "handshare/common/shutdown.hpp"
-#include "handshare/dds/membership.hpp"
 #include "handshare/dds/messages.hpp"
 #include "handshare/scene/scene.hpp"
-#include "handshare/world_server/member_registry.hpp"
+#include "console_log.hpp"
+#include "pose_trace.hpp"
+#include "sample_intake.hpp"
 #include "server_session.hpp"
+#include "session_log_writer.hpp"
+#include "session_publisher.hpp"
 
 namespace handshare::server {
 
 namespace {
+
+ServerSessionConfig SessionConfig(const WorldServerConfig& config) {
+  ServerSessionConfig c;
+  c.session = config.where.session;
+  c.domain_id = config.where.domain_id;
+  c.tick_Hz = config.tick_Hz;
+  if (!config.cache_dir.empty()) c.objects.models.cache_dir = config.cache_dir;
+  c.objects.dump_dir = config.dump_dir;
+  c.objects.delta.threshold_m = config.deformation_threshold_m;
+  return c;
+}
 
 std::string HostName() {
   char name[256] = {};
@@ -52,36 +65,6 @@ bool WorldServer::CheckLog() {
   return !log_failed_;
 }
 
-void WorldServer::OnControlEvent(const ControlRecord& event) {
-  char line[200];
-  std::snprintf(line, sizeof line, "control %s: %s by %s (value %.3f, error %s)", event.control_id.c_str(),
-                LogName(event.kind), event.user.c_str(), event.value,
-                event.error_m ? (std::to_string(1e3 * *event.error_m).substr(0, 5) + " mm").c_str() : "-");
-  Say(line);
-  if (log_) log_->OnControlEvent(event);
-}
-
-void WorldServer::OnSceneChange(const std::string& scene, const std::string& title) {
-  Say("scene '" + scene + "': " + title);
-  if (log_) log_->OnSceneChange(scene, title, common::UnixNowNs());
-}
-
-void WorldServer::OnMemberEvent(const MemberEvent& event, std::size_t present) {
-  const Member& m = event.member;
-  std::ostringstream line;
-  line << "member " << ToString(event.change) << ": user=" << m.user << " kind=" << m.kind;
-  if (!m.device.empty()) line << " device=" << m.device;
-  line << " pid=" << m.pid << " present=" << present;
-  Say(line.str());
-  if (log_) log_->OnMember(event.change, m, common::UnixNowNs());
-}
-
-void WorldServer::OnOwnershipChange(const OwnershipChange& change) {
-  Say("object '" + change.object_id + "': owner '" + change.previous_owner + "' -> '" + change.owner + "' (" +
-        ToString(change.reason) + ")");
-  if (log_) log_->OnOwnership(change.object_id, change.owner, ToString(change.reason), common::UnixNowNs());
-}
-
 int WorldServer::Run() {
   using Clock = std::chrono::steady_clock;
   start_ = Clock::now();
@@ -101,11 +84,11 @@ int WorldServer::Run() {
                                        static_cast<std::int64_t>(getpid()), common::UnixNowNs(),
                                        resume ? resume->session_id : 0});
   }
-  if (!config_.pose_trace_file.empty() && !pose_trace_.is_open()) {
-    pose_trace_.open(config_.pose_trace_file);
-    if (!pose_trace_) throw std::runtime_error("cannot write the pose trace " + config_.pose_trace_file);
-    pose_trace_ << "stamp_ns,object_id,owner,x_m,y_m,z_m,vx_m_per_s,vy_m_per_s,vz_m_per_s\n" << std::setprecision(9);
-    pose_trace_.flush();
+  std::optional<PoseTrace> pose_trace;
+  if (!config_.pose_trace_file.empty()) {
+    pose_trace_file_.open(config_.pose_trace_file);
+    if (!pose_trace_file_) throw std::runtime_error("cannot write the pose trace " + config_.pose_trace_file);
+    pose_trace.emplace(pose_trace_file_);
   }
   dds::Participant participant(config_.where, "world_server");
   if (log_) Say("session log " + log_->file().string() + ": session #" + std::to_string(log_->session_id()));
@@ -116,7 +99,25 @@ int WorldServer::Run() {
         std::to_string(resume->poses.size()) + " body poses, board message #" +
         std::to_string(resume->state.message_id) + ", " + std::to_string(resume->controls.size()) + " control places");
   }
-  ServerSession session(*this, config_, participant, std::move(scene), resume ? &*resume : nullptr);
+  // The tick's consumers, in the order they take each tick's events: the samples are written,
+  // and the log's rows queued (a checkpoint committed), before the console prints the lines
+  // that say so.
+  SessionPublisher publisher(participant, config_.where.session);
+  SampleIntake intake(participant, config_.where.session);
+  std::optional<SessionLogWriter> log_writer;
+  if (log_) log_writer.emplace(*log_);
+  ConsoleLog console([this](const std::string& line) { Say(line); });
+  std::vector<SessionEventSink*> sinks{&publisher};
+  if (log_writer) sinks.push_back(&*log_writer);
+  if (pose_trace) sinks.push_back(&*pose_trace);
+  sinks.push_back(&console);
+  const auto deliver = [&](const ServerSession::Events& events, Clock::time_point now) {
+    for (SessionEventSink* sink : sinks) sink->Take(events, now);
+  };
+
+  ServerSession session(SessionConfig(config_), std::move(scene), resume ? &*resume : nullptr);
+  deliver(session.Start(), Clock::now());
+  TickInputs inputs;
 
   // One tick per period at absolute deadlines, re-synced after a stall.
   const auto period = std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(1.0 / config_.tick_Hz));
@@ -131,7 +132,8 @@ int WorldServer::Run() {
                                                          : std::chrono::duration<double>(now - last_tick).count();
     if (last_tick != Clock::time_point{}) tick_interval.Record(1e6 * dt_s);
     last_tick = now;
-    session.Tick(now, std::min(dt_s, 0.1));
+    intake.Take(inputs);
+    deliver(session.Tick(inputs, now, std::min(dt_s, 0.1)), now);
     CheckLog();
     tick_work.Record(std::chrono::duration<double, std::micro>(Clock::now() - now).count());
     next += period;
@@ -140,7 +142,7 @@ int WorldServer::Run() {
   }
   Say("shutting down: " + std::to_string(session.members().joined_total()) + " members joined, " +
       std::to_string(session.members().present().size()) + " still present, " +
-      std::to_string(session.deformations_sent()) + " deformation samples sent, samples dropped: " +
+      std::to_string(publisher.deformations_sent()) + " deformation samples sent, samples dropped: " +
       session.dropped().Summary());
   char line[240];
   std::snprintf(line, sizeof line,
@@ -152,15 +154,6 @@ int WorldServer::Run() {
   Say(participant.TrafficSummary());
   CloseLog();
   return log_failed_ ? 1 : 0;
-}
-
-void WorldServer::CommitLog() {
-  if (!log_ || log_failed_) return;
-  try {
-    log_->Flush();
-  } catch (const SessionLogError&) {
-    // CheckLog() reports it once and the session goes on without the log.
-  }
 }
 
 void WorldServer::CloseLog() {

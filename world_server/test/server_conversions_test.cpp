@@ -111,5 +111,38 @@ TEST(ServerConversions, BoardAndDeformationSamplesCarryTheirFields) {
   EXPECT_EQ(d.u_W_m()[2], -1e-3f);
 }
 
+TEST(ServerConversions, ABodyStateBecomesAnObjectStateSample) {
+  BodyState b;
+  b.object_id = "ball";
+  b.owner = "alice";
+  b.X_WO.translation() = Eigen::Vector3d(0.1, 0.2, 0.3);
+  b.X_WO.linear() = Eigen::AngleAxisd(0.5, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+  b.v_WO_m_per_s = Eigen::Vector3d(0.0, 0.4, -0.5);
+  const msg::ObjectState m = ToObjectState(b, "museum", 1234);
+  EXPECT_EQ(m.object_id().to_string(), "ball");
+  EXPECT_EQ(m.session().to_string(), "museum");
+  EXPECT_EQ(m.owner().to_string(), "alice");
+  EXPECT_EQ(m.stamp_ns(), 1234u);
+  EXPECT_EQ(m.p_WO_m()[0], 0.1);
+  EXPECT_EQ(m.p_WO_m()[2], 0.3);
+  EXPECT_EQ(m.v_WO_m_per_s()[1], 0.4);
+  EXPECT_EQ(m.v_WO_m_per_s()[2], -0.5);
+  EXPECT_NEAR(m.q_WO_wxyz()[0], std::cos(0.25), 1e-15);
+  EXPECT_NEAR(m.q_WO_wxyz()[3], std::sin(0.25), 1e-15);
+  EXPECT_EQ(m.q_WO_wxyz()[1], 0.0);
+  EXPECT_TRUE(dds::CheckObjectState(m, "museum").empty());
+}
+
+TEST(ServerConversions, TheRosterNamesThePresentMembersUpToTheIdlsBound) {
+  std::vector<std::string> ids;
+  for (int i = 0; i < 70; ++i) ids.push_back("member-" + std::to_string(i));
+  const msg::SessionRoster r = ToSessionRoster(ids, "museum");
+  EXPECT_EQ(r.session().to_string(), "museum");
+  ASSERT_EQ(r.members().size(), kMaxRoster);
+  EXPECT_EQ(r.members()[0].to_string(), "member-0");
+  EXPECT_TRUE(dds::CheckSessionRoster(r, "museum").empty());
+  EXPECT_EQ(ToSessionRoster({}, "museum").members().size(), 0u);
+}
+
 }  // namespace
 }  // namespace handshare::server

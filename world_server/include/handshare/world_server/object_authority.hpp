@@ -8,8 +8,11 @@
 ///     same patches the haptic nodes build) and returns the changed surface nodes to publish
 ///     (DeformationDelta);
 ///   - returns the rigid bodies' states (owned, free and moving) to publish.
-/// No DDS: the world server turns the inputs and outputs into samples. Models are built on a
-/// loader thread, so a new world (tetgen, compliance cache) never stalls the session.
+/// What it returns is plain (BodyState, DeformationSample, OwnershipChange, lines for the log):
+/// the session turns it into events (session_events.hpp) and only the DDS publisher turns
+/// those into samples. Its input is still the wire's contact set (msg::ContactSet, as
+/// session::PeerContacts keeps it). Models are built on a loader thread, so a new world
+/// (tetgen, compliance cache) never stalls the session.
 ///
 /// Deformation contract (what graphics nodes rely on): node ids are the vertex indices of the
 /// object's scene mesh (LoadMesh order), which the tetrahedral mesh keeps as its first nodes;
@@ -21,6 +24,7 @@
 #include <map>
 #include <memory>
 #include <optional>
+#include <set>
 #include <string>
 #include <vector>
 
@@ -29,6 +33,7 @@
 #include "handshare/dds/messages.hpp"
 #include "handshare/scene/scene.hpp"
 #include "handshare/session/peer_contacts.hpp"
+#include "handshare/world_server/body_state.hpp"
 #include "handshare/world/scene_models.hpp"
 #include "handshare/world_server/deformation_delta.hpp"
 #include "handshare/world_server/ownership_arbiter.hpp"
@@ -54,10 +59,11 @@ struct ObjectAuthorityOptions {
   std::filesystem::path dump_dir;
 };
 
+/// What one tick decided: plain data, in the order the session reports it.
 struct TickOutput {
   std::vector<std::string> notes;               ///< lines for the server's log
   std::vector<OwnershipChange> ownership;
-  std::vector<msg::ObjectState> states;
+  std::vector<BodyState> bodies;                ///< rigid-body states to publish
   std::vector<std::pair<std::string, DeformationSample>> deformations;  ///< object id, sample
 };
 
@@ -89,7 +95,8 @@ class ObjectAuthority {
                  Clock::duration grace = {});
   /// A reader of deformations joined: the next tick sends keyframes.
   void RequestKeyframes();
-  /// Advances to `now` (dt_s since the last tick, sub-stepped) and returns what to publish.
+  /// Advances to `now` (dt_s since the last tick, sub-stepped) and returns what to publish:
+  /// the stages below, in this order.
   TickOutput Tick(Clock::time_point now, double dt_s);
 
   bool ready() const { return models_ != nullptr; }
@@ -114,6 +121,37 @@ class ObjectAuthority {
     const world::PreparedDeformable* prepared = nullptr;
     double E_Pa = 0.0, nu = 0.0;
   };
+  // Who moves each dynamic body this tick (PlanBodies): its owner, or nobody (held at rest).
+  struct BodyPlan {
+    // Owned bodies: the owner, and its newest set when that set simulates the body (else null:
+    // granted, and the owner has not taken it over yet).
+    std::map<contact::ObjectId, std::pair<std::string, const session::PeerContacts::Entry*>> owned;
+    // Held at rest this tick: a resumed session's body reserved for its owner's claim, or a body
+    // handed over until its new owner simulates it.
+    std::map<contact::ObjectId, Eigen::Isometry3d> at_rest;
+    // Reserved for an owner's claim: not published (the claim decides, not this server).
+    std::set<contact::ObjectId> reserved;
+  };
+
+  // ---- the stages of a tick ----
+  /// Drops finished superseded builds and adopts the current world's models once built.
+  void AdoptModels(TickOutput& out);
+  /// Expires silent peers and arbitrates ownership; notes which bodies are being handed over.
+  void ArbitrateOwnership(Clock::time_point now, TickOutput& out);
+  /// Who simulates what (owners, reservations of a resumed session, hand-overs).
+  BodyPlan PlanBodies(Clock::time_point now, TickOutput& out);
+  /// The peers' fingertips on deformables, faded, into remote_; returns how many.
+  std::size_t GatherPeerContacts(Clock::time_point now, double dt_s);
+  /// Scripted motions and beats at the session clock's time.
+  void MoveScriptedObjects(Clock::time_point now);
+  /// Sub-steps the world over dt_s: owned bodies at their owner's pose, held ones at rest, the
+  /// deformables' solve once (the last sub-step) with the `remote` gathered contacts.
+  void StepWorld(const BodyPlan& plan, Clock::time_point now, double dt_s, std::size_t remote);
+  /// The rigid bodies' states to publish.
+  void PublishBodies(const BodyPlan& plan, Clock::time_point now, TickOutput& out);
+  /// The deformables' changed surface fields to publish.
+  void PublishFields(Clock::time_point now, TickOutput& out);
+
   void Adopt(world::SceneModels models, TickOutput& out);
   void ReapSuperseded(TickOutput& out);
   struct SupersededBuild {

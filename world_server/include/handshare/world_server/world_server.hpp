@@ -1,7 +1,9 @@
 #pragma once
-/// The world server: owns a session. Publishes the scene state and the message board
-/// (transient-local, so late joiners get them), tracks members joining, leaving and
-/// vanishing, prints every change and, with a log file, records the session (SessionLog).
+/// The world server: owns a session. Each tick takes the samples that arrived, runs the
+/// session's tick (a function from its state and those inputs to domain events,
+/// session_events.hpp) and hands the events to its consumers: the DDS publisher (scene state
+/// and message board transient-local, so late joiners get them), the session log when one is
+/// configured (SessionLog), the pose trace, and the console, which prints every change.
 /// One per session.
 #include <chrono>
 #include <fstream>
@@ -9,8 +11,6 @@
 #include <string>
 
 #include "handshare/common/node_main.hpp"
-#include "handshare/world_server/member_registry.hpp"
-#include "handshare/world_server/ownership_arbiter.hpp"
 #include "handshare/world_server/session_log.hpp"
 
 namespace handshare::server {
@@ -42,27 +42,9 @@ class WorldServer {
   /// the run (the session itself went on).
   int Run();
 
-  /// Events of the session, printed and recorded in the log (once Run() opened it). Cheap: the
-  /// log queues the row and a writer thread commits it. Call them from Run()'s thread (the
-  /// log itself is thread-safe, the printing is not). The session's tick (ServerSession) calls
-  /// them for every scene it publishes, control event, member change and ownership change.
-  void OnControlEvent(const ControlRecord& event);
-  void OnSceneChange(const std::string& scene, const std::string& title);
-  void OnMemberEvent(const MemberEvent& event, std::size_t present);
-  void OnOwnershipChange(const OwnershipChange& change);
-
-  /// Prints one line of the server's log (stdout, with the time since start).
+  /// Prints one line of the server's log (stdout, with the time since start). The session's
+  /// own lines come as events (ConsoleLog); these are the server's (the log, shutdown).
   void Say(const std::string& line);
-
-  /// Commits what the log has queued now (waits for the disk: for the few rows a restart must
-  /// find, control events and their effects). A failure is reported by the next CheckLog().
-  void CommitLog();
-
-  /// nullptr without a log file, or before Run() opened it.
-  SessionLog* session_log() { return log_.get(); }
-  /// nullptr without --pose-trace, or before Run() opened it. Rows: stamp_ns (the host's steady
-  /// clock, as haptic_node's traces), object_id, owner, x, y, z [m], vx, vy, vz [m/s].
-  std::ostream* pose_trace() { return pose_trace_.is_open() ? &pose_trace_ : nullptr; }
 
  private:
   /// Reports a log failure once; true while the log is healthy.
@@ -72,7 +54,7 @@ class WorldServer {
 
   WorldServerConfig config_;
   std::unique_ptr<SessionLog> log_;
-  std::ofstream pose_trace_;
+  std::ofstream pose_trace_file_;
   bool log_failed_ = false;
   std::chrono::steady_clock::time_point start_;
 };

@@ -1,0 +1,77 @@
+#include "sample_intake.hpp"
+
+#include "handshare/common/clock.hpp"
+#include "handshare/dds/sample_checks.hpp"
+#include "server_conversions.hpp"
+
+namespace handshare::server {
+
+SampleIntake::SampleIntake(dds::Participant& participant, std::string session)
+    : session_(std::move(session)),
+      member_reader_(dds::MakeReader<msg::MemberInfo>(participant, dds::topics::kMemberInfo)),
+      contact_reader_(dds::MakeReader<msg::ContactSet>(participant, dds::topics::kContactSet)),
+      control_reader_(dds::MakeReader<msg::ControlEvent>(participant, dds::topics::kControlEvent)) {}
+
+void SampleIntake::Take(TickInputs& in) {
+  in.clear();
+  TakeMembers(in);
+  TakeControlEvents(in);
+  TakeContactSets(in);
+}
+
+void SampleIntake::TakeMembers(TickInputs& in) {
+  msg::MemberInfo info;
+  dds::SampleMeta meta;
+  while (member_reader_.TakeNext(info, meta)) {
+    MemberInput m;
+    m.instance = meta.instance;
+    m.writer = meta.writer;
+    if (meta.valid_data && info.leaving()) {
+      m.kind = MemberInput::Kind::kLeaving;  // a clean leave, said in data
+    } else if (meta.valid_data && meta.instance_state == dds::InstanceState::kAlive) {
+      m.kind = MemberInput::Kind::kAnnounced;
+      m.refused = dds::CheckMemberInfo(info, session_);
+      m.member = ToMember(info);
+    } else if (meta.instance_state != dds::InstanceState::kAlive) {
+      m.kind = meta.instance_state == dds::InstanceState::kDisposed ? MemberInput::Kind::kDisposed
+                                                                     : MemberInput::Kind::kNoWriters;
+    } else {
+      continue;  // no data, instance alive: nothing changed
+    }
+    in.members.push_back(std::move(m));
+  }
+  // Writers that vanished without disposing (killed processes, lost hosts), and writers back
+  // after a partition healed.
+  dds::WriterChange change;
+  while (member_reader_.TakeWriterChange(change)) in.member_writers.push_back({change.writer, change.alive});
+}
+
+void SampleIntake::TakeControlEvents(TickInputs& in) {
+  msg::ControlEvent sample;
+  dds::SampleMeta meta;
+  while (control_reader_.TakeNext(sample, meta)) {
+    if (!meta.valid_data) continue;
+    ControlEventInput e;
+    e.user = sample.user().to_string();
+    e.writer = meta.writer;
+    e.refused = dds::CheckControlEvent(sample, session_);
+    if (e.refused.empty()) {
+      const auto input = ToControlInput(sample);
+      if (!input) continue;  // CheckControlEvent refused every kind ToControlInput cannot map
+      e.input = *input;
+      e.record = ToControlRecord(sample, *input, common::UnixNowNs());
+    }
+    in.controls.push_back(std::move(e));
+  }
+}
+
+void SampleIntake::TakeContactSets(TickInputs& in) {
+  msg::ContactSet set;
+  dds::SampleMeta meta;
+  while (contact_reader_.TakeNext(set, meta)) {
+    if (!meta.valid_data) continue;
+    in.contacts.push_back({set, meta.writer, dds::CheckContactSet(set, session_)});
+  }
+}
+
+}  // namespace handshare::server
