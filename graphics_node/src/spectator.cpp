@@ -15,7 +15,7 @@
 
 #include <nlohmann/json.hpp>
 
-#include "handshare/common/rejoin_clock.hpp"
+#include "handshare/node/rejoin_clock.hpp"
 #include "handshare/dds/roster_rejoin.hpp"
 #include "handshare/common/shutdown.hpp"
 #include "handshare/dds/membership.hpp"
@@ -422,7 +422,7 @@ int Spectator::Run() {
     return std::make_unique<SpectatorLink>(config_.where, assets_dir, name, config_.fps, config_.language);
   };
   auto link = open_link();
-  common::RejoinClock rejoin(config_.rejoin_after);
+  node::RejoinClock rejoin(config_.rejoin_after);
   // A member the world server has (its roster) that this view never hears, a user's hand
   // above all, is a secured handshake between the two that never finished (Fast DDS 2.9,
   // docs/security.md): a new participant starts it again, as the recorder does.
@@ -443,7 +443,7 @@ int Spectator::Run() {
     if (why.empty()) return;
     std::fprintf(stderr, "[graphics_node %s] %s\n", name.c_str(), why.c_str());
     Clock::time_point opened;
-    const std::string joined = common::RunRejoin(
+    const std::string joined = node::RunRejoin(
         roster_rejoin.rejoins(), Clock::now(), [&] { link.reset(); }, [&] { link = open_link(); }, opened);
     std::fprintf(stderr, "[graphics_node %s] %s\n", name.c_str(), joined.c_str());
     roster_rejoin.Restart(opened);

@@ -12,7 +12,7 @@
 namespace handshare::graphics {
 namespace {
 
-// The simulated hand's fingertips, open and closed (haptic_node/src/sim_hand.cpp, GripOffsets).
+// The simulated hand's fingertips, open and closed (core/device/src/sim_hand.cpp, GripOffsets).
 const std::array<Eigen::Vector3d, kHandFingers> kOpen_H = {
     Eigen::Vector3d(-0.060, 0.040, -0.010), Eigen::Vector3d(-0.036, 0.100, 0.000), Eigen::Vector3d(-0.012, 0.105, 0.000),
     Eigen::Vector3d(0.012, 0.100, 0.000), Eigen::Vector3d(0.036, 0.090, 0.000)};

@@ -8,7 +8,7 @@
 #include <memory>
 #include <string>
 
-#include "handshare/common/node_main.hpp"
+#include "handshare/common/session_options.hpp"
 #include "handshare/world_server/member_registry.hpp"
 #include "handshare/world_server/ownership_arbiter.hpp"
 #include "handshare/world_server/session_log.hpp"

@@ -9,7 +9,7 @@
 #include <string>
 #include <string_view>
 
-namespace handshare::common {
+namespace handshare::node {
 
 class RejoinClock {
  public:
@@ -70,4 +70,4 @@ std::string RejoinClock::Swap(std::unique_ptr<Link>& link, Open open) {
   return RunRejoin(rejoins_, joined_, [&] { link.reset(); }, [&] { link = open(); }, joined_);
 }
 
-}  // namespace handshare::common
+}  // namespace handshare::node

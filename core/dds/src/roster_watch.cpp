@@ -1,8 +1,8 @@
-#include "handshare/common/roster_watch.hpp"
+#include "handshare/dds/roster_watch.hpp"
 
 #include <algorithm>
 
-namespace handshare::common {
+namespace handshare::dds {
 
 std::vector<std::string> RosterWatch::Unheard(const std::vector<std::string>& heard, Clock::time_point now) {
   std::map<std::string, Clock::time_point> missing;
@@ -22,4 +22,4 @@ void RosterWatch::Restart(Clock::time_point now) {
   for (auto& [id, since] : missing_since_) since = now;
 }
 
-}  // namespace handshare::common
+}  // namespace handshare::dds

@@ -1,4 +1,4 @@
-#include "handshare/common/peers.hpp"
+#include "handshare/node/peers.hpp"
 
 #include <arpa/inet.h>
 #include <netdb.h>
@@ -9,7 +9,10 @@
 
 #include "handshare/common/options.hpp"
 
-namespace handshare::common {
+namespace handshare::node {
+
+using common::OptionError;
+using common::Peer;
 
 namespace {
 
@@ -77,4 +80,4 @@ std::vector<Peer> ParsePeers(std::string_view list) {
   return peers;
 }
 
-}  // namespace handshare::common
+}  // namespace handshare::node

@@ -1,8 +1,8 @@
-#include "handshare/common/roster_watch.hpp"
+#include "handshare/dds/roster_watch.hpp"
 
 #include <gtest/gtest.h>
 
-namespace handshare::common {
+namespace handshare::dds {
 
 // A member the world server has (its roster) and this node has not heard is reported once it
 // has been unheard for the wait: counted from when it appeared in the roster, from when it was
@@ -40,4 +40,4 @@ TEST(RosterWatch, AMemberTheServerHasAndThisNodeNeverHeardIsReportedAfterTheWait
   EXPECT_TRUE(never.Unheard({}, t0 + 1000s).empty());
 }
 
-}  // namespace handshare::common
+}  // namespace handshare::dds

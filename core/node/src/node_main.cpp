@@ -1,11 +1,17 @@
-#include "handshare/common/node_main.hpp"
+#include "handshare/node/node_main.hpp"
 
 #include <exception>
 #include <iostream>
 
 #include "handshare/common/shutdown.hpp"
+#include "handshare/node/peers.hpp"
 
-namespace handshare::common {
+namespace handshare::node {
+
+using common::InstallShutdownHandlers;
+using common::OptionError;
+using common::Options;
+using common::SessionOptions;
 
 void DeclareSessionOptions(Options& options) {
   options.Value("domain", "D", "DDS domain id (0..232)", "0")
@@ -50,4 +56,4 @@ int RunNodeMain(int argc, const char* const argv[], Options& options,
   }
 }
 
-}  // namespace handshare::common
+}  // namespace handshare::node

@@ -1,4 +1,4 @@
-#include "handshare/common/peers.hpp"
+#include "handshare/node/peers.hpp"
 
 #include <gtest/gtest.h>
 
@@ -6,14 +6,14 @@
 
 #include "handshare/common/options.hpp"
 
-namespace handshare::common {
+namespace handshare::node {
 namespace {
 
 // The message of the OptionError that ParsePeers throws for list ("" when none).
 std::string ErrorOf(const std::string& list) {
   try {
     ParsePeers(list);
-  } catch (const OptionError& e) {
+  } catch (const common::OptionError& e) {
     return e.what();
   }
   return "";
@@ -45,4 +45,4 @@ TEST(Peers, BadEntriesNameTheOptionAndTheValue) {
 }
 
 }  // namespace
-}  // namespace handshare::common
+}  // namespace handshare::node

@@ -5,7 +5,7 @@
 #include <string>
 #include <vector>
 
-namespace handshare::common {
+namespace handshare::dds {
 
 /// The members the world server has (its SessionRoster) that a node has not heard itself, and
 /// since when. A node that hears the server but never one member has a DDS-Security handshake
@@ -31,4 +31,4 @@ class RosterWatch {
   std::map<std::string, Clock::time_point> missing_since_;
 };
 
-}  // namespace handshare::common
+}  // namespace handshare::dds
