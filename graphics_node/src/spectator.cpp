@@ -227,8 +227,8 @@ class WorldView {
         AddHandFigure(HiroHandFigure(*hiro_, HandPose(hand.state), hand.state.q_hand_rad()),
                       hand.state.fingertip_radius_m(), kHiroRgb, view);
       } else {
-        std::array<Eigen::Vector3d, kHandFingers> tips;
-        for (int i = 0; i < kHandFingers; ++i) tips[i] = Eigen::Vector3d(hand.state.p_WE_m()[i].data());
+        std::array<Eigen::Vector3d, kFingers> tips;
+        for (int i = 0; i < kFingers; ++i) tips[i] = Eigen::Vector3d(hand.state.p_WE_m()[i].data());
         AddHandFigure(FitHandToFingertips(HandPose(hand.state), tips), hand.state.fingertip_radius_m(), kSkinRgb, view);
       }
       for (int i = 0; i < 5; ++i) {

@@ -142,8 +142,8 @@ void HapticLoop::Step(double t_s) noexcept {
   s.fingertip_radius_m = caps_.fingertip_radius_m;
   for (int k = 0; k < 3; ++k) s.p_WH_m[k] = device_fault ? 0.0 : reading_.p_WH[k];
   for (int k = 0; k < 4; ++k) s.q_WH_wxyz[k] = device_fault ? (k == 0 ? 1.0 : 0.0) : reading_.q_WH_wxyz[k];
-  for (int j = 0; j < 15; ++j) s.q_hand_rad[j] = device_fault ? 0.0 : reading_.q_hand_rad[j];
-  for (int j = 0; j < 6; ++j) s.q_arm_rad[j] = device_fault ? 0.0 : reading_.q_arm_rad[j];
+  for (int j = 0; j < common::kHandJoints; ++j) s.q_hand_rad[j] = device_fault ? 0.0 : reading_.q_hand_rad[j];
+  for (int j = 0; j < common::kArmJoints; ++j) s.q_arm_rad[j] = device_fault ? 0.0 : reading_.q_arm_rad[j];
   for (int i = 0; i < kFingers; ++i) {
     for (int k = 0; k < 3; ++k) {
       s.p_WE_m[i][k] = device_fault ? 0.0 : reading_.p_WE[i][k];

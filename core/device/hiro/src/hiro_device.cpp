@@ -29,7 +29,7 @@ HiroDevice::HiroDevice(const HiroModel& model, std::unique_ptr<HiroHardware> har
   if (!hardware_) throw ConfigError("HiroDevice: no hardware");
   for (auto& i : force_integral_) i.setZero();
   for (auto& t : tau_gravity_finger_) t.setZero();
-  for (int f = 0; f < kFingerCount; ++f) {
+  for (int f = 0; f < kFingers; ++f) {
     q_finger_[f].setZero();
     qd_finger_[f].setZero();
   }
@@ -37,7 +37,7 @@ HiroDevice::HiroDevice(const HiroModel& model, std::unique_ptr<HiroHardware> har
 
 haptic::DeviceCapabilities HiroDevice::capabilities() const noexcept {
   haptic::DeviceCapabilities c;
-  c.fingers = kFingerCount;
+  c.fingers = kFingers;
   c.max_fingertip_force_N = model_.max_fingertip_force_N;
   c.max_force_rate_N_per_s = 2000.0;
   c.control_rate_Hz = model_.control_rate_Hz;
@@ -53,14 +53,14 @@ void HiroDevice::Read(double t_s, haptic::DeviceReading& out) noexcept {
 
   // Joint angles; velocities from encoder differences through a first-order low-pass.
   ArmVector q_arm;
-  std::array<FingerVector, kFingerCount> q_finger;
+  std::array<FingerVector, kFingers> q_finger;
   for (int j = 0; j < kArmJoints; ++j) {
     q_arm[j] = enc_arm_[j];
     const JointSpec& js = model_.arm.joint[j];
     ok = ok && std::isfinite(q_arm[j]) && q_arm[j] > js.min_rad - kRangeTolerance_rad &&
          q_arm[j] < js.max_rad + kRangeTolerance_rad;
   }
-  for (int f = 0; f < kFingerCount; ++f) {
+  for (int f = 0; f < kFingers; ++f) {
     for (int j = 0; j < kFingerJoints; ++j) {
       q_finger[f][j] = enc_hand_[3 * f + j];
       const JointSpec& js = model_.finger[f].joint[j];
@@ -76,7 +76,7 @@ void HiroDevice::Read(double t_s, haptic::DeviceReading& out) noexcept {
       dt_s_ = t_s - t_prev_s_;
       const double a = dt_s_ / (dt_s_ + 1.0 / (2.0 * M_PI * gains_.velocity_filter_Hz));
       qd_arm_ += a * ((q_arm - q_arm_) / dt_s_ - qd_arm_);
-      for (int f = 0; f < kFingerCount; ++f) qd_finger_[f] += a * ((q_finger[f] - q_finger_[f]) / dt_s_ - qd_finger_[f]);
+      for (int f = 0; f < kFingers; ++f) qd_finger_[f] += a * ((q_finger[f] - q_finger_[f]) / dt_s_ - qd_finger_[f]);
     }
     q_arm_ = q_arm;
     q_finger_ = q_finger;
@@ -85,7 +85,7 @@ void HiroDevice::Read(double t_s, haptic::DeviceReading& out) noexcept {
 
     arm_ = ArmFk(model_.arm, q_arm_);
     const Eigen::Matrix3d& R_BH = arm_.X_BH.linear();
-    for (int f = 0; f < kFingerCount; ++f) {
+    for (int f = 0; f < kFingers; ++f) {
       fingers_[f] = FingerFk(model_.finger[f], q_finger_[f]);
       p_WE_[f] = p_WB_ + arm_.X_BH * fingers_[f].p_HE;
       // The sensor measures what the holder applies on the device; the user feels minus that.
@@ -101,7 +101,7 @@ void HiroDevice::Read(double t_s, haptic::DeviceReading& out) noexcept {
   out.p_WH = p_WB_ + arm_.X_BH.translation();
   const Eigen::Quaterniond q_WH(arm_.X_BH.linear());
   out.q_WH_wxyz = Eigen::Vector4d(q_WH.w(), q_WH.x(), q_WH.y(), q_WH.z());
-  for (int f = 0; f < kFingerCount; ++f) out.p_WE[f] = p_WE_[f];
+  for (int f = 0; f < kFingers; ++f) out.p_WE[f] = p_WE_[f];
   for (int j = 0; j < kArmJoints; ++j) out.q_arm_rad[j] = enc_arm_[j];
   for (int j = 0; j < kHandJoints; ++j) out.q_hand_rad[j] = enc_hand_[j];
 }
@@ -111,7 +111,7 @@ void HiroDevice::Command(const std::array<Eigen::Vector3d, haptic::kFingers>& f_
   ArmJointArray tau_arm{};
   if (!valid_) {
     // No trustworthy state: hold the device up with the last good gravity torques, no force.
-    for (int f = 0; f < kFingerCount; ++f) {
+    for (int f = 0; f < kFingers; ++f) {
       force_integral_[f].setZero();
       for (int j = 0; j < kFingerJoints; ++j) tau_hand[3 * f + j] = tau_gravity_finger_[f][j];
     }
@@ -125,8 +125,8 @@ void HiroDevice::Command(const std::array<Eigen::Vector3d, haptic::kFingers>& f_
 
   // Fingers: PI force control on the sensors, J^T to joints, gravity and limits first.
   ArmVector tau_reaction = ArmVector::Zero();
-  std::array<Eigen::Vector3d, kFingerCount> p_HE, f_error_W;
-  for (int f = 0; f < kFingerCount; ++f) {
+  std::array<Eigen::Vector3d, kFingers> p_HE, f_error_W;
+  for (int f = 0; f < kFingers; ++f) {
     const FingerSpec& spec = model_.finger[f];
     HiroFingerStatus& st = status_[f];
     const Eigen::Vector3d f_cmd =

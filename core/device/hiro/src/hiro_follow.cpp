@@ -18,15 +18,15 @@ void CapNorm(V&& v, double limit) noexcept {
 
 }  // namespace
 
-Eigen::Isometry3d FitRigid(const std::array<Eigen::Vector3d, kFingerCount>& a,
-                           const std::array<Eigen::Vector3d, kFingerCount>& b,
-                           const std::array<double, kFingerCount>& w, double* rms_m) noexcept {
+Eigen::Isometry3d FitRigid(const std::array<Eigen::Vector3d, kFingers>& a,
+                           const std::array<Eigen::Vector3d, kFingers>& b,
+                           const std::array<double, kFingers>& w, double* rms_m) noexcept {
   // Weighted centroids, then the rotation from the SVD of the weighted cross-covariance
   //   H = sum w (a - a_bar)(b - b_bar)^T = U S V^T,  R = V diag(1, 1, det(V U^T)) U^T
   // (Kabsch 1976; the sign fix keeps det R = +1, Umeyama 1991), t = b_bar - R a_bar.
   double w_sum = 0.0;
   Eigen::Vector3d a_bar = Eigen::Vector3d::Zero(), b_bar = Eigen::Vector3d::Zero();
-  for (int i = 0; i < kFingerCount; ++i) {
+  for (int i = 0; i < kFingers; ++i) {
     w_sum += w[i];
     a_bar += w[i] * a[i];
     b_bar += w[i] * b[i];
@@ -34,7 +34,7 @@ Eigen::Isometry3d FitRigid(const std::array<Eigen::Vector3d, kFingerCount>& a,
   a_bar /= w_sum;
   b_bar /= w_sum;
   Eigen::Matrix3d H = Eigen::Matrix3d::Zero();
-  for (int i = 0; i < kFingerCount; ++i) H.noalias() += w[i] * (a[i] - a_bar) * (b[i] - b_bar).transpose();
+  for (int i = 0; i < kFingers; ++i) H.noalias() += w[i] * (a[i] - a_bar) * (b[i] - b_bar).transpose();
   const Eigen::JacobiSVD<Eigen::Matrix3d> svd(H, Eigen::ComputeFullU | Eigen::ComputeFullV);
   const Eigen::Matrix3d& U = svd.matrixU();
   const Eigen::Matrix3d& V = svd.matrixV();
@@ -44,7 +44,7 @@ Eigen::Isometry3d FitRigid(const std::array<Eigen::Vector3d, kFingerCount>& a,
   X.translation() = b_bar - X.linear() * a_bar;
   if (rms_m) {
     double s = 0.0;
-    for (int i = 0; i < kFingerCount; ++i) s += w[i] * (X * a[i] - b[i]).squaredNorm();
+    for (int i = 0; i < kFingers; ++i) s += w[i] * (X * a[i] - b[i]).squaredNorm();
     *rms_m = std::sqrt(s / w_sum);
   }
   return X;
@@ -108,7 +108,7 @@ ArmVector DlsJointVelocity(const ArmJacobian& J, const Twist& V, const ArmVector
 }
 
 ArmFollower::ArmFollower(const HiroModel& model) noexcept : arm_(model.arm), spec_(model.follow) {
-  for (int f = 0; f < kFingerCount; ++f) {
+  for (int f = 0; f < kFingers; ++f) {
     p_HE_opt_[f] = FingerFk(model.finger[f], model.finger[f].q_optimum_rad).p_HE;
   }
   const double w = 2.0 * M_PI * spec_.servo_bandwidth_Hz;
@@ -120,15 +120,15 @@ ArmFollower::ArmFollower(const HiroModel& model) noexcept : arm_(model.arm), spe
   }
 }
 
-Eigen::Isometry3d ArmFollower::Target(const std::array<Eigen::Vector3d, kFingerCount>& p_BU,
+Eigen::Isometry3d ArmFollower::Target(const std::array<Eigen::Vector3d, kFingers>& p_BU,
                                       double* rms_m) const noexcept {
   // The hand pose that puts the optimum fingertips (in H) closest to the user's fingertips.
   return FitRigid(p_HE_opt_, p_BU, spec_.finger_weight, rms_m);
 }
 
 const ArmVector& ArmFollower::Step(const ArmVector& q, const ArmVector& qd, const ArmKinematics& k,
-                                   const std::array<Eigen::Vector3d, kFingerCount>& p_HE,
-                                   const std::array<Eigen::Vector3d, kFingerCount>& f_error_W, double dt_s,
+                                   const std::array<Eigen::Vector3d, kFingers>& p_HE,
+                                   const std::array<Eigen::Vector3d, kFingers>& f_error_W, double dt_s,
                                    bool follow) noexcept {
   ArmFollowStatus& st = status_;
   if (!started_) {
@@ -139,7 +139,7 @@ const ArmVector& ArmFollower::Step(const ArmVector& q, const ArmVector& qd, cons
   ArmVector qd_ref = ArmVector::Zero();
   if (follow) {
     // 0. The user's fingertips: the device's, plus where the uncontrolled force says.
-    for (int f = 0; f < kFingerCount; ++f) {
+    for (int f = 0; f < kFingers; ++f) {
       Eigen::Vector3d c = -f_error_W[f] / spec_.user_finger_stiffness_N_per_m;
       if (!c.allFinite()) c.setZero();
       CapNorm(c, spec_.max_user_offset_m);

@@ -170,13 +170,13 @@ HiroModel HiroModel::Parse(const std::string& json_text, const std::string& orig
   if (std::abs(link_mass.sum() - finger_mass) > 1e-6) {
     r.Fail("/assumed/hand/finger_link_mass_kg", "must add up to /sourced/hand/finger_mass_kg");
   }
-  if (std::abs(m.palm_mass_kg + kFingerCount * finger_mass - hand_mass) > 1e-6) {
+  if (std::abs(m.palm_mass_kg + kFingers * finger_mass - hand_mass) > 1e-6) {
     r.Fail("/assumed/hand/palm_mass_kg", "palm plus five fingers must add up to /sourced/hand/mass_kg");
   }
   const Eigen::Vector3d q_opt = r.Vector<3>("/assumed/hand/optimum_pose_deg", -180.0, 180.0) * kDeg;
   const double hand_counts = r.Number("/assumed/hand/encoder_counts_per_rev", 16.0, 1e9);
-  if (r.Size("/assumed/hand/finger_bases") != kFingerCount) r.Fail("/assumed/hand/finger_bases", "expected 5 fingers");
-  for (int f = 0; f < kFingerCount; ++f) {
+  if (r.Size("/assumed/hand/finger_bases") != kFingers) r.Fail("/assumed/hand/finger_bases", "expected 5 fingers");
+  for (int f = 0; f < kFingers; ++f) {
     FingerSpec& fs = m.finger[f];
     const std::string base = "/assumed/hand/finger_bases/" + std::to_string(f);
     fs.p_HF = r.Vector<3>(base + "/p_HF_m", -0.5, 0.5);
@@ -204,7 +204,7 @@ HiroModel HiroModel::Parse(const std::string& json_text, const std::string& orig
   ArmFollowSpec& fo = m.follow;
   const std::string af = "/assumed/arm_following/";
   double weight_sum = 0.0;
-  for (int f = 0; f < kFingerCount; ++f) {
+  for (int f = 0; f < kFingers; ++f) {
     fo.finger_weight[f] = r.Number(af + "finger_weight/" + std::to_string(f), 0.0, 100.0);
     weight_sum += fo.finger_weight[f];
   }
@@ -312,7 +312,7 @@ FingerKinematics FingerFk(const FingerSpec& f, const FingerVector& q_rad) noexce
 }
 
 ArmVector ArmGravityTorque(const HiroModel& m, const ArmKinematics& arm,
-                           const std::array<FingerKinematics, kFingerCount>& fingers) noexcept {
+                           const std::array<FingerKinematics, kFingers>& fingers) noexcept {
   // tau = -sum_i J_i^T m_i g: the torque the motors must add to hold still (J_i of the mass
   // centre, only the joints that move it).
   ArmVector tau = ArmVector::Zero();
@@ -325,7 +325,7 @@ ArmVector ArmGravityTorque(const HiroModel& m, const ArmKinematics& arm,
   add(arm.p_B_wrist, m.arm.wrist_mass_kg, 4);
   const Eigen::Isometry3d& X_BH = arm.X_BH;
   add(X_BH * m.palm_com_H, m.palm_mass_kg, kArmJoints);
-  for (int f = 0; f < kFingerCount; ++f) {
+  for (int f = 0; f < kFingers; ++f) {
     for (int j = 0; j < kFingerJoints; ++j) add(X_BH * fingers[f].com_H[j], m.finger[f].link_mass_kg[j], kArmJoints);
   }
   return tau;
@@ -345,7 +345,7 @@ FingerVector FingerGravityTorque(const FingerSpec& finger, const FingerKinematic
 }
 
 double GravityPotential(const HiroModel& m, const ArmKinematics& arm,
-                        const std::array<FingerKinematics, kFingerCount>& fingers) noexcept {
+                        const std::array<FingerKinematics, kFingers>& fingers) noexcept {
   // V = sum m g z over every mass centre.
   double V = 0.0;
   auto add = [&](const Eigen::Vector3d& p_B, double mass) { V += mass * kGravity_m_per_s2 * p_B.z(); };
@@ -353,7 +353,7 @@ double GravityPotential(const HiroModel& m, const ArmKinematics& arm,
   add(0.5 * (arm.p_B_elbow + arm.p_B_wrist), m.arm.forearm_mass_kg);
   add(arm.p_B_wrist, m.arm.wrist_mass_kg);
   add(arm.X_BH * m.palm_com_H, m.palm_mass_kg);
-  for (int f = 0; f < kFingerCount; ++f) {
+  for (int f = 0; f < kFingers; ++f) {
     for (int j = 0; j < kFingerJoints; ++j) add(arm.X_BH * fingers[f].com_H[j], m.finger[f].link_mass_kg[j]);
   }
   return V;

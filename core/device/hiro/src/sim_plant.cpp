@@ -70,8 +70,8 @@ SimulatedHiro::SimulatedHiro(const HiroModel& model, HiroSimOptions options)
   // Device at home, fingers at their optimum pose, base at the origin: where are the tips?
   q_arm_ = model_.arm.q_home_rad;
   const ArmKinematics arm = ArmFk(model_.arm, q_arm_);
-  std::array<Eigen::Vector3d, kFingerCount> p_BE_home;
-  for (int f = 0; f < kFingerCount; ++f) {
+  std::array<Eigen::Vector3d, kFingers> p_BE_home;
+  for (int f = 0; f < kFingers; ++f) {
     q_finger_[f] = model_.finger[f].q_optimum_rad;
     p_BE_home[f] = arm.X_BH * FingerFk(model_.finger[f], q_finger_[f]).p_HE;
   }
@@ -81,21 +81,21 @@ SimulatedHiro::SimulatedHiro(const HiroModel& model, HiroSimOptions options)
     // No script: a gentle default motion centred where the home pose puts the fingertips.
     const auto open = haptic::SimFingertips(haptic::HandPose{});
     Eigen::Vector3d mean_dev = Eigen::Vector3d::Zero(), mean_open = Eigen::Vector3d::Zero();
-    for (int f = 0; f < kFingerCount; ++f) {
-      mean_dev += p_BE_home[f] / kFingerCount;
-      mean_open += open[f] / kFingerCount;
+    for (int f = 0; f < kFingers; ++f) {
+      mean_dev += p_BE_home[f] / kFingers;
+      mean_open += open[f] / kFingers;
     }
     script_ = haptic::HandScript::Default(options_.p_WB + mean_dev - mean_open);
   }
   clock_ = std::make_unique<haptic::ScriptClock>(script_);
-  const std::array<Eigen::Vector3d, kFingerCount> p_WU0 = UserTargets(0.0);
+  const std::array<Eigen::Vector3d, kFingers> p_WU0 = UserTargets(0.0);
   p_WB_ = options_.p_WB;
   if (options_.place_base_at_script_start) {
     p_WB_.setZero();
-    for (int f = 0; f < kFingerCount; ++f) p_WB_ += (p_WU0[f] - p_BE_home[f]) / kFingerCount;
+    for (int f = 0; f < kFingers; ++f) p_WB_ += (p_WU0[f] - p_BE_home[f]) / kFingers;
   }
   // Each device finger starts touching its user fingertip (as far as its range allows).
-  for (int f = 0; f < kFingerCount; ++f) {
+  for (int f = 0; f < kFingers; ++f) {
     const Eigen::Vector3d p_HE = arm.X_BH.inverse() * (p_WU0[f] - p_WB_);
     SolveFingerIk(model_.finger[f], p_HE, q_finger_[f]);
     p_WU_[f] = p_WU0[f];
@@ -120,9 +120,9 @@ bool SimulatedHiro::OnWorldReady(double t_s, std::string_view world) noexcept {
   return clock_->OnWorldReady(t_s, world);
 }
 
-std::array<Eigen::Vector3d, kFingerCount> SimulatedHiro::UserTargets(double t_s) const noexcept {
+std::array<Eigen::Vector3d, kFingers> SimulatedHiro::UserTargets(double t_s) const noexcept {
   const auto tips = haptic::SimFingertips(script_.PoseAt(ScriptTime(t_s)));
-  std::array<Eigen::Vector3d, kFingerCount> out;
+  std::array<Eigen::Vector3d, kFingers> out;
   // Minimum-jerk fraction of the turn done by t_s: 10 s^3 - 15 s^4 + 6 s^5.
   const UserHandTurn& turn = options_.turn;
   double s = t_s >= turn.t0_s + turn.duration_s ? 1.0 : 0.0;
@@ -133,16 +133,16 @@ std::array<Eigen::Vector3d, kFingerCount> SimulatedHiro::UserTargets(double t_s)
   const Eigen::Matrix3d R =
       Eigen::AngleAxisd(s * turn.angle_rad, turn.axis_W.normalized()).toRotationMatrix();
   Eigen::Vector3d c = Eigen::Vector3d::Zero();
-  for (const auto& p : tips) c += p / kFingerCount;
-  for (int f = 0; f < kFingerCount; ++f) out[f] = c + R * (tips[f] - c) + options_.p_offset_W;
+  for (const auto& p : tips) c += p / kFingers;
+  for (int f = 0; f < kFingers; ++f) out[f] = c + R * (tips[f] - c) + options_.p_offset_W;
   return out;
 }
 
 void SimulatedHiro::RefreshKinematics() noexcept {
   const ArmKinematics arm = ArmFk(model_.arm, q_arm_);
-  std::array<FingerKinematics, kFingerCount> fingers;
+  std::array<FingerKinematics, kFingers> fingers;
   const Eigen::Matrix3d& R_BH = arm.X_BH.linear();
-  for (int f = 0; f < kFingerCount; ++f) {
+  for (int f = 0; f < kFingers; ++f) {
     fingers[f] = FingerFk(model_.finger[f], q_finger_[f]);
     const Eigen::Vector3d p_BE = arm.X_BH * fingers[f].p_HE;
     p_WE0_[f] = p_WB_ + p_BE;
@@ -162,7 +162,7 @@ void SimulatedHiro::Substep(double h) noexcept {
   const auto targets = UserTargets(t_s_ + h);
   ArmVector tau_ext_arm = ArmVector::Zero();
   const ArmVector dq_arm = q_arm_ - q_arm0_;
-  for (int f = 0; f < kFingerCount; ++f) {
+  for (int f = 0; f < kFingers; ++f) {
     // Device fingertip, linearised about the last refresh.
     const Eigen::Vector3d p_D = p_WE0_[f] + J_arm_tip_[f] * dq_arm + J_finger_W_[f] * (q_finger_[f] - q_finger0_[f]);
     const Eigen::Vector3d v_D = J_arm_tip_[f] * qd_arm_ + J_finger_W_[f] * qd_finger_[f];
@@ -213,7 +213,7 @@ bool SimulatedHiro::Sync(double t_s) noexcept {
   for (int j = 0; j < kArmJoints; ++j) {
     enc_arm_[j] = options_.encoder_quantization ? Quantize(q_arm_[j], model_.arm.joint[j].encoder_rad) : q_arm_[j];
   }
-  for (int f = 0; f < kFingerCount; ++f) {
+  for (int f = 0; f < kFingers; ++f) {
     for (int j = 0; j < kFingerJoints; ++j) {
       const double q = q_finger_[f][j];
       enc_hand_[3 * f + j] = options_.encoder_quantization ? Quantize(q, model_.finger[f].joint[j].encoder_rad) : q;
@@ -234,11 +234,11 @@ void SimulatedHiro::ReadEncoders(ArmJointArray& q_arm_rad, HandJointArray& q_han
   q_hand_rad = enc_hand_;
 }
 
-void SimulatedHiro::ReadForceSensors(std::array<SensorWrench, kFingerCount>& out) const noexcept { out = wrench_; }
+void SimulatedHiro::ReadForceSensors(std::array<SensorWrench, kFingers>& out) const noexcept { out = wrench_; }
 
 void SimulatedHiro::WriteMotorTorques(const ArmJointArray& tau_arm_N_m, const HandJointArray& tau_hand_N_m) noexcept {
   for (int j = 0; j < kArmJoints; ++j) tau_arm_cmd_[j] = std::isfinite(tau_arm_N_m[j]) ? tau_arm_N_m[j] : 0.0;
-  for (int f = 0; f < kFingerCount; ++f) {
+  for (int f = 0; f < kFingers; ++f) {
     for (int j = 0; j < kFingerJoints; ++j) {
       const double t = tau_hand_N_m[3 * f + j];
       tau_finger_cmd_[f][j] = std::isfinite(t) ? t : 0.0;

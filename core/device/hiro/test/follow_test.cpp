@@ -14,7 +14,7 @@ namespace handshare::hiro {
 namespace {
 
 constexpr double kDeg = M_PI / 180.0;
-using Points = std::array<Eigen::Vector3d, kFingerCount>;
+using Points = std::array<Eigen::Vector3d, kFingers>;
 
 const HiroModel& Model() {
   static const HiroModel m = HiroModel::Load(HANDSHARE_HIRO_CONFIG);
@@ -37,13 +37,13 @@ double AngleBetween(const Eigen::Matrix3d& A, const Eigen::Matrix3d& B) {
 TEST(HiroFollowFit, RecoversAKnownRigidMotionOfTheOptimumFingertips) {
   const ArmFollower follower(Model());
   const Points& a = follower.p_HE_optimum();
-  const std::array<double, kFingerCount> w{1, 1, 1, 1, 1};
+  const std::array<double, kFingers> w{1, 1, 1, 1, 1};
   std::mt19937_64 rng(7);
   for (int trial = 0; trial < 200; ++trial) {
     // Up to 179 deg: the fit must not fold back near pi.
     const Eigen::Isometry3d X = RandomPose(rng, 179.0 * kDeg);
     Points b;
-    for (int i = 0; i < kFingerCount; ++i) b[i] = X * a[i];
+    for (int i = 0; i < kFingers; ++i) b[i] = X * a[i];
     double rms = 1.0;
     const Eigen::Isometry3d fit = FitRigid(a, b, w, &rms);
     // Exact data: recovered to rounding (points ~0.1 m apart, doubles: 1e-12 is ample).
@@ -62,8 +62,8 @@ TEST(HiroFollowFit, IsTheLeastSquaresOptimumAndNeverAReflection) {
   for (int trial = 0; trial < 50; ++trial) {
     const Eigen::Isometry3d X = RandomPose(rng, M_PI);
     Points b;
-    std::array<double, kFingerCount> w;
-    for (int i = 0; i < kFingerCount; ++i) {
+    std::array<double, kFingers> w;
+    for (int i = 0; i < kFingers; ++i) {
       b[i] = X * a[i] + Eigen::Vector3d(n(rng), n(rng), n(rng));
       w[i] = uw(rng);
     }
@@ -74,7 +74,7 @@ TEST(HiroFollowFit, IsTheLeastSquaresOptimumAndNeverAReflection) {
     // a minimum. Oracle independent of the SVD: the cost itself.
     auto cost = [&](const Eigen::Isometry3d& Y) {
       double c = 0.0;
-      for (int i = 0; i < kFingerCount; ++i) c += w[i] * (Y * a[i] - b[i]).squaredNorm();
+      for (int i = 0; i < kFingers; ++i) c += w[i] * (Y * a[i] - b[i]).squaredNorm();
       return c;
     };
     const double c0 = cost(fit);
@@ -96,15 +96,15 @@ TEST(HiroFollowFit, IsTheLeastSquaresOptimumAndNeverAReflection) {
   const Points p{Eigen::Vector3d(0, 0, 0), Eigen::Vector3d(0.1, 0, 0), Eigen::Vector3d(0, 0.08, 0),
                  Eigen::Vector3d(0, 0, 0.06), Eigen::Vector3d(0.05, 0.05, 0.05)};
   Points b;
-  const std::array<double, kFingerCount> w{1, 1, 1, 1, 1};
-  for (int i = 0; i < kFingerCount; ++i) b[i] = Eigen::Vector3d(-p[i].x(), p[i].y(), p[i].z());
+  const std::array<double, kFingers> w{1, 1, 1, 1, 1};
+  for (int i = 0; i < kFingers; ++i) b[i] = Eigen::Vector3d(-p[i].x(), p[i].y(), p[i].z());
   double rms = 0.0;
   const Eigen::Isometry3d fit = FitRigid(p, b, w, &rms);
   EXPECT_NEAR(fit.linear().determinant(), 1.0, 1e-12);
   EXPECT_GT(rms, 1e-3);
   // A finger with weight zero does not move the fit at all.
   Points c;
-  for (int i = 0; i < kFingerCount; ++i) c[i] = a[i] + Eigen::Vector3d(0.01, 0.02, -0.01);
+  for (int i = 0; i < kFingers; ++i) c[i] = a[i] + Eigen::Vector3d(0.01, 0.02, -0.01);
   c[0] += Eigen::Vector3d(0.2, -0.3, 0.1);
   const Eigen::Isometry3d fit0 = FitRigid(a, c, {0, 1, 1, 1, 1}, &rms);
   EXPECT_LT(rms, 1e-12);
@@ -232,9 +232,9 @@ UserHand ExpectedUserHand(const HandMotion& m) {
   UserHand h;
   h.before = haptic::SimFingertips(haptic::HandPose{});
   Eigen::Vector3d c = Eigen::Vector3d::Zero();
-  for (const auto& p : h.before) c += p / kFingerCount;
+  for (const auto& p : h.before) c += p / kFingers;
   const Eigen::Matrix3d R = Eigen::AngleAxisd(m.angle_rad, m.axis.normalized()).toRotationMatrix();
-  for (int i = 0; i < kFingerCount; ++i) h.after[i] = c + m.move + R * (h.before[i] - c);
+  for (int i = 0; i < kFingers; ++i) h.after[i] = c + m.move + R * (h.before[i] - c);
   return h;
 }
 
@@ -275,13 +275,13 @@ FollowRun RunFollow(const HandMotion& motion, const Eigen::Vector3d& f_cmd, bool
   FollowRun run;
   {
     Points b0, b1;
-    for (int i = 0; i < kFingerCount; ++i) {
+    for (int i = 0; i < kFingers; ++i) {
       b0[i] = user.before[i] - plant.p_WB();
       b1[i] = user.after[i] - plant.p_WB();
     }
     run.target_start = ref_follower.Target(b0);
     run.target_end = ref_follower.Target(b1);
-    for (int i = 0; i < kFingerCount; ++i) {
+    for (int i = 0; i < kFingers; ++i) {
       run.target_max_residual_m =
           std::max(run.target_max_residual_m, (run.target_end * ref_follower.p_HE_optimum()[i] - b1[i]).norm());
     }
@@ -318,7 +318,7 @@ FollowRun RunFollow(const HandMotion& motion, const Eigen::Vector3d& f_cmd, bool
     if (n == std::lround(motion.t0_s * 1e3)) run.X_BH_start = X;
     double& force_err = t <= t_done ? run.max_force_err_moving_N : run.max_force_err_after_N;
     if (t > motion.t0_s && t <= t_done + 1.0) {
-      for (int i = 0; i < kFingerCount; ++i) force_err = std::max(force_err, (plant.f_on_user_W()[i] - f_cmd).norm());
+      for (int i = 0; i < kFingers; ++i) force_err = std::max(force_err, (plant.f_on_user_W()[i] - f_cmd).norm());
     }
     if (t > t_done) {
       const bool within = (X.translation() - run.target_end.translation()).norm() < kPosTol_m &&
@@ -336,10 +336,10 @@ FollowRun RunFollow(const HandMotion& motion, const Eigen::Vector3d& f_cmd, bool
     // A force pressed on the user's fingertips moves them off the script (the user's finger
     // is a spring): the fit to where they truly are, for runs with a force.
     Points b;
-    for (int i = 0; i < kFingerCount; ++i) b[i] = plant.p_WU()[i] - plant.p_WB();
+    for (int i = 0; i < kFingers; ++i) b[i] = plant.p_WU()[i] - plant.p_WB();
     run.end_error_true_m = (run.X_BH_end.translation() - ref_follower.Target(b).translation()).norm();
   }
-  for (int i = 0; i < kFingerCount; ++i) {
+  for (int i = 0; i < kFingers; ++i) {
     const FingerSpec& fs = m.finger[i];
     run.max_finger_dev_rad =
         std::max(run.max_finger_dev_rad, (plant.q_finger_rad()[i] - fs.q_optimum_rad).cwiseAbs().maxCoeff());

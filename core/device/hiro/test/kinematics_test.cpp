@@ -134,7 +134,7 @@ TEST(HiroKinematics, ArmJacobiansMatchCentralDifferences) {
 TEST(HiroKinematics, FingerJacobiansMatchCentralDifferences) {
   const HiroModel& m = Model();
   std::mt19937 rng(11);
-  for (int f = 0; f < kFingerCount; ++f) {
+  for (int f = 0; f < kFingers; ++f) {
     for (int trial = 0; trial < 10; ++trial) {
       const FingerVector q = RandomInRange<kFingerJoints>(rng, m.finger[f].joint);
       const FingerKinematics k = FingerFk(m.finger[f], q);
@@ -156,9 +156,9 @@ TEST(HiroKinematics, GravityTorquesAreTheGradientOfThePotential) {
   std::mt19937 rng(3);
   for (int trial = 0; trial < 10; ++trial) {
     const ArmVector qa = RandomInRange<kArmJoints>(rng, m.arm.joint);
-    std::array<FingerVector, kFingerCount> qf;
-    std::array<FingerKinematics, kFingerCount> fk;
-    for (int f = 0; f < kFingerCount; ++f) {
+    std::array<FingerVector, kFingers> qf;
+    std::array<FingerKinematics, kFingers> fk;
+    for (int f = 0; f < kFingers; ++f) {
       qf[f] = RandomInRange<kFingerJoints>(rng, m.finger[f].joint);
       fk[f] = FingerFk(m.finger[f], qf[f]);
     }
@@ -171,7 +171,7 @@ TEST(HiroKinematics, GravityTorquesAreTheGradientOfThePotential) {
       const double dV = (GravityPotential(m, ArmFk(m.arm, qp), fk) - GravityPotential(m, ArmFk(m.arm, qm), fk)) / (2 * kFdStep);
       EXPECT_NEAR(tau[i], dV, 1e-6) << "arm joint " << i;
     }
-    for (int f = 0; f < kFingerCount; ++f) {
+    for (int f = 0; f < kFingers; ++f) {
       const FingerVector tf = FingerGravityTorque(m.finger[f], fk[f], ak.X_BH.linear());
       for (int j = 0; j < kFingerJoints; ++j) {
         auto fp = fk, fm = fk;
@@ -187,8 +187,8 @@ TEST(HiroKinematics, GravityTorquesAreTheGradientOfThePotential) {
   }
   // And a magnitude check by hand: arm straight down (elbow -90), hand hanging: no torque at
   // the shoulder flexion joint, since every mass is on the vertical through it.
-  std::array<FingerKinematics, kFingerCount> fk0;
-  for (int f = 0; f < kFingerCount; ++f) fk0[f] = FingerFk(m.finger[f], FingerVector::Zero());
+  std::array<FingerKinematics, kFingers> fk0;
+  for (int f = 0; f < kFingers; ++f) fk0[f] = FingerFk(m.finger[f], FingerVector::Zero());
   const ArmVector hang = ArmGravityTorque(m, ArmFk(m.arm, ArmDeg(0, 0, -90, 0, 0, 0)), fk0);
   // Masses off the vertical: only the palm com (z offset in H = -y in B here) and fingers.
   EXPECT_LT(std::abs(hang[0]), 0.73 * kGravity_m_per_s2 * 0.2);

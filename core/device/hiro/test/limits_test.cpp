@@ -71,7 +71,7 @@ TEST(HiroLimits, ClosedLoopTorquesAndJointsStayWithinLimits) {
       f[i] = 3.5 * Eigen::Vector3d(std::cos(a), std::sin(a) * std::cos(3 * t), std::sin(a) * std::sin(3 * t));
     }
     device->Command(f);
-    for (int i = 0; i < kFingerCount; ++i) {
+    for (int i = 0; i < kFingers; ++i) {
       const auto& st = device->finger_status()[i];
       if (st.force_scale < 1.0) ++saturated_steps;
       for (int j = 0; j < kFingerJoints; ++j) {
@@ -147,7 +147,7 @@ TEST(HiroDevice, ArmGivesAtMost45NAtTheHandBase) {
     // From the hand base through the fingertips' centroid: no moment about the hand base,
     // so the force limit binds, not the 2.6 N m.
     Eigen::Vector3d centroid = Eigen::Vector3d::Zero();
-    for (const auto& p : r.p_WE) centroid += p / kFingerCount;
+    for (const auto& p : r.p_WE) centroid += p / kFingers;
     const Eigen::Vector3d n_W = (centroid - r.p_WH).normalized();
     for (auto& fi : f) fi = n > 100 ? Eigen::Vector3d(20.0 * n_W) : Eigen::Vector3d::Zero();
     device.Command(f);
@@ -156,7 +156,7 @@ TEST(HiroDevice, ArmGivesAtMost45NAtTheHandBase) {
     for (int j = 0; j < kArmJoints; ++j) q_arm[j] = r.q_arm_rad[j];
     const ArmKinematics arm = ArmFk(model.arm, q_arm);
     ArmVector tau_asked = ArmVector::Zero();
-    for (int i = 0; i < kFingerCount; ++i) {
+    for (int i = 0; i < kFingers; ++i) {
       const Eigen::Vector3d p_BE = r.p_WE[i] - p_WB;
       tau_asked += ArmPointJacobianAt(arm, p_BE).transpose() * device.finger_status()[i].f_command_E_W;
     }
@@ -189,7 +189,7 @@ TEST(HiroDevice, ReportsCapabilitiesAndAValidReading) {
   // The device's fingertips start on the user's scripted fingertips (solved at setup); the
   // thumb may be off where its range does not reach, the others are within 1 mm.
   const auto tips = haptic::SimFingertips(haptic::HandPose{Eigen::Vector3d(0.1, 0.2, 0.3)});
-  for (int i = 1; i < kFingerCount; ++i) EXPECT_LT((r.p_WE[i] - tips[i]).norm(), 1e-3) << "finger " << i;
+  for (int i = 1; i < kFingers; ++i) EXPECT_LT((r.p_WE[i] - tips[i]).norm(), 1e-3) << "finger " << i;
   EXPECT_NEAR(r.q_WH_wxyz.norm(), 1.0, 1e-12);
 }
 

@@ -84,7 +84,7 @@ TEST(HiroWorkspace, FingerAndThumbVolumesAgainstTheChaptersTable1) {
   EXPECT_NEAR(finger / finger_grid, 1.0, 0.01);
   EXPECT_NEAR(thumb / thumb_grid, 1.0, 0.01);
   // Every finger but the thumb has the same links and ranges.
-  for (int i = 2; i < kFingerCount; ++i) EXPECT_NEAR(FingerWorkspaceVolume(m.finger[i], 4, 400), finger, 1e-12);
+  for (int i = 2; i < kFingers; ++i) EXPECT_NEAR(FingerWorkspaceVolume(m.finger[i], 4, 400), finger, 1e-12);
 
   // Table 1's ratio, 713 / 535 = 1.333, is the ratio of the joint-1 ranges (80 / 60 deg): with
   // the finger's joint-2 range (-25..94 deg) the model's thumb is exactly 4/3 of a finger.

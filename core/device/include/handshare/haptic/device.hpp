@@ -19,8 +19,8 @@ struct DeviceReading {
   Eigen::Vector3d p_WH = Eigen::Vector3d::Zero();            // hand base H
   Eigen::Vector4d q_WH_wxyz = Eigen::Vector4d(1, 0, 0, 0);  // hand base orientation
   std::array<Eigen::Vector3d, kFingers> p_WE{};              // fingertips E
-  std::array<double, 15> q_hand_rad{};
-  std::array<double, 6> q_arm_rad{};
+  std::array<double, common::kHandJoints> q_hand_rad{};  // finger f, joint j at 3 f + j
+  std::array<double, common::kArmJoints> q_arm_rad{};
   bool valid = false;                          // false: device lost or data not trustworthy
 };
 
@@ -32,8 +32,8 @@ struct DeviceCapabilities {
   double max_force_rate_N_per_s = 2000.0;
   /// Native control rate of the device [Hz] (HIRO II: 1 kHz).
   double control_rate_Hz = 1000.0;
-  int hand_joints = 0;  // actuated joints in the hand (HIRO II: 15); 0 for scripted hands
-  int arm_joints = 0;   // actuated joints in the arm (HIRO II: 6)
+  int hand_joints = 0;  // actuated joints in the hand (HIRO II: common::kHandJoints); 0 for scripted hands
+  int arm_joints = 0;   // actuated joints in the arm (HIRO II: common::kArmJoints)
 };
 
 class Device {

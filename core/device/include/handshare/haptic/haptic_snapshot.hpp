@@ -20,8 +20,8 @@ struct HapticSnapshot {
   double impulse_E_W_Ns[kFingers][3] = {};
   double fingertip_radius_m = 0.0;
   /// The device's joint angles (zeros for a device without joints): screens draw its hand.
-  double q_hand_rad[15] = {};
-  double q_arm_rad[6] = {};
+  double q_hand_rad[common::kHandJoints] = {};
+  double q_arm_rad[common::kArmJoints] = {};
   bool fault = false;  // device fault or a finger's safety fault this step
 };
 

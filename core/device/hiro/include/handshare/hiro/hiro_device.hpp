@@ -69,7 +69,7 @@ class HiroDevice final : public haptic::Device {
 
   const HiroModel& model() const noexcept { return model_; }
   HiroHardware& hardware() noexcept { return *hardware_; }
-  const std::array<HiroFingerStatus, kFingerCount>& finger_status() const noexcept { return status_; }
+  const std::array<HiroFingerStatus, kFingers>& finger_status() const noexcept { return status_; }
   const ArmVector& tau_arm_N_m() const noexcept { return tau_arm_; }
   /// The arm's torque for the reaction of the commanded fingertip forces in the last
   /// Command(), after LimitHandWrench, before joint saturation [N m].
@@ -95,20 +95,20 @@ class HiroDevice final : public haptic::Device {
   ArmJointArray enc_arm_{};
   HandJointArray enc_hand_{};
   ArmVector q_arm_ = ArmVector::Zero(), qd_arm_ = ArmVector::Zero();
-  std::array<FingerVector, kFingerCount> q_finger_{}, qd_finger_{};
+  std::array<FingerVector, kFingers> q_finger_{}, qd_finger_{};
   ArmKinematics arm_;
-  std::array<FingerKinematics, kFingerCount> fingers_{};
-  std::array<Eigen::Vector3d, kFingerCount> p_WE_{};
-  std::array<SensorWrench, kFingerCount> wrench_{};
+  std::array<FingerKinematics, kFingers> fingers_{};
+  std::array<Eigen::Vector3d, kFingers> p_WE_{};
+  std::array<SensorWrench, kFingers> wrench_{};
 
   // Controller state.
   ArmFollower follower_;
-  std::array<Eigen::Vector3d, kFingerCount> force_integral_{};
+  std::array<Eigen::Vector3d, kFingers> force_integral_{};
   ArmVector tau_arm_ = ArmVector::Zero(), tau_gravity_arm_ = ArmVector::Zero();
   ArmVector tau_reaction_ = ArmVector::Zero();
   double hand_wrench_scale_ = 1.0;
-  std::array<FingerVector, kFingerCount> tau_gravity_finger_{};
-  std::array<HiroFingerStatus, kFingerCount> status_{};
+  std::array<FingerVector, kFingers> tau_gravity_finger_{};
+  std::array<HiroFingerStatus, kFingers> status_{};
 };
 
 /// The HIRO II driver on the simulated plant: loads the config, builds SimulatedHiro and the

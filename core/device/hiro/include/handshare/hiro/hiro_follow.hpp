@@ -40,9 +40,9 @@ using Twist = Eigen::Matrix<double, 6, 1>;  // [w; v], angular over linear, as t
 /// Weighted least-squares rigid transform: X minimising sum_i w_i |X a_i - b_i|^2 over proper
 /// rigid transforms (det R = +1; a reflection is never returned). Weights >= 0, positive sum.
 /// If rms_m is given it receives sqrt(sum_i w_i |X a_i - b_i|^2 / sum_i w_i) [m].
-Eigen::Isometry3d FitRigid(const std::array<Eigen::Vector3d, kFingerCount>& a,
-                           const std::array<Eigen::Vector3d, kFingerCount>& b,
-                           const std::array<double, kFingerCount>& w, double* rms_m = nullptr) noexcept;
+Eigen::Isometry3d FitRigid(const std::array<Eigen::Vector3d, kFingers>& a,
+                           const std::array<Eigen::Vector3d, kFingers>& b,
+                           const std::array<double, kFingers>& w, double* rms_m = nullptr) noexcept;
 
 /// Rotation vector (unit axis times angle, angle in [0, pi]) of a rotation matrix: log(R).
 Eigen::Vector3d RotationVector(const Eigen::Matrix3d& R) noexcept;
@@ -63,7 +63,7 @@ ArmVector DlsJointVelocity(const ArmJacobian& J, const Twist& V, const ArmVector
 struct ArmFollowStatus {
   Eigen::Isometry3d X_BH_target = Eigen::Isometry3d::Identity();  // the fit (step 1)
   double fit_rms_m = 0.0;                                         // its weighted rms residual
-  std::array<Eigen::Vector3d, kFingerCount> p_BU{};               // user's fingertips (step 0)
+  std::array<Eigen::Vector3d, kFingers> p_BU{};               // user's fingertips (step 0)
   Twist error = Twist::Zero();                                    // PoseError(X_BH, target)
   Twist V_command = Twist::Zero();                                // capped twist (step 2)
   ArmVector q_ref_rad = ArmVector::Zero();
@@ -85,21 +85,21 @@ class ArmFollower {
   /// B axes) [N]. follow = false holds the arm where the reference is (no fit). Returns the
   /// servo torque [N m] (no gravity, reaction or limit terms). Real-time safe.
   const ArmVector& Step(const ArmVector& q_rad, const ArmVector& qd_rad_per_s, const ArmKinematics& k,
-                        const std::array<Eigen::Vector3d, kFingerCount>& p_HE,
-                        const std::array<Eigen::Vector3d, kFingerCount>& f_error_W, double dt_s,
+                        const std::array<Eigen::Vector3d, kFingers>& p_HE,
+                        const std::array<Eigen::Vector3d, kFingers>& f_error_W, double dt_s,
                         bool follow) noexcept;
 
   const ArmFollowStatus& status() const noexcept { return status_; }
   /// Fingertips at the optimum finger pose, in H [m].
-  const std::array<Eigen::Vector3d, kFingerCount>& p_HE_optimum() const noexcept { return p_HE_opt_; }
+  const std::array<Eigen::Vector3d, kFingers>& p_HE_optimum() const noexcept { return p_HE_opt_; }
   /// The hand-base pose (in B) the fit asks for given the user's fingertips p_BU in B.
   /// Real-time safe.
-  Eigen::Isometry3d Target(const std::array<Eigen::Vector3d, kFingerCount>& p_BU, double* rms_m = nullptr) const noexcept;
+  Eigen::Isometry3d Target(const std::array<Eigen::Vector3d, kFingers>& p_BU, double* rms_m = nullptr) const noexcept;
 
  private:
   ArmSpec arm_;
   ArmFollowSpec spec_;
-  std::array<Eigen::Vector3d, kFingerCount> p_HE_opt_{};
+  std::array<Eigen::Vector3d, kFingers> p_HE_opt_{};
   ArmVector kp_ = ArmVector::Zero(), kd_ = ArmVector::Zero(), leash_rad_ = ArmVector::Zero();
   bool started_ = false;
   ArmFollowStatus status_;

@@ -37,7 +37,7 @@ class HiroHardware {
   /// Joint angles from the encoders, as latched by Sync() [rad]. Real-time safe.
   virtual void ReadEncoders(ArmJointArray& q_arm_rad, HandJointArray& q_hand_rad) const noexcept = 0;
   /// The five 6-axis force sensors, as latched by Sync(). Real-time safe.
-  virtual void ReadForceSensors(std::array<SensorWrench, kFingerCount>& out) const noexcept = 0;
+  virtual void ReadForceSensors(std::array<SensorWrench, kFingers>& out) const noexcept = 0;
   /// Motor torque commands at the joints [N m]; held until the next call. Real-time safe.
   virtual void WriteMotorTorques(const ArmJointArray& tau_arm_N_m, const HandJointArray& tau_hand_N_m) noexcept = 0;
   /// The node has the world `world` from t_s (haptic::Device::OnWorldReady, bridge thread).
@@ -105,7 +105,7 @@ class SimulatedHiro final : public HiroHardware {
 
   bool Sync(double t_s) noexcept override;
   void ReadEncoders(ArmJointArray& q_arm_rad, HandJointArray& q_hand_rad) const noexcept override;
-  void ReadForceSensors(std::array<SensorWrench, kFingerCount>& out) const noexcept override;
+  void ReadForceSensors(std::array<SensorWrench, kFingers>& out) const noexcept override;
   void WriteMotorTorques(const ArmJointArray& tau_arm_N_m, const HandJointArray& tau_hand_N_m) noexcept override;
   /// The scripted user hand's await_world lines (haptic::ScriptClock). Any thread.
   bool OnWorldReady(double t_s, std::string_view world) noexcept override;
@@ -113,18 +113,18 @@ class SimulatedHiro final : public HiroHardware {
   // Ground truth, for tests and telemetry.
   double time_s() const noexcept { return t_s_; }
   const ArmVector& q_arm_rad() const noexcept { return q_arm_; }
-  const std::array<FingerVector, kFingerCount>& q_finger_rad() const noexcept { return q_finger_; }
+  const std::array<FingerVector, kFingers>& q_finger_rad() const noexcept { return q_finger_; }
   /// Device fingertips (finger holders) in W, exact (no quantization).
-  const std::array<Eigen::Vector3d, kFingerCount>& p_WE() const noexcept { return p_WE_; }
+  const std::array<Eigen::Vector3d, kFingers>& p_WE() const noexcept { return p_WE_; }
   /// The users' fingertips in W.
-  const std::array<Eigen::Vector3d, kFingerCount>& p_WU() const noexcept { return p_WU_; }
+  const std::array<Eigen::Vector3d, kFingers>& p_WU() const noexcept { return p_WU_; }
   /// Force the device applies on each user fingertip [N], at the last substep.
-  const std::array<Eigen::Vector3d, kFingerCount>& f_on_user_W() const noexcept { return f_on_user_W_; }
+  const std::array<Eigen::Vector3d, kFingers>& f_on_user_W() const noexcept { return f_on_user_W_; }
   /// Work the device has done on the users' fingertips since start [J].
   double energy_to_user_J() const noexcept { return energy_to_user_J_; }
   /// Torques the motors actually applied at the last substep (after saturation) [N m].
   const ArmVector& tau_arm_applied() const noexcept { return tau_arm_applied_; }
-  const std::array<FingerVector, kFingerCount>& tau_finger_applied() const noexcept { return tau_finger_applied_; }
+  const std::array<FingerVector, kFingers>& tau_finger_applied() const noexcept { return tau_finger_applied_; }
   const Eigen::Vector3d& p_WB() const noexcept { return p_WB_; }
   /// Syncs that skipped time instead of integrating it.
   std::uint64_t resyncs() const noexcept { return resyncs_; }
@@ -136,7 +136,7 @@ class SimulatedHiro final : public HiroHardware {
   /// holds on the way), looped if so configured.
   double ScriptTime(double t_s) const noexcept;
   /// The user's scripted fingertips at t_s: script, turn, offset.
-  std::array<Eigen::Vector3d, kFingerCount> UserTargets(double t_s) const noexcept;
+  std::array<Eigen::Vector3d, kFingers> UserTargets(double t_s) const noexcept;
 
   HiroModel model_;
   HiroSimOptions options_;
@@ -147,28 +147,28 @@ class SimulatedHiro final : public HiroHardware {
   Eigen::Vector3d p_WB_;
 
   ArmVector q_arm_ = ArmVector::Zero(), qd_arm_ = ArmVector::Zero();
-  std::array<FingerVector, kFingerCount> q_finger_{}, qd_finger_{};
-  std::array<Eigen::Vector3d, kFingerCount> p_WU_{}, v_WU_{}, p_target_prev_{};
+  std::array<FingerVector, kFingers> q_finger_{}, qd_finger_{};
+  std::array<Eigen::Vector3d, kFingers> p_WU_{}, v_WU_{}, p_target_prev_{};
   ArmVector tau_arm_cmd_ = ArmVector::Zero(), tau_arm_applied_ = ArmVector::Zero();
-  std::array<FingerVector, kFingerCount> tau_finger_cmd_{}, tau_finger_applied_{};
+  std::array<FingerVector, kFingers> tau_finger_cmd_{}, tau_finger_applied_{};
 
   // Kinematics at the start of the current Sync() (the linearisation point).
   ArmVector q_arm0_ = ArmVector::Zero();
-  std::array<FingerVector, kFingerCount> q_finger0_{};
-  std::array<Eigen::Vector3d, kFingerCount> p_WE0_{};
-  std::array<ArmPointJacobian, kFingerCount> J_arm_tip_{};
-  std::array<Eigen::Matrix3d, kFingerCount> J_finger_W_{};
-  std::array<Eigen::Matrix3d, kFingerCount> R_WS_{};
+  std::array<FingerVector, kFingers> q_finger0_{};
+  std::array<Eigen::Vector3d, kFingers> p_WE0_{};
+  std::array<ArmPointJacobian, kFingers> J_arm_tip_{};
+  std::array<Eigen::Matrix3d, kFingers> J_finger_W_{};
+  std::array<Eigen::Matrix3d, kFingers> R_WS_{};
   ArmVector tau_gravity_arm_ = ArmVector::Zero();  // gravity's torque on the joints
-  std::array<FingerVector, kFingerCount> tau_gravity_finger_{};
+  std::array<FingerVector, kFingers> tau_gravity_finger_{};
 
-  std::array<Eigen::Vector3d, kFingerCount> p_WE_{}, f_on_user_W_{};
+  std::array<Eigen::Vector3d, kFingers> p_WE_{}, f_on_user_W_{};
   double energy_to_user_J_ = 0.0;
 
   // Latched sensor values.
   ArmJointArray enc_arm_{};
   HandJointArray enc_hand_{};
-  std::array<SensorWrench, kFingerCount> wrench_{};
+  std::array<SensorWrench, kFingers> wrench_{};
   std::mt19937_64 rng_;
   std::normal_distribution<double> noise_{0.0, 1.0};
   std::uint64_t resyncs_ = 0;

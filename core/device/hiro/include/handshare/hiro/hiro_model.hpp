@@ -2,7 +2,7 @@
 /// HIRO II model: geometry, limits and masses loaded from a config file
 /// (assets/devices/hiro2.json), forward kinematics, Jacobians and gravity torques of the arm
 /// (6 DOF) and the five 3-DOF fingers. What the chapter gives and what is assumed is kept
-/// apart in the config file; see haptic_node/hiro/README.md.
+/// apart in the config file; see core/device/hiro/README.md.
 ///
 /// Frames (Drake monogram notation): W world (z up, gravity -z), B arm base at the shoulder
 /// (axes parallel to W, at p_WB), H hand base, F_i base of finger i (joint 1), S_i distal link
@@ -18,12 +18,15 @@
 #include <stdexcept>
 #include <string>
 
+#include "handshare/common/hand.hpp"
+
 namespace handshare::hiro {
 
-inline constexpr int kArmJoints = 6;
-inline constexpr int kFingerJoints = 3;
-inline constexpr int kFingerCount = 5;  // thumb, index, middle, ring, little
-inline constexpr int kHandJoints = kFingerCount * kFingerJoints;
+// The hand's counts are the ones every layer shares (handshare/common/hand.hpp).
+using common::kArmJoints;
+using common::kFingerJoints;
+using common::kFingers;  // thumb, index, middle, ring, little
+using common::kHandJoints;
 inline constexpr double kGravity_m_per_s2 = 9.81;
 
 using ArmVector = Eigen::Matrix<double, kArmJoints, 1>;
@@ -66,7 +69,7 @@ struct ArmSpec {
 /// How the arm follows the user's hand (assumed; see hiro_follow.hpp for the method).
 struct ArmFollowSpec {
   /// Weight of each finger in the rigid fit of the optimum fingertips to the current ones.
-  std::array<double, kFingerCount> finger_weight{1.0, 1.0, 1.0, 1.0, 1.0};
+  std::array<double, kFingers> finger_weight{1.0, 1.0, 1.0, 1.0, 1.0};
   /// The user's fingertip is taken (f_meas - f_cmd) / this beyond the device's [N/m].
   double user_finger_stiffness_N_per_m = 300.0;
   double max_user_offset_m = 0.03;      // cap on that correction
@@ -93,7 +96,7 @@ struct FingerSpec {
 struct HiroModel {
   ArmSpec arm;
   ArmFollowSpec follow;
-  std::array<FingerSpec, kFingerCount> finger{};
+  std::array<FingerSpec, kFingers> finger{};
   double palm_mass_kg = 0.0;
   Eigen::Vector3d palm_com_H = Eigen::Vector3d::Zero();
   double max_fingertip_force_N = 0.0;
@@ -150,13 +153,13 @@ double LimitHandWrench(const ArmJacobian& J_H, double max_force_N, double max_mo
 /// Joint torques that hold the arm against gravity (hand and fingers included, fingers at
 /// q_hand). tau = -sum_links J_com^T m g, g = (0, 0, -9.81) in B. [N m]
 ArmVector ArmGravityTorque(const HiroModel& m, const ArmKinematics& arm,
-                           const std::array<FingerKinematics, kFingerCount>& fingers) noexcept;
+                           const std::array<FingerKinematics, kFingers>& fingers) noexcept;
 /// Joint torques that hold finger i against gravity, for hand orientation R_BH. [N m]
 FingerVector FingerGravityTorque(const FingerSpec& finger, const FingerKinematics& k,
                                  const Eigen::Matrix3d& R_BH) noexcept;
 /// Potential energy of the whole device in gravity [J] (for tests: tau_g = dV/dq).
 double GravityPotential(const HiroModel& m, const ArmKinematics& arm,
-                        const std::array<FingerKinematics, kFingerCount>& fingers) noexcept;
+                        const std::array<FingerKinematics, kFingers>& fingers) noexcept;
 
 /// Saturates joint torques at +-max, keeping the direction of the task part where possible:
 /// tau = tau_fixed + s * tau_task with the largest s in [0, 1] that keeps every joint within
