@@ -1,7 +1,8 @@
 #pragma once
 /// One interface for every haptic device (HIRO II, simulated hands, replay): fingertip poses
-/// in, fingertip forces out. Layer 1: no middleware, no rendering. Read() and Command() are
-/// called from the haptic thread and must be real-time safe (no allocation, locks, I/O).
+/// in, fingertip forces out. Layer 2 (device, docs/ARCHITECTURE.md): no middleware, no
+/// rendering. Read() and Command() are called from the haptic thread and must be real-time safe
+/// (no allocation, locks, I/O).
 #include <Eigen/Core>
 #include <array>
 #include <cstdint>

@@ -1,7 +1,7 @@
 #pragma once
 /// The replay device: plays back a recorded device-state log (the CSV that `haptic_node
-/// --trace` writes), so a session can be reproduced with the same hand motion. Layer 1: no
-/// middleware.
+/// --trace` writes), so a session can be reproduced with the same hand motion. Layer 2 (device,
+/// docs/ARCHITECTURE.md): no middleware.
 ///
 /// Log format: a header line naming the columns, then one row per sample. Required columns:
 /// t_s (seconds since the recording's loop start, non-decreasing), fault (0/1), and the
