@@ -1,11 +1,11 @@
 // audio_guide: speaks the session's message board.
 #include "handshare/audio_guide/guide.hpp"
-#include "handshare/common/node_main.hpp"
+#include "handshare/node/node_main.hpp"
 
 int main(int argc, char** argv) {
   handshare::common::Options options(
       "audio_guide", "Speaks every message-board text of a handshare session with eSpeak NG.");
-  handshare::common::DeclareSessionOptions(options);
+  handshare::node::DeclareSessionOptions(options);
   options.Value("name", "NAME", "member name (default audio-<pid>)", "")
       .Value("out", "DIR", "write one WAV (and a .txt) per message here instead of playing", "")
       .Value("alsa-device", "PCM", "ALSA device to play on", "default")
@@ -14,9 +14,9 @@ int main(int argc, char** argv) {
       .Value("rejoin-after", "SEC",
              "join again with a new participant when no board came from the world server this long after "
              "joining (a secured join whose handshake never finished; 0: never)", "15");
-  return handshare::common::RunNodeMain(argc, argv, options, [](const auto& o) {
+  return handshare::node::RunNodeMain(argc, argv, options, [](const auto& o) {
     handshare::audio_guide::GuideConfig c;
-    c.where = handshare::common::ReadSessionOptions(o);
+    c.where = handshare::node::ReadSessionOptions(o);
     c.name = o.GetString("name");
     c.out_dir = o.GetString("out");
     c.alsa_device = o.GetString("alsa-device");

@@ -2,7 +2,7 @@
 #include <cmath>
 #include <cstdio>
 
-#include "handshare/common/node_main.hpp"
+#include "handshare/node/node_main.hpp"
 #include "handshare/graphics/spectator.hpp"
 #include "handshare/render/window_renderer.hpp"
 
@@ -11,7 +11,7 @@ int main(int argc, char** argv) {
   handshare::common::Options options(
       "graphics_node", "Spectates a handshare session: the scene and every user's hand and five fingertips "
                        "(red, green, blue, yellow, cyan), headless into PNG frames or in a window.");
-  handshare::common::DeclareSessionOptions(options);
+  handshare::node::DeclareSessionOptions(options);
   options.Value("name", "NAME", "member name (default graphics-<pid>)", "")
       .Flag("headless", "render offscreen (software GL) into PNG files, no display needed")
       .Value("frames", "N", "headless: number of frames to write", "0")
@@ -37,9 +37,9 @@ int main(int argc, char** argv) {
       .Value("state-out", "FILE",
              "at exit, write what the spectator shows as JSON: scene, revision, board {message_id, text}, "
              "objects {id: {p_WO_m, q_WO_wxyz, from}}", "");
-  return handshare::common::RunNodeMain(argc, argv, options, [](const auto& o) {
+  return handshare::node::RunNodeMain(argc, argv, options, [](const auto& o) {
     handshare::graphics::SpectatorConfig c;
-    c.where = handshare::common::ReadSessionOptions(o);
+    c.where = handshare::node::ReadSessionOptions(o);
     c.name = o.GetString("name");
     c.headless = o.FlagSet("headless");
     c.width_px = static_cast<int>(o.GetInt("width", 16, 8192));

@@ -1,12 +1,12 @@
 // haptic_node: one user at one haptic device (HIRO II or simulated) joining a session.
 #include "handshare/common/data_dir.hpp"
-#include "handshare/common/node_main.hpp"
+#include "handshare/node/node_main.hpp"
 #include "handshare/haptic/haptic_node.hpp"
 
 int main(int argc, char** argv) {
   handshare::common::Options options(
       "haptic_node", "Joins a handshare session with a haptic device and runs the haptic loop.");
-  handshare::common::DeclareSessionOptions(options);
+  handshare::node::DeclareSessionOptions(options);
   options.Value("user", "U", "user name, unique in the session", std::nullopt, true)
       .Value("device", "KIND", "device driver: sim, hiro (simulated HIRO II plant), replay", "sim")
       .Value("hiro-config", "FILE", "hiro: device geometry",
@@ -34,9 +34,9 @@ int main(int argc, char** argv) {
       .Value("rejoin-after", "SEC",
              "join again with a new participant when no world server was heard this long after joining "
              "(a secured join whose handshake never finished; 0: never)", "15");
-  return handshare::common::RunNodeMain(argc, argv, options, [](const auto& o) {
+  return handshare::node::RunNodeMain(argc, argv, options, [](const auto& o) {
     handshare::haptic::HapticNodeConfig c;
-    c.where = handshare::common::ReadSessionOptions(o);
+    c.where = handshare::node::ReadSessionOptions(o);
     c.user = o.GetString("user");
     c.device = o.GetString("device");
     if (c.device != "sim" && c.device != "replay" && c.device != "hiro") {

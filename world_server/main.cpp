@@ -1,5 +1,5 @@
 // world_server: owns a shared session (scene state, message board, members).
-#include "handshare/common/node_main.hpp"
+#include "handshare/node/node_main.hpp"
 #include "handshare/world_server/world_server.hpp"
 
 int main(int argc, char** argv) {
@@ -7,7 +7,7 @@ int main(int argc, char** argv) {
       "world_server", "Owns a shared handshare session: publishes the scene and the message board, "
                       "tracks members joining and leaving, arbitrates grasped objects, publishes "
                       "deformations and rigid bodies' states, and records the session with --log.");
-  handshare::common::DeclareSessionOptions(options);
+  handshare::node::DeclareSessionOptions(options);
   options.Value("scene", "NAME", "scene to start with (assets/scenes/NAME.json)", "start_menu")
       .Value("log", "FILE", "record the session in this SQLite session log (a new session is appended; "
                             "read it with session_report)", "")
@@ -19,9 +19,9 @@ int main(int argc, char** argv) {
       .Value("deformation-threshold", "M", "re-send a deformed surface node when it moved more than M metres", "1e-4")
       .Value("resume-within", "SEC", "with --log: a session of this name whose server was killed less than SEC "
                                      "ago is resumed where it was (0: always start afresh)", "600");
-  return handshare::common::RunNodeMain(argc, argv, options, [](const auto& o) {
+  return handshare::node::RunNodeMain(argc, argv, options, [](const auto& o) {
     handshare::server::WorldServerConfig config;
-    config.where = handshare::common::ReadSessionOptions(o);
+    config.where = handshare::node::ReadSessionOptions(o);
     config.scene = o.GetString("scene");
     config.log_file = o.GetString("log");
     config.cache_dir = o.GetString("cache");

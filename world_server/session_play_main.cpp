@@ -4,7 +4,7 @@
 #include <string>
 #include <vector>
 
-#include "handshare/common/node_main.hpp"
+#include "handshare/node/node_main.hpp"
 #include "handshare/world_server/recording.hpp"
 
 int main(int argc, char** argv) {
@@ -13,7 +13,7 @@ int main(int argc, char** argv) {
                            "(relative to its first sample) scaled by 1/--speed; scene state, message board and "
                            "deformations stay transient-local for late joiners. It announces itself as member "
                            "'player' (kind world_server, device 'replay').");
-  handshare::common::DeclareSessionOptions(options);
+  handshare::node::DeclareSessionOptions(options);
   options.Value("speed", "X", "play X times as fast as recorded", "1")
       .Value("wait-for-readers", "N", "start the clock once N spectators matched the scene-state and deformation writers", "0")
       .Value("deliver-timeout", "SEC",
@@ -47,13 +47,13 @@ int main(int argc, char** argv) {
       return 1;
     }
   }
-  return handshare::common::RunNodeMain(static_cast<int>(rest.size()), rest.data(), options, [&](const auto& o) {
+  return handshare::node::RunNodeMain(static_cast<int>(rest.size()), rest.data(), options, [&](const auto& o) {
     if (files.size() != 1) {
       throw handshare::common::OptionError(files.empty() ? "missing the recording FILE"
                                                          : "expected one FILE, got " + std::to_string(files.size()));
     }
     handshare::server::PlayConfig config;
-    config.where = handshare::common::ReadSessionOptions(o);
+    config.where = handshare::node::ReadSessionOptions(o);
     config.file = files[0];
     config.speed = o.GetDouble("speed", 0.01, 1000.0);
     config.wait_for_readers = static_cast<int>(o.GetInt("wait-for-readers", 0, 1000));

@@ -8,7 +8,7 @@
 #include <functional>
 #include <memory>
 
-#include "handshare/common/rejoin_clock.hpp"
+#include "handshare/node/rejoin_clock.hpp"
 #include "handshare/common/shutdown.hpp"
 #include "handshare/dds/membership.hpp"
 #include "handshare/dds/messages.hpp"
@@ -53,7 +53,7 @@ int Guide::Run() {
     dds::Reader<msg::ControlState> control_reader;
   };
   auto link = std::make_unique<Link>(config_.where, name, config_.cues, say);
-  common::RejoinClock rejoin(std::chrono::duration<double>(config_.rejoin_after_s));
+  node::RejoinClock rejoin(std::chrono::duration<double>(config_.rejoin_after_s));
 
   const auto start = Clock::now();
   std::uint32_t last_id = 0;

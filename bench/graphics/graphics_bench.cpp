@@ -100,12 +100,12 @@ void AddTwoHands(render::SceneView& view) {
   for (const double x : {-0.10, 0.12}) {
     Eigen::Isometry3d X_WH = Eigen::Isometry3d::Identity();
     X_WH.translation() = Eigen::Vector3d(x, -0.06, 0.13);
-    std::array<Eigen::Vector3d, graphics::kHandFingers> p_WE;
-    for (int f = 0; f < graphics::kHandFingers; ++f) {
+    std::array<Eigen::Vector3d, graphics::kFingers> p_WE;
+    for (int f = 0; f < graphics::kFingers; ++f) {
       p_WE[static_cast<std::size_t>(f)] = X_WH * Eigen::Vector3d(-0.04 + 0.02 * f, f == 0 ? 0.05 : 0.10, -0.06);
     }
     graphics::AddHandFigure(graphics::FitHandToFingertips(X_WH, p_WE), 0.008, {0.93F, 0.78F, 0.66F}, view);
-    for (int f = 0; f < graphics::kHandFingers; ++f) {
+    for (int f = 0; f < graphics::kFingers; ++f) {
       view.markers.push_back(render::Sphere{p_WE[static_cast<std::size_t>(f)], 0.008, kFingerRgb[static_cast<std::size_t>(f)]});
     }
   }

@@ -22,8 +22,8 @@ Eigen::Vector2d ChainEnd(const std::array<double, 3>& links, double theta) {
 
 }  // namespace
 
-const std::array<std::array<double, 3>, kHandFingers>& HandLinkLengths() noexcept {
-  static const std::array<std::array<double, 3>, kHandFingers> kLinks = {{
+const std::array<std::array<double, 3>, kFingers>& HandLinkLengths() noexcept {
+  static const std::array<std::array<double, 3>, kFingers> kLinks = {{
       {0.035, 0.030, 0.024},   // thumb: metacarpal, proximal, distal
       {0.035, 0.022, 0.018},   // index: proximal, middle, distal phalanx
       {0.038, 0.024, 0.018},   // middle
@@ -32,20 +32,20 @@ const std::array<std::array<double, 3>, kHandFingers>& HandLinkLengths() noexcep
   return kLinks;
 }
 
-const std::array<Eigen::Vector3d, kHandFingers>& HandKnuckles_H() noexcept {
+const std::array<Eigen::Vector3d, kFingers>& HandKnuckles_H() noexcept {
   // The simulated hand's frame (haptic_node's sim_hand): fingers along +y, thumb towards -x.
-  static const std::array<Eigen::Vector3d, kHandFingers> kKnuckles = {
+  static const std::array<Eigen::Vector3d, kFingers> kKnuckles = {
       Eigen::Vector3d(-0.030, -0.010, -0.010), Eigen::Vector3d(-0.030, 0.030, 0.0),
       Eigen::Vector3d(-0.010, 0.032, 0.0), Eigen::Vector3d(0.010, 0.030, 0.0),
       Eigen::Vector3d(0.028, 0.026, 0.0)};
   return kKnuckles;
 }
 
-HandFigure FitHandToFingertips(const Eigen::Isometry3d& X_WH, const std::array<Eigen::Vector3d, kHandFingers>& p_WE) {
+HandFigure FitHandToFingertips(const Eigen::Isometry3d& X_WH, const std::array<Eigen::Vector3d, kFingers>& p_WE) {
   HandFigure hand;
   hand.X_WH = X_WH.matrix().allFinite() ? X_WH : Eigen::Isometry3d::Identity();
   const Eigen::Vector3d palm_normal_W = -(hand.X_WH.linear() * Eigen::Vector3d::UnitZ());  // the palm side
-  for (int f = 0; f < kHandFingers; ++f) {
+  for (int f = 0; f < kFingers; ++f) {
     const std::array<double, 3>& links = HandLinkLengths()[f];
     const double length = links[0] + links[1] + links[2];
     const Eigen::Vector3d knuckle = hand.X_WH * HandKnuckles_H()[f];
@@ -132,14 +132,17 @@ void AddHandFigure(const HandFigure& hand, double fingertip_radius_m, const rend
 }
 
 HandFigure HiroHandFigure(const hiro::HiroModel& model, const Eigen::Isometry3d& X_WH,
-                          const std::array<double, 3 * kHandFingers>& q_hand_rad) {
-  static_assert(hiro::kFingerCount == kHandFingers && hiro::kFingerJoints == 3);
+                          const std::array<double, common::kHandJoints>& q_hand_rad) {
+  static_assert(common::kFingerJoints == hiro::FingerVector::RowsAtCompileTime);
   HandFigure hand;
   hand.X_WH = X_WH;
   Eigen::Vector3d lo = Eigen::Vector3d::Constant(1e9), hi = Eigen::Vector3d::Constant(-1e9);
-  for (int f = 0; f < kHandFingers; ++f) {
+  for (int f = 0; f < kFingers; ++f) {
     hiro::FingerVector q;
-    for (int j = 0; j < 3; ++j) q[j] = std::isfinite(q_hand_rad[3 * f + j]) ? q_hand_rad[3 * f + j] : 0.0;
+    for (int j = 0; j < common::kFingerJoints; ++j) {
+      const double q_j = q_hand_rad[common::kFingerJoints * f + j];
+      q[j] = std::isfinite(q_j) ? q_j : 0.0;
+    }
     const hiro::FingerKinematics k = hiro::FingerFk(model.finger[f], q);
     for (int j = 0; j < 3; ++j) hand.joints_W[f][j] = X_WH * k.point_H[j];
     hand.joints_W[f][3] = X_WH * k.p_HE;

@@ -15,7 +15,7 @@
 
 #include <nlohmann/json.hpp>
 
-#include "handshare/common/rejoin_clock.hpp"
+#include "handshare/node/rejoin_clock.hpp"
 #include "handshare/dds/roster_rejoin.hpp"
 #include "handshare/common/shutdown.hpp"
 #include "handshare/dds/membership.hpp"
@@ -226,8 +226,8 @@ class WorldView {
         AddHandFigure(HiroHandFigure(*hiro_, HandPose(hand.state), hand.state.q_hand_rad()),
                       hand.state.fingertip_radius_m(), kHiroRgb, view);
       } else {
-        std::array<Eigen::Vector3d, kHandFingers> tips;
-        for (int i = 0; i < kHandFingers; ++i) tips[i] = Eigen::Vector3d(hand.state.p_WE_m()[i].data());
+        std::array<Eigen::Vector3d, kFingers> tips;
+        for (int i = 0; i < kFingers; ++i) tips[i] = Eigen::Vector3d(hand.state.p_WE_m()[i].data());
         AddHandFigure(FitHandToFingertips(HandPose(hand.state), tips), hand.state.fingertip_radius_m(), kSkinRgb, view);
       }
       for (int i = 0; i < 5; ++i) {
@@ -421,7 +421,7 @@ int Spectator::Run() {
     return std::make_unique<SpectatorLink>(config_.where, assets_dir, name, config_.fps, config_.language);
   };
   auto link = open_link();
-  common::RejoinClock rejoin(config_.rejoin_after);
+  node::RejoinClock rejoin(config_.rejoin_after);
   // A member the world server has (its roster) that this view never hears, a user's hand
   // above all, is a secured handshake between the two that never finished (Fast DDS 2.9,
   // docs/security.md): a new participant starts it again, as the recorder does.
@@ -442,7 +442,7 @@ int Spectator::Run() {
     if (why.empty()) return;
     std::fprintf(stderr, "[graphics_node %s] %s\n", name.c_str(), why.c_str());
     Clock::time_point opened;
-    const std::string joined = common::RunRejoin(
+    const std::string joined = node::RunRejoin(
         roster_rejoin.rejoins(), Clock::now(), [&] { link.reset(); }, [&] { link = open_link(); }, opened);
     std::fprintf(stderr, "[graphics_node %s] %s\n", name.c_str(), joined.c_str());
     roster_rejoin.Restart(opened);

@@ -12,11 +12,11 @@
 namespace handshare::graphics {
 namespace {
 
-// The simulated hand's fingertips, open and closed (haptic_node/src/sim_hand.cpp, GripOffsets).
-const std::array<Eigen::Vector3d, kHandFingers> kOpen_H = {
+// The simulated hand's fingertips, open and closed (core/device/src/sim_hand.cpp, GripOffsets).
+const std::array<Eigen::Vector3d, kFingers> kOpen_H = {
     Eigen::Vector3d(-0.060, 0.040, -0.010), Eigen::Vector3d(-0.036, 0.100, 0.000), Eigen::Vector3d(-0.012, 0.105, 0.000),
     Eigen::Vector3d(0.012, 0.100, 0.000), Eigen::Vector3d(0.036, 0.090, 0.000)};
-const std::array<Eigen::Vector3d, kHandFingers> kClosed_H = {
+const std::array<Eigen::Vector3d, kFingers> kClosed_H = {
     Eigen::Vector3d(-0.025, 0.060, -0.030), Eigen::Vector3d(0.000, 0.075, -0.020), Eigen::Vector3d(0.012, 0.070, -0.025),
     Eigen::Vector3d(0.020, 0.062, -0.028), Eigen::Vector3d(0.024, 0.055, -0.030)};
 
@@ -29,9 +29,9 @@ Eigen::Isometry3d SomePose() {
 
 // Every finger's links keep their lengths, start at its knuckle and end at its fingertip; the
 // finger bends towards the palm (its joints lie on the back of the hand's side of the chord).
-void ExpectAFittedHand(const HandFigure& hand, const Eigen::Isometry3d& X_WH, const std::array<Eigen::Vector3d, kHandFingers>& tips_W) {
+void ExpectAFittedHand(const HandFigure& hand, const Eigen::Isometry3d& X_WH, const std::array<Eigen::Vector3d, kFingers>& tips_W) {
   const Eigen::Vector3d palm_W = -(X_WH.linear() * Eigen::Vector3d::UnitZ());
-  for (int f = 0; f < kHandFingers; ++f) {
+  for (int f = 0; f < kFingers; ++f) {
     const auto& j = hand.joints_W[f];
     EXPECT_LT((j[0] - X_WH * HandKnuckles_H()[f]).norm(), 1e-12) << f;
     EXPECT_LT((j[3] - tips_W[f]).norm(), 1e-12) << f;
@@ -48,10 +48,10 @@ void ExpectAFittedHand(const HandFigure& hand, const Eigen::Isometry3d& X_WH, co
 TEST(HandFigure, FitsTheSimulatedHandOpenAndClosedAtAnyPose) {
   for (const Eigen::Isometry3d& X_WH : {Eigen::Isometry3d(Eigen::Isometry3d::Identity()), SomePose()}) {
     for (const auto* shape : {&kOpen_H, &kClosed_H}) {
-      std::array<Eigen::Vector3d, kHandFingers> tips_W;
-      for (int f = 0; f < kHandFingers; ++f) tips_W[f] = X_WH * (*shape)[f];
+      std::array<Eigen::Vector3d, kFingers> tips_W;
+      for (int f = 0; f < kFingers; ++f) tips_W[f] = X_WH * (*shape)[f];
       const HandFigure hand = FitHandToFingertips(X_WH, tips_W);
-      for (int f = 0; f < kHandFingers; ++f) EXPECT_FALSE(hand.stretched[f]) << f << ": the sim hand is within reach";
+      for (int f = 0; f < kFingers; ++f) EXPECT_FALSE(hand.stretched[f]) << f << ": the sim hand is within reach";
       ExpectAFittedHand(hand, X_WH, tips_W);
     }
   }
@@ -62,11 +62,11 @@ TEST(HandFigure, RandomFingertipsAreReachedOrTheFingerStretches) {
   std::uniform_real_distribution<double> box(-0.15, 0.15);
   int stretched = 0;
   for (int trial = 0; trial < 500; ++trial) {
-    std::array<Eigen::Vector3d, kHandFingers> tips;
+    std::array<Eigen::Vector3d, kFingers> tips;
     for (auto& t : tips) t = Eigen::Vector3d(box(rng), box(rng) + 0.05, box(rng));
     const HandFigure hand = FitHandToFingertips(SomePose(), tips);
     ExpectAFittedHand(hand, SomePose(), tips);
-    for (int f = 0; f < kHandFingers; ++f) {
+    for (int f = 0; f < kFingers; ++f) {
       const double length = HandLinkLengths()[f][0] + HandLinkLengths()[f][1] + HandLinkLengths()[f][2];
       EXPECT_EQ(hand.stretched[f], (tips[f] - hand.joints_W[f][0]).norm() > length * (1 + 1e-9));
       stretched += hand.stretched[f] ? 1 : 0;
@@ -76,7 +76,7 @@ TEST(HandFigure, RandomFingertipsAreReachedOrTheFingerStretches) {
 }
 
 TEST(HandFigure, BadFingertipsGiveAStraightHandNotNaN) {
-  std::array<Eigen::Vector3d, kHandFingers> tips;
+  std::array<Eigen::Vector3d, kFingers> tips;
   tips.fill(Eigen::Vector3d::Constant(std::numeric_limits<double>::quiet_NaN()));
   const HandFigure hand = FitHandToFingertips(Eigen::Isometry3d::Identity(), tips);
   for (const auto& finger : hand.joints_W) {
@@ -104,7 +104,7 @@ TEST(HandFigure, TheHiroHandFromItsJointAnglesReachesTheReportedFingertips) {
     X_WH.linear() = Eigen::Quaterniond(r.q_WH_wxyz[0], r.q_WH_wxyz[1], r.q_WH_wxyz[2], r.q_WH_wxyz[3]).toRotationMatrix();
     X_WH.translation() = r.p_WH;
     const HandFigure hand = HiroHandFigure(model, X_WH, r.q_hand_rad);
-    for (int f = 0; f < kHandFingers; ++f) {
+    for (int f = 0; f < kFingers; ++f) {
       worst_m = std::max(worst_m, (hand.joints_W[f][3] - r.p_WE[f]).norm());
       for (int k = 0; k < 2; ++k) {
         EXPECT_NEAR((hand.joints_W[f][k + 1] - hand.joints_W[f][k]).norm(), model.finger[f].link_m[k], 1e-9) << f;
@@ -144,7 +144,7 @@ TEST(HandFigure, TheDrawnHandLiesBetweenPalmAndFingertips) {
   const render::Rgb skin{0.86F, 0.70F, 0.58F};
   const HandFigure hand = FitHandToFingertips(Eigen::Isometry3d::Identity(), kOpen_H);
   AddHandFigure(hand, 0.008, skin, scene);
-  for (int f = 0; f < kHandFingers; ++f) scene.markers.push_back(render::Sphere{kOpen_H[f], 0.008, render::Rgb{1.0F, 0.0F, 0.0F}});
+  for (int f = 0; f < kFingers; ++f) scene.markers.push_back(render::Sphere{kOpen_H[f], 0.008, render::Rgb{1.0F, 0.0F, 0.0F}});
   const render::ImageRgb8 image = renderer.Render(scene, camera);
   const auto is_skin = [](const std::uint8_t* p) { return p[0] > 60 && p[1] > 0.6 * p[0] && p[1] < 0.95 * p[0] && p[2] < p[1]; };
   const auto is_red = [](const std::uint8_t* p) { return p[0] > 110 && p[1] < 0.5 * p[0] && p[2] < 0.5 * p[0]; };

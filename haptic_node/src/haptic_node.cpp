@@ -10,7 +10,7 @@
 #include <thread>
 
 #include "haptic_bridge.hpp"
-#include "handshare/common/rejoin_clock.hpp"
+#include "handshare/node/rejoin_clock.hpp"
 #include "handshare/common/shutdown.hpp"
 #include "handshare/dds/membership.hpp"
 #include "handshare/haptic/haptic_loop.hpp"
@@ -154,7 +154,7 @@ int HapticNode::Run() {
   const auto start = Clock::now();
   const auto period = std::chrono::duration_cast<Clock::duration>(
       std::chrono::duration<double>(1.0 / config_.publish_Hz));
-  common::RejoinClock rejoin(std::chrono::duration<double>(config_.rejoin_after_s));
+  node::RejoinClock rejoin(std::chrono::duration<double>(config_.rejoin_after_s));
   auto next = start;
   while (!common::ShutdownRequested()) {
     if (config_.where.duration.count() > 0 && Clock::now() - start >= config_.where.duration) break;

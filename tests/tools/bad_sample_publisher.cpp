@@ -11,7 +11,7 @@
 #include <string>
 #include <thread>
 
-#include "handshare/common/node_main.hpp"
+#include "handshare/node/node_main.hpp"
 #include "handshare/common/options.hpp"
 #include "handshare/common/shutdown.hpp"
 #include "handshare/dds/messages.hpp"
@@ -41,7 +41,7 @@ msg::ContactSet ContactSet(const std::string& session, const std::string& object
 }
 
 int Run(const common::Options& o) {
-  const common::SessionOptions where = common::ReadSessionOptions(o);
+  const common::SessionOptions where = node::ReadSessionOptions(o);
   const std::string object = o.GetString("object");
   const double rate_Hz = o.GetDouble("rate", 1.0, 10000.0);
   dds::Participant participant(where, o.GetString("as"));
@@ -199,12 +199,12 @@ int Run(const common::Options& o) {
 int main(int argc, char** argv) {
   handshare::common::Options options("bad_sample_publisher",
                                      "Publishes malformed samples on every topic of a session (a test's hostile peer).");
-  handshare::common::DeclareSessionOptions(options);
+  handshare::node::DeclareSessionOptions(options);
   options.Value("object", "ID", "the object the bad contact sets and deformations name", "tail")
       .Value("rate", "HZ", "rounds per second", "1000")
       .Value("forge", "USER", "also write well-formed samples in this user's name (\"\": none)", "")
       .Value("ghost", "MEMBER", "write nothing but a world server's roster naming this member id (\"\": none)", "")
       .Value("as", "NAME", "participant name; with --security it picks the identity (e.g. graphics_node/x: a "
                            "spectator's)", "bad_sample_publisher");
-  return handshare::common::RunNodeMain(argc, argv, options, [](const handshare::common::Options& o) { return Run(o); });
+  return handshare::node::RunNodeMain(argc, argv, options, [](const handshare::common::Options& o) { return Run(o); });
 }

@@ -19,7 +19,7 @@
 #include <thread>
 #include <vector>
 
-#include "handshare/common/node_main.hpp"
+#include "handshare/node/node_main.hpp"
 #include "handshare/common/options.hpp"
 #include "handshare/common/shutdown.hpp"
 #include "handshare/dds/messages.hpp"
@@ -262,7 +262,7 @@ int Subscribe(const common::Options& o, const common::SessionOptions& where, con
 }
 
 int Run(const common::Options& o) {
-  const common::SessionOptions where = common::ReadSessionOptions(o);
+  const common::SessionOptions where = node::ReadSessionOptions(o);
   const std::string role = o.GetString("role");
   const std::string which = o.GetString("case");
   if (which != "event" && which != "field" && which != "contact") {
@@ -279,7 +279,7 @@ int main(int argc, char** argv) {
   handshare::common::Options options("qos_probe",
                                      "Measures delivery of reliable events, deformation fields and contact sets "
                                      "with the project's QoS profiles (tests/net/qos_measure.py drives it).");
-  handshare::common::DeclareSessionOptions(options);
+  handshare::node::DeclareSessionOptions(options);
   options.Value("role", "pub|sub", "publish or subscribe", std::nullopt, true)
       .Value("case", "event|field|contact", "what to measure", std::nullopt, true)
       .Value("rate", "HZ", "samples per second of the measured topic", "10")
@@ -288,6 +288,6 @@ int main(int argc, char** argv) {
       .Value("field-rate", "HZ", "contact case: Deformations per second on the same link (0: none)", "0")
       .Value("linger", "SEC", "pub: keep the writer this long after the last sample (repairs)", "3")
       .Value("within-ms", "MS", "sub: also count the samples that arrived within this", "100");
-  return handshare::common::RunNodeMain(argc, argv, options,
+  return handshare::node::RunNodeMain(argc, argv, options,
                                         [](const handshare::common::Options& o) { return Run(o); });
 }

@@ -13,7 +13,7 @@
 #include <thread>
 #include <vector>
 
-#include "handshare/common/node_main.hpp"
+#include "handshare/node/node_main.hpp"
 #include "handshare/common/options.hpp"
 #include "handshare/common/shutdown.hpp"
 #include "handshare/dds/messages.hpp"
@@ -78,7 +78,7 @@ void Print(const char* when, const Figures& f, std::size_t refused) {
 }
 
 int Run(const common::Options& o) {
-  const common::SessionOptions where = common::ReadSessionOptions(o);
+  const common::SessionOptions where = node::ReadSessionOptions(o);
   const std::string name = o.GetString("as");
   dds::Participant participant(where, name);
   std::vector<std::string> refused;
@@ -126,8 +126,8 @@ int Run(const common::Options& o) {
 int main(int argc, char** argv) {
   handshare::common::Options options(
       "security_probe", "Joins a session and counts the endpoints it matches and the samples it reads (security tests).");
-  handshare::common::DeclareSessionOptions(options);
+  handshare::node::DeclareSessionOptions(options);
   options.Value("as", "NAME", "participant name; with --security it picks the identity (e.g. haptic_node/bob)",
                 "security_probe");
-  return handshare::common::RunNodeMain(argc, argv, options, [](const handshare::common::Options& o) { return Run(o); });
+  return handshare::node::RunNodeMain(argc, argv, options, [](const handshare::common::Options& o) { return Run(o); });
 }

@@ -13,7 +13,7 @@
 #include <thread>
 
 #include "handshare/common/clock.hpp"
-#include "handshare/common/rejoin_clock.hpp"
+#include "handshare/node/rejoin_clock.hpp"
 #include "handshare/dds/roster_rejoin.hpp"
 #include "handshare/common/shutdown.hpp"
 #include "handshare/dds/membership.hpp"
@@ -560,7 +560,7 @@ int RunRecorder(const RecordConfig& config) {
         std::fflush(stdout);
         for (auto& tap : taps) taken += tap->Drain(*writer, t0);
         SteadyClock::time_point opened;
-        const std::string joined = common::RunRejoin(roster.rejoins(), SteadyClock::now(), leave, join, opened);
+        const std::string joined = node::RunRejoin(roster.rejoins(), SteadyClock::now(), leave, join, opened);
         std::printf("[session_record] %s\n", joined.c_str());
         std::fflush(stdout);
         roster.Restart(opened);

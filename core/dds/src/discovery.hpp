@@ -5,7 +5,7 @@
 
 #include <string>
 
-#include "handshare/common/node_main.hpp"
+#include "handshare/common/session_options.hpp"
 
 namespace handshare::dds::detail {
 

@@ -17,6 +17,7 @@
 #include <thread>
 
 #include "handshare/dds/messages.hpp"
+#include "handshare/node/peers.hpp"
 
 namespace handshare::dds {
 namespace {
@@ -28,7 +29,7 @@ common::SessionOptions Where(int domain, const std::string& peers) {
   common::SessionOptions where;
   where.domain_id = domain;
   where.session = "s";
-  where.peers = common::ParsePeers(peers);
+  where.peers = node::ParsePeers(peers);
   return where;
 }
 

@@ -567,20 +567,4 @@ TetMesh ReadAbaqusInp(const fs::path& path) {
   return b.Build();
 }
 
-// ---------------------------------------------------------------- dispatch
-
-TetMesh ReadVolumeMesh(const fs::path& file) {
-  std::string ext = file.extension().string();
-  for (char& c : ext) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
-  if (ext == ".msh") return ReadGmshMsh(file);
-  if (ext == ".node" || ext == ".ele") return ReadTetgen(file);
-  if (ext == ".inp") return ReadAbaqusInp(file);
-  if (ext == ".obj" || ext == ".stl" || ext == ".ply" || ext == ".off") {
-    return TetrahedralizeSurfaceFile(file);
-  }
-  throw InputError(file.string(), 0, "extension",
-                   "unknown mesh format '" + ext +
-                       "' (expected .msh, .node/.ele, .inp, or a surface .obj/.stl/.ply/.off)");
-}
-
 }  // namespace handshare::fem

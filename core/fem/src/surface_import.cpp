@@ -1,4 +1,5 @@
-// Surface meshes through assimp, tetrahedralization through the external tetgen program.
+// Surface meshes through assimp, tetrahedralization through the external tetgen program, and
+// the reader of any mesh file by its extension. Uses mesh_io.cpp's readers; they never call here.
 // TetGen is GPL: it is only ever run as a separate process (posix_spawn), never linked.
 
 #include <fcntl.h>
@@ -7,6 +8,7 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <cctype>
 #include <cerrno>
 #include <cmath>
 #include <cstdio>
@@ -25,6 +27,7 @@
 
 #include "handshare/fem/error.hpp"
 #include "handshare/fem/mesh_io.hpp"
+#include "handshare/fem/surface_import.hpp"
 
 extern char** environ;
 
@@ -199,6 +202,20 @@ TetMesh TetrahedralizeSurface(const SurfaceMeshData& s, const TetgenOptions& opt
 
 TetMesh TetrahedralizeSurfaceFile(const fs::path& surface_file, const TetgenOptions& options) {
   return TetrahedralizeSurface(ReadSurfaceMesh(surface_file), options, surface_file.string());
+}
+
+TetMesh ReadVolumeMesh(const fs::path& file) {
+  std::string ext = file.extension().string();
+  for (char& c : ext) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  if (ext == ".msh") return ReadGmshMsh(file);
+  if (ext == ".node" || ext == ".ele") return ReadTetgen(file);
+  if (ext == ".inp") return ReadAbaqusInp(file);
+  if (ext == ".obj" || ext == ".stl" || ext == ".ply" || ext == ".off") {
+    return TetrahedralizeSurfaceFile(file);
+  }
+  throw InputError(file.string(), 0, "extension",
+                   "unknown mesh format '" + ext +
+                       "' (expected .msh, .node/.ele, .inp, or a surface .obj/.stl/.ply/.off)");
 }
 
 }  // namespace handshare::fem

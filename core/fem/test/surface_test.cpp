@@ -8,7 +8,7 @@
 #include <Eigen/Geometry>
 
 #include "handshare/fem/error.hpp"
-#include "handshare/fem/mesh_io.hpp"
+#include "handshare/fem/surface_import.hpp"
 #include "test_util.hpp"
 
 namespace handshare::fem {

@@ -13,7 +13,7 @@
 #include "cli_common.hpp"
 #include "handshare/fem/compliance.hpp"
 #include "handshare/fem/error.hpp"
-#include "handshare/fem/mesh_io.hpp"
+#include "handshare/fem/surface_import.hpp"
 
 namespace {
 

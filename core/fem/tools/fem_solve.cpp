@@ -10,7 +10,7 @@
 #include <nlohmann/json.hpp>
 
 #include "cli_common.hpp"
-#include "handshare/fem/mesh_io.hpp"
+#include "handshare/fem/surface_import.hpp"
 #include "handshare/fem/static_solver.hpp"
 
 namespace {

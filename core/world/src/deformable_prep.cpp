@@ -5,7 +5,7 @@
 #include <cstdlib>
 #include <sstream>
 
-#include "handshare/fem/mesh_io.hpp"
+#include "handshare/fem/surface_import.hpp"
 #include "handshare/fem/static_solver.hpp"
 
 namespace handshare::world {

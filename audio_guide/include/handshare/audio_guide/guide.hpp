@@ -6,7 +6,7 @@
 #include <chrono>
 #include <string>
 
-#include "handshare/common/node_main.hpp"
+#include "handshare/common/session_options.hpp"
 
 namespace handshare::audio_guide {
 

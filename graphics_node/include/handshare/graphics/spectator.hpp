@@ -7,7 +7,7 @@
 #include <filesystem>
 #include <string>
 
-#include "handshare/common/node_main.hpp"
+#include "handshare/common/session_options.hpp"
 #include "handshare/graphics/hand_figure.hpp"
 
 namespace handshare::graphics {

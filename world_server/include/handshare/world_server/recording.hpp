@@ -28,7 +28,7 @@
 #include <string>
 #include <vector>
 
-#include "handshare/common/node_main.hpp"
+#include "handshare/common/session_options.hpp"
 
 namespace handshare::server {
 

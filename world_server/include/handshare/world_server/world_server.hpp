@@ -10,7 +10,7 @@
 #include <memory>
 #include <string>
 
-#include "handshare/common/node_main.hpp"
+#include "handshare/common/session_options.hpp"
 #include "handshare/world_server/session_log.hpp"
 
 namespace handshare::server {

@@ -2,7 +2,7 @@
 /// @file
 /// Haptic rendering of one hand (5 fingertips) against a scene of static rigid objects, dynamic
 /// rigid bodies (grasping, under the scene's gravity) and FEM deformables shared with remote
-/// hands. Layer 2 of the architecture: no middleware, no rendering.
+/// hands. Layer 4 of the architecture (haptic rendering): no middleware, no rendering.
 ///
 /// Setup (allocates, may throw): construct with a WorldConfig, Add*() objects, SetSupport(),
 /// then Init() sizes every per-step buffer for config.max_hands x kFingers fingertips.

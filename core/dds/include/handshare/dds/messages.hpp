@@ -3,8 +3,10 @@
 /// Node libraries include this; they never include Fast DDS headers themselves.
 #include <handshare/idl/handshare.h>
 
+#include <array>
 #include <functional>
 #include <string>
+#include <type_traits>
 
 #include "handshare/common/hand.hpp"
 #include "handshare/dds/participant.hpp"
@@ -12,8 +14,17 @@
 
 namespace handshare::dds {
 
-// One finger count: the models' (handshare/common/hand.hpp) is the messages' (handshare.idl).
+// One finger count and one joint count: the models' (handshare/common/hand.hpp) are the
+// messages' (handshare.idl), constants and array sizes.
 static_assert(common::kFingers == msg::kFingers, "handshare.idl kFingers != common::kFingers");
+static_assert(common::kHandJoints == msg::kHandJoints, "handshare.idl kHandJoints != common::kHandJoints");
+static_assert(common::kArmJoints == msg::kArmJoints, "handshare.idl kArmJoints != common::kArmJoints");
+static_assert(std::tuple_size_v<std::remove_cvref_t<decltype(msg::DeviceState().q_hand_rad())>> == common::kHandJoints,
+              "DeviceState::q_hand_rad has not kHandJoints angles");
+static_assert(std::tuple_size_v<std::remove_cvref_t<decltype(msg::DeviceState().q_arm_rad())>> == common::kArmJoints,
+              "DeviceState::q_arm_rad has not kArmJoints angles");
+static_assert(std::tuple_size_v<std::remove_cvref_t<decltype(msg::DeviceState().p_WE_m())>> == common::kFingers,
+              "DeviceState::p_WE_m has not kFingers fingertips");
 
 namespace detail {
 #define HANDSHARE_DECLARE_DDS_TYPE(T)                  \

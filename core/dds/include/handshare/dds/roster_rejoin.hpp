@@ -7,15 +7,15 @@
 #include <string>
 #include <vector>
 
-#include "handshare/common/roster_watch.hpp"
 #include "handshare/dds/messages.hpp"
 #include "handshare/dds/participant.hpp"
+#include "handshare/dds/roster_watch.hpp"
 
 namespace handshare::dds {
 
 class RosterRejoin {
  public:
-  using Clock = common::RosterWatch::Clock;
+  using Clock = RosterWatch::Clock;
   /// At most this many rejoins: a member this node can never reach (another network, another
   /// fault) must not make it leave and join every `after` for ever.
   static constexpr int kMaxRejoins = 5;
@@ -40,7 +40,7 @@ class RosterRejoin {
  private:
   std::chrono::duration<double> after_;
   std::string session_;
-  common::RosterWatch watch_;
+  RosterWatch watch_;
   int rejoins_ = 0;
 };
 
