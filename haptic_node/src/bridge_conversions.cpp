@@ -24,17 +24,15 @@ bool IsDynamic(const world::SceneModels& models, std::int32_t object) {
 void ToDeviceState(const HapticSnapshot& s, msg::DeviceState& out) {
   out.stamp_ns(s.stamp_ns);
   out.seq(static_cast<std::uint32_t>(s.seq));
-  for (int k = 0; k < 3; ++k) out.p_WH_m()[k] = s.p_WH_m[k];
-  for (int k = 0; k < 4; ++k) out.q_WH_wxyz()[k] = s.q_WH_wxyz[k];
+  std::copy_n(s.p_WH_m, 3, out.p_WH_m().begin());
+  std::copy_n(s.q_WH_wxyz, 4, out.q_WH_wxyz().begin());
   for (int i = 0; i < kFingers; ++i) {
-    for (int k = 0; k < 3; ++k) {
-      out.p_WE_m()[i][k] = s.p_WE_m[i][k];
-      out.f_E_W_N()[i][k] = s.f_E_W_N[i][k];
-    }
+    std::copy_n(s.p_WE_m[i], 3, out.p_WE_m()[i].begin());
+    std::copy_n(s.f_E_W_N[i], 3, out.f_E_W_N()[i].begin());
   }
   out.fingertip_radius_m(s.fingertip_radius_m);
-  for (int j = 0; j < 15; ++j) out.q_hand_rad()[j] = s.q_hand_rad[j];
-  for (int j = 0; j < 6; ++j) out.q_arm_rad()[j] = s.q_arm_rad[j];
+  std::copy_n(s.q_hand_rad, common::kHandJoints, out.q_hand_rad().begin());
+  std::copy_n(s.q_arm_rad, common::kArmJoints, out.q_arm_rad().begin());
   out.fault(s.fault);
 }
 
