@@ -1081,7 +1081,7 @@ struct ContactSolver::PatchRounds {
 bool ContactSolver::SolveWithPatches(StepStatus& status) noexcept {
   // Like the general path's iteration, with one more kind of change: a sticking patch whose
   // force leaves its cone starts to slip, in the direction e of that force (and never sticks
-  // again within this call; a patch the warm start below made slip is checked once). Patch
+  // again within this call; a patch the warm start made slip, RestartPass, is checked once). Patch
   // nodes are held in 3-D; with push_only one that pulls is released and a released one the
   // surface pushes into the tip is held again (at the patch's slide). Other contacts behave as
   // on the general path.
@@ -1241,7 +1241,8 @@ void ContactSolver::RestartPass(PatchRounds& rounds) noexcept {
   // patch at its stick. A patch that slipped in the previous step and whose fingertip still moves
   // along the surface starts slipping, that way: after the first solve WouldStick() checks it
   // against sticking, which the same factor answers, and it sticks if that is inside its cone.
-  // (Every other patch starts sticking: a slip's direction then comes from its slide, below.)
+  // (Every other patch starts sticking: a slip's direction then comes from its slide,
+  // TurnSlipsTowardTheirSlides.)
   for (std::int32_t j = 0; j < num_unique_; ++j) {
     active_[j] = frozen_[j] ? 0 : 1;
     releases_[j] = 0;
