@@ -108,6 +108,151 @@ void ExtractBlocks(const Eigen::MatrixXd& X, std::int32_t s0, std::int32_t s1,
   }
 }
 
+// Chooses the precompute method (kAuto: the one estimated faster) and analyses Kff for it:
+// solves_chol for blocked solves, schur_chol (compliance DOFs last) for the Schur complement.
+// nf free DOFs, ns = row_of_slot.size() compliance DOFs.
+PrecomputeMethod AnalyzeCandidates(const Eigen::SparseMatrix<double>& Kff, std::int64_t nf,
+                                   const std::vector<std::int64_t>& row_of_slot, std::int64_t ns,
+                                   PrecomputeMethod method, SparseCholesky& solves_chol, SparseCholesky& schur_chol) {
+  // Analyse the candidates. Rates (flop/s) of this 2-core machine with OpenBLAS, measured by
+  // bench/fem: supernodal factorization, blocked supernodal solves, dense triangular inversion.
+  constexpr double kRateFactor = 3.0e10, kRateSolve = 1.0e10, kRateDense = 4.0e10;
+  double t_solves = 0.0, t_schur = 0.0;
+  if (method != PrecomputeMethod::kSchurComplement) {
+    solves_chol.Analyze(Kff);
+    t_solves = solves_chol.factor_flops() / kRateFactor +
+               4.0 * static_cast<double>(solves_chol.factor_nonzeros()) * static_cast<double>(ns) / kRateSolve;
+  }
+  if (method != PrecomputeMethod::kBlockedSolves) {
+    // Interior (non-compliance) DOFs first in their own fill-reducing order, compliance DOFs
+    // last in slot order.
+    std::vector<std::uint8_t> is_compliance(static_cast<std::size_t>(nf), 0);
+    for (std::int64_t r : row_of_slot) is_compliance[r] = 1;
+    detail::DofMap interior;
+    interior.free_of_dof.assign(static_cast<std::size_t>(nf), -1);
+    for (std::int64_t i = 0; i < nf; ++i) {
+      if (!is_compliance[i]) {
+        interior.free_of_dof[i] = static_cast<std::int64_t>(interior.free_dofs.size());
+        interior.free_dofs.push_back(i);
+      }
+    }
+    std::vector<int> perm;
+    perm.reserve(static_cast<std::size_t>(nf));
+    if (!interior.free_dofs.empty()) {
+      SparseCholesky ordering;
+      ordering.Analyze(detail::FreeBlock(Kff, interior));
+      for (int k : ordering.Permutation()) perm.push_back(static_cast<int>(interior.free_dofs[k]));
+    }
+    for (std::int64_t r : row_of_slot) perm.push_back(static_cast<int>(r));
+    schur_chol.AnalyzeWithOrdering(Kff, perm);
+    const double n = static_cast<double>(ns);
+    t_schur = schur_chol.factor_flops() / kRateFactor + (2.0 / 3.0) * n * n * n / kRateDense;
+  }
+  if (method == PrecomputeMethod::kAuto) {
+    method = t_schur < t_solves ? PrecomputeMethod::kSchurComplement : PrecomputeMethod::kBlockedSolves;
+  }
+  return method;
+}
+
+// C = S^-1 = L_ss^-T L_ss^-1 in place of the trailing factor L_ss (ns x ns, the lower triangle
+// of A): LAPACK dtrtri then dlauum, the two halves of dpotri.
+void InvertTrailingFactor(Eigen::MatrixXd& A, std::int64_t ns, std::int32_t N, const ProgressFn& progress) {
+  const int n = static_cast<int>(ns);
+  int info = 0;
+  if (n > 0) {
+    dtrtri_("L", "N", &n, A.data(), &n, &info, 1, 1);
+    if (info != 0) throw FemError("dense inversion of the condensed stiffness failed (dtrtri info " + std::to_string(info) + ")");
+    if (progress) progress(N / 2, N);
+    dlauum_("L", &n, A.data(), &n, &info, 1);
+    if (info != 0) throw FemError("dense inversion of the condensed stiffness failed (dlauum info " + std::to_string(info) + ")");
+  }
+}
+
+// The lower triangle of A holds C; blocks (n <= k) of the packed storage are C_nk = C_kn^T.
+template <class Scalar>
+void ExtractInverse(const Eigen::MatrixXd& A, std::int32_t N, Scalar* store) {
+  for (std::int32_t k = 0; k < N; ++k) {
+    Scalar* dst = store + 9 * Compliance::PackedIndex(0, k);
+    for (std::int32_t m = 0; m <= k; ++m, dst += 9) {
+      for (int a = 0; a < 3; ++a)
+        for (int r = 0; r < 3; ++r) {
+          // C_mk(r, a) = C(3m + r, 3k + a); read from the lower triangle.
+          const std::int64_t i = 3 * m + r, j = 3 * k + a;
+          dst[3 * a + r] = static_cast<Scalar>(i >= j ? A(i, j) : A(j, i));
+        }
+    }
+  }
+}
+
+// Blocked solves: K_ff X = E for the unit columns E of `block` compliance nodes at a time (0:
+// chosen here), each block's columns of C into store.
+template <class Scalar>
+void SolveColumnBlocks(SparseCholesky& chol, const std::vector<std::int64_t>& row_of_slot, std::int64_t nf,
+                       int block, Scalar* store, const ProgressFn& progress) {
+  const auto N = static_cast<std::int32_t>(row_of_slot.size() / 3);
+  if (block <= 0) {
+    // About 256 MiB of right-hand sides, at most 128 nodes (384 columns): past that the BLAS-3
+    // supernodal solve gains little.
+    const std::int64_t by_memory = (256ll << 20) / (24 * std::max<std::int64_t>(nf, 1));
+    block = static_cast<int>(std::clamp<std::int64_t>(by_memory, 1, 128));
+  }
+  Eigen::MatrixXd X;
+  for (std::int32_t s0 = 0; s0 < N; s0 += block) {
+    const std::int32_t s1 = std::min(N, s0 + block);
+    X.setZero(nf, 3 * (s1 - s0));
+    for (std::int32_t k = s0; k < s1; ++k)
+      for (int a = 0; a < 3; ++a) X(row_of_slot[3 * k + a], 3 * (k - s0) + a) = 1.0;
+    chol.SolveInPlace(X);
+    ExtractBlocks(X, s0, s1, row_of_slot, store);
+    if (progress) progress(s1, N);
+  }
+}
+
+// The header of the cache file `in` reads, checked against the file's size and expected_hash.
+FileHeader ReadHeader(std::ifstream& in, const fs::path& file, std::uint64_t expected_hash) {
+  const std::string name = file.string();
+  std::error_code ec;
+  const std::uint64_t size = fs::file_size(file, ec);
+  if (ec) throw CacheError("compliance cache " + name + ": " + ec.message());
+  FileHeader h{};
+  if (size < sizeof h) {
+    throw CacheError("compliance cache " + name + ": truncated: " + std::to_string(size) +
+                     " bytes, the header alone needs " + std::to_string(sizeof h));
+  }
+  in.read(reinterpret_cast<char*>(&h), sizeof h);
+  if (std::memcmp(h.magic, kMagic, sizeof kMagic) != 0) {
+    throw CacheError("compliance cache " + name + ": not a handshare compliance cache (bad magic)");
+  }
+  if (h.version != kVersion) {
+    throw CacheError("compliance cache " + name + ": format version " + std::to_string(h.version) +
+                     ", this build reads version " + std::to_string(kVersion) + " (delete it to rebuild)");
+  }
+  if (h.header_checksum != HeaderChecksum(h)) {
+    throw CacheError("compliance cache " + name + ": corrupt header (checksum mismatch)");
+  }
+  if (expected_hash != 0 && h.input_hash != expected_hash) {
+    char buf[160];
+    std::snprintf(buf, sizeof buf, "stale: built for another mesh, material or fixed set (input hash %016llx, expected %016llx)",
+                  static_cast<unsigned long long>(h.input_hash), static_cast<unsigned long long>(expected_hash));
+    throw CacheError("compliance cache " + name + ": " + buf);
+  }
+  if ((h.scalar_bytes != 4 && h.scalar_bytes != 8) || h.num_nodes > (1u << 20) ||
+      h.num_mesh_nodes > INT32_MAX || h.num_fixed > h.num_mesh_nodes || h.num_nodes > h.num_mesh_nodes ||
+      h.payload_bytes != IndexBytes(h.num_nodes, h.num_fixed) + NumScalars(h.num_nodes) * h.scalar_bytes) {
+    throw CacheError("compliance cache " + name + ": corrupt header (inconsistent sizes)");
+  }
+  const std::uint64_t expected_size = sizeof h + h.payload_bytes;
+  if (size < expected_size) {
+    throw CacheError("compliance cache " + name + ": truncated: " + std::to_string(size) +
+                     " bytes, expected " + std::to_string(expected_size));
+  }
+  if (size > expected_size) {
+    throw CacheError("compliance cache " + name + ": " + std::to_string(size - expected_size) +
+                     " unexpected trailing bytes");
+  }
+  return h;
+}
+
 }  // namespace
 
 std::vector<std::int32_t> ResolveComplianceNodes(const TetMesh& mesh,
@@ -198,106 +343,28 @@ Compliance Compliance::Precompute(const TetMesh& mesh, const Material& material,
   }
   const auto t1 = Clock::now();
 
-  // Analyse the candidates. Rates (flop/s) of this 2-core machine with OpenBLAS, measured by
-  // bench/fem: supernodal factorization, blocked supernodal solves, dense triangular inversion.
-  constexpr double kRateFactor = 3.0e10, kRateSolve = 1.0e10, kRateDense = 4.0e10;
-  PrecomputeMethod method = options.method;
   SparseCholesky solves_chol, schur_chol;
-  double t_solves = 0.0, t_schur = 0.0;
-  if (method != PrecomputeMethod::kSchurComplement) {
-    solves_chol.Analyze(Kff);
-    t_solves = solves_chol.factor_flops() / kRateFactor +
-               4.0 * static_cast<double>(solves_chol.factor_nonzeros()) * static_cast<double>(ns) / kRateSolve;
-  }
-  if (method != PrecomputeMethod::kBlockedSolves) {
-    // Interior (non-compliance) DOFs first in their own fill-reducing order, compliance DOFs
-    // last in slot order.
-    std::vector<std::uint8_t> is_compliance(static_cast<std::size_t>(nf), 0);
-    for (std::int64_t r : row_of_slot) is_compliance[r] = 1;
-    detail::DofMap interior;
-    interior.free_of_dof.assign(static_cast<std::size_t>(nf), -1);
-    for (std::int64_t i = 0; i < nf; ++i) {
-      if (!is_compliance[i]) {
-        interior.free_of_dof[i] = static_cast<std::int64_t>(interior.free_dofs.size());
-        interior.free_dofs.push_back(i);
-      }
-    }
-    std::vector<int> perm;
-    perm.reserve(static_cast<std::size_t>(nf));
-    if (!interior.free_dofs.empty()) {
-      SparseCholesky ordering;
-      ordering.Analyze(detail::FreeBlock(Kff, interior));
-      for (int k : ordering.Permutation()) perm.push_back(static_cast<int>(interior.free_dofs[k]));
-    }
-    for (std::int64_t r : row_of_slot) perm.push_back(static_cast<int>(r));
-    schur_chol.AnalyzeWithOrdering(Kff, perm);
-    const double n = static_cast<double>(ns);
-    t_schur = schur_chol.factor_flops() / kRateFactor + (2.0 / 3.0) * n * n * n / kRateDense;
-  }
-  if (method == PrecomputeMethod::kAuto) {
-    method = t_schur < t_solves ? PrecomputeMethod::kSchurComplement : PrecomputeMethod::kBlockedSolves;
-  }
+  const PrecomputeMethod method = AnalyzeCandidates(Kff, nf, row_of_slot, ns, options.method, solves_chol, schur_chol);
   SparseCholesky& chol = method == PrecomputeMethod::kSchurComplement ? schur_chol : solves_chol;
   const auto t2 = Clock::now();
   chol.Factorize(Kff);
   const auto t3 = Clock::now();
   if (progress) progress(0, N);
 
+  const bool f32 = c.precision_ == Precision::kFloat32;
   if (method == PrecomputeMethod::kSchurComplement) {
-    // C = S^-1 = L_ss^-T L_ss^-1: LAPACK dtrtri then dlauum, the two halves of dpotri.
     Eigen::MatrixXd A = chol.TrailingFactor(ns);
-    const int n = static_cast<int>(ns);
-    int info = 0;
-    if (n > 0) {
-      dtrtri_("L", "N", &n, A.data(), &n, &info, 1, 1);
-      if (info != 0) throw FemError("dense inversion of the condensed stiffness failed (dtrtri info " + std::to_string(info) + ")");
-      if (progress) progress(N / 2, N);
-      dlauum_("L", &n, A.data(), &n, &info, 1);
-      if (info != 0) throw FemError("dense inversion of the condensed stiffness failed (dlauum info " + std::to_string(info) + ")");
-    }
-    // The lower triangle of A holds C; blocks (n <= k) of the packed storage are C_nk = C_kn^T.
-    auto extract = [&](auto* store) {
-      using S = std::remove_pointer_t<decltype(store)>;
-      for (std::int32_t k = 0; k < N; ++k) {
-        S* dst = store + 9 * PackedIndex(0, k);
-        for (std::int32_t m = 0; m <= k; ++m, dst += 9) {
-          for (int a = 0; a < 3; ++a)
-            for (int r = 0; r < 3; ++r) {
-              // C_mk(r, a) = C(3m + r, 3k + a); read from the lower triangle.
-              const std::int64_t i = 3 * m + r, j = 3 * k + a;
-              dst[3 * a + r] = static_cast<S>(i >= j ? A(i, j) : A(j, i));
-            }
-        }
-      }
-    };
-    if (c.precision_ == Precision::kFloat32) {
-      extract(c.f32_.data());
+    InvertTrailingFactor(A, ns, N, progress);
+    if (f32) {
+      ExtractInverse(A, N, c.f32_.data());
     } else {
-      extract(c.f64_.data());
+      ExtractInverse(A, N, c.f64_.data());
     }
     if (progress) progress(N, N);
+  } else if (f32) {
+    SolveColumnBlocks(chol, row_of_slot, nf, options.block_nodes, c.f32_.data(), progress);
   } else {
-    int block = options.block_nodes;
-    if (block <= 0) {
-      // About 256 MiB of right-hand sides, at most 128 nodes (384 columns): past that the BLAS-3
-      // supernodal solve gains little.
-      const std::int64_t by_memory = (256ll << 20) / (24 * std::max<std::int64_t>(nf, 1));
-      block = static_cast<int>(std::clamp<std::int64_t>(by_memory, 1, 128));
-    }
-    Eigen::MatrixXd X;
-    for (std::int32_t s0 = 0; s0 < N; s0 += block) {
-      const std::int32_t s1 = std::min(N, s0 + block);
-      X.setZero(nf, 3 * (s1 - s0));
-      for (std::int32_t k = s0; k < s1; ++k)
-        for (int a = 0; a < 3; ++a) X(row_of_slot[3 * k + a], 3 * (k - s0) + a) = 1.0;
-      chol.SolveInPlace(X);
-      if (c.precision_ == Precision::kFloat32) {
-        ExtractBlocks(X, s0, s1, row_of_slot, c.f32_.data());
-      } else {
-        ExtractBlocks(X, s0, s1, row_of_slot, c.f64_.data());
-      }
-      if (progress) progress(s1, N);
-    }
+    SolveColumnBlocks(chol, row_of_slot, nf, options.block_nodes, c.f64_.data(), progress);
   }
   const auto t4 = Clock::now();
   if (stats != nullptr) {
@@ -442,45 +509,7 @@ Compliance Compliance::Load(const fs::path& file, std::uint64_t expected_hash) {
   const std::string name = file.string();
   std::ifstream in(file, std::ios::binary);
   if (!in) throw CacheError("compliance cache " + name + ": cannot open: " + std::strerror(errno));
-  std::error_code ec;
-  const std::uint64_t size = fs::file_size(file, ec);
-  if (ec) throw CacheError("compliance cache " + name + ": " + ec.message());
-  FileHeader h{};
-  if (size < sizeof h) {
-    throw CacheError("compliance cache " + name + ": truncated: " + std::to_string(size) +
-                     " bytes, the header alone needs " + std::to_string(sizeof h));
-  }
-  in.read(reinterpret_cast<char*>(&h), sizeof h);
-  if (std::memcmp(h.magic, kMagic, sizeof kMagic) != 0) {
-    throw CacheError("compliance cache " + name + ": not a handshare compliance cache (bad magic)");
-  }
-  if (h.version != kVersion) {
-    throw CacheError("compliance cache " + name + ": format version " + std::to_string(h.version) +
-                     ", this build reads version " + std::to_string(kVersion) + " (delete it to rebuild)");
-  }
-  if (h.header_checksum != HeaderChecksum(h)) {
-    throw CacheError("compliance cache " + name + ": corrupt header (checksum mismatch)");
-  }
-  if (expected_hash != 0 && h.input_hash != expected_hash) {
-    char buf[160];
-    std::snprintf(buf, sizeof buf, "stale: built for another mesh, material or fixed set (input hash %016llx, expected %016llx)",
-                  static_cast<unsigned long long>(h.input_hash), static_cast<unsigned long long>(expected_hash));
-    throw CacheError("compliance cache " + name + ": " + buf);
-  }
-  if ((h.scalar_bytes != 4 && h.scalar_bytes != 8) || h.num_nodes > (1u << 20) ||
-      h.num_mesh_nodes > INT32_MAX || h.num_fixed > h.num_mesh_nodes || h.num_nodes > h.num_mesh_nodes ||
-      h.payload_bytes != IndexBytes(h.num_nodes, h.num_fixed) + NumScalars(h.num_nodes) * h.scalar_bytes) {
-    throw CacheError("compliance cache " + name + ": corrupt header (inconsistent sizes)");
-  }
-  const std::uint64_t expected_size = sizeof h + h.payload_bytes;
-  if (size < expected_size) {
-    throw CacheError("compliance cache " + name + ": truncated: " + std::to_string(size) +
-                     " bytes, expected " + std::to_string(expected_size));
-  }
-  if (size > expected_size) {
-    throw CacheError("compliance cache " + name + ": " + std::to_string(size - expected_size) +
-                     " unexpected trailing bytes");
-  }
+  const FileHeader h = ReadHeader(in, file, expected_hash);
   Compliance c;
   c.precision_ = static_cast<Precision>(h.scalar_bytes);
   c.material_ = Material{h.E_Pa, h.nu};

@@ -20,6 +20,18 @@ namespace handshare::fem {
 
 namespace {
 
+// SolveWithPatches: a fingertip that moved less than this along the surface this step is at
+// rest: 1 mm/s at 1 kHz, where a stroke is 10-100 um a step and a device's noise well under 1 um.
+constexpr double kRestMotion_m = 1e-6;
+// Most rounds that only turn the slipping patches' directions since the held set last changed,
+// and most updates of the given forces.
+constexpr std::int32_t kMaxDirectionRounds = 16;
+constexpr std::int32_t kMaxForceUpdates = 100;
+
+// Relative tolerance of the active-set tests: a held node pulls, or a released one is pressed
+// into its tip, by more than this share of the largest force or imposed displacement.
+constexpr double kTol = 1e-9;
+
 // The active-set pivoting rule of both solve paths: flip every violating contact at once (block
 // principal pivoting) while the number of violations keeps falling, with 3 tries of grace, else
 // one contact, the least index (Murty's rule, which cannot cycle).
@@ -61,6 +73,14 @@ void SolveFactored(const double* L, int n, int ld, double* B, int nrhs, int ldb)
 ContactSolver::ContactSolver(std::shared_ptr<const Compliance> compliance,
                              const ContactSolverOptions& options)
     : compliance_(compliance), options_(options), field_(compliance) {
+  CheckOptions();
+  eps_m_per_N_ = options_.regularization_m_per_N;
+  if (options_.coupling_stiffness_N_per_m > 0.0) eps_m_per_N_ += 1.0 / options_.coupling_stiffness_N_per_m;
+  AllocateContactBuffers();
+  AllocatePatchBuffers();
+}
+
+void ContactSolver::CheckOptions() const {
   if (!compliance_) throw InputError("", 0, "compliance", "null");
   if (compliance_->num_nodes() == 0) throw InputError("", 0, "compliance", "empty");
   if (options_.max_contacts < 1 || options_.max_contacts > 1024) {
@@ -79,9 +99,9 @@ ContactSolver::ContactSolver(std::shared_ptr<const Compliance> compliance,
     throw InputError("", 0, "max_friction_patches",
                      "must be in 0..1024, got " + std::to_string(options_.max_friction_patches));
   }
-  eps_m_per_N_ = options_.regularization_m_per_N;
-  if (options_.coupling_stiffness_N_per_m > 0.0) eps_m_per_N_ += 1.0 / options_.coupling_stiffness_N_per_m;
+}
 
+void ContactSolver::AllocateContactBuffers() {
   const auto M = static_cast<std::size_t>(options_.max_contacts);
   forces_N_.assign(M, Eigen::Vector3d::Zero());
   states_.assign(M, ContactState::kActive);
@@ -128,6 +148,10 @@ ContactSolver::ContactSolver(std::shared_ptr<const Compliance> compliance,
   fac_slot_.assign(M, -1);
   fac_full3d_.assign(M, 0);
   fac_n_.assign(M, Eigen::Vector3d::Zero());
+}
+
+void ContactSolver::AllocatePatchBuffers() {
+  const auto M = static_cast<std::size_t>(options_.max_contacts);
   const auto P = static_cast<std::size_t>(options_.max_friction_patches);
   patch_of_.assign(M, -1);
   releases_.assign(M, 0);
@@ -180,7 +204,6 @@ std::int32_t ContactSolver::num_active() const noexcept {
 
 StepStatus ContactSolver::Solve(std::span<const ContactInput> contacts,
                                 std::span<const FrictionPatch> patches) noexcept {
-  const Compliance& C = *compliance_;
   const std::int32_t M = options_.max_contacts;
   const bool overflow = contacts.size() > static_cast<std::size_t>(M);
   num_inputs_ = overflow ? M : static_cast<std::int32_t>(contacts.size());
@@ -190,7 +213,36 @@ StepStatus ContactSolver::Solve(std::span<const ContactInput> contacts,
   bool rejected = overflow;
   bool invalid = patches.size() > static_cast<std::size_t>(options_.max_friction_patches);
   num_patches_ = invalid ? 0 : static_cast<std::int32_t>(patches.size());
+  if (!ReadPatches(patches)) invalid = true;
+  // Stage 1: validate and merge repeated nodes.
+  MergeTouches(contacts, invalid, rejected);
+  if (!AverageMergedTouches()) invalid = true;
+  if (invalid) return GiveUp(StepStatus::kInvalidInput);
+  if (num_unique_ == 0) {
+    ForgetPrevious();
+    table_valid_ = false;
+    return rejected ? StepStatus::kSomeRejected : StepStatus::kOk;
+  }
+  // Stages 2 and 3: gather the contacts' compliance and solve.
+  StepStatus status = StepStatus::kOk;
+  if (!GatherAndSolve(status)) return GiveUp(StepStatus::kNumericalFailure);
+  // Stage 4: per-input outputs.
+  WriteOutputs();
+  RememberActiveSet();
+  if (status != StepStatus::kOk) return status;
+  return rejected ? StepStatus::kSomeRejected : StepStatus::kOk;
+}
+
+StepStatus ContactSolver::GiveUp(StepStatus status) noexcept {
+  ZeroOutputs();
+  ForgetPrevious();
+  table_valid_ = false;
+  return status;
+}
+
+bool ContactSolver::ReadPatches(std::span<const FrictionPatch> patches) noexcept {
   // The patches: a unit normal, a finite stick, 0 <= mu; the tangent basis of each.
+  bool valid = true;
   for (std::int32_t p = 0; p < num_patches_; ++p) {
     const FrictionPatch& in = patches[static_cast<std::size_t>(p)];
     const double nn = in.n_out.norm();
@@ -199,7 +251,7 @@ StepStatus ContactSolver::Solve(std::span<const ContactInput> contacts,
                     std::isfinite(in.mu_static) && in.mu_static >= 0.0 &&
                     std::isfinite(in.mu_kinetic) && in.mu_kinetic >= 0.0;
     if (!ok) {
-      invalid = true;
+      valid = false;
       continue;
     }
     FrictionPatch& q = patch_in_[p];
@@ -211,8 +263,12 @@ StepStatus ContactSolver::Solve(std::span<const ContactInput> contacts,
     q.slide_m = tangent_[p] * (tangent_[p].transpose() * in.slide_m);  // its tangential part
     patch_state_[p] = FrictionPatchState{false, q.slide_m, Eigen::Vector3d::Zero()};
   }
+  return valid;
+}
 
-  // Stage 1: validate and merge repeated nodes (m is small: O(m^2) search).
+void ContactSolver::MergeTouches(std::span<const ContactInput> contacts, bool& invalid, bool& rejected) noexcept {
+  // m is small: O(m^2) search.
+  const Compliance& C = *compliance_;
   for (std::int32_t i = 0; i < num_inputs_; ++i) {
     const ContactInput& c = contacts[i];
     unique_of_input_[i] = -1;
@@ -257,6 +313,10 @@ StepStatus ContactSolver::Solve(std::span<const ContactInput> contacts,
     unique_of_input_[i] = j;
     states_[i] = ContactState::kActive;
   }
+}
+
+bool ContactSolver::AverageMergedTouches() noexcept {
+  bool valid = true;
   for (std::int32_t j = 0; j < num_unique_; ++j) {
     index_of_slot_[slot_[j]] = -1;  // merged: the map is clean for the next Solve()
     d_m_[j] /= static_cast<double>(multiplicity_[j]);
@@ -264,36 +324,19 @@ StepStatus ContactSolver::Solve(std::span<const ContactInput> contacts,
     if (nn > 1e-12) {
       n_[j] /= nn;
     } else if (mode_[j] == ContactMode::kNormalOnly || options_.push_only) {
-      invalid = true;  // merged inputs with opposite normals
+      valid = false;  // merged inputs with opposite normals
     }
     active_[j] = 1;
     slipping_[j] = 0;
     mode_in_[j] = mode_[j];
   }
-  if (invalid) {
-    ZeroOutputs();
-    ForgetPrevious();
-    table_valid_ = false;
-    return StepStatus::kInvalidInput;
-  }
-  if (num_unique_ == 0) {
-    ForgetPrevious();
-    table_valid_ = false;
-    return rejected ? StepStatus::kSomeRejected : StepStatus::kOk;
-  }
+  return valid;
+}
 
-  // Stages 2 and 3: gather the contacts' compliance and solve. Push-only with every contact
-  // frictionless (the haptic world's fingertip patches) is the scalar problem of
-  // SolveNormalPushOnly. Otherwise C_cc (3u x 3u) and, with push-only, iterate on the set of
-  // held contacts:
-  //  a) sticking contacts that pull slip (keep their normal constraint only; friction needs
-  //     pressure). Sticking -> slipping never reverts, so this happens at most m times;
-  //  b) the rest is a linear complementarity problem with a P-matrix (frictionless contacts):
-  //     block principal pivoting (Judice and Pires 1994) flips every violating contact at once
-  //     while the number of violations keeps falling (3 tries of grace), else one contact by
-  //     Murty's least-index rule, which terminates. A pulling contact is released; a released
-  //     node the surface pushes into the tip is re-engaged (frictionless).
-  StepStatus status = StepStatus::kOk;
+bool ContactSolver::GatherAndSolve(StepStatus& status) noexcept {
+  // Push-only with every contact frictionless (the haptic world's fingertip patches) is the
+  // scalar problem of SolveNormalPushOnly. Otherwise C_cc (3u x 3u), and fingertip patches with
+  // friction have their own iteration (SolveWithPatches); the rest is SolveGeneral.
   for (std::int32_t j = 0; j < num_unique_; ++j) perm_[j] = j;
   bool all_normal = options_.push_only;
   bool patched = false;
@@ -301,32 +344,26 @@ StepStatus ContactSolver::Solve(std::span<const ContactInput> contacts,
     all_normal = all_normal && mode_[j] == ContactMode::kNormalOnly;
     patched = patched || patch_of_[j] >= 0;
   }
-  if (!all_normal) {  // patch nodes are held in 3-D, so patched implies this
-    table_valid_ = false;
-    detail::GatherBlocks(C, slot_.data(), num_unique_, Ccc_.data(), 3 * M);
-    // Fingertip patches with friction: their own iteration (SolveWithPatches).
-    if (patched && !SolveWithPatches(status)) {
-      ZeroOutputs();
-      ForgetPrevious();
-      return StepStatus::kNumericalFailure;
-    }
-  } else {
-    // Every fingertip patch of the haptic world: the scalar problem, warm started.
-    if (!SolveNormalPushOnly(status)) {
-      ZeroOutputs();
-      ForgetPrevious();
-      table_valid_ = false;
-      return StepStatus::kNumericalFailure;
-    }
-  }
+  // Every fingertip patch of the haptic world: the scalar problem, warm started.
+  if (all_normal) return SolveNormalPushOnly(status);
+  // Patch nodes are held in 3-D, so patched implies this path.
+  table_valid_ = false;
+  detail::GatherBlocks(*compliance_, slot_.data(), num_unique_, Ccc_.data(), 3 * options_.max_contacts);
+  return patched ? SolveWithPatches(status) : SolveGeneral(status);
+}
+
+bool ContactSolver::SolveGeneral(StepStatus& status) noexcept {
+  // With push-only, iterate on the set of held contacts:
+  //  a) sticking contacts that pull slip (keep their normal constraint only; friction needs
+  //     pressure). Sticking -> slipping never reverts, so this happens at most m times;
+  //  b) the rest is a linear complementarity problem with a P-matrix (frictionless contacts):
+  //     block principal pivoting (Judice and Pires 1994) flips every violating contact at once
+  //     while the number of violations keeps falling (3 tries of grace), else one contact by
+  //     Murty's least-index rule, which terminates. A pulling contact is released; a released
+  //     node the surface pushes into the tip is re-engaged (frictionless).
   BlockPivoting pivoting(num_unique_);
-  while (!all_normal && !patched) {
-    if (!SolveActiveSet()) {
-      ZeroOutputs();
-      ForgetPrevious();
-      table_valid_ = false;
-      return StepStatus::kNumericalFailure;
-    }
+  while (true) {
+    if (!SolveActiveSet()) return false;
     if (!options_.push_only) break;
     ComputeContactDisplacements();
     double f_scale = 0.0, d_scale = 0.0;
@@ -336,17 +373,14 @@ StepStatus ContactSolver::Solve(std::span<const ContactInput> contacts,
     }
     if (f_scale == 0.0) f_scale = 1.0;
     if (d_scale == 0.0) d_scale = 1.0;
-    constexpr double kTol = 1e-9;
+    auto pulls = [&](std::int32_t j) { return f_N_[j].dot(n_[j]) / f_scale > kTol; };
     auto violates = [&](std::int32_t j) {
-      return active_[j] ? f_N_[j].dot(n_[j]) / f_scale > kTol
-                        : (u_c_m_[j] - d_m_[j]).dot(n_[j]) / d_scale > kTol;
+      return active_[j] ? pulls(j) : (u_c_m_[j] - d_m_[j]).dot(n_[j]) / d_scale > kTol;
     };
     bool slipped = false;
     std::int32_t violations = 0;
     for (std::int32_t j = 0; j < num_unique_; ++j) {
-      if (active_[j] && mode_[j] == ContactMode::kFull3d && f_N_[j].dot(n_[j]) / f_scale > kTol) {
-        slipped = true;
-      }
+      if (active_[j] && mode_[j] == ContactMode::kFull3d && pulls(j)) slipped = true;
       violations += violates(j) ? 1 : 0;
     }
     if (!slipped && violations == 0) break;
@@ -357,7 +391,7 @@ StepStatus ContactSolver::Solve(std::span<const ContactInput> contacts,
     ++iterations_;
     if (slipped) {
       for (std::int32_t j = 0; j < num_unique_; ++j) {
-        if (active_[j] && mode_[j] == ContactMode::kFull3d && f_N_[j].dot(n_[j]) / f_scale > kTol) {
+        if (active_[j] && mode_[j] == ContactMode::kFull3d && pulls(j)) {
           mode_[j] = ContactMode::kNormalOnly;
           slipping_[j] = 1;
         }
@@ -379,8 +413,11 @@ StepStatus ContactSolver::Solve(std::span<const ContactInput> contacts,
       if (!block) break;  // least index
     }
   }
+  return true;
+}
 
-  // Stage 4: per-input outputs (a merged node's force split evenly).
+void ContactSolver::WriteOutputs() noexcept {
+  // Per input, a merged node's force split evenly; a load per held node.
   for (std::int32_t i = 0; i < num_inputs_; ++i) {
     const std::int32_t j = unique_of_input_[i];
     if (j < 0) continue;
@@ -396,16 +433,19 @@ StepStatus ContactSolver::Solve(std::span<const ContactInput> contacts,
   for (std::int32_t j = 0; j < num_unique_; ++j) {
     if (active_[j]) loads_[num_loads_++] = NodeLoad{slot_[j], f_N_[j]};
   }
-  RememberActiveSet();
-  if (status != StepStatus::kOk) return status;
-  return rejected ? StepStatus::kSomeRejected : StepStatus::kOk;
 }
 
 void ContactSolver::GatherNormalCompliance() noexcept {
+  // Which nodes the previous Solve() touched too (also the warm start's map).
+  for (std::int32_t j = 0; j < num_unique_; ++j) prev_index_[j] = prev_of_slot_[slot_[j]];
+  AssignTablePositions();
+  PrefetchNewBlocks();
+  FillNormalCompliance();
+}
+
+void ContactSolver::AssignTablePositions() noexcept {
   const std::int32_t u = num_unique_;
   const std::int32_t M = options_.max_contacts;
-  // Which nodes the previous Solve() touched too (also the warm start's map).
-  for (std::int32_t j = 0; j < u; ++j) prev_index_[j] = prev_of_slot_[slot_[j]];
   // The blocks of a large compliance lie far apart in memory (a cache miss or more each), so
   // reading them is the costliest part of the force path; fingertips move a fraction of a node
   // spacing per haptic step. So the blocks stay in a table between steps: a node keeps its
@@ -437,31 +477,40 @@ void ContactSolver::GatherNormalCompliance() noexcept {
   for (std::int32_t j = 0; j < u; ++j) {
     if (is_new_[j]) pos_[j] = free_pos_[--num_free_];  // u <= M positions: never runs out
   }
-  // S_ij = n_i^T C_ij n_j; the table keeps C_ab for table positions a <= b (packed), and S_ab
-  // as last computed with the normals in pos_n_.
+}
+
+void ContactSolver::PrefetchNewBlocks() const noexcept {
+  const std::int32_t u = num_unique_;
   const Compliance& C = *compliance_;
   // The new pairs' blocks are cache (and TLB) misses in a large compliance: ask for all of them
   // before reading any, so that the misses overlap instead of coming one after the other (a
   // patch that gains a row of nodes needs a few hundred). A hint only: same values read.
   const float* c32 = C.data_f32();
   const double* c64 = C.data_f64();
-  if (c32 != nullptr || c64 != nullptr) {
-    for (std::int32_t j = 0; j < u; ++j) {
-      if (!is_new_[j]) continue;
-      for (std::int32_t i = 0; i < u; ++i) {
-        if (is_new_[i] && i > j) continue;  // both new: once
-        const std::int32_t lo = std::min(slot_[i], slot_[j]), hi = std::max(slot_[i], slot_[j]);
-        const std::int64_t off = 9 * Compliance::PackedIndex(lo, hi);
-        if (c32 != nullptr) {
-          __builtin_prefetch(c32 + off);
-          __builtin_prefetch(c32 + off + 8);
-        } else {
-          __builtin_prefetch(c64 + off);
-          __builtin_prefetch(c64 + off + 8);
-        }
+  if (c32 == nullptr && c64 == nullptr) return;
+  for (std::int32_t j = 0; j < u; ++j) {
+    if (!is_new_[j]) continue;
+    for (std::int32_t i = 0; i < u; ++i) {
+      if (is_new_[i] && i > j) continue;  // both new: once
+      const std::int32_t lo = std::min(slot_[i], slot_[j]), hi = std::max(slot_[i], slot_[j]);
+      const std::int64_t off = 9 * Compliance::PackedIndex(lo, hi);
+      if (c32 != nullptr) {
+        __builtin_prefetch(c32 + off);
+        __builtin_prefetch(c32 + off + 8);
+      } else {
+        __builtin_prefetch(c64 + off);
+        __builtin_prefetch(c64 + off + 8);
       }
     }
   }
+}
+
+void ContactSolver::FillNormalCompliance() noexcept {
+  const std::int32_t u = num_unique_;
+  const std::int32_t M = options_.max_contacts;
+  const Compliance& C = *compliance_;
+  // S_ij = n_i^T C_ij n_j; the table keeps C_ab for table positions a <= b (packed), and S_ab
+  // as last computed with the normals in pos_n_.
   for (std::int32_t j = 0; j < u; ++j) {
     same_n_[j] = !is_new_[j] && std::memcmp(pos_n_[pos_[j]].data(), n_[j].data(), sizeof(double) * 3) == 0;
   }
@@ -516,7 +565,6 @@ void ContactSolver::ForgetPrevious() noexcept {
 
 bool ContactSolver::SolveNormalPushOnly(StepStatus& status) noexcept {
   const std::int32_t u = num_unique_;
-  const std::int32_t M = options_.max_contacts;
   // S = N^T C_cc N (u x u): every contact holds only its normal, so the 3u x 3u problem is a
   // u x u one (9x less to factor, 3x less per displacement check).
   GatherNormalCompliance();
@@ -529,55 +577,11 @@ bool ContactSolver::SolveNormalPushOnly(StepStatus& status) noexcept {
   WarmStartActiveSet();
   // The same pivoting as the general path (block principal pivoting with Murty's rule as the
   // fallback), on the normal forces lambda (f = lambda n: push is lambda < 0).
-  constexpr double kTol = 1e-9;
   BlockPivoting pivoting(u);
   while (true) {
-    std::int32_t r = 0;
-    for (std::int32_t j = 0; j < u; ++j) {
-      lambda_N_[j] = 0.0;
-      if (active_[j]) {
-        act_pos_[r] = pos_[j];
-        act_[r++] = j;
-      }
-    }
-    if (r > 0) {
-      for (std::int32_t b = 0; b < r; ++b) {
-        const double* Sb = S_.data() + static_cast<std::size_t>(act_pos_[b]) * M;
-        double* Lb = L_.data() + static_cast<std::size_t>(b) * r;
-        for (std::int32_t a = b; a < r; ++a) Lb[a] = Sb[act_pos_[a]];
-        Lb[b] += eps_m_per_N_;
-        rhs_[b] = dn_m_[act_[b]];
-      }
-      if (r <= detail::kSmallSpdMax) {  // a few nodes: the register kernel (eps is in L_ already)
-        if (!detail::SmallSpdSolve(L_.data(), r, r, 0.0, rhs_.data(), detail::BestIsa())) return false;
-      } else {
-        const detail::Isa isa = detail::BestIsa();
-        if (!detail::FactorSpd(L_.data(), r, r, isa)) return false;
-        detail::SolveFactoredSpd(L_.data(), r, r, rhs_.data(), 1, r, isa);
-      }
-      for (std::int32_t b = 0; b < r; ++b) {
-        if (!std::isfinite(rhs_[b])) return false;
-        lambda_N_[act_[b]] = rhs_[b];
-      }
-    }
-    double f_scale = 0.0;
-    for (std::int32_t b = 0; b < r; ++b) f_scale = std::max(f_scale, std::abs(rhs_[b]));
-    if (f_scale == 0.0) f_scale = 1.0;
-    // A held node violates if it pulls; a released one if the surface would push into the tip.
-    std::int32_t violations = 0;
-    for (std::int32_t j = 0; j < u; ++j) {
-      bool v;
-      if (active_[j]) {
-        v = lambda_N_[j] / f_scale > kTol;
-      } else {
-        const double* Sj = S_.data() + static_cast<std::size_t>(pos_[j]) * M;
-        double un = 0.0;
-        for (std::int32_t b = 0; b < r; ++b) un += Sj[act_pos_[b]] * rhs_[b];
-        v = (un - dn_m_[j]) / d_scale > kTol;
-      }
-      violates_[j] = v ? 1 : 0;
-      violations += v ? 1 : 0;
-    }
+    const std::int32_t r = ListActiveNormals();
+    if (r > 0 && !SolveActiveNormals(r)) return false;
+    const std::int32_t violations = FindNormalViolations(r, d_scale);
     if (violations == 0) break;
     if (iterations_ >= options_.max_active_set_iterations) {
       status = StepStatus::kNotConverged;
@@ -596,6 +600,64 @@ bool ContactSolver::SolveNormalPushOnly(StepStatus& status) noexcept {
     f_N_[j] = active_[j] ? Eigen::Vector3d(lambda_N_[j] * n_[j]) : Eigen::Vector3d::Zero();
   }
   return true;
+}
+
+std::int32_t ContactSolver::ListActiveNormals() noexcept {
+  std::int32_t r = 0;
+  for (std::int32_t j = 0; j < num_unique_; ++j) {
+    lambda_N_[j] = 0.0;
+    if (active_[j]) {
+      act_pos_[r] = pos_[j];
+      act_[r++] = j;
+    }
+  }
+  return r;
+}
+
+bool ContactSolver::SolveActiveNormals(std::int32_t r) noexcept {
+  const std::int32_t M = options_.max_contacts;
+  for (std::int32_t b = 0; b < r; ++b) {
+    const double* Sb = S_.data() + static_cast<std::size_t>(act_pos_[b]) * M;
+    double* Lb = L_.data() + static_cast<std::size_t>(b) * r;
+    for (std::int32_t a = b; a < r; ++a) Lb[a] = Sb[act_pos_[a]];
+    Lb[b] += eps_m_per_N_;
+    rhs_[b] = dn_m_[act_[b]];
+  }
+  if (r <= detail::kSmallSpdMax) {  // a few nodes: the register kernel (eps is in L_ already)
+    if (!detail::SmallSpdSolve(L_.data(), r, r, 0.0, rhs_.data(), detail::BestIsa())) return false;
+  } else {
+    const detail::Isa isa = detail::BestIsa();
+    if (!detail::FactorSpd(L_.data(), r, r, isa)) return false;
+    detail::SolveFactoredSpd(L_.data(), r, r, rhs_.data(), 1, r, isa);
+  }
+  for (std::int32_t b = 0; b < r; ++b) {
+    if (!std::isfinite(rhs_[b])) return false;
+    lambda_N_[act_[b]] = rhs_[b];
+  }
+  return true;
+}
+
+std::int32_t ContactSolver::FindNormalViolations(std::int32_t r, double d_scale) noexcept {
+  const std::int32_t M = options_.max_contacts;
+  double f_scale = 0.0;
+  for (std::int32_t b = 0; b < r; ++b) f_scale = std::max(f_scale, std::abs(rhs_[b]));
+  if (f_scale == 0.0) f_scale = 1.0;
+  // A held node violates if it pulls; a released one if the surface would push into the tip.
+  std::int32_t violations = 0;
+  for (std::int32_t j = 0; j < num_unique_; ++j) {
+    bool v;
+    if (active_[j]) {
+      v = lambda_N_[j] / f_scale > kTol;
+    } else {
+      const double* Sj = S_.data() + static_cast<std::size_t>(pos_[j]) * M;
+      double un = 0.0;
+      for (std::int32_t b = 0; b < r; ++b) un += Sj[act_pos_[b]] * rhs_[b];
+      v = (un - dn_m_[j]) / d_scale > kTol;
+    }
+    violates_[j] = v ? 1 : 0;
+    violations += v ? 1 : 0;
+  }
+  return violations;
 }
 
 int ContactSolver::AssembleHeld(bool fill_matrix, int from_row) noexcept {
@@ -708,29 +770,44 @@ bool ContactSolver::SolvePatchedSystem(bool refactor, bool same_columns) noexcep
   // same_columns: only the slipping patches' directions changed since the last call (the held
   // set, the modes, the slipping patches and the sticking slides did not): z0 and Z stand, and
   // only the cone equations are formed and solved again (bit for bit what a whole call gives).
-  const int ld = 3 * options_.max_contacts;
-  const int p0 = refactor && !same_columns ? ResumableRows() : 0;
+  const bool new_columns = !same_columns;
+  const int p0 = refactor && new_columns ? ResumableRows() : 0;
   const int r = same_columns ? patched_rows_ : AssembleHeld(refactor, p0);
   patched_rows_ = r;
   num_slipping_ = 0;
-  for (std::int32_t j = 0; j < num_unique_ && !same_columns; ++j) {
-    const std::int32_t p = patch_of_[j];
-    if (!active_[j] || p < 0 || mode_[j] != ContactMode::kFull3d || patch_state_[p].slipping) continue;
-    for (int c = 0; c < 3; ++c) rhs_[row_of_[j] + c] += patch_in_[p].slide_m[c];
-  }
+  if (new_columns) AddSticks();
   if (r == 0) {
     fac_valid_ = false;
     return true;
   }
-  if (refactor && !same_columns) {
-    if (eps_m_per_N_ > 0.0) {
-      for (int k = p0; k < r; ++k) A_[static_cast<std::ptrdiff_t>(k) * ld + k] += eps_m_per_N_;
-    }
-    fac_valid_ = false;
-    const bool ok = p0 > 0 ? detail::ResumeFactorSpd(A_.data(), r, ld, p0, detail::BestIsa()) : FactorSpd(A_.data(), r, ld);
-    if (!ok) return false;
-    RememberFactored();
+  if (refactor && new_columns && !FactorHeld(r, p0)) return false;
+  ListSlippingPatches();
+  SolveColumns(r, same_columns);
+  if (num_slipping_ > 0 && !SolveSlides(r)) return false;
+  return ForcesFromRows();
+}
+
+void ContactSolver::AddSticks() noexcept {
+  for (std::int32_t j = 0; j < num_unique_; ++j) {
+    const std::int32_t p = patch_of_[j];
+    if (!active_[j] || p < 0 || mode_[j] != ContactMode::kFull3d || patch_state_[p].slipping) continue;
+    for (int c = 0; c < 3; ++c) rhs_[row_of_[j] + c] += patch_in_[p].slide_m[c];
   }
+}
+
+bool ContactSolver::FactorHeld(int r, int p0) noexcept {
+  const int ld = 3 * options_.max_contacts;
+  if (eps_m_per_N_ > 0.0) {
+    for (int k = p0; k < r; ++k) A_[static_cast<std::ptrdiff_t>(k) * ld + k] += eps_m_per_N_;
+  }
+  fac_valid_ = false;
+  const bool ok = p0 > 0 ? detail::ResumeFactorSpd(A_.data(), r, ld, p0, detail::BestIsa()) : FactorSpd(A_.data(), r, ld);
+  if (!ok) return false;
+  RememberFactored();
+  return true;
+}
+
+void ContactSolver::ListSlippingPatches() noexcept {
   // The slipping patches that hold a node in 3-D (a patch whose nodes all went frictionless
   // has no tangential force and no slide to find), each with its active nodes (members from
   // slip_begin_[a] to slip_begin_[a + 1]) and its cone equations as weights on the held rows
@@ -773,65 +850,71 @@ bool ContactSolver::SolvePatchedSystem(bool refactor, bool same_columns) noexcep
   slip_begin_[ns] = q;
   slip_row_begin_[ns] = t;
   num_slipping_ = ns;
+}
+
+void ContactSolver::SolveColumns(int r, bool same_columns) noexcept {
   // Z = A^-1 B: B puts the tangent basis into the rows of each slipping patch's held nodes.
   // z0 and Z are solved together, b0 in the column before Z's (Z_'s column 0): one pass of the
   // lane solve takes eight columns, so the right-hand side rides along with up to three
   // slipping patches instead of a pass of its own.
   if (same_columns) {
     std::copy(Z_.begin(), Z_.begin() + r, rhs_.begin());  // z0, kept in Z_'s column 0
-  } else {
-    for (std::int32_t a = 0; a < ns; ++a) {
-      const std::int32_t p = slipping_list_[a];
-      for (int c = 0; c < 2; ++c) {
-        double* z = Zcol(2 * a + c);
-        std::fill(z, z + r, 0.0);
-        for (std::int32_t m = slip_begin_[a]; m < slip_begin_[a + 1]; ++m) {
-          const std::int32_t j = slip_members_[m];
-          if (mode_[j] != ContactMode::kFull3d) continue;
-          for (int k = 0; k < 3; ++k) z[row_of_[j] + k] = tangent_[p](k, c);
-        }
+    return;
+  }
+  const int ld = 3 * options_.max_contacts;
+  for (std::int32_t a = 0; a < num_slipping_; ++a) {
+    const std::int32_t p = slipping_list_[a];
+    for (int c = 0; c < 2; ++c) {
+      double* z = Zcol(2 * a + c);
+      std::fill(z, z + r, 0.0);
+      for (std::int32_t m = slip_begin_[a]; m < slip_begin_[a + 1]; ++m) {
+        const std::int32_t j = slip_members_[m];
+        if (mode_[j] != ContactMode::kFull3d) continue;
+        for (int k = 0; k < 3; ++k) z[row_of_[j] + k] = tangent_[p](k, c);
       }
     }
-    std::copy(rhs_.begin(), rhs_.begin() + r, Z_.begin());
-    SolveFactored(A_.data(), r, ld, Z_.data(), 1 + 2 * ns, ld);
-    std::copy(Z_.begin(), Z_.begin() + r, rhs_.begin());
   }
-  if (ns > 0) {
-    const int n2 = 2 * ns;
-    // Phi_a applied to the columns (the patch's held nodes' rows), both equations of a patch
-    // from one read of each row. With given forces the equations are T^T F = g instead
-    // (symmetric: Phi Z = B^T A^-1 B).
-    // Every column's sums at once (column 0: z0, as rhs_; then Z).
-    const std::ptrdiff_t ldz = 3 * static_cast<std::ptrdiff_t>(options_.max_contacts);
-    double* s0 = slip_sum_.data();
-    double* s1 = s0 + (n2 + 1);
-    for (std::int32_t a = 0; a < ns; ++a) {
-      const std::int32_t b = slip_row_begin_[a];
-      detail::WeightedRowSums(Z_.data(), ldz, n2 + 1, slip_row_.data() + b, slip_row_w0_.data() + b,
-                              slip_row_w1_.data() + b, slip_row_begin_[a + 1] - b, s0, s1, detail::BestIsa());
-      const Eigen::Vector2d g = given_force_ ? slip_force_[slipping_list_[a]] : Eigen::Vector2d::Zero();
-      slip_rhs_[2 * a] = g[0] - s0[0];
-      slip_rhs_[2 * a + 1] = g[1] - s1[0];
-      for (int col = 1; col <= n2; ++col) {
-        slip_M_[static_cast<std::ptrdiff_t>(col - 1) * n2 + 2 * a] = s0[col];
-        slip_M_[static_cast<std::ptrdiff_t>(col - 1) * n2 + 2 * a + 1] = s1[col];
-      }
-    }
-    if (!detail::LuInPlace(slip_M_.data(), n2, n2, slip_piv_.data())) return false;
-    detail::LuSolveInPlace(slip_M_.data(), n2, n2, slip_piv_.data(), slip_rhs_.data());
-    for (int col = 0; col < n2; ++col) {
-      if (!std::isfinite(slip_rhs_[col])) return false;
-    }
-    // y = z0 + Z s, a matrix-vector product over Z's columns.
-    Eigen::Map<Eigen::VectorXd>(rhs_.data(), r).noalias() +=
-        Eigen::Map<const Eigen::MatrixXd, 0, Eigen::OuterStride<>>(Zcol(0), r, n2, Eigen::OuterStride<>(ldz)) *
-        Eigen::Map<const Eigen::VectorXd>(slip_rhs_.data(), n2);
-    for (std::int32_t a = 0; a < ns; ++a) {
-      const std::int32_t p = slipping_list_[a];
-      patch_state_[p].slide_m = tangent_[p] * Eigen::Vector2d(slip_rhs_[2 * a], slip_rhs_[2 * a + 1]);
+  std::copy(rhs_.begin(), rhs_.begin() + r, Z_.begin());
+  SolveFactored(A_.data(), r, ld, Z_.data(), 1 + 2 * num_slipping_, ld);
+  std::copy(Z_.begin(), Z_.begin() + r, rhs_.begin());
+}
+
+bool ContactSolver::SolveSlides(int r) noexcept {
+  const std::int32_t ns = num_slipping_;
+  const int n2 = 2 * ns;
+  // Phi_a applied to the columns (the patch's held nodes' rows), both equations of a patch
+  // from one read of each row. With given forces the equations are T^T F = g instead
+  // (symmetric: Phi Z = B^T A^-1 B).
+  // Every column's sums at once (column 0: z0, as rhs_; then Z).
+  const std::ptrdiff_t ldz = 3 * static_cast<std::ptrdiff_t>(options_.max_contacts);
+  double* s0 = slip_sum_.data();
+  double* s1 = s0 + (n2 + 1);
+  for (std::int32_t a = 0; a < ns; ++a) {
+    const std::int32_t b = slip_row_begin_[a];
+    detail::WeightedRowSums(Z_.data(), ldz, n2 + 1, slip_row_.data() + b, slip_row_w0_.data() + b,
+                            slip_row_w1_.data() + b, slip_row_begin_[a + 1] - b, s0, s1, detail::BestIsa());
+    const Eigen::Vector2d g = given_force_ ? slip_force_[slipping_list_[a]] : Eigen::Vector2d::Zero();
+    slip_rhs_[2 * a] = g[0] - s0[0];
+    slip_rhs_[2 * a + 1] = g[1] - s1[0];
+    for (int col = 1; col <= n2; ++col) {
+      slip_M_[static_cast<std::ptrdiff_t>(col - 1) * n2 + 2 * a] = s0[col];
+      slip_M_[static_cast<std::ptrdiff_t>(col - 1) * n2 + 2 * a + 1] = s1[col];
     }
   }
-  return ForcesFromRows();
+  if (!detail::LuInPlace(slip_M_.data(), n2, n2, slip_piv_.data())) return false;
+  detail::LuSolveInPlace(slip_M_.data(), n2, n2, slip_piv_.data(), slip_rhs_.data());
+  for (int col = 0; col < n2; ++col) {
+    if (!std::isfinite(slip_rhs_[col])) return false;
+  }
+  // y = z0 + Z s, a matrix-vector product over Z's columns.
+  Eigen::Map<Eigen::VectorXd>(rhs_.data(), r).noalias() +=
+      Eigen::Map<const Eigen::MatrixXd, 0, Eigen::OuterStride<>>(Zcol(0), r, n2, Eigen::OuterStride<>(ldz)) *
+      Eigen::Map<const Eigen::VectorXd>(slip_rhs_.data(), n2);
+  for (std::int32_t a = 0; a < ns; ++a) {
+    const std::int32_t p = slipping_list_[a];
+    patch_state_[p].slide_m = tangent_[p] * Eigen::Vector2d(slip_rhs_[2 * a], slip_rhs_[2 * a + 1]);
+  }
+  return true;
 }
 
 int ContactSolver::ResumableRows() const noexcept {
@@ -982,10 +1065,23 @@ int ContactSolver::TurnTowardTheSlide(std::int32_t a, double tol) noexcept {
   return 1;
 }
 
+// The state of SolveWithPatches' rounds: what RestartPass sets at the start of a pass, what a
+// pass leaves for the next (frozen_pushed), and the scale of the displacement tests.
+struct ContactSolver::PatchRounds {
+  PatchRounds(std::int32_t contacts, double imposed_scale) noexcept : pivoting(contacts), d_scale(imposed_scale) {}
+  bool refactor = true;
+  bool same_columns = false;          // the last round turned directions only
+  std::int32_t direction_rounds = 0;  // since the held set last changed (converges in about 6)
+  BlockPivoting pivoting;
+  std::int32_t pivots = 0, updates = 0;
+  bool frozen_pushed = false;  // a let-go node the surface pushes into its tip (last round)
+  double d_scale;
+};
+
 bool ContactSolver::SolveWithPatches(StepStatus& status) noexcept {
   // Like the general path's iteration, with one more kind of change: a sticking patch whose
   // force leaves its cone starts to slip, in the direction e of that force (and never sticks
-  // again within this call; a patch the warm start below made slip is checked once). Patch
+  // again within this call; a patch the warm start made slip, RestartPass, is checked once). Patch
   // nodes are held in 3-D; with push_only one that pulls is released and a released one the
   // surface pushes into the tip is held again (at the patch's slide). Other contacts behave as
   // on the general path.
@@ -997,108 +1093,9 @@ bool ContactSolver::SolveWithPatches(StepStatus& status) noexcept {
   // a given tangential force g = mu_k F_n e from the last iterate: for a given g the held set is
   // the solution of a convex problem (pivoting settles it), and g is updated from the new F_n
   // until it no longer changes (a fixed point; the answer satisfies the same equations).
-  // The held rows' order (perm_): the nodes of the factor in A_ (the last held set factored,
-  // this step's or an earlier one's) in its row order, then the new ones, where pivots mostly
-  // happen; so the first factor resumes after the rows of the nodes that stayed, and so does a
-  // refactor after a pivot.
-  {
-    std::int32_t q = 0;
-    if (fac_valid_) {
-      for (std::int32_t j = 0; j < num_unique_; ++j) index_of_slot_[slot_[j]] = j;
-      for (std::int32_t k = 0; k < fac_count_; ++k) {
-        const std::int32_t j = index_of_slot_[fac_slot_[k]];
-        if (j < 0 || in_perm_[j]) continue;
-        in_perm_[j] = 1;
-        perm_[q++] = j;
-      }
-      for (std::int32_t j = 0; j < num_unique_; ++j) index_of_slot_[slot_[j]] = -1;
-    }
-    for (std::int32_t j = 0; j < num_unique_; ++j) {
-      if (in_perm_[j]) {
-        in_perm_[j] = 0;
-      } else {
-        perm_[q++] = j;
-      }
-    }
-  }
-  // A fingertip that moved less than this along the surface this step is at rest: 1 mm/s at
-  // 1 kHz, where a stroke is 10-100 um a step and a device's noise well under 1 um.
-  constexpr double kRestMotion_m = 1e-6;
-  auto moved = [&](std::int32_t p) -> Eigen::Vector2d { return tangent_[p].transpose() * patch_in_[p].motion_m; };
-  // Which patches decide on the settled held set, with the direction their slide agrees with
-  // (found exactly): every patch but one that slipped in the previous step under a fingertip
-  // that still moves along the surface, which slips on the way the fingertip moves from the
-  // start (a stroke). A sticking patch under a moving fingertip used to be checked on every
-  // solve as well, and to take the motion's direction: the first trial holds the nodes that
-  // pull, which carry more tangential force than the patch can, so a press or a drag that
-  // added a node to a patch 30 % inside its cone slipped it, and its force turned to the
-  // motion's in one step (0.49 N at 0.75 N pressing, docs/fem.md, "A sticking patch under a
-  // moving fingertip").
-  for (std::int32_t p = 0; p < num_patches_; ++p) {
-    settles_[p] = moved(p).norm() <= kRestMotion_m || !patch_in_[p].slipped_before ? 1 : 0;
-  }
-  auto settles = [&](std::int32_t p) { return settles_[p] != 0; };  // asked every round: once a call
-  bool refactor = true;
-  std::int32_t direction_rounds = 0;  // since the held set last changed (converges in about 6)
-  constexpr std::int32_t kMaxDirectionRounds = 16;
-  BlockPivoting pivoting(num_unique_);
-  std::int32_t pivots = 0, updates = 0;
-  constexpr double kTol = 1e-9;
-  constexpr std::int32_t kMaxForceUpdates = 100;
-  auto patch_forces = [&] {
-    for (std::int32_t p = 0; p < num_patches_; ++p) patch_state_[p].force_N.setZero();
-    for (std::int32_t j = 0; j < num_unique_; ++j) {
-      if (active_[j] && patch_of_[j] >= 0) patch_state_[patch_of_[j]].force_N += f_N_[j];
-    }
-  };
-  // The tangential force a slipping patch's cone asks for at its current normal force.
-  auto cone_force = [&](std::int32_t p) -> Eigen::Vector2d {
-    const double f_n = -patch_in_[p].n_out.dot(patch_state_[p].force_N);
-    return patch_in_[p].mu_kinetic * std::max(f_n, 0.0) * slip_dir_[p];
-  };
-  // A sticking patch whose force leaves its cone starts to slip, checked once its held set has
-  // settled (no node pulls or is pushed in while released); a patch that carries a stroke's slip
-  // on (not settles()) is checked on every solve, as before. A trial with nodes that pull holds
-  // more tangential force than the patch can: at rest that slipped a patch every step although
-  // the previous step's slide, held, was on its kinetic cone, and it never came to rest; under
-  // a moving fingertip it slipped patches well inside their cone (docs/fem.md). Such a patch's
-  // nodes then start again held in 3-D: what the sticking trial's pivoting decided about them
-  // no longer holds.
-  auto start_slipping = [&](bool settled, double f_scale) {
-    bool any = false;
-    for (std::int32_t p = 0; p < num_patches_; ++p) {
-      FrictionPatchState& st = patch_state_[p];
-      if (st.slipping || settles(p) != settled) continue;
-      const FrictionPatch& in = patch_in_[p];
-      const double f_n = -in.n_out.dot(st.force_N);
-      const Eigen::Vector2d f_t = tangent_[p].transpose() * st.force_N;
-      const double mu = in.slipped_before ? in.mu_kinetic : in.mu_static;
-      if (f_t.norm() <= mu * std::max(f_n, 0.0) + kTol * f_scale) continue;
-      st.slipping = true;
-      // The way it slides: on the settled held set it starts from the trial force's and then
-      // follows the slide; a stroke's slip carried on, the fingertip's motion along the surface.
-      slip_dir_[p] = settled ? Eigen::Vector2d(f_t / f_t.norm()) : Eigen::Vector2d(moved(p).normalized());
-      slip_force_[p] = cone_force(p);
-      any = true;
-      if (!settled) continue;
-      for (std::int32_t j = 0; j < num_unique_; ++j) {
-        if (patch_of_[j] != p) continue;
-        active_[j] = 1;
-        mode_[j] = ContactMode::kFull3d;
-        slipping_[j] = 0;
-        releases_[j] = 0;
-      }
-    }
-    return any;
-  };
-  // The scales of the tolerances: the largest imposed displacement or slide (fixed in this call)
-  // and, each round, the largest force. A largest norm is the root of the largest squared norm,
-  // bit for bit (the root is monotonic and correctly rounded): one root, not one per node.
-  double d_scale2 = 0.0;
-  for (std::int32_t j = 0; j < num_unique_; ++j) d_scale2 = std::max(d_scale2, d_m_[j].squaredNorm());
-  for (std::int32_t p = 0; p < num_patches_; ++p) d_scale2 = std::max(d_scale2, patch_in_[p].slide_m.squaredNorm());
-  const double d_scale = d_scale2 == 0.0 ? 1.0 : std::sqrt(d_scale2);
-  bool same_columns = false;  // the last round turned directions only
+  OrderRowsAsTheFactor();
+  ChooseWhichPatchesSettle();
+  PatchRounds rounds(num_unique_, ImposedScale());
   // Two passes. The first starts with every node held (patch nodes in 3-D); where push-only
   // nodes pull, the held set it ends in depends on the path the pivoting took, and that path on
   // every candidate, even a patch that ends with no node held: a peer's faded patch losing one
@@ -1109,207 +1106,346 @@ bool ContactSolver::SolveWithPatches(StepStatus& status) noexcept {
   // its tip, the second pass does not hold, and a third repeats the first. Only peers' patches:
   // a user's own fingertip that lifts off changes what the user feels anyway, and a second pass
   // on every such step cost the friction row of haptic_bench half again at p99.
+  std::fill(frozen_.begin(), frozen_.begin() + num_unique_, std::uint8_t{0});
+  RestartPass(rounds);
+  for (int pass = 0; pass < 3; ++pass) {
+    if (pass == 1) {
+      if (status == StepStatus::kNotConverged) break;
+      if (!FreezeLetGoPeers()) break;
+      RestartPass(rounds);
+    } else if (pass == 2) {
+      // The let-go patches stayed released in the second pass; if the surface now pushes one of
+      // their nodes into its tip, that pass's answer does not hold: the first pass again.
+      if (!rounds.frozen_pushed && status != StepStatus::kNotConverged) break;
+      std::fill(frozen_.begin(), frozen_.begin() + num_unique_, std::uint8_t{0});
+      status = StepStatus::kOk;
+      RestartPass(rounds);
+    }
+    if (!RunPatchedPass(rounds, status)) return false;
+  }
+  SumPatchForces();
+  return true;
+}
+
+bool ContactSolver::RunPatchedPass(PatchRounds& rounds, StepStatus& status) noexcept {
+  while (true) {
+    if (!SolvePatchedSystem(rounds.refactor, rounds.same_columns)) return false;
+    rounds.refactor = false;
+    rounds.same_columns = false;
+    const double f_scale = ForceScale();
+    SumPatchForces();
+    if (TurnSlipsTowardTheirSlides(rounds)) continue;
+    if (WarmSlipsStickAgain()) {
+      ++iterations_;
+      continue;
+    }
+    if (StartSlipping(/*settled=*/false, f_scale)) {
+      ++iterations_;
+      continue;  // at most one re-solve per patch: slipping does not revert
+    }
+    bool slipped = false;
+    const std::int32_t violations = options_.push_only ? FindPatchedViolations(rounds, f_scale, slipped) : 0;
+    if (violations > 0) {
+      if (rounds.pivots >= options_.max_active_set_iterations) {
+        status = StepStatus::kNotConverged;
+        break;
+      }
+      PivotPatched(rounds, violations, slipped);
+      continue;
+    }
+    if (StartSlipping(/*settled=*/true, f_scale)) {
+      ++iterations_;
+      rounds.refactor = true;
+      rounds.direction_rounds = 0;
+      rounds.pivoting = BlockPivoting(num_unique_);
+      rounds.pivots = 0;
+      continue;
+    }
+    if (!given_force_) break;
+    // The held set is settled for the given forces: update them from the new normal forces.
+    if (UpdateGivenForces() <= kTol * f_scale) break;
+    if (++rounds.updates > kMaxForceUpdates) {
+      status = StepStatus::kNotConverged;
+      break;
+    }
+    ++iterations_;
+    rounds.pivoting = BlockPivoting(num_unique_);
+    rounds.pivots = 0;
+  }
+  return true;
+}
+
+void ContactSolver::OrderRowsAsTheFactor() noexcept {
+  // The held rows' order (perm_): the nodes of the factor in A_ (the last held set factored,
+  // this step's or an earlier one's) in its row order, then the new ones, where pivots mostly
+  // happen; so the first factor resumes after the rows of the nodes that stayed, and so does a
+  // refactor after a pivot.
+  std::int32_t q = 0;
+  if (fac_valid_) {
+    for (std::int32_t j = 0; j < num_unique_; ++j) index_of_slot_[slot_[j]] = j;
+    for (std::int32_t k = 0; k < fac_count_; ++k) {
+      const std::int32_t j = index_of_slot_[fac_slot_[k]];
+      if (j < 0 || in_perm_[j]) continue;
+      in_perm_[j] = 1;
+      perm_[q++] = j;
+    }
+    for (std::int32_t j = 0; j < num_unique_; ++j) index_of_slot_[slot_[j]] = -1;
+  }
+  for (std::int32_t j = 0; j < num_unique_; ++j) {
+    if (in_perm_[j]) {
+      in_perm_[j] = 0;
+    } else {
+      perm_[q++] = j;
+    }
+  }
+}
+
+Eigen::Vector2d ContactSolver::MotionAlongSurface(std::int32_t p) const noexcept {
+  return tangent_[p].transpose() * patch_in_[p].motion_m;
+}
+
+void ContactSolver::ChooseWhichPatchesSettle() noexcept {
+  // Which patches decide on the settled held set, with the direction their slide agrees with
+  // (found exactly): every patch but one that slipped in the previous step under a fingertip
+  // that still moves along the surface, which slips on the way the fingertip moves from the
+  // start (a stroke). A sticking patch under a moving fingertip used to be checked on every
+  // solve as well, and to take the motion's direction: the first trial holds the nodes that
+  // pull, which carry more tangential force than the patch can, so a press or a drag that
+  // added a node to a patch 30 % inside its cone slipped it, and its force turned to the
+  // motion's in one step (0.49 N at 0.75 N pressing, docs/fem.md, "A sticking patch under a
+  // moving fingertip"). Once a call; Settles() asks it every round.
+  for (std::int32_t p = 0; p < num_patches_; ++p) {
+    settles_[p] = MotionAlongSurface(p).norm() <= kRestMotion_m || !patch_in_[p].slipped_before ? 1 : 0;
+  }
+}
+
+double ContactSolver::ImposedScale() const noexcept {
+  // The scales of the tolerances: the largest imposed displacement or slide (fixed in this call)
+  // and, each round, the largest force (ForceScale). A largest norm is the root of the largest
+  // squared norm, bit for bit (the root is monotonic and correctly rounded): one root, not one
+  // per node.
+  double d_scale2 = 0.0;
+  for (std::int32_t j = 0; j < num_unique_; ++j) d_scale2 = std::max(d_scale2, d_m_[j].squaredNorm());
+  for (std::int32_t p = 0; p < num_patches_; ++p) d_scale2 = std::max(d_scale2, patch_in_[p].slide_m.squaredNorm());
+  return d_scale2 == 0.0 ? 1.0 : std::sqrt(d_scale2);
+}
+
+double ContactSolver::ForceScale() const noexcept {
+  double f_scale2 = 0.0;
+  for (std::int32_t j = 0; j < num_unique_; ++j) f_scale2 = std::max(f_scale2, f_N_[j].squaredNorm());
+  return f_scale2 == 0.0 ? 1.0 : std::sqrt(f_scale2);
+}
+
+void ContactSolver::RestartPass(PatchRounds& rounds) noexcept {
   // A pass starts with every node held but the frozen ones, in the mode its input asks, and every
   // patch at its stick. A patch that slipped in the previous step and whose fingertip still moves
   // along the surface starts slipping, that way: after the first solve WouldStick() checks it
   // against sticking, which the same factor answers, and it sticks if that is inside its cone.
-  // (Every other patch starts sticking: a slip's direction then comes from its slide, below.)
-  auto restart = [&] {
+  // (Every other patch starts sticking: a slip's direction then comes from its slide,
+  // TurnSlipsTowardTheirSlides.)
+  for (std::int32_t j = 0; j < num_unique_; ++j) {
+    active_[j] = frozen_[j] ? 0 : 1;
+    releases_[j] = 0;
+    mode_[j] = mode_in_[j];
+    slipping_[j] = 0;
+  }
+  for (std::int32_t p = 0; p < num_patches_; ++p) {
+    warm_slip_[p] = Settles(p) ? 0 : 1;
+    patch_state_[p].slipping = warm_slip_[p] != 0;
+    patch_state_[p].slide_m = patch_in_[p].slide_m;
+    if (warm_slip_[p]) slip_dir_[p] = MotionAlongSurface(p).normalized();
+  }
+  given_force_ = false;
+  std::fill(restuck_.begin(), restuck_.end(), std::uint8_t{0});
+  rounds.refactor = true;
+  rounds.direction_rounds = 0;
+  rounds.pivoting = BlockPivoting(num_unique_);
+  rounds.pivots = 0;
+  rounds.updates = 0;
+  rounds.same_columns = false;
+}
+
+bool ContactSolver::FreezeLetGoPeers() noexcept {
+  // The peers' patches that ended with every node released.
+  bool any_let_go = false;
+  for (std::int32_t p = 0; p < num_patches_; ++p) {
+    if (!patch_in_[p].peer) continue;
+    bool holds = false;
+    for (std::int32_t j = 0; j < num_unique_ && !holds; ++j) holds = patch_of_[j] == p && active_[j];
+    if (holds) continue;
     for (std::int32_t j = 0; j < num_unique_; ++j) {
-      active_[j] = frozen_[j] ? 0 : 1;
-      releases_[j] = 0;
-      mode_[j] = mode_in_[j];
-      slipping_[j] = 0;
+      if (patch_of_[j] == p) frozen_[j] = 1;
     }
-    for (std::int32_t p = 0; p < num_patches_; ++p) {
-      warm_slip_[p] = settles(p) ? 0 : 1;
-      patch_state_[p].slipping = warm_slip_[p] != 0;
+    any_let_go = true;
+  }
+  return any_let_go;
+}
+
+void ContactSolver::SumPatchForces() noexcept {
+  for (std::int32_t p = 0; p < num_patches_; ++p) patch_state_[p].force_N.setZero();
+  for (std::int32_t j = 0; j < num_unique_; ++j) {
+    if (active_[j] && patch_of_[j] >= 0) patch_state_[patch_of_[j]].force_N += f_N_[j];
+  }
+}
+
+Eigen::Vector2d ContactSolver::ConeForce(std::int32_t p) const noexcept {
+  // The tangential force a slipping patch's cone asks for at its current normal force.
+  const double f_n = -patch_in_[p].n_out.dot(patch_state_[p].force_N);
+  return patch_in_[p].mu_kinetic * std::max(f_n, 0.0) * slip_dir_[p];
+}
+
+bool ContactSolver::TurnSlipsTowardTheirSlides(PatchRounds& rounds) noexcept {
+  // A slipping patch (but a stroke's slip carried on): kinetic friction opposes the sliding, so its
+  // force runs along the way the fingertip slid over the material, stick - s (tangent
+  // coordinates). Holding the trial force's direction instead needs large sideways slides
+  // where the patch's tangential stiffness is anisotropic, and a held fingertip crept: its
+  // patch changed nodes with every slide and slipped again (docs/fem.md). The direction in
+  // which force and slide agree is found per patch (TurnTowardTheSlide); the rounds take the
+  // other patches along, with the same factor and columns: only the cone equations change.
+  bool turned = false, restuck = false;
+  for (std::int32_t a = 0; a < num_slipping_ && !given_force_; ++a) {
+    const std::int32_t p = slipping_list_[a];
+    if (!Settles(p)) continue;  // a stroke's slip carried on goes the way the fingertip moves
+    const int turn = TurnTowardTheSlide(a, 1e-9);
+    if (turn > 0) turned = true;
+    if (turn < 0 && !restuck_[p]) {  // no direction: held at its stick it is inside its cone
+      restuck_[p] = 1;
+      patch_state_[p].slipping = false;
       patch_state_[p].slide_m = patch_in_[p].slide_m;
-      if (warm_slip_[p]) slip_dir_[p] = moved(p).normalized();
-    }
-    given_force_ = false;
-    std::fill(restuck_.begin(), restuck_.end(), std::uint8_t{0});
-    refactor = true;
-    direction_rounds = 0;
-    pivoting = BlockPivoting(num_unique_);
-    pivots = 0;
-    updates = 0;
-    same_columns = false;
-  };
-  std::fill(frozen_.begin(), frozen_.begin() + num_unique_, std::uint8_t{0});
-  restart();
-  bool frozen_pushed = false;  // a let-go node the surface pushes into its tip (last round)
-  for (int pass = 0; pass < 3; ++pass) {
-    if (pass == 1) {
-      if (status == StepStatus::kNotConverged) break;
-      // The peers' patches that ended with every node released.
-      bool any_let_go = false;
-      for (std::int32_t p = 0; p < num_patches_; ++p) {
-        if (!patch_in_[p].peer) continue;
-        bool holds = false;
-        for (std::int32_t j = 0; j < num_unique_ && !holds; ++j) holds = patch_of_[j] == p && active_[j];
-        if (holds) continue;
-        for (std::int32_t j = 0; j < num_unique_; ++j) {
-          if (patch_of_[j] == p) frozen_[j] = 1;
-        }
-        any_let_go = true;
-      }
-      if (!any_let_go) break;
-      restart();
-    } else if (pass == 2) {
-      // The let-go patches stayed released in the second pass; if the surface now pushes one of
-      // their nodes into its tip, that pass's answer does not hold: the first pass again.
-      if (!frozen_pushed && status != StepStatus::kNotConverged) break;
-      std::fill(frozen_.begin(), frozen_.begin() + num_unique_, std::uint8_t{0});
-      status = StepStatus::kOk;
-      restart();
-    }
-    while (true) {
-      if (!SolvePatchedSystem(refactor, same_columns)) return false;
-      refactor = false;
-      same_columns = false;
-      double f_scale2 = 0.0;
-      for (std::int32_t j = 0; j < num_unique_; ++j) f_scale2 = std::max(f_scale2, f_N_[j].squaredNorm());
-      const double f_scale = f_scale2 == 0.0 ? 1.0 : std::sqrt(f_scale2);
-      patch_forces();
-      // A slipping patch (but a stroke's slip carried on): kinetic friction opposes the sliding, so its
-      // force runs along the way the fingertip slid over the material, stick - s (tangent
-      // coordinates). Holding the trial force's direction instead needs large sideways slides
-      // where the patch's tangential stiffness is anisotropic, and a held fingertip crept: its
-      // patch changed nodes with every slide and slipped again (docs/fem.md). The direction in
-      // which force and slide agree is found per patch (TurnTowardTheSlide); the rounds take the
-      // other patches along, with the same factor and columns: only the cone equations change.
-      bool turned = false, restuck = false;
-      for (std::int32_t a = 0; a < num_slipping_ && !given_force_; ++a) {
-        const std::int32_t p = slipping_list_[a];
-        if (!settles(p)) continue;  // a stroke's slip carried on goes the way the fingertip moves
-        const int turn = TurnTowardTheSlide(a, 1e-9);
-        if (turn > 0) turned = true;
-        if (turn < 0 && !restuck_[p]) {  // no direction: held at its stick it is inside its cone
-          restuck_[p] = 1;
-          patch_state_[p].slipping = false;
-          patch_state_[p].slide_m = patch_in_[p].slide_m;
-          turned = true;
-          restuck = true;
-        }
-      }
-      if (restuck || (turned && direction_rounds < kMaxDirectionRounds)) {  // a patch stuck again: re-solved
-        ++direction_rounds;
-        ++iterations_;
-        same_columns = !restuck;
-        continue;
-      }
-      bool sticks_again = false;
-      for (std::int32_t p = 0; p < num_patches_; ++p) {
-        if (!warm_slip_[p]) continue;
-        warm_slip_[p] = 0;
-        std::int32_t a = 0;  // its index in the last solve's slipping list (absent: holds no node in 3-D)
-        while (a < num_slipping_ && slipping_list_[a] != p) ++a;
-        if (a == num_slipping_ || !WouldStick(a)) continue;
-        patch_state_[p].slipping = false;
-        patch_state_[p].slide_m = patch_in_[p].slide_m;
-        sticks_again = true;
-      }
-      if (sticks_again) {
-        ++iterations_;
-        continue;
-      }
-      if (start_slipping(/*settled=*/false, f_scale)) {
-        ++iterations_;
-        continue;  // at most one re-solve per patch: slipping does not revert
-      }
-      std::int32_t violations = 0;
-      bool slipped = false;
-      if (options_.push_only) {
-        frozen_pushed = false;
-        ComputeContactDisplacements();
-        auto target = [&](std::int32_t j) {
-          const std::int32_t p = patch_of_[j];
-          return p >= 0 ? Eigen::Vector3d(d_m_[j] + patch_state_[p].slide_m) : d_m_[j];
-        };
-        for (std::int32_t j = 0; j < num_unique_; ++j) {
-          bool v = active_[j] ? f_N_[j].dot(n_[j]) / f_scale > kTol
-                              : (u_c_m_[j] - target(j)).dot(n_[j]) / d_scale > kTol;
-        if (frozen_[j]) {  // stays released in this pass (see above)
-          frozen_pushed = frozen_pushed || v;
-          v = false;
-        }
-          violates_[j] = v ? 1 : 0;
-          violations += v ? 1 : 0;
-          // A sticking contact that pulls slips first, patch node or not (as on the general path:
-          // friction needs pressure): it keeps its normal constraint only, for the rest of the call.
-          if (v && active_[j] && mode_[j] == ContactMode::kFull3d) {
-            mode_[j] = ContactMode::kNormalOnly;
-            slipping_[j] = 1;
-            slipped = true;
-          }
-        }
-      }
-      if (violations > 0) {
-        if (pivots >= options_.max_active_set_iterations) {
-          status = StepStatus::kNotConverged;
-          break;
-        }
-        ++pivots;
-        ++iterations_;
-        refactor = true;  // nodes change held set or mode below (or did above: slipped)
-        direction_rounds = 0;  // a new held set: the directions settle again
-        MoveViolatorsLast();
-        if (slipped) continue;
-        const bool block = pivoting.Block(violations);
-        for (std::int32_t j = 0; j < num_unique_; ++j) {
-          if (!violates_[j]) continue;
-          if (active_[j]) {
-            active_[j] = 0;
-            if (releases_[j] < 255) ++releases_[j];
-          } else {
-            active_[j] = 1;
-            if (mode_[j] == ContactMode::kFull3d) {  // re-engages frictionless
-              mode_[j] = ContactMode::kNormalOnly;
-              slipping_[j] = 1;
-            }
-            if (releases_[j] >= 2 && !given_force_) {  // came back twice: switch (see above)
-              given_force_ = true;
-              for (std::int32_t p = 0; p < num_patches_; ++p) {
-                if (patch_state_[p].slipping) slip_force_[p] = cone_force(p);
-              }
-              pivoting = BlockPivoting(num_unique_);
-              pivots = 0;
-            }
-          }
-          if (!block) break;  // least index
-        }
-        continue;
-      }
-      if (start_slipping(/*settled=*/true, f_scale)) {
-        ++iterations_;
-        refactor = true;
-        direction_rounds = 0;
-        pivoting = BlockPivoting(num_unique_);
-        pivots = 0;
-        continue;
-      }
-      if (!given_force_) break;
-      // The held set is settled for the given forces: update them from the new normal forces.
-      double change = 0.0;
-      for (std::int32_t p = 0; p < num_patches_; ++p) {
-        if (!patch_state_[p].slipping) continue;
-        const Eigen::Vector2d g = cone_force(p);
-        change = std::max(change, (g - slip_force_[p]).norm());
-        slip_force_[p] = g;
-      }
-      if (change <= kTol * f_scale) break;
-      if (++updates > kMaxForceUpdates) {
-        status = StepStatus::kNotConverged;
-        break;
-      }
-      ++iterations_;
-      pivoting = BlockPivoting(num_unique_);
-      pivots = 0;
+      turned = true;
+      restuck = true;
     }
   }
-  patch_forces();
-  return true;
+  if (restuck || (turned && rounds.direction_rounds < kMaxDirectionRounds)) {  // a patch stuck again: re-solved
+    ++rounds.direction_rounds;
+    ++iterations_;
+    rounds.same_columns = !restuck;
+    return true;
+  }
+  return false;
+}
+
+bool ContactSolver::WarmSlipsStickAgain() noexcept {
+  bool sticks_again = false;
+  for (std::int32_t p = 0; p < num_patches_; ++p) {
+    if (!warm_slip_[p]) continue;
+    warm_slip_[p] = 0;
+    std::int32_t a = 0;  // its index in the last solve's slipping list (absent: holds no node in 3-D)
+    while (a < num_slipping_ && slipping_list_[a] != p) ++a;
+    if (a == num_slipping_ || !WouldStick(a)) continue;
+    patch_state_[p].slipping = false;
+    patch_state_[p].slide_m = patch_in_[p].slide_m;
+    sticks_again = true;
+  }
+  return sticks_again;
+}
+
+bool ContactSolver::StartSlipping(bool settled, double f_scale) noexcept {
+  // A sticking patch whose force leaves its cone starts to slip, checked once its held set has
+  // settled (no node pulls or is pushed in while released); a patch that carries a stroke's slip
+  // on (not Settles()) is checked on every solve, as before. A trial with nodes that pull holds
+  // more tangential force than the patch can: at rest that slipped a patch every step although
+  // the previous step's slide, held, was on its kinetic cone, and it never came to rest; under
+  // a moving fingertip it slipped patches well inside their cone (docs/fem.md). Such a patch's
+  // nodes then start again held in 3-D: what the sticking trial's pivoting decided about them
+  // no longer holds.
+  bool any = false;
+  for (std::int32_t p = 0; p < num_patches_; ++p) {
+    FrictionPatchState& st = patch_state_[p];
+    if (st.slipping || Settles(p) != settled) continue;
+    const FrictionPatch& in = patch_in_[p];
+    const double f_n = -in.n_out.dot(st.force_N);
+    const Eigen::Vector2d f_t = tangent_[p].transpose() * st.force_N;
+    const double mu = in.slipped_before ? in.mu_kinetic : in.mu_static;
+    if (f_t.norm() <= mu * std::max(f_n, 0.0) + kTol * f_scale) continue;
+    st.slipping = true;
+    // The way it slides: on the settled held set it starts from the trial force's and then
+    // follows the slide; a stroke's slip carried on, the fingertip's motion along the surface.
+    slip_dir_[p] = settled ? Eigen::Vector2d(f_t / f_t.norm()) : Eigen::Vector2d(MotionAlongSurface(p).normalized());
+    slip_force_[p] = ConeForce(p);
+    any = true;
+    if (!settled) continue;
+    for (std::int32_t j = 0; j < num_unique_; ++j) {
+      if (patch_of_[j] != p) continue;
+      active_[j] = 1;
+      mode_[j] = ContactMode::kFull3d;
+      slipping_[j] = 0;
+      releases_[j] = 0;
+    }
+  }
+  return any;
+}
+
+std::int32_t ContactSolver::FindPatchedViolations(PatchRounds& rounds, double f_scale, bool& slipped) noexcept {
+  rounds.frozen_pushed = false;
+  ComputeContactDisplacements();
+  auto target = [&](std::int32_t j) {
+    const std::int32_t p = patch_of_[j];
+    return p >= 0 ? Eigen::Vector3d(d_m_[j] + patch_state_[p].slide_m) : d_m_[j];
+  };
+  std::int32_t violations = 0;
+  for (std::int32_t j = 0; j < num_unique_; ++j) {
+    bool v = active_[j] ? f_N_[j].dot(n_[j]) / f_scale > kTol
+                        : (u_c_m_[j] - target(j)).dot(n_[j]) / rounds.d_scale > kTol;
+    if (frozen_[j]) {  // stays released in this pass (see SolveWithPatches)
+      rounds.frozen_pushed = rounds.frozen_pushed || v;
+      v = false;
+    }
+    violates_[j] = v ? 1 : 0;
+    violations += v ? 1 : 0;
+    // A sticking contact that pulls slips first, patch node or not (as on the general path:
+    // friction needs pressure): it keeps its normal constraint only, for the rest of the call.
+    if (v && active_[j] && mode_[j] == ContactMode::kFull3d) {
+      mode_[j] = ContactMode::kNormalOnly;
+      slipping_[j] = 1;
+      slipped = true;
+    }
+  }
+  return violations;
+}
+
+void ContactSolver::PivotPatched(PatchRounds& rounds, std::int32_t violations, bool slipped) noexcept {
+  ++rounds.pivots;
+  ++iterations_;
+  rounds.refactor = true;       // nodes change held set or mode below (or did: slipped)
+  rounds.direction_rounds = 0;  // a new held set: the directions settle again
+  MoveViolatorsLast();
+  if (slipped) return;
+  const bool block = rounds.pivoting.Block(violations);
+  for (std::int32_t j = 0; j < num_unique_; ++j) {
+    if (!violates_[j]) continue;
+    if (active_[j]) {
+      active_[j] = 0;
+      if (releases_[j] < 255) ++releases_[j];
+    } else {
+      active_[j] = 1;
+      if (mode_[j] == ContactMode::kFull3d) {  // re-engages frictionless
+        mode_[j] = ContactMode::kNormalOnly;
+        slipping_[j] = 1;
+      }
+      if (releases_[j] >= 2 && !given_force_) {  // came back twice: switch (see SolveWithPatches)
+        given_force_ = true;
+        for (std::int32_t p = 0; p < num_patches_; ++p) {
+          if (patch_state_[p].slipping) slip_force_[p] = ConeForce(p);
+        }
+        rounds.pivoting = BlockPivoting(num_unique_);
+        rounds.pivots = 0;
+      }
+    }
+    if (!block) break;  // least index
+  }
+}
+
+double ContactSolver::UpdateGivenForces() noexcept {
+  // The largest change of a slipping patch's given force.
+  double change = 0.0;
+  for (std::int32_t p = 0; p < num_patches_; ++p) {
+    if (!patch_state_[p].slipping) continue;
+    const Eigen::Vector2d g = ConeForce(p);
+    change = std::max(change, (g - slip_force_[p]).norm());
+    slip_force_[p] = g;
+  }
+  return change;
 }
 
 void ContactSolver::ComputeContactDisplacements() noexcept {

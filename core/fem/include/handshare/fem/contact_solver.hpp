@@ -192,6 +192,30 @@ class ContactSolver {
   const ContactSolverOptions& options() const noexcept { return options_; }
 
  private:
+  // The state of SolveWithPatches' rounds in a pass (defined in contact_solver.cpp).
+  struct PatchRounds;
+
+  // Construction: throws InputError for bad options; sizes every buffer.
+  void CheckOptions() const;
+  void AllocateContactBuffers();
+  void AllocatePatchBuffers();
+
+  // Solve()'s stages. The patches' inputs and tangent bases; false if one is bad.
+  bool ReadPatches(std::span<const FrictionPatch> patches) noexcept;
+  // Stage 1: validates the inputs (invalid: the call fails; rejected: ignored) and merges the
+  // touches of one node; then their mean displacement and normal (false: opposite normals).
+  void MergeTouches(std::span<const ContactInput> contacts, bool& invalid, bool& rejected) noexcept;
+  bool AverageMergedTouches() noexcept;
+  // Stages 2 and 3: the compliance of the touched nodes and the solve of the path they need.
+  // Returns false on a numerical failure.
+  bool GatherAndSolve(StepStatus& status) noexcept;
+  // Stage 4: forces_N_, states_ and loads_ from the solved nodes.
+  void WriteOutputs() noexcept;
+  // Zero outputs, nothing kept for the next call: returns status.
+  StepStatus GiveUp(StepStatus status) noexcept;
+
+  // The general path: any modes, no patches; with push_only, pivoting on the held set.
+  bool SolveGeneral(StepStatus& status) noexcept;
   bool SolveActiveSet() noexcept;
   // Fills rhs_ = G d* and row_of_ for the held contacts, rows in the order perm_ lists the nodes,
   // and, with fill_matrix, A_ = G C_cc G^T (its lower triangle; only the rows from from_row on,
@@ -204,14 +228,54 @@ class ContactSolver {
   void RememberFactored() noexcept;
   // f_N_ of the held contacts from the solved rows in rhs_; false if one is not finite.
   bool ForcesFromRows() noexcept;
+  // u_c_m_ of the released nodes: C_cc f from the held ones.
+  void ComputeContactDisplacements() noexcept;
+
   // Push-only or not, with the friction patches (every patch node held in 3-D). Returns false on
   // a numerical failure.
   bool SolveWithPatches(StepStatus& status) noexcept;
+  // One pass of SolveWithPatches: rounds of solves and changes until none is left.
+  bool RunPatchedPass(PatchRounds& rounds, StepStatus& status) noexcept;
+  // SolveWithPatches' stages: perm_ from the kept factor's rows; settles_; the scale of the
+  // imposed displacements and of the forces; a pass's start; the peers' patches that let go
+  // (frozen_ for the next pass; false if none).
+  void OrderRowsAsTheFactor() noexcept;
+  void ChooseWhichPatchesSettle() noexcept;
+  double ImposedScale() const noexcept;
+  double ForceScale() const noexcept;
+  void RestartPass(PatchRounds& rounds) noexcept;
+  bool FreezeLetGoPeers() noexcept;
+  // A round's changes, in the order they are tried; each true if it changed something to solve
+  // again: slipping patches turned toward their slides, patches the warm start made slip that
+  // stick, sticking patches outside their cones that slip.
+  bool TurnSlipsTowardTheirSlides(PatchRounds& rounds) noexcept;
+  bool WarmSlipsStickAgain() noexcept;
+  bool StartSlipping(bool settled, double f_scale) noexcept;
+  // Push-only: violates_ (held nodes that pull, released ones pressed into their tips) and the
+  // sticking ones that slip (slipped); returns the count. Then the pivot on them.
+  std::int32_t FindPatchedViolations(PatchRounds& rounds, double f_scale, bool& slipped) noexcept;
+  void PivotPatched(PatchRounds& rounds, std::int32_t violations, bool slipped) noexcept;
+  // The slipping patches' given forces from their cones; returns the largest change.
+  double UpdateGivenForces() noexcept;
+  // patch_state_'s forces from f_N_; a patch's cone force; whether it decides on the settled
+  // held set; the fingertip's motion along the surface (tangent coordinates).
+  void SumPatchForces() noexcept;
+  Eigen::Vector2d ConeForce(std::int32_t p) const noexcept;
+  bool Settles(std::int32_t p) const noexcept { return settles_[p] != 0; }
+  Eigen::Vector2d MotionAlongSurface(std::int32_t p) const noexcept;
   // One linear solve of SolveWithPatches at the current held set and patch states: f_N_, and
   // the slipping patches' slides. refactor: the held set or a node's mode changed since the
   // last call (else A_ still holds the factor of G C_cc G^T). Returns false on a numerical
   // failure.
   bool SolvePatchedSystem(bool refactor, bool same_columns = false) noexcept;
+  // Its stages: the sticking patches' slides into rhs_; the factor of the r held rows (resumed
+  // after p0); the slipping patches' members and cone weights; z0 and Z; the slides (false: not
+  // finite, or a singular system).
+  void AddSticks() noexcept;
+  bool FactorHeld(int r, int p0) noexcept;
+  void ListSlippingPatches() noexcept;
+  void SolveColumns(int r, bool same_columns) noexcept;
+  bool SolveSlides(int r) noexcept;
   // For a patch the warm start made slip (list index a of the last SolvePatchedSystem): true if
   // held at its stick instead it would be inside its cone (the forces from z0 + Z s, no solve).
   bool WouldStick(std::int32_t a) const noexcept;
@@ -222,15 +286,24 @@ class ContactSolver {
   // For list index a of the last SolvePatchedSystem: how far its fingertip slid over the
   // material, the stick minus the slide it solved (tangent coordinates).
   Eigen::Vector2d SlidOver(std::int32_t a) const noexcept;
-  // u_c_m_ of the released nodes: C_cc f from the held ones.
-  void ComputeContactDisplacements() noexcept;
+
   // Push-only with every contact frictionless: the scalar problem on S = N^T C_cc N, warm
   // started from the previous Solve()'s active set. Returns false on a numerical failure.
   bool SolveNormalPushOnly(StepStatus& status) noexcept;
   void WarmStartActiveSet() noexcept;
+  // Its stages: act_ and act_pos_ of the held nodes (returns their count r); lambda_N_ of the r
+  // held ones (false on a numerical failure); violates_ and their count.
+  std::int32_t ListActiveNormals() noexcept;
+  bool SolveActiveNormals(std::int32_t r) noexcept;
+  std::int32_t FindNormalViolations(std::int32_t r, double d_scale) noexcept;
   // Fills S_ for slot_[0..num_unique_) at their table positions, reading only blocks the table
   // lacks and computing only the entries of nodes that are new or whose normal changed.
   void GatherNormalCompliance() noexcept;
+  // Its stages: pos_ and is_new_ (a node touched in the previous Solve() keeps its position);
+  // a prefetch of the new pairs' blocks; the table and S_ entries of new or turned nodes.
+  void AssignTablePositions() noexcept;
+  void PrefetchNewBlocks() const noexcept;
+  void FillNormalCompliance() noexcept;
   void RememberActiveSet() noexcept;
   // Drops the previous Solve()'s nodes (no warm start, no table positions carried over).
   void ForgetPrevious() noexcept;
