@@ -8,7 +8,12 @@ int main(int argc, char** argv) {
       "haptic_node", "Joins a handshare session with a haptic device and runs the haptic loop.");
   handshare::node::DeclareSessionOptions(options);
   options.Value("user", "U", "user name, unique in the session", std::nullopt, true)
-      .Value("device", "KIND", "device driver: sim, hiro (simulated HIRO II plant), replay", "sim")
+      .Value("device", "KIND",
+             "device driver: sim, hiro (simulated HIRO II plant), replay, or plugin:PATH.so[:ARGS] (a lab's device "
+             "through the C ABI of handshare/device_plugin.h, docs/devices.md)", "sim")
+      .Value("device-origin", "X,Y,Z", "plugin: where the device's workspace centre is in the world [m]", "0,-0.05,0.12")
+      .Value("device-scale", "S", "plugin: world metres per device metre", "1")
+      .Value("device-deadline-us", "US", "plugin: a read or command taking longer is a device fault", "500")
       .Value("hiro-config", "FILE", "hiro: device geometry",
              (handshare::common::AssetsDir() / "devices" / "hiro2.json").string())
       .Value("cache", "DIR", "compliance cache of the deformable objects (default: ~/.cache/handshare)", "")
@@ -39,10 +44,13 @@ int main(int argc, char** argv) {
     c.where = handshare::node::ReadSessionOptions(o);
     c.user = o.GetString("user");
     c.device = o.GetString("device");
-    if (c.device != "sim" && c.device != "replay" && c.device != "hiro") {
+    if (c.device != "sim" && c.device != "replay" && c.device != "hiro" && c.device.rfind("plugin:", 0) != 0) {
       throw handshare::common::OptionError("option --device: '" + c.device +
-                                           "' is not available (this build has: sim, hiro, replay)");
+                                           "' is not available (this build has: sim, hiro, replay, plugin:PATH.so[:ARGS])");
     }
+    c.device_origin_m = o.GetVector3("device-origin");
+    c.device_scale = o.GetDouble("device-scale", 1e-3, 1e3);
+    c.device_deadline_s = 1e-6 * o.GetDouble("device-deadline-us", 10.0, 1e6);
     c.hiro_config = o.GetString("hiro-config");
     c.cache_dir = o.GetString("cache");
     c.script = o.GetString("script");

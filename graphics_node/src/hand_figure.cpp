@@ -12,6 +12,9 @@ namespace {
 constexpr double kMaxFlexRad = 2.0 * std::numbers::pi / 3.0;  // per joint: a fist
 constexpr double kLinkHalfWidthM = 0.007;
 constexpr double kJointRadiusM = 0.0075;
+constexpr double kStylusLengthM = 0.12;    // a pen or a gripper handle, as drawn
+constexpr double kStylusHalfWidthM = 0.005;
+constexpr double kGripperHandleM = 0.04;   // the handle sits this far above the points' centre
 
 // The planar chain of `links` with every joint flexed by `theta`: its end point.
 Eigen::Vector2d ChainEnd(const std::array<double, 3>& links, double theta) {
@@ -128,6 +131,49 @@ void AddHandFigure(const HandFigure& hand, double fingertip_radius_m, const rend
       view.hand_boxes.push_back(link);
     }
     for (int k = 0; k < 3; ++k) view.hand_spheres.push_back(render::Sphere{joints[k], kJointRadiusM, skin});
+  }
+}
+
+namespace {
+/// A thin box from a to b (nothing when they meet).
+void AddLink(const Eigen::Vector3d& a, const Eigen::Vector3d& b, double half_width_m, const render::Rgb& rgb,
+             render::SceneView& view) {
+  const double length = (b - a).norm();
+  if (!(length > 1e-6)) return;
+  render::Box link;
+  link.p_W = 0.5 * (a + b);
+  link.half_extents_m = Eigen::Vector3d(half_width_m, 0.5 * length, half_width_m);
+  link.q_WB = Eigen::Quaterniond::FromTwoVectors(Eigen::Vector3d::UnitY(), (b - a) / length);
+  link.rgb = rgb;
+  view.hand_boxes.push_back(link);
+}
+}  // namespace
+
+void AddDeviceFigure(const std::array<Eigen::Vector3d, kFingers>& p_WE, unsigned present, double fingertip_radius_m,
+                     const render::Rgb& rgb, render::SceneView& view) {
+  Eigen::Vector3d centre = Eigen::Vector3d::Zero();
+  int n = 0;
+  for (int f = 0; f < kFingers; ++f) {
+    if (((present >> f) & 1u) == 0 || !p_WE[f].allFinite()) continue;
+    centre += p_WE[f];
+    ++n;
+  }
+  if (n == 0) return;
+  centre /= n;
+  // Up and towards the user (-y): how a pen or a gripper's handle is held over a table.
+  const Eigen::Vector3d up = Eigen::Vector3d(0.0, -0.45, 1.0).normalized();
+  if (n == 1) {
+    AddLink(centre + fingertip_radius_m * up, centre + (fingertip_radius_m + kStylusLengthM) * up, kStylusHalfWidthM, rgb, view);
+    return;
+  }
+  const Eigen::Vector3d handle = centre + kGripperHandleM * up;
+  AddLink(handle, handle + kStylusLengthM * up, kStylusHalfWidthM, rgb, view);
+  for (int f = 0; f < kFingers; ++f) {
+    if (((present >> f) & 1u) == 0 || !p_WE[f].allFinite()) continue;
+    const Eigen::Vector3d to_tip = p_WE[f] - handle;
+    const double full = to_tip.norm();
+    if (full <= fingertip_radius_m) continue;
+    AddLink(handle, handle + to_tip * ((full - fingertip_radius_m) / full), kLinkHalfWidthM, rgb, view);
   }
 }
 

@@ -222,7 +222,13 @@ class WorldView {
       if (hand.state.fault()) continue;  // a faulted device has no trustworthy pose
       // The hand itself under the fingertips: a HIRO II's from its joint angles, any other
       // fitted to the device's hand base and fingertips.
-      if (hiro_ && names_.DeviceOf(user) == "hiro") {
+      const unsigned present = ~static_cast<unsigned>(hand.state.absent_fingers()) & 0x1Fu;
+      if (present != 0x1Fu) {
+        // A stylus or a gripper (a device with fewer fingers): what the user really holds.
+        std::array<Eigen::Vector3d, kFingers> tips;
+        for (int i = 0; i < kFingers; ++i) tips[i] = Eigen::Vector3d(hand.state.p_WE_m()[i].data());
+        AddDeviceFigure(tips, present, hand.state.fingertip_radius_m(), kSkinRgb, view);
+      } else if (hiro_ && names_.DeviceOf(user) == "hiro") {
         AddHandFigure(HiroHandFigure(*hiro_, HandPose(hand.state), hand.state.q_hand_rad()),
                       hand.state.fingertip_radius_m(), kHiroRgb, view);
       } else {
@@ -231,6 +237,7 @@ class WorldView {
         AddHandFigure(FitHandToFingertips(HandPose(hand.state), tips), hand.state.fingertip_radius_m(), kSkinRgb, view);
       }
       for (int i = 0; i < 5; ++i) {
+        if (((present >> i) & 1u) == 0) continue;  // a finger the device does not have
         const auto& p = hand.state.p_WE_m()[i];
         view.markers.push_back(render::Sphere{
             Eigen::Vector3d(p[0], p[1], p[2]), hand.state.fingertip_radius_m(),

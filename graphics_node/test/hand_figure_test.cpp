@@ -2,6 +2,7 @@
 
 #include <gtest/gtest.h>
 
+#include <limits>
 #include <random>
 
 #include "handshare/haptic/sim_hand.hpp"
@@ -196,6 +197,39 @@ TEST(HandFigure, FingertipsShowThroughTheHandButNotThroughTheScene) {
   scene.hand_boxes.clear();
   scene.boxes.push_back(wall);
   EXPECT_FALSE(centre_is_red(scene)) << "a scene object in front hides it";
+}
+
+}  // namespace
+}  // namespace handshare::graphics
+
+namespace handshare::graphics {
+namespace {
+
+// A device with fewer fingers is drawn as what the user holds, from its present fingers only:
+// one point a pen rising from the fingertip's surface, two a gripper handle with a link to each.
+TEST(HandFigure, AStylusIsAPenAndAPinchAGripperFromThePresentFingersOnly) {
+  std::array<Eigen::Vector3d, kFingers> tips;
+  for (auto& p : tips) p = Eigen::Vector3d::Constant(std::numeric_limits<double>::quiet_NaN());  // absent: never read
+  tips[1] = Eigen::Vector3d(0.1, 0.0, 0.02);
+  render::SceneView stylus;
+  AddDeviceFigure(tips, 0b00010, 0.008, render::Rgb{1.0F, 1.0F, 1.0F}, stylus);
+  ASSERT_EQ(stylus.hand_boxes.size(), 1u);
+  const render::Box& pen = stylus.hand_boxes[0];
+  const Eigen::Vector3d axis = pen.q_WB * Eigen::Vector3d::UnitY();
+  EXPECT_GT(axis.z(), 0.8);   // up
+  EXPECT_LT(axis.y(), -0.3);  // towards the user
+  // It starts at the fingertip sphere's surface.
+  const Eigen::Vector3d bottom = pen.p_W - pen.half_extents_m.y() * axis;
+  EXPECT_NEAR((bottom - tips[1]).norm(), 0.008, 1e-9);
+
+  tips[0] = Eigen::Vector3d(0.06, 0.0, 0.02);
+  render::SceneView pinch;
+  AddDeviceFigure(tips, 0b00011, 0.008, render::Rgb{1.0F, 1.0F, 1.0F}, pinch);
+  ASSERT_EQ(pinch.hand_boxes.size(), 3u);  // the handle and a link to each point
+  for (const auto& b : pinch.hand_boxes) EXPECT_TRUE(b.p_W.allFinite());
+  render::SceneView none;
+  AddDeviceFigure(tips, 0, 0.008, render::Rgb{1.0F, 1.0F, 1.0F}, none);
+  EXPECT_TRUE(none.hand_boxes.empty());
 }
 
 }  // namespace

@@ -1,6 +1,7 @@
 #include "bridge_conversions.hpp"
 
 #include <algorithm>
+#include <bit>
 #include <cmath>
 
 #include "handshare/dds/contact_codec.hpp"
@@ -34,6 +35,18 @@ void ToDeviceState(const HapticSnapshot& s, msg::DeviceState& out) {
   std::copy_n(s.q_hand_rad, common::kHandJoints, out.q_hand_rad().begin());
   std::copy_n(s.q_arm_rad, common::kArmJoints, out.q_arm_rad().begin());
   out.fault(s.fault);
+  out.absent_fingers(static_cast<std::uint8_t>(kEveryFinger & ~s.finger_mask));
+}
+
+msg::DeviceCaps ToDeviceCaps(const DeviceCapabilities& c) {
+  msg::DeviceCaps out;
+  out.contact_points(static_cast<std::uint8_t>(std::popcount(static_cast<unsigned>(c.finger_mask))));
+  out.finger_mask(c.finger_mask);
+  out.max_force_N(static_cast<float>(c.max_fingertip_force_N));
+  out.workspace_radius_m(static_cast<float>(c.workspace_radius_m));
+  out.rate_Hz(static_cast<float>(c.control_rate_Hz));
+  out.gripper(c.has_gripper);
+  return out;
 }
 
 void ToLoopStatistics(const common::LoopStats& s, std::uint64_t faults, msg::LoopStatistics& out) {

@@ -22,6 +22,8 @@ namespace handshare::haptic {
 
 /// The device state viewers get from one haptic snapshot (user and session are set once).
 void ToDeviceState(const HapticSnapshot& s, msg::DeviceState& out);
+/// The device's capabilities as its member announces them (msg::DeviceCaps).
+msg::DeviceCaps ToDeviceCaps(const DeviceCapabilities& c);
 
 /// The loop statistics sample of the haptic loop's statistics and its fault count.
 void ToLoopStatistics(const common::LoopStats& s, std::uint64_t faults, msg::LoopStatistics& out);

@@ -9,11 +9,13 @@
 #include <string>
 #include <thread>
 
+#include "bridge_conversions.hpp"
 #include "haptic_bridge.hpp"
 #include "handshare/node/rejoin_clock.hpp"
 #include "handshare/common/shutdown.hpp"
 #include "handshare/dds/membership.hpp"
 #include "handshare/haptic/haptic_loop.hpp"
+#include "handshare/haptic/plugin_device.hpp"
 #include "handshare/haptic/replay.hpp"
 #include "handshare/haptic/sim_hand.hpp"
 #include "handshare/hiro/hiro_device.hpp"
@@ -37,7 +39,14 @@ std::unique_ptr<Device> MakeDevice(const HapticNodeConfig& c) {
     return hiro::MakeHiroDevice(c.hiro_config, sim);
   }
   if (c.device == "replay") return std::make_unique<ReplayDevice>(ReplayLog::Load(c.replay_file), c.replay_loop);
-  throw std::invalid_argument("device '" + c.device + "' is not available (this build has: sim, hiro, replay)");
+  if (c.device.rfind("plugin:", 0) == 0) {
+    PluginDeviceOptions o = PluginDeviceOptions::FromSpec(c.device);
+    o.origin_W = Eigen::Vector3d(c.device_origin_m[0], c.device_origin_m[1], c.device_origin_m[2]);
+    o.scale = c.device_scale;
+    o.deadline_s = c.device_deadline_s;
+    return PluginDevice::Open(o);
+  }
+  throw std::invalid_argument("device '" + c.device + "' is not available (this build has: sim, hiro, replay, plugin:PATH.so[:ARGS])");
 }
 
 /// Everything of this node that lives on DDS: its participant, its member announcement and the
@@ -46,7 +55,7 @@ struct SessionLink {
   SessionLink(const HapticNodeConfig& config, Device& device, HapticLoop& loop, std::ostream* trace,
               HapticBridge::Say say)
       : participant(config.where, "haptic_node/" + config.user),
-        member(participant, config.user, msg::NODE_HAPTIC, device.name()),
+        member(participant, config.user, msg::NODE_HAPTIC, device.name(), 0.0, ToDeviceCaps(device.capabilities())),
         bridge(config, device, loop, participant, trace, std::move(say)) {}
   dds::Participant participant;
   dds::MemberAnnouncement member;
@@ -143,6 +152,8 @@ int HapticNode::Run() {
     WriteTraceHeader(trace);
   }
 
+  const auto* plugin = dynamic_cast<const PluginDevice*>(device.get());
+  if (plugin != nullptr) say("device " + plugin->Describe());
   HapticLoop loop(*device, HapticLoopConfig{config_.rate_Hz, true});
   auto link = std::make_unique<SessionLink>(config_, *device, loop, trace ? &trace : nullptr, say);
   const bool realtime = loop.Start();
@@ -175,6 +186,12 @@ int HapticNode::Run() {
   loop.TakeStats(stats);
   PrintLoopSummary(config_.user, stats, loop.faults(), loop.rate_limited_steps(), link->bridge);
   PrintBridgeSummary(config_, link->bridge);
+  if (plugin != nullptr) {
+    const PluginFaults f = plugin->faults();
+    say("device faults: " + std::to_string(f.total()) + " (calls failed " + std::to_string(f.read_errors) +
+        ", not finite " + std::to_string(f.not_finite) + ", jumps " + std::to_string(f.jumps) + ", overruns " +
+        std::to_string(f.overruns) + ")");
+  }
   if (rejoin.rejoins() > 0) say("rejoined the session " + std::to_string(rejoin.rejoins()) + " time(s)");
   say(link->participant.TrafficSummary());
   return 0;

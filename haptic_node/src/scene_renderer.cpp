@@ -139,8 +139,16 @@ void SceneRenderer::Render(double /*t_s*/, double dt_s, std::uint64_t now_ns, co
     passivity_.Admit(c, r);
   }
   peer_weights_.EndStep(now_ns);
-  // 3. Contacts: rigid, dynamic and deformable objects, all hands on a deformable together.
-  world.Step(dt_s, reading.p_WE, {remote_contacts_.data(), static_cast<std::size_t>(n_remote)});
+  // 3. Contacts: rigid, dynamic and deformable objects, all hands on a deformable together;
+  // only the fingertips the device has (packed: tip i is finger tip_finger_[i]).
+  std::size_t n_tips = 0;
+  for (int f = 0; f < kFingers; ++f) {
+    if (!HasFinger(reading.finger_mask, f)) continue;
+    tip_finger_[n_tips] = f;
+    tips_[n_tips++] = reading.p_WE[f];
+  }
+  const std::span<const Eigen::Vector3d> tips(tips_.data(), n_tips);
+  world.Step(dt_s, tips, {remote_contacts_.data(), static_cast<std::size_t>(n_remote)});
   passivity_.Observe(world.remote_forces_O());
   coupling_stats_.Write(passivity_.stats());
   if (load_snapshots_ && ++steps_since_loads_ >= DeformableLoads::kEverySteps) {
@@ -154,12 +162,14 @@ void SceneRenderer::Render(double /*t_s*/, double dt_s, std::uint64_t now_ns, co
     if (controls::Control* c = controls_.Find(command.id.data())) c->RequestState(command.index, command.engaged);
   }
   event_buffer_.Clear();
-  controls_.Step(dt_s, reading.p_WE, fingertip_radius_m_, f_controls_, event_buffer_);
+  for (auto& f : f_controls_) f.setZero();
+  controls_.Step(dt_s, tips, fingertip_radius_m_, {f_controls_.data(), n_tips}, event_buffer_);
   for (const auto& e : event_buffer_) {
     if (!events_.Push(e)) dropped_events_.fetch_add(1, std::memory_order_relaxed);
   }
   const auto fingers = world.fingers();
-  for (int i = 0; i < kFingers; ++i) f_E_W[i] = fingers[i].f_E_W_N + f_controls_[i];
+  for (auto& f : f_E_W) f.setZero();
+  for (std::size_t i = 0; i < n_tips; ++i) f_E_W[tip_finger_[i]] = fingers[i].f_E_W_N + f_controls_[i];
 
   // 5. Report for the bridge (contact set, grasp claims, body poses).
   ContactReport& r = reports_.WriteSlot();
@@ -167,7 +177,12 @@ void SceneRenderer::Render(double /*t_s*/, double dt_s, std::uint64_t now_ns, co
   r.step_ns = common::SteadyNowNs();
   r.peer_stamp_ns = peer_stamp_ns_;
   r.peer_seen_ns = peer_seen_ns_;
-  for (int i = 0; i < kFingers; ++i) r.fingers[i] = fingers[i].contact;
+  for (auto& c : r.fingers) c = contact::FingerContact{};
+  for (std::size_t i = 0; i < n_tips; ++i) {
+    const int f = tip_finger_[i];
+    r.fingers[f] = fingers[i].contact;
+    r.fingers[f].finger = f;
+  }
   r.num_bodies = 0;
   for (const auto body : models_.dynamic_bodies) {
     if (r.num_bodies >= kMaxReportedBodies) break;

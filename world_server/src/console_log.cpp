@@ -16,6 +16,7 @@ std::string Line(const MemberChanged& e) {
   line << "member " << ToString(e.event.change) << ": user=" << m.user << " kind=" << m.kind;
   if (!m.device.empty()) line << " device=" << m.device;
   line << " pid=" << m.pid << " present=" << e.present;
+  if (!m.device_caps.empty()) line << " (device: " << m.device_caps << ")";
   return line.str();
 }
 

@@ -9,7 +9,7 @@ namespace handshare::server {
 
 Member ToMember(const msg::MemberInfo& info) {
   return Member{info.member_id().to_string(), info.user().to_string(), dds::ToString(info.kind()),
-                info.device().to_string(), info.pid()};
+                info.device().to_string(), info.pid(), dds::Describe(info.device_caps())};
 }
 
 std::optional<ControlInput> ToControlInput(const msg::ControlEvent& e) {

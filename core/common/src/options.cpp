@@ -1,6 +1,8 @@
 #include "handshare/common/options.hpp"
 
+#include <algorithm>
 #include <cerrno>
+#include <cstdio>
 #include <cmath>
 #include <cstdlib>
 #include <iostream>
@@ -122,6 +124,20 @@ double Options::GetDouble(const std::string& name, double min, double max) const
     std::ostringstream range;
     range << "[" << min << ", " << max << "]";
     throw OptionError("option --" + name + ": '" + text + "' is not a number in " + range.str());
+  }
+  return v;
+}
+
+std::array<double, 3> Options::GetVector3(const std::string& name, double max_abs) const {
+  const std::string text = GetString(name);
+  std::array<double, 3> v{};
+  char tail = 0;
+  const bool parsed = std::sscanf(text.c_str(), "%lf,%lf,%lf%c", &v[0], &v[1], &v[2], &tail) == 3;
+  if (!parsed || !std::isfinite(v[0] + v[1] + v[2]) ||
+      std::max({std::abs(v[0]), std::abs(v[1]), std::abs(v[2])}) > max_abs) {
+    std::ostringstream range;
+    range << max_abs;
+    throw OptionError("option --" + name + ": '" + text + "' is not X,Y,Z (three numbers, each within " + range.str() + ")");
   }
   return v;
 }

@@ -82,6 +82,26 @@ TEST(Options, AChoiceIsOneOfItsValuesOrNamesThem) {
   EXPECT_EQ(d.GetChoice("language", {"en", "ja"}), "en");
 }
 
+TEST(Options, AVector3IsThreeBoundedNumbersOrTheErrorSaysSo) {
+  for (const char* bad : {"1,2", "1,2,3,4", "1,2,x", "1,2,3x", "nan,0,0", "0,0,11", ""}) {
+    Options o("prog", "test program");
+    o.Value("origin", "X,Y,Z", "place", "0,0,0");
+    const char* argv[] = {"prog", "--origin", bad};
+    ASSERT_TRUE(o.Parse(3, argv));
+    try {
+      (void)o.GetVector3("origin", 10.0);
+      ADD_FAILURE() << "'" << bad << "' accepted";
+    } catch (const OptionError& e) {
+      EXPECT_EQ(std::string(e.what()), std::string("option --origin: '") + bad + "' is not X,Y,Z (three numbers, each within 10)");
+    }
+  }
+  Options o("prog", "test program");
+  o.Value("origin", "X,Y,Z", "place", "0,0,0");
+  const char* argv[] = {"prog", "--origin", "0.5,-1e-2,10"};
+  ASSERT_TRUE(o.Parse(3, argv));
+  EXPECT_EQ(o.GetVector3("origin", 10.0), (std::array<double, 3>{0.5, -0.01, 10.0}));
+}
+
 TEST(Options, HelpReturnsFalse) {
   Options o = Make();
   const char* argv[] = {"prog", "--help"};

@@ -1,5 +1,7 @@
 #include "handshare/dds/membership.hpp"
 
+#include <sstream>
+
 #include <unistd.h>
 
 #include <chrono>
@@ -8,7 +10,8 @@
 namespace handshare::dds {
 
 MemberAnnouncement::MemberAnnouncement(Participant& participant, const std::string& user,
-                                       msg::NodeKind kind, const std::string& device, double view_Hz)
+                                       msg::NodeKind kind, const std::string& device, double view_Hz,
+                                       const msg::DeviceCaps& device_caps)
     : writer_(MakeWriter<msg::MemberInfo>(participant, topics::kMemberInfo)) {
   if (user.empty() || user.size() > 40) {
     throw DdsError("member name '" + user + "' must have 1..40 characters");
@@ -21,6 +24,7 @@ MemberAnnouncement::MemberAnnouncement(Participant& participant, const std::stri
   info_.kind(kind);
   info_.device(device);
   info_.view_Hz(static_cast<float>(view_Hz));
+  info_.device_caps(device_caps);
   info_.host(host);
   info_.pid(static_cast<std::int32_t>(getpid()));
   info_.joined_unix_ns(static_cast<std::uint64_t>(
@@ -51,6 +55,23 @@ const char* ToString(msg::NodeKind kind) {
     case msg::NODE_AUDIO_GUIDE: return "audio_guide";
   }
   return "unknown";
+}
+
+std::string Describe(const msg::DeviceCaps& caps) {
+  if (caps.contact_points() == 0) return "";
+  static const char* const kNames[] = {"thumb", "index", "middle", "ring", "little"};
+  std::ostringstream s;
+  s << static_cast<int>(caps.contact_points()) << (caps.contact_points() == 1 ? " point (" : " points (");
+  const char* sep = "";
+  for (int f = 0; f < 5; ++f) {
+    if ((caps.finger_mask() >> f) & 1u) {
+      s << sep << kNames[f];
+      sep = ", ";
+    }
+  }
+  s << "), " << caps.max_force_N() << " N, workspace " << caps.workspace_radius_m() << " m, " << caps.rate_Hz() << " Hz"
+    << (caps.gripper() ? ", gripper" : "");
+  return s.str();
 }
 
 }  // namespace handshare::dds

@@ -1,5 +1,7 @@
 #include "handshare/dds/sample_checks.hpp"
 
+#include <bit>
+
 #include "handshare/common/utf8.hpp"
 #include "handshare/dds/contact_codec.hpp"
 
@@ -168,6 +170,9 @@ std::string CheckDeviceState(const msg::DeviceState& s, std::string_view session
     c.Vector("f_E_W_N[" + std::to_string(i) + "]", s.f_E_W_N()[i], 3, b.max_force_N);
   }
   c.Range("fingertip_radius_m", s.fingertip_radius_m(), 0.0, b.max_fingertip_radius_m);
+  // A device has at least one of the five fingers.
+  if (c.ok() && (s.absent_fingers() & ~0x1Fu) != 0) c.Fail("absent_fingers " + std::to_string(s.absent_fingers()) + " names a sixth finger");
+  if (c.ok() && s.absent_fingers() == 0x1F) c.Fail("absent_fingers 31: a device without a finger");
   // Joint angles (screens draw a HIRO II's hand from them): finite, each within a few turns.
   for (std::size_t j = 0; j < s.q_hand_rad().size(); ++j) c.Range("q_hand_rad[" + std::to_string(j) + "]", s.q_hand_rad()[j], -20.0, 20.0);
   for (std::size_t j = 0; j < s.q_arm_rad().size(); ++j) c.Range("q_arm_rad[" + std::to_string(j) + "]", s.q_arm_rad()[j], -20.0, 20.0);
@@ -218,6 +223,18 @@ std::string CheckMemberInfo(const msg::MemberInfo& s, std::string_view session) 
     c.Fail("kind " + std::to_string(kind) + " is not a node kind");
   }
   c.Range("view_Hz", s.view_Hz(), 0.0, SampleBounds{}.max_rate_Hz);
+  // The device's capabilities (all zero: no device): 1 to 5 points, as many fingers as points.
+  const msg::DeviceCaps& d = s.device_caps();
+  if (c.ok() && d.contact_points() > 0) {
+    const int fingers = std::popcount(static_cast<unsigned>(d.finger_mask()));
+    if (d.contact_points() > 5 || (d.finger_mask() & ~0x1Fu) != 0 || fingers != d.contact_points()) {
+      c.Fail("device_caps: " + std::to_string(d.contact_points()) + " contact points on finger mask " +
+             std::to_string(d.finger_mask()) + " (1 to 5 points, one per finger 0 to 4)");
+    }
+    c.Range("device_caps.max_force_N", d.max_force_N(), 0.0, SampleBounds{}.max_force_N);
+    c.Range("device_caps.workspace_radius_m", d.workspace_radius_m(), 0.0, SampleBounds{}.max_position_m);
+    c.Range("device_caps.rate_Hz", d.rate_Hz(), 0.0, 1e5);
+  }
   return c.reason();
 }
 

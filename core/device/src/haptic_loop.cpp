@@ -20,8 +20,8 @@ NoRenderer no_renderer;
 
 bool AllFinite(const DeviceReading& r) noexcept {
   if (!r.p_WH.allFinite() || !r.q_WH_wxyz.allFinite()) return false;
-  for (const auto& p : r.p_WE) {
-    if (!p.allFinite()) return false;
+  for (int i = 0; i < kFingers; ++i) {
+    if (HasFinger(r.finger_mask, i) && !r.p_WE[i].allFinite()) return false;
   }
   return true;
 }
@@ -118,6 +118,10 @@ void HapticLoop::Step(double t_s) noexcept {
       renderer_->Render(t_s, world_dt_s, now_ns, reading_, f_E_W_);
     }
   }
+  // A finger the device lacks gets no force, whatever asked for one.
+  for (int i = 0; i < kFingers; ++i) {
+    if (!HasFinger(reading_.finger_mask, i)) f_E_W_[i].setZero();
+  }
 
   // 3. Safety: clamp, passivity, rate bound; a fault ramps the force to zero.
   safety_in_.device_fault = device_fault;
@@ -139,6 +143,7 @@ void HapticLoop::Step(double t_s) noexcept {
   s.stamp_ns = now_ns;
   s.t_s = t_s;
   s.fault = fault;
+  s.finger_mask = reading_.finger_mask;
   s.fingertip_radius_m = caps_.fingertip_radius_m;
   for (int k = 0; k < 3; ++k) s.p_WH_m[k] = device_fault ? 0.0 : reading_.p_WH[k];
   for (int k = 0; k < 4; ++k) s.q_WH_wxyz[k] = device_fault ? (k == 0 ? 1.0 : 0.0) : reading_.q_WH_wxyz[k];

@@ -54,6 +54,13 @@ struct HandFigure {
 void AddHandFigure(const HandFigure& hand, double fingertip_radius_m, const render::Rgb& skin,
                    render::SceneView& view);
 
+/// A device with fewer fingers than a hand (msg::DeviceState::absent_fingers), drawn as what the
+/// user holds: one point is a stylus (a pen rising from the fingertip, up and towards the user),
+/// two to four a gripper (a handle above the points' centre with a link to each point). Only the
+/// fingers in `present` (bit f is finger f) are read; the caller draws their fingertip markers.
+void AddDeviceFigure(const std::array<Eigen::Vector3d, kFingers>& p_WE, unsigned present, double fingertip_radius_m,
+                     const render::Rgb& rgb, render::SceneView& view);
+
 /// A user's own view: the eye at `eye_H` in the hand base's frame (default 0.30 m behind the hand
 /// and 0.25 m above it: fingers along +y, the palm facing -z), looking at `look_at_H` (just ahead
 /// of the fingertips, below the palm), with the world's up (+z) as up.

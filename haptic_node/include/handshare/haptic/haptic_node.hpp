@@ -2,6 +2,7 @@
 /// A haptic node: one user at one device. The haptic loop runs on its own thread; this class
 /// is the bridge thread around it: it joins the session, publishes the device state at viewer
 /// rate and the loop statistics at 1 Hz, and prints the loop statistics at exit.
+#include <array>
 #include <chrono>
 #include <string>
 
@@ -12,7 +13,10 @@ namespace handshare::haptic {
 struct HapticNodeConfig {
   common::SessionOptions where;  // domain, session, duration, QoS file
   std::string user;
-  std::string device = "sim";
+  std::string device = "sim";                    // sim, hiro, replay or plugin:PATH.so[:ARGS]
+  std::array<double, 3> device_origin_m{0.0, -0.05, 0.12};  // plugin: where the device frame's origin is in W
+  double device_scale = 1.0;                     // plugin: p_W = origin + scale p_D
+  double device_deadline_s = 0.0005;             // plugin: a read or command slower than this is a fault
   std::string script;                            // sim: hand script file ("" = default motion)
   std::string replay_file;                       // replay: device-state log (a --trace file)
   bool replay_loop = false;                      // replay: start over at the end

@@ -151,6 +151,10 @@ class SceneRenderer final : public ForceRenderer {
   std::vector<contact::ObjectId> deformables_;                       // world indices (load snapshots)
   // Haptic-thread state, sized here.
   std::array<Eigen::Vector3d, kFingers> f_controls_{};
+  // The fingertips the device has, packed (a stylus: one, its index finger), and which finger
+  // each is: the world and the controls see only those, with no stand-ins for the others.
+  std::array<Eigen::Vector3d, kFingers> tips_{};
+  std::array<int, kFingers> tip_finger_{};
   controls::EventBuffer event_buffer_;
   RemoteContacts remote_;
   FollowedBodies followed_;

@@ -20,6 +20,7 @@ struct Member {
   std::string kind;    // "haptic", "graphics", "audio_guide", "world_server"
   std::string device;  // haptic nodes only
   std::int64_t pid = 0;
+  std::string device_caps = {};  // haptic nodes: the device's capabilities in words (dds::Describe)
 };
 
 enum class MemberChange { kJoined, kLeft, kLost };

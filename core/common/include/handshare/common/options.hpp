@@ -3,6 +3,7 @@
 /// and every mistake (unknown option, missing or malformed value) is an OptionError that
 /// names the option, for main() to print with the usage and exit non-zero.
 #include <map>
+#include <array>
 #include <optional>
 #include <stdexcept>
 #include <string>
@@ -38,6 +39,8 @@ class Options {
   long GetInt(const std::string& name, long min, long max) const;
   /// Finite number in [min, max], else OptionError.
   double GetDouble(const std::string& name, double min, double max) const;
+  /// "X,Y,Z", three finite numbers each within [-max_abs, max_abs], else OptionError.
+  std::array<double, 3> GetVector3(const std::string& name, double max_abs) const;
   /// One of `choices`, else OptionError naming the option, the value and the choices.
   std::string GetChoice(const std::string& name, const std::vector<std::string>& choices) const;
 

@@ -12,10 +12,11 @@ class MemberAnnouncement {
  public:
   /// @param user    user name (haptic nodes) or node name (others); unique in the session.
   /// @param kind    what the node is.
-  /// @param device  "sim", "hiro", "replay" for haptic nodes, "" otherwise.
+  /// @param device  "sim", "hiro", "replay", "desk", "plugin:<name>" for haptic nodes, "" otherwise.
   /// @param view_Hz graphics nodes: how often they read device states (their frame rate).
+  /// @param device_caps haptic nodes: what their device is (contact points, fingers, limits).
   MemberAnnouncement(Participant& participant, const std::string& user, msg::NodeKind kind,
-                     const std::string& device = "", double view_Hz = 0.0);
+                     const std::string& device = "", double view_Hz = 0.0, const msg::DeviceCaps& device_caps = {});
   /// Disposes the member entry: a clean leave.
   ~MemberAnnouncement();
   MemberAnnouncement(const MemberAnnouncement&) = delete;
@@ -29,5 +30,8 @@ class MemberAnnouncement {
 };
 
 const char* ToString(msg::NodeKind kind);
+/// A device's capabilities in words: "1 point (index), 3.3 N, workspace 0.08 m, 1000 Hz";
+/// "" for none (contact_points 0).
+std::string Describe(const msg::DeviceCaps& caps);
 
 }  // namespace handshare::dds

@@ -23,6 +23,7 @@ struct HapticSnapshot {
   double q_hand_rad[common::kHandJoints] = {};
   double q_arm_rad[common::kArmJoints] = {};
   bool fault = false;  // device fault or a finger's safety fault this step
+  FingerMask finger_mask = kEveryFinger;  // the fingers the device has (p_WE_m of others: the base)
 };
 
 }  // namespace handshare::haptic
