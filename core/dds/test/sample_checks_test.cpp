@@ -194,6 +194,41 @@ TEST(SampleChecks, DeviceStatesBoardsAndMembers) {
   EXPECT_EQ(CheckMemberInfo(m, "museum"), "view_Hz is -1 (expected 0 to 10000)");
 }
 
+// A device's fingers and capabilities (docs/devices.md): at least one finger, no sixth; as many
+// fingers as contact points.
+TEST(SampleChecks, ADeviceHasOneToFiveFingersAndSaysWhichItHas) {
+  msg::DeviceState d;
+  d.session("museum");
+  d.user("carol");
+  d.q_WH_wxyz({1.0, 0.0, 0.0, 0.0});
+  d.fingertip_radius_m(0.008);
+  d.absent_fingers(0b11101);  // a stylus: the index finger only
+  EXPECT_EQ(CheckDeviceState(d, "museum"), "");
+  d.absent_fingers(0b11111);
+  EXPECT_EQ(CheckDeviceState(d, "museum"), "absent_fingers 31: a device without a finger");
+  d.absent_fingers(0b100000);
+  EXPECT_EQ(CheckDeviceState(d, "museum"), "absent_fingers 32 names a sixth finger");
+  msg::MemberInfo m;
+  m.session("museum");
+  m.user("carol");
+  m.kind(msg::NODE_HAPTIC);
+  msg::DeviceCaps caps;
+  caps.contact_points(2);
+  caps.finger_mask(0b00011);
+  caps.max_force_N(12.0f);
+  caps.workspace_radius_m(0.08f);
+  caps.rate_Hz(1000.0f);
+  m.device_caps(caps);
+  EXPECT_EQ(CheckMemberInfo(m, "museum"), "");
+  caps.finger_mask(0b00001);
+  m.device_caps(caps);
+  EXPECT_EQ(CheckMemberInfo(m, "museum"), "device_caps: 2 contact points on finger mask 1 (1 to 5 points, one per finger 0 to 4)");
+  caps.finger_mask(0b00011);
+  caps.rate_Hz(std::nanf(""));
+  m.device_caps(caps);
+  EXPECT_EQ(CheckMemberInfo(m, "museum"), "device_caps.rate_Hz is nan (expected 0 to 100000)");
+}
+
 TEST(SampleChecks, ControlStatesNameAControlOfAWorldAndAPlausibleIndex) {
   msg::ControlState s;
   s.session("museum");
