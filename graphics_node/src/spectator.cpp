@@ -498,6 +498,7 @@ int Spectator::Run() {
       for (const auto& [user, hand] : world.hands()) {
         if (hand.state.fault()) continue;
         for (int i = 0; i < 5; ++i) {
+          if ((hand.state.absent_fingers() >> i) & 1u) continue;  // not drawn: the device has no such finger
           const auto& p = hand.state.p_WE_m()[i];
           index << written << "," << file << "," << user << "," << i << "," << p[0] << "," << p[1]
                 << "," << p[2] << "," << hand.state.fingertip_radius_m() << "\n";
