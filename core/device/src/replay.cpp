@@ -29,6 +29,7 @@ void WriteTraceHeader(std::ostream& out) {
   for (int i = 0; i < kFingers; ++i) out << ",fx" << i << ",fy" << i << ",fz" << i;
   out << ",stamp_ns";
   for (int i = 0; i < kFingers; ++i) out << ",jx" << i << ",jy" << i << ",jz" << i;
+  out << ",fingers";  // the fingers the device has (bit f: finger f; 31 a whole hand)
   out << "\n";
 }
 
@@ -43,6 +44,7 @@ void WriteTraceRow(std::ostream& out, const HapticSnapshot& s) {
   // writes it at the publish rate; the haptic thread never does).
   out << "," << s.stamp_ns;
   for (const auto& j : s.impulse_E_W_Ns) out << "," << j[0] << "," << j[1] << "," << j[2];
+  out << "," << static_cast<unsigned>(s.finger_mask);
   out << "\n";
   out.flush();
 }
@@ -84,6 +86,7 @@ ReplayLog ReplayLog::Parse(const std::string& text, const std::string& origin) {
   }
   const std::array<std::size_t, 3> c_hand = {optional("hx"), optional("hy"), optional("hz")};
   const std::array<std::size_t, 4> c_q = {optional("qw"), optional("qx"), optional("qy"), optional("qz")};
+  const std::size_t c_fingers = optional("fingers");  // older logs: a whole hand
 
   ReplayLog log;
   while (std::getline(lines, line)) {
@@ -127,6 +130,18 @@ ReplayLog ReplayLog::Parse(const std::string& text, const std::string& origin) {
     if (std::all_of(c_q.begin(), c_q.end(), [](std::size_t c) { return c != static_cast<std::size_t>(-1); })) {
       for (int k = 0; k < 4; ++k) sample.q_WH_wxyz[k] = number(c_q[k]);
     }
+    if (c_fingers != static_cast<std::size_t>(-1)) {
+      const double mask = number(c_fingers);
+      if (!(mask >= 1.0 && mask <= kEveryFinger) || mask != std::floor(mask)) {
+        fail("column 'fingers': '" + cells[c_fingers] + "' is not a finger mask (1 to 31)");
+      }
+      const auto m = static_cast<FingerMask>(mask);
+      if (!log.samples_.empty() && m != log.finger_mask_) {
+        fail("column 'fingers' changes from " + std::to_string(log.finger_mask_) + " to " + cells[c_fingers] +
+             " (one device per log)");
+      }
+      log.finger_mask_ = m;
+    }
     log.samples_.push_back(sample);
   }
   if (log.samples_.empty()) throw ReplayError(origin + ": device-state log has a header but no samples");
@@ -158,6 +173,7 @@ void ReplayDevice::Read(double t_s, DeviceReading& out) noexcept {
   out.q_WH_wxyz = (a.q_WH_wxyz + w * (b.q_WH_wxyz - a.q_WH_wxyz)).normalized();
   for (int i = 0; i < kFingers; ++i) out.p_WE[i] = a.p_WE[i] + w * (b.p_WE[i] - a.p_WE[i]);
   out.valid = !a.fault && !(w > 0.0 && b.fault);
+  out.finger_mask = log_.finger_mask();
 }
 
 }  // namespace handshare::haptic

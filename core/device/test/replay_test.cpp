@@ -112,3 +112,37 @@ TEST(Replay, NonFinitePositionsBecomeALoopFault) {
 
 }  // namespace
 }  // namespace handshare::haptic
+
+namespace handshare::haptic {
+namespace {
+
+// A trace of a device with fewer fingers (a stylus: the index only) replays as that device:
+// the same fingers, not a whole hand with four made-up ones; a bad or changing mask is named.
+TEST(Replay, ATraceKeepsTheFingersTheDeviceHad) {
+  HapticSnapshot snap;
+  snap.finger_mask = 0b00010;
+  snap.t_s = 0.0;
+  std::ostringstream trace;
+  WriteTraceHeader(trace);
+  WriteTraceRow(trace, snap);
+  snap.t_s = 0.01;
+  WriteTraceRow(trace, snap);
+  ReplayDevice replay(ReplayLog::Parse(trace.str(), "trace"));
+  EXPECT_EQ(replay.capabilities().finger_mask, FingerMask{0b00010});
+  EXPECT_EQ(replay.capabilities().fingers, 1);
+  DeviceReading r;
+  replay.Read(0.005, r);
+  EXPECT_EQ(r.finger_mask, FingerMask{0b00010});
+  // Older logs, without the column: a whole hand.
+  const std::string header = "t_s,fault,x0,y0,z0,x1,y1,z1,x2,y2,z2,x3,y3,z3,x4,y4,z4";
+  const std::string row = "0,0,0,0,0,0,0,0,0,0,0,0,0,0,0,0,0";
+  EXPECT_EQ(ReplayLog::Parse(header + "\n" + row + "\n", "old").finger_mask(), kEveryFinger);
+  EXPECT_NE(ErrorOf(header + ",fingers\n" + row + ",0\n").find("log.csv:2: column 'fingers': '0' is not a finger mask (1 to 31)"),
+            std::string::npos);
+  EXPECT_NE(ErrorOf(header + ",fingers\n" + row + ",2\n0.1" + row.substr(1) + ",3\n")
+                .find("log.csv:3: column 'fingers' changes from 2 to 3 (one device per log)"),
+            std::string::npos);
+}
+
+}  // namespace
+}  // namespace handshare::haptic

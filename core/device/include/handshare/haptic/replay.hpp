@@ -7,6 +7,7 @@
 /// t_s (seconds since the recording's loop start, non-decreasing), fault (0/1), and the
 /// fingertips x0,y0,z0 .. x4,y4,z4 [m]. Optional: hand base hx,hy,hz [m] and qw,qx,qy,qz;
 /// any other column (seq, forces) is ignored. Rows recorded during a fault replay as a fault.
+#include <bit>
 #include <filesystem>
 #include <ostream>
 #include <stdexcept>
@@ -43,10 +44,13 @@ class ReplayLog {
   static ReplayLog Load(const std::filesystem::path& file);
 
   const std::vector<ReplaySample>& samples() const noexcept { return samples_; }
+  /// The fingers of the recorded device (the log's `fingers` column; a whole hand without one).
+  FingerMask finger_mask() const noexcept { return finger_mask_; }
   double duration_s() const noexcept { return samples_.back().t_s - samples_.front().t_s; }
 
  private:
   std::vector<ReplaySample> samples_;  // never empty after Parse
+  FingerMask finger_mask_ = kEveryFinger;
 };
 
 /// Plays a log from its first sample, interpolating linearly between samples (the log is
@@ -56,7 +60,12 @@ class ReplayLog {
 class ReplayDevice final : public Device {
  public:
   explicit ReplayDevice(ReplayLog log, bool loop = false) : log_(std::move(log)), loop_(loop) {}
-  DeviceCapabilities capabilities() const noexcept override { return {}; }
+  DeviceCapabilities capabilities() const noexcept override {
+    DeviceCapabilities c;
+    c.finger_mask = log_.finger_mask();
+    c.fingers = std::popcount(static_cast<unsigned>(c.finger_mask));
+    return c;
+  }
   void Read(double t_s, DeviceReading& out) noexcept override;
   void Command(const std::array<Eigen::Vector3d, kFingers>& f_E_W) noexcept override {
     last_command_ = f_E_W;
