@@ -1,4 +1,4 @@
-// haptic_node: one user at one haptic device (HIRO II or simulated) joining a session.
+// haptic_node: one user at one haptic device (HIRO II, simulated, or a desk's mouse and keyboard) joining a session.
 #include "handshare/common/data_dir.hpp"
 #include "handshare/node/node_main.hpp"
 #include "handshare/haptic/haptic_node.hpp"
@@ -8,7 +8,7 @@ int main(int argc, char** argv) {
       "haptic_node", "Joins a handshare session with a haptic device and runs the haptic loop.");
   handshare::node::DeclareSessionOptions(options);
   options.Value("user", "U", "user name, unique in the session", std::nullopt, true)
-      .Value("device", "KIND", "device driver: sim, hiro (simulated HIRO II plant), replay", "sim")
+      .Value("device", "KIND", "device driver: sim, hiro (simulated HIRO II plant), replay, desk (a person at the mouse and keyboard of 'graphics_node --view user:U --input desk'; docs/devices.md)", "sim")
       .Value("hiro-config", "FILE", "hiro: device geometry",
              (handshare::common::AssetsDir() / "devices" / "hiro2.json").string())
       .Value("cache", "DIR", "compliance cache of the deformable objects (default: ~/.cache/handshare)", "")
@@ -39,9 +39,9 @@ int main(int argc, char** argv) {
     c.where = handshare::node::ReadSessionOptions(o);
     c.user = o.GetString("user");
     c.device = o.GetString("device");
-    if (c.device != "sim" && c.device != "replay" && c.device != "hiro") {
+    if (c.device != "sim" && c.device != "replay" && c.device != "hiro" && c.device != "desk") {
       throw handshare::common::OptionError("option --device: '" + c.device +
-                                           "' is not available (this build has: sim, hiro, replay)");
+                                           "' is not available (this build has: sim, hiro, replay, desk)");
     }
     c.hiro_config = o.GetString("hiro-config");
     c.cache_dir = o.GetString("cache");

@@ -9,6 +9,7 @@
 #include <string>
 #include <thread>
 
+#include "desk_device.hpp"
 #include "haptic_bridge.hpp"
 #include "handshare/node/rejoin_clock.hpp"
 #include "handshare/common/shutdown.hpp"
@@ -37,7 +38,9 @@ std::unique_ptr<Device> MakeDevice(const HapticNodeConfig& c) {
     return hiro::MakeHiroDevice(c.hiro_config, sim);
   }
   if (c.device == "replay") return std::make_unique<ReplayDevice>(ReplayLog::Load(c.replay_file), c.replay_loop);
-  throw std::invalid_argument("device '" + c.device + "' is not available (this build has: sim, hiro, replay)");
+  // A person at the view's mouse and keyboard: the bridge hands it their input (DeskInput).
+  if (c.device == "desk") return std::make_unique<DeskDevice>();
+  throw std::invalid_argument("device '" + c.device + "' is not available (this build has: sim, hiro, replay, desk)");
 }
 
 /// Everything of this node that lives on DDS: its participant, its member announcement and the
@@ -119,6 +122,10 @@ void PrintBridgeSummary(const HapticNodeConfig& config, const HapticBridge& brid
               config.paced_streams ? "paced" : "full", static_cast<unsigned long long>(bridge.device_states_published()),
               static_cast<unsigned long long>(bridge.contact_sets_sent()),
               static_cast<unsigned long long>(bridge.contact_sets_shared()));
+  if (config.device == "desk") {
+    std::printf("[haptic_node %s] desk: %llu inputs taken from the view\n", config.user.c_str(),
+                static_cast<unsigned long long>(bridge.desk_inputs()));
+  }
   std::fflush(stdout);
 }
 
