@@ -1,0 +1,164 @@
+#!/usr/bin/env python3
+"""A person at a desk, tested as one: real X input events (xdotool) to the window of a user's own
+view (graphics_node --view user:alice --input desk) under a virtual display (Xvfb), and with
+those events alone alice's hand (haptic_node --device desk) moves: the haptic node's trace shows
+the hand base where the pointer put it; the hand presses the start menu's solar-system button
+and the world server opens the solar system; the window losing focus releases the hand, and so
+does the view going quiet (killed).
+
+Needs Xvfb and xdotool (Debian: xvfb, xdotool; deploy/install_deps.sh); without them the test is
+skipped (77).
+
+usage: desk_test.py --bin-dir DIR --domain D --work DIR
+"""
+import os
+import select
+import shutil
+import signal
+import subprocess
+import sys
+import time
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+sys.path.insert(0, HERE)
+from session_test import Failure, check, read_trace, run_cases, wait_until  # noqa: E402
+
+# The desk's mapping (graphics_node/include/handshare/graphics/desk_control.hpp, DeskControlConfig).
+HOME = (0.0, -0.20, 0.15)
+HALF_WIDTH_M, HALF_HEIGHT_M, DEPTH_STEP_M = 0.30, 0.15, 0.01
+WIDTH, HEIGHT = 640, 480  # the window
+
+
+def pointer_for(x_m, z_m):
+    """The window pixel whose pointer puts the hand base at x_m, z_m."""
+    col = round((1.0 + (x_m - HOME[0]) / HALF_WIDTH_M) / 2.0 * WIDTH)
+    row = round((1.0 - (z_m - HOME[2]) / HALF_HEIGHT_M) / 2.0 * HEIGHT)
+    return min(max(col, 0), WIDTH - 1), min(max(row, 0), HEIGHT - 1)
+
+
+def start_xvfb(h):
+    """A virtual display of its own (Xvfb picks a free number and writes it to a pipe); it ends
+    with the test's other processes."""
+    read_end, write_end = os.pipe()
+    log = open(os.path.join(h.work, "xvfb.log"), "w")
+    proc = subprocess.Popen(["Xvfb", "-displayfd", str(write_end), "-screen", "0", "1024x768x24", "-nolisten", "tcp"],
+                            pass_fds=(write_end,), stdout=log, stderr=subprocess.STDOUT)
+    os.close(write_end)
+    h.procs["xvfb"] = (proc, log)
+    number = b""
+    deadline = time.monotonic() + 30
+    while not number.endswith(b"\n"):
+        ready, _, _ = select.select([read_end], [], [], max(0.0, deadline - time.monotonic()))
+        check(ready, f"Xvfb did not say its display number within 30 s:\n{h.log('xvfb')}")
+        chunk = os.read(read_end, 16)
+        check(chunk, f"Xvfb ended without a display:\n{h.log('xvfb')}")
+        number += chunk
+    os.close(read_end)
+    return ":" + number.decode().strip()
+
+
+def xdotool(*args, timeout=30):
+    """One xdotool command on the test's display; its output."""
+    r = subprocess.run(["xdotool", *map(str, args)], capture_output=True, text=True, timeout=timeout)
+    check(r.returncode == 0, f"xdotool {' '.join(map(str, args))} failed ({r.returncode}): {r.stderr}")
+    return r.stdout.strip()
+
+
+def live_rows(trace):
+    return [r for r in read_trace(trace) if r["fault"] == 0.0]
+
+
+def hand_near(trace, x=None, y=None, z=None, tol=0.005):
+    """The newest valid row has the hand base within tol of the given coordinates."""
+    rows = live_rows(trace)
+    if not rows:
+        return False
+    r = rows[-1]
+    return all(want is None or abs(r[c] - want) <= tol for c, want in (("hx", x), ("hy", y), ("hz", z)))
+
+
+def newest(trace):
+    rows = read_trace(trace)
+    return rows[-1] if rows else None
+
+
+def case_desk(h, domain):
+    for tool in ("Xvfb", "xdotool"):
+        if shutil.which(tool) is None:
+            print(f"SKIP: {tool} is not installed (deploy/install_deps.sh installs xvfb and xdotool)")
+            sys.exit(77)
+    session = f"it-desk-{os.getpid()}"
+    w = h.work
+    trace = os.path.join(w, "alice.csv")
+    common = ["--domain", domain, "--session", session]
+    os.environ["DISPLAY"] = start_xvfb(h)
+    h.start("world_server", "world_server", *common, "--scene", "start_menu")
+    h.start("alice", "haptic_node", *common, "--user", "alice", "--device", "desk", "--trace", trace)
+    h.start("view", "graphics_node", *common, "--name", "desk-alice", "--view", "user:alice", "--input", "desk",
+            "--width", WIDTH, "--height", HEIGHT, "--fps", 30)
+    h.wait_for_line("alice", "scene 'start_menu' revision 1", 60)
+    window = xdotool("search", "--sync", "--onlyvisible", "--name", "alice at the desk", timeout=90).split()[0]
+    # No window manager: the test gives the window the keyboard focus, as a click would.
+    xdotool("windowfocus", "--sync", window)
+    xdotool("mousemove", "--window", window, WIDTH // 2, HEIGHT // 2)
+    h.wait_for_line("view", "desk: the window has focus", 30)
+    h.wait_for_line("alice", "desk: the hand is live", 30)
+    wait_until("alice's hand at home, as the pointer at the window's centre puts it", 30,
+               lambda: hand_near(trace, *HOME), lambda: f"newest trace row: {newest(trace)}")
+
+    # The pointer to the right and up: the hand follows, smoothly, in the same directions.
+    col, row = pointer_for(0.20, 0.20)
+    xdotool("mousemove", "--window", window, col, row)
+    wait_until("alice's hand 0.2 m right and 5 cm up", 30, lambda: hand_near(trace, 0.20, HOME[1], 0.20),
+               lambda: f"newest trace row: {newest(trace)}")
+    rows = live_rows(trace)
+    steps = [abs(b["hx"] - a["hx"]) / max(b["t_s"] - a["t_s"], 1e-6) for a, b in zip(rows, rows[1:])
+             if b["t_s"] > a["t_s"]]
+    check(max(steps) <= 0.26, f"the hand base moved at up to {max(steps):.3f} m/s (the desk's bound: 0.25 m/s)")
+    print(f"pointer right and up: hand at x {rows[-1]['hx']:.3f} m, z {rows[-1]['hz']:.3f} m, "
+          f"base speed at most {max(steps):.3f} m/s")
+
+    # The start menu's solar-system button (-0.15, -0.08, 0.012): the index fingertip (0.036 m
+    # left of and 0.10 m ahead of the hand base, open hand) above it, two wheel notches away
+    # from you, then the pointer down to the bottom edge (the table top) presses it.
+    x_button = -0.15 + 0.036
+    col, row = pointer_for(x_button, 0.06)
+    xdotool("mousemove", "--window", window, col, row)
+    for _ in range(2):
+        xdotool("click", 4)  # the wheel, away from you
+    y_button = HOME[1] + 2 * DEPTH_STEP_M
+    wait_until("alice's index finger above the solar-system button", 30,
+               lambda: hand_near(trace, x_button, y_button, 0.06, tol=0.006),
+               lambda: f"newest trace row: {newest(trace)}")
+    col, row = pointer_for(x_button, 0.0)
+    xdotool("mousemove", "--window", window, col, row)
+    h.wait_for_line("world_server", "control button_solar_system by alice: scene 'solar_system'", 60)
+    h.wait_for_line("alice", "scene 'solar_system'", 60)
+    print("the pointer pressed the solar-system button: the solar system is open")
+    xdotool("mousemove", "--window", window, *pointer_for(0.0, 0.15))
+
+    # The window loses the keyboard focus (unmapped): the hand is released, and comes back.
+    xdotool("windowunmap", "--sync", window)
+    h.wait_for_line("alice", "desk: the view lost focus: the hand is released", 30)
+    wait_until("a released hand in alice's trace", 10, lambda: newest(trace)["fault"] == 1.0)
+    xdotool("windowmap", "--sync", window)
+    xdotool("windowfocus", "--sync", window)
+    wait_until("alice's hand live again", 30, lambda: h.log("alice").count("desk: the hand is live") >= 2,
+               lambda: h.log("alice"))
+    wait_until("a live hand in alice's trace", 10, lambda: newest(trace)["fault"] == 0.0)
+
+    # The view dies: its input stops, and the haptic node releases the hand after 0.5 s.
+    h.procs["view"][0].send_signal(signal.SIGKILL)
+    h.wait("view", 10)
+    h.wait_for_line("alice", "desk: no input for 0.5 s: the hand is released", 30)
+    wait_until("a released hand in alice's trace", 10, lambda: newest(trace)["fault"] == 1.0)
+    rc = h.stop("alice", 30)
+    check(rc == 0, f"alice's haptic node ended with {rc}")
+    loop = [line for line in h.log("alice").splitlines() if "loop statistics" in line]
+    check(loop and "rate-limited steps 0," in loop[-1],
+          f"the desk's smoothing must keep the force safety's rate bound from tripping: {loop}")
+    print("released on focus loss and on a quiet desk; " + loop[-1].split("] ")[-1][:160])
+
+
+if __name__ == "__main__":
+    sys.exit(run_cases({"desk": case_desk}))
