@@ -55,8 +55,10 @@ struct DeskFilterConfig {
   double max_turn_acceleration_rad_per_s2 = 20.0;
   double max_closure_rate_per_s = 2.0;         ///< each finger, full closure per second
   double max_closure_acceleration_per_s2 = 20.0;
-  /// No target this long: the hand is released [s].
-  double input_timeout_s = 0.5;
+  /// No target this long: the hand is released [s]. A view draws 30 frames a second, but one
+  /// stalls for a few hundred ms while it loads a new world's meshes (software GL, a loaded
+  /// 2-core machine): 1 s rides that out and still lets go of a hand whose view died.
+  double input_timeout_s = 1.0;
 };
 
 /// The bound on any fingertip's speed the filter's bounds give: base speed + turn rate x the

@@ -193,15 +193,15 @@ TEST(DeskDevice, GoesInvalidWhenTheInputStops) {
   DeviceReading r;
   desk.Read(0.0, r);
   EXPECT_TRUE(r.valid);
-  g_fake_now_ns += 400'000'000;  // 0.4 s of silence: still the person's hand
-  desk.Read(0.4, r);
+  g_fake_now_ns += 900'000'000;  // 0.9 s of silence: still the person's hand
+  desk.Read(0.9, r);
   EXPECT_TRUE(r.valid);
-  g_fake_now_ns += 200'000'000;  // 0.6 s: the desk has gone quiet
-  desk.Read(0.6, r);
+  g_fake_now_ns += 200'000'000;  // 1.1 s: the desk has gone quiet
+  desk.Read(1.1, r);
   EXPECT_FALSE(r.valid);
   t.received_ns = g_fake_now_ns;  // input again: the hand is back
   desk.Post(t);
-  desk.Read(0.601, r);
+  desk.Read(1.101, r);
   EXPECT_TRUE(r.valid);
 }
 
