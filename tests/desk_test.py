@@ -11,6 +11,7 @@ skipped (77).
 
 usage: desk_test.py --bin-dir DIR --domain D --work DIR
 """
+import math
 import os
 import select
 import shutil
@@ -27,6 +28,20 @@ from session_test import Failure, check, read_trace, run_cases, wait_until  # no
 HOME = (0.0, -0.20, 0.15)
 HALF_WIDTH_M, HALF_HEIGHT_M, DEPTH_STEP_M = 0.30, 0.15, 0.01
 WIDTH, HEIGHT = 640, 480  # the window
+# The desk's hand (haptic_node/src/desk_device.hpp, DeskFingertip_H): fingertips on a ring about
+# a grasp centre in the hand base's frame, thumb first at azimuth -90 deg, 72 deg apart, 15 deg
+# below it; radius 75 mm open, 10 mm closed.
+GRASP_CENTRE_H = (0.0, 0.07, -0.03)
+RING_OPEN_M, RING_CLOSED_M = 0.075, 0.010
+BALL_KG, MOON_G = 0.2, 1.62  # the solar system's ball (assets/scenes/solar_system.json)
+
+
+def fingertip_h(finger, closure):
+    a = math.radians(-90 + 72 * finger)
+    e = math.radians(-15)
+    r = RING_OPEN_M + closure * (RING_CLOSED_M - RING_OPEN_M)
+    n = (math.cos(e) * math.cos(a), math.cos(e) * math.sin(a), math.sin(e))
+    return tuple(c + r * k for c, k in zip(GRASP_CENTRE_H, n))
 
 
 def pointer_for(x_m, z_m):
@@ -118,23 +133,58 @@ def case_desk(h, domain):
     print(f"pointer right and up: hand at x {rows[-1]['hx']:.3f} m, z {rows[-1]['hz']:.3f} m, "
           f"base speed at most {max(steps):.3f} m/s")
 
-    # The start menu's solar-system button (-0.15, -0.08, 0.012): the index fingertip (0.036 m
-    # left of and 0.10 m ahead of the hand base, open hand) above it, two wheel notches away
-    # from you, then the pointer down to the bottom edge (the table top) presses it.
-    x_button = -0.15 + 0.036
-    col, row = pointer_for(x_button, 0.06)
-    xdotool("mousemove", "--window", window, col, row)
-    for _ in range(2):
-        xdotool("click", 4)  # the wheel, away from you
-    y_button = HOME[1] + 2 * DEPTH_STEP_M
-    wait_until("alice's index finger above the solar-system button", 30,
-               lambda: hand_near(trace, x_button, y_button, 0.06, tol=0.006),
+    # The start menu's solar-system button (-0.15, -0.08, 0.012): the middle fingertip above
+    # it (the pointer, and S once: a centimetre towards you), then down onto it.
+    middle = fingertip_h(2, 0.0)
+    x_base = -0.15 - middle[0]
+    y_base = HOME[1] - DEPTH_STEP_M
+    check(abs(y_base + middle[1] + 0.08) < 0.005, "the middle fingertip must come over the button")
+    z_above = 0.012 + 0.05 - middle[2]
+    xdotool("mousemove", "--window", window, *pointer_for(x_base, z_above))
+    xdotool("key", "s")
+    wait_until("alice's middle finger above the solar-system button", 30,
+               lambda: hand_near(trace, x_base, y_base, z_above, tol=0.006),
                lambda: f"newest trace row: {newest(trace)}")
-    col, row = pointer_for(x_button, 0.0)
-    xdotool("mousemove", "--window", window, col, row)
+    xdotool("mousemove", "--window", window, *pointer_for(x_base, 0.0 - middle[2]))
     h.wait_for_line("world_server", "control button_solar_system by alice: scene 'solar_system'", 60)
     h.wait_for_line("alice", "scene 'solar_system'", 60)
     print("the pointer pressed the solar-system button: the solar system is open")
+    xdotool("mousemove", "--window", window, *pointer_for(0.0, 0.15))
+
+    # The ball on the Moon (0, 0.05, 0.04), radius 0.04: the grasp centre over it (the wheel,
+    # 18 notches away from you, with S's centimetre back), down around it, C five times (the
+    # ring 42.5 mm: 5.5 mm inside the fingertips' contact distance), then lifted 5 cm.
+    ball = (0.0, 0.05, 0.04)
+    x_base, y_base = ball[0] - GRASP_CENTRE_H[0], ball[1] - GRASP_CENTRE_H[1]
+    notches = round((y_base - HOME[1]) / DEPTH_STEP_M) + 1  # + the centimetre of S
+    for _ in range(notches):
+        xdotool("click", 4)  # the wheel, away from you
+    z_grasp = ball[2] - GRASP_CENTRE_H[2]
+    wait_until("alice's open hand over the ball", 30, lambda: hand_near(trace, x_base, y_base, 0.15, tol=0.006),
+               lambda: f"newest trace row: {newest(trace)}")
+    xdotool("mousemove", "--window", window, *pointer_for(x_base, z_grasp))
+    wait_until("alice's open hand around the ball", 30, lambda: hand_near(trace, x_base, y_base, z_grasp, tol=0.004),
+               lambda: f"newest trace row: {newest(trace)}")
+    xdotool("key", "c", "c", "c", "c", "c")
+    closed = [fingertip_h(i, 0.5) for i in range(5)]
+    wait_until("alice's hand closed around the ball", 30,
+               lambda: live_rows(trace) and all(abs(live_rows(trace)[-1][f"y{i}"] - (y_base + closed[i][1])) < 0.003
+                                                for i in range(5)),
+               lambda: f"newest trace row: {newest(trace)}")
+    z_lift = z_grasp + 0.05
+    xdotool("mousemove", "--window", window, *pointer_for(x_base, z_lift))
+    wait_until("alice's hand up 5 cm", 30, lambda: hand_near(trace, x_base, y_base, z_lift, tol=0.004),
+               lambda: f"newest trace row: {newest(trace)}")
+    start_rows = len(read_trace(trace))
+    # As the tour's check: the last 2 s of a 3 s hold (the ball settles in the hand first).
+    wait_until("3 s of trace with the hand still", 60, lambda: len(read_trace(trace)) >= start_rows + 300)
+    held = [-sum(r[f"fz{i}"] for i in range(5)) for r in read_trace(trace)[start_rows + 100:start_rows + 300]]
+    weight = sum(held) / len(held)
+    print(f"held weight on the Moon {weight:.3f} N (m g = {BALL_KG * MOON_G:.3f} N), "
+          f"from {min(held):.3f} to {max(held):.3f} N over {len(held)} rows")
+    check(abs(weight - BALL_KG * MOON_G) <= 0.05 * BALL_KG * MOON_G,
+          f"the held weight {weight:.3f} N is not the ball's {BALL_KG * MOON_G:.3f} N within 5 %")
+    xdotool("key", "o")
     xdotool("mousemove", "--window", window, *pointer_for(0.0, 0.15))
 
     # The window loses the keyboard focus (unmapped): the hand is released, and comes back.

@@ -5,16 +5,15 @@
 #include <cmath>
 
 #include "handshare/common/clock.hpp"
-#include "handshare/haptic/sim_hand.hpp"
 
 namespace handshare::haptic {
 
 namespace {
 
-// The farthest fingertip from the hand base, and the longest path a fingertip takes from open
-// to closed, of the grip shape (sim_hand.cpp's GripOffsets: 0.105 m and 0.048 m), rounded up.
-constexpr double kFingertipReach_m = 0.13;
-constexpr double kClosingPath_m = 0.05;
+// The farthest fingertip from the hand base (the ring open: |centre| + its radius, 0.076 +
+// 0.075 m), and the path a fingertip takes from open to closed (the ring's radius change).
+constexpr double kFingertipReach_m = 0.16;
+constexpr double kClosingPath_m = kDeskRingOpen_m - kDeskRingClosed_m;
 
 // The rotation vector (axis times angle, angle in [0, pi]) of a unit quaternion.
 Eigen::Vector3d RotationVector(const std::array<double, 4>& q_wxyz) noexcept {
@@ -41,6 +40,19 @@ void ClampNorm(V& v, double max_norm) noexcept {
 }
 
 }  // namespace
+
+Eigen::Vector3d DeskFingertip_H(int finger, double closure) noexcept {
+  // As the scripted hand's grasp verb: azimuth -90 deg (the thumb, towards the person) + 72 deg
+  // a finger, elevation -15 deg.
+  constexpr double kPi = 3.14159265358979323846;
+  const double azimuth = -0.5 * kPi + 2.0 * kPi * finger / kFingers;
+  const double elevation = -15.0 * kPi / 180.0;
+  const double c = std::clamp(closure, 0.0, 1.0);
+  const double radius = kDeskRingOpen_m + c * (kDeskRingClosed_m - kDeskRingOpen_m);
+  const Eigen::Vector3d n(std::cos(elevation) * std::cos(azimuth), std::cos(elevation) * std::sin(azimuth),
+                          std::sin(elevation));
+  return Eigen::Vector3d(0.0, kDeskGraspCentreY_m, kDeskGraspCentreZ_m) + radius * n;
+}
 
 double MaxFingertipSpeed(const DeskFilterConfig& c) noexcept {
   return c.max_speed_m_per_s + c.max_turn_rate_rad_per_s * kFingertipReach_m + c.max_closure_rate_per_s * kClosingPath_m;
@@ -87,16 +99,12 @@ void DeskDevice::Read(double t_s, DeviceReading& out) noexcept {
              c.max_turn_acceleration_rad_per_s2, dt_s);
   closure_.Step(closure_target, c.tau_s, c.max_closure_rate_per_s, c.max_closure_acceleration_per_s2, dt_s);
 
-  // Fingertips: each finger's grip offset at its own closure, turned with the hand.
+  // Fingertips: each finger on the grasp ring at its own closure, turned with the hand.
   const Eigen::Matrix3d R_WH = RotationOf(turn_.x);
   const Eigen::Quaterniond q(R_WH);
   out.p_WH = base_.x;
   out.q_WH_wxyz = Eigen::Vector4d(q.w(), q.x(), q.y(), q.z());
-  for (int i = 0; i < kFingers; ++i) {
-    HandPose finger;  // at the origin: SimFingertips gives the offsets from the hand base
-    finger.grip = std::clamp(closure_.x[i], 0.0, 1.0);
-    out.p_WE[i] = base_.x + R_WH * SimFingertips(finger)[i];
-  }
+  for (int i = 0; i < kFingers; ++i) out.p_WE[i] = base_.x + R_WH * DeskFingertip_H(i, closure_.x[i]);
 
   // Released while the window has no focus or the desk has gone quiet.
   const bool fresh = target_.received_ns != 0 && now_ns >= target_.received_ns &&

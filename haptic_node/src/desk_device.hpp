@@ -15,9 +15,13 @@
 ///   groups' bounds times their lever arms), so a 1000 N/m contact changes its force by at most
 ///   0.6 N per 1 ms step, well under the force safety's rate bound (2 N per step).
 ///
-/// Fingertips from the filtered pose: each finger's offset from the hand base is the scripted
-/// hand's at that finger's closure (haptic::SimFingertips, the grip shape of `sim`), turned by
-/// the hand base's orientation.
+/// Fingertips from the filtered pose (DeskFingertip_H): a hand that closes around what is under
+/// it, as the scripted hand's `grasp` places its fingertips (sim_hand.hpp): each fingertip on a
+/// ring around a grasp centre in front of and below the palm, 72 degrees apart about the
+/// vertical (the thumb towards the person), 15 degrees below the ring's centre; a finger's
+/// closure c shrinks its radius from 75 mm (open) to 10 mm (closed, fingertips touching), so
+/// a ball of radius r is held at c = (0.075 - r - fingertip radius) / 0.065 (the Moon's ball,
+/// 40 mm: c = 0.42), and the pose is turned with the hand base.
 ///
 /// Release: no target for input_timeout_s, or a target saying the window lost focus, makes the
 /// reading invalid (valid = false): the haptic loop ramps the force to zero as for a lost device.
@@ -51,9 +55,9 @@ struct DeskFilterConfig {
   double tau_s = 0.06;
   double max_speed_m_per_s = 0.25;             ///< hand base
   double max_acceleration_m_per_s2 = 3.0;
-  double max_turn_rate_rad_per_s = 1.5;        ///< hand base rotation
+  double max_turn_rate_rad_per_s = 1.2;        ///< hand base rotation
   double max_turn_acceleration_rad_per_s2 = 20.0;
-  double max_closure_rate_per_s = 2.0;         ///< each finger, full closure per second
+  double max_closure_rate_per_s = 1.5;         ///< each finger, full closure per second
   double max_closure_acceleration_per_s2 = 20.0;
   /// No target this long: the hand is released [s]. A view draws 30 frames a second, but one
   /// stalls for a few hundred ms while it loads a new world's meshes (software GL, a loaded
@@ -62,8 +66,15 @@ struct DeskFilterConfig {
 };
 
 /// The bound on any fingertip's speed the filter's bounds give: base speed + turn rate x the
-/// farthest fingertip from the base (0.13 m) + closure rate x the longest closing path (0.05 m).
+/// farthest fingertip from the base (0.13 m) + closure rate x the closing path (0.065 m).
 double MaxFingertipSpeed(const DeskFilterConfig& c) noexcept;
+
+/// Where the desk puts fingertip `finger` (0 thumb .. 4 little) at closure c in [0, 1], in the
+/// hand base's frame H (x right, y forward, z up) [m].
+Eigen::Vector3d DeskFingertip_H(int finger, double closure) noexcept;
+/// The grasp ring: its centre in H, its radius open and closed [m].
+inline constexpr double kDeskGraspCentreY_m = 0.07, kDeskGraspCentreZ_m = -0.03;
+inline constexpr double kDeskRingOpen_m = 0.075, kDeskRingClosed_m = 0.010;
 
 class DeskDevice final : public Device {
  public:

@@ -49,11 +49,8 @@ class UnfilteredDesk final : public Device {
  public:
   DeviceCapabilities capabilities() const noexcept override { return {}; }
   void Read(double, DeviceReading& out) noexcept override {
-    HandPose pose;
-    pose.p_WH = Eigen::Vector3d(target.p_WH_m.data());
-    pose.grip = target.closure[0];
-    out.p_WH = pose.p_WH;
-    out.p_WE = SimFingertips(pose);
+    out.p_WH = Eigen::Vector3d(target.p_WH_m.data());
+    for (int i = 0; i < kFingers; ++i) out.p_WE[i] = out.p_WH + DeskFingertip_H(i, target.closure[i]);
     out.stamp_ns = common::SteadyNowNs();
     out.valid = true;
   }
@@ -143,21 +140,35 @@ TEST(DeskDevice, AStepGivesBoundedFingertipSpeedAndAccelerationAndArrives) {
   EXPECT_LE(bound, 0.6);
   EXPECT_LE(max_speed, bound * (1.0 + 1e-9));
   EXPECT_GT(max_speed, 0.5 * bound) << "the speed bound is what limited this step";
-  // Base 3 m/s^2 + turn 20 rad/s^2 x 0.13 m + closure 20 /s^2 x 0.05 m + centripetal 1.5^2 x
-  // 0.13 m, about 7 m/s^2; 10 allows for the discrete steps.
+  // Base 3 m/s^2 + turn 20 rad/s^2 x 0.16 m + closure 20 /s^2 x 0.065 m + centripetal 1.2^2 x
+  // 0.16 m, about 7.7 m/s^2; 10 allows for the discrete steps.
   EXPECT_LE(max_acceleration, 10.0);
   EXPECT_NEAR(r.p_WH.x(), 0.3, 1e-4);
   EXPECT_NEAR(r.p_WH.y(), 0.3, 1e-4);
   EXPECT_NEAR(r.p_WH.z(), 0.0, 1e-4);
   const Eigen::Quaterniond q(r.q_WH_wxyz[0], r.q_WH_wxyz[1], r.q_WH_wxyz[2], r.q_WH_wxyz[3]);
   EXPECT_NEAR(q.angularDistance(Eigen::Quaterniond(Eigen::AngleAxisd(1.5, Eigen::Vector3d::UnitZ()))), 0.0, 1e-4);
-  HandPose closed;
-  closed.grip = 1.0;
-  const auto p_HE = SimFingertips(closed);
   const Eigen::Matrix3d R = q.toRotationMatrix();
   for (int i = 0; i < kFingers; ++i) {
-    EXPECT_LT((r.p_WE[i] - (r.p_WH + R * p_HE[i])).norm(), 1e-4) << "finger " << i;
+    EXPECT_LT((r.p_WE[i] - (r.p_WH + R * DeskFingertip_H(i, 1.0))).norm(), 1e-4) << "finger " << i;
   }
+}
+
+// The hand closes around what is under it: at closure c every fingertip is on a ring of radius
+// 75 - 65 c mm about the grasp centre, so a ball there is held at one closure by all five.
+TEST(DeskDevice, TheHandClosesAroundABall) {
+  const Eigen::Vector3d centre(0.0, kDeskGraspCentreY_m, kDeskGraspCentreZ_m);
+  const double ball_m = 0.04 + kSimFingertipRadius_m;  // the Moon's ball, touched by a fingertip
+  const double c = (kDeskRingOpen_m - ball_m) / (kDeskRingOpen_m - kDeskRingClosed_m);
+  for (int i = 0; i < kFingers; ++i) {
+    EXPECT_NEAR((DeskFingertip_H(i, 0.0) - centre).norm(), kDeskRingOpen_m, 1e-12);
+    EXPECT_NEAR((DeskFingertip_H(i, c) - centre).norm(), ball_m, 1e-12) << "finger " << i;
+    EXPECT_LT(DeskFingertip_H(i, c).z(), centre.z()) << "below the equator, to hold it up";
+  }
+  EXPECT_LT(DeskFingertip_H(0, 0.0).y(), centre.y()) << "the thumb is on the person's side";
+  Eigen::Vector3d sum = Eigen::Vector3d::Zero();
+  for (int i = 0; i < kFingers; ++i) sum += DeskFingertip_H(i, 0.5) - centre;
+  EXPECT_LT(sum.head<2>().norm(), 1e-12) << "the pushes cancel sideways";
 }
 
 TEST(DeskDevice, OneFingerClosesAlone) {
