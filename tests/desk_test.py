@@ -3,8 +3,9 @@
 view (graphics_node --view user:alice --input desk) under a virtual display (Xvfb), and with
 those events alone alice's hand (haptic_node --device desk) moves: the haptic node's trace shows
 the hand base where the pointer put it; the hand presses the start menu's solar-system button
-and the world server opens the solar system; the window losing focus releases the hand, and so
-does the view going quiet (killed).
+and the world server opens the solar system; it grasps the ball on the Moon and lifts it (held
+weight m g within 5 %, a frame of the window grabbed meanwhile) and pushes the lever to Mars;
+the window losing focus releases the hand, and so does the view going quiet (killed).
 
 Needs Xvfb and xdotool (Debian: xvfb, xdotool; deploy/install_deps.sh); without them the test is
 skipped (77).
@@ -197,9 +198,35 @@ def case_desk(h, domain):
           f"from {min(held):.3f} to {max(held):.3f} N over {len(held)} rows")
     check(abs(weight - BALL_KG * MOON_G) <= 0.05 * BALL_KG * MOON_G,
           f"the held weight {weight:.3f} N is not the ball's {BALL_KG * MOON_G:.3f} N within 5 %")
+    h.wait_for_line("world_server", "object 'ball': owner '' -> 'alice' (granted)", 10)
     grab_window(window, os.path.join(w, "desk_holding_ball.png"))
     xdotool("key", "o")
-    xdotool("mousemove", "--window", window, *pointer_for(0.0, 0.15))
+
+    # The lever (0.25, 0.1, 0): the middle fingertip behind its handle, then away from you into
+    # Mars' detent, as the tour's hand pushes it (0.25, 0.07, 0.075) -> (0.25, 0.17, 0.06): the
+    # pointer places it, the wheel pushes.
+    middle = fingertip_h(2, 0.0)
+    x_lever = 0.25 - middle[0]
+    y_behind, y_pushed = 0.07 - middle[1], 0.17 - middle[1]
+    z_behind, z_pushed = 0.075 - middle[2], 0.06 - middle[2]
+    xdotool("mousemove", "--window", window, *pointer_for(x_lever, 0.20))
+    notches = round((y_behind - y_base) / DEPTH_STEP_M)
+    for _ in range(abs(notches)):
+        xdotool("click", 4 if notches > 0 else 5)  # the wheel: 4 away from you, 5 towards you
+    y_behind = y_base + notches * DEPTH_STEP_M
+    wait_until("alice's hand over the lever", 30, lambda: hand_near(trace, x_lever, y_behind, 0.20, tol=0.006),
+               lambda: f"newest trace row: {newest(trace)}")
+    xdotool("mousemove", "--window", window, *pointer_for(x_lever, z_behind))
+    wait_until("alice's middle finger behind the lever's handle", 30,
+               lambda: hand_near(trace, x_lever, y_behind, z_behind, tol=0.006),
+               lambda: f"newest trace row: {newest(trace)}")
+    xdotool("mousemove", "--window", window, *pointer_for(x_lever, z_pushed))
+    for _ in range(round((y_pushed - y_behind) / DEPTH_STEP_M)):
+        xdotool("click", 4)
+    h.wait_for_line("world_server", "gravity -3.71 m/s^2", 60)
+    print("the wheel pushed the lever to Mars")
+    xdotool("mousemove", "--window", window, *pointer_for(x_lever, 0.25))
+    xdotool("mousemove", "--window", window, *pointer_for(0.0, 0.25))
 
     # The window loses the keyboard focus (unmapped): the hand is released, and comes back.
     xdotool("windowunmap", "--sync", window)
