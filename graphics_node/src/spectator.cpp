@@ -312,6 +312,16 @@ class WorldView {
   std::string next_action_;
 };
 
+/// The desk's writer. A keystore (--security) grants no role the desk's topic yet: say so.
+dds::Writer<msg::DeskInput> MakeDeskWriter(dds::Participant& participant) {
+  try {
+    return dds::MakeWriter<msg::DeskInput>(participant, dds::topics::kDeskInput);
+  } catch (const dds::DdsError& e) {
+    throw std::runtime_error(std::string("--input desk: cannot write ") + dds::topics::kDeskInput.name + " (" + e.what() +
+                             "); under --security no keystore role grants it yet (docs/devices.md)");
+  }
+}
+
 /// Everything of a spectator that lives on DDS: its participant, what it reads and its member
 /// announcement. A rejoin makes a new one.
 struct SpectatorLink {
@@ -325,8 +335,7 @@ struct SpectatorLink {
             participant, dds::topics::kSessionRoster,
             [&name](const std::string& line) { std::fprintf(stderr, "[graphics_node %s] %s\n", name.c_str(), line.c_str()); },
             "no rejoin when a member stays unheard")),
-        desk_writer(desk ? dds::MakeWriter<msg::DeskInput>(participant, dds::topics::kDeskInput)
-                         : dds::Writer<msg::DeskInput>{}) {}
+        desk_writer(desk ? MakeDeskWriter(participant) : dds::Writer<msg::DeskInput>{}) {}
   dds::Participant participant;
   // The readers first: the server re-sends body poses (best-effort) when it sees the member
   // join, and a reader created after the announcement could miss them.
