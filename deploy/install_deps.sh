@@ -20,6 +20,8 @@ PACKAGES=(
   libfreetype-dev fonts-ipafont-gothic
   # presentation: audio playback (ALSA) and a virtual X display for window tests
   libasound2-dev xvfb
+  # a person at the desk, tested as one: real X input events to the window (tests/desk_test.py)
+  xdotool
   # session log, config parsing
   libsqlite3-dev sqlite3 nlohmann-json3-dev
   # asset preparation and independent FEM oracle (called as external programs)

@@ -1,4 +1,4 @@
-// haptic_node: one user at one haptic device (HIRO II or simulated) joining a session.
+// haptic_node: one user at one haptic device (HIRO II, simulated, or a desk's mouse and keyboard) joining a session.
 #include "handshare/common/data_dir.hpp"
 #include "handshare/node/node_main.hpp"
 #include "handshare/haptic/haptic_node.hpp"
@@ -9,8 +9,9 @@ int main(int argc, char** argv) {
   handshare::node::DeclareSessionOptions(options);
   options.Value("user", "U", "user name, unique in the session", std::nullopt, true)
       .Value("device", "KIND",
-             "device driver: sim, hiro (simulated HIRO II plant), replay, or plugin:PATH.so[:ARGS] (a lab's device "
-             "through the C ABI of handshare/device_plugin.h, docs/devices.md)", "sim")
+             "device driver: sim, hiro (simulated HIRO II plant), replay, desk (a person at the mouse and keyboard of "
+             "'graphics_node --view user:U --input desk'), or plugin:PATH.so[:ARGS] (a lab's device through the C ABI "
+             "of handshare/device_plugin.h); docs/devices.md", "sim")
       .Value("device-origin", "X,Y,Z", "plugin: where the device's workspace centre is in the world [m]", "0,-0.05,0.12")
       .Value("device-scale", "S", "plugin: world metres per device metre", "1")
       .Value("device-deadline-us", "US", "plugin: a read or command taking longer is a device fault", "500")
@@ -44,9 +45,10 @@ int main(int argc, char** argv) {
     c.where = handshare::node::ReadSessionOptions(o);
     c.user = o.GetString("user");
     c.device = o.GetString("device");
-    if (c.device != "sim" && c.device != "replay" && c.device != "hiro" && c.device.rfind("plugin:", 0) != 0) {
+    if (c.device != "sim" && c.device != "replay" && c.device != "hiro" && c.device != "desk" &&
+        c.device.rfind("plugin:", 0) != 0) {
       throw handshare::common::OptionError("option --device: '" + c.device +
-                                           "' is not available (this build has: sim, hiro, replay, plugin:PATH.so[:ARGS])");
+                                           "' is not available (this build has: sim, hiro, replay, desk, plugin:PATH.so[:ARGS])");
     }
     c.device_origin_m = o.GetVector3("device-origin", 10.0);
     c.device_scale = o.GetDouble("device-scale", 1e-3, 1e3);

@@ -277,17 +277,18 @@ const CaptionBitmap& CaptionCache::For(std::string_view text, int width_px, int 
   return s.bitmap;
 }
 
-LabelCache::LabelCache(std::filesystem::path font_file) : font_file_(std::move(font_file)) {}
+LabelCache::LabelCache(std::filesystem::path font_file, int em_divisor, int max_lines)
+    : font_file_(std::move(font_file)), em_divisor_(std::max(1, em_divisor)), max_lines_(std::max(1, max_lines)) {}
 LabelCache::~LabelCache() = default;
 
 const CaptionBitmap& LabelCache::For(const std::string& text, int height_px, int max_width_px) {
-  const int pixel_size = std::max(12, height_px / 40);
+  const int pixel_size = std::max(12, height_px / em_divisor_);
   const auto key = std::make_tuple(text, pixel_size, max_width_px);
   if (const auto it = layouts_.find(key); it != layouts_.end()) return it->second;
   if (layouts_.size() >= kEntries) layouts_.clear();
   if (!font_) font_ = std::make_unique<CaptionFont>(font_file_);
   ++laid_out_;
-  return layouts_.emplace(key, font_->Layout(text, pixel_size, std::max(1, max_width_px), 2)).first->second;
+  return layouts_.emplace(key, font_->Layout(text, pixel_size, std::max(1, max_width_px), max_lines_)).first->second;
 }
 
 }  // namespace handshare::render::detail

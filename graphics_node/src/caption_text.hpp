@@ -100,19 +100,23 @@ class CaptionCache {
 class LabelCache {
  public:
   static constexpr std::size_t kEntries = 64;
-  explicit LabelCache(std::filesystem::path font_file = DefaultCaptionFont());
+  /// Labels: em height 1/40 of the viewport's, at most two lines. Other blocks of text (the
+  /// overlay) pass their own.
+  explicit LabelCache(std::filesystem::path font_file = DefaultCaptionFont(), int em_divisor = 40, int max_lines = 2);
   ~LabelCache();
   LabelCache(const LabelCache&) = delete;
   LabelCache& operator=(const LabelCache&) = delete;
 
-  /// `text` laid out for a viewport `height_px` high: em height 1/40 of it (at least 12 px), at
-  /// most two lines of at most `max_width_px`.
+  /// `text` laid out for a viewport `height_px` high: em height 1/em_divisor of it (at least
+  /// 12 px), at most max_lines lines of at most `max_width_px`.
   const CaptionBitmap& For(const std::string& text, int height_px, int max_width_px);
   /// How many layouts were made so far.
   [[nodiscard]] std::uint64_t laid_out() const { return laid_out_; }
 
  private:
   std::filesystem::path font_file_;
+  int em_divisor_;
+  int max_lines_;
   std::unique_ptr<CaptionFont> font_;
   std::map<std::tuple<std::string, int, int>, CaptionBitmap> layouts_;
   std::uint64_t laid_out_ = 0;

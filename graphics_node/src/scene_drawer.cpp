@@ -420,6 +420,19 @@ void DrawCaption(const GlApi& gl, const SceneView& scene, const Viewport& viewpo
   BlendText(gl, text, scene.caption_rgb, margin_px, top_px, std::max(0, w - margin_px), band_px);
 }
 
+// The overlay at the top-left of `viewport`: a dark box as large as its text, the text over it.
+void DrawOverlay(const GlApi& gl, const SceneView& scene, const Viewport& viewport, LabelCache& cache) {
+  if (scene.overlay.empty()) return;
+  const int w = viewport.width_px;
+  const int h = viewport.height_px;
+  const CaptionBitmap& text = cache.For(scene.overlay, h, std::max(1, w / 2));
+  if (text.width_px == 0 || text.height_px == 0) return;
+  const int pad = std::max(2, text.stats.pixel_size / 2);
+  PixelOrtho(gl, viewport);
+  DarkBox(gl, 0, 0, std::min(w, text.width_px + 2 * pad), std::min(h, text.height_px + 2 * pad), 0.55F);
+  BlendText(gl, text, scene.overlay_rgb, pad, pad, std::max(0, w - pad), std::max(0, h - pad));
+}
+
 }  // namespace
 
 void ValidateScene(const SceneView& scene, const Camera& camera) {
@@ -473,6 +486,7 @@ void DrawFrame(const GlApi& gl, const SceneView& scene, const Camera& camera, St
     case StereoMode::kMono:
       DrawEye(gl, scene, camera, Eye::kCenter, full, text);
       DrawCaption(gl, scene, full, captions);
+      DrawOverlay(gl, scene, full, text.overlay);
       break;
     case StereoMode::kSideBySide: {
       const int left_width_px = fb_width_px / 2;
@@ -481,9 +495,11 @@ void DrawFrame(const GlApi& gl, const SceneView& scene, const Camera& camera, St
       if (left.width_px > 0) {
         DrawEye(gl, scene, camera, Eye::kLeft, left, text);
         DrawCaption(gl, scene, left, captions);
+        DrawOverlay(gl, scene, left, text.overlay);
       }
       DrawEye(gl, scene, camera, Eye::kRight, right, text);
       DrawCaption(gl, scene, right, captions);
+      DrawOverlay(gl, scene, right, text.overlay);
       break;
     }
     case StereoMode::kAnaglyph:
@@ -495,6 +511,7 @@ void DrawFrame(const GlApi& gl, const SceneView& scene, const Camera& camera, St
       DrawEye(gl, scene, camera, Eye::kRight, full, text);
       gl.ColorMask(GL_TRUE, GL_TRUE, GL_TRUE, GL_TRUE);
       DrawCaption(gl, scene, full, captions);
+      DrawOverlay(gl, scene, full, text.overlay);
       break;
   }
   gl.CheckError("drawing the scene");

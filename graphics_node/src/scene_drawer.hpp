@@ -35,6 +35,7 @@ struct TextCaches {
   CaptionCache captions;
   PageCache pages;
   LabelCache labels;
+  LabelCache overlay{DefaultCaptionFont(), 50, 30};  // SceneView::overlay: smaller, many lines
   PageTextureObjects page_objects;
 };
 

@@ -22,6 +22,9 @@
 #include "handshare/dds/messages.hpp"
 #include "handshare/dds/name_binding.hpp"
 #include "handshare/dds/sample_checks.hpp"
+#include "handshare/common/clock.hpp"
+#include "handshare/graphics/desk_control.hpp"
+#include "handshare/graphics/desk_feedback.hpp"
 #include "handshare/graphics/scene_replica.hpp"
 #include "handshare/hiro/hiro_model.hpp"
 #include "handshare/render/image.hpp"
@@ -35,6 +38,10 @@ namespace handshare::graphics {
 namespace {
 
 using Clock = std::chrono::steady_clock;
+
+/// The fingertip force a desk's colours reach red at [N]: the haptic device limit a desk's hand
+/// renders with (haptic::DeviceCapabilities' default, 3.5 N, HIRO II's).
+constexpr double kDeskMaxForce_N = 3.5;
 
 /// A user's hand is drawn while its device state is fresher than this.
 constexpr auto kHandTimeout = std::chrono::seconds(2);
@@ -214,7 +221,10 @@ class WorldView {
     if (ec) throw std::runtime_error("cannot write state file " + file.string() + ": " + ec.message());
   }
 
-  render::SceneView Build() const {
+  /// The frame's content. desk_user: the user whose hand a desk drives here ("" none): their
+  /// fingertips show what they feel (desk_feedback.hpp) and the overlay says it, after
+  /// `desk_help` (the key mapping, "" hidden).
+  render::SceneView Build(const std::string& desk_user = "", const std::string& desk_help = "") const {
     render::SceneView view;
     view.caption = board_text_.empty() || next_action_.empty() ? board_text_ : board_text_ + "\n" + next_action_;
     world_.AddObjects(view);
@@ -236,6 +246,15 @@ class WorldView {
         for (int i = 0; i < kFingers; ++i) tips[i] = Eigen::Vector3d(hand.state.p_WE_m()[i].data());
         AddHandFigure(FitHandToFingertips(HandPose(hand.state), tips), hand.state.fingertip_radius_m(), kSkinRgb, view);
       }
+      if (user == desk_user) {
+        std::array<Eigen::Vector3d, kFingers> tips, forces;
+        for (int i = 0; i < kFingers; ++i) {
+          tips[i] = Eigen::Vector3d(hand.state.p_WE_m()[i].data());
+          forces[i] = Eigen::Vector3d(hand.state.f_E_W_N()[i].data());
+        }
+        AddForceFeedback(tips, forces, hand.state.fingertip_radius_m(), kDeskMaxForce_N, view);
+        continue;
+      }
       for (int i = 0; i < 5; ++i) {
         if (((present >> i) & 1u) == 0) continue;  // a finger the device does not have
         const auto& p = hand.state.p_WE_m()[i];
@@ -244,12 +263,24 @@ class WorldView {
             render::Rgb{kFingertipRgb[i][0], kFingertipRgb[i][1], kFingertipRgb[i][2]}});
       }
     }
+    if (!desk_user.empty()) view.overlay = DeskOverlay(desk_user, desk_help);
     view.grid.half_size_m = 0.4;
     view.grid.spacing_m = 0.05;
     return view;
   }
 
  private:
+  // The desk's overlay: the key mapping, then what the hand feels or why there is none.
+  std::string DeskOverlay(const std::string& user, const std::string& help) const {
+    std::string text = help.empty() ? std::string() : help + "\n";
+    const auto it = hands_.find(user);
+    if (it == hands_.end()) return text + "waiting for your hand: haptic_node --device desk --user " + user;
+    if (it->second.state.fault()) return text + "your hand is released (the window has no focus, or no input)";
+    std::array<Eigen::Vector3d, kFingers> forces;
+    for (int i = 0; i < kFingers; ++i) forces[i] = Eigen::Vector3d(it->second.state.f_E_W_N()[i].data());
+    return text + ForceReadout(forces);
+  }
+
   // When each piece of the shared state first arrived, counted from joining (this view's
   // readers exist): the late joiner's figures (docs/network.md).
   void Arrived(const std::string& what) {
@@ -288,25 +319,37 @@ class WorldView {
   std::string next_action_;
 };
 
+/// The desk's writer. A keystore (--security) grants no role the desk's topic yet: say so.
+dds::Writer<msg::DeskInput> MakeDeskWriter(dds::Participant& participant) {
+  try {
+    return dds::MakeWriter<msg::DeskInput>(participant, dds::topics::kDeskInput);
+  } catch (const dds::DdsError& e) {
+    throw std::runtime_error(std::string("--input desk: cannot write ") + dds::topics::kDeskInput.name + " (" + e.what() +
+                             "); under --security no keystore role grants it yet (docs/devices.md)");
+  }
+}
+
 /// Everything of a spectator that lives on DDS: its participant, what it reads and its member
 /// announcement. A rejoin makes a new one.
 struct SpectatorLink {
   /// fps: the frame rate, announced so that haptic nodes send device states no faster.
   SpectatorLink(const common::SessionOptions& where, const std::filesystem::path& assets_dir, const std::string& name,
-                double fps, const std::string& language)
+                double fps, const std::string& language, bool desk)
       : participant(where, "graphics_node/" + name),  // the role picks its identity
         world(participant, assets_dir, name, where.session, language),
         member(participant, name, msg::NODE_GRAPHICS, "", fps),
         roster(dds::MakeReaderIfGranted<msg::SessionRoster>(
             participant, dds::topics::kSessionRoster,
             [&name](const std::string& line) { std::fprintf(stderr, "[graphics_node %s] %s\n", name.c_str(), line.c_str()); },
-            "no rejoin when a member stays unheard")) {}
+            "no rejoin when a member stays unheard")),
+        desk_writer(desk ? MakeDeskWriter(participant) : dds::Writer<msg::DeskInput>{}) {}
   dds::Participant participant;
   // The readers first: the server re-sends body poses (best-effort) when it sees the member
   // join, and a reader created after the announcement could miss them.
   WorldView world;
   dds::MemberAnnouncement member;
   dds::Reader<msg::SessionRoster> roster;  // the world server's members: to rejoin if one stays unheard
+  dds::Writer<msg::DeskInput> desk_writer;  // --input desk: the person's input, to their haptic node
 };
 
 // One line on what the shared world received, for the node's log.
@@ -327,6 +370,52 @@ void PrintWorldSummary(const std::string& name, const SceneReplica& world, const
   std::fflush(stdout);
 }
 
+
+/// The desk's input as DeskInput samples, with a line in the log when the hand goes live, the
+/// window loses or regains focus, and at the end.
+class DeskSender {
+ public:
+  DeskSender(std::string name, const std::string& user, const std::string& session) : name_(std::move(name)) {
+    msg_.user(user);
+    msg_.session(session);
+  }
+  void Send(const DeskControl& desk, dds::Writer<msg::DeskInput>& writer) {
+    const Eigen::Vector3d p = desk.p_WH();
+    const Eigen::Quaterniond q = desk.q_WH();
+    msg_.stamp_ns(common::SteadyNowNs());
+    msg_.seq(msg_.seq() + 1);
+    msg_.p_WH_m({p.x(), p.y(), p.z()});
+    msg_.q_WH_wxyz({q.w(), q.x(), q.y(), q.z()});
+    for (int i = 0; i < kFingers; ++i) msg_.closure()[i] = desk.closure()[i];
+    msg_.focused(desk.focused());
+    writer.Write(msg_);
+    if (sent_ == 0 || desk.focused() != msg_focused_) {
+      std::printf("[graphics_node %s] desk: %s, hand target (%.3f, %.3f, %.3f) m\n", name_.c_str(),
+                  desk.focused() ? "the window has focus: input goes to the hand" : "the window has no focus: the hand is released",
+                  p.x(), p.y(), p.z());
+      std::fflush(stdout);
+    }
+    msg_focused_ = desk.focused();
+    ++sent_;
+  }
+  // The window closes: the hand is let go at once, not after the haptic node's timeout.
+  void Release(dds::Writer<msg::DeskInput>& writer) {
+    if (sent_ == 0) return;
+    msg_.focused(false);
+    msg_.stamp_ns(common::SteadyNowNs());
+    msg_.seq(msg_.seq() + 1);
+    writer.Write(msg_);
+    std::printf("[graphics_node %s] desk: %llu inputs sent; the hand is released\n", name_.c_str(),
+                static_cast<unsigned long long>(sent_));
+    std::fflush(stdout);
+  }
+
+ private:
+  std::string name_;
+  msg::DeskInput msg_;
+  std::uint64_t sent_ = 0;
+  bool msg_focused_ = false;
+};
 
 render::StereoMode ToRender(StereoOutput s) {
   switch (s) {
@@ -417,6 +506,7 @@ int Spectator::Run() {
   } else {
     render::WindowRenderer::Options options;
     options.title = "handshare - " + config_.where.session;
+    if (config_.desk_input) options.title += " - " + config_.view_user + " at the desk";
     options.width_px = config_.width_px;
     options.height_px = config_.height_px;
     options.stereo = ToRender(config_.stereo);
@@ -425,7 +515,8 @@ int Spectator::Run() {
   }
 
   const auto open_link = [&] {
-    return std::make_unique<SpectatorLink>(config_.where, assets_dir, name, config_.fps, config_.language);
+    return std::make_unique<SpectatorLink>(config_.where, assets_dir, name, config_.fps, config_.language,
+                                           config_.desk_input);
   };
   auto link = open_link();
   node::RejoinClock rejoin(config_.rejoin_after);
@@ -522,15 +613,28 @@ int Spectator::Run() {
 
   render::WindowRenderer& window = *window_renderer;
   auto next = Clock::now();
+  DeskControl desk;
+  DeskSender desk_sender(name, config_.view_user, config_.where.session);
+  auto last_frame = Clock::now();
   while (!window.ShouldClose() && !common::ShutdownRequested()) {
     if (config_.where.duration.count() > 0 && Clock::now() - start >= config_.where.duration) break;
     rejoin_if_unheard();
     link->world.Update();
-    window.Render(link->world.Build(),
+    const std::string desk_user = config_.desk_input ? config_.view_user : std::string();
+    window.Render(link->world.Build(desk_user, desk.help_shown() ? DeskControl::HelpText() : std::string()),
                   config_.view_user.empty() ? camera : link->world.UserCamera(config_.view_user, config_.eye, camera));
+    if (config_.desk_input) {
+      // What the person did while that frame was up (Render polls the window's events), to
+      // their haptic node at once: every frame, so a quiet desk is noticed there.
+      const auto now = Clock::now();
+      desk.Apply(window.TakeInput(), std::chrono::duration<double>(now - last_frame).count());
+      last_frame = now;
+      desk_sender.Send(desk, link->desk_writer);
+    }
     next += period;
     std::this_thread::sleep_until(next);
   }
+  if (config_.desk_input) desk_sender.Release(link->desk_writer);
   finish();
   return 0;
 }

@@ -46,6 +46,10 @@ struct WindowRenderer::Impl {
   detail::GlApi gl;
   detail::TextCaches text;  // the caption's layout, the pages' textures
   std::uint64_t offscreen_binds_seen = 0;
+  // Input events since the last TakeInput (GLFW's callbacks, on the main thread in PollEvents).
+  double wheel_steps = 0.0;
+  std::vector<WindowInput::KeyPress> presses;
+  double cursor_x = 0.5, cursor_y = 0.5;
 
   // Makes the window's context current; forces a real re-bind if an OSMesa context was bound
   // since (see detail::g_offscreen_binds).
@@ -86,8 +90,20 @@ WindowRenderer::WindowRenderer(const Options& options) : impl_(std::make_unique<
                              std::to_string(height) + " OpenGL window: " + reason);
   }
   impl_->stereo = options.stereo;
-  glfwSetKeyCallback(impl_->window, [](GLFWwindow* window, int key, int, int action, int) {
+  glfwSetWindowUserPointer(impl_->window, impl_.get());
+  glfwSetKeyCallback(impl_->window, [](GLFWwindow* window, int key, int, int action, int mods) {
     if (key == GLFW_KEY_ESCAPE && action == GLFW_PRESS) glfwSetWindowShouldClose(window, GLFW_TRUE);
+    // Printable keys GLFW names by their character: space, digits, letters (upper case).
+    const bool printable = key == GLFW_KEY_SPACE || (key >= GLFW_KEY_0 && key <= GLFW_KEY_9) ||
+                           (key >= GLFW_KEY_A && key <= GLFW_KEY_Z);
+    if (!printable || action == GLFW_RELEASE) return;
+    auto* impl = static_cast<Impl*>(glfwGetWindowUserPointer(window));
+    if (impl->presses.size() < 256) {  // a stuck repeat between two takes cannot grow it without end
+      impl->presses.push_back({static_cast<char>(key), (mods & GLFW_MOD_SHIFT) != 0, action == GLFW_REPEAT});
+    }
+  });
+  glfwSetScrollCallback(impl_->window, [](GLFWwindow* window, double, double dy) {
+    static_cast<Impl*>(glfwGetWindowUserPointer(window))->wheel_steps += dy;
   });
   impl_->offscreen_binds_seen = detail::g_offscreen_binds.load();
   glfwMakeContextCurrent(impl_->window);
@@ -140,6 +156,30 @@ ImageRgb8 WindowRenderer::RenderAndCapture(const SceneView& scene, const Camera&
   glfwSwapBuffers(impl_->window);
   glfwPollEvents();
   return image;
+}
+
+WindowInput WindowRenderer::TakeInput() {
+  WindowInput in;
+  in.focused = glfwGetWindowAttrib(impl_->window, GLFW_FOCUSED) != 0;
+  in.cursor_inside = glfwGetWindowAttrib(impl_->window, GLFW_HOVERED) != 0;
+  int width = 0;
+  int height = 0;
+  glfwGetWindowSize(impl_->window, &width, &height);
+  if (in.cursor_inside && width > 0 && height > 0) {
+    double x = 0.0;
+    double y = 0.0;
+    glfwGetCursorPos(impl_->window, &x, &y);
+    impl_->cursor_x = std::clamp(x / width, 0.0, 1.0);
+    impl_->cursor_y = std::clamp(y / height, 0.0, 1.0);
+  }
+  in.cursor_x = impl_->cursor_x;
+  in.cursor_y = impl_->cursor_y;
+  in.left_button = glfwGetMouseButton(impl_->window, GLFW_MOUSE_BUTTON_LEFT) == GLFW_PRESS;
+  in.right_button = glfwGetMouseButton(impl_->window, GLFW_MOUSE_BUTTON_RIGHT) == GLFW_PRESS;
+  in.wheel_steps = impl_->wheel_steps;
+  impl_->wheel_steps = 0.0;
+  in.presses.swap(impl_->presses);
+  return in;
 }
 
 bool WindowRenderer::ShouldClose() const { return glfwWindowShouldClose(impl_->window) != 0; }

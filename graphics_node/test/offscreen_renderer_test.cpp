@@ -275,6 +275,34 @@ int CountCaptionPixels(const ImageRgb8& image, int row_begin, int row_end) {
   return count;
 }
 
+// Bright pixels within columns [col_begin, col_end) of rows [row_begin, row_end).
+int CountBrightPixels(const ImageRgb8& image, int row_begin, int row_end, int col_begin, int col_end) {
+  int count = 0;
+  for (int row = row_begin; row < row_end; ++row) {
+    for (int col = col_begin; col < col_end; ++col) {
+      const std::uint8_t* px = image.At(col, row);
+      if (px[0] > 200 && px[1] > 200 && px[2] > 200) ++count;
+    }
+  }
+  return count;
+}
+
+TEST_F(RenderOffscreen, OverlayIsDrawnAtTheTopLeftOnlyWhenPresent) {
+  Camera camera = ObliqueCamera();
+  camera.width_px = 640;
+  camera.height_px = 480;
+  SceneView scene;
+  scene.grid.visible = false;
+  const int w = camera.width_px, h = camera.height_px;
+  EXPECT_EQ(CountBrightPixels(renderer_.Render(scene, camera), 0, h, 0, w), 0);
+  scene.overlay = "mouse: hand left/right, up/down\nwheel or W/S: away / towards you\nforces [N]: thumb 0.00";
+  const ImageRgb8 with = renderer_.Render(scene, camera);
+  // Three lines of 12 px text in the top-left quarter, nothing elsewhere.
+  EXPECT_GT(CountBrightPixels(with, 0, h / 4, 0, w / 2), 150);  // 292 seen
+  EXPECT_EQ(CountBrightPixels(with, h / 4, h, 0, w), 0);
+  EXPECT_EQ(CountBrightPixels(with, 0, h, w / 2, w), 0);
+}
+
 TEST_F(RenderOffscreen, CaptionIsDrawnAtTheBottomOnlyWhenPresent) {
   Camera camera = ObliqueCamera();
   camera.width_px = 480;

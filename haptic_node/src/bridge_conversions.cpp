@@ -49,6 +49,16 @@ msg::DeviceCaps ToDeviceCaps(const DeviceCapabilities& c) {
   return out;
 }
 
+DeskTarget ToDeskTarget(const msg::DeskInput& in, std::uint64_t received_ns) {
+  DeskTarget t;
+  for (int k = 0; k < 3; ++k) t.p_WH_m[k] = in.p_WH_m()[k];
+  for (int k = 0; k < 4; ++k) t.q_WH_wxyz[k] = in.q_WH_wxyz()[k];
+  for (int i = 0; i < kFingers; ++i) t.closure[i] = in.closure()[i];
+  t.focused = in.focused();
+  t.received_ns = received_ns;
+  return t;
+}
+
 void ToLoopStatistics(const common::LoopStats& s, std::uint64_t faults, msg::LoopStatistics& out) {
   out.rate_Hz(s.rate_Hz);
   out.jitter_p50_us(s.jitter.Quantile(0.5));

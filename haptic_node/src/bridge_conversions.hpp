@@ -10,6 +10,7 @@
 
 #include <Eigen/Geometry>
 
+#include "desk_device.hpp"
 #include "handshare/common/latency_histogram.hpp"
 #include "handshare/common/periodic_loop.hpp"
 #include "handshare/dds/messages.hpp"
@@ -24,6 +25,10 @@ namespace handshare::haptic {
 void ToDeviceState(const HapticSnapshot& s, msg::DeviceState& out);
 /// The device's capabilities as its member announces them (msg::DeviceCaps).
 msg::DeviceCaps ToDeviceCaps(const DeviceCapabilities& c);
+
+/// The desk device's target from a checked desk input (dds::CheckDeskInput), taken at
+/// received_ns on the steady clock.
+DeskTarget ToDeskTarget(const msg::DeskInput& in, std::uint64_t received_ns);
 
 /// The loop statistics sample of the haptic loop's statistics and its fault count.
 void ToLoopStatistics(const common::LoopStats& s, std::uint64_t faults, msg::LoopStatistics& out);

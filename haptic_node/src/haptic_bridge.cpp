@@ -27,6 +27,10 @@ HapticBridge::HapticBridge(const HapticNodeConfig& config, Device& device, Hapti
       object_reader_(dds::MakeReader<msg::ObjectState>(participant, dds::topics::kObjectState)),
       control_reader_(dds::MakeReaderIfGranted<msg::ControlState>(participant, dds::topics::kControlState, say_,
                                                                   "controls start at rest in every world")),
+      desk_(dynamic_cast<DeskDevice*>(&device)),
+      desk_reader_(desk_ == nullptr ? dds::Reader<msg::DeskInput>{}
+                                    : dds::MakeReaderIfGranted<msg::DeskInput>(participant, dds::topics::kDeskInput, say_,
+                                                                               "the desk's hand stays released")),
       deadband_(session::DeadbandConfig{.weber = config.deadband_weber}),
       state_pacer_(config.publish_Hz),
       contact_pacer_(config.publish_Hz),
@@ -68,11 +72,43 @@ void HapticBridge::FollowControlStates() {
   }
 }
 
+void HapticBridge::FollowDeskInput() {
+  if (desk_ == nullptr || !desk_reader_) return;
+  msg::DeskInput input;
+  dds::SampleMeta meta;
+  bool posted = false;
+  DeskTarget target;
+  while (desk_reader_.TakeNext(input, meta)) {
+    if (!meta.valid_data || input.user().to_string() != config_.user) continue;
+    const std::string bad = dds::CheckDeskInput(input, config_.where.session);
+    if (!dropped_.Accept("desk_input", "participant " + dds::ParticipantOf(meta.writer), bad, say_)) continue;
+    target = ToDeskTarget(input, common::SteadyNowNs());
+    posted = true;
+  }
+  const std::uint64_t now_ns = common::SteadyNowNs();
+  if (posted) {
+    desk_->Post(target);  // the newest only: the haptic thread smooths towards it
+    ++desk_inputs_;
+    desk_last_ns_ = now_ns;
+    if (target.focused != desk_live_) {
+      desk_live_ = target.focused;
+      say_(desk_live_ ? Format("desk: the hand is live at (%.3f, %.3f, %.3f) m", target.p_WH_m[0], target.p_WH_m[1],
+                               target.p_WH_m[2])
+                      : std::string("desk: the view lost focus: the hand is released"));
+    }
+  } else if (desk_live_ && desk_last_ns_ != 0 &&
+             static_cast<double>(now_ns - desk_last_ns_) * 1e-9 > desk_->config().input_timeout_s) {
+    desk_live_ = false;
+    say_(Format("desk: no input for %.1f s: the hand is released", desk_->config().input_timeout_s));
+  }
+}
+
 void HapticBridge::Tick() {
   const std::uint64_t start_ns = common::SteadyNowNs();
   if (last_tick_ns_ != 0) tick_interval_.Record(1e-3 * static_cast<double>(start_ns - last_tick_ns_));
   last_tick_ns_ = start_ns;
   ++ticks_;
+  FollowDeskInput();
   FollowControlStates();
   ApplySceneChange();
   loop_.CollectRetired();

@@ -14,6 +14,7 @@
 #include <string>
 
 #include "bridge_conversions.hpp"
+#include "desk_device.hpp"
 #include "local_field_dump.hpp"
 #include "handshare/common/latency_histogram.hpp"
 #include "handshare/common/session_clock.hpp"
@@ -53,6 +54,8 @@ class HapticBridge {
   /// Whether a scene state of the session's world server has arrived since this bridge began.
   bool heard_world_server() const { return scene_revision_ != 0; }
   std::uint64_t control_events_sent() const { return control_events_sent_; }
+  /// --device desk: the person's inputs taken from their view.
+  std::uint64_t desk_inputs() const { return desk_inputs_; }
   /// Received samples refused by the checks (session/sample_checks.hpp), per topic.
   const dds::DroppedSamples& dropped() const { return dropped_; }
   /// Age of the peers' contact sets when this bridge took them: their sender's stamp (its
@@ -102,6 +105,10 @@ class HapticBridge {
   void PublishContactSet();
   /// The loop statistics, once a second.
   void PublishStatistics();
+  /// --device desk: the person's newest input from their view (this user's DeskInput), handed
+  /// to the desk device; says when the hand goes live and when it is released (focus lost,
+  /// desk quiet).
+  void FollowDeskInput();
 
   /// This node's field of each touched deformable, to --dump-deformation DIR.
   void DumpLocalFields();
@@ -130,6 +137,11 @@ class HapticBridge {
   std::set<std::string> peers_heard_;  // peers whose contact sets were taken (each named once)
   dds::Reader<msg::ObjectState> object_reader_;
   dds::Reader<msg::ControlState> control_reader_;  // empty: a keystore without the grant
+  DeskDevice* desk_ = nullptr;                      // --device desk, else none
+  dds::Reader<msg::DeskInput> desk_reader_;         // empty without a desk (or the grant)
+  std::uint64_t desk_inputs_ = 0;                   // taken and posted
+  std::uint64_t desk_last_ns_ = 0;                  // when the newest was taken
+  bool desk_live_ = false;                          // what was last said: live or released
   std::map<std::string, msg::ControlState> control_states_;  // by control id, newest
 
   std::shared_ptr<SceneRenderer> renderer_;  ///< the bridge's handle; the loop holds its own

@@ -10,6 +10,7 @@
 #include <thread>
 
 #include "bridge_conversions.hpp"
+#include "desk_device.hpp"
 #include "haptic_bridge.hpp"
 #include "handshare/node/rejoin_clock.hpp"
 #include "handshare/common/shutdown.hpp"
@@ -39,6 +40,8 @@ std::unique_ptr<Device> MakeDevice(const HapticNodeConfig& c) {
     return hiro::MakeHiroDevice(c.hiro_config, sim);
   }
   if (c.device == "replay") return std::make_unique<ReplayDevice>(ReplayLog::Load(c.replay_file), c.replay_loop);
+  // A person at the view's mouse and keyboard: the bridge hands it their input (DeskInput).
+  if (c.device == "desk") return std::make_unique<DeskDevice>();
   if (c.device.rfind("plugin:", 0) == 0) {
     PluginDeviceOptions o = PluginDeviceOptions::FromSpec(c.device);
     o.origin_W = Eigen::Vector3d(c.device_origin_m[0], c.device_origin_m[1], c.device_origin_m[2]);
@@ -46,7 +49,7 @@ std::unique_ptr<Device> MakeDevice(const HapticNodeConfig& c) {
     o.deadline_s = c.device_deadline_s;
     return PluginDevice::Open(o);
   }
-  throw std::invalid_argument("device '" + c.device + "' is not available (this build has: sim, hiro, replay, plugin:PATH.so[:ARGS])");
+  throw std::invalid_argument("device '" + c.device + "' is not available (this build has: sim, hiro, replay, desk, plugin:PATH.so[:ARGS])");
 }
 
 /// Everything of this node that lives on DDS: its participant, its member announcement and the
@@ -128,6 +131,10 @@ void PrintBridgeSummary(const HapticNodeConfig& config, const HapticBridge& brid
               config.paced_streams ? "paced" : "full", static_cast<unsigned long long>(bridge.device_states_published()),
               static_cast<unsigned long long>(bridge.contact_sets_sent()),
               static_cast<unsigned long long>(bridge.contact_sets_shared()));
+  if (config.device == "desk") {
+    std::printf("[haptic_node %s] desk: %llu inputs taken from the view\n", config.user.c_str(),
+                static_cast<unsigned long long>(bridge.desk_inputs()));
+  }
   std::fflush(stdout);
 }
 

@@ -179,6 +179,16 @@ std::string CheckDeviceState(const msg::DeviceState& s, std::string_view session
   return c.reason();
 }
 
+std::string CheckDeskInput(const msg::DeskInput& s, std::string_view session, const SampleBounds& b) {
+  Checker c;
+  c.Session(s.session().to_string(), session);
+  c.NonEmpty("user", s.user().to_string());
+  c.Vector("p_WH_m", s.p_WH_m(), 3, b.max_position_m);
+  c.Quaternion("q_WH_wxyz", s.q_WH_wxyz());
+  for (std::size_t i = 0; i < s.closure().size(); ++i) c.Range("closure[" + std::to_string(i) + "]", s.closure()[i], 0.0, 1.0);
+  return c.reason();
+}
+
 std::string CheckDeformation(const msg::Deformation& s, std::string_view session, const SampleBounds& b) {
   Checker c;
   c.Session(s.session().to_string(), session);

@@ -287,5 +287,29 @@ TEST(DroppedSamples, CountsPerTopicAndPrintsAFloodOncePerThousand) {
   EXPECT_NE(said[0].find("dropped a bad device_state sample from 'alice': p is nan"), std::string::npos);
 }
 
+// A desk's input drives a hand: a target far away, a rotation that is none or a closure
+// beyond closed is refused, named, never smoothed into the loop.
+TEST(SampleChecks, DeskInputs) {
+  msg::DeskInput d;
+  d.session("museum");
+  d.user("alice");
+  d.p_WH_m({0.0, -0.2, 0.15});
+  d.q_WH_wxyz({1.0, 0.0, 0.0, 0.0});
+  d.closure({0.0, 0.5, 1.0, 0.0, 0.0});
+  EXPECT_EQ(CheckDeskInput(d, "museum"), "");
+  EXPECT_NE(CheckDeskInput(d, "lab"), "");
+  d.closure()[2] = 1.5;
+  EXPECT_EQ(CheckDeskInput(d, "museum"), "closure[2] is 1.5 (expected 0 to 1)");
+  d.closure()[2] = 1.0;
+  d.q_WH_wxyz({0.0, 0.0, 0.0, 0.0});
+  EXPECT_EQ(CheckDeskInput(d, "museum"), "q_WH_wxyz has norm 0 (a rotation's is 1)");
+  d.q_WH_wxyz({1.0, 0.0, 0.0, 0.0});
+  d.p_WH_m()[1] = std::nan("");
+  EXPECT_EQ(CheckDeskInput(d, "museum"), "p_WH_m[1] is nan");
+  d.p_WH_m()[1] = 0.0;
+  d.user("");
+  EXPECT_NE(CheckDeskInput(d, "museum"), "");
+}
+
 }  // namespace
 }  // namespace handshare::dds

@@ -27,6 +27,10 @@ struct SpectatorConfig {
   std::string language = "en";       // the board's language shown: en or ja
   std::string view_user;             // "" = the spectator's camera; else that user's own view (eye)
   UserEye eye;                       // the user's eye relative to their hand base
+  /// A user's view in a window only: the person's mouse and keyboard drive that user's hand
+  /// (DeskControl, sent as DeskInput to haptic_node --device desk), and the view shows what the
+  /// hand feels (each fingertip's force as colour and arrow, the held weight, the key mapping).
+  bool desk_input = false;
   std::chrono::duration<double> wait_for_scene{5.0};  // headless: wait this long for the scene
   /// No scene from the world server this long after joining: join again with a new participant
   /// (a secured handshake that never finished; docs/security.md); 0: never.

@@ -171,6 +171,11 @@ struct SceneView {
   /// A character the font lacks is drawn as a hollow box. Empty: no band.
   std::string caption;
   Rgb caption_rgb{1.0F, 1.0F, 1.0F};            ///< caption text colour.
+  /// Text over the top-left corner of the image (a user's help and readouts), UTF-8, '\n'
+  /// starts a line, in the caption font (em height 1/50 of the image's, at least 12 px, at most
+  /// 30 lines, half the image's width) on a dark translucent box. Empty: none.
+  std::string overlay;
+  Rgb overlay_rgb{0.95F, 0.95F, 0.85F};         ///< overlay text colour.
   Rgb background_rgb{0.08F, 0.09F, 0.12F};      ///< clear colour.
 };
 

@@ -4,11 +4,31 @@
 
 #include <memory>
 #include <string>
+#include <vector>
 
 #include "handshare/render/image.hpp"
 #include "handshare/render/scene_view.hpp"
 
 namespace handshare::render {
+
+/// What the person at a window did since the last WindowRenderer::TakeInput(): plain data, no
+/// GLFW types. Keys are named by the character on them (letters upper case, digits, space),
+/// as GLFW names its printable keys.
+struct WindowInput {
+  struct KeyPress {
+    char key = 0;        ///< 'A'..'Z', '0'..'9', ' '
+    bool shift = false;  ///< a Shift key was down
+    bool repeat = false; ///< the key is held and the system repeats it
+  };
+  bool focused = false;             ///< the window has the keyboard focus
+  bool cursor_inside = false;       ///< the mouse pointer is over the window
+  double cursor_x = 0.5;            ///< pointer in the window: 0 left .. 1 right (last known)
+  double cursor_y = 0.5;            ///< 0 top .. 1 bottom (last known)
+  double wheel_steps = 0.0;         ///< vertical wheel since the last take, + away from the person (up)
+  bool left_button = false;         ///< held now
+  bool right_button = false;        ///< held now
+  std::vector<KeyPress> presses;    ///< printable keys pressed (and repeated) since the last take, in order
+};
 
 /// A window that shows one SceneView per Render() call. GLFW requires that every call, including
 /// construction and destruction, happens on the process's main thread. Several windows may exist;
@@ -48,6 +68,10 @@ class WindowRenderer {
   /// swap: screenshots and tests. (Reading the front buffer after the swap is unreliable: its
   /// pixels belong to the window system.)
   [[nodiscard]] ImageRgb8 RenderAndCapture(const SceneView& scene, const Camera& camera);
+
+  /// What the person did at the window since the last call (events arrive while Render polls
+  /// them). Main thread only.
+  [[nodiscard]] WindowInput TakeInput();
 
   /// True if GLFW can be initialized here (a display is reachable); never throws.
   [[nodiscard]] static bool DisplayAvailable() noexcept;

@@ -41,6 +41,9 @@ std::string CheckControlEvent(const msg::ControlEvent& s, std::string_view sessi
 std::string CheckControlState(const msg::ControlState& s, std::string_view session);
 std::string CheckSessionRoster(const msg::SessionRoster& s, std::string_view session);
 std::string CheckDeviceState(const msg::DeviceState& s, std::string_view session, const SampleBounds& b = {});
+/// A desk's input (graphics_node --input desk): the target within max_position_m, a unit
+/// quaternion, each closure in [0, 1].
+std::string CheckDeskInput(const msg::DeskInput& s, std::string_view session, const SampleBounds& b = {});
 /// Also: 3 displacements per node id, ids below surface_node_count when it is given.
 std::string CheckDeformation(const msg::Deformation& s, std::string_view session, const SampleBounds& b = {});
 std::string CheckMessageBoard(const msg::MessageBoard& s, std::string_view session);

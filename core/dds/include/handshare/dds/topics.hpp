@@ -19,6 +19,7 @@ inline constexpr TopicSpec kControlEvent{"handshare/control_event", "event_write
 inline constexpr TopicSpec kControlState{"handshare/control_state", "state_writer", "state_reader"};
 inline constexpr TopicSpec kSessionRoster{"handshare/session_roster", "state_writer", "state_reader"};
 inline constexpr TopicSpec kMessageBoard{"handshare/message_board", "state_writer", "state_reader"};
+inline constexpr TopicSpec kDeskInput{"handshare/desk_input", "stream_writer", "stream_reader"};
 inline constexpr TopicSpec kLoopStatistics{"handshare/loop_statistics", "stream_writer",
                                            "stream_reader"};
 
