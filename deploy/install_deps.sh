@@ -15,7 +15,7 @@ PACKAGES=(
   # tests and benchmarks
   libgtest-dev libgmock-dev libbenchmark-dev
   # presentation: software OpenGL (offscreen), a window where a display exists, PNG, speech
-  libosmesa6-dev libgl-dev libglfw3-dev libpng-dev espeak-ng libespeak-ng-dev
+  libosmesa6-dev libgl-dev libglfw3-dev libsdl2-dev libpng-dev espeak-ng libespeak-ng-dev
   # presentation: the board's caption in a real font, Latin and Japanese (FreeType, IPA Gothic)
   libfreetype-dev fonts-ipafont-gothic
   # presentation: audio playback (ALSA) and a virtual X display for window tests

@@ -28,9 +28,10 @@ int main(int argc, char** argv) {
              "whose view: the spectator's, or a user's own (from their eye, following their hand)", "spectator")
       .Value("eye", "X,Y,Z", "user view: the eye in the hand base's frame [m] (fingers along +y, up +z)",
              "0,-0.30,0.25")
-      .Value("input", "none|desk",
+      .Value("input", "none|desk|gamepad",
              "desk: with --view user:NAME in a window, the mouse and keyboard drive NAME's hand "
-             "(haptic_node --device desk --user NAME; mapping in docs/devices.md)", "none")
+             "(haptic_node --device desk --user NAME; mapping in docs/devices.md); gamepad: the first game "
+             "controller does, and rumbles with what the hand feels", "none")
       .Flag("fullscreen", "window: full screen on the primary monitor (large screen)")
       .Value("assets", "DIR", "folder that the scene's mesh paths are relative to",
              handshare::graphics::DefaultAssetsDir().string())
@@ -60,11 +61,13 @@ int main(int argc, char** argv) {
     } else if (view != "spectator") {
       throw OptionError("option --view: '" + view + "' is not spectator or user:NAME");
     }
-    c.desk_input = o.GetChoice("input", {"none", "desk"}) == "desk";
+    const std::string input = o.GetChoice("input", {"none", "desk", "gamepad"});
+    c.desk_input = input != "none";
+    c.gamepad_input = input == "gamepad";
     if (c.desk_input && c.view_user.empty()) {
-      throw OptionError("option --input desk needs --view user:NAME (the hand the desk drives)");
+      throw OptionError("option --input " + input + " needs --view user:NAME (the hand it drives)");
     }
-    if (c.desk_input && c.headless) throw OptionError("option --input desk needs a window (not --headless)");
+    if (c.desk_input && c.headless) throw OptionError("option --input " + input + " needs a window (not --headless)");
     const std::string eye = o.GetString("eye");
     double xyz[3];
     char tail = 0;

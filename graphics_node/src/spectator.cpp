@@ -25,6 +25,8 @@
 #include "handshare/common/clock.hpp"
 #include "handshare/graphics/desk_control.hpp"
 #include "handshare/graphics/desk_feedback.hpp"
+#include "handshare/graphics/gamepad_control.hpp"
+#include "handshare/render/gamepad.hpp"
 #include "handshare/graphics/scene_replica.hpp"
 #include "handshare/hiro/hiro_model.hpp"
 #include "handshare/render/image.hpp"
@@ -269,6 +271,19 @@ class WorldView {
     return view;
   }
 
+  /// The rumble for what `user`'s hand feels now (none for a hand not here or faulted).
+  GamepadRumble Rumble(const std::string& user, const GamepadControl& control) const {
+    const auto it = hands_.find(user);
+    if (it == hands_.end() || it->second.state.fault()) return {};
+    std::array<Eigen::Vector3d, kFingers> forces;
+    double largest_N = 0.0;
+    for (int i = 0; i < kFingers; ++i) {
+      forces[i] = Eigen::Vector3d(it->second.state.f_E_W_N()[i].data());
+      largest_N = std::max(largest_N, forces[i].norm());
+    }
+    return control.RumbleFor(HeldWeight_N(forces), largest_N);
+  }
+
  private:
   // The desk's overlay: the key mapping, then what the hand feels or why there is none.
   std::string DeskOverlay(const std::string& user, const std::string& help) const {
@@ -375,27 +390,29 @@ void PrintWorldSummary(const std::string& name, const SceneReplica& world, const
 /// window loses or regains focus, and at the end.
 class DeskSender {
  public:
-  DeskSender(std::string name, const std::string& user, const std::string& session) : name_(std::move(name)) {
+  DeskSender(std::string name, const std::string& user, const std::string& session, bool gamepad)
+      : name_(std::move(name)), gamepad_(gamepad) {
     msg_.user(user);
     msg_.session(session);
   }
-  void Send(const DeskControl& desk, dds::Writer<msg::DeskInput>& writer) {
-    const Eigen::Vector3d p = desk.p_WH();
-    const Eigen::Quaterniond q = desk.q_WH();
+  void Send(const HandTarget& desk, dds::Writer<msg::DeskInput>& writer) {
+    const Eigen::Vector3d& p = desk.p_WH;
+    const Eigen::Quaterniond& q = desk.q_WH;
     msg_.stamp_ns(common::SteadyNowNs());
     msg_.seq(msg_.seq() + 1);
     msg_.p_WH_m({p.x(), p.y(), p.z()});
     msg_.q_WH_wxyz({q.w(), q.x(), q.y(), q.z()});
-    for (int i = 0; i < kFingers; ++i) msg_.closure()[i] = desk.closure()[i];
-    msg_.focused(desk.focused());
+    for (int i = 0; i < kFingers; ++i) msg_.closure()[i] = desk.closure[i];
+    msg_.focused(desk.focused);
     writer.Write(msg_);
-    if (sent_ == 0 || desk.focused() != msg_focused_) {
+    if (sent_ == 0 || desk.focused != msg_focused_) {
       std::printf("[graphics_node %s] desk: %s, hand target (%.3f, %.3f, %.3f) m\n", name_.c_str(),
-                  desk.focused() ? "the window has focus: input goes to the hand" : "the window has no focus: the hand is released",
+                  desk.focused ? (gamepad_ ? "the gamepad is connected: input goes to the hand" : "the window has focus: input goes to the hand")
+                               : (gamepad_ ? "the gamepad is unplugged: the hand is released" : "the window has no focus: the hand is released"),
                   p.x(), p.y(), p.z());
       std::fflush(stdout);
     }
-    msg_focused_ = desk.focused();
+    msg_focused_ = desk.focused;
     ++sent_;
   }
   // The window closes: the hand is let go at once, not after the haptic node's timeout.
@@ -412,6 +429,7 @@ class DeskSender {
 
  private:
   std::string name_;
+  bool gamepad_;  // the input is a gamepad's, not the window's mouse and keyboard
   msg::DeskInput msg_;
   std::uint64_t sent_ = 0;
   bool msg_focused_ = false;
@@ -614,22 +632,36 @@ int Spectator::Run() {
   render::WindowRenderer& window = *window_renderer;
   auto next = Clock::now();
   DeskControl desk;
-  DeskSender desk_sender(name, config_.view_user, config_.where.session);
+  GamepadControl gamepad;
+  std::optional<render::Gamepad> pad;
+  if (config_.gamepad_input) pad.emplace();
+  DeskSender desk_sender(name, config_.view_user, config_.where.session, config_.gamepad_input);
   auto last_frame = Clock::now();
   while (!window.ShouldClose() && !common::ShutdownRequested()) {
     if (config_.where.duration.count() > 0 && Clock::now() - start >= config_.where.duration) break;
     rejoin_if_unheard();
     link->world.Update();
     const std::string desk_user = config_.desk_input ? config_.view_user : std::string();
-    window.Render(link->world.Build(desk_user, desk.help_shown() ? DeskControl::HelpText() : std::string()),
+    const std::string help = pad ? GamepadControl::HelpText() : desk.help_shown() ? DeskControl::HelpText() : std::string();
+    window.Render(link->world.Build(desk_user, help),
                   config_.view_user.empty() ? camera : link->world.UserCamera(config_.view_user, config_.eye, camera));
     if (config_.desk_input) {
       // What the person did while that frame was up (Render polls the window's events), to
       // their haptic node at once: every frame, so a quiet desk is noticed there.
       const auto now = Clock::now();
-      desk.Apply(window.TakeInput(), std::chrono::duration<double>(now - last_frame).count());
+      const double dt_s = std::chrono::duration<double>(now - last_frame).count();
       last_frame = now;
-      desk_sender.Send(desk, link->desk_writer);
+      if (pad) {
+        (void)window.TakeInput();  // the gamepad drives the hand, not the window's mouse and keys
+        gamepad.Apply(pad->Poll(), dt_s);
+        desk_sender.Send(gamepad.target(), link->desk_writer);
+        // What the hand feels, as rumble: the held weight and the largest fingertip force.
+        const GamepadRumble r = link->world.Rumble(config_.view_user, gamepad);
+        pad->Rumble(r.low, r.high, 250);
+      } else {
+        desk.Apply(window.TakeInput(), dt_s);
+        desk_sender.Send(desk.target(), link->desk_writer);
+      }
     }
     next += period;
     std::this_thread::sleep_until(next);

@@ -29,6 +29,15 @@
 
 namespace handshare::graphics {
 
+/// What a person's input asks of their hand: sent as a DeskInput to their haptic node, from the
+/// desk (DeskControl) or a gamepad (GamepadControl, gamepad_control.hpp).
+struct HandTarget {
+  Eigen::Vector3d p_WH = Eigen::Vector3d::Zero();          ///< hand base in W [m]
+  Eigen::Quaterniond q_WH = Eigen::Quaterniond::Identity();
+  std::array<double, common::kFingers> closure{};          ///< per finger, thumb first: 0 open .. 1 closed
+  bool focused = false;                                    ///< false: the hand is released
+};
+
 struct DeskControlConfig {
   Eigen::Vector3d home_W{0.0, -0.20, 0.15};  ///< hand base with the pointer at the window's centre [m]
   double half_width_m = 0.30;                 ///< pointer at the left / right edge: x -/+ this [m]
@@ -56,6 +65,8 @@ class DeskControl {
   [[nodiscard]] const std::array<double, common::kFingers>& closure() const { return closure_; }
   /// False while the window has no keyboard focus: the haptic node releases the hand.
   [[nodiscard]] bool focused() const { return focused_; }
+  /// All of the above, as sent.
+  [[nodiscard]] HandTarget target() const { return {p_WH(), q_WH(), closure_, focused_}; }
   [[nodiscard]] bool help_shown() const { return help_; }
   [[nodiscard]] const DeskControlConfig& config() const { return config_; }
 

@@ -31,6 +31,7 @@ struct SpectatorConfig {
   /// (DeskControl, sent as DeskInput to haptic_node --device desk), and the view shows what the
   /// hand feels (each fingertip's force as colour and arrow, the held weight, the key mapping).
   bool desk_input = false;
+  bool gamepad_input = false;  // with desk_input: the hand follows the gamepad, not the window's mouse and keys
   std::chrono::duration<double> wait_for_scene{5.0};  // headless: wait this long for the scene
   /// No scene from the world server this long after joining: join again with a new participant
   /// (a secured handshake that never finished; docs/security.md); 0: never.
