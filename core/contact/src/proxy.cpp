@@ -230,7 +230,7 @@ std::size_t ProxySolver::EndSlot(const Eigen::Vector3d& x) noexcept {
   return static_cast<std::size_t>(h >> 58) % kEndEntries;
 }
 
-bool ProxySolver::Gather(MeshCollider& collider, const ProxyParams& params, const Eigen::Vector3d& x,
+bool ProxySolver::Gather(const MeshCollider& collider, const ProxyParams& params, const Eigen::Vector3d& x,
                          const Eigen::Vector3d& d) noexcept {
   const double Rs = params.radius_m + params.skin_m;
   const Eigen::Vector3d center = x + 0.5 * d;
@@ -325,7 +325,7 @@ bool ProxySolver::Site::Is(const MeshCollider& collider, const ProxyParams& para
          std::memcmp(x.data(), at.data(), sizeof(double) * 3) == 0;
 }
 
-int ProxySolver::ConstraintsAt(MeshCollider& collider, const ProxyParams& params, const Eigen::Vector3d& x) noexcept {
+int ProxySolver::ConstraintsAt(const MeshCollider& collider, const ProxyParams& params, const Eigen::Vector3d& x) noexcept {
   if (!reference_ && cons_site_.Is(collider, params, x)) return cons_m_;
   Gather(collider, params, x, Eigen::Vector3d::Zero());
   return CollectConstraints(collider, params, x);
@@ -408,14 +408,14 @@ Eigen::Vector3d ProxySolver::Project(const Eigen::Vector3d& goal, const Eigen::V
   return best_t;
 }
 
-Eigen::Vector3d ProxySolver::Move(MeshCollider& collider, const ProxyParams& params,
+Eigen::Vector3d ProxySolver::Move(const MeshCollider& collider, const ProxyParams& params,
                                   const Eigen::Vector3d& x0, const Eigen::Vector3d& goal,
                                   bool* truncated, std::int32_t* iterations) noexcept {
   cons_site_ = Site{};  // a call from outside Step starts from a fresh gather
   return MoveFrom(collider, params, x0, goal, truncated, iterations);
 }
 
-Eigen::Vector3d ProxySolver::MoveFrom(MeshCollider& collider, const ProxyParams& params,
+Eigen::Vector3d ProxySolver::MoveFrom(const MeshCollider& collider, const ProxyParams& params,
                                       const Eigen::Vector3d& x0, const Eigen::Vector3d& goal,
                                       bool* truncated, std::int32_t* iterations) noexcept {
   truncated_ = false;
@@ -486,7 +486,7 @@ Eigen::Vector3d ProxySolver::MoveFrom(MeshCollider& collider, const ProxyParams&
   return x;
 }
 
-ProxyContact ProxySolver::Step(MeshCollider& collider, const ProxyParams& params,
+ProxyContact ProxySolver::Step(const MeshCollider& collider, const ProxyParams& params,
                                const FrictionParams& friction, const Eigen::Vector3d& goal,
                                ProxyState& state) noexcept {
   ProxyContact out;
