@@ -136,6 +136,14 @@ struct WorldConfig {
 /// What one local finger feels and touches this step: in W what the device and this node's
 /// display use (force felt, proxy, the main contact), and in `contact` what the hand shares
 /// with the others (FingerContact, frame O). Plain data.
+///
+/// The main contact is one state: `contact` (frame O) is where it is made, and p_WC_m, n_W,
+/// u_W_m, depth_m, object and main_node are that contact seen in W at the object's pose of
+/// this step (HapticWorld derives them from it, in one place). Both are kept because their
+/// readers differ: the device, the controls and the display work in W and need no object pose
+/// to read them; the peers, the server and the bridge need the contact in O. The force is the
+/// other way round: f_E_W_N (on the fingertip, clamped) is what the device gets, and
+/// contact.f_O_N is minus it in O.
 struct FingerResult {
   /// The main contact (largest force) as the hand shares it: frame O, force on the object
   /// (finger_contact.hpp). contact.object -1: this finger touches nothing.
@@ -143,17 +151,19 @@ struct FingerResult {
   Eigen::Vector3d f_E_W_N = Eigen::Vector3d::Zero();  ///< force on the fingertip, clamped.
   Eigen::Vector3d p_WP_m = Eigen::Vector3d::Zero();   ///< proxy (IHIP) centre; fingertip if free.
   Eigen::Vector3d e_PE_W_m = Eigen::Vector3d::Zero(); ///< penetration vector, proxy -> fingertip.
-  Eigen::Vector3d p_WC_m = Eigen::Vector3d::Zero();   ///< contact point on the surface (a
+  Eigen::Vector3d p_WC_m = Eigen::Vector3d::Zero();   ///< X_WO contact.p_OC_m: contact point (a
                                                       ///< deformable's: undeformed, at rest; with
                                                       ///< friction, where this step's patch was
                                                       ///< found plus its slide, so that a peer
                                                       ///< rebuilds that patch: p_WC - stick).
-  Eigen::Vector3d n_W = Eigen::Vector3d::Zero();      ///< outward unit normal there.
-  Eigen::Vector3d u_W_m = Eigen::Vector3d::Zero();    ///< deformable: imposed displacement (the
-                                                      ///< indentation -depth n_W plus the stick).
-  double depth_m = 0.0;                 ///< penetration along n.
-  ObjectId object = -1;                 ///< main object (largest force), -1 if none.
-  std::int32_t main_node = -1;          ///< deformable: patch node nearest the contact point.
+  Eigen::Vector3d n_W = Eigen::Vector3d::Zero();      ///< R_WO contact.n_O: outward unit normal.
+  Eigen::Vector3d u_W_m = Eigen::Vector3d::Zero();    ///< R_WO contact.u_O_m: a deformable's imposed
+                                                      ///< displacement (the indentation -depth n_W
+                                                      ///< plus the stick).
+  double depth_m = 0.0;                 ///< contact.depth_m: penetration along n.
+  ObjectId object = -1;                 ///< contact.object: main object (largest force), -1 if none.
+  std::int32_t main_node = -1;          ///< contact.node: a deformable's patch node nearest the
+                                        ///< contact point.
   std::int32_t patch_nodes = 0;         ///< deformable: nodes in the patch.
   std::int32_t objects_touched = 0;
   bool valid = false;                   ///< input finite (else zero force).
@@ -305,12 +315,15 @@ class HapticWorld {
   /// finger_stages.cpp: finger i's proxy on object k (a fingertip not `valid` keeps its proxy
   /// and touches nothing), and a rigid object's spring-damper force.
   void ProxyStep(int i, std::size_t k, bool valid, const Eigen::Vector3d& p_WE, double dt_s) noexcept;
-  /// finger_stages.cpp: finger i's forces summed and clamped, its main contact in W and as it
-  /// shares it (SharedContact).
+  /// finger_stages.cpp: finger i's forces summed and clamped, and its main contact (MainContact).
   void ResolveFinger(int i, const Eigen::Vector3d& p_WE) noexcept;
-  /// Finger i's main contact as the hand shares it (FingerResult::contact), frame O, from its
-  /// result and its fingertip centre p_WE.
-  FingerContact SharedContact(int i, const FingerResult& res, const Eigen::Vector3d& p_WE) const noexcept;
+  /// Finger i's main contact, on object k: its proxy and Coulomb state, the contact it shares
+  /// (SharedContact) and that contact seen in W.
+  void MainContact(int i, std::size_t k, const Eigen::Vector3d& p_WE, FingerResult& res) const noexcept;
+  /// Finger i's contact on object k as the hand shares it (FingerResult::contact), frame O, from
+  /// its fingertip centre p_WE, the patch node nearest the contact and the force it feels f_E_W.
+  FingerContact SharedContact(int i, std::size_t k, const Eigen::Vector3d& p_WE, std::int32_t main_node,
+                              const Eigen::Vector3d& f_E_W) const noexcept;
   /// deformable_stage.cpp: every hand's patches on deformable k (model m, data d) in one solve.
   void StepDeformable(const Object& m, ObjectData& d, std::size_t k, std::span<const FingerContact> remote,
                       StepReport& report) noexcept;
