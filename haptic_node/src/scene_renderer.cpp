@@ -12,16 +12,12 @@ SceneRenderer::SceneRenderer(const scene::Scene& scene, const world::SceneModels
       clock_(clock),
       models_(world::BuildSceneModels(scene, options)),
       controls_(controls::MakeControls(scene)),
-      fingertip_radius_m_(options.fingertip_radius_m) {
+      fingertip_radius_m_(options.fingertip_radius_m),
+      scripted_(scene_, models_) {
   for (auto& f : f_controls_) f.setZero();
   // A hand on a control when this world appears (it pressed the arrow that brought it here, at
   // the same place) must leave before it can actuate it.
   controls_.SetGuardFirstVisits(true);
-  for (std::size_t i = 0; i < scene_.objects.size(); ++i) {
-    const auto id = models_.Find(scene_.objects[i].id);
-    if (id >= 0 && scene_.objects[i].motion.active()) moving_.emplace_back(id, i);
-    if (id >= 0 && scene_.objects[i].beat.active()) beating_.emplace_back(id, i);
-  }
   for (const auto& d : models_.deformables) {
     if (const auto id = models_.Find(d.object_id); id >= 0) deformables_.push_back(id);
   }
@@ -90,15 +86,7 @@ void SceneRenderer::Render(double /*t_s*/, double dt_s, std::uint64_t now_ns, co
   auto& world = *models_.world;
   // 1. Objects that move by themselves (the Daphnia swims, its body beats), on the session's
   // clock.
-  if (!moving_.empty() || !beating_.empty()) {
-    const double t = clock_.Now_s();
-    for (const auto& [object, i] : moving_) {
-      Eigen::Isometry3d X = scene_.objects[i].X_WO();
-      X.translation() += scene_.objects[i].motion.Offset_W(t);
-      world.SetPose(object, X);
-    }
-    for (const auto& [object, i] : beating_) world.SetModeScale(object, scene_.objects[i].beat.Scale(t));
-  }
+  if (!scripted_.empty()) scripted_.Apply(world, clock_.Now_s());
   // 1b. Bodies simulated elsewhere (another user owns them, or the world server): follow.
   followed_in_.Read(followed_);
   if (followed_.count > 0) {
@@ -122,23 +110,15 @@ void SceneRenderer::Render(double /*t_s*/, double dt_s, std::uint64_t now_ns, co
     peer_stamp_ns_ = remote_.newest_stamp_ns;
     peer_seen_ns_ = common::SteadyNowNs();
   }
+  const std::size_t n_received = static_cast<std::size_t>(std::clamp(remote_.count, 0, kMaxRemoteContacts));
+  const std::size_t n_remote = peer_fade_.Step({remote_.items, n_received}, remote_.fade, dt_s, now_ns,
+                                               remote_contacts_, remote_from_);
   // The network coupling's passivity controller holds back what a late displacement would
   // put into the body beyond what the peer put in at its end (contact/coupling_passivity.hpp).
-  int n_remote = 0;
   passivity_.BeginStep(dt_s, remote_.fade.rate_per_s());
-  for (int i = 0; i < std::min(remote_.count, kMaxRemoteContacts); ++i) {
-    const contact::PeerContact& c = remote_.items[i];
-    const double law = remote_.fade.WeightAt(now_ns, c.received_ns);
-    if (law <= 0.0) continue;
-    // A contact coming back after its set had aged into the fade (this bridge stalled) rises at
-    // the fade's rate, not in one step (contact::PeerWeights).
-    const double w = peer_weights_.Weight(c, law, dt_s, remote_.fade.rate_per_s(), now_ns);
-    if (w <= 0.0) continue;
-    contact::FingerContact& r = remote_contacts_[static_cast<std::size_t>(n_remote++)];
-    r = contact::FadedContact(c, w);
-    passivity_.Admit(c, r);
+  for (std::size_t j = 0; j < n_remote; ++j) {
+    passivity_.Admit(remote_.items[remote_from_[j]], remote_contacts_[j]);
   }
-  peer_weights_.EndStep(now_ns);
   // 3. Contacts: rigid, dynamic and deformable objects, all hands on a deformable together;
   // only the fingertips the device has (packed: tip i is finger tip_finger_[i]).
   std::size_t n_tips = 0;
@@ -148,7 +128,7 @@ void SceneRenderer::Render(double /*t_s*/, double dt_s, std::uint64_t now_ns, co
     tips_[n_tips++] = reading.p_WE[f];
   }
   const std::span<const Eigen::Vector3d> tips(tips_.data(), n_tips);
-  world.Step(dt_s, tips, {remote_contacts_.data(), static_cast<std::size_t>(n_remote)});
+  world.Step(dt_s, tips, {remote_contacts_.data(), n_remote});
   passivity_.Observe(world.remote_forces_O());
   coupling_stats_.Write(passivity_.stats());
   if (load_snapshots_ && ++steps_since_loads_ >= DeformableLoads::kEverySteps) {

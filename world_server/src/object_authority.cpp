@@ -98,12 +98,12 @@ void ObjectAuthority::SetScene(const scene::Scene& scene) {
     models_.reset();
     ready_scene_.clear();
     deformables_.clear();
-    moving_.clear();
+    scripted_ = {};
     last_published_.clear();
     arbiter_.Clear();
     claims_.clear();
     handing_over_.clear();
-    peer_weights_ = {};
+    peer_fade_ = {};
     peers_.Clear();
   }
   // A build in flight is superseded, not waited for: the tick goes on, and its models are
@@ -176,14 +176,9 @@ void ObjectAuthority::Adopt(world::SceneModels models, TickOutput& out) {
   models_ = std::make_unique<world::SceneModels>(std::move(models));
   ready_scene_ = scene_.name;
   deformables_.clear();
-  moving_.clear();
   last_published_.clear();
   remote_.assign(static_cast<std::size_t>(64), contact::FingerContact{});
-  for (std::size_t i = 0; i < scene_.objects.size(); ++i) {
-    const auto& o = scene_.objects[i];
-    const auto object = models_->Find(o.id);
-    if (object >= 0 && o.motion.active()) moving_.emplace_back(object, i);
-  }
+  scripted_ = world::ScriptedMotion(scene_, *models_);
   for (const auto& prepared : models_->deformables) {
     Deformable d;
     d.id = prepared.object_id;
@@ -314,30 +309,18 @@ std::size_t ObjectAuthority::GatherPeerContacts(Clock::time_point now, double dt
   // whoever touches a body claims it and simulates it; a free body only falls and rests.)
   // Faded as the haptic nodes fade them, and coming back at the fade's rate as they do
   // (contact::PeerWeights), so the published field is the one the nodes' solves have.
-  std::size_t n_all = 0;
-  const std::uint64_t now_ns = session::PeerContacts::SteadyNs(now);
+  received_.clear();
   peers_.ForEach(*models_, now, [&](const contact::PeerContact& c, const msg::ContactSet&) {
-    if (n_all >= remote_.size() || world.contact_solver(c.contact.object) == nullptr) return;
-    const double law = peers_.fade().WeightAt(now_ns, c.received_ns);
-    const double w = peer_weights_.Weight(c, law, dt_s, peers_.fade().rate_per_s(), now_ns);
-    if (w > 0.0) remote_[n_all++] = contact::FadedContact(c, w);
+    if (world.contact_solver(c.contact.object) != nullptr) received_.push_back(c);
   });
-  peer_weights_.EndStep(now_ns);
-  return n_all;
+  return peer_fade_.Step(received_, peers_.fade(), dt_s, session::PeerContacts::SteadyNs(now), remote_);
 }
 
 void ObjectAuthority::MoveScriptedObjects(Clock::time_point now) {
   auto& world = *models_->world;
   const double motion_t =
       clock_.At_s(static_cast<std::uint64_t>(std::chrono::nanoseconds(now.time_since_epoch()).count()));
-  for (const auto& [object, i] : moving_) {
-    Eigen::Isometry3d X = scene_.objects[i].X_WO();
-    X.translation() += scene_.objects[i].motion.Offset_W(motion_t);
-    world.SetPose(object, X);
-  }
-  for (const auto& d : deformables_) {
-    if (d.beat) world.SetModeScale(d.object, d.beat->Scale(motion_t));
-  }
+  scripted_.Apply(world, motion_t);
 }
 
 void ObjectAuthority::StepWorld(const BodyPlan& plan, Clock::time_point now, double dt_s, std::size_t remote) {
@@ -395,8 +378,8 @@ void ObjectAuthority::PublishBodies(const BodyPlan& plan, Clock::time_point now,
     last_published_[body] = X.translation();
     out.bodies.push_back({id, "", X, world.body_velocity_W(body)});
   }
-  for (const auto& [object, i] : moving_) {
-    out.bodies.push_back({scene_.objects[i].id, "", world.pose(object), Eigen::Vector3d::Zero()});
+  for (const auto& m : scripted_.moving()) {
+    out.bodies.push_back({m.id, "", world.pose(m.object), Eigen::Vector3d::Zero()});
   }
 }
 

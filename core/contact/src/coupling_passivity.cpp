@@ -48,110 +48,124 @@ void CouplingPassivity::BeginStep(double dt_s, double catch_up_rate_per_s) noexc
   for (Channel& c : channels_) c.seen = false;
 }
 
+// Admit's stages: the contact's channel, the peer's end (what its samples did), this end (the
+// displacement the solve may impose), then the channel's state for the next step.
 void CouplingPassivity::Admit(const PeerContact& sent, FingerContact& input) noexcept {
   if (num_admitted_ >= kMaxChannels) return;  // more than the renderer hands in: passed, unobserved
   std::int16_t& slot = admitted_[static_cast<std::size_t>(num_admitted_++)];
   slot = -1;
   if (!AsVector(input.u_O_m).allFinite()) return;
-  const int found = Find(sent.user_key, sent.contact.finger, sent.contact.object);
-  Channel* ch = found < 0 ? nullptr : &channels_[static_cast<std::size_t>(found)];
-  if (ch == nullptr) {
-    for (Channel& c : channels_) {
-      if (!c.open) {
-        c = Channel{};
-        c.open = true;
-        c.user_key = sent.user_key;
-        c.finger = sent.contact.finger;
-        c.object = sent.contact.object;
-        ch = &c;
-        ++stats_.channels_total;
-        break;
-      }
-    }
-    if (ch == nullptr) return;
-  }
+  Channel* ch = ChannelOf(sent);
+  if (ch == nullptr) return;
   if (ch->seen) return;  // the same contact twice in one set: the first one is the channel's
   ch->seen = true;
   slot = static_cast<std::int16_t>(ch - channels_.data());
 
-  // The peer's end: the work its sample path did on its body (the body got minus the force on
-  // the fingertip), once per sample.
-  if (sent.received_ns != ch->sample_ns) {
-    // f: the force on the peer's fingertip (minus the force on the body).
-    const Eigen::Vector3d u = AsVector(sent.contact.u_O_m), f = -AsVector(sent.contact.f_O_N);
-    if (u.allFinite() && f.allFinite()) {
-      ch->e_tx += std::max(0.0, -0.5 * (f + ch->f_sent).dot(u - ch->u_sent));
-      ch->u_sent = u;
-      ch->f_sent = f;
-      // The peer is still once its samples have stayed within kStill_m of one another for
-      // kStillAfter_ns (a deadbanded still hand sends a keepalive every 100 ms).
-      if (ch->still_since_ns == 0 || (u - ch->u_still).norm() > kStill_m) {
-        ch->u_still = u;
-        ch->still_since_ns = sent.received_ns;
-      }
-    }
-    ch->sample_ns = sent.received_ns;
-  }
+  ObserveSample(*ch, sent);
   const bool still = ch->still_since_ns != 0 && sent.received_ns - ch->still_since_ns >= kStillAfter_ns;
 
   // This end: the displacement the solve will impose, within what the channel has brought.
   const Eigen::Vector3d target = AsVector(input.u_O_m);
-  Eigen::Vector3d u = target;
-  if (enabled_) {
-    // A sample's jump is taken at no more than a fingertip's speed: the step's energy is then
-    // predicted to within (1/2) k (v dt)^2 even before the contact's stiffness is known.
-    // After a hold, the lag closes at the fade's rate (the speed at which a peer's contact of
-    // this size fades in or out), not at a fingertip's: the other hand feels a ramp, not a step.
-    // The sample's own change still passes at a fingertip's speed.
-    auto clamped = [](const Eigen::Vector3d& v, double limit) -> Eigen::Vector3d {
-      const double d = v.norm();
-      return d > limit ? Eigen::Vector3d((limit / d) * v) : v;
-    };
-    Eigen::Vector3d to = target - ch->u_imposed;
-    if (ch->held) {
-      const double catch_up_m = catch_up_rate_per_s_ * std::max(target.norm(), ch->u_imposed.norm()) * dt_s_;
-      to = clamped(target - ch->target_prev, max_step_m_) + clamped(ch->target_prev - ch->u_imposed, catch_up_m);
-    }
-    u = ch->u_imposed + clamped(to, max_step_m_);
-    const Eigen::Vector3d& F = ch->force;
-    auto predicted = [&](const Eigen::Vector3d& d) { return F.dot(d) + 0.5 * ch->k * d.squaredNorm(); };
-    const double budget = ch->e_tx + ch->e_granted - ch->e_rx;
-    const Eigen::Vector3d du = u - ch->u_imposed;
-    const double want = predicted(du);
-    // (Rounding: on a linear body without delay the prediction equals the budget's increment.)
-    const bool over_budget = want > budget + kRounding_J + 1e-9 * std::abs(want);
-    if (over_budget && ch->held && still) {
-      // The peer has stopped and the local copy still lags: the lag closes (at the fade's rate
-      // above), granted beyond the budget so that both copies come to one shape. Bounded by the
-      // work of closing the lag, once per stop; a swing never stops, so it is never granted one.
-      const double grant = want - std::max(budget, 0.0);
-      ch->e_granted += grant;
-      stats_.energy_granted_J += grant;
-      ++stats_.granted_still;
-    } else if (over_budget) {
-      // Scale the change: k a^2 |du|^2 / 2 + (F . du) a = budget, the root in [0, 1]. With no
-      // budget left (a prediction fell short by a step's error), nothing that puts energy in
-      // passes until the peer's samples bring more; a release always passes.
-      const double room = std::max(budget, 0.0);
-      const double a = 0.5 * ch->k * du.squaredNorm(), b = F.dot(du);
-      double alpha = 0.0;
-      if (a > 0.0) {
-        alpha = (-b + std::sqrt(std::max(0.0, b * b + 4.0 * a * room))) / (2.0 * a);
-      } else if (b > 0.0) {
-        alpha = room / b;
-      }
-      alpha = std::clamp(alpha, 0.0, 1.0);
-      u = ch->u_imposed + alpha * du;
-      ch->held = true;
-      ++stats_.held_back;
-      stats_.drift_max_m = std::max(stats_.drift_max_m, (target - u).norm());
-    }
-  }
+  const Eigen::Vector3d u = enabled_ ? Limit(*ch, target, still) : target;
   if (ch->held && (target - u).norm() <= kCaughtUp_m) ch->held = false;
   ch->target_prev = target;
   input.u_O_m = ToVec3(u);
   ch->du = u - ch->u_imposed;
   ch->u_imposed = u;
+}
+
+CouplingPassivity::Channel* CouplingPassivity::ChannelOf(const PeerContact& sent) noexcept {
+  const int found = Find(sent.user_key, sent.contact.finger, sent.contact.object);
+  if (found >= 0) return &channels_[static_cast<std::size_t>(found)];
+  for (Channel& c : channels_) {
+    if (!c.open) {
+      c = Channel{};
+      c.open = true;
+      c.user_key = sent.user_key;
+      c.finger = sent.contact.finger;
+      c.object = sent.contact.object;
+      ++stats_.channels_total;
+      return &c;
+    }
+  }
+  return nullptr;
+}
+
+// The peer's end: the work its sample path did on its body (the body got minus the force on
+// the fingertip), once per sample.
+void CouplingPassivity::ObserveSample(Channel& ch, const PeerContact& sent) noexcept {
+  if (sent.received_ns == ch.sample_ns) return;
+  // f: the force on the peer's fingertip (minus the force on the body).
+  const Eigen::Vector3d u = AsVector(sent.contact.u_O_m), f = -AsVector(sent.contact.f_O_N);
+  if (u.allFinite() && f.allFinite()) {
+    ch.e_tx += std::max(0.0, -0.5 * (f + ch.f_sent).dot(u - ch.u_sent));
+    ch.u_sent = u;
+    ch.f_sent = f;
+    // The peer is still once its samples have stayed within kStill_m of one another for
+    // kStillAfter_ns (a deadbanded still hand sends a keepalive every 100 ms).
+    if (ch.still_since_ns == 0 || (u - ch.u_still).norm() > kStill_m) {
+      ch.u_still = u;
+      ch.still_since_ns = sent.received_ns;
+    }
+  }
+  ch.sample_ns = sent.received_ns;
+}
+
+// A sample's jump is taken at no more than a fingertip's speed: the step's energy is then
+// predicted to within (1/2) k (v dt)^2 even before the contact's stiffness is known.
+// After a hold, the lag closes at the fade's rate (the speed at which a peer's contact of
+// this size fades in or out), not at a fingertip's: the other hand feels a ramp, not a step.
+// The sample's own change still passes at a fingertip's speed.
+Eigen::Vector3d CouplingPassivity::Limit(Channel& ch, const Eigen::Vector3d& target, bool still) noexcept {
+  auto clamped = [](const Eigen::Vector3d& v, double limit) -> Eigen::Vector3d {
+    const double d = v.norm();
+    return d > limit ? Eigen::Vector3d((limit / d) * v) : v;
+  };
+  Eigen::Vector3d to = target - ch.u_imposed;
+  if (ch.held) {
+    const double catch_up_m = catch_up_rate_per_s_ * std::max(target.norm(), ch.u_imposed.norm()) * dt_s_;
+    to = clamped(target - ch.target_prev, max_step_m_) + clamped(ch.target_prev - ch.u_imposed, catch_up_m);
+  }
+  Eigen::Vector3d u = ch.u_imposed + clamped(to, max_step_m_);
+  const Eigen::Vector3d& F = ch.force;
+  auto predicted = [&](const Eigen::Vector3d& d) { return F.dot(d) + 0.5 * ch.k * d.squaredNorm(); };
+  const double budget = ch.e_tx + ch.e_granted - ch.e_rx;
+  const Eigen::Vector3d du = u - ch.u_imposed;
+  const double want = predicted(du);
+  // (Rounding: on a linear body without delay the prediction equals the budget's increment.)
+  const bool over_budget = want > budget + kRounding_J + 1e-9 * std::abs(want);
+  if (over_budget && ch.held && still) {
+    // The peer has stopped and the local copy still lags: the lag closes (at the fade's rate
+    // above), granted beyond the budget so that both copies come to one shape. Bounded by the
+    // work of closing the lag, once per stop; a swing never stops, so it is never granted one.
+    const double grant = want - std::max(budget, 0.0);
+    ch.e_granted += grant;
+    stats_.energy_granted_J += grant;
+    ++stats_.granted_still;
+  } else if (over_budget) {
+    u = ScaledToBudget(ch, du, budget);
+    ch.held = true;
+    ++stats_.held_back;
+    stats_.drift_max_m = std::max(stats_.drift_max_m, (target - u).norm());
+  }
+  return u;
+}
+
+// Scale the change: k a^2 |du|^2 / 2 + (F . du) a = budget, the root in [0, 1]. With no
+// budget left (a prediction fell short by a step's error), nothing that puts energy in
+// passes until the peer's samples bring more; a release always passes.
+Eigen::Vector3d CouplingPassivity::ScaledToBudget(const Channel& ch, const Eigen::Vector3d& du,
+                                                  double budget) const noexcept {
+  const double room = std::max(budget, 0.0);
+  const double a = 0.5 * ch.k * du.squaredNorm(), b = ch.force.dot(du);
+  double alpha = 0.0;
+  if (a > 0.0) {
+    alpha = (-b + std::sqrt(std::max(0.0, b * b + 4.0 * a * room))) / (2.0 * a);
+  } else if (b > 0.0) {
+    alpha = room / b;
+  }
+  alpha = std::clamp(alpha, 0.0, 1.0);
+  return ch.u_imposed + alpha * du;
 }
 
 void CouplingPassivity::Observe(std::span<const Eigen::Vector3d> force_on_body_O) noexcept {

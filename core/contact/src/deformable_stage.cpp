@@ -11,22 +11,22 @@
 
 namespace handshare::contact {
 
-void HapticWorld::StepDeformable(Object& o, std::size_t k, std::span<const FingerContact> remote,
+void HapticWorld::StepDeformable(const Object& m, ObjectData& d, std::size_t k, std::span<const FingerContact> remote,
                                  StepReport& report) noexcept {
   PatchGather g;
   for (std::size_t r = 0; r < num_remote_forces_; ++r) remote_patch_[r] = {0, 0};
-  for (int i = 0; i < kFingers; ++i) GatherLocalPatch(o, k, i, g);
-  for (std::size_t r = 0; r < remote.size(); ++r) GatherRemotePatch(o, r, remote[r], g, report);
-  o.num_inputs = g.m;
-  const fem::StepStatus st = o.solver->Solve(
-      std::span<const fem::ContactInput>(o.inputs.data(), static_cast<std::size_t>(g.m)),
-      std::span<const fem::FrictionPatch>(o.friction.data(), static_cast<std::size_t>(g.num_friction)));
+  for (int i = 0; i < kFingers; ++i) GatherLocalPatch(m, d, k, i, g);
+  for (std::size_t r = 0; r < remote.size(); ++r) GatherRemotePatch(m, d, k, r, remote[r], g, report);
+  d.num_inputs = g.m;
+  const fem::StepStatus st = d.solver->Solve(
+      std::span<const fem::ContactInput>(d.inputs.data(), static_cast<std::size_t>(g.m)),
+      std::span<const fem::FrictionPatch>(d.friction.data(), static_cast<std::size_t>(g.num_friction)));
   const bool failed = st == fem::StepStatus::kInvalidInput || st == fem::StepStatus::kNumericalFailure;
   if (failed) {
     ++report.solver_faults;  // its forces stay zero (the fingers' and the remote contacts')
     return;
   }
-  const auto forces = o.solver->forces_N();
+  const auto forces = d.solver->forces_N();
   for (std::size_t r = 0; r < num_remote_forces_; ++r) {
     const auto [begin, count] = remote_patch_[r];
     if (count == 0) continue;
@@ -34,34 +34,33 @@ void HapticWorld::StepDeformable(Object& o, std::size_t k, std::span<const Finge
     for (std::int32_t q = 0; q < count; ++q) f_obj += forces[static_cast<std::size_t>(begin + q)];
     remote_force_O_[r] = f_obj;
   }
-  const auto num_obj = objects_.size();
-  for (std::size_t i = 0; i < static_cast<std::size_t>(kFingers); ++i) ApplyFingerPatch(o, fo_[i * num_obj + k], forces);
+  for (int i = 0; i < kFingers; ++i) ApplyFingerPatch(d, hand_->at(i, k, data_.size()), forces);
 }
 
 // A patch of the fingertip's sphere at p_O along n_O, depth deep, appended to the object's
 // inputs. With a memo (a remote contact's), the patch is copied from it while its query is bit
 // for bit the same, and found and kept in it otherwise.
-void HapticWorld::AddPatch(Object& o, PatchGather& g, const Eigen::Vector3d& p_O, const Eigen::Vector3d& n_O,
-                           double depth, std::int32_t& count, bool& truncated, PatchMemo* memo,
-                           fem::ContactInput* kept) noexcept {
-  const auto cap = static_cast<std::int32_t>(o.inputs.size());
+void HapticWorld::AddPatch(const Object& m, ObjectData& d, PatchGather& g, const Eigen::Vector3d& p_O,
+                           const Eigen::Vector3d& n_O, double depth, std::int32_t& count, bool& truncated,
+                           PatchMemo* memo, fem::ContactInput* kept) noexcept {
+  const auto cap = static_cast<std::int32_t>(d.inputs.size());
   count = 0;
-  const std::int32_t room = std::min(o.max_patch, cap - g.m);
+  const std::int32_t room = std::min(m.max_patch, cap - g.m);
   if (room <= 0 || !(depth > 0.0)) return;
   if (memo != nullptr && memo->room == room && memo->depth_m == depth && memo->p_O_m == p_O && memo->n_O == n_O) {
-    std::copy(kept, kept + memo->count, o.inputs.begin() + g.m);
+    std::copy(kept, kept + memo->count, d.inputs.begin() + g.m);
     count = memo->count;
     truncated = memo->truncated;
     g.m += count;
     return;
   }
   const fem::PatchResult pr =
-      o.patches->Sphere(p_O, n_O, config_.fingertip_radius_m, depth, fem::ContactMode::kNormalOnly,
-                        std::span<fem::ContactInput>(o.inputs.data() + g.m, static_cast<std::size_t>(room)));
+      m.patches->Sphere(p_O, n_O, config().fingertip_radius_m, depth, fem::ContactMode::kNormalOnly,
+                        std::span<fem::ContactInput>(d.inputs.data() + g.m, static_cast<std::size_t>(room)));
   count = pr.count;
   truncated = pr.truncated;
   if (memo != nullptr) {
-    std::copy(o.inputs.begin() + g.m, o.inputs.begin() + g.m + count, kept);
+    std::copy(d.inputs.begin() + g.m, d.inputs.begin() + g.m + count, kept);
     *memo = PatchMemo{p_O, n_O, depth, room, count, truncated};
   }
   g.m += pr.count;
@@ -71,9 +70,9 @@ void HapticWorld::AddPatch(Object& o, PatchGather& g, const Eigen::Vector3d& p_O
 // fingertip holds the material point it first pressed (its anchor): the patch is centred there
 // and slides with the fingertip by the tangential offset (the stick) while the cone holds it;
 // the solve says where it slipped to, and the anchor follows.
-void HapticWorld::GatherLocalPatch(Object& o, std::size_t k, int i, PatchGather& g) noexcept {
-  const bool friction = o.mu_static > 0.0;  // mu_kinetic <= mu_static
-  FingerObject& fo = fo_[static_cast<std::size_t>(i) * objects_.size() + k];
+void HapticWorld::GatherLocalPatch(const Object& m, ObjectData& d, std::size_t k, int i, PatchGather& g) noexcept {
+  const bool friction = m.mu_static > 0.0;  // mu_kinetic <= mu_static
+  FingerObject& fo = hand_->at(i, k, data_.size());
   fo.patch_begin = g.m;
   fo.patch_count = 0;
   fo.friction_patch = -1;
@@ -95,12 +94,12 @@ void HapticWorld::GatherLocalPatch(Object& o, std::size_t k, int i, PatchGather&
   };
   if (friction) {
     if (!fo.anchored) anchor_here();
-    const Eigen::Vector3d d = p - fo.anchor_O_m;
-    stick = d - d.dot(n) * n;
+    const Eigen::Vector3d off = p - fo.anchor_O_m;
+    stick = off - off.dot(n) * n;
   }
   bool trunc = false;
   fo.patch_center_O_m = p - stick;
-  AddPatch(o, g, fo.patch_center_O_m, n, fo.contact.depth_m, fo.patch_count, trunc);
+  AddPatch(m, d, g, fo.patch_center_O_m, n, fo.contact.depth_m, fo.patch_count, trunc);
   if (friction && fo.patch_count == 0 && stick.squaredNorm() > 0.0) {
     // No node under the anchor (a slide left it off the fingertip's footprint): without a
     // patch the anchor would never move again and the fingertip would feel nothing while it
@@ -108,11 +107,11 @@ void HapticWorld::GatherLocalPatch(Object& o, std::size_t k, int i, PatchGather&
     anchor_here();
     stick.setZero();
     fo.patch_center_O_m = p;
-    AddPatch(o, g, p, n, fo.contact.depth_m, fo.patch_count, trunc);
+    AddPatch(m, d, g, p, n, fo.contact.depth_m, fo.patch_count, trunc);
   }
   fo.contact.truncated = fo.contact.truncated || trunc;
   if (!friction || fo.patch_count == 0) return;
-  for (std::int32_t q = 0; q < fo.patch_count; ++q) o.inputs[static_cast<std::size_t>(fo.patch_begin + q)].patch = g.num_friction;
+  for (std::int32_t q = 0; q < fo.patch_count; ++q) d.inputs[static_cast<std::size_t>(fo.patch_begin + q)].patch = g.num_friction;
   // How the fingertip moves along the surface: this step's motion (stick - last slide),
   // smoothed over about 16 steps. A device held still jitters: the HIRO II model on its plant
   // moves 1.3 um a step (p50; p99 5 um) with no direction kept, which the friction solve took
@@ -132,13 +131,13 @@ void HapticWorld::GatherLocalPatch(Object& o, std::size_t k, int i, PatchGather&
     constexpr double kSlipTurn = 0.02;
     const Eigen::Vector3d m_t = motion - motion.dot(n) * n;
     const double speed = m_t.norm();
-    const Eigen::Vector3d d = fo.slip_dir_O - fo.slip_dir_O.dot(n) * n;
-    if (speed > 0.0 && d.squaredNorm() > 0.0) {  // a unit vector plus 2 % of one: never short
-      fo.slip_dir_O = (d.normalized() + kSlipTurn * (m_t / speed)).normalized();
+    const Eigen::Vector3d dir = fo.slip_dir_O - fo.slip_dir_O.dot(n) * n;
+    if (speed > 0.0 && dir.squaredNorm() > 0.0) {  // a unit vector plus 2 % of one: never short
+      fo.slip_dir_O = (dir.normalized() + kSlipTurn * (m_t / speed)).normalized();
       motion = speed * fo.slip_dir_O;
     }
   }
-  o.friction[static_cast<std::size_t>(g.num_friction)] = {n, stick, o.mu_static, o.mu_kinetic, fo.slipped,
+  d.friction[static_cast<std::size_t>(g.num_friction)] = {n, stick, m.mu_static, m.mu_kinetic, fo.slipped,
                                                         motion, /*peer=*/false};
   fo.friction_patch = g.num_friction++;
 }
@@ -154,9 +153,9 @@ void HapticWorld::GatherLocalPatch(Object& o, std::size_t k, int i, PatchGather&
 // Each remote contact's patch in the inputs (the coupling's force on the body, after the solve).
 // The contact is in the body's frame O, as the hand that made it solved it: wherever this
 // process has the body (a swimming one is a few milliseconds elsewhere here), the same patch.
-void HapticWorld::GatherRemotePatch(Object& o, std::size_t r, const FingerContact& rc, PatchGather& g,
-                                    StepReport& report) noexcept {
-  if (rc.object < 0 || rc.object >= num_objects() || objects_[static_cast<std::size_t>(rc.object)].get() != &o) return;
+void HapticWorld::GatherRemotePatch(const Object& m, ObjectData& d, std::size_t k, std::size_t r,
+                                    const FingerContact& rc, PatchGather& g, StepReport& report) noexcept {
+  if (rc.object < 0 || static_cast<std::size_t>(rc.object) != k) return;
   const auto p_OC = AsVector(rc.p_OC_m), u_O = AsVector(rc.u_O_m), n_in = AsVector(rc.n_O);
   if (!p_OC.allFinite() || !u_O.allFinite() || !n_in.allFinite() || !(u_O.norm() > 0.0)) {
     ++report.remote_rejected;
@@ -170,30 +169,30 @@ void HapticWorld::GatherRemotePatch(Object& o, std::size_t r, const FingerContac
     return;
   }
   const Eigen::Vector3d stick_O = u_O + depth * n_O;
-  const bool sticks = stick_O.norm() > 1e-12 && g.num_friction < static_cast<std::int16_t>(o.friction.size());
+  const bool sticks = stick_O.norm() > 1e-12 && g.num_friction < static_cast<std::int16_t>(d.friction.size());
   std::int32_t count = 0;
   bool trunc = false;
   const std::int32_t begin = g.m;
   const bool memo = r < kMaxRemoteForces;
-  AddPatch(o, g, p_OC - (sticks ? stick_O : Eigen::Vector3d::Zero()), n_O, depth, count, trunc,
-            memo ? &o.remote_memo[r] : nullptr,
-            memo ? o.remote_memo_inputs.data() + r * static_cast<std::size_t>(o.max_patch) : nullptr);
+  AddPatch(m, d, g, p_OC - (sticks ? stick_O : Eigen::Vector3d::Zero()), n_O, depth, count, trunc,
+           memo ? &d.remote_memo[r] : nullptr,
+           memo ? d.remote_memo_inputs.data() + r * static_cast<std::size_t>(m.max_patch) : nullptr);
   if (r < kMaxRemoteForces) remote_patch_[r] = {begin, count};
   if (!sticks || count == 0) return;
-  for (std::int32_t q = 0; q < count; ++q) o.inputs[static_cast<std::size_t>(begin + q)].patch = g.num_friction;
-  o.friction[static_cast<std::size_t>(g.num_friction++)] = {n_O, stick_O, o.mu_static, o.mu_kinetic, false,
+  for (std::int32_t q = 0; q < count; ++q) d.inputs[static_cast<std::size_t>(begin + q)].patch = g.num_friction;
+  d.friction[static_cast<std::size_t>(g.num_friction++)] = {n_O, stick_O, m.mu_static, m.mu_kinetic, false,
                                                           Eigen::Vector3d::Zero(), /*peer=*/true};
 }
 
 // A local fingertip's share of the solve: the force its patch puts on the object, felt as minus
 // that, and with friction where its anchor goes next.
-void HapticWorld::ApplyFingerPatch(Object& o, FingerObject& fo, std::span<const Eigen::Vector3d> forces) noexcept {
+void HapticWorld::ApplyFingerPatch(ObjectData& d, FingerObject& fo, std::span<const Eigen::Vector3d> forces) noexcept {
   if (!fo.contact.touching) return;
   Eigen::Vector3d f_obj = Eigen::Vector3d::Zero();
   for (std::int32_t q = 0; q < fo.patch_count; ++q) f_obj += forces[static_cast<std::size_t>(fo.patch_begin + q)];
-  fo.f_W_N = -(o.X_WO.linear() * f_obj);  // the fingertip feels minus the force on the object
+  fo.f_W_N = -(d.X_WO.linear() * f_obj);  // the fingertip feels minus the force on the object
   if (fo.friction_patch >= 0) {
-    const fem::FrictionPatchState& ps = o.solver->patch_states()[static_cast<std::size_t>(fo.friction_patch)];
+    const fem::FrictionPatchState& ps = d.solver->patch_states()[static_cast<std::size_t>(fo.friction_patch)];
     if (ps.slipping && !fo.slipped) {  // the way it starts to slide: its force's
       const Eigen::Vector3d& n = fo.contact.n_O;
       const Eigen::Vector3d ft = ps.force_N - ps.force_N.dot(n) * n;

@@ -9,17 +9,17 @@
 namespace handshare::contact {
 
 void HapticWorld::CollideFinger(int i, const Eigen::Vector3d& p, double dt_s, StepReport& report) noexcept {
-  FingerResult& res = results_[static_cast<std::size_t>(i)];
+  FingerResult& res = hand_->results[static_cast<std::size_t>(i)];
   res.valid = p.allFinite() && p.cwiseAbs().maxCoeff() < 1e3;
   res.p_WP_m = res.valid ? p : Eigen::Vector3d::Zero();
   if (!res.valid) ++report.invalid_fingers;
-  for (std::size_t k = 0; k < objects_.size(); ++k) ProxyStep(i, k, res.valid, p, dt_s);
+  for (std::size_t k = 0; k < data_.size(); ++k) ProxyStep(i, k, res.valid, p, dt_s);
 }
 
 void HapticWorld::ProxyStep(int i, std::size_t k, bool valid, const Eigen::Vector3d& p, double dt_s) noexcept {
-  const auto num_obj = objects_.size();
-  Object& o = *objects_[k];
-  FingerObject& fo = fo_[static_cast<std::size_t>(i) * num_obj + k];
+  const Object& o = model_->object(k);
+  const ObjectData& d = data_[k];
+  FingerObject& fo = hand_->at(i, k, data_.size());
   fo.contact = ProxyContact{};
   fo.f_W_N.setZero();
   fo.patch_count = 0;
@@ -28,15 +28,15 @@ void HapticWorld::ProxyStep(int i, std::size_t k, bool valid, const Eigen::Vecto
     return;
   }
   const bool deformable = o.kind == ObjectKind::kDeformable;
-  Eigen::Vector3d g_O = o.X_WO.inverse() * p;
+  Eigen::Vector3d g_O = d.X_WO.inverse() * p;
   fo.shift_O_m.setZero();
-  if (deformable && o.mode && o.mode_scale != 0.0) {
-    fo.shift_O_m = ModeShift(o, g_O);
+  if (deformable && o.mode && d.mode_scale != 0.0) {
+    fo.shift_O_m = ModeShift(o, d, g_O);
     g_O -= fo.shift_O_m;
   }
   FrictionParams fr;
   if (!deformable) fr = {o.material.mu_static, o.material.mu_kinetic};
-  fo.contact = proxy_solver_.Step(*o.collider, config_.proxy, fr, g_O, fo.proxy);
+  fo.contact = proxy_solver_.Step(*o.collider, config().proxy, fr, g_O, fo.proxy);
   const Eigen::Vector3d v_O = fo.prev_valid ? Eigen::Vector3d((g_O - fo.prev_goal_O_m) / dt_s)
                                             : Eigen::Vector3d::Zero();
   fo.prev_goal_O_m = g_O;
@@ -47,21 +47,22 @@ void HapticWorld::ProxyStep(int i, std::size_t k, bool valid, const Eigen::Vecto
   const Eigen::Vector3d& n = fo.contact.n_O;
   // The proxy rests skin_m off the surface: measure the spring from the surface itself.
   Eigen::Vector3d f_O =
-      o.material.stiffness_N_per_m * (fo.contact.x_O_m - g_O - config_.proxy.skin_m * n);
+      o.material.stiffness_N_per_m * (fo.contact.x_O_m - g_O - config().proxy.skin_m * n);
   f_O -= o.material.damping_N_s_per_m * v_O.dot(n) * n;
   if (f_O.dot(n) <= 0.0) f_O.setZero();
-  fo.f_W_N = o.X_WO.linear() * f_O;
+  fo.f_W_N = d.X_WO.linear() * f_O;
 }
 
 void HapticWorld::ResolveFinger(int i, const Eigen::Vector3d& p_WE) noexcept {
-  const auto num_obj = objects_.size();
-  FingerResult& res = results_[static_cast<std::size_t>(i)];
-  scale_[static_cast<std::size_t>(i)] = 0.0;
+  const auto num_obj = data_.size();
+  FingerResult& res = hand_->results[static_cast<std::size_t>(i)];
+  hand_->scale[static_cast<std::size_t>(i)] = 0.0;
   if (!res.valid) return;
   Eigen::Vector3d f = Eigen::Vector3d::Zero();
   double best = -1.0;
+  std::size_t main = num_obj;  // the object of the largest force
   for (std::size_t k = 0; k < num_obj; ++k) {
-    const FingerObject& fo = fo_[static_cast<std::size_t>(i) * num_obj + k];
+    const FingerObject& fo = hand_->at(i, k, num_obj);
     res.truncated = res.truncated || fo.contact.truncated;
     if (!fo.contact.touching) continue;
     ++res.objects_touched;
@@ -69,72 +70,79 @@ void HapticWorld::ResolveFinger(int i, const Eigen::Vector3d& p_WE) noexcept {
     const double mag = fo.f_W_N.norm();
     if (mag <= best) continue;
     best = mag;
-    const Object& o = *objects_[k];
-    res.object = static_cast<ObjectId>(k);
-    res.p_WP_m = o.X_WO * (fo.contact.x_O_m + fo.shift_O_m);
-    res.e_PE_W_m = p_WE - res.p_WP_m;
-    res.p_WC_m = o.X_WO * fo.contact.p_O_m;
-    res.n_W = o.X_WO.linear() * fo.contact.n_O;
-    res.depth_m = fo.contact.depth_m;
-    res.sticking = fo.contact.sticking;
-    res.in_contact = true;
-    res.main_node = -1;
-    res.patch_nodes = 0;
-    res.u_W_m.setZero();
-    if (o.kind == ObjectKind::kDeformable) {
-      res.sticking = fo.friction_patch >= 0 && !fo.slipped;  // the patch's Coulomb state
-      res.u_W_m = -fo.contact.depth_m * res.n_W;
-      if (fo.friction_patch >= 0) {
-        res.u_W_m += o.X_WO.linear() * fo.solved_slide_O_m;  // and its stick
-        // The contact point a peer rebuilds this step's patch from: its center, slid. A patch
-        // that slipped was found at the anchor it had before the slip; from the proxy's point
-        // (the anchor after it) a peer's patch took other nodes and solved another force:
-        // on the beating belly, 0.74 N where the user felt 0.89 N (docs/fem.md).
-        res.p_WC_m = o.X_WO * (fo.patch_center_O_m + fo.solved_slide_O_m);
-      }
-      res.patch_nodes = fo.patch_count;
-      double best_d = std::numeric_limits<double>::infinity();
-      const auto& P = o.tet->positions_m();
-      for (std::int32_t q = 0; q < fo.patch_count; ++q) {
-        const std::int32_t node = o.inputs[static_cast<std::size_t>(fo.patch_begin + q)].node;
-        const double dq = (P[static_cast<std::size_t>(node)] - fo.contact.p_O_m).squaredNorm();
-        if (dq < best_d) {
-          best_d = dq;
-          res.main_node = node;
-        }
-      }
-    }
+    main = k;
   }
   const double norm = f.norm();
   double s = 1.0;
-  if (norm > config_.max_force_N) {
-    s = config_.max_force_N / norm;
+  if (norm > config().max_force_N) {
+    s = config().max_force_N / norm;
     res.clamped = true;
   }
-  scale_[static_cast<std::size_t>(i)] = s;
+  hand_->scale[static_cast<std::size_t>(i)] = s;
   res.f_E_W_N = s * f;
-  res.contact = SharedContact(i, res, p_WE);
+  if (main < num_obj) MainContact(i, main, p_WE, res);
 }
 
-FingerContact HapticWorld::SharedContact(int i, const FingerResult& res, const Eigen::Vector3d& p_WE) const noexcept {
+void HapticWorld::MainContact(int i, std::size_t k, const Eigen::Vector3d& p_WE, FingerResult& res) const noexcept {
+  const Object& o = model_->object(k);
+  const ObjectData& d = data_[k];
+  const FingerObject& fo = hand_->at(i, k, data_.size());
+  const bool deformable = o.kind == ObjectKind::kDeformable;
+  res.in_contact = true;
+  res.p_WP_m = d.X_WO * (fo.contact.x_O_m + fo.shift_O_m);
+  res.e_PE_W_m = p_WE - res.p_WP_m;
+  // A deformable's: the patch's Coulomb state.
+  res.sticking = deformable ? fo.friction_patch >= 0 && !fo.slipped : fo.contact.sticking;
+  res.patch_nodes = deformable ? fo.patch_count : 0;
+  std::int32_t main_node = -1;
+  if (deformable) {
+    double best_d = std::numeric_limits<double>::infinity();
+    const auto& P = o.tet->positions_m();
+    for (std::int32_t q = 0; q < fo.patch_count; ++q) {
+      const std::int32_t node = d.inputs[static_cast<std::size_t>(fo.patch_begin + q)].node;
+      const double dq = (P[static_cast<std::size_t>(node)] - fo.contact.p_O_m).squaredNorm();
+      if (dq < best_d) {
+        best_d = dq;
+        main_node = node;
+      }
+    }
+  }
+  res.contact = SharedContact(i, k, p_WE, main_node, res.f_E_W_N);
+  // The main contact in W, for the device and this node's display: the shared one seen in W,
+  // derived here and nowhere else.
+  const FingerContact& c = res.contact;
+  res.object = c.object;
+  res.main_node = c.node;
+  res.depth_m = c.depth_m;
+  res.p_WC_m = d.X_WO * AsVector(c.p_OC_m);
+  res.n_W = d.X_WO.linear() * AsVector(c.n_O);
+  res.u_W_m = deformable ? Eigen::Vector3d(d.X_WO.linear() * AsVector(c.u_O_m)) : Eigen::Vector3d::Zero();
+}
+
+FingerContact HapticWorld::SharedContact(int i, std::size_t k, const Eigen::Vector3d& p_WE, std::int32_t main_node,
+                                         const Eigen::Vector3d& f_E_W) const noexcept {
+  const Object& o = model_->object(k);
+  const ObjectData& d = data_[k];
+  const FingerObject& fo = hand_->at(i, k, data_.size());
+  const Eigen::Matrix3d R_OW = d.X_WO.linear().transpose();
   FingerContact c;
   c.finger = i;
-  if (!res.valid || !res.in_contact || res.object < 0) return c;
-  const Object& o = *objects_[static_cast<std::size_t>(res.object)];
-  const FingerObject& fo = fo_[static_cast<std::size_t>(i) * objects_.size() + static_cast<std::size_t>(res.object)];
-  const Eigen::Matrix3d R_OW = o.X_WO.linear().transpose();
-  c.object = res.object;
-  c.node = res.main_node;
-  c.depth_m = res.depth_m;
+  c.object = static_cast<ObjectId>(k);
+  c.node = main_node;
+  c.depth_m = fo.contact.depth_m;
   c.n_O = ToVec3(fo.contact.n_O);
-  c.p_OE_m = ToVec3(R_OW * (p_WE - o.X_WO.translation()));
-  c.f_O_N = ToVec3(R_OW * -res.f_E_W_N);  // on the object: minus what the fingertip feels
+  c.p_OE_m = ToVec3(R_OW * (p_WE - d.X_WO.translation()));
+  c.f_O_N = ToVec3(R_OW * -f_E_W);  // on the object: minus what the fingertip feels
   Eigen::Vector3d p_OC = fo.contact.p_O_m;
   if (o.kind == ObjectKind::kDeformable) {
     Eigen::Vector3d u_O = -fo.contact.depth_m * fo.contact.n_O;
     if (fo.friction_patch >= 0) {
-      u_O += fo.solved_slide_O_m;                      // and its stick
-      p_OC = fo.patch_center_O_m + fo.solved_slide_O_m;  // where a peer rebuilds this patch (FingerResult::p_WC_m)
+      u_O += fo.solved_slide_O_m;  // and its stick
+      // The contact point a peer rebuilds this step's patch from: its center, slid. A patch
+      // that slipped was found at the anchor it had before the slip; from the proxy's point
+      // (the anchor after it) a peer's patch took other nodes and solved another force:
+      // on the beating belly, 0.74 N where the user felt 0.89 N (docs/fem.md).
+      p_OC = fo.patch_center_O_m + fo.solved_slide_O_m;
     }
     c.u_O_m = ToVec3(u_O);
   }

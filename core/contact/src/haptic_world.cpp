@@ -66,8 +66,7 @@ void CheckMaterial(const RigidMaterial& m) {
 
 }  // namespace
 
-HapticWorld::HapticWorld(const WorldConfig& config)
-    : config_(config), proxy_solver_(config.max_candidates) {
+HapticModel::HapticModel(const WorldConfig& config) : config_(config) {
   if (config_.max_hands < 1 || config_.max_hands > 16) {
     throw std::invalid_argument("WorldConfig.max_hands must be in 1..16");
   }
@@ -80,29 +79,72 @@ HapticWorld::HapticWorld(const WorldConfig& config)
   config_.proxy.radius_m = config_.fingertip_radius_m;
 }
 
+HapticModel::~HapticModel() = default;
+
+HapticWorld::HapticWorld(const WorldConfig& config)
+    : hand_(std::make_unique<HandData>()), proxy_solver_(config.max_candidates) {
+  std::shared_ptr<HapticModel> model(new HapticModel(config));
+  setup_ = model.get();
+  model_ = std::move(model);
+}
+
+HapticWorld::HapticWorld(std::shared_ptr<const HapticModel> model)
+    : model_(std::move(model)),
+      hand_(std::make_unique<HandData>()),
+      proxy_solver_(model_ ? model_->config().max_candidates : 1) {
+  if (!model_) throw std::invalid_argument("HapticWorld: null model");
+  data_.reserve(model_->objects_.size());
+  for (const auto& o : model_->objects_) data_.push_back(MakeObjectData(*o));
+  SizeBuffers();
+  initialized_ = true;
+}
+
 HapticWorld::~HapticWorld() = default;
 
-void HapticWorld::CheckSetup(const char* what) const {
-  if (initialized_) throw std::logic_error(std::string("HapticWorld::") + what + " after Init()");
+HapticModel& HapticWorld::Setup(const char* what) {
+  if (initialized_ || setup_ == nullptr) throw std::logic_error(std::string("HapticWorld::") + what + " after Init()");
+  return *setup_;
+}
+
+HapticWorld::ObjectData HapticWorld::MakeObjectData(const Object& m) const {
+  ObjectData d;
+  d.X_WO = m.X_WO0;
+  d.v_W = m.v_W0;
+  d.w_W = m.w_W0;
+  if (m.kind == ObjectKind::kDeformable) {
+    d.solver = std::make_unique<fem::ContactSolver>(m.compliance, m.solver_options);
+    d.inputs.assign(static_cast<std::size_t>(m.solver_options.max_contacts), fem::ContactInput{});
+    d.friction.assign(static_cast<std::size_t>(m.solver_options.max_friction_patches), fem::FrictionPatch{});
+    d.remote_memo.assign(kMaxRemoteForces, PatchMemo{});
+    d.remote_memo_inputs.assign(kMaxRemoteForces * static_cast<std::size_t>(m.max_patch), fem::ContactInput{});
+  }
+  return d;
+}
+
+void HapticWorld::SizeBuffers() {
+  hand_->fo.assign(static_cast<std::size_t>(kFingers) * data_.size(), FingerObject{});
+  for (auto& r : hand_->results) r = FingerResult{};
+  mode_candidates_.assign(static_cast<std::size_t>(config().max_candidates), 0);
 }
 
 ObjectId HapticWorld::AddStatic(const Shape& shape, const RigidMaterial& material,
                                 const Eigen::Isometry3d& X_WO) {
-  CheckSetup("AddStatic");
+  HapticModel& model = Setup("AddStatic");
   CheckMaterial(material);
   if (!FiniteIsometry(X_WO)) throw std::invalid_argument("AddStatic: X_WO is not a finite rigid pose");
   auto o = std::make_unique<Object>();
   o->kind = ObjectKind::kStatic;
-  o->collider = std::make_unique<MeshCollider>(MeshOf(shape), config_.max_candidates);
+  o->collider = std::make_unique<MeshCollider>(MeshOf(shape), config().max_candidates);
   o->material = material;
-  o->X_WO = X_WO;
-  objects_.push_back(std::move(o));
-  return static_cast<ObjectId>(objects_.size() - 1);
+  o->X_WO0 = X_WO;
+  data_.push_back(MakeObjectData(*o));
+  model.objects_.push_back(std::move(o));
+  return static_cast<ObjectId>(model.objects_.size() - 1);
 }
 
 ObjectId HapticWorld::AddDynamic(const Shape& shape, const RigidMaterial& material,
                                  const BodyProperties& body, const Eigen::Isometry3d& X_WB) {
-  CheckSetup("AddDynamic");
+  HapticModel& model = Setup("AddDynamic");
   CheckMaterial(material);
   if (!FiniteIsometry(X_WB)) throw std::invalid_argument("AddDynamic: X_WB is not a finite rigid pose");
   if (!(body.mass_kg > 0.0) || !std::isfinite(body.mass_kg) || !body.inertia_B_kg_m2.allFinite() ||
@@ -113,12 +155,12 @@ ObjectId HapticWorld::AddDynamic(const Shape& shape, const RigidMaterial& materi
   auto o = std::make_unique<Object>();
   o->kind = ObjectKind::kDynamic;
   auto mesh = MeshOf(shape);
-  o->collider = std::make_unique<MeshCollider>(mesh, config_.max_candidates);
+  o->collider = std::make_unique<MeshCollider>(mesh, config().max_candidates);
   o->material = material;
-  o->X_WO = X_WB;
+  o->X_WO0 = X_WB;
   o->mass_kg = body.mass_kg;
-  o->v_W = body.v_WB_m_per_s;
-  o->w_W = body.w_WB_rad_per_s;
+  o->v_W0 = body.v_WB_m_per_s;
+  o->w_W0 = body.w_WB_rad_per_s;
   o->lin_damp = body.linear_damping_N_s_per_m;
   o->ang_damp = body.angular_damping_N_m_s;
   Eigen::Matrix3d I = body.inertia_B_kg_m2;
@@ -150,12 +192,13 @@ ObjectId HapticWorld::AddDynamic(const Shape& shape, const RigidMaterial& materi
   } else {
     o->support_points_B = mesh->p_O_m;  // box: its 8 corners; mesh: every vertex
   }
-  objects_.push_back(std::move(o));
-  return static_cast<ObjectId>(objects_.size() - 1);
+  data_.push_back(MakeObjectData(*o));
+  model.objects_.push_back(std::move(o));
+  return static_cast<ObjectId>(model.objects_.size() - 1);
 }
 
 ObjectId HapticWorld::AddDeformable(const DeformableDesc& d) {
-  CheckSetup("AddDeformable");
+  HapticModel& model = Setup("AddDeformable");
   if (!d.mesh || !d.compliance) throw std::invalid_argument("AddDeformable: null mesh or compliance");
   if (!FiniteIsometry(d.X_WO)) throw std::invalid_argument("AddDeformable: X_WO is not a finite rigid pose");
   if (d.max_patch_nodes < 1) throw std::invalid_argument("AddDeformable: max_patch_nodes must be >= 1");
@@ -180,121 +223,118 @@ ObjectId HapticWorld::AddDeformable(const DeformableDesc& d) {
   }
   o->tet = d.mesh;
   o->compliance = d.compliance;
-  o->X_WO = d.X_WO;
+  o->X_WO0 = d.X_WO;
   const fem::Surface surface = fem::ExtractSurface(*d.mesh);
   auto tri = std::make_shared<TriMesh>();
   tri->p_O_m = d.mesh->positions_m();
   tri->triangles.assign(surface.triangles.begin(), surface.triangles.end());
-  o->collider = std::make_unique<MeshCollider>(std::move(tri), config_.max_candidates);
+  o->collider = std::make_unique<MeshCollider>(std::move(tri), config().max_candidates);
   o->patches = std::make_unique<fem::ContactPatchFinder>(*d.mesh, surface, *d.compliance);
   o->max_patch = d.max_patch_nodes;
   o->mu_static = d.mu_static;
   o->mu_kinetic = d.mu_kinetic;
-  const std::int32_t max_contacts = config_.max_hands * kFingers * d.max_patch_nodes;
-  fem::ContactSolverOptions so;
-  so.max_contacts = max_contacts;
+  fem::ContactSolverOptions& so = o->solver_options;
+  so.max_contacts = config().max_hands * kFingers * d.max_patch_nodes;
   so.push_only = true;
   so.regularization_m_per_N = d.regularization_m_per_N;
-  so.max_friction_patches = config_.max_hands * kFingers;
-  o->solver = std::make_unique<fem::ContactSolver>(d.compliance, so);
-  o->inputs.assign(static_cast<std::size_t>(max_contacts), fem::ContactInput{});
-  o->friction.assign(static_cast<std::size_t>(so.max_friction_patches), fem::FrictionPatch{});
-  o->remote_memo.assign(kMaxRemoteForces, PatchMemo{});
-  o->remote_memo_inputs.assign(kMaxRemoteForces * static_cast<std::size_t>(d.max_patch_nodes), fem::ContactInput{});
-  objects_.push_back(std::move(o));
-  return static_cast<ObjectId>(objects_.size() - 1);
+  so.max_friction_patches = config().max_hands * kFingers;
+  data_.push_back(MakeObjectData(*o));
+  model.objects_.push_back(std::move(o));
+  return static_cast<ObjectId>(model.objects_.size() - 1);
 }
 
 void HapticWorld::SetSupport(const SupportPlane& plane) {
-  CheckSetup("SetSupport");
+  HapticModel& model = Setup("SetSupport");
   if (!plane.n_W.allFinite() || !(plane.n_W.norm() > 0.0) || !std::isfinite(plane.offset_m) ||
       !(plane.stiffness_N_per_m > 0.0) || !(plane.damping_N_s_per_m >= 0.0) || !(plane.mu >= 0.0) ||
       !(plane.slip_velocity_m_per_s > 0.0)) {
     throw std::invalid_argument("SetSupport: need a finite nonzero normal, stiffness > 0, damping, mu >= 0");
   }
-  support_ = plane;
-  support_.n_W.normalize();
-  has_support_ = true;
+  model.support_ = plane;
+  model.support_.n_W.normalize();
+  model.has_support_ = true;
 }
 
 void HapticWorld::SetGravity(const Eigen::Vector3d& g) {
-  CheckSetup("SetGravity");
+  HapticModel& model = Setup("SetGravity");
   if (!g.allFinite()) throw std::invalid_argument("SetGravity: not finite");
-  config_.gravity_W_m_per_s2 = g;
+  model.config_.gravity_W_m_per_s2 = g;
 }
 
 void HapticWorld::Init() {
-  CheckSetup("Init");
-  fo_.assign(static_cast<std::size_t>(kFingers) * objects_.size(), FingerObject{});
-  for (auto& r : results_) r = FingerResult{};
-  mode_candidates_.assign(static_cast<std::size_t>(config_.max_candidates), 0);
+  Setup("Init");
+  SizeBuffers();
+  setup_ = nullptr;  // the model is const from here on
   initialized_ = true;
 }
 
+std::span<const FingerResult> HapticWorld::fingers() const noexcept {
+  return {hand_->results.data(), hand_->results.size()};
+}
+
 std::span<const fem::NodeLoad> HapticWorld::held_loads(ObjectId id) const noexcept {
-  if (id < 0 || id >= num_objects() || !objects_[static_cast<std::size_t>(id)]->solver) return {};
-  return objects_[static_cast<std::size_t>(id)]->solver->loads();
+  if (id < 0 || id >= num_objects() || !data_[static_cast<std::size_t>(id)].solver) return {};
+  return data_[static_cast<std::size_t>(id)].solver->loads();
 }
 
 const fem::ContactSolver* HapticWorld::contact_solver(ObjectId id) const noexcept {
   if (id < 0 || id >= num_objects()) return nullptr;
-  return objects_[static_cast<std::size_t>(id)]->solver.get();
+  return data_[static_cast<std::size_t>(id)].solver.get();
 }
 
 Eigen::Isometry3d HapticWorld::pose(ObjectId id) const noexcept {
   if (id < 0 || id >= num_objects()) return Eigen::Isometry3d::Identity();
-  return objects_[static_cast<std::size_t>(id)]->X_WO;
+  return data_[static_cast<std::size_t>(id)].X_WO;
 }
 
 Eigen::Vector3d HapticWorld::body_velocity_W(ObjectId id) const noexcept {
   if (id < 0 || id >= num_objects()) return Eigen::Vector3d::Zero();
-  return objects_[static_cast<std::size_t>(id)]->v_W;
+  return data_[static_cast<std::size_t>(id)].v_W;
 }
 
 Eigen::Vector3d HapticWorld::finger_reaction_W(ObjectId id) const noexcept {
   if (id < 0 || id >= num_objects()) return Eigen::Vector3d::Zero();
-  return objects_[static_cast<std::size_t>(id)]->reaction_W_N;
+  return data_[static_cast<std::size_t>(id)].reaction_W_N;
 }
 
 bool HapticWorld::proxy_W(int finger, ObjectId object, Eigen::Vector3d& p_WP_m) const noexcept {
   if (!initialized_ || finger < 0 || finger >= kFingers || object < 0 || object >= num_objects()) return false;
-  const FingerObject& fo = fo_[static_cast<std::size_t>(finger) * objects_.size() + static_cast<std::size_t>(object)];
+  const FingerObject& fo = hand_->at(finger, static_cast<std::size_t>(object), data_.size());
   if (!fo.proxy.initialized) return false;
-  p_WP_m = objects_[static_cast<std::size_t>(object)]->X_WO * (fo.proxy.x_O_m + fo.shift_O_m);
+  p_WP_m = data_[static_cast<std::size_t>(object)].X_WO * (fo.proxy.x_O_m + fo.shift_O_m);
   return true;
 }
 
 void HapticWorld::SetModeScale(ObjectId id, double s) noexcept {
   if (id < 0 || id >= num_objects() || !std::isfinite(s)) return;
-  Object& o = *objects_[static_cast<std::size_t>(id)];
-  if (o.mode) o.mode_scale = s;
+  if (model_->object(static_cast<std::size_t>(id)).mode) data_[static_cast<std::size_t>(id)].mode_scale = s;
 }
 
 double HapticWorld::mode_scale(ObjectId id) const noexcept {
-  return id >= 0 && id < num_objects() ? objects_[static_cast<std::size_t>(id)]->mode_scale : 0.0;
+  return id >= 0 && id < num_objects() ? data_[static_cast<std::size_t>(id)].mode_scale : 0.0;
 }
 
 
 void HapticWorld::SetPose(ObjectId id, const Eigen::Isometry3d& X) noexcept {
   if (id < 0 || id >= num_objects() || !X.matrix().allFinite()) return;
-  Object& o = *objects_[static_cast<std::size_t>(id)];
-  o.X_WO = X;
-  o.v_W.setZero();
-  o.w_W.setZero();
+  ObjectData& d = data_[static_cast<std::size_t>(id)];
+  d.X_WO = X;
+  d.v_W.setZero();
+  d.w_W.setZero();
 }
 
 void HapticWorld::SetVelocity(ObjectId id, const Eigen::Vector3d& v_W, const Eigen::Vector3d& w_W) noexcept {
   if (id < 0 || id >= num_objects() || !v_W.allFinite() || !w_W.allFinite()) return;
-  Object& o = *objects_[static_cast<std::size_t>(id)];
-  if (o.kind != ObjectKind::kDynamic) return;
-  o.v_W = v_W;
-  o.w_W = w_W;
+  if (model_->object(static_cast<std::size_t>(id)).kind != ObjectKind::kDynamic) return;
+  ObjectData& d = data_[static_cast<std::size_t>(id)];
+  d.v_W = v_W;
+  d.w_W = w_W;
 }
 
 
-Eigen::Vector3d HapticWorld::ModeShift(const Object& o, const Eigen::Vector3d& g) noexcept {
-  const double s = o.mode_scale;
-  const double reach = config_.fingertip_radius_m + std::abs(s) * o.mode_reach_m + 1e-3;
+Eigen::Vector3d HapticWorld::ModeShift(const Object& o, const ObjectData& d, const Eigen::Vector3d& g) noexcept {
+  const double s = d.mode_scale;
+  const double reach = config().fingertip_radius_m + std::abs(s) * o.mode_reach_m + 1e-3;
   const BallQueryResult q = o.collider->QueryBall(g, reach, mode_candidates_);
   if (q.count == 0) return Eigen::Vector3d::Zero();
   const TriMesh& mesh = o.collider->mesh();
@@ -331,17 +371,19 @@ StepReport HapticWorld::Step(double dt_s, std::span<const Eigen::Vector3d> p_WE,
   if (!BeginStep(dt_s, p_WE, remote, report)) return report;
   // 1. Each fingertip against every object: collision, proxy, rigid force. A finger the hand
   //    does not have (p_WE shorter than kFingers) touches nothing.
+  const std::size_t num_obj = data_.size();
   for (int i = 0; i < kFingers; ++i) {
     const auto f = static_cast<std::size_t>(i);
     if (f < p_WE.size()) {
       CollideFinger(i, p_WE[f], dt_s, report);
     } else {
-      for (std::size_t k = 0; k < objects_.size(); ++k) ProxyStep(i, k, false, Eigen::Vector3d::Zero(), dt_s);
+      for (std::size_t k = 0; k < num_obj; ++k) ProxyStep(i, k, false, Eigen::Vector3d::Zero(), dt_s);
     }
   }
   // 2. Each deformable: every hand's patches on it (local and remote, one path) in one solve.
-  for (std::size_t k = 0; k < objects_.size(); ++k) {
-    if (objects_[k]->kind == ObjectKind::kDeformable) StepDeformable(*objects_[k], k, remote, report);
+  for (std::size_t k = 0; k < num_obj; ++k) {
+    const Object& m = model_->object(k);
+    if (m.kind == ObjectKind::kDeformable) StepDeformable(m, data_[k], k, remote, report);
   }
   // 3. Each finger: its forces summed and clamped, its main contact (what it shares).
   for (std::size_t f = 0; f < p_WE.size(); ++f) ResolveFinger(static_cast<int>(f), p_WE[f]);
@@ -353,15 +395,16 @@ StepReport HapticWorld::Step(double dt_s, std::span<const Eigen::Vector3d> p_WE,
 
 bool HapticWorld::BeginStep(double dt_s, std::span<const Eigen::Vector3d> p_WE, std::span<const FingerContact> remote,
                             StepReport& report) noexcept {
-  for (auto& r : results_) r = FingerResult{};
-  for (std::size_t i = 0; i < results_.size(); ++i) results_[i].contact.finger = static_cast<std::int32_t>(i);
-  scale_.fill(0.0);
+  auto& results = hand_->results;
+  for (auto& r : results) r = FingerResult{};
+  for (std::size_t i = 0; i < results.size(); ++i) results[i].contact.finger = static_cast<std::int32_t>(i);
+  hand_->scale.fill(0.0);
   if (!initialized_ || !(dt_s > 0.0) || !std::isfinite(dt_s) || p_WE.size() > static_cast<std::size_t>(kFingers)) {
     report.ok = false;
     report.invalid_fingers = kFingers;
     return false;
   }
-  for (auto& o : objects_) o->reaction_W_N.setZero();
+  for (auto& d : data_) d.reaction_W_N.setZero();
   num_remote_forces_ = std::min(remote.size(), kMaxRemoteForces);
   for (std::size_t r = 0; r < num_remote_forces_; ++r) remote_force_O_[r].setZero();
   return true;

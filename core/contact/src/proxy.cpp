@@ -230,7 +230,7 @@ std::size_t ProxySolver::EndSlot(const Eigen::Vector3d& x) noexcept {
   return static_cast<std::size_t>(h >> 58) % kEndEntries;
 }
 
-bool ProxySolver::Gather(MeshCollider& collider, const ProxyParams& params, const Eigen::Vector3d& x,
+bool ProxySolver::Gather(const MeshCollider& collider, const ProxyParams& params, const Eigen::Vector3d& x,
                          const Eigen::Vector3d& d) noexcept {
   const double Rs = params.radius_m + params.skin_m;
   const Eigen::Vector3d center = x + 0.5 * d;
@@ -325,7 +325,7 @@ bool ProxySolver::Site::Is(const MeshCollider& collider, const ProxyParams& para
          std::memcmp(x.data(), at.data(), sizeof(double) * 3) == 0;
 }
 
-int ProxySolver::ConstraintsAt(MeshCollider& collider, const ProxyParams& params, const Eigen::Vector3d& x) noexcept {
+int ProxySolver::ConstraintsAt(const MeshCollider& collider, const ProxyParams& params, const Eigen::Vector3d& x) noexcept {
   if (!reference_ && cons_site_.Is(collider, params, x)) return cons_m_;
   Gather(collider, params, x, Eigen::Vector3d::Zero());
   return CollectConstraints(collider, params, x);
@@ -408,14 +408,14 @@ Eigen::Vector3d ProxySolver::Project(const Eigen::Vector3d& goal, const Eigen::V
   return best_t;
 }
 
-Eigen::Vector3d ProxySolver::Move(MeshCollider& collider, const ProxyParams& params,
+Eigen::Vector3d ProxySolver::Move(const MeshCollider& collider, const ProxyParams& params,
                                   const Eigen::Vector3d& x0, const Eigen::Vector3d& goal,
                                   bool* truncated, std::int32_t* iterations) noexcept {
   cons_site_ = Site{};  // a call from outside Step starts from a fresh gather
   return MoveFrom(collider, params, x0, goal, truncated, iterations);
 }
 
-Eigen::Vector3d ProxySolver::MoveFrom(MeshCollider& collider, const ProxyParams& params,
+Eigen::Vector3d ProxySolver::MoveFrom(const MeshCollider& collider, const ProxyParams& params,
                                       const Eigen::Vector3d& x0, const Eigen::Vector3d& goal,
                                       bool* truncated, std::int32_t* iterations) noexcept {
   truncated_ = false;
@@ -486,21 +486,20 @@ Eigen::Vector3d ProxySolver::MoveFrom(MeshCollider& collider, const ProxyParams&
   return x;
 }
 
-ProxyContact ProxySolver::Step(MeshCollider& collider, const ProxyParams& params,
-                               const FrictionParams& friction, const Eigen::Vector3d& goal,
-                               ProxyState& state) noexcept {
-  ProxyContact out;
-  out.x_O_m = state.x_O_m;
-  cons_site_ = Site{};  // set again below only from this collider's own results
-  if (!goal.allFinite()) return out;
+namespace {
+
+// Step's first stage: a proxy that has not started (or is not finite) starts at the goal; one
+// far from the mesh's bounding sphere at both ends is free, at the goal. True: free (state and
+// out are set).
+bool StartOrFree(const MeshCollider& collider, const ProxyParams& params, const Eigen::Vector3d& goal,
+                 ProxyState& state, ProxyContact& out) noexcept {
   if (!state.initialized || !state.x_O_m.allFinite()) {
     state.x_O_m = goal;
     state.initialized = true;
     state.in_contact = false;
     state.free_tracked = false;
   }
-  const Eigen::Vector3d x0 = state.x_O_m;
-  // Far from the mesh's bounding sphere at both ends: free.
+  const Eigen::Vector3d& x0 = state.x_O_m;
   const double reach = collider.bound_radius_m() + params.radius_m + params.max_step_m;
   if ((x0 - collider.bound_center_O_m()).norm() > reach &&
       (goal - collider.bound_center_O_m()).norm() > reach) {
@@ -508,8 +507,57 @@ ProxyContact ProxySolver::Step(MeshCollider& collider, const ProxyParams& params
     state.free_tracked = false;
     state.in_contact = false;
     out.x_O_m = goal;
-    return out;
+    return true;
   }
+  return false;
+}
+
+// Step's last stage: the contact at the final proxy x from its m constraints. Normal: the
+// touching feature nearest to the proxy (the others in the band are tilted neighbours); among
+// features touching equally (a concave corner) the one pressed hardest. (A template: the
+// solver's constraint type is its own.)
+template <class Constraint>
+void ContactAt(const Constraint* cons, int m, const Eigen::Vector3d& x, const Eigen::Vector3d& goal, double skin_m,
+               ProxyContact& out) noexcept {
+  if (m <= 0) return;
+  int best = 0;
+  for (int i = 1; i < m; ++i) {
+    if (cons[i].dist < cons[best].dist) best = i;
+  }
+  const Constraint& k = cons[best];
+  out.p_O_m = k.c;
+  out.n_O = k.n;
+  out.triangle = k.tri;
+  double depth = -std::numeric_limits<double>::infinity();
+  for (int i = 0; i < m; ++i) {
+    const Constraint& q = cons[i];
+    if (q.dist > k.dist + 1e-9) continue;
+    const double di = q.n.dot(x - goal);
+    if (di > depth) {
+      depth = di;
+      out.p_O_m = q.c;
+      out.n_O = q.n;
+      out.triangle = q.tri;
+    }
+  }
+  // Depth of the fingertip sphere below the surface (the proxy rests skin_m above it).
+  out.depth_m = std::max(0.0, depth - skin_m);
+  out.touching = depth > skin_m;
+}
+
+}  // namespace
+
+// The stages: start (or free), the frictionless god-object's move, Coulomb on the proxy about
+// it, and the contact where the proxy ends.
+ProxyContact ProxySolver::Step(const MeshCollider& collider, const ProxyParams& params,
+                               const FrictionParams& friction, const Eigen::Vector3d& goal,
+                               ProxyState& state) noexcept {
+  ProxyContact out;
+  out.x_O_m = state.x_O_m;
+  cons_site_ = Site{};  // set again below only from this collider's own results
+  if (!goal.allFinite()) return out;
+  if (StartOrFree(collider, params, goal, state, out)) return out;
+  const Eigen::Vector3d x0 = state.x_O_m;
   bool trunc = false;
   std::int32_t iters = 0;
   Eigen::Vector3d x = x0;
@@ -570,33 +618,7 @@ ProxyContact ProxySolver::Step(MeshCollider& collider, const ProxyParams& params
   out.iterations = iters;
   out.x_O_m = x;
   state.x_O_m = x;
-  if (m > 0) {
-    int best = 0;
-    for (int i = 1; i < m; ++i) {
-      if (cons_[static_cast<std::size_t>(i)].dist < cons_[static_cast<std::size_t>(best)].dist) best = i;
-    }
-    const Constraint& k = cons_[static_cast<std::size_t>(best)];
-    out.p_O_m = k.c;
-    out.n_O = k.n;
-    out.triangle = k.tri;
-    // Normal: the touching feature nearest to the proxy (the others in the band are tilted
-    // neighbours); among features touching equally (a concave corner) the one pressed hardest.
-    double depth = -std::numeric_limits<double>::infinity();
-    for (int i = 0; i < m; ++i) {
-      const Constraint& q = cons_[static_cast<std::size_t>(i)];
-      if (q.dist > k.dist + 1e-9) continue;
-      const double di = q.n.dot(x - goal);
-      if (di > depth) {
-        depth = di;
-        out.p_O_m = q.c;
-        out.n_O = q.n;
-        out.triangle = q.tri;
-      }
-    }
-    // Depth of the fingertip sphere below the surface (the proxy rests skin_m above it).
-    out.depth_m = std::max(0.0, depth - params.skin_m);
-    out.touching = depth > params.skin_m;
-  }
+  ContactAt(cons_.data(), m, x, goal, params.skin_m, out);
   if (!out.touching) out.sticking = false;
   state.in_contact = out.touching;
   state.sliding = out.touching && slipped;

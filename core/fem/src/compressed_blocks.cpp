@@ -370,82 +370,112 @@ class HBuilder {
   int Compress(const Cluster& s, const Cluster& t, std::int64_t max_floats) {
     const std::int64_t m = 3 * static_cast<std::int64_t>(s.size()), n = 3 * static_cast<std::int64_t>(t.size());
     const std::int64_t cap = std::min(max_floats, m * n - 1);
-    auto cost = [&](std::int64_t k, bool half) { return half ? (k * (m + n) + 1) / 2 + k : k * (m + n); };
-    auto most_rank = [&](std::int64_t floats, bool half) {  // largest k with cost(k) <= floats
-      std::int64_t k = half ? 2 * floats / (m + n + 2) + 1 : floats / (m + n);
-      while (k > 0 && cost(k, half) > floats) --k;
-      return static_cast<int>(std::min<std::int64_t>(k, kMaxBlockRank));
-    };
     const bool try_half = o_.factor_precision == Precision::kFloat16;
     if (cap < 0) return -1;
     Fill(s, t);
     ++tried;
-    const double norm = A_.norm(), budget = o_.tolerance * norm;
+    Candidates c;
+    c.m = m;
+    c.n = n;
+    const double norm = A_.norm();
+    c.budget = o_.tolerance * norm;
     R_ = A_;
     // ACA may overshoot the rank that the recompression ends at, so its limit follows the dense
     // break-even rank (not max_floats: a tighter ACA limit was measured to cost memory).
-    const int dense_limit = most_rank(m * n - 1, try_half);
+    const int dense_limit = MostRank(m, n, m * n - 1, try_half);
     const int aca_limit = static_cast<int>(std::min<std::int64_t>({dense_limit + dense_limit / 2 + 2, m, n}));
-    const int aca = AcaFullPivot(R_, kAcaShare * budget, aca_limit, U_, V_);
-    if (aca < 0) return -1;
-    // Candidate factors of rank k: from the SVD of the recompression, or ACA's own at rank <= 1.
-    int k0 = aca;
+    c.aca = AcaFullPivot(R_, kAcaShare * c.budget, aca_limit, U_, V_);
+    if (c.aca < 0) return -1;
+    Recompress(c);
+    return SmallestStoredRank(c, cap, try_half);
+  }
+
+  // Compress's stages. The candidate factors of one block: of rank k from the SVD of the
+  // recompression of ACA's factors, or ACA's own at rank <= 1.
+  struct Candidates {
+    std::int64_t m = 0, n = 0;  // the block's rows and columns
+    double budget = 0.0;        // tolerance * ||A||_F
+    int aca = 0;                // ACA's rank
+    int k0 = 0;                 // the smallest rank the singular values allow
     Eigen::MatrixXd qum, qvm, su, sv_mat;
     Eigen::VectorXd sv;
-    if (aca > 1) {
-      const Eigen::HouseholderQR<Eigen::MatrixXd> qu(U_.leftCols(aca)), qv(V_.leftCols(aca));
-      const Eigen::MatrixXd ru = qu.matrixQR().topRows(aca).triangularView<Eigen::Upper>();
-      const Eigen::MatrixXd rv = qv.matrixQR().topRows(aca).triangularView<Eigen::Upper>();
-      const Eigen::BDCSVD<Eigen::MatrixXd> svd(ru * rv.transpose(), Eigen::ComputeFullU | Eigen::ComputeFullV);
-      sv = svd.singularValues();
-      // Smallest k whose discarded singular values, added to the ACA residual, fit the budget.
-      const double r2 = R_.squaredNorm();
-      double tail2 = 0.0;
-      while (k0 > 0 && r2 + tail2 + sv(k0 - 1) * sv(k0 - 1) <= budget * budget) {
-        tail2 += sv(k0 - 1) * sv(k0 - 1);
-        --k0;
-      }
-      qum = qu.householderQ() * Eigen::MatrixXd::Identity(m, aca);
-      qvm = qv.householderQ() * Eigen::MatrixXd::Identity(n, aca);
-      su = svd.matrixU();
-      sv_mat = svd.matrixV();
+    Eigen::MatrixXd u, v;       // the candidate Meets last rounded
+  };
+  // Floats a rank-k factorization of an m x n block stores (float16 factors count half, plus
+  // one float32 scale per rank).
+  static std::int64_t Cost(std::int64_t m, std::int64_t n, std::int64_t k, bool half) {
+    return half ? (k * (m + n) + 1) / 2 + k : k * (m + n);
+  }
+  // The largest k with Cost(k) <= floats (at most kMaxBlockRank).
+  static int MostRank(std::int64_t m, std::int64_t n, std::int64_t floats, bool half) {
+    std::int64_t k = half ? 2 * floats / (m + n + 2) + 1 : floats / (m + n);
+    while (k > 0 && Cost(m, n, k, half) > floats) --k;
+    return static_cast<int>(std::min<std::int64_t>(k, kMaxBlockRank));
+  }
+
+  // QR of both ACA factors, SVD of the r x r core, and the smallest k whose discarded singular
+  // values, added to the ACA residual, fit the budget.
+  void Recompress(Candidates& c) {
+    c.k0 = c.aca;
+    if (c.aca <= 1) return;
+    const int aca = c.aca;
+    const Eigen::HouseholderQR<Eigen::MatrixXd> qu(U_.leftCols(aca)), qv(V_.leftCols(aca));
+    const Eigen::MatrixXd ru = qu.matrixQR().topRows(aca).triangularView<Eigen::Upper>();
+    const Eigen::MatrixXd rv = qv.matrixQR().topRows(aca).triangularView<Eigen::Upper>();
+    const Eigen::BDCSVD<Eigen::MatrixXd> svd(ru * rv.transpose(), Eigen::ComputeFullU | Eigen::ComputeFullV);
+    c.sv = svd.singularValues();
+    const double r2 = R_.squaredNorm();
+    double tail2 = 0.0;
+    while (c.k0 > 0 && r2 + tail2 + c.sv(c.k0 - 1) * c.sv(c.k0 - 1) <= c.budget * c.budget) {
+      tail2 += c.sv(c.k0 - 1) * c.sv(c.k0 - 1);
+      --c.k0;
     }
-    // Rounds the rank-k candidate as it would be stored and checks its explicit residual; on
-    // success the stored form is left for Emit.
-    Eigen::MatrixXd u, v;
-    auto meets = [&](int k, bool half) {
-      if (aca > 1) {
-        u = qum * (su.leftCols(k) * sv.head(k).asDiagonal());
-        v = qvm * sv_mat.leftCols(k);
-      } else {
-        u = U_.leftCols(k);
-        v = V_.leftCols(k);
-      }
-      Round(u, v, half);
-      R_ = A_;
-      R_.noalias() -= u * v.transpose();
-      if (R_.norm() > budget) return false;
-      half_ = half;
-      if (!half) {
-        U_.leftCols(k) = u;
-        V_.leftCols(k) = v;
-      }
-      return true;
-    };
+    c.qum = qu.householderQ() * Eigen::MatrixXd::Identity(c.m, aca);
+    c.qvm = qv.householderQ() * Eigen::MatrixXd::Identity(c.n, aca);
+    c.su = svd.matrixU();
+    c.sv_mat = svd.matrixV();
+  }
+
+  // Rounds the rank-k candidate as it would be stored and checks its explicit residual; on
+  // success the stored form is left for Emit.
+  bool Meets(Candidates& c, int k, bool half) {
+    if (c.aca > 1) {
+      c.u = c.qum * (c.su.leftCols(k) * c.sv.head(k).asDiagonal());
+      c.v = c.qvm * c.sv_mat.leftCols(k);
+    } else {
+      c.u = U_.leftCols(k);
+      c.v = V_.leftCols(k);
+    }
+    Round(c.u, c.v, half);
+    R_ = A_;
+    R_.noalias() -= c.u * c.v.transpose();
+    if (R_.norm() > c.budget) return false;
+    half_ = half;
+    if (!half) {
+      U_.leftCols(k) = c.u;
+      V_.leftCols(k) = c.v;
+    }
+    return true;
+  }
+
+  // The smallest rank that meets the tolerance within cap floats: float16 first (with
+  // factor_precision kFloat16), then float32 at the ranks that store less than that; -1: none.
+  int SmallestStoredRank(Candidates& c, std::int64_t cap, bool try_half) {
     int half_rank = -1;
     if (try_half) {
       // First at the largest allowed rank, where truncation is smallest: if the rounding fails
       // there, it fails at every rank (saves the search at tight tolerances).
-      const int limit = std::min(most_rank(cap, true), aca);
-      if (k0 <= limit && (k0 == limit || meets(limit, true))) {
-        for (int k = k0; k <= limit && half_rank < 0; ++k)
-          if (meets(k, true)) half_rank = k;
+      const int limit = std::min(MostRank(c.m, c.n, cap, true), c.aca);
+      if (c.k0 <= limit && (c.k0 == limit || Meets(c, limit, true))) {
+        for (int k = c.k0; k <= limit && half_rank < 0; ++k)
+          if (Meets(c, k, true)) half_rank = k;
       }
     }
     // float32 at the ranks that store less than the float16 result (if any).
-    const int limit = std::min(most_rank(half_rank >= 0 ? cost(half_rank, true) - 1 : cap, false), aca);
-    for (int k = k0; k <= limit; ++k)
-      if (meets(k, false)) return k;
+    const int limit =
+        std::min(MostRank(c.m, c.n, half_rank >= 0 ? Cost(c.m, c.n, half_rank, true) - 1 : cap, false), c.aca);
+    for (int k = c.k0; k <= limit; ++k)
+      if (Meets(c, k, false)) return k;
     half_ = half_rank >= 0;
     return half_rank;
   }

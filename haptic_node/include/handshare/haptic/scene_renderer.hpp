@@ -19,6 +19,7 @@
 #include "handshare/contact/coupling_passivity.hpp"
 #include "handshare/contact/peer_contact.hpp"
 #include "handshare/world/scene_models.hpp"
+#include "handshare/world/scripted_motion.hpp"
 
 namespace handshare::haptic {
 
@@ -146,8 +147,7 @@ class SceneRenderer final : public ForceRenderer {
   world::SceneModels models_;
   controls::ControlSet controls_;
   double fingertip_radius_m_;
-  std::vector<std::pair<contact::ObjectId, std::size_t>> moving_;  // (object, scene index)
-  std::vector<std::pair<contact::ObjectId, std::size_t>> beating_;  // (object, scene index)
+  world::ScriptedMotion scripted_;  // motions and beats on the session clock
   std::vector<contact::ObjectId> deformables_;                       // world indices (load snapshots)
   // Haptic-thread state, sized here.
   std::array<Eigen::Vector3d, kFingers> f_controls_{};
@@ -159,8 +159,9 @@ class SceneRenderer final : public ForceRenderer {
   RemoteContacts remote_;
   FollowedBodies followed_;
   std::array<contact::FingerContact, kMaxRemoteContacts> remote_contacts_{};
+  std::array<std::int32_t, kMaxRemoteContacts> remote_from_{};  // remote_contacts_[j] is remote_.items[remote_from_[j]]
   contact::CouplingPassivity passivity_;
-  contact::PeerWeights peer_weights_;  // the fade's weights, rising again at its rate
+  contact::PeerFadeStage peer_fade_;
   // Channels.
   common::TripleBuffer<RemoteContacts> remote_in_;
   common::TripleBuffer<FollowedBodies> followed_in_;

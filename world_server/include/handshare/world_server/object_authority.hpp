@@ -35,6 +35,7 @@
 #include "handshare/session/peer_contacts.hpp"
 #include "handshare/world_server/body_state.hpp"
 #include "handshare/world/scene_models.hpp"
+#include "handshare/world/scripted_motion.hpp"
 #include "handshare/world_server/deformation_delta.hpp"
 #include "handshare/world_server/ownership_arbiter.hpp"
 
@@ -190,10 +191,11 @@ class ObjectAuthority {
   };
   std::map<std::string, HandOver> handing_over_;
   std::vector<Deformable> deformables_;
-  std::vector<std::pair<contact::ObjectId, std::size_t>> moving_;  // object, scene index
+  world::ScriptedMotion scripted_;  // motions and beats on the session clock
   std::map<contact::ObjectId, Eigen::Vector3d> last_published_;     // free bodies
-  std::vector<contact::FingerContact> remote_;
-  contact::PeerWeights peer_weights_;  // the fade's weights, rising again at its rate
+  std::vector<contact::PeerContact> received_;  // the peers' contacts on deformables, this tick
+  std::vector<contact::FingerContact> remote_;   // faded, as the solve takes them
+  contact::PeerFadeStage peer_fade_;
   bool keyframes_requested_ = false;
   Clock::time_point next_pose_refresh_{};  // ObjectAuthorityOptions::pose_refresh_period
 };

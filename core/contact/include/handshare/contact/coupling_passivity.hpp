@@ -116,6 +116,17 @@ class CouplingPassivity {
   };
   /// The open channel of (user_key, finger, object): its index, -1 if none.
   int Find(std::uint64_t user_key, std::int32_t finger, std::int32_t object) const noexcept;
+  // Admit's stages.
+  /// The contact's open channel, opened if it has none; nullptr if every channel is open.
+  Channel* ChannelOf(const PeerContact& sent) noexcept;
+  /// The peer's end: the work its samples did on its body (e_tx), once per sample, and since
+  /// when it has been still.
+  void ObserveSample(Channel& ch, const PeerContact& sent) noexcept;
+  /// This end: target taken at a fingertip's speed (a held lag closing at the fade's rate),
+  /// within the energy the channel has brought, or granted beyond it once the peer is still.
+  Eigen::Vector3d Limit(Channel& ch, const Eigen::Vector3d& target, bool still) noexcept;
+  /// The channel's last displacement plus the part of du whose predicted work fits the budget.
+  Eigen::Vector3d ScaledToBudget(const Channel& ch, const Eigen::Vector3d& du, double budget) const noexcept;
 
   bool enabled_;
   double max_step_m_ = 0.0;

@@ -4,8 +4,15 @@
 /// rigid bodies (grasping, under the scene's gravity) and FEM deformables shared with remote
 /// hands. Layer 4 of the architecture (haptic rendering): no middleware, no rendering.
 ///
+/// Model and data (as MuJoCo's mjModel/mjData, Pinocchio's Model/Data): a HapticModel is what
+/// the scene's objects are (colliders, materials, masses, compliances, beat modes, the support
+/// and gravity), const once built; a HapticWorld steps its own data on one (poses, velocities,
+/// forces, the deformables' solver state and patch memos, and per hand the proxies, friction
+/// anchors and results). Any number of worlds may share one model (shared_model()).
+///
 /// Setup (allocates, may throw): construct with a WorldConfig, Add*() objects, SetSupport(),
-/// then Init() sizes every per-step buffer for config.max_hands x kFingers fingertips.
+/// then Init() freezes the model and sizes every per-step buffer for config.max_hands x kFingers
+/// fingertips; or construct on a model another world built (HapticWorld(shared_model())).
 /// Real time: Step() is noexcept and never allocates; it reads the local fingertip centres and
 /// the remote hands' contacts and writes one FingerResult per local finger.
 ///
@@ -129,6 +136,14 @@ struct WorldConfig {
 /// What one local finger feels and touches this step: in W what the device and this node's
 /// display use (force felt, proxy, the main contact), and in `contact` what the hand shares
 /// with the others (FingerContact, frame O). Plain data.
+///
+/// The main contact is one state: `contact` (frame O) is where it is made, and p_WC_m, n_W,
+/// u_W_m, depth_m, object and main_node are that contact seen in W at the object's pose of
+/// this step (HapticWorld derives them from it, in one place). Both are kept because their
+/// readers differ: the device, the controls and the display work in W and need no object pose
+/// to read them; the peers, the server and the bridge need the contact in O. The force is the
+/// other way round: f_E_W_N (on the fingertip, clamped) is what the device gets, and
+/// contact.f_O_N is minus it in O.
 struct FingerResult {
   /// The main contact (largest force) as the hand shares it: frame O, force on the object
   /// (finger_contact.hpp). contact.object -1: this finger touches nothing.
@@ -136,17 +151,19 @@ struct FingerResult {
   Eigen::Vector3d f_E_W_N = Eigen::Vector3d::Zero();  ///< force on the fingertip, clamped.
   Eigen::Vector3d p_WP_m = Eigen::Vector3d::Zero();   ///< proxy (IHIP) centre; fingertip if free.
   Eigen::Vector3d e_PE_W_m = Eigen::Vector3d::Zero(); ///< penetration vector, proxy -> fingertip.
-  Eigen::Vector3d p_WC_m = Eigen::Vector3d::Zero();   ///< contact point on the surface (a
+  Eigen::Vector3d p_WC_m = Eigen::Vector3d::Zero();   ///< X_WO contact.p_OC_m: contact point (a
                                                       ///< deformable's: undeformed, at rest; with
                                                       ///< friction, where this step's patch was
                                                       ///< found plus its slide, so that a peer
                                                       ///< rebuilds that patch: p_WC - stick).
-  Eigen::Vector3d n_W = Eigen::Vector3d::Zero();      ///< outward unit normal there.
-  Eigen::Vector3d u_W_m = Eigen::Vector3d::Zero();    ///< deformable: imposed displacement (the
-                                                      ///< indentation -depth n_W plus the stick).
-  double depth_m = 0.0;                 ///< penetration along n.
-  ObjectId object = -1;                 ///< main object (largest force), -1 if none.
-  std::int32_t main_node = -1;          ///< deformable: patch node nearest the contact point.
+  Eigen::Vector3d n_W = Eigen::Vector3d::Zero();      ///< R_WO contact.n_O: outward unit normal.
+  Eigen::Vector3d u_W_m = Eigen::Vector3d::Zero();    ///< R_WO contact.u_O_m: a deformable's imposed
+                                                      ///< displacement (the indentation -depth n_W
+                                                      ///< plus the stick).
+  double depth_m = 0.0;                 ///< contact.depth_m: penetration along n.
+  ObjectId object = -1;                 ///< contact.object: main object (largest force), -1 if none.
+  std::int32_t main_node = -1;          ///< contact.node: a deformable's patch node nearest the
+                                        ///< contact point.
   std::int32_t patch_nodes = 0;         ///< deformable: nodes in the patch.
   std::int32_t objects_touched = 0;
   bool valid = false;                   ///< input finite (else zero force).
@@ -164,9 +181,38 @@ struct StepReport {
   std::int32_t remote_rejected = 0;
 };
 
+/// What a scene's objects are, for haptic rendering: const once built (HapticWorld::Init), so
+/// any number of worlds on any threads may read it at once. Built only through a HapticWorld's
+/// setup calls; each object's parts are private to the contact sources.
+class HapticModel {
+ public:
+  struct Object;  ///< one object's collider, material, mass, compliance (world_object.hpp)
+  ~HapticModel();
+  HapticModel(const HapticModel&) = delete;
+  HapticModel& operator=(const HapticModel&) = delete;
+
+  const WorldConfig& config() const noexcept { return config_; }
+  std::int32_t num_objects() const noexcept { return static_cast<std::int32_t>(objects_.size()); }
+  bool has_support() const noexcept { return has_support_; }
+  const SupportPlane& support() const noexcept { return support_; }
+  const Object& object(std::size_t k) const noexcept { return *objects_[k]; }
+
+ private:
+  friend class HapticWorld;
+  explicit HapticModel(const WorldConfig& config);
+  WorldConfig config_;
+  bool has_support_ = false;
+  SupportPlane support_{};
+  std::vector<std::unique_ptr<Object>> objects_;
+};
+
 class HapticWorld {
  public:
   explicit HapticWorld(const WorldConfig& config = {});
+  /// A world of its own (poses, velocities, proxies, solver states as the model starts them)
+  /// on a model another world built and Init()ed: already initialized, ready to Step.
+  /// @throws std::invalid_argument for a null model.
+  explicit HapticWorld(std::shared_ptr<const HapticModel> model);
   ~HapticWorld();
   HapticWorld(const HapticWorld&) = delete;
   HapticWorld& operator=(const HapticWorld&) = delete;
@@ -198,7 +244,7 @@ class HapticWorld {
   StepReport Step(double dt_s, std::span<const Eigen::Vector3d> p_WE_m,
                   std::span<const FingerContact> remote = {}) noexcept;
 
-  std::span<const FingerResult> fingers() const noexcept { return {results_.data(), results_.size()}; }
+  std::span<const FingerResult> fingers() const noexcept;
   /// Deformable: the held nodes' loads of the last solve (forces on the object, frame O), for
   /// the deformation the world server publishes. Empty for other objects.
   std::span<const fem::NodeLoad> held_loads(ObjectId id) const noexcept;
@@ -230,22 +276,34 @@ class HapticWorld {
   /// Sum of the last step's reactions of the local fingertips on the object [N] (minus what
   /// the fingertips feel).
   Eigen::Vector3d finger_reaction_W(ObjectId id) const noexcept;
-  std::int32_t num_objects() const noexcept { return static_cast<std::int32_t>(objects_.size()); }
+  std::int32_t num_objects() const noexcept { return model_->num_objects(); }
   /// Where finger `finger`'s proxy on `object` is, in W, touching or not (a free proxy sits on
   /// its fingertip); false (p untouched) for a bad index or a proxy that has not started.
   bool proxy_W(int finger, ObjectId object, Eigen::Vector3d& p_WP_m) const noexcept;
-  const WorldConfig& config() const noexcept { return config_; }
+  const WorldConfig& config() const noexcept { return model_->config(); }
+  /// The model this world steps (complete once Init() returned).
+  const HapticModel& model() const noexcept { return *model_; }
+  /// The model to build more worlds on (HapticWorld(std::shared_ptr<const HapticModel>));
+  /// null before Init().
+  std::shared_ptr<const HapticModel> shared_model() const noexcept { return initialized_ ? model_ : nullptr; }
 
  private:
-  struct Object;
+  using Object = HapticModel::Object;
+  struct ObjectData;
   struct PatchMemo;
   struct FingerObject;
+  struct HandData;
   /// A deformable's inputs as its stage gathers them: nodes so far, friction patches so far.
   struct PatchGather {
     std::int32_t m = 0;
     std::int16_t num_friction = 0;
   };
-  void CheckSetup(const char* what) const;
+  /// The model while it is built; throws std::logic_error after Init().
+  HapticModel& Setup(const char* what);
+  /// The data of model object m as a world starts it (setup; allocates).
+  ObjectData MakeObjectData(const Object& m) const;
+  /// Sizes the per-step buffers and the hand's data (setup; allocates).
+  void SizeBuffers();
 
   // ---- The stages of Step, each in the file that says so ----
   /// haptic_world.cpp: clears the last step's results; false (report not ok) for a bad dt or
@@ -257,23 +315,28 @@ class HapticWorld {
   /// finger_stages.cpp: finger i's proxy on object k (a fingertip not `valid` keeps its proxy
   /// and touches nothing), and a rigid object's spring-damper force.
   void ProxyStep(int i, std::size_t k, bool valid, const Eigen::Vector3d& p_WE, double dt_s) noexcept;
-  /// finger_stages.cpp: finger i's forces summed and clamped, its main contact in W and as it
-  /// shares it (SharedContact).
+  /// finger_stages.cpp: finger i's forces summed and clamped, and its main contact (MainContact).
   void ResolveFinger(int i, const Eigen::Vector3d& p_WE) noexcept;
-  /// Finger i's main contact as the hand shares it (FingerResult::contact), frame O, from its
-  /// result and its fingertip centre p_WE.
-  FingerContact SharedContact(int i, const FingerResult& res, const Eigen::Vector3d& p_WE) const noexcept;
-  /// deformable_stage.cpp: every hand's patches on deformable o (object k) in one solve.
-  void StepDeformable(Object& o, std::size_t k, std::span<const FingerContact> remote, StepReport& report) noexcept;
-  void GatherLocalPatch(Object& o, std::size_t k, int i, PatchGather& g) noexcept;
-  void GatherRemotePatch(Object& o, std::size_t r, const FingerContact& rc, PatchGather& g, StepReport& report) noexcept;
-  void AddPatch(Object& o, PatchGather& g, const Eigen::Vector3d& p_O, const Eigen::Vector3d& n_O, double depth,
-                std::int32_t& count, bool& truncated, PatchMemo* memo = nullptr,
+  /// Finger i's main contact, on object k: its proxy and Coulomb state, the contact it shares
+  /// (SharedContact) and that contact seen in W.
+  void MainContact(int i, std::size_t k, const Eigen::Vector3d& p_WE, FingerResult& res) const noexcept;
+  /// Finger i's contact on object k as the hand shares it (FingerResult::contact), frame O, from
+  /// its fingertip centre p_WE, the patch node nearest the contact and the force it feels f_E_W.
+  FingerContact SharedContact(int i, std::size_t k, const Eigen::Vector3d& p_WE, std::int32_t main_node,
+                              const Eigen::Vector3d& f_E_W) const noexcept;
+  /// deformable_stage.cpp: every hand's patches on deformable k (model m, data d) in one solve.
+  void StepDeformable(const Object& m, ObjectData& d, std::size_t k, std::span<const FingerContact> remote,
+                      StepReport& report) noexcept;
+  void GatherLocalPatch(const Object& m, ObjectData& d, std::size_t k, int i, PatchGather& g) noexcept;
+  void GatherRemotePatch(const Object& m, ObjectData& d, std::size_t k, std::size_t r, const FingerContact& rc,
+                         PatchGather& g, StepReport& report) noexcept;
+  void AddPatch(const Object& m, ObjectData& d, PatchGather& g, const Eigen::Vector3d& p_O, const Eigen::Vector3d& n_O,
+                double depth, std::int32_t& count, bool& truncated, PatchMemo* memo = nullptr,
                 fem::ContactInput* kept = nullptr) noexcept;
-  void ApplyFingerPatch(Object& o, FingerObject& fo, std::span<const Eigen::Vector3d> forces) noexcept;
+  void ApplyFingerPatch(ObjectData& d, FingerObject& fo, std::span<const Eigen::Vector3d> forces) noexcept;
   /// A moded deformable: s mode at the surface point nearest g_O (interpolated over its
   /// triangle), zero if no surface is within reach of the fingertip.
-  Eigen::Vector3d ModeShift(const Object& o, const Eigen::Vector3d& g_O) noexcept;
+  Eigen::Vector3d ModeShift(const Object& m, const ObjectData& d, const Eigen::Vector3d& g_O) noexcept;
   /// body_stage.cpp: the fingertips' reactions and the other hands' forces on the bodies.
   void ApplyReactions(std::span<const FingerContact> remote, StepReport& report) noexcept;
   /// body_stage.cpp: every dynamic body over dt_s (StepBody).
@@ -282,56 +345,25 @@ class HapticWorld {
   /// fingers put on it held): a stalled loop hands in a long dt_s, and one explicit step of
   /// the support spring (5000 N/m under a 0.2 kg ball: stable below about 12 ms) over it
   /// throws the body. dt_s is capped at kMaxBodyStep_s (the body then lags the wall clock).
-  void StepBody(Object& o, double dt_s) noexcept;
-  void SubstepBody(Object& o, double h_s) noexcept;
+  void StepBody(const Object& m, ObjectData& d, double dt_s) noexcept;
+  void SubstepBody(const Object& m, ObjectData& d, double h_s) noexcept;
   static constexpr double kMaxBodySubstep_s = 2e-3;
   static constexpr double kMaxBodyStep_s = 0.1;
 
-  WorldConfig config_;
+  // The model: const from Init() on; setup_ is the same object while it is built.
+  std::shared_ptr<const HapticModel> model_;
+  HapticModel* setup_ = nullptr;
   bool initialized_ = false;
-  std::vector<std::unique_ptr<Object>> objects_;
-  bool has_support_ = false;
-  SupportPlane support_{};
+  // The data, world_object.hpp: each object's in this world (by object index), the hand's.
+  std::vector<ObjectData> data_;
+  std::unique_ptr<HandData> hand_;
+  // Per-step scratch.
   ProxySolver proxy_solver_;
-  // Per (finger, object): proxy state, previous goal (for the fingertip velocity), and this
-  // step's contact and force (before the clamp).
-  struct FingerObject {
-    ProxyState proxy;
-    // A moded deformable: where the surface near the fingertip has moved (s mode); the proxy
-    // runs on the rest surface toward the fingertip moved back by it.
-    Eigen::Vector3d shift_O_m = Eigen::Vector3d::Zero();
-    Eigen::Vector3d prev_goal_O_m = Eigen::Vector3d::Zero();
-    bool prev_valid = false;
-    ProxyContact contact;
-    Eigen::Vector3d f_W_N = Eigen::Vector3d::Zero();
-    std::int32_t patch_begin = 0, patch_count = 0;
-    // Friction on a deformable: the material point the fingertip holds (frame O, on the
-    // undeformed surface), whether it holds one, and whether it slipped in the last step.
-    Eigen::Vector3d anchor_O_m = Eigen::Vector3d::Zero();
-    // The slide the anchor keeps (a slip carried on follows the solved one a quarter of the
-    // way) and the slide the last step's solve held (what its report gives peers).
-    Eigen::Vector3d slide_O_m = Eigen::Vector3d::Zero();
-    Eigen::Vector3d solved_slide_O_m = Eigen::Vector3d::Zero();
-    // Where this step's patch was found (the anchor on the contact's tangent plane): peers
-    // rebuild it from the contact point a report gives, center + slide (FingerResult::p_WC_m).
-    Eigen::Vector3d patch_center_O_m = Eigen::Vector3d::Zero();
-    // The fingertip's motion along the surface per step, smoothed (FrictionPatch::motion_m).
-    Eigen::Vector3d motion_O_m = Eigen::Vector3d::Zero();
-    // The way a slipping patch slides (unit, frame O; zero while it sticks): its force's when it
-    // started, turned toward the fingertip's motion a little each step.
-    Eigen::Vector3d slip_dir_O = Eigen::Vector3d::Zero();
-    bool anchored = false;
-    bool slipped = false;
-    std::int16_t friction_patch = -1;  // this step's patch index in the solve, -1: none
-  };
-  std::vector<FingerObject> fo_;  // [finger * num_objects + object]
-  std::array<FingerResult, kFingers> results_{};
   std::vector<std::int32_t> mode_candidates_;  // ModeShift's ball query
   std::array<Eigen::Vector3d, kMaxRemoteForces> remote_force_O_{};
   std::size_t num_remote_forces_ = 0;
   // Each remote contact's patch in its deformable's inputs (begin, count), this step.
   std::array<std::pair<std::int32_t, std::int32_t>, kMaxRemoteForces> remote_patch_{};
-  std::array<double, kFingers> scale_{};
 };
 
 }  // namespace handshare::contact

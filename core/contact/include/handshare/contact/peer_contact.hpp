@@ -1,11 +1,14 @@
 #pragma once
 /// How the other hands' contacts (PeerContact, finger_contact.hpp: a FingerContact with who
 /// sent it and when it came) enter a solve: faded by their age at the solver's own step
-/// (PeerFade, FadedContact), and rising again at the fade's rate (PeerWeights). The haptic
-/// renderer and the world server both step them through here. Plain data, no middleware.
+/// (PeerFade, FadedContact), and rising again at the fade's rate (PeerWeights); PeerFadeStage is
+/// that stage of a solve, which the haptic renderer and the world server both run. Plain data,
+/// no middleware.
 #include <algorithm>
 #include <array>
+#include <cstddef>
 #include <cstdint>
+#include <span>
 #include <string_view>
 
 #include "handshare/contact/finger_contact.hpp"
@@ -115,6 +118,41 @@ class PeerWeights {
   };
   std::array<Channel, kMaxChannels> channels_{};
   int count_ = 0;
+};
+
+/// The peer-fade stage of a solve, the one loop every process that solves the peers' contacts
+/// runs (the haptic renderer at each haptic step, the world server at each tick): each contact
+/// weighted by the fade law at its age at this step (PeerFade::WeightAt), rising again at the
+/// fade's rate (PeerWeights), and faded (FadedContact); a contact of weight 0 leaves the solve.
+/// Fixed arrays: real-time safe.
+class PeerFadeStage {
+ public:
+  /// One step: writes the faded contacts of `peers` into `out`, in order, and, where `from` is
+  /// long enough, the index in `peers` each came from. Once `out` is full, the contacts left
+  /// are not weighed (their weights start afresh when they next fit).
+  /// @param now_ns  this step's time, on the clock of PeerContact::received_ns [ns]
+  /// @param dt_s    since the last step [s]
+  /// @returns how many contacts were written.
+  std::size_t Step(std::span<const PeerContact> peers, const PeerFade& fade, double dt_s, std::uint64_t now_ns,
+                   std::span<FingerContact> out, std::span<std::int32_t> from = {}) noexcept {
+    std::size_t n = 0;
+    for (std::size_t i = 0; i < peers.size() && n < out.size(); ++i) {
+      const PeerContact& c = peers[i];
+      const double law = fade.WeightAt(now_ns, c.received_ns);
+      if (law <= 0.0) continue;
+      // A contact coming back after its set had aged into the fade (its bridge stalled) rises
+      // at the fade's rate, not in one step.
+      const double w = weights_.Weight(c, law, dt_s, fade.rate_per_s(), now_ns);
+      if (w <= 0.0) continue;
+      if (n < from.size()) from[n] = static_cast<std::int32_t>(i);
+      out[n++] = FadedContact(c, w);
+    }
+    weights_.EndStep(now_ns);
+    return n;
+  }
+
+ private:
+  PeerWeights weights_;
 };
 
 }  // namespace handshare::contact

@@ -83,7 +83,7 @@ class ProxySolver {
 
   /// One haptic step of the proxy on `collider` toward the fingertip centre goal_O (O frame).
   /// Updates state; returns the contact. Non-finite goal: state unchanged, touching = false.
-  ProxyContact Step(MeshCollider& collider, const ProxyParams& params,
+  ProxyContact Step(const MeshCollider& collider, const ProxyParams& params,
                     const FrictionParams& friction, const Eigen::Vector3d& goal_O_m,
                     ProxyState& state) noexcept;
 
@@ -98,7 +98,7 @@ class ProxySolver {
 
   /// The frictionless constrained motion from x0 toward goal (the core of Step; public for
   /// tests). Returns the final proxy centre.
-  Eigen::Vector3d Move(MeshCollider& collider, const ProxyParams& params,
+  Eigen::Vector3d Move(const MeshCollider& collider, const ProxyParams& params,
                        const Eigen::Vector3d& x0_O_m, const Eigen::Vector3d& goal_O_m,
                        bool* truncated = nullptr, std::int32_t* iterations = nullptr) noexcept;
 
@@ -142,18 +142,18 @@ class ProxySolver {
   // Candidate triangles near the segment x + s d, s in [0, 1] (d = 0: the point x): at least
   // every one within the touch band of it (culled_: only those, up to the cull's float slack), else every one
   // in the ball around it grown by R + skin and a margin. Returns false if none.
-  bool Gather(MeshCollider& collider, const ProxyParams& params, const Eigen::Vector3d& x,
+  bool Gather(const MeshCollider& collider, const ProxyParams& params, const Eigen::Vector3d& x,
               const Eigen::Vector3d& d) noexcept;
   int CollectConstraints(const MeshCollider& collider, const ProxyParams& params,
                          const Eigen::Vector3d& x) noexcept;
   Eigen::Vector3d Project(const Eigen::Vector3d& goal, const Eigen::Vector3d& x, int m) const noexcept;
   // Move, reusing the constraints at x0 when the last collection in this Step was there.
-  Eigen::Vector3d MoveFrom(MeshCollider& collider, const ProxyParams& params,
+  Eigen::Vector3d MoveFrom(const MeshCollider& collider, const ProxyParams& params,
                            const Eigen::Vector3d& x0_O_m, const Eigen::Vector3d& goal_O_m,
                            bool* truncated, std::int32_t* iterations) noexcept;
   // The constraints at x (cons_, m returned): the ones at hand when they were collected there
   // for this collider and params from an untruncated gather, else a fresh gather and collection.
-  int ConstraintsAt(MeshCollider& collider, const ProxyParams& params, const Eigen::Vector3d& x) noexcept;
+  int ConstraintsAt(const MeshCollider& collider, const ProxyParams& params, const Eigen::Vector3d& x) noexcept;
   // The constraints where an earlier Step ended at x, if the end table holds them (fast path).
   void LoadEnd(const MeshCollider& collider, const ProxyParams& params, const Eigen::Vector3d& x) noexcept;
   // Remembers the constraints at hand for a later Step starting where they were collected.
