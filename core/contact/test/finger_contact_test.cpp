@@ -26,9 +26,13 @@ TEST(FingerContact, AContactGivenInWIsTheWorldsOwnContactInO) {
   const ObjectId id = w.AddDeformable(d);
   w.Init();
   const double r = w.config().fingertip_radius_m, depth = 0.0015;
-  const Eigen::Vector3d p_WE = d.X_WO * Eigen::Vector3d(0.03, 0.025, 0.03 + r - depth);
-  const std::array<Eigen::Vector3d, 1> tips = {p_WE};
-  for (int k = 0; k < 5; ++k) w.Step(1e-3, tips);
+  // Lowered from 2 mm above the top face (z = 3 cm in O) to the depth: the proxy comes from outside.
+  Eigen::Vector3d p_WE;
+  for (int k = 0; k <= 40; ++k) {
+    p_WE = d.X_WO * Eigen::Vector3d(0.03, 0.025, 0.03 + r + 0.002 - (0.002 + depth) * k / 40.0);
+    const std::array<Eigen::Vector3d, 1> tips = {p_WE};
+    w.Step(1e-3, tips);
+  }
   const FingerResult& res = w.fingers()[0];
   ASSERT_TRUE(res.in_contact);
   ASSERT_EQ(res.contact.object, id);
