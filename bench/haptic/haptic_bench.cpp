@@ -186,7 +186,8 @@ std::unique_ptr<Scenario> MakeDeformable(const std::string& name, bool plate, in
   if (two_hands) {
     // A remote hand's five fingertips pressing 1.5 mm at fixed points, as its ContactSet says.
     for (int i = 0; i < kFingers; ++i) {
-      s->remote.push_back(ContactInObjectFrame(d.X_WO, i, 0, Eigen::Vector3d(0.15 * L + 0.17 * L * i, 0.9 * L, top),
+      const Eigen::Vector3d p_C(0.15 * L + 0.17 * L * i, 0.9 * L, top);
+      s->remote.push_back(ContactInObjectFrame(d.X_WO, i, 0, p_C, p_C + Eigen::Vector3d(0, 0, 0.008 - 0.0015),
                                                Eigen::Vector3d(0, 0, -0.0015), Eigen::Vector3d(0, 0, 0.2)));
     }
   }

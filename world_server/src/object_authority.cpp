@@ -7,54 +7,54 @@
 #include <set>
 #include <sstream>
 
+#include "handshare/contact/finger_contact.hpp"
+#include "handshare/dds/messages.hpp"
 #include "handshare/session/contact_deadband.hpp"
+#include "handshare/session/peer_contacts.hpp"
 
 namespace handshare::server {
 
-namespace {
+struct ObjectAuthority::BodyPlan {
+  // Owned bodies: the owner, and its newest set when that set simulates the body (else null:
+  // granted, and the owner has not taken it over yet).
+  std::map<contact::ObjectId, std::pair<std::string, const session::PeerContacts::Entry*>> owned;
+  // Held at rest this tick: a resumed session's body reserved for its owner's claim, or a body
+  // handed over until its new owner simulates it.
+  std::map<contact::ObjectId, Eigen::Isometry3d> at_rest;
+  // Reserved for an owner's claim: not published (the claim decides, not this server).
+  std::set<contact::ObjectId> reserved;
+};
 
-bool Finite(const msg::ContactSet& s) {
-  for (int k = 0; k < 3; ++k) {
-    if (!std::isfinite(s.p_WO_m()[k])) return false;
-  }
-  for (int k = 0; k < 4; ++k) {
-    if (!std::isfinite(s.q_WO_wxyz()[k])) return false;
-  }
-  return true;
-}
+namespace {
 
 // The owner's body velocity; zero when not finite or faster than any hand moves (a corrupt
 // sample must not fling the body out of the world).
 Eigen::Vector3d Velocity(const msg::ContactSet& s) {
   constexpr double kMaxSpeed_m_per_s = 20.0;
-  const Eigen::Vector3d v(s.v_WO_m_per_s()[0], s.v_WO_m_per_s()[1], s.v_WO_m_per_s()[2]);
+  const Eigen::Vector3d v = contact::AsVector(s.v_WO_m_per_s());
   return v.allFinite() && v.norm() <= kMaxSpeed_m_per_s ? v : Eigen::Vector3d::Zero();
 }
 
-Eigen::Isometry3d Pose(const msg::ContactSet& s) {
-  Eigen::Isometry3d X = Eigen::Isometry3d::Identity();
-  const auto& q = s.q_WO_wxyz();
-  X.linear() = Eigen::Quaterniond(q[0], q[1], q[2], q[3]).normalized().toRotationMatrix();
-  X.translation() = Eigen::Vector3d(s.p_WO_m()[0], s.p_WO_m()[1], s.p_WO_m()[2]);
-  return X;
-}
-
-/// Where an owner's body is at `now`: its newest set's pose, moved on at the set's velocity
-/// since the set arrived, for at most session::kMaxReckoning_s (the first-order hold the
-/// owner's deadband assumes: it sends a set only when the body leaves this reckoning).
+/// Where an owner's body is at `now`: its newest set's pose (found trustworthy by
+/// SimulatingSet), moved on at the set's velocity since the set arrived, for at most
+/// session::kMaxReckoning_s (the first-order hold the owner's deadband assumes: it sends a set
+/// only when the body leaves this reckoning).
 Eigen::Isometry3d ReckonedPose(const session::PeerContacts::Entry& e, std::chrono::steady_clock::time_point now) {
-  Eigen::Isometry3d X = Pose(e.set);
+  Eigen::Isometry3d X = contact::ToPose(e.set.p_WO_m(), e.set.q_WO_wxyz());
   const double age_s = std::chrono::duration<double>(now - e.received).count();
   X.translation() += Velocity(e.set) * std::clamp(age_s, 0.0, session::kMaxReckoning_s);
   return X;
 }
 
-/// `user`'s newest set when it reports simulating `id` at a finite pose, else nullptr.
+/// `user`'s newest set when it reports simulating `id` at a pose to trust (contact::ToPose:
+/// finite, a rotation), else nullptr.
 const session::PeerContacts::Entry* SimulatingSet(const session::PeerContacts& peers, const std::string& user,
                                                   const std::string& id) {
   const auto it = peers.sets().find(user);
+  Eigen::Isometry3d X_WO;
   if (it == peers.sets().end() || !it->second.set.simulating() ||
-      it->second.set.simulated_object_id().to_string() != id || !Finite(it->second.set)) {
+      it->second.set.simulated_object_id().to_string() != id ||
+      !contact::ToPose(it->second.set.p_WO_m(), it->second.set.q_WO_wxyz(), X_WO)) {
     return nullptr;
   }
   return &it->second;
@@ -81,7 +81,10 @@ void DumpMesh(const std::filesystem::path& dir, const world::PreparedDeformable&
 }  // namespace
 
 ObjectAuthority::ObjectAuthority(std::string session, ObjectAuthorityOptions options, common::SessionClock clock)
-    : session_(std::move(session)), options_(std::move(options)), clock_(clock), peers_(options_.peers), arbiter_(options_.ownership) {}
+    : session_(std::move(session)), options_(std::move(options)), clock_(clock),
+      peers_(std::make_unique<session::PeerContacts>(session::PeerContactsConfig{
+          std::chrono::nanoseconds(options_.peers.fade_after_ns), std::chrono::nanoseconds(options_.peers.lifespan_ns)})),
+      arbiter_(options_.ownership) {}
 
 ObjectAuthority::~ObjectAuthority() {
   if (loading_.valid()) loading_.wait();
@@ -104,7 +107,7 @@ void ObjectAuthority::SetScene(const scene::Scene& scene) {
     claims_.clear();
     handing_over_.clear();
     peer_fade_ = {};
-    peers_.Clear();
+    peers_->Clear();
   }
   // A build in flight is superseded, not waited for: the tick goes on, and its models are
   // dropped when it finishes (Tick reaps it).
@@ -118,7 +121,7 @@ void ObjectAuthority::SetScene(const scene::Scene& scene) {
 void ObjectAuthority::OnContactSet(const msg::ContactSet& set, Clock::time_point now) {
   const std::string user = set.user().to_string();
   if (user.empty() || set.session().to_string() != session_) return;
-  peers_.Receive(set, now);
+  peers_->Receive(set, now);
   const std::string claim = set.grasped_object_id().to_string();
   std::string& previous = claims_[user];
   if (!previous.empty() && previous != claim) arbiter_.Report(user, previous, false, now);
@@ -255,7 +258,7 @@ void ObjectAuthority::AdoptModels(TickOutput& out) {
 }
 
 void ObjectAuthority::ArbitrateOwnership(Clock::time_point now, TickOutput& out) {
-  peers_.Expire(now);
+  peers_->Expire(now);
   out.ownership = arbiter_.Update(now);
   for (const auto& change : out.ownership) {
     if (change.reason == OwnershipReason::kHandedOver) {
@@ -286,7 +289,7 @@ ObjectAuthority::BodyPlan ObjectAuthority::PlanBodies(Clock::time_point now, Tic
       }
     }
     if (owner.empty()) continue;
-    const session::PeerContacts::Entry* set = SimulatingSet(peers_, owner, id);
+    const session::PeerContacts::Entry* set = SimulatingSet(*peers_, owner, id);
     plan.owned[body] = {owner, set};
     if (set != nullptr) {
       handing_over_.erase(id);  // the new owner simulates it
@@ -294,7 +297,7 @@ ObjectAuthority::BodyPlan ObjectAuthority::PlanBodies(Clock::time_point now, Tic
       // Handed over, and the new owner has not taken it over yet: it is in that owner's grasp,
       // so it stays where the last owner left it instead of falling for the round trip.
       if (!h->second.X_WO) {
-        const session::PeerContacts::Entry* last = SimulatingSet(peers_, h->second.from, id);
+        const session::PeerContacts::Entry* last = SimulatingSet(*peers_, h->second.from, id);
         h->second.X_WO = last != nullptr ? ReckonedPose(*last, now) : world.pose(body);
       }
       plan.at_rest[body] = *h->second.X_WO;
@@ -310,10 +313,10 @@ std::size_t ObjectAuthority::GatherPeerContacts(Clock::time_point now, double dt
   // Faded as the haptic nodes fade them, and coming back at the fade's rate as they do
   // (contact::PeerWeights), so the published field is the one the nodes' solves have.
   received_.clear();
-  peers_.ForEach(*models_, now, [&](const contact::PeerContact& c, const msg::ContactSet&) {
+  peers_->ForEach(*models_, now, [&](const contact::PeerContact& c, const msg::ContactSet&) {
     if (world.contact_solver(c.contact.object) != nullptr) received_.push_back(c);
   });
-  return peer_fade_.Step(received_, peers_.fade(), dt_s, session::PeerContacts::SteadyNs(now), remote_);
+  return peer_fade_.Step(received_, peers_->fade(), dt_s, session::PeerContacts::SteadyNs(now), remote_);
 }
 
 void ObjectAuthority::MoveScriptedObjects(Clock::time_point now) {
@@ -429,7 +432,7 @@ void ObjectAuthority::Dump(const Deformable& d, std::uint32_t revision, Clock::t
   std::ostringstream contacts;
   contacts.precision(17);
   bool first_contact = true;
-  peers_.ForEach(*models_, now, [&](const contact::PeerContact& c, const msg::ContactSet& set) {
+  peers_->ForEach(*models_, now, [&](const contact::PeerContact& c, const msg::ContactSet& set) {
     const contact::FingerContact& fc = c.contact;
     if (fc.object != d.object) return;
     users.insert(set.user().to_string());
@@ -444,7 +447,7 @@ void ObjectAuthority::Dump(const Deformable& d, std::uint32_t revision, Clock::t
     triple("p_W_m", X_WO * contact::AsVector(fc.p_OC_m));
     triple("u_W_m", R * contact::AsVector(fc.u_O_m));
     triple("n_W", R * contact::AsVector(fc.n_O));
-    contacts << ", \"weight\": " << peers_.fade().WeightAt(session::PeerContacts::SteadyNs(now), c.received_ns) << "}";
+    contacts << ", \"weight\": " << peers_->fade().WeightAt(session::PeerContacts::SteadyNs(now), c.received_ns) << "}";
     first_contact = false;
   });
   std::ostringstream j;

@@ -73,12 +73,8 @@ msg::ObjectState ToObjectState(const BodyState& body, const std::string& session
   s.session(session);
   s.owner(body.owner);
   s.stamp_ns(stamp_ns);
-  const Eigen::Quaterniond q(body.X_WO.linear());
-  for (int k = 0; k < 3; ++k) {
-    s.p_WO_m()[k] = body.X_WO.translation()[k];
-    s.v_WO_m_per_s()[k] = body.v_WO_m_per_s[k];
-  }
-  s.q_WO_wxyz({q.w(), q.x(), q.y(), q.z()});
+  contact::FromPose(body.X_WO, s.p_WO_m(), s.q_WO_wxyz());
+  s.v_WO_m_per_s(contact::ToVec3(body.v_WO_m_per_s));
   return s;
 }
 

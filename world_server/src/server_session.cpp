@@ -12,19 +12,9 @@ namespace {
 scene::Scene ResumedScene(scene::Scene fallback, const ResumePoint* resume, const SceneLoader& load) {
   if (resume == nullptr) return fallback;
   scene::Scene s = load(resume->state.scene);
-  const auto& g = resume->state.gravity_W_m_per_s2;
-  s.gravity_W_m_per_s2 = Eigen::Vector3d(g[0], g[1], g[2]);
+  s.gravity_W_m_per_s2 = contact::AsVector(resume->state.gravity_W_m_per_s2);
   s.title = resume->state.title;
   return s;
-}
-
-Eigen::Isometry3d PoseOf(const ObjectPose& p) {
-  Eigen::Isometry3d X = Eigen::Isometry3d::Identity();
-  X.linear() = Eigen::Quaterniond(p.q_WO_wxyz[0], p.q_WO_wxyz[1], p.q_WO_wxyz[2], p.q_WO_wxyz[3])
-                   .normalized()
-                   .toRotationMatrix();
-  X.translation() = Eigen::Vector3d(p.p_WO_m[0], p.p_WO_m[1], p.p_WO_m[2]);
-  return X;
 }
 
 }  // namespace
@@ -41,8 +31,12 @@ ServerSession::ServerSession(ServerSessionConfig config, scene::Scene scene, con
   message_id_ = resume->state.message_id - 1;
   for (const auto& p : resume->poses) {
     // A body its owner held: kept for that owner's claim for 2 s (a participant lease of 1 s
-    // and rediscovery, 0.3 s measured), so it is not dropped and re-grabbed.
-    objects_.PlaceBody(p.object_id, PoseOf(p), p.owner, std::chrono::seconds(2));
+    // and rediscovery, 0.3 s measured), so it is not dropped and re-grabbed. A logged pose
+    // nobody can trust (not finite, no rotation) is not placed: the body starts where the
+    // scene puts it.
+    Eigen::Isometry3d X_WO;
+    if (!contact::ToPose(p.p_WO_m, p.q_WO_wxyz, X_WO)) continue;
+    objects_.PlaceBody(p.object_id, X_WO, p.owner, std::chrono::seconds(2));
   }
 }
 
@@ -229,7 +223,7 @@ SessionState ServerSession::State() const {
   st.scene = scene_.name;
   st.title = scene_.title;
   st.revision = revision_;
-  for (int k = 0; k < 3; ++k) st.gravity_W_m_per_s2[k] = scene_.gravity_W_m_per_s2[k];
+  st.gravity_W_m_per_s2 = contact::ToVec3(scene_.gravity_W_m_per_s2);
   st.epoch_unix_ns = clock_.EpochUnixNs();
   st.message_id = message_id_;
   st.board = board_;

@@ -56,12 +56,7 @@ void SessionLogWriter::LogPose(const BodyState& body, Clock::time_point now) {
   p.object_id = body.object_id;
   p.owner = body.owner;
   p.unix_ns = unix_now_();
-  const Eigen::Quaterniond q(body.X_WO.linear());
-  for (int k = 0; k < 3; ++k) p.p_WO_m[k] = body.X_WO.translation()[k];
-  p.q_WO_wxyz[0] = q.w();
-  p.q_WO_wxyz[1] = q.x();
-  p.q_WO_wxyz[2] = q.y();
-  p.q_WO_wxyz[3] = q.z();
+  contact::FromPose(body.X_WO, p.p_WO_m, p.q_WO_wxyz);
   log_.OnObjectPose(p);
 }
 

@@ -6,28 +6,15 @@
 #include <map>
 #include <stdexcept>
 
+#include "test_support.hpp"
+
 namespace handshare::server {
 namespace {
 
 using controls::EventKind;
-
-scene::Message Msg(const std::string& language, const std::string& text) { return {language, text, "", language == "ja" ? "よみ" : ""}; }
-
-scene::ControlSpec Control(const std::string& id, scene::ControlType type) {
-  scene::ControlSpec c;
-  c.id = id;
-  c.type = type;
-  return c;
-}
-
-scene::Scene World(const std::string& name, double g) {
-  scene::Scene s;
-  s.name = name;
-  s.title = name + " title";
-  s.gravity_W_m_per_s2 = Eigen::Vector3d(0, 0, -g);
-  s.messages = {Msg("en", "welcome to " + name), Msg("ja", name + " ja")};
-  return s;
-}
+using testing::Control;
+using testing::Msg;
+using testing::World;
 
 // The start menu and two worlds, the way the scene files build them.
 class ControlActions : public ::testing::Test {

@@ -53,17 +53,9 @@ const msg::ObjectState* BallState(const TickOutput& out) {
   return nullptr;
 }
 
-// The scene of these tests, written as dir/scenes/NAME.json: a ground box and a 0.2 kg ball of
-// radius 4 cm resting on it, under gravity g_z [m/s^2].
-std::filesystem::path WriteBallScene(const std::filesystem::path& dir, const std::string& name, double g_z) {
-  std::filesystem::create_directories(dir / "scenes");
-  const auto file = dir / "scenes" / (name + ".json");
-  std::ofstream(file) << R"({"name": ")" << name << R"(", "gravity_m_per_s2": [0, 0, )" << g_z << R"(], "objects": [
-      {"id": "ground", "kind": "rigid", "shape": "box", "position_m": [0, 0, -0.02], "half_extent_m": [0.3, 0.3, 0.02]},
-      {"id": "ball", "kind": "rigid", "shape": "sphere", "position_m": [0, 0, 0.04], "radius_m": 0.04, "mass_kg": 0.2}],
-      "messages": [{"language": "en", "text": "t", "next_action": "a"}]})";
-  return file;
-}
+// The scene of these tests: testing::WriteBallScene (a ground box and a 0.2 kg ball of radius
+// 4 cm resting on it).
+using testing::WriteBallScene;
 
 // Ticks every 10 ms (sleeping as long, for the loader thread) until the models are adopted;
 // `each` sees every tick's output. Returns the tick time reached.
@@ -254,11 +246,7 @@ TEST(ObjectAuthority, AWorldChangeWhileAModelBuildIsInFlightSupersedesIt) {
       {"id": "block", "kind": "deformable", "shape": "box", "position_m": [0, 0, 0.02],
        "half_extent_m": [0.03, 0.03, 0.015], "material": {"E_Pa": 20000, "nu": 0.4}, "fixed": {"below_m": -0.0149}}],
       "messages": [{"language": "en", "text": "t", "next_action": "a"}]})";
-  const auto moon = dir.path() / "scenes" / "moon.json";
-  std::ofstream(moon) << R"({"name": "moon", "gravity_m_per_s2": [0, 0, -1.62], "objects": [
-      {"id": "ground", "kind": "rigid", "shape": "box", "position_m": [0, 0, -0.02], "half_extent_m": [0.3, 0.3, 0.02]},
-      {"id": "ball", "kind": "rigid", "shape": "sphere", "position_m": [0, 0, 0.04], "radius_m": 0.04, "mass_kg": 0.2}],
-      "messages": [{"language": "en", "text": "t", "next_action": "a"}]})";
+  const auto moon = WriteBallScene(dir.path(), "moon", -kMoon);
   ObjectAuthorityOptions options;
   options.models.cache_dir = dir.path() / "cache";  // empty: the soft block is tetrahedralized and precomputed
   ObjectAuthority world("s", options);

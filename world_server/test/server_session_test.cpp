@@ -20,7 +20,11 @@ namespace {
 using Clock = ServerSession::Clock;
 using Events = ServerSession::Events;
 using controls::EventKind;
+using testing::Control;
+using testing::Msg;
 using testing::TempDir;
+using testing::World;
+using testing::WriteBallScene;
 
 // The name of an event's kind, for asserting the order of a tick's events.
 std::string KindOf(const SessionEvent& e) {
@@ -53,24 +57,6 @@ std::vector<std::string> Lines(const Events& events) {
   std::vector<std::string> lines;
   for (const auto& e : All<LineSaid>(events)) lines.push_back(e.line);
   return lines;
-}
-
-scene::Message Msg(const std::string& language, const std::string& text) { return {language, text, "", ""}; }
-
-scene::ControlSpec Control(const std::string& id, scene::ControlType type) {
-  scene::ControlSpec c;
-  c.id = id;
-  c.type = type;
-  return c;
-}
-
-scene::Scene World(const std::string& name, double g) {
-  scene::Scene s;
-  s.name = name;
-  s.title = name + " title";
-  s.gravity_W_m_per_s2 = Eigen::Vector3d(0, 0, -g);
-  s.messages = {Msg("en", "welcome to " + name), Msg("ja", name + " ja")};
-  return s;
 }
 
 InstanceKey Key(std::uint8_t participant, std::uint8_t entity = 1) {
@@ -293,17 +279,6 @@ TEST_F(ServerSessionTest, ARefusedSampleOrAnotherParticipantsUseOfANameIsDropped
   EXPECT_NE(Lines(events)[0].find("session is 'other'"), std::string::npos) << Lines(events)[0];
   EXPECT_EQ(session.dropped().of("control_event"), 2u);
   EXPECT_EQ(session.scene().name, "start_menu");
-}
-
-// The ball scene of object_authority_test: a ground box and a 0.2 kg ball resting on it.
-std::filesystem::path WriteBallScene(const std::filesystem::path& dir) {
-  std::filesystem::create_directories(dir / "scenes");
-  const auto file = dir / "scenes" / "moon.json";
-  std::ofstream(file) << R"({"name": "moon", "gravity_m_per_s2": [0, 0, -1.62], "objects": [
-      {"id": "ground", "kind": "rigid", "shape": "box", "position_m": [0, 0, -0.02], "half_extent_m": [0.3, 0.3, 0.02]},
-      {"id": "ball", "kind": "rigid", "shape": "sphere", "position_m": [0, 0, 0.04], "radius_m": 0.04, "mass_kg": 0.2}],
-      "messages": [{"language": "en", "text": "t", "next_action": "a"}]})";
-  return file;
 }
 
 TEST_F(ServerSessionTest, AContactSetGraspingAFreeBodyGivesOwnershipChangedAndTheBodyMovesAsItsOwners) {

@@ -20,22 +20,7 @@ using testing::kSecond;
 using testing::kT0;
 using testing::TempDir;
 
-// One text value of `sql` in `file`, read with sqlite3 alone ("<none>": no row).
-std::string Query(const std::filesystem::path& file, const std::string& sql) {
-  sqlite3* db = nullptr;
-  sqlite3_open_v2(file.c_str(), &db, SQLITE_OPEN_READONLY, nullptr);
-  sqlite3_stmt* s = nullptr;
-  std::string out = "<none>";
-  if (sqlite3_prepare_v2(db, sql.c_str(), -1, &s, nullptr) != SQLITE_OK) {
-    ADD_FAILURE() << sql << ": " << sqlite3_errmsg(db);
-  } else if (sqlite3_step(s) == SQLITE_ROW) {
-    const auto* t = sqlite3_column_text(s, 0);
-    out = t ? reinterpret_cast<const char*>(t) : "<null>";
-  }
-  sqlite3_finalize(s);
-  sqlite3_close(db);
-  return out;
-}
+using testing::Query;  // one text value, read with sqlite3 alone ("<none>": no row)
 
 BodyState Body(const std::string& id, const std::string& owner, double z) {
   BodyState b;

@@ -14,20 +14,7 @@ using testing::kSecond;
 using testing::kT0;
 using testing::TempDir;
 
-std::int64_t QueryInt(const std::filesystem::path& file, const std::string& sql) {
-  sqlite3* db = nullptr;
-  sqlite3_open_v2(file.c_str(), &db, SQLITE_OPEN_READONLY, nullptr);
-  sqlite3_stmt* s = nullptr;
-  std::int64_t v = -1;
-  if (sqlite3_prepare_v2(db, sql.c_str(), -1, &s, nullptr) == SQLITE_OK && sqlite3_step(s) == SQLITE_ROW) {
-    v = sqlite3_column_int64(s, 0);
-  } else {
-    ADD_FAILURE() << sql << ": " << sqlite3_errmsg(db);
-  }
-  sqlite3_finalize(s);
-  sqlite3_close(db);
-  return v;
-}
+using testing::QueryInt;
 
 void Exec(const std::filesystem::path& file, const std::string& sql) {
   sqlite3* db = nullptr;

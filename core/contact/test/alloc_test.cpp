@@ -33,7 +33,8 @@ TEST(RealTime, StepDoesNotAllocate) {
   w.SetSupport(SupportPlane{});
   w.Init();
   std::array<FingerContact, 1> remote = {
-      ContactInObjectFrame(d.X_WO, 0, block, Eigen::Vector3d(0.63, 0.03, 0.02), Eigen::Vector3d(0, 0, -0.001), Eigen::Vector3d(0, 0, 0.1))};
+      ContactInObjectFrame(d.X_WO, 0, block, Eigen::Vector3d(0.63, 0.03, 0.02), Eigen::Vector3d(0.63, 0.03, 0.027),
+                           Eigen::Vector3d(0, 0, -0.001), Eigen::Vector3d(0, 0, 0.1))};
   // Fingers sweep across every object, in and out of contact, with a NaN now and then.
   auto tips_at = [&](int k) {
     std::array<Eigen::Vector3d, kFingers> tips;

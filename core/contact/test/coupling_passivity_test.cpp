@@ -253,9 +253,11 @@ TEST(CouplingPassivity, TheWorldReportsEachRemoteContactsForceOnTheBody) {
   const ObjectId block = w.AddDeformable(d);
   w.Init();
   std::array<FingerContact, 2> remote = {
-      ContactInObjectFrame(d.X_WO, 0, block, d.X_WO * Eigen::Vector3d(0.03, 0.03, 0.03), Eigen::Vector3d(0, 0, -0.001),
+      ContactInObjectFrame(d.X_WO, 0, block, d.X_WO * Eigen::Vector3d(0.03, 0.03, 0.03),
+                           d.X_WO * Eigen::Vector3d(0.03, 0.03, 0.037), Eigen::Vector3d(0, 0, -0.001),
                            Eigen::Vector3d(0, 0, 0.1), Eigen::Vector3d(0, 0, 1)),
-      ContactInObjectFrame(d.X_WO, 1, block, Eigen::Vector3d::Constant(NAN), Eigen::Vector3d(0, 0, -0.001))};
+      ContactInObjectFrame(d.X_WO, 1, block, Eigen::Vector3d::Constant(NAN), Eigen::Vector3d::Constant(NAN),
+                           Eigen::Vector3d(0, 0, -0.001))};
   std::array<Eigen::Vector3d, kFingers> far;
   far.fill(Eigen::Vector3d(0, 0, 1));
   w.Step(1e-3, far, remote);

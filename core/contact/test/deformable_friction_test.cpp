@@ -213,7 +213,8 @@ TEST(DeformableFriction, APeersStickIsHeldWhereItIsSolved) {
   // Without a normal the same contact is a frictionless press along -u (as before there was
   // friction): no stick is held.
   const FingerResult r = a->fingers()[1];
-  const FingerContact old = ContactInObjectFrame(a->pose(0), 1, 0, r.p_WC_m, -r.depth_m * r.n_W, r.f_E_W_N);
+  const FingerContact old = ContactInObjectFrame(a->pose(0), 1, 0, r.p_WC_m, a->pose(0) * AsVector(r.contact.p_OE_m),
+                                                  -r.depth_m * r.n_W, r.f_E_W_N);
   peer->Step(1e-3, far, std::span(&old, 1));
   EXPECT_LT(std::abs(load_sum(*peer).x()), 1e-9 * load_sum(*peer).norm());
 }

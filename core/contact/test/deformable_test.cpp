@@ -178,7 +178,8 @@ TEST(Deformable, APeersContactsAreFollowedThroughEveryChange) {
   const Block& b = TheBlock();
   const Eigen::Vector3d n_W = b.X_WO.linear() * Eigen::Vector3d::UnitZ();
   auto at = [&](int finger, double x, double y, double depth) {
-    return ContactInObjectFrame(b.X_WO, finger, 0, b.X_WO * Eigen::Vector3d(x, y, b.top), -depth * n_W,
+    return ContactInObjectFrame(b.X_WO, finger, 0, b.X_WO * Eigen::Vector3d(x, y, b.top),
+                                b.X_WO * Eigen::Vector3d(x, y, b.top + kR - depth), -depth * n_W,
                                 Eigen::Vector3d::Zero(), n_W);
   };
   const FingerContact c0 = at(0, 0.02, 0.02, 0.0015), c1 = at(1, 0.04, 0.035, 0.001);
@@ -285,6 +286,7 @@ TEST(Deformable, AMovingBodyIsSolvedAsTheHandFeltItWhereverTheReceiverHasIt) {
   // The old way: the point, normal and displacement in W as the hand had the body, mapped into
   // the body with the receiver's pose.
   const FingerContact in_W = ContactInObjectFrame(X_moved, 0, id, b.X_WO * AsVector(r.contact.p_OC_m),
+                                                  b.X_WO * AsVector(r.contact.p_OE_m),
                                                   b.X_WO.linear() * AsVector(r.contact.u_O_m), r.f_E_W_N,
                                                   b.X_WO.linear() * AsVector(r.contact.n_O));
   const Eigen::Vector3d f_old = receiver(in_W);

@@ -10,9 +10,12 @@
 ///   - returns the rigid bodies' states (owned, free and moving) to publish.
 /// What it returns is plain (BodyState, DeformationSample, OwnershipChange, lines for the log):
 /// the session turns it into events (session_events.hpp) and only the DDS publisher turns
-/// those into samples. Its input is still the wire's contact set (msg::ContactSet, as
-/// session::PeerContacts keeps it). Models are built on a loader thread, so a new world
-/// (tetgen, compliance cache) never stalls the session.
+/// those into samples. This header includes no DDS or generated message header (ctest
+/// architecture.no_middleware_in_core checks it). Its one input from the wire is a user's
+/// contact set, taken as it arrived (msg::ContactSet, declared here only by name): the
+/// implementation hands it to session::PeerContacts, which decodes its contacts through the
+/// contact codec; the poses it carries become Eigen through contact::ToPose. Models are built
+/// on a loader thread, so a new world (tetgen, compliance cache) never stalls the session.
 ///
 /// Deformation contract (what graphics nodes rely on): node ids are the vertex indices of the
 /// object's scene mesh (LoadMesh order), which the tetrahedral mesh keeps as its first nodes;
@@ -30,14 +33,19 @@
 
 #include "handshare/common/session_clock.hpp"
 #include "handshare/contact/peer_contact.hpp"
-#include "handshare/dds/messages.hpp"
 #include "handshare/scene/scene.hpp"
-#include "handshare/session/peer_contacts.hpp"
 #include "handshare/world_server/body_state.hpp"
 #include "handshare/world/scene_models.hpp"
 #include "handshare/world/scripted_motion.hpp"
 #include "handshare/world_server/deformation_delta.hpp"
 #include "handshare/world_server/ownership_arbiter.hpp"
+
+namespace handshare::msg {
+class ContactSet;  // handshare.idl; read only in object_authority.cpp
+}  // namespace handshare::msg
+namespace handshare::session {
+class PeerContacts;
+}  // namespace handshare::session
 
 namespace handshare::server {
 
@@ -46,7 +54,7 @@ struct ObjectAuthorityOptions {
   double physics_dt_s = 0.001;           ///< body integration sub-step (support stiffness needs <= 2 ms)
   DeformationDeltaConfig delta;
   OwnershipConfig ownership;
-  session::PeerContactsConfig peers;
+  contact::PeerFade peers;  ///< how a silent user's contacts fade out (session::PeerContacts)
   /// Free bodies are published while they move more than this per tick, and once when they stop.
   double rest_tolerance_m = 1e-5;
   /// Every free body's pose is published again at least this often (0: only on a spectator's
@@ -123,16 +131,8 @@ class ObjectAuthority {
     double E_Pa = 0.0, nu = 0.0;
   };
   // Who moves each dynamic body this tick (PlanBodies): its owner, or nobody (held at rest).
-  struct BodyPlan {
-    // Owned bodies: the owner, and its newest set when that set simulates the body (else null:
-    // granted, and the owner has not taken it over yet).
-    std::map<contact::ObjectId, std::pair<std::string, const session::PeerContacts::Entry*>> owned;
-    // Held at rest this tick: a resumed session's body reserved for its owner's claim, or a body
-    // handed over until its new owner simulates it.
-    std::map<contact::ObjectId, Eigen::Isometry3d> at_rest;
-    // Reserved for an owner's claim: not published (the claim decides, not this server).
-    std::set<contact::ObjectId> reserved;
-  };
+  // Defined in object_authority.cpp (it points at the owners' newest contact sets).
+  struct BodyPlan;
 
   // ---- the stages of a tick ----
   /// Drops finished superseded builds and adopts the current world's models once built.
@@ -179,7 +179,7 @@ class ObjectAuthority {
   std::map<std::string, Reservation> reserved_;  // PlaceBody with an owner: held for its claim
   std::string loading_scene_;
   Clock::time_point loading_since_{};
-  session::PeerContacts peers_;
+  std::unique_ptr<session::PeerContacts> peers_;  // the users' newest contact sets
   OwnershipArbiter arbiter_;
   std::map<std::string, std::string> claims_;   // user -> object it claims ("" none)
   // Bodies handed from one owner to another (OwnershipReason::kHandedOver): held still where the

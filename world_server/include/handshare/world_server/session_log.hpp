@@ -17,6 +17,7 @@
 #include <string_view>
 #include <vector>
 
+#include "handshare/contact/finger_contact.hpp"  // contact::Vec3, QuatWxyz
 #include "handshare/controls/controls.hpp"
 #include "handshare/scene/scene.hpp"
 #include "handshare/world_server/member_registry.hpp"
@@ -65,7 +66,7 @@ struct SessionState {
   std::string scene;                      // the current world
   std::string title;
   std::uint32_t revision = 0;             // of the scene state last published
-  double gravity_W_m_per_s2[3] = {0.0, 0.0, 0.0};
+  contact::Vec3 gravity_W_m_per_s2{};
   std::uint64_t epoch_unix_ns = 0;        // the session clock's origin
   std::uint32_t message_id = 0;           // the board's last message ...
   std::vector<scene::Message> board;      // ... in every language
@@ -76,8 +77,8 @@ struct ObjectPose {
   std::string object_id;
   std::string owner;                      // "" free
   std::uint64_t unix_ns = 0;
-  double p_WO_m[3] = {0.0, 0.0, 0.0};
-  double q_WO_wxyz[4] = {1.0, 0.0, 0.0, 0.0};
+  contact::Vec3 p_WO_m{};
+  contact::QuatWxyz q_WO_wxyz{1.0, 0.0, 0.0, 0.0};
 };
 
 /// Where a control of the current world settled (its events; a hand's motion is not kept).

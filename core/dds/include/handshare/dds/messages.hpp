@@ -15,7 +15,7 @@
 namespace handshare::dds {
 
 // One finger count and one joint count: the models' (handshare/common/hand.hpp) are the
-// messages' (handshare.idl), constants and array sizes.
+// messages' (handshare.idl names them once as constants and sizes its arrays with them).
 static_assert(common::kFingers == msg::kFingers, "handshare.idl kFingers != common::kFingers");
 static_assert(common::kHandJoints == msg::kHandJoints, "handshare.idl kHandJoints != common::kHandJoints");
 static_assert(common::kArmJoints == msg::kArmJoints, "handshare.idl kArmJoints != common::kArmJoints");
@@ -25,6 +25,10 @@ static_assert(std::tuple_size_v<std::remove_cvref_t<decltype(msg::DeviceState().
               "DeviceState::q_arm_rad has not kArmJoints angles");
 static_assert(std::tuple_size_v<std::remove_cvref_t<decltype(msg::DeviceState().p_WE_m())>> == common::kFingers,
               "DeviceState::p_WE_m has not kFingers fingertips");
+static_assert(std::tuple_size_v<std::remove_cvref_t<decltype(msg::DeviceState().f_E_W_N())>> == common::kFingers,
+              "DeviceState::f_E_W_N has not kFingers fingertips");
+static_assert(std::tuple_size_v<std::remove_cvref_t<decltype(msg::ContactSet().fingers())>> == common::kFingers,
+              "ContactSet::fingers has not kFingers fingers");
 
 namespace detail {
 #define HANDSHARE_DECLARE_DDS_TYPE(T)                  \

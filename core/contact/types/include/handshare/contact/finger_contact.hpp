@@ -96,9 +96,12 @@ inline void FromPose(const Eigen::Isometry3d& X, Vec3& p, QuatWxyz& q_wxyz) noex
 }
 
 /// A contact given in the world frame W (a test's, a tool's) in the frame O of an object at
-/// pose X_WO: p_WC, n_W, p_WE, u_W in W, f_E_W the force the fingertip feels in W.
+/// pose X_WO: the contact point p_WC, the fingertip centre p_WE, the imposed displacement u_W and
+/// the normal n_W in W, f_E_W_N the force the fingertip feels in W. Depth: -u . n (|u| without
+/// a normal), as a frictionless deformable's contact has it.
 inline FingerContact ContactInObjectFrame(const Eigen::Isometry3d& X_WO, std::int32_t finger, ObjectId object,
-                                          const Eigen::Vector3d& p_WC_m, const Eigen::Vector3d& u_W_m,
+                                          const Eigen::Vector3d& p_WC_m, const Eigen::Vector3d& p_WE_m,
+                                          const Eigen::Vector3d& u_W_m,
                                           const Eigen::Vector3d& f_E_W_N = Eigen::Vector3d::Zero(),
                                           const Eigen::Vector3d& n_W = Eigen::Vector3d::Zero()) noexcept {
   const Eigen::Isometry3d X_OW = X_WO.inverse();
@@ -106,10 +109,10 @@ inline FingerContact ContactInObjectFrame(const Eigen::Isometry3d& X_WO, std::in
   c.finger = finger;
   c.object = object;
   c.p_OC_m = ToVec3(X_OW * p_WC_m);
+  c.p_OE_m = ToVec3(X_OW * p_WE_m);
   c.u_O_m = ToVec3(X_OW.linear() * u_W_m);
   c.f_O_N = ToVec3(X_OW.linear() * -f_E_W_N);
   c.n_O = ToVec3(X_OW.linear() * n_W);
-  c.p_OE_m = c.p_OC_m;
   const Eigen::Vector3d n_O = AsVector(c.n_O);
   c.depth_m = n_O.squaredNorm() > 0.0 ? -AsVector(c.u_O_m).dot(n_O) : AsVector(c.u_O_m).norm();
   return c;
