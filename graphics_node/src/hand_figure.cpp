@@ -104,36 +104,6 @@ HandFigure FitHandToFingertips(const Eigen::Isometry3d& X_WH, const std::array<E
   return hand;
 }
 
-void AddHandFigure(const HandFigure& hand, double fingertip_radius_m, const render::Rgb& skin,
-                   render::SceneView& view) {
-  render::Box palm;
-  palm.p_W = hand.X_WH * hand.palm_center_H;
-  palm.half_extents_m = hand.palm_half_extents_H;
-  palm.q_WB = Eigen::Quaterniond(hand.X_WH.linear());
-  palm.rgb = skin;
-  view.hand_boxes.push_back(palm);
-  for (const auto& joints : hand.joints_W) {
-    for (int k = 0; k < 3; ++k) {
-      const Eigen::Vector3d a = joints[k];
-      Eigen::Vector3d b = joints[k + 1];
-      if (k == 2) {  // stop at the fingertip sphere's surface
-        const double full = (b - a).norm();
-        if (full <= fingertip_radius_m) continue;
-        b = a + (b - a) * ((full - fingertip_radius_m) / full);
-      }
-      const double length = (b - a).norm();
-      if (length < 1e-6) continue;
-      render::Box link;
-      link.p_W = 0.5 * (a + b);
-      link.half_extents_m = Eigen::Vector3d(kLinkHalfWidthM, 0.5 * length, kLinkHalfWidthM);
-      link.q_WB = Eigen::Quaterniond::FromTwoVectors(Eigen::Vector3d::UnitY(), (b - a) / length);
-      link.rgb = skin;
-      view.hand_boxes.push_back(link);
-    }
-    for (int k = 0; k < 3; ++k) view.hand_spheres.push_back(render::Sphere{joints[k], kJointRadiusM, skin});
-  }
-}
-
 namespace {
 /// A thin box from a to b (nothing when they meet).
 void AddLink(const Eigen::Vector3d& a, const Eigen::Vector3d& b, double half_width_m, const render::Rgb& rgb,
@@ -147,7 +117,33 @@ void AddLink(const Eigen::Vector3d& a, const Eigen::Vector3d& b, double half_wid
   link.rgb = rgb;
   view.hand_boxes.push_back(link);
 }
+
+/// A link from a towards a fingertip at b that stops at the fingertip sphere's surface (none
+/// when a is inside the sphere).
+void AddLinkToFingertip(const Eigen::Vector3d& a, const Eigen::Vector3d& b, double fingertip_radius_m,
+                        double half_width_m, const render::Rgb& rgb, render::SceneView& view) {
+  const double full = (b - a).norm();
+  if (!(full > fingertip_radius_m)) return;
+  AddLink(a, a + (b - a) * ((full - fingertip_radius_m) / full), half_width_m, rgb, view);
+}
 }  // namespace
+
+void AddHandFigure(const HandFigure& hand, double fingertip_radius_m, const render::Rgb& skin,
+                   render::SceneView& view) {
+  render::Box palm;
+  palm.p_W = hand.X_WH * hand.palm_center_H;
+  palm.half_extents_m = hand.palm_half_extents_H;
+  palm.q_WB = Eigen::Quaterniond(hand.X_WH.linear());
+  palm.rgb = skin;
+  view.hand_boxes.push_back(palm);
+  for (const auto& joints : hand.joints_W) {
+    AddLink(joints[0], joints[1], kLinkHalfWidthM, skin, view);
+    AddLink(joints[1], joints[2], kLinkHalfWidthM, skin, view);
+    AddLinkToFingertip(joints[2], joints[3], fingertip_radius_m, kLinkHalfWidthM, skin, view);
+    for (int k = 0; k < 3; ++k) view.hand_spheres.push_back(render::Sphere{joints[k], kJointRadiusM, skin});
+  }
+}
+
 
 void AddDeviceFigure(const std::array<Eigen::Vector3d, kFingers>& p_WE, unsigned present, double fingertip_radius_m,
                      const render::Rgb& rgb, render::SceneView& view) {
@@ -170,10 +166,7 @@ void AddDeviceFigure(const std::array<Eigen::Vector3d, kFingers>& p_WE, unsigned
   AddLink(handle, handle + kStylusLengthM * up, kStylusHalfWidthM, rgb, view);
   for (int f = 0; f < kFingers; ++f) {
     if (((present >> f) & 1u) == 0 || !p_WE[f].allFinite()) continue;
-    const Eigen::Vector3d to_tip = p_WE[f] - handle;
-    const double full = to_tip.norm();
-    if (full <= fingertip_radius_m) continue;
-    AddLink(handle, handle + to_tip * ((full - fingertip_radius_m) / full), kLinkHalfWidthM, rgb, view);
+    AddLinkToFingertip(handle, p_WE[f], fingertip_radius_m, kLinkHalfWidthM, rgb, view);
   }
 }
 
