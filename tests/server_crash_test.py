@@ -128,6 +128,9 @@ def run(h, domain):
     h.start("spectator", "graphics_node", "--domain", domain, "--session", session, "--headless",
             "--frames", 100000, "--fps", 2, "--out", os.path.join(h.work, "frames"), "--state-out", state_file)
     h.wait_for_line("spectator", "control 'lever_planet' of 'solar_system' at index 1 (by alice)", 60)
+    # The state it writes names the controls of the world it shows: wait for that world too (the
+    # control states can come before the scene state).
+    h.wait_for_line("spectator", "scene 'solar_system' revision", 60)
     check(h.stop("spectator", 20) == 0, "the spectator did not end cleanly")
     with open(state_file) as f:
         shown = json.load(f)["controls"]
