@@ -1,6 +1,4 @@
 // graphics_node: a spectator's view of a session, headless (PNG frames) or in a window.
-#include <cmath>
-#include <cstdio>
 
 #include "handshare/node/node_main.hpp"
 #include "handshare/graphics/spectator.hpp"
@@ -68,14 +66,8 @@ int main(int argc, char** argv) {
       throw OptionError("option --input " + input + " needs --view user:NAME (the hand it drives)");
     }
     if (c.desk_input && c.headless) throw OptionError("option --input " + input + " needs a window (not --headless)");
-    const std::string eye = o.GetString("eye");
-    double xyz[3];
-    char tail = 0;
-    if (std::sscanf(eye.c_str(), "%lf,%lf,%lf%c", &xyz[0], &xyz[1], &xyz[2], &tail) != 3 ||
-        !std::isfinite(xyz[0] + xyz[1] + xyz[2]) || std::abs(xyz[0]) + std::abs(xyz[1]) + std::abs(xyz[2]) > 10.0) {
-      throw OptionError("option --eye: '" + eye + "' is not X,Y,Z in metres (each within 10 m)");
-    }
-    c.eye.eye_H = Eigen::Vector3d(xyz[0], xyz[1], xyz[2]);
+    const auto eye = o.GetVector3("eye", 10.0);  // metres, each within 10 m
+    c.eye.eye_H = Eigen::Vector3d(eye[0], eye[1], eye[2]);
     const std::string stereo = o.GetString("stereo");
     if (stereo == "mono") c.stereo = handshare::graphics::StereoOutput::kMono;
     else if (stereo == "side-by-side") c.stereo = handshare::graphics::StereoOutput::kSideBySide;
