@@ -142,7 +142,6 @@ void SceneRenderer::Render(double /*t_s*/, double dt_s, std::uint64_t now_ns, co
     if (controls::Control* c = controls_.Find(command.id.data())) c->RequestState(command.index, command.engaged);
   }
   event_buffer_.Clear();
-  for (auto& f : f_controls_) f.setZero();
   controls_.Step(dt_s, tips, fingertip_radius_m_, {f_controls_.data(), n_tips}, event_buffer_);
   for (const auto& e : event_buffer_) {
     if (!events_.Push(e)) dropped_events_.fetch_add(1, std::memory_order_relaxed);
