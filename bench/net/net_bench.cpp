@@ -1,12 +1,12 @@
 // net_bench: one-way latency of a contact set (handshare/contact_set, ContactSet, the project's
 // stream profiles and typed layer) from one process's writer to another's reader, over Fast DDS
 // shared memory, UDP on loopback and UDP between two network namespaces on a bridge, with the
-// split of where the time goes; and the same path shaped like two haptic nodes (a 1 kHz haptic
-// thread -> triple buffer -> 100 Hz bridge -> DDS -> 100 Hz bridge -> triple buffer -> 1 kHz
-// haptic thread).
+// split of where the time goes; and the path from one haptic node's haptic step to another's,
+// through the haptic node's own code (HapticNode: HapticLoop, SceneRenderer, HapticBridge).
 //
 //   net_bench --csv [--count N] [--rate HZ] [--node-count N] [--domain D] [--transports LIST]
-//             [--fifo PRIO] [--keep DIR] [--security KEYSTORE]
+//             [--fifo PRIO] [--keep DIR] [--security KEYSTORE] [--node-coupling woken|polled]
+//             [--node-weber W]
 //     --domain D (default 160): the runs use D, D+1, ... (two per transport, each on a domain
 //     of its own so none meets a participant an earlier run left in its lease).
 //     --security KEYSTORE: both ends run over DDS-Security with the keystore's identities of
@@ -14,6 +14,10 @@
 //     alice bob); every measure is then printed with the suffix _secured.
 //     --fifo PRIO: both ends' processes run SCHED_FIFO at PRIO (every thread, Fast DDS's receive
 //     threads included: they inherit it), to show what scheduling does to the tail.
+//     --node-coupling: woken (default) the nodes' bridges as built, woken by the haptic step and
+//     the readers; polled: HapticNodeConfig::coupling_on_wake off, contact sets taken and sent
+//     at the bridge's 100 Hz ticks only (the bridge before the coupling path was event-driven).
+//     --node-weber W (default 0.02): the nodes' contact-set deadband (0: off).
 //     prints transport,measure,p50_us,p99_us,max_us rows (and '#' comment lines with the load,
 //     losses and what was skipped). transport: shm | udp | netns; measure:
 //       contact_one_way      stamp before the writer's write() -> sample taken by the reader
@@ -23,24 +27,25 @@
 //       write_to_wake        write() returned -> the reader's WaitSet woke (transport, receive
 //                            thread, notification; negative when the reader wakes first)
 //       wake_to_taken        WaitSet woke -> take() returned (deserialization, copy)
-//       node_path            node-shaped path: sender's haptic step -> receiver's haptic step
-//                            that first sees the set
-//       node_sender_handoff  sender's haptic step -> its bridge's write()
-//       node_dds_and_tick    sender bridge's write() -> receiver bridge's take() (DDS hop plus
-//                            the wait for the receiver's next bridge tick)
-//       node_receiver_handoff receiver bridge's take() -> its haptic step that sees it
-//   The threads tick on grids of CLOCK_MONOTONIC whose phases sweep during the run (the
-//   sender's bridge against the receiver's by 1.1 ms every 50 ticks, the receiver's haptic
-//   steps against its bridge by 0.1 ms every 700 steps), so the run covers the phases a random
-//   pair of nodes has.
+//       node_path            two haptic nodes (alice and bob pressing one soft block, each its
+//                            own process): the sender's haptic step that made a contact set ->
+//                            the receiver's haptic step that first used it
+//       node_sender_handoff  sender's haptic step -> its bridge calls write()
+//       node_write_call      the sender bridge's write() call
+//       node_dds_and_tick    write() called -> the receiver's bridge took the set (the DDS hop,
+//                            the listener's wake-up; polled: the wait for the next bridge tick)
+//       node_receiver_handoff receiver bridge took it -> its haptic step that first used it
+//   Both directions are counted; the pairs are matched by the set's stamp (its write() call),
+//   which the receiving bridge's trace keeps with the take and the first use.
 //   One clock: CLOCK_MONOTONIC, shared by the processes of one host, network namespaces too.
 //   The shm and udp transports are forced by a QoS file made from the project's
 //   (deploy/qos/handshare_qos.xml, or $HANDSHARE_QOS_FILE) with the participant's builtin
 //   transports replaced by one user transport. netns needs root and `ip` (iproute2): without
 //   them its rows are skipped with a '#' line saying why.
 //
-//   net_bench --role writer|reader|node-writer|node-reader --qos FILE --domain D --session S
-//             --count N --rate HZ --out FILE
+//   net_bench --role writer|reader --qos FILE --domain D --session S --count N --rate HZ --out FILE
+//   net_bench --role node --user alice|bob --assets DIR --qos FILE --domain D --session S
+//             --node-count N --out FILE
 //     one end (what --csv runs, in a namespace for netns).
 #include <fcntl.h>
 #include <pthread.h>
@@ -62,18 +67,20 @@
 #include <filesystem>
 #include <fstream>
 #include <map>
+#include <memory>
 #include <sstream>
 #include <stdexcept>
 #include <string>
 #include <thread>
+#include <tuple>
 #include <vector>
 
 #include "handshare/common/clock.hpp"
-#include "handshare/common/triple_buffer.hpp"
 #include "handshare/dds/messages.hpp"
 #include "handshare/dds/participant.hpp"
 #include "handshare/dds/serialization.hpp"
 #include "handshare/dds/topics.hpp"
+#include "handshare/haptic/haptic_node.hpp"
 
 extern char** environ;
 
@@ -99,10 +106,18 @@ struct Options {
   int domain = 160;
   int fifo = 0;           // > 0: both ends run SCHED_FIFO at this priority (every thread)
   int count = 5000;       // samples measured in the contact_one_way run
-  int node_count = 2000;  // bridge ticks measured in the node-shaped run
+  int node_count = 2000;  // node path: each haptic node runs NodeSeconds (about this many sets each way when polled)
   double rate_Hz = 1000.0;
   std::string security;   // a keystore: both ends run secured (DDS-Security), as haptic users alice and bob
+  std::string user;       // --role node: alice or bob
+  std::string assets;     // --role node: the scene and hand scripts (WriteNodeAssets)
+  double node_weber = 0.02;             // the nodes' contact-set deadband in the node path
+  std::string node_coupling = "woken";  // woken: the bridge as built; polled: at its 100 Hz ticks only (as before)
 };
+
+// How long each haptic node of the node path runs: its world's build, then about node_count
+// sets each way at the polled bridge's 100 Hz (more when woken).
+double NodeSeconds(const Options& o) { return 6.0 + static_cast<double>(o.node_count) / 100.0; }
 
 // Secured runs print their measures with this suffix ("contact_one_way_secured"), so one CSV can
 // hold rows with and without security.
@@ -114,8 +129,6 @@ std::string EndName(const Options& o, const char* plain, const char* user) {
 }
 
 constexpr int kWarmup = 200;  // samples (or ticks) sent before the measured ones
-constexpr std::int64_t kBridgePeriodNs = 10'000'000;  // the haptic node's bridge: 100 Hz
-constexpr std::int64_t kHapticPeriodNs = 1'000'000;   // the haptic loop: 1 kHz
 
 std::int64_t Now() { return static_cast<std::int64_t>(common::SteadyNowNs()); }
 
@@ -232,135 +245,45 @@ int RunReader(const Options& o) {
   return 0;
 }
 
-// What the haptic thread hands its bridge, and what a bridge hands its haptic thread.
-struct Stamped {
-  std::int64_t seq = -1;
-  std::int64_t haptic_ns = 0;  // the sender's haptic step
-  std::int64_t bridge_ns = 0;  // receiver: when its bridge took it
-};
-
-// The emulated haptic thread runs as HapticLoop's does: SCHED_FIFO at half the maximum
-// priority when permitted. Returns whether it was.
-bool HapticPriority() {
-  sched_param param{};
-  param.sched_priority = sched_get_priority_max(SCHED_FIFO) / 2;
-  return pthread_setschedparam(pthread_self(), SCHED_FIFO, &param) == 0;
-}
-
-// The first deadline of a grid of `period` at or after t, plus phase.
-std::int64_t OnGrid(std::int64_t t, std::int64_t period, std::int64_t phase) {
-  return (t / period + 1) * period + phase;
-}
-
-// Sender shaped like a haptic node: a 1 kHz haptic thread publishes its step's stamp through a
-// triple buffer; the 100 Hz bridge writes the newest as a contact set (stamp_ns = the haptic
-// step's time). Rows: "p SEQ HAPTIC_NS WRITE_NS".
-int RunNodeWriter(const Options& o) {
-  dds::Participant p(o.domain, o.session, EndName(o, "net_bench_node_writer", "alice"), o.qos, o.security);
-  auto w = dds::MakeWriter<msg::ContactSet>(p, dds::topics::kContactSet);
-  msg::ContactSet s = MakeContactSet(o.session);
-  std::ofstream out = OpenOut(o.out);
-  WaitForReader(w);
-  common::TripleBuffer<Stamped> to_bridge;
-  std::atomic<bool> stop{false};
-  std::atomic<bool> realtime{false};
-  std::thread haptic([&] {
-    realtime = HapticPriority();
-    std::int64_t next = OnGrid(Now(), kHapticPeriodNs, 0);
-    for (std::int64_t k = 0; !stop.load(std::memory_order_relaxed); ++k) {
-      SleepUntilNs(next);
-      next += kHapticPeriodNs;
-      to_bridge.Write(Stamped{k, Now(), 0});
-    }
-  });
-  std::vector<std::array<std::int64_t, 3>> rows;
-  rows.reserve(static_cast<std::size_t>(o.node_count + kWarmup));
-  std::int64_t tick = OnGrid(Now(), kBridgePeriodNs, 0);
-  Stamped newest;
-  for (int i = 0; i < o.node_count + kWarmup; ++i) {
-    // The phase against the receiver's bridge steps by 1.1 ms every 50 ticks (0..9.9 ms), and
-    // so against this node's haptic steps by 0.1 ms (0..0.9 ms).
-    const std::int64_t phase = ((i / 50) % 10) * 1'100'000;
-    tick = OnGrid(tick, kBridgePeriodNs, phase);
-    SleepUntilNs(tick);
-    tick -= phase;
-    to_bridge.Read(newest);
-    if (newest.seq < 0) continue;
-    s.seq(static_cast<std::uint32_t>(i));
-    s.stamp_ns(static_cast<std::uint64_t>(newest.haptic_ns));
-    const std::int64_t write_ns = Now();
-    w.Write(s);
-    rows.push_back({i, newest.haptic_ns, write_ns});
+// The haptic node itself (HapticNode: its device, 1 kHz HapticLoop, SceneRenderer and
+// HapticBridge on its bridge thread, the code haptic_node runs), as user alice or bob of a
+// session whose scene `lab` (a soft block) is in o.assets; its simulated hand presses the block
+// beside the other's, moving, so both hands share the block and their contact sets change.
+// bob's process also plays the world server's part the bench needs: the scene state.
+// The bridge's coupling trace (HapticNodeConfig::coupling_trace_file) is the result file.
+int RunNode(const Options& o) {
+  const fs::path assets(o.assets);
+  const bool bob = o.user == "bob";
+  haptic::HapticNodeConfig c;
+  c.where.domain_id = o.domain;
+  c.where.session = o.session;
+  c.where.qos_file = o.qos;
+  c.where.security_dir = o.security;
+  c.where.duration = std::chrono::duration<double>(NodeSeconds(o));
+  c.user = o.user;
+  c.device = "sim";
+  c.script = (assets / (o.user + ".hand")).string();
+  c.cache_dir = (assets / ("cache_" + o.user)).string();  // one each: the two build it at once
+  c.deadband_weber = o.node_weber;
+  c.rejoin_after_s = 0.0;
+  c.coupling_on_wake = o.node_coupling == "woken";
+  c.coupling_trace_file = o.out;
+  setenv("HANDSHARE_ASSETS", assets.c_str(), 1);
+  std::unique_ptr<dds::Participant> server;
+  dds::Writer<msg::SceneState> scene_writer;
+  if (bob) {
+    // Reliable, transient-local: alice gets it whenever she matches.
+    server = std::make_unique<dds::Participant>(c.where, o.security.empty() ? "net_bench_scene" : "world_server");
+    scene_writer = dds::MakeWriter<msg::SceneState>(*server, dds::topics::kSceneState);
+    msg::SceneState scene;
+    scene.session(o.session);
+    scene.scene("lab");
+    scene.revision(1);
+    scene.gravity_W_m_per_s2({0.0, 0.0, -9.81});
+    scene.tick_Hz(60.0f);
+    scene_writer.Write(scene);
   }
-  stop = true;
-  haptic.join();
-  out << "realtime " << (realtime ? 1 : 0) << "\n";
-  for (const auto& r : rows) out << "p " << r[0] << ' ' << r[1] << ' ' << r[2] << "\n";
-  std::this_thread::sleep_for(std::chrono::milliseconds(500));
-  return 0;
-}
-
-// Receiver shaped like a haptic node: the 100 Hz bridge takes what arrived (no waiting, as
-// HapticBridge::ReceivePeers) and hands the newest to the 1 kHz haptic thread through a triple
-// buffer; the haptic thread notes the step at which each set first reaches it.
-// Rows: "h SEQ HAPTIC_NS BRIDGE_NS SEEN_NS".
-int RunNodeReader(const Options& o) {
-  dds::Participant p(o.domain, o.session, EndName(o, "net_bench_node_reader", "bob"), o.qos, o.security);
-  auto r = dds::MakeReader<msg::ContactSet>(p, dds::topics::kContactSet);
-  std::ofstream out = OpenOut(o.out);
-  const int last = o.node_count + kWarmup - 1;
-  common::TripleBuffer<Stamped> to_haptic;
-  std::atomic<bool> stop{false};
-  std::vector<std::array<std::int64_t, 4>> rows;
-  rows.reserve(static_cast<std::size_t>(o.node_count + kWarmup));
-  std::atomic<bool> realtime{false};
-  std::thread haptic([&] {
-    realtime = HapticPriority();
-    std::int64_t next = OnGrid(Now(), kHapticPeriodNs, 0);
-    Stamped in;
-    std::int64_t seen = -1;
-    for (std::int64_t k = 0; !stop.load(std::memory_order_relaxed); ++k) {
-      // The haptic steps' phase against this node's bridge ticks: 0.05..0.95 ms, a step of
-      // 0.1 ms every 700 steps (not in step with the sender's sweep).
-      SleepUntilNs(next + ((k / 700) % 10) * 100'000 + 50'000);
-      next += kHapticPeriodNs;
-      const std::int64_t step = Now();
-      if (to_haptic.Read(in) && in.seq != seen) {
-        seen = in.seq;
-        rows.push_back({in.seq, in.haptic_ns, in.bridge_ns, step});
-      }
-    }
-  });
-  msg::ContactSet s;
-  dds::SampleMeta meta;
-  const std::int64_t give_up = Now() + 120'000'000'000;
-  std::int64_t last_data = 0;
-  std::int64_t tick = OnGrid(Now(), kBridgePeriodNs, 0);
-  bool done = false;
-  while (!done) {
-    SleepUntilNs(tick);
-    tick = OnGrid(tick, kBridgePeriodNs, 0);
-    const std::int64_t now = Now();
-    if (now > give_up || (last_data != 0 && now - last_data > 3'000'000'000)) break;
-    bool any = false;
-    Stamped newest;
-    while (r.TakeNext(s, meta)) {
-      if (!meta.valid_data) continue;
-      any = true;
-      newest = Stamped{static_cast<std::int64_t>(s.seq()), static_cast<std::int64_t>(s.stamp_ns()), Now()};
-      if (static_cast<int>(s.seq()) >= last) done = true;
-    }
-    if (any) {
-      last_data = newest.bridge_ns;
-      to_haptic.Write(newest);
-    }
-  }
-  std::this_thread::sleep_for(std::chrono::milliseconds(5));  // the last one reaches the loop
-  stop = true;
-  haptic.join();
-  out << "realtime " << (realtime ? 1 : 0) << "\n";
-  for (const auto& x : rows) out << "h " << x[0] << ' ' << x[1] << ' ' << x[2] << ' ' << x[3] << "\n";
-  return 0;
+  return haptic::HapticNode(c).Run();
 }
 
 // ---------------------------------------------------------------- the driver (--csv)
@@ -648,52 +571,101 @@ void MeasureHop(const Options& o, const std::string& transport, const std::strin
   PrintRow(transport, std::string("wake_to_taken") + Secured(o), to_taken);
 }
 
-// The node-shaped path.
+// The lab scene and the two hands of the node path (RunNode), written to dir/assets.
+fs::path WriteNodeAssets(const fs::path& dir) {
+  const fs::path assets = dir / "assets";
+  fs::create_directories(assets / "scenes");
+  // A soft block on the ground: its top is at z = 0.02 m, x in -0.12..-0.08, y in -0.02..0.02.
+  std::ofstream(assets / "scenes" / "lab.json")
+      << R"({"name": "lab", "gravity_m_per_s2": [0, 0, -9.81], "objects": [
+  {"id": "ground", "kind": "rigid", "shape": "box", "position_m": [0, 0, -0.02], "half_extent_m": [0.3, 0.3, 0.02]},
+  {"id": "block", "kind": "deformable", "shape": "box", "position_m": [-0.1, 0, 0.01],
+   "half_extent_m": [0.02, 0.02, 0.01], "material": {"E_Pa": 20000, "nu": 0.4}, "fixed": {"below_m": -0.0099}}],
+  "messages": [{"language": "en", "text": "net_bench", "next_action": "none"}]})";
+  // Each index fingertip (radius 8 mm: touching at z = 0.028 m) presses 1 to 3 mm into the
+  // top, 10 mm from the other's, in and out every 0.4 s (alice and bob out of step).
+  for (const auto& [user, x, phase] : {std::tuple{"alice", -0.105, 0.0}, std::tuple{"bob", -0.095, 0.13}}) {
+    std::ofstream f(assets / (std::string(user) + ".hand"));
+    f << "start " << x << " 0 0.08\nawait_world lab\npoke 0.5 " << x << " 0 0.027\n";
+    if (phase > 0.0) f << "hold " << phase << "\n";
+    for (int i = 0; i < 400; ++i) f << "poke 0.2 " << x << " 0 0.025\npoke 0.2 " << x << " 0 0.027\n";
+  }
+  return assets;
+}
+
+// The node path: two haptic nodes' own code (RunNode), each pressing the block with the
+// other, their bridges' coupling traces paired by the contact set's stamp (its sender's
+// write() call): both directions. The first second of each node's writes is a warm-up.
 void MeasureNodePath(const Options& o, const std::string& transport, const std::string& qos, const fs::path& dir,
                      const NamespacePair* ns, int domain) {
   const std::string self = fs::read_symlink("/proc/self/exe").string();
   const std::string session = "net_bench_" + std::to_string(getpid()) + "_node_" + transport;
-  auto argv = [&](const std::string& role, const std::string& out, int k) {
+  const fs::path assets = WriteNodeAssets(dir);
+  auto argv = [&](const std::string& user, const std::string& out, int k) {
     std::vector<std::string> a;
     if (ns != nullptr) a = {"ip", "netns", "exec", ns->Ns(k)};
-    a.insert(a.end(), {self, "--role", role, "--qos", qos, "--domain", std::to_string(domain), "--session", session,
-                       "--count", std::to_string(o.count), "--node-count", std::to_string(o.node_count), "--rate",
-                       std::to_string(o.rate_Hz), "--out", out});
+    a.insert(a.end(), {self, "--role", "node", "--user", user, "--qos", qos, "--domain", std::to_string(domain),
+                       "--session", session, "--node-count", std::to_string(o.node_count), "--assets",
+                       assets.string(), "--node-weber", std::to_string(o.node_weber), "--node-coupling",
+                       o.node_coupling, "--out", out});
     if (o.fifo > 0) a.insert(a.end(), {"--fifo", std::to_string(o.fifo)});
     if (!o.security.empty()) a.insert(a.end(), {"--security", o.security});
     return a;
   };
-  const std::string rf = (dir / (transport + "_node_reader.txt")).string();
-  const std::string wf = (dir / (transport + "_node_writer.txt")).string();
-  const std::array<std::string, 2> logs{(dir / (transport + "_node_reader.log")).string(),
-                                        (dir / (transport + "_node_writer.log")).string()};
-  Child reader = Spawn(argv("node-reader", rf, 0), logs[0], transport + " node reader");
-  Child writer = Spawn(argv("node-writer", wf, 1), logs[1], transport + " node writer");
-  WaitBoth({reader, writer}, logs, 60.0 + o.node_count * 0.01);
+  const std::array<std::string, 2> users{"bob", "alice"};
+  std::array<std::string, 2> files, logs;
+  for (int k = 0; k < 2; ++k) {
+    files[k] = (dir / (transport + "_node_" + users[k] + ".txt")).string();
+    logs[k] = (dir / (transport + "_node_" + users[k] + ".log")).string();
+  }
+  Child bob = Spawn(argv(users[0], files[0], 0), logs[0], transport + " node bob");
+  Child alice = Spawn(argv(users[1], files[1], 1), logs[1], transport + " node alice");
+  WaitBoth({bob, alice}, logs, 60.0 + NodeSeconds(o));
 
-  std::map<std::int64_t, std::int64_t> written;  // seq -> bridge write time
-  int realtime = 0;
-  for (const Row& r : ReadRows(wf)) {
-    if (r.tag == "p" && r.v.at(0) >= kWarmup) written[r.v[0]] = r.v[2];
-    if (r.tag == "realtime") realtime += static_cast<int>(r.v.at(0));
+  // Per node: its writes by stamp (the step that made the set, write() called and returned),
+  // and the peers' sets it took (by stamp) and first used in a haptic step (by stamp).
+  struct Written {
+    std::int64_t step, call, done;
+  };
+  std::array<std::map<std::int64_t, Written>, 2> written;
+  std::array<std::map<std::int64_t, std::int64_t>, 2> taken, used;
+  for (int k = 0; k < 2; ++k) {
+    std::int64_t first_write = -1;
+    for (const Row& r : ReadRows(files[k])) {
+      if (r.v.size() < 4) continue;
+      if (r.tag == "w") {
+        if (first_write < 0) first_write = r.v[2];
+        if (r.v[2] - first_write >= 1'000'000'000) written[k][r.v[2]] = Written{r.v[1], r.v[2], r.v[3]};
+      }
+      if (r.tag == "t") taken[k][r.v[0]] = r.v[1];
+      if (r.tag == "u") used[k].emplace(r.v[0], r.v[1]);
+    }
   }
-  std::vector<double> total, sender, hop, receiver;
-  for (const Row& r : ReadRows(rf)) {
-    if (r.tag == "realtime") realtime += static_cast<int>(r.v.at(0));
-    if (r.tag != "h" || r.v.at(0) < kWarmup) continue;
-    const auto it = written.find(r.v[0]);
-    if (it == written.end()) continue;
-    total.push_back(1e-3 * static_cast<double>(r.v[3] - r.v[1]));
-    sender.push_back(1e-3 * static_cast<double>(it->second - r.v[1]));
-    hop.push_back(1e-3 * static_cast<double>(r.v[2] - it->second));
-    receiver.push_back(1e-3 * static_cast<double>(r.v[3] - r.v[2]));
+  std::vector<double> total, sender, hop, receiver, write_call;
+  std::size_t writes = 0;
+  for (int k = 0; k < 2; ++k) {
+    const int peer = 1 - k;
+    writes += written[k].size();
+    for (const auto& [stamp, w] : written[k]) {
+      const auto t = taken[peer].find(stamp);
+      const auto u = used[peer].find(stamp);
+      if (t == taken[peer].end() || u == used[peer].end()) continue;
+      total.push_back(1e-3 * static_cast<double>(u->second - w.step));
+      sender.push_back(1e-3 * static_cast<double>(w.call - w.step));
+      write_call.push_back(1e-3 * static_cast<double>(w.done - w.call));
+      hop.push_back(1e-3 * static_cast<double>(t->second - w.call));
+      receiver.push_back(1e-3 * static_cast<double>(u->second - t->second));
+    }
   }
-  std::printf("# %s node path: %zu of %zu bridge writes reached the receiver's haptic thread; haptic threads "
-              "%s; load %s\n",
-              transport.c_str(), total.size(), written.size(),
-              realtime == 2 ? "SCHED_FIFO" : "NOT both SCHED_FIFO (no permission): normal priority", LoadAvg().c_str());
+  const double seconds = NodeSeconds(o);
+  std::printf("# %s node path (haptic_node's own loop and bridge, coupling %s, deadband weber %.2f): %zu contact "
+              "sets written after the warm-up (%.0f per second per node), %zu first used by the peer's haptic step "
+              "and counted; load %s\n",
+              transport.c_str(), o.node_coupling.c_str(), o.node_weber, writes,
+              static_cast<double>(writes) / 2.0 / std::max(1.0, seconds - 3.0), total.size(), LoadAvg().c_str());
   PrintRow(transport, std::string("node_path") + Secured(o), total);
   PrintRow(transport, std::string("node_sender_handoff") + Secured(o), sender);
+  PrintRow(transport, std::string("node_write_call") + Secured(o), write_call);
   PrintRow(transport, std::string("node_dds_and_tick") + Secured(o), hop);
   PrintRow(transport, std::string("node_receiver_handoff") + Secured(o), receiver);
 }
@@ -707,11 +679,12 @@ int RunCsv(const Options& o) {
   const fs::path dir = o.keep.empty() ? fs::temp_directory_path() / ("net_bench." + std::to_string(getpid()))
                                       : fs::path(o.keep);
   fs::create_directories(dir);
-  std::printf("# net_bench: %d samples at %.0f Hz per transport, %d node-shaped bridge ticks; %s; %s; load before %s\n",
-              o.count, o.rate_Hz, o.node_count,
+  std::printf("# net_bench: %d samples at %.0f Hz per transport, node path %.0f s per transport (coupling %s); %s; %s; "
+              "load before %s\n",
+              o.count, o.rate_Hz, NodeSeconds(o), o.node_coupling.c_str(),
               o.security.empty() ? "no security" : ("DDS-Security with keystore " + o.security).c_str(),
               o.fifo > 0 ? ("both ends SCHED_FIFO " + std::to_string(o.fifo) + " (every thread)").c_str()
-                         : "both ends at normal priority (emulated haptic threads SCHED_FIFO)",
+                         : "both ends at normal priority (the haptic nodes' loops SCHED_FIFO when permitted, as HapticLoop)",
               LoadAvg().c_str());
   std::printf("transport,measure,p50_us,p99_us,max_us\n");
   std::fflush(stdout);
@@ -750,8 +723,9 @@ int RunCsv(const Options& o) {
 const char* kUsage =
     "usage: net_bench --csv [--count N] [--rate HZ] [--node-count N] [--domain D] [--transports shm,udp,netns]\n"
     "                 [--fifo PRIO] [--keep DIR] [--security KEYSTORE]\n"
-    "       net_bench --role writer|reader|node-writer|node-reader --qos FILE --domain D --session S\n"
-    "                 --out FILE [--count N] [--node-count N] [--rate HZ]\n"
+    "                 [--node-coupling woken|polled] [--node-weber W]\n"
+    "       net_bench --role writer|reader|node --qos FILE --domain D --session S --out FILE\n"
+    "                 [--count N] [--node-count N] [--rate HZ] [--user alice|bob --assets DIR]\n"
     "Prints transport,measure,p50_us,p99_us,max_us rows; see the top of bench/net/net_bench.cpp.\n";
 
 int ToInt(const std::string& flag, const std::string& v, int lo, int hi) {
@@ -812,6 +786,23 @@ Options Parse(int argc, char** argv) {
         o.transports.push_back(t);
       }
       if (o.transports.empty()) throw UsageError("--transports is empty");
+    } else if (a == "--user") {
+      o.user = value();
+      if (o.user != "alice" && o.user != "bob") throw UsageError("--user wants alice or bob, got '" + o.user + "'");
+    } else if (a == "--assets") {
+      o.assets = value();
+    } else if (a == "--node-coupling") {
+      o.node_coupling = value();
+      if (o.node_coupling != "woken" && o.node_coupling != "polled") {
+        throw UsageError("--node-coupling wants woken or polled, got '" + o.node_coupling + "'");
+      }
+    } else if (a == "--node-weber") {
+      const std::string v = value();
+      char* end = nullptr;
+      o.node_weber = std::strtod(v.c_str(), &end);
+      if (end == v.c_str() || *end != '\0' || !(o.node_weber >= 0.0 && o.node_weber <= 1.0)) {
+        throw UsageError("--node-weber wants a Weber fraction in 0..1, got '" + v + "'");
+      }
     } else if (a == "--help" || a == "-h") {
       std::fputs(kUsage, stdout);
       std::exit(0);
@@ -821,9 +812,10 @@ Options Parse(int argc, char** argv) {
   }
   if (o.csv == !o.role.empty()) throw UsageError("give either --csv or --role");
   if (!o.role.empty()) {
-    if (o.role != "writer" && o.role != "reader" && o.role != "node-writer" && o.role != "node-reader") {
+    if (o.role != "writer" && o.role != "reader" && o.role != "node") {
       throw UsageError("unknown --role '" + o.role + "'");
     }
+    if (o.role == "node" && (o.user.empty() || o.assets.empty())) throw UsageError("--role node needs --user and --assets");
     if (o.qos.empty() || o.session.empty() || o.out.empty()) throw UsageError("--role needs --qos, --session and --out");
   }
   if (o.csv && o.domain + 2 * static_cast<int>(o.transports.size()) > 233) throw UsageError("--domain too high");
@@ -852,8 +844,7 @@ int main(int argc, char** argv) {
     if (o.csv) return RunCsv(o);
     if (o.role == "writer") return RunWriter(o);
     if (o.role == "reader") return RunReader(o);
-    if (o.role == "node-writer") return RunNodeWriter(o);
-    return RunNodeReader(o);
+    return RunNode(o);
   } catch (const std::exception& e) {
     std::fprintf(stderr, "net_bench: %s\n", e.what());
     return 1;

@@ -1,7 +1,7 @@
 #!/usr/bin/python3
 """Plots `net_bench --csv` output (transport,measure,p50_us,p99_us,max_us): left, the contact set's
 one-way latency and its split per transport (p50 bars, p99 whiskers, the 0.5 ms target); right,
-the node-shaped path (haptic step to haptic step through two 100 Hz bridges) and its split.
+the node path (haptic step to haptic step through two haptic nodes' own loop and bridge) and its split.
 Usage: plot_net_bench.py RESULTS.csv OUT.png  (Debian's python3-matplotlib)."""
 import csv
 import sys
@@ -12,7 +12,7 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 
 HOP = ["contact_one_way", "write_call", "write_to_wake", "wake_to_taken", "serialize", "deserialize"]
-NODE = ["node_path", "node_sender_handoff", "node_dds_and_tick", "node_receiver_handoff"]
+NODE = ["node_path", "node_sender_handoff", "node_write_call", "node_dds_and_tick", "node_receiver_handoff"]
 COLOURS = {"shm": "tab:blue", "udp": "tab:orange", "netns": "tab:green"}
 
 
@@ -49,7 +49,7 @@ def main() -> int:
         rows = list(csv.DictReader(row for row in f if not row.startswith("#")))
     fig, (a, b) = plt.subplots(1, 2, figsize=(13, 5), gridspec_kw={"width_ratios": [3, 2]})
     panel(a, rows, HOP, "Contact set, writer -> reader (1 kHz, best-effort)", 500.0)
-    panel(b, rows, NODE, "Node-shaped: haptic step -> peer's haptic step")
+    panel(b, rows, NODE, "Node path: haptic step -> peer's haptic step")
     fig.tight_layout()
     fig.savefig(sys.argv[2], dpi=110)
     return 0

@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
+#include <fstream>
+#include <stdexcept>
 
 #include "handshare/common/clock.hpp"
 #include "handshare/haptic/replay.hpp"
@@ -48,6 +50,12 @@ HapticBridge::HapticBridge(const HapticNodeConfig& config, Device& device, Hapti
   contacts_msg_.session(config_.where.session);
   stats_msg_.node("haptic_node/" + config_.user);
   stats_msg_.session(config_.where.session);
+  if (!config_.coupling_trace_file.empty()) trace_rows_.rows.reserve(CouplingTrace::kCapacity);
+  if (config_.coupling_on_wake) {
+    // The listeners only signal; this bridge's thread takes the samples (Couple).
+    contact_reader_.OnDataAvailable([wake = wake_] { wake->Post(); });
+    object_reader_.OnDataAvailable([wake = wake_] { wake->Post(); });
+  }
 }
 
 void HapticBridge::FollowControlStates() {
@@ -118,13 +126,33 @@ void HapticBridge::Tick() {
       have_report_ = true;
       RecordPeerLoopAge();
     }
-    ReceivePeers();
-    FollowPeerBodies();
+    ReceivePeers(true);
+    FollowPeerBodies(true);
     DumpLocalFields();
   }
   PublishDeviceState();
   PublishContactSet();
   PublishStatistics();
+}
+
+void HapticBridge::Couple() {
+  if (!renderer_) return;
+  if (renderer_->TakeReport(report_)) {
+    have_report_ = true;
+    RecordPeerLoopAge();
+  }
+  ReceivePeers(false);
+  FollowPeerBodies(false);
+  PublishContactSet();
+}
+
+void HapticBridge::WriteCouplingTrace() const {
+  if (config_.coupling_trace_file.empty()) return;
+  std::ofstream out(config_.coupling_trace_file);
+  if (!out) throw std::runtime_error("cannot write coupling trace " + config_.coupling_trace_file);
+  for (const CouplingTrace::Row& r : trace_rows_.rows) {
+    out << r.kind << ' ' << r.a << ' ' << r.b << ' ' << r.c << ' ' << r.d << '\n';
+  }
 }
 
 void HapticBridge::ApplySceneChange() {
@@ -176,6 +204,7 @@ void HapticBridge::AdoptScene(const msg::SceneState& state) {
   contact_pacer_.Reset();
   coupling_before_ = coupling_stats();
   coupling_now_ = {};
+  if (config_.coupling_on_wake) next->SetWakeup(wake_);
   renderer_ = next;
   have_report_ = false;
   loop_.SetRenderer(renderer_);
@@ -208,7 +237,7 @@ void HapticBridge::ForwardControlEvents() {
   held_events_.clear();
 }
 
-void HapticBridge::ReceivePeers() {
+void HapticBridge::ReceivePeers(bool tick) {
   names_.Follow(member_reader_);
   // A peer touching something sends its contact set at its publish rate; one silent for
   // longer has gone (or stopped touching without a last sample): its contacts fade out.
@@ -216,6 +245,7 @@ void HapticBridge::ReceivePeers() {
   const std::uint64_t now_ns = common::SteadyNowNs();
   msg::ContactSet peer;
   dds::SampleMeta meta;
+  bool taken = false;
   while (contact_reader_.TakeNext(peer, meta)) {
     if (!meta.valid_data || peer.user().to_string() == config_.user) continue;
     std::string bad = dds::CheckContactSet(peer, config_.where.session);
@@ -231,8 +261,12 @@ void HapticBridge::ReceivePeers() {
       // DDS hop plus the wait for this bridge's tick): bench/net reports it.
       if (peer.stamp_ns() <= now_ns) peer_age_.Record(1e-3 * static_cast<double>(now_ns - peer.stamp_ns()));
       newest_peer_stamp_ns_ = std::max(newest_peer_stamp_ns_, peer.stamp_ns());
+      if (!config_.coupling_trace_file.empty()) trace_rows_.Add({'t', peer.stamp_ns(), now_ns, 0, 0});
+      taken = true;
     }
   }
+  // Between ticks only a new set is handed over; a tick also lets the silent ones expire.
+  if (!tick && !taken) return;
   peers_.Expire(now);
   RemoteContacts remote = ToRemoteContacts(peers_, renderer_->models(), now);
   remote.newest_stamp_ns = newest_peer_stamp_ns_;
@@ -272,19 +306,25 @@ void HapticBridge::RecordPeerLoopAge() {
   if (report_.peer_seen_ns >= report_.peer_stamp_ns) {
     peer_loop_age_.Record(1e-3 * static_cast<double>(report_.peer_seen_ns - report_.peer_stamp_ns));
   }
+  if (!config_.coupling_trace_file.empty()) trace_rows_.Add({'u', report_.peer_stamp_ns, report_.peer_seen_ns, 0, 0});
 }
 
-void HapticBridge::FollowPeerBodies() {
+void HapticBridge::FollowPeerBodies(bool tick) {
   // The owner simulates a grasped body, the world server a free one; this hand follows every
   // body it does not own itself.
   msg::ObjectState body;
   dds::SampleMeta meta;
+  bool taken = false;
   while (object_reader_.TakeNext(body, meta)) {
     if (!meta.valid_data) continue;
     const std::string bad = dds::CheckObjectState(body, config_.where.session);
     if (!dropped_.Accept("object_state", body.owner().to_string(), bad, say_)) continue;
     bodies_[body.object_id().to_string()] = {body, common::SteadyNowNs()};
+    taken = true;
   }
+  // Between ticks: a new state (a hand-over, a thrown body) goes to the loop at once; a hand
+  // that owns a body or holds one for a hand-over follows its own report at once too.
+  if (!tick && !taken && owned_ < 0 && hand_over_.held() < 0) return;
   const world::SceneModels& models = renderer_->models();
   FollowedBodies followed = ToFollowedBodies(bodies_, config_.user, models);
   // A body this hand lets go of while another user's hand grasps it stays still there until
@@ -325,19 +365,27 @@ void HapticBridge::PublishContactSet() {
   const std::uint64_t now_ns = common::SteadyNowNs();
   if (!(active || last_sent_active_) || contact_writer_.matched_readers() == 0) {
     last_sent_active_ = active;
+    renderer_->SetReportWake(false);
     return;
   }
-  // Full rate while a peer's loop solves an object with this hand's contacts; else the world
-  // server's tick. A tick that is not due leaves the set for the next due one (the end of a
-  // touch included: last_sent_active_ keeps it owed).
+  // While a peer's loop solves an object with this hand's contacts, every report goes to the
+  // deadband as soon as the haptic step made it (the step posts the wake-up); else the world
+  // server, reading at its tick, is the only reader: no faster than that tick. A set that is
+  // not due is left for the next due one (the end of a touch included: last_sent_active_
+  // keeps it owed).
   const bool shared = session::SharesObjectWithPeer(contacts_msg_, peers_, Clock::now());
+  const bool on_wake = config_.coupling_on_wake && shared;
+  renderer_->SetReportWake(on_wake);
   const double rate_Hz =
       config_.paced_streams ? session::ContactSetRate(shared, server_tick_Hz_, config_.publish_Hz) : config_.publish_Hz;
-  if (!contact_pacer_.Due(now_ns, rate_Hz)) return;
+  if (!on_wake && !contact_pacer_.Due(now_ns, rate_Hz)) return;
   if (deadband_.Offer(contacts_msg_, now_ns)) {
     contacts_msg_.stamp_ns(now_ns);
     contacts_msg_.seq(contacts_msg_.seq() + 1);
     contact_writer_.Write(contacts_msg_);
+    if (!config_.coupling_trace_file.empty()) {
+      trace_rows_.Add({'w', contacts_msg_.seq(), report_.step_ns, now_ns, common::SteadyNowNs()});
+    }
     ++contact_sets_sent_;
     if (shared) ++contact_sets_shared_;
     if (report_.step_ns != 0 && report_.step_ns <= contacts_msg_.stamp_ns()) {

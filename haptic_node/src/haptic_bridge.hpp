@@ -12,12 +12,14 @@
 #include <ostream>
 #include <set>
 #include <string>
+#include <vector>
 
 #include "bridge_conversions.hpp"
 #include "desk_device.hpp"
 #include "local_field_dump.hpp"
 #include "handshare/common/latency_histogram.hpp"
 #include "handshare/common/session_clock.hpp"
+#include "handshare/common/wakeup.hpp"
 #include "handshare/dds/messages.hpp"
 #include "handshare/haptic/haptic_loop.hpp"
 #include "handshare/haptic/haptic_node.hpp"
@@ -38,6 +40,22 @@ inline std::string Format(const char* format, auto... args) {
   return line;
 }
 
+/// Every contact set of the coupling path with its times on this host's steady clock [ns], for
+/// bench/net (HapticNodeConfig::coupling_trace_file). Fixed capacity: rows beyond it are not kept.
+struct CouplingTrace {
+  struct Row {
+    char kind;  ///< 'w' written: seq, the step that made it, write() called, returned;
+                ///< 't' a peer's taken: its stamp (the sender's write), the take;
+                ///< 'u' a peer's first used by the haptic loop: its stamp, that step
+    std::uint64_t a, b, c, d;
+  };
+  static constexpr std::size_t kCapacity = 400'000;
+  std::vector<Row> rows;
+  void Add(const Row& r) {
+    if (rows.size() < rows.capacity()) rows.push_back(r);
+  }
+};
+
 class HapticBridge {
  public:
   using Clock = std::chrono::steady_clock;
@@ -49,6 +67,15 @@ class HapticBridge {
 
   /// One bridge period: the stages below, in this order.
   void Tick();
+  /// Between ticks: sleeps until the haptic step reports a contact worth offering, a peer's
+  /// contact set or an object state arrives (the readers' listeners post; nothing is polled),
+  /// or the deadline. True when woken before it: then call Couple().
+  bool WaitForCoupling(Clock::time_point deadline) { return wake_->WaitUntil(deadline); }
+  /// The coupling stages alone, at once: the newest report, the peers' contact sets and the
+  /// bodies' states to the haptic loop (lock-free), this hand's contact set to the deadband.
+  void Couple();
+  /// Writes the coupling trace (HapticNodeConfig::coupling_trace_file) if one was asked for.
+  void WriteCouplingTrace() const;
 
   std::uint64_t device_states_published() const { return device_states_published_; }
   /// Whether a scene state of the session's world server has arrived since this bridge began.
@@ -93,10 +120,12 @@ class HapticBridge {
   /// kMaxHeldEvents, the oldest dropped and counted beyond) until a reader is matched.
   void ForwardControlEvents();
   static constexpr std::size_t kMaxHeldEvents = 256;
-  /// The other users' contact sets, on this world's deformables.
-  void ReceivePeers();
-  /// Rigid bodies another process simulates: this hand follows their published states.
-  void FollowPeerBodies();
+  /// The other users' contact sets, on this world's deformables, handed to the loop (always at
+  /// a tick, which also lets vanished peers expire; between ticks when one was taken).
+  void ReceivePeers(bool tick);
+  /// Rigid bodies another process simulates: this hand follows their published states (always
+  /// at a tick; between ticks when a state arrived or the hand's report changed the hand-over).
+  void FollowPeerBodies(bool tick);
   /// The newest haptic snapshot, to viewers (and the trace), at the fastest viewer's frame rate.
   void PublishDeviceState();
   /// This hand's contacts: while touching, grasping or simulating, and once more at the end,
@@ -118,6 +147,9 @@ class HapticBridge {
   void AdoptScene(const msg::SceneState& state);
 
   HapticNodeConfig config_;
+  // Posted by the haptic step and the contact and object readers' listeners (before the
+  // readers: the listeners hold it too).
+  std::shared_ptr<common::Wakeup> wake_ = std::make_shared<common::Wakeup>();
   Device& device_;
   HapticLoop& loop_;
   std::ostream* trace_;
@@ -181,6 +213,7 @@ class HapticBridge {
   std::uint64_t newest_peer_stamp_ns_ = 0;
   std::uint64_t last_loop_peer_stamp_ns_ = 0;
   std::unique_ptr<LocalFieldDump> field_dump_;  // --dump-deformation
+  CouplingTrace trace_rows_;                     // coupling_trace_file
 };
 
 }  // namespace handshare::haptic

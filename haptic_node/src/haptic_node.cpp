@@ -168,7 +168,9 @@ int HapticNode::Run() {
       ": device " + device->name() + ", loop " + std::to_string(static_cast<int>(config_.rate_Hz)) + " Hz" +
       (realtime ? " (SCHED_FIFO)" : " (normal priority: no permission for SCHED_FIFO)"));
 
-  // The bridge thread: one tick per period at absolute deadlines, re-synced after a stall.
+  // The bridge thread: one tick per period at absolute deadlines, re-synced after a stall;
+  // between ticks it sleeps on its wake-up and runs the coupling stages whenever the haptic
+  // step or a reader posts it (a contact set or an object state goes through at once).
   const auto start = Clock::now();
   const auto period = std::chrono::duration_cast<Clock::duration>(
       std::chrono::duration<double>(1.0 / config_.publish_Hz));
@@ -186,9 +188,10 @@ int HapticNode::Run() {
     }
     next += period;
     if (Clock::now() > next + 5 * period) next = Clock::now();
-    std::this_thread::sleep_until(next);
+    while (link->bridge.WaitForCoupling(next)) link->bridge.Couple();
   }
   loop.Stop();
+  link->bridge.WriteCouplingTrace();
   common::LoopStats stats;
   loop.TakeStats(stats);
   PrintLoopSummary(config_.user, stats, loop.faults(), loop.rate_limited_steps(), link->bridge);

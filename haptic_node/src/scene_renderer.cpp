@@ -79,6 +79,17 @@ void SceneRenderer::ReleaseAll() noexcept {
   r = ContactReport{};
   r.seq = ++seq_;
   reports_.Publish();
+  PostReport(r);
+}
+
+void SceneRenderer::PostReport(const ContactReport& r) noexcept {
+  if (!wake_) return;
+  bool changed = false;
+  for (int f = 0; f < kFingers; ++f) {
+    changed |= r.fingers[f].object != touched_[f];
+    touched_[f] = r.fingers[f].object;
+  }
+  if (changed || report_wake_.load(std::memory_order_relaxed)) wake_->Post();
 }
 
 void SceneRenderer::Render(double /*t_s*/, double dt_s, std::uint64_t now_ns, const DeviceReading& reading,
@@ -171,6 +182,9 @@ void SceneRenderer::Render(double /*t_s*/, double dt_s, std::uint64_t now_ns, co
     b.v_WO_m_per_s = contact::ToVec3(world.body_velocity_W(body));
   }
   reports_.Publish();
+  // 6. The bridge wakes for a report that may be worth sending (a touch began or ended, or a
+  // peer shares an object): no tick between this step and the deadband.
+  PostReport(r);
 }
 
 }  // namespace handshare::haptic

@@ -17,6 +17,7 @@
 #include "bridge_conversions.hpp"
 #include "local_field_dump.hpp"
 #include "handshare/common/clock.hpp"
+#include "handshare/common/wakeup.hpp"
 #include "handshare/scene/scene.hpp"
 #include "handshare/session/peer_contacts.hpp"
 #include "handshare/testing/allocation_counter.hpp"
@@ -321,6 +322,51 @@ TEST(SceneRenderer, APeerBackAfterABridgeStallComesBackAtTheFadesRate) {
   EXPECT_LE(worst, bound) << "alice's force moved " << worst << " N in one 1 ms step at " << worst_at_ms
                           << " ms as bob's contact came back (allowed " << bound << " N)";
   EXPECT_NEAR(prev, f_full, 1e-9) << "back at full weight 450 ms after the bridge resumed";
+  EXPECT_EQ(allocations, 0);
+  std::filesystem::remove_all(dir);
+}
+
+// The coupling path between ticks: the haptic step posts the bridge's wake-up when a finger
+// starts or stops touching an object, and after every step while the bridge asks for it (a
+// peer shares the object), without allocating; a report with nothing new posts nothing.
+TEST(SceneRenderer, TheStepWakesTheBridgeForAReportWorthOffering) {
+  const auto dir = LabDir("wake");
+  world::SceneModelsOptions options;
+  options.cache_dir = dir / "cache";
+  SceneRenderer r(scene::LoadScene(WriteLab(dir, kGroundAndBlock)), options);
+  auto wake = std::make_shared<common::Wakeup>();
+  r.SetWakeup(wake);
+  std::array<Eigen::Vector3d, kFingers> f{};
+  DeviceReading hand;
+  hand.valid = true;
+  for (auto& p : hand.p_WE) p = Eigen::Vector3d(1.0, 1.0, 1.0);  // far from everything
+  std::uint64_t t_ns = common::SteadyNowNs();
+  long allocations = 0;
+  auto step = [&] {
+    t_ns += 1'000'000;
+    const long before = testing::AllocationCount();
+    r.Render(0.0, 1e-3, t_ns, hand, f);
+    allocations += testing::AllocationCount() - before;
+  };
+  for (int i = 0; i < 5; ++i) step();
+  EXPECT_EQ(wake->posts(), 0u) << "no finger touches anything: nothing to offer";
+  // The index finger comes down onto the block's top (z = 0.02 m): the step that touches posts.
+  hand.p_WE[0] = Eigen::Vector3d(-0.1, 0.0, 0.02 + options.fingertip_radius_m - 0.001);
+  step();
+  EXPECT_EQ(wake->posts(), 1u) << "the touch began";
+  EXPECT_TRUE(wake->WaitUntil(common::Wakeup::Clock::now()));
+  ContactReport report;
+  ASSERT_TRUE(r.TakeReport(report));
+  EXPECT_GE(report.fingers[0].object, 0);
+  for (int i = 0; i < 5; ++i) step();
+  EXPECT_EQ(wake->posts(), 1u) << "still touching, no peer on the object: the bridge's tick will do";
+  r.SetReportWake(true);  // a peer's loop solves the block with this hand's contacts
+  for (int i = 0; i < 5; ++i) step();
+  EXPECT_EQ(wake->posts(), 6u) << "every step's report goes to the deadband";
+  r.SetReportWake(false);
+  hand.p_WE[0] = Eigen::Vector3d(1.0, 1.0, 1.0);
+  step();
+  EXPECT_EQ(wake->posts(), 7u) << "the touch ended";
   EXPECT_EQ(allocations, 0);
   std::filesystem::remove_all(dir);
 }

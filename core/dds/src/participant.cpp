@@ -28,6 +28,7 @@
 #include <cstdlib>
 #include <deque>
 #include <filesystem>
+#include <functional>
 #include <atomic>
 #include <map>
 #include <mutex>
@@ -221,6 +222,11 @@ class LostWriterListener final : public fdds::DataReaderListener {
     deadlines_missed_.store(static_cast<std::uint64_t>(s.total_count), std::memory_order_relaxed);
   }
   std::uint64_t deadlines_missed() const { return deadlines_missed_.load(std::memory_order_relaxed); }
+  // A reader whose owner waits on its own wake-up (Reader::OnDataAvailable): only signal.
+  void on_data_available(fdds::DataReader*) override {
+    if (notify_) notify_();
+  }
+  void set_notify(std::function<void()> notify) { notify_ = std::move(notify); }
   // In the order they happened (a flapping link: lost, back, lost).
   bool Take(WriterChange& out) {
     std::lock_guard<std::mutex> lock(mutex_);
@@ -241,6 +247,7 @@ class LostWriterListener final : public fdds::DataReaderListener {
   std::mutex mutex_;
   std::deque<WriterChange> changes_;
   std::atomic<std::uint64_t> deadlines_missed_{0};
+  std::function<void()> notify_;  // set before data_available is in the listener's mask
 };
 
 class ReaderImpl final : public detail::UntypedReader {
@@ -248,10 +255,7 @@ class ReaderImpl final : public detail::UntypedReader {
   ReaderImpl(std::shared_ptr<detail::ParticipantImpl> owner, fdds::Topic* topic,
              const fdds::DataReaderQos& qos, std::string topic_name)
       : owner_(std::move(owner)), topic_(std::move(topic_name)), counters_(owner_->CountersFor(topic->get_name())) {
-    r_ = CheckEntity(owner_->subscriber->create_datareader(
-                         topic, qos, &listener_,
-                         fdds::StatusMask::subscription_matched() << fdds::StatusMask::liveliness_changed()
-                                                << fdds::StatusMask::requested_deadline_missed()),
+    r_ = CheckEntity(owner_->subscriber->create_datareader(topic, qos, &listener_, kListenerMask),
                      "reader on " + topic_);
     fdds::StatusCondition& condition = r_->get_statuscondition();
     Check(condition.set_enabled_statuses(fdds::StatusMask::data_available()),
@@ -275,6 +279,12 @@ class ReaderImpl final : public detail::UntypedReader {
   }
 
   bool TakeWriterChange(WriterChange& change) override { return listener_.Take(change); }
+  void OnDataAvailable(std::function<void()> notify) override {
+    listener_.set_notify(std::move(notify));
+    fdds::StatusMask mask = kListenerMask;
+    mask << fdds::StatusMask::data_available();
+    Check(r_->set_listener(&listener_, mask), "data listener of " + topic_);
+  }
   std::uint64_t deadlines_missed() const override { return listener_.deadlines_missed(); }
 
   bool TakeNext(void* sample, SampleMeta& meta) override {
@@ -324,6 +334,9 @@ class ReaderImpl final : public detail::UntypedReader {
   std::shared_ptr<detail::ParticipantImpl> owner_;
   std::string topic_;
   std::shared_ptr<detail::TrafficCounters> counters_;
+  static inline const fdds::StatusMask kListenerMask = fdds::StatusMask::subscription_matched()
+                                                     << fdds::StatusMask::liveliness_changed()
+                                                     << fdds::StatusMask::requested_deadline_missed();
   LostWriterListener listener_;
   fdds::DataReader* r_ = nullptr;
   fdds::WaitSet waitset_;

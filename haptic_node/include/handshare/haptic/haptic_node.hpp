@@ -30,6 +30,8 @@ struct HapticNodeConfig {
   double rejoin_after_s = 15.0;                  // no world server heard this long after joining: join again; 0: never
   std::string trace_file;                        // CSV of every published device state
   std::string dump_dir;                          // this node's field of each touched deformable ("" = none)
+  bool coupling_on_wake = true;                  // contact sets and object states between ticks, woken by the haptic step and the readers; false: only at the bridge's ticks (as before; bench/net compares)
+  std::string coupling_trace_file;               // every contact set written, taken and first used, with its times (bench/net; "" = none)
 };
 
 class HapticNode {

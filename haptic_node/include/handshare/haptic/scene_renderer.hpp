@@ -14,6 +14,7 @@
 #include "handshare/common/session_clock.hpp"
 #include "handshare/common/spsc_queue.hpp"
 #include "handshare/common/triple_buffer.hpp"
+#include "handshare/common/wakeup.hpp"
 #include "handshare/controls/controls.hpp"
 #include "handshare/haptic/force_renderer.hpp"
 #include "handshare/contact/coupling_passivity.hpp"
@@ -113,6 +114,14 @@ class SceneRenderer final : public ForceRenderer {
   /// World object index -> scene object id ("" if out of range).
   const std::string& IdOf(std::int32_t object) const noexcept;
   bool TakeReport(ContactReport& out) noexcept { return reports_.Read(out); }
+  /// The bridge's wake-up: the haptic step posts it (a non-blocking futex wake, no lock, no
+  /// allocation) when a finger starts or stops touching an object, and after every step while
+  /// SetReportWake(true), so a report that may be worth sending reaches the bridge within the
+  /// step that made it. Not thread-safe: call before SetRenderer; nullptr: never posted.
+  void SetWakeup(std::shared_ptr<common::Wakeup> wake) noexcept { wake_ = std::move(wake); }
+  /// Bridge side, any time: post after every step (a peer's loop solves an object with this
+  /// hand's contacts: every report is offered to the deadband), or only on touch changes.
+  void SetReportWake(bool every_step) noexcept { report_wake_.store(every_step, std::memory_order_relaxed); }
   bool TakeEvent(controls::ControlEvent& out) noexcept { return events_.Pop(out); }
   void SetRemote(const RemoteContacts& remote) noexcept { remote_in_.Write(remote); }
   /// The bodies to follow from the next step on (an empty set: this hand simulates them all).
@@ -141,6 +150,7 @@ class SceneRenderer final : public ForceRenderer {
 
  private:
   void WriteLoads(const contact::HapticWorld& world) noexcept;
+  void PostReport(const ContactReport& r) noexcept;
 
   scene::Scene scene_;
   common::SessionClock clock_;
@@ -178,6 +188,9 @@ class SceneRenderer final : public ForceRenderer {
   };
   common::SpscQueue<ControlCommand, 64> control_in_;
   std::atomic<std::uint64_t> dropped_events_{0};
+  std::shared_ptr<common::Wakeup> wake_;
+  std::atomic<bool> report_wake_{false};
+  std::array<std::int32_t, kFingers> touched_{-1, -1, -1, -1, -1};  // each finger's object at the last report
   std::uint64_t seq_ = 0;
   std::uint64_t peer_stamp_ns_ = 0;  // the newest peer set used, and the step that first used it
   std::uint64_t peer_seen_ns_ = 0;

@@ -8,6 +8,7 @@
 #include <array>
 #include <chrono>
 #include <cstdint>
+#include <functional>
 #include <memory>
 #include <stdexcept>
 #include <string>
@@ -80,6 +81,7 @@ class UntypedReader {
   virtual int matched_writers() const = 0;
   virtual bool TakeWriterChange(WriterChange& change) = 0;
   virtual std::uint64_t deadlines_missed() const = 0;
+  virtual void OnDataAvailable(std::function<void()> notify) = 0;
 };
 
 /// Defined in types.cpp for every message type of handshare.idl.
@@ -129,6 +131,10 @@ class Reader {
   /// Requested-deadline misses so far (profiles with a deadline: a writer's instance that sent
   /// nothing for a whole period, counted once per instance and period; 0 without a deadline).
   std::uint64_t deadlines_missed() const { return r_->deadlines_missed(); }
+  /// From now on, `notify` runs on the middleware's receive thread whenever samples arrive:
+  /// it must only signal (e.g. common::Wakeup::Post) and outlive this reader; the owner takes
+  /// the samples on its own thread. Set once; WaitForData is not for such a reader.
+  void OnDataAvailable(std::function<void()> notify) { r_->OnDataAvailable(std::move(notify)); }
   explicit operator bool() const { return r_ != nullptr; }
 
  private:

@@ -1,0 +1,128 @@
+// The haptic bridge's coupling path between its ticks, over real DDS (two participants of this
+// process on loopback, a test domain of its own): a peer's contact set wakes the bridge through
+// its reader's listener, is taken and handed to the haptic loop at once, and the loop's next
+// step uses it, with no bridge tick in between (before, it waited for the next 100 Hz tick).
+#include "haptic_bridge.hpp"
+
+#include <gtest/gtest.h>
+
+#include <unistd.h>
+
+#include <chrono>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <string>
+#include <thread>
+
+#include "handshare/common/clock.hpp"
+#include "handshare/dds/messages.hpp"
+#include "handshare/haptic/haptic_loop.hpp"
+#include "handshare/haptic/sim_hand.hpp"
+
+namespace handshare::haptic {
+namespace {
+
+using namespace std::chrono_literals;
+using Clock = HapticBridge::Clock;
+
+constexpr int kDomain = 221;
+
+// A scene "lab" (a soft block on the ground) in a fresh assets folder this process reads.
+std::filesystem::path WriteLabAssets() {
+  const auto dir = std::filesystem::temp_directory_path() / ("handshare_haptic_bridge_test_" + std::to_string(getpid()));
+  std::filesystem::remove_all(dir);
+  std::filesystem::create_directories(dir / "scenes");
+  std::ofstream(dir / "scenes" / "lab.json") << R"({"name": "lab", "gravity_m_per_s2": [0, 0, -9.81], "objects": [
+      {"id": "ground", "kind": "rigid", "shape": "box", "position_m": [0, 0, -0.02], "half_extent_m": [0.3, 0.3, 0.02]},
+      {"id": "block", "kind": "deformable", "shape": "box", "position_m": [-0.1, 0, 0.01],
+       "half_extent_m": [0.02, 0.02, 0.01], "material": {"E_Pa": 20000, "nu": 0.4}, "fixed": {"below_m": -0.0099}}],
+      "messages": [{"language": "en", "text": "t", "next_action": "a"}]})";
+  return dir;
+}
+
+// Bob's index fingertip pressing the block's top 3 mm, in the block's frame O.
+msg::ContactSet BobOnTheBlock(const std::string& session, std::uint64_t stamp_ns) {
+  msg::ContactSet s;
+  s.user("bob");
+  s.session(session);
+  s.stamp_ns(stamp_ns);
+  auto& f = s.fingers()[1];
+  f.active(true);
+  f.object_id("block");
+  f.p_OC_m({0.005, 0.0, 0.01});
+  f.n_O({0.0, 0.0, 1.0});
+  f.p_OE_m({0.005, 0.0, 0.015});
+  f.radius_m(0.008);
+  f.depth_m(0.003);
+  f.u_O_m({0.0, 0.0, -0.003});
+  f.f_O_N({0.0, 0.0, -0.5});
+  return s;
+}
+
+class BridgeCoupling : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    assets_ = WriteLabAssets();
+    setenv("HANDSHARE_ASSETS", assets_.c_str(), 1);
+    setenv("HANDSHARE_CACHE", (assets_ / "cache").c_str(), 1);
+  }
+  void TearDown() override { std::filesystem::remove_all(assets_); }
+  std::filesystem::path assets_;
+};
+
+// Bob's contact set, written while alice's bridge sleeps between its ticks, wakes it (the
+// contact reader's listener posts its wake-up), is taken by the coupling stages alone and is
+// used by alice's very next haptic step. With HapticNodeConfig::coupling_on_wake off (the
+// bridge as it was: peers taken at its ticks only) the wait runs to its deadline and fails.
+TEST_F(BridgeCoupling, APeersContactSetWakesTheBridgeAndReachesTheNextHapticStep) {
+  const std::string session = "coupling_" + std::to_string(getpid());
+  HapticNodeConfig config;
+  config.where.domain_id = kDomain;
+  config.where.session = session;
+  config.user = "alice";
+  config.rejoin_after_s = 0.0;
+  dds::Participant alice_p(config.where, "haptic_node/alice");
+  dds::Participant bob_p(kDomain, session, "haptic_node/bob");
+  SimDevice device(HandScript::Default(Eigen::Vector3d(0.2, 0.2, 0.3)));  // far from the block
+  HapticLoop loop(device, HapticLoopConfig{1000.0, false});
+  HapticBridge bridge(config, device, loop, alice_p, nullptr, [](const std::string&) {});
+
+  // Bob's side plays the world server too: the scene, then his contact set.
+  auto scene_writer = dds::MakeWriter<msg::SceneState>(bob_p, dds::topics::kSceneState);
+  auto contact_writer = dds::MakeWriter<msg::ContactSet>(bob_p, dds::topics::kContactSet);
+  msg::SceneState scene;
+  scene.session(session);
+  scene.scene("lab");
+  scene.revision(1);
+  scene.gravity_W_m_per_s2({0.0, 0.0, -9.81});
+  scene.tick_Hz(60.0f);
+  scene_writer.Write(scene);
+  const auto give_up = Clock::now() + 60s;
+  while (!bridge.heard_world_server() && Clock::now() < give_up) {
+    bridge.Tick();
+    std::this_thread::sleep_for(10ms);
+  }
+  ASSERT_TRUE(bridge.heard_world_server()) << "no scene state in 60 s";
+  while (contact_writer.matched_readers() == 0 && Clock::now() < give_up) std::this_thread::sleep_for(10ms);
+  ASSERT_GT(contact_writer.matched_readers(), 0) << "alice's contact reader never matched bob's writer";
+  double t_s = 0.0;
+  loop.Step(t_s);  // the loop adopts the scene's renderer
+  bridge.Tick();
+  while (bridge.WaitForCoupling(Clock::now())) bridge.Couple();  // nothing owed before bob writes
+  ASSERT_EQ(bridge.peer_contact_age().count(), 0u);
+
+  const std::uint64_t stamp_ns = common::SteadyNowNs();
+  contact_writer.Write(BobOnTheBlock(session, stamp_ns));
+  // No tick from here on: only the wake-up can bring the set in.
+  ASSERT_TRUE(bridge.WaitForCoupling(Clock::now() + 10s)) << "bob's contact set did not wake the bridge";
+  bridge.Couple();
+  EXPECT_EQ(bridge.peer_contact_age().count(), 1u) << "taken between ticks";
+  loop.Step(t_s += 1e-3);  // alice's next haptic step
+  bridge.Couple();         // reads that step's report: the step that first used bob's set
+  ASSERT_EQ(bridge.peer_contact_loop_age().count(), 1u) << "the haptic step after the wake did not use bob's set";
+  EXPECT_GT(bridge.peer_contact_loop_age().max_us(), 0.0);
+}
+
+}  // namespace
+}  // namespace handshare::haptic
