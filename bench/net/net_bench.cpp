@@ -16,8 +16,7 @@
 //     threads included: they inherit it), to show what scheduling does to the tail.
 //     --node-coupling: woken (default) the nodes' bridges as built, woken by the haptic step and
 //     the readers; polled: HapticNodeConfig::coupling_on_wake off, contact sets taken and sent
-//     at the bridge's 100 Hz ticks only, and no short time slice asked for (HapticNodeConfig::
-//     short_slice off): the node before the coupling path was event-driven.
+//     at the bridge's 100 Hz ticks only (the bridge before the coupling path was event-driven).
 //     --node-weber W (default 0.02): the nodes' contact-set deadband (0: off).
 //     prints transport,measure,p50_us,p99_us,max_us rows (and '#' comment lines with the load,
 //     losses and what was skipped). transport: shm | udp | netns; measure:
@@ -268,7 +267,6 @@ int RunNode(const Options& o) {
   c.deadband_weber = o.node_weber;
   c.rejoin_after_s = 0.0;
   c.coupling_on_wake = o.node_coupling == "woken";
-  c.short_slice = o.node_coupling == "woken";  // polled: the node as it was
   c.coupling_trace_file = o.out;
   setenv("HANDSHARE_ASSETS", assets.c_str(), 1);
   std::unique_ptr<dds::Participant> server;

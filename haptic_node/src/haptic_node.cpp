@@ -1,10 +1,5 @@
 #include "handshare/haptic/haptic_node.hpp"
 
-#include <sched.h>
-#include <sys/syscall.h>
-#include <unistd.h>
-
-#include <cstdint>
 #include <cstdio>
 #include <fstream>
 #include <functional>
@@ -55,28 +50,6 @@ std::unique_ptr<Device> MakeDevice(const HapticNodeConfig& c) {
     return PluginDevice::Open(o);
   }
   throw std::invalid_argument("device '" + c.device + "' is not available (this build has: sim, hiro, replay, desk, plugin:PATH.so[:ARGS])");
-}
-
-/// Asks the scheduler for a short time slice for this thread and the threads it starts from now
-/// on (Linux 6.12+ EEVDF: sched_attr::sched_runtime of a SCHED_OTHER thread, 0.1 ms). A thread
-/// that sleeps most of the time and is woken (the bridge by the haptic step or a reader's
-/// listener, Fast DDS's receive threads by the network) then preempts a busy task at once
-/// instead of after that task's slice (up to a few ms on a loaded machine). Normal priority,
-/// no privilege, the same fair share of the CPU; earlier kernels ignore it. Returns whether the
-/// kernel took it.
-bool RequestShortSlice() {
-  struct SchedAttr {  // struct sched_attr (linux/sched/types.h), not in glibc 2.36's headers
-    std::uint32_t size, policy;
-    std::uint64_t flags;
-    std::int32_t nice;
-    std::uint32_t priority;
-    std::uint64_t runtime_ns, deadline_ns, period_ns;
-    std::uint32_t util_min, util_max;
-  } attr{};
-  attr.size = sizeof attr;
-  attr.policy = SCHED_OTHER;
-  attr.runtime_ns = 100'000;
-  return syscall(SYS_sched_setattr, 0, &attr, 0) == 0;
 }
 
 /// Everything of this node that lives on DDS: its participant, its member announcement and the
@@ -188,8 +161,6 @@ int HapticNode::Run() {
 
   const auto* plugin = dynamic_cast<const PluginDevice*>(device.get());
   if (plugin != nullptr) say("device " + plugin->Describe());
-  // Before the participant and the haptic loop: their threads inherit it.
-  if (config_.short_slice && !RequestShortSlice()) say("the scheduler refused a short time slice: wake-ups wait for busy tasks' slices");
   HapticLoop loop(*device, HapticLoopConfig{config_.rate_Hz, true});
   auto link = std::make_unique<SessionLink>(config_, *device, loop, trace ? &trace : nullptr, say);
   const bool realtime = loop.Start();

@@ -31,7 +31,6 @@ struct HapticNodeConfig {
   std::string trace_file;                        // CSV of every published device state
   std::string dump_dir;                          // this node's field of each touched deformable ("" = none)
   bool coupling_on_wake = true;                  // contact sets and object states between ticks, woken by the haptic step and the readers; false: only at the bridge's ticks (as before; bench/net compares)
-  bool short_slice = true;                       // the bridge's and the middleware's threads ask for a 0.1 ms time slice (EEVDF): woken, they preempt busy tasks at once
   std::string coupling_trace_file;               // every contact set written, taken and first used, with its times (bench/net; "" = none)
 };
 
