@@ -340,6 +340,9 @@ TEST(SceneRenderer, TheStepWakesTheBridgeForAReportWorthOffering) {
   DeviceReading hand;
   hand.valid = true;
   for (auto& p : hand.p_WE) p = Eigen::Vector3d(1.0, 1.0, 1.0);  // far from everything
+  // The index fingertip 2 mm above the block's top (z = 0.02 m).
+  const double above_m = 0.02 + options.fingertip_radius_m + 0.002;
+  hand.p_WE[0] = Eigen::Vector3d(-0.1, 0.0, above_m);
   std::uint64_t t_ns = common::SteadyNowNs();
   long allocations = 0;
   auto step = [&] {
@@ -350,12 +353,16 @@ TEST(SceneRenderer, TheStepWakesTheBridgeForAReportWorthOffering) {
   };
   for (int i = 0; i < 5; ++i) step();
   EXPECT_EQ(wake->posts(), 0u) << "no finger touches anything: nothing to offer";
-  // The index finger comes down onto the block's top (z = 0.02 m): the step that touches posts.
-  hand.p_WE[0] = Eigen::Vector3d(-0.1, 0.0, 0.02 + options.fingertip_radius_m - 0.001);
-  step();
-  EXPECT_EQ(wake->posts(), 1u) << "the touch began";
-  EXPECT_TRUE(wake->WaitUntil(common::Wakeup::Clock::now()));
+  // It comes down 0.1 mm a step: the step that touches posts, none before.
   ContactReport report;
+  int down = 0;
+  for (; down < 40 && wake->posts() == 0; ++down) {
+    hand.p_WE[0].z() = above_m - 1e-4 * (down + 1);
+    step();
+  }
+  ASSERT_EQ(wake->posts(), 1u) << "the touch began";
+  EXPECT_GE(down, 15) << "posted before the fingertip reached the block";
+  EXPECT_TRUE(wake->WaitUntil(common::Wakeup::Clock::now()));
   ASSERT_TRUE(r.TakeReport(report));
   EXPECT_GE(report.fingers[0].object, 0);
   for (int i = 0; i < 5; ++i) step();
