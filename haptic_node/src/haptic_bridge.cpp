@@ -258,7 +258,7 @@ void HapticBridge::ReceivePeers(bool tick) {
       }
       peers_.Receive(peer, now, config_.user);
       // The sender's write to this take, on the steady clock both share on one host (the
-      // DDS hop plus the wait for this bridge's tick): bench/net reports it.
+      // DDS hop and this bridge's wake-up, or its tick with coupling_on_wake off).
       if (peer.stamp_ns() <= now_ns) peer_age_.Record(1e-3 * static_cast<double>(now_ns - peer.stamp_ns()));
       newest_peer_stamp_ns_ = std::max(newest_peer_stamp_ns_, peer.stamp_ns());
       if (!config_.coupling_trace_file.empty()) trace_rows_.Add({'t', peer.stamp_ns(), now_ns, 0, 0});

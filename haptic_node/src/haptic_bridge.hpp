@@ -1,8 +1,10 @@
 #pragma once
 /// The haptic node's bridge thread, as a list of stages: everything between the haptic loop
 /// (its own real-time thread) and the session's DDS topics. One Tick() per bridge period
-/// (100 Hz by default); each stage is a short function over the bridge's state. Private to the
-/// node library: it holds DDS writers and readers.
+/// (100 Hz by default); each stage is a short function over the bridge's state. Between ticks
+/// the coupling stages alone (Couple()) run whenever the haptic step or the contact and object
+/// readers post the bridge's wake-up. Private to the node library: it holds DDS writers and
+/// readers.
 #include <cstdint>
 #include <cstdio>
 #include <deque>

@@ -1,7 +1,9 @@
 #pragma once
 /// A haptic node: one user at one device. The haptic loop runs on its own thread; this class
 /// is the bridge thread around it: it joins the session, publishes the device state at viewer
-/// rate and the loop statistics at 1 Hz, and prints the loop statistics at exit.
+/// rate and the loop statistics at 1 Hz, exchanges contact sets and body states with the peers
+/// as they come (woken by the haptic step and the readers), and prints the loop statistics at
+/// exit.
 #include <array>
 #include <chrono>
 #include <string>
