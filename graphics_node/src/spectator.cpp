@@ -31,6 +31,7 @@
 #include "handshare/hiro/hiro_model.hpp"
 #include "handshare/render/image.hpp"
 #include "handshare/render/offscreen_renderer.hpp"
+#include "handshare/render/projection.hpp"
 #include "handshare/render/window_renderer.hpp"
 #include "handshare/scene/scene.hpp"
 #include "handshare/contact/finger_contact.hpp"  // contact::ToPose
@@ -173,6 +174,13 @@ class WorldView {
     const auto it = hands_.find(user);
     if (it == hands_.end() || it->second.state.fault()) return fallback;
     return UserEyeCamera(HandPose(it->second.state), eye, fallback);
+  }
+
+  /// The hand base a user's hand is drawn at, if one is.
+  std::optional<Eigen::Vector3d> HandBase(const std::string& user) const {
+    const auto it = hands_.find(user);
+    if (it == hands_.end() || it->second.state.fault()) return std::nullopt;
+    return HandPose(it->second.state).translation();
   }
 
   /// The member ids (MemberInfo::member_id) of the members this view has heard.
@@ -487,7 +495,8 @@ int Spectator::Run() {
     throw std::runtime_error("assets folder " + assets_dir.string() + " does not exist (option --assets)");
   }
   for (const auto& [file, option] : {std::pair{config_.deformation_out, "--deformation-out"},
-                                     std::pair{config_.state_out, "--state-out"}}) {
+                                     std::pair{config_.state_out, "--state-out"},
+                                     std::pair{config_.frame_log, "--frame-log"}}) {
     if (file.empty()) continue;
     const std::filesystem::path folder = std::filesystem::absolute(file).parent_path();
     if (!std::filesystem::is_directory(folder)) {
@@ -630,6 +639,13 @@ int Spectator::Run() {
   }
 
   render::WindowRenderer& window = *window_renderer;
+  std::ofstream frame_log;
+  if (!config_.frame_log.empty()) {
+    frame_log.open(config_.frame_log);
+    if (!frame_log) throw std::runtime_error("cannot write " + config_.frame_log.string() + " (option --frame-log)");
+    frame_log << "frame,t_ns,hand_x_m,hand_y_m,hand_z_m,anchor_x_px,anchor_y_px\n" << std::setprecision(9);
+  }
+  std::uint64_t frames_shown = 0;
   auto next = Clock::now();
   DeskControl desk;
   GamepadControl gamepad;
@@ -643,11 +659,24 @@ int Spectator::Run() {
     link->world.Update();
     const std::string desk_user = config_.desk_input ? config_.view_user : std::string();
     const std::string help = pad ? GamepadControl::HelpText() : desk.help_shown() ? DeskControl::HelpText() : std::string();
-    window.Render(link->world.Build(desk_user, help),
-                  config_.view_user.empty() ? camera : link->world.UserCamera(config_.view_user, config_.eye, camera));
-    if (config_.desk_input) {
-      // What the person did while that frame was up (Render polls the window's events), to
-      // their haptic node at once: every frame, so a quiet desk is noticed there.
+    const render::Camera frame_camera =
+        config_.view_user.empty() ? camera : link->world.UserCamera(config_.view_user, config_.eye, camera);
+    window.Render(link->world.Build(desk_user, help), frame_camera);
+    if (frame_log.is_open()) {
+      frame_log << frames_shown << "," << common::SteadyNowNs() << ",";
+      if (const auto p = link->world.HandBase(config_.view_user)) {
+        frame_log << p->x() << "," << p->y() << "," << p->z() << ",";
+      } else {
+        frame_log << ",,,";
+      }
+      const Eigen::Vector3d anchor = render::ProjectToImage(frame_camera, Eigen::Vector3d::Zero());
+      frame_log << anchor.x() << "," << anchor.y() << "\n";
+    }
+    ++frames_shown;
+    // What the person did, to their haptic node: every frame, so that a quiet desk is noticed
+    // there, and between frames as soon as it happens (the mouse and keys; a gamepad is read
+    // at the frame rate).
+    const auto send_input = [&] {
       const auto now = Clock::now();
       const double dt_s = std::chrono::duration<double>(now - last_frame).count();
       last_frame = now;
@@ -662,9 +691,16 @@ int Spectator::Run() {
         desk.Apply(window.TakeInput(), dt_s);
         desk_sender.Send(desk.target(), link->desk_writer);
       }
-    }
+    };
+    if (config_.desk_input) send_input();
     next += period;
-    std::this_thread::sleep_until(next);
+    if (config_.desk_input && !pad) {
+      for (auto now = Clock::now(); now < next; now = Clock::now()) {
+        if (window.WaitForInput(std::chrono::duration<double>(next - now).count())) send_input();
+      }
+    } else {
+      std::this_thread::sleep_until(next);
+    }
   }
   if (config_.desk_input) desk_sender.Release(link->desk_writer);
   finish();
