@@ -24,7 +24,9 @@ usage: motion_to_photon.py --bin-dir BUILD [--moves 200] [--width 1280] [--heigh
                            [--domain 216] [--work DIR] [--csv FILE] [--png FILE]
 Writes one CSV row per move (move, direction, send_ms, latency_ms, frames_after_event,
 first_change_ms: the first frame whose hand base differs at all, before the desk's filter has
-moved it a pixel) and
+moved it a pixel; loop_moved_ms: the haptic loop's step that made that frame's state, after
+the event; state_to_photon_ms: from the step of the state in the first visible frame to that
+frame on the screen) and
 prints p50 / p99 / max and the load. A bench: it asserts nothing.
 """
 import argparse
@@ -113,7 +115,7 @@ class FrameLog:
             if not line or cells[0] == "frame" or cells[2] == "":
                 continue  # the header, or a frame without alice's hand
             self.rows.append((int(cells[1]), float(cells[5]), float(cells[6]),
-                              (float(cells[2]), float(cells[3]), float(cells[4]))))
+                              (float(cells[2]), float(cells[3]), float(cells[4])), int(cells[7])))
 
 
 def percentile(values, p):
@@ -191,7 +193,7 @@ def main():
             while time.monotonic() < deadline:
                 frames.poll()
                 if frames.rows:
-                    t_last, _, _, hand = frames.rows[-1]
+                    t_last, hand = frames.rows[-1][0], frames.rows[-1][3]
                     still = [r for r in frames.rows if r[0] >= t_last - hold_s * 1e9]
                     if (still and still[0][0] <= t_last - 0.9 * hold_s * 1e9 and
                             all(max(abs(p - q) for p, q in zip(r[3], hand)) < 1e-4 for r in still)):
@@ -224,13 +226,15 @@ def main():
                     time.sleep(0.002)
             if seen is None:
                 print(f"move {move}: no frame showed the hand moved within 3 s", flush=True)
-                results.append((move, direction, send_ms, float("nan"), -1, float("nan")))
+                results.append((move, direction, send_ms, float("nan"), -1, float("nan"), float("nan"), float("nan")))
                 continue
             latency_ms = (seen[0][0] - t0) * 1e-6
             # The first frame whose hand base differs at all from the rest's: the path without the
             # desk filter's ramp up to a visible pixel.
             first = next(r for r in frames.rows if r[0] > t0 and r[3] != rest[3])
-            results.append((move, direction, send_ms, latency_ms, seen[1], (first[0] - t0) * 1e-6))
+            # Its stamp: the haptic loop's step that first moved the hand, on the same clock.
+            results.append((move, direction, send_ms, latency_ms, seen[1], (first[0] - t0) * 1e-6,
+                            (first[4] - t0) * 1e-6, (seen[0][0] - seen[0][4]) * 1e-6))
         load = os.getloadavg()
         xtest.close()
     finally:
@@ -250,16 +254,22 @@ def main():
     p50, p99, worst = percentile(latencies, 50), percentile(latencies, 99), max(latencies)
     x50 = percentile([r[2] for r in results], 50)
     firsts = [r[5] for r in results if r[5] == r[5]]
+    loops = [r[6] for r in results if r[6] == r[6]]
+    shown = [r[7] for r in results if r[7] == r[7]]
     print(f"motion to photon at {a.width} x {a.height}, {a.fps:g} fps, world {a.world}: {len(latencies)} moves "
           f"({missing} unseen): p50 {p50:.1f} ms, p99 {p99:.1f} ms, max {worst:.1f} ms (sending the event: "
           f"p50 {x50:.2f} ms, inside the figures); the first frame with the hand moved at all: p50 {percentile(firsts, 50):.1f} ms, "
-          f"p99 {percentile(firsts, 99):.1f} ms; load average {load[0]:.2f} {load[1]:.2f} {load[2]:.2f}")
+          f"p99 {percentile(firsts, 99):.1f} ms; the haptic loop's step that first moved it: p50 "
+          f"{percentile(loops, 50):.1f} ms, p99 {percentile(loops, 99):.1f} ms after the event; from the step "
+          f"of the state in the first visible frame to that frame: p50 {percentile(shown, 50):.1f} ms, p99 "
+          f"{percentile(shown, 99):.1f} ms; load average {load[0]:.2f} {load[1]:.2f} {load[2]:.2f}")
     if a.csv:
         with open(a.csv, "w", newline="") as f:
             w = csv.writer(f)
-            w.writerow(["move", "direction", "send_ms", "latency_ms", "frames_after_event", "first_change_ms"])
+            w.writerow(["move", "direction", "send_ms", "latency_ms", "frames_after_event", "first_change_ms",
+                        "loop_moved_ms", "state_to_photon_ms"])
             for r in results:
-                w.writerow([r[0], r[1], f"{r[2]:.3f}", f"{r[3]:.3f}", r[4], f"{r[5]:.3f}"])
+                w.writerow([r[0], r[1], f"{r[2]:.3f}", f"{r[3]:.3f}", r[4], f"{r[5]:.3f}", f"{r[6]:.3f}", f"{r[7]:.3f}"])
     if a.png:
         import matplotlib
         matplotlib.use("Agg")

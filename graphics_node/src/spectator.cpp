@@ -12,6 +12,9 @@
 #include <set>
 #include <sstream>
 #include <thread>
+#include <atomic>
+#include <condition_variable>
+#include <mutex>
 
 #include <nlohmann/json.hpp>
 
@@ -174,6 +177,16 @@ class WorldView {
     const auto it = hands_.find(user);
     if (it == hands_.end() || it->second.state.fault()) return fallback;
     return UserEyeCamera(HandPose(it->second.state), eye, fallback);
+  }
+
+  /// Blocks up to `timeout` for any user's device state to arrive. Another thread may wait here
+  /// while this one updates (DeviceStateWaker).
+  bool WaitForDeviceState(std::chrono::nanoseconds timeout) { return device_reader_.WaitForData(timeout); }
+
+  /// The stamp of a user's newest device state (0: none).
+  std::uint64_t HandStamp(const std::string& user) const {
+    const auto it = hands_.find(user);
+    return it == hands_.end() ? 0 : it->second.state.stamp_ns();
   }
 
   /// The hand base a user's hand is drawn at, if one is.
@@ -352,6 +365,56 @@ dds::Writer<msg::DeskInput> MakeDeskWriter(dds::Participant& participant) {
   }
 }
 
+/// A desk's view draws the person's hand as soon as its new state is here, not when the next
+/// frame is due: this thread waits on the device-state reader and wakes the window's wait
+/// (render::WindowRenderer::Wake) when a state arrives; the main thread takes it
+/// (WorldView::Update), says so (Taken), and the thread waits again.
+class DeviceStateWaker {
+ public:
+  explicit DeviceStateWaker(WorldView& world) : thread_([this, &world] { Run(world); }) {}
+  ~DeviceStateWaker() {
+    {
+      std::lock_guard lock(mutex_);
+      stop_ = true;
+    }
+    taken_.notify_all();
+    thread_.join();
+  }
+  DeviceStateWaker(const DeviceStateWaker&) = delete;
+  DeviceStateWaker& operator=(const DeviceStateWaker&) = delete;
+
+  [[nodiscard]] bool arrived() const { return arrived_.load(); }
+  void Taken() {
+    {
+      std::lock_guard lock(mutex_);
+      arrived_ = false;
+    }
+    taken_.notify_all();
+  }
+
+ private:
+  void Run(WorldView& world) {
+    std::unique_lock lock(mutex_);
+    while (!stop_) {
+      lock.unlock();
+      const bool data = world.WaitForDeviceState(std::chrono::milliseconds(50));
+      lock.lock();
+      if (!data || stop_) continue;
+      arrived_ = true;
+      render::WindowRenderer::Wake();
+      // Until the main thread has taken it (the reader says data while it is there); a main
+      // thread busy drawing is asked again after 100 ms.
+      taken_.wait_for(lock, std::chrono::milliseconds(100), [this] { return stop_ || !arrived_; });
+    }
+  }
+
+  std::mutex mutex_;
+  std::condition_variable taken_;
+  bool stop_ = false;
+  std::atomic<bool> arrived_{false};
+  std::thread thread_;  // last: starts once the rest exists
+};
+
 /// Everything of a spectator that lives on DDS: its participant, what it reads and its member
 /// announcement. A rejoin makes a new one.
 struct SpectatorLink {
@@ -365,7 +428,8 @@ struct SpectatorLink {
             participant, dds::topics::kSessionRoster,
             [&name](const std::string& line) { std::fprintf(stderr, "[graphics_node %s] %s\n", name.c_str(), line.c_str()); },
             "no rejoin when a member stays unheard")),
-        desk_writer(desk ? MakeDeskWriter(participant) : dds::Writer<msg::DeskInput>{}) {}
+        desk_writer(desk ? MakeDeskWriter(participant) : dds::Writer<msg::DeskInput>{}),
+        waker(desk ? std::make_unique<DeviceStateWaker>(world) : nullptr) {}
   dds::Participant participant;
   // The readers first: the server re-sends body poses (best-effort) when it sees the member
   // join, and a reader created after the announcement could miss them.
@@ -373,6 +437,7 @@ struct SpectatorLink {
   dds::MemberAnnouncement member;
   dds::Reader<msg::SessionRoster> roster;  // the world server's members: to rejoin if one stays unheard
   dds::Writer<msg::DeskInput> desk_writer;  // --input desk: the person's input, to their haptic node
+  std::unique_ptr<DeviceStateWaker> waker;  // --input desk: before the readers' end, ends first
 };
 
 // One line on what the shared world received, for the node's log.
@@ -643,7 +708,7 @@ int Spectator::Run() {
   if (!config_.frame_log.empty()) {
     frame_log.open(config_.frame_log);
     if (!frame_log) throw std::runtime_error("cannot write " + config_.frame_log.string() + " (option --frame-log)");
-    frame_log << "frame,t_ns,hand_x_m,hand_y_m,hand_z_m,anchor_x_px,anchor_y_px\n" << std::setprecision(9);
+    frame_log << "frame,t_ns,hand_x_m,hand_y_m,hand_z_m,anchor_x_px,anchor_y_px,hand_stamp_ns\n" << std::setprecision(9);
   }
   std::uint64_t frames_shown = 0;
   auto next = Clock::now();
@@ -657,6 +722,7 @@ int Spectator::Run() {
     if (config_.where.duration.count() > 0 && Clock::now() - start >= config_.where.duration) break;
     rejoin_if_unheard();
     link->world.Update();
+    if (link->waker) link->waker->Taken();
     const std::string desk_user = config_.desk_input ? config_.view_user : std::string();
     const std::string help = pad ? GamepadControl::HelpText() : desk.help_shown() ? DeskControl::HelpText() : std::string();
     const render::Camera frame_camera =
@@ -670,7 +736,7 @@ int Spectator::Run() {
         frame_log << ",,,";
       }
       const Eigen::Vector3d anchor = render::ProjectToImage(frame_camera, Eigen::Vector3d::Zero());
-      frame_log << anchor.x() << "," << anchor.y() << "\n";
+      frame_log << anchor.x() << "," << anchor.y() << "," << link->world.HandStamp(config_.view_user) << "\n";
     }
     ++frames_shown;
     // What the person did, to their haptic node: every frame, so that a quiet desk is noticed
@@ -694,9 +760,22 @@ int Spectator::Run() {
     };
     if (config_.desk_input) send_input();
     next += period;
-    if (config_.desk_input && !pad) {
+    if (config_.desk_input) {
+      // Until the next frame is due: the person's input goes out as it arrives, and a new state
+      // of their own hand is drawn at once (from half a frame period after the last frame on):
+      // the frames follow the hand's states, not a clock of their own.
+      const std::uint64_t drawn = link->world.HandStamp(config_.view_user);
+      const auto earliest = Clock::now() + period / 2;
       for (auto now = Clock::now(); now < next; now = Clock::now()) {
-        if (window.WaitForInput(std::chrono::duration<double>(next - now).count())) send_input();
+        const auto until = link->waker->arrived() ? std::min(next, std::max(now, earliest)) : next;
+        if (window.WaitForInput(std::chrono::duration<double>(until - now).count()) && !pad) send_input();
+        if (!link->waker->arrived() || Clock::now() < earliest) continue;
+        link->world.Update();
+        link->waker->Taken();
+        if (link->world.HandStamp(config_.view_user) != drawn) {
+          next = Clock::now();  // this frame now; the one after a period later
+          break;
+        }
       }
     } else {
       std::this_thread::sleep_until(next);

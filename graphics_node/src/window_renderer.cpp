@@ -205,6 +205,8 @@ bool WindowRenderer::WaitForInput(double timeout_s) {
   return arrived;
 }
 
+void WindowRenderer::Wake() { glfwPostEmptyEvent(); }
+
 bool WindowRenderer::ShouldClose() const { return glfwWindowShouldClose(impl_->window) != 0; }
 
 int WindowRenderer::framebuffer_width_px() const {

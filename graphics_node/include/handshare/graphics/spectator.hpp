@@ -47,7 +47,9 @@ struct SpectatorConfig {
   /// CLOCK_MONOTONIC, once the frame is swapped to the screen), the view user's hand base
   /// hand_x_m, hand_y_m, hand_z_m as drawn (blank without a hand), and where the world's origin
   /// lands in the frame, anchor_x_px, anchor_y_px (a user's view follows the hand: the scene
-  /// moves on the screen when the hand does). bench/graphics/motion_to_photon.py reads it.
+  /// moves on the screen when the hand does), and the stamp of the hand's device state drawn,
+  /// hand_stamp_ns (the haptic loop's steady clock: the same clock on one machine).
+  /// bench/graphics/motion_to_photon.py reads it.
   std::filesystem::path frame_log;
 };
 

@@ -79,6 +79,9 @@ class WindowRenderer {
   /// move reaches the hand at once, not when the next frame is due. Main thread only.
   [[nodiscard]] bool WaitForInput(double timeout_s);
 
+  /// Ends a WaitForInput early, from any thread (it then returns false unless input came too).
+  static void Wake();
+
   /// True if GLFW can be initialized here (a display is reachable); never throws.
   [[nodiscard]] static bool DisplayAvailable() noexcept;
 
