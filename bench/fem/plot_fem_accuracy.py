@@ -1,0 +1,94 @@
+#!/usr/bin/python3
+"""Plots `fem_accuracy` output: the linear model's error against press depth, per part.
+
+usage: /usr/bin/python3 plot_fem_accuracy.py ACCURACY.csv USER_DEPTHS.csv SUMMARY.csv OUT.png
+
+Top row: the press force's error (linear against CalculiX NLGEOM, dashed, and neo-Hooke, solid)
+for each press; bottom row: the displacement of the free surface under the fingers and the whole
+surface field, one-finger normal press. Marked: 5 % and 10 %, a quarter of the part's local
+thickness, the depths the scripted users press (tour: red, test sessions: orange) and
+haptic_bench's deepest press (3.2 mm). Prints the markdown table for docs/fem.md.
+"""
+
+import csv
+import sys
+from collections import defaultdict
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402
+
+PARTS = ["tail", "head", "leg", "belly", "horn"]
+PRESSES = [("one_normal", "1 finger, normal", "C0"), ("one_oblique", "1 finger, 30 deg oblique", "C1"),
+           ("five_normal", "5 fingers, normal", "C2"), ("five_oblique", "5 fingers, 30 deg oblique", "C3")]
+STYLE = {"neo_hooke": "-", "nlgeom": "--"}
+HAPTIC_BENCH_DEEPEST_MM = 3.2
+
+
+def main():
+    rows = defaultdict(list)
+    thickness = {}
+    with open(sys.argv[1]) as f:
+        for r in csv.DictReader(f):
+            if r["converged"] != "1":
+                continue
+            rows[(r["part"], r["press"], r["model"])].append(r)
+            thickness[r["part"]] = float(r["thickness_mm"])
+    users = defaultdict(list)
+    with open(sys.argv[2]) as f:
+        for r in csv.DictReader(f):
+            users[r["part"]].append((r["script"], float(r["depth_mm"])))
+    fig, axes = plt.subplots(2, 5, figsize=(22, 9), sharex="col")
+    for col, part in enumerate(PARTS):
+        ax = axes[0][col]
+        for press, label, colour in PRESSES:
+            for model, ls in STYLE.items():
+                pts = rows.get((part, press, model))
+                if not pts:
+                    continue
+                ax.plot([float(r["depth_mm"]) for r in pts], [100 * float(r["force_err"]) for r in pts],
+                        ls, color=colour, marker=".", label=f"{label}, {model.replace('_', '-')}")
+        ax.set_title(f"{part} (local thickness {thickness.get(part, float('nan')):.0f} mm)")
+        ax.set_ylabel("force error of the linear model [%]")
+        bottom = axes[1][col]
+        for model, ls in STYLE.items():
+            pts = rows.get((part, "one_normal", model))
+            if not pts:
+                continue
+            d = [float(r["depth_mm"]) for r in pts]
+            bottom.plot(d, [100 * float(r["disp_err"]) for r in pts], ls, color="C4", marker=".",
+                        label=f"under the finger, {model.replace('_', '-')}")
+            bottom.plot(d, [100 * float(r["field_err"]) for r in pts], ls, color="C5", marker=".",
+                        label=f"whole surface, {model.replace('_', '-')}")
+        bottom.set_ylabel("field error, 1 finger normal [%]")
+        bottom.set_xlabel("press depth [mm]")
+        for a in (ax, bottom):
+            a.set_yscale("log")
+            a.axhline(5, color="grey", lw=0.8)
+            a.axhline(10, color="black", lw=0.8)
+            if part in thickness:
+                a.axvline(thickness[part] / 4, color="black", ls="-.", lw=1)
+            a.axvline(HAPTIC_BENCH_DEEPEST_MM, color="grey", ls=":", lw=1.2)
+            for script, depth in users.get(part, []):
+                a.axvline(depth, color="red" if script.startswith("tour") else "orange", lw=1.5, alpha=0.7)
+            a.grid(True, which="both", alpha=0.3)
+    axes[0][0].legend(fontsize=7, loc="lower right")
+    axes[1][0].legend(fontsize=7, loc="lower right")
+    fig.suptitle("How deep before the linear model lies: linear FEM against CalculiX (NLGEOM dashed, neo-Hooke "
+                 "solid). Lines: 5 % grey, 10 % black; a quarter of the local thickness dash-dot; users' presses: "
+                 "tour red, test sessions orange; haptic_bench's deepest dotted", fontsize=10)
+    fig.tight_layout(rect=(0, 0, 1, 0.96))
+    fig.savefig(sys.argv[4], dpi=80)
+
+    print("| part | press | model | thickness [mm] | 5 % at [mm] | 10 % at [mm] | deepest run [mm] | error there |")
+    print("|---|---|---|---|---|---|---|---|")
+    with open(sys.argv[3]) as f:
+        for r in csv.DictReader(f):
+            print(f"| {r['part']} | {r['press']} | {r['model']} | {float(r['thickness_mm']):.0f} | "
+                  f"{r['depth_5pct_mm']} | {r['depth_10pct_mm']} | {float(r['deepest_mm']):g} | "
+                  f"{100 * float(r['err_at_deepest']):.1f} % |")
+
+
+if __name__ == "__main__":
+    main()
