@@ -15,10 +15,10 @@
 //      small-strain moduli;
 //   4. the errors of the linear model against each nonlinear one: the press force, the
 //      displacement of the free surface under the fingers, and the whole surface field.
-// Writes one CSV row per part, press, nonlinear model and depth, a summary CSV with the depth
-// at which the force error passes 5 % and 10 %, and the depths users press in the tour's and the
-// test sessions' hand scripts (their fingertip targets against the parts' rest surfaces).
-// Plot: bench/fem/plot_fem_accuracy.py. Results and the table: docs/fem.md, "How deep before
+// Writes one CSV row per part, press, nonlinear model and depth, and the depths users press in
+// the tour's and the test sessions' hand scripts (their fingertip targets against the parts'
+// rest surfaces). bench/fem/plot_fem_accuracy.py plots them and writes the summary: the depth at
+// which the force error passes 5 % and 10 %. Results and the table: docs/fem.md, "How deep before
 // the linear model lies".
 //
 // --check runs a few depths of one part and press and fails (exit 1) unless the linear and the
@@ -430,35 +430,6 @@ std::vector<Row> MeasurePress(const Part& part, const PressSpec& press, const st
   return rows;
 }
 
-// The depth at which the force error first reaches `threshold` (linear between the bracketing
-// depths), -1 if it does at the first depth already, +inf if never within the depths run.
-double CrossingDepth(const std::vector<Row>& rows, double threshold) {
-  const Row* prev = nullptr;
-  for (const Row& r : rows) {
-    if (!r.converged) continue;
-    if (r.force_err >= threshold) {
-      if (prev == nullptr) return -1.0;
-      return prev->depth_mm + (threshold - prev->force_err) / (r.force_err - prev->force_err) * (r.depth_mm - prev->depth_mm);
-    }
-    prev = &r;
-  }
-  return INFINITY;
-}
-
-std::string DepthText(double d, const std::vector<Row>& rows) {
-  char b[64];
-  if (d < 0) {
-    std::snprintf(b, sizeof b, "< %.1f", rows.front().depth_mm);
-  } else if (std::isinf(d)) {
-    double deepest = 0.0;
-    for (const Row& r : rows) if (r.converged) deepest = r.depth_mm;
-    std::snprintf(b, sizeof b, "> %.1f", deepest);
-  } else {
-    std::snprintf(b, sizeof b, "%.2f", d);
-  }
-  return b;
-}
-
 // The depths the scripted users press: every `poke` and the bottom of every `press` of the
 // index fingertip (its centre, frame W) while the world of a part is shown, against that part's
 // rest surface (fingertip radius 8 mm). Worlds follow `await_world NAME`.
@@ -468,12 +439,17 @@ struct UserPress {
   double depth_mm = 0;
 };
 
-std::vector<UserPress> ScriptedPresses(const std::vector<fs::path>& scripts, const std::vector<Part>& parts) {
+// A script is "PATH" or "PATH:WORLD", WORLD the world its session starts in (a bare
+// `await_world` waits for it).
+std::vector<UserPress> ScriptedPresses(const std::vector<std::string>& scripts, const std::vector<Part>& parts) {
   std::vector<UserPress> out;
-  for (const auto& file : scripts) {
+  for (const auto& spec : scripts) {
+    const auto colon = spec.find(':');
+    const fs::path file = spec.substr(0, colon);
+    const std::string first_world = colon == std::string::npos ? "" : spec.substr(colon + 1);
     std::ifstream in(file);
     if (!in) Fail("cannot read hand script " + file.string());
-    std::string line, world;
+    std::string line, world = first_world;
     int n = 0;
     while (std::getline(in, line)) {
       ++n;
@@ -482,7 +458,7 @@ std::vector<UserPress> ScriptedPresses(const std::vector<fs::path>& scripts, con
       if (!(ss >> cmd) || cmd[0] == '#') continue;
       if (cmd == "await_world") {
         std::string w;
-        world = (ss >> w) ? w : "";
+        world = (ss >> w) ? w : first_world;
         continue;
       }
       if (cmd != "poke" && cmd != "press") continue;
@@ -543,9 +519,8 @@ int main(int argc, char** argv) {
              "one_normal,one_oblique,five_normal,five_oblique")
       .Value("depths-mm", "A,B", "press depths [mm] (default: 0.5 mm to a third of the local thickness)", "")
       .Value("csv", "FILE", "per-depth rows", "")
-      .Value("summary", "FILE", "depths where the force error passes 5 % and 10 %", "")
       .Value("user-depths", "FILE", "depths the scripted users press (CSV)", "")
-      .Value("scripts", "A,B", "hand scripts whose presses are the users' depths", "")
+      .Value("scripts", "A,B", "hand scripts whose presses are the users' depths (PATH or PATH:FIRST_WORLD)", "")
       .Value("check-summary", "FILE", "--check: the committed summary to hold the run to", "")
       .Flag("check", "check one part and press (the first of --parts and --presses) against --check-summary")
       .Flag("quiet", "no line per run on stderr");
@@ -625,12 +600,6 @@ int main(int argc, char** argv) {
       if (!csv) Fail("cannot write " + options.GetString("csv"));
       csv << kCsvHeader << "\n";
     }
-    std::ofstream summary;
-    if (!options.GetString("summary").empty()) {
-      summary.open(options.GetString("summary"));
-      if (!summary) Fail("cannot write " + options.GetString("summary"));
-      summary << "part,press,model,thickness_mm,depth_5pct_mm,depth_10pct_mm,deepest_mm,err_at_deepest\n";
-    }
     for (const Part& part : parts) {
       std::vector<CcxModel> models = {CcxModel::kNlgeom};
       if (part.spec->rubber_like) models.push_back(CcxModel::kNeoHooke);
@@ -642,28 +611,10 @@ int main(int argc, char** argv) {
           if (csv.is_open()) WriteRow(csv, r);
         }
         if (csv.is_open()) csv.flush();
-        for (CcxModel model : models) {
-          std::vector<Row> of_model;
-          for (const Row& r : rows) {
-            if (r.model == CcxModelName(model)) of_model.push_back(r);
-          }
-          const Row* deepest = nullptr;
-          for (const Row& r : of_model) {
-            if (r.converged) deepest = &r;
-          }
-          if (summary.is_open()) {
-            summary << part.spec->name << "," << press->name << "," << CcxModelName(model) << "," << thickness_mm << ","
-                    << DepthText(CrossingDepth(of_model, 0.05), of_model) << ","
-                    << DepthText(CrossingDepth(of_model, 0.10), of_model) << ","
-                    << (deepest ? deepest->depth_mm : 0.0) << "," << (deepest ? deepest->force_err : std::nan("")) << "\n";
-            summary.flush();
-          }
-        }
       }
     }
     if (!options.GetString("user-depths").empty()) {
-      std::vector<fs::path> scripts;
-      for (const auto& s : SplitList(options.GetString("scripts"))) scripts.emplace_back(s);
+      const std::vector<std::string> scripts = SplitList(options.GetString("scripts"));
       std::ofstream u(options.GetString("user-depths"));
       if (!u) Fail("cannot write " + options.GetString("user-depths"));
       u << "script,line,part,depth_mm\n";

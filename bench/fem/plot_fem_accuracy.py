@@ -1,13 +1,17 @@
 #!/usr/bin/python3
 """Plots `fem_accuracy` output: the linear model's error against press depth, per part.
 
-usage: /usr/bin/python3 plot_fem_accuracy.py ACCURACY.csv USER_DEPTHS.csv SUMMARY.csv OUT.png
+usage: /usr/bin/python3 plot_fem_accuracy.py ACCURACY.csv USER_DEPTHS.csv OUT.png SUMMARY.csv
 
 Top row: the press force's error (linear against CalculiX NLGEOM, dashed, and neo-Hooke, solid)
 for each press; bottom row: the displacement of the free surface under the fingers and the whole
 surface field, one-finger normal press. Marked: 5 % and 10 %, a quarter of the part's local
 thickness, the depths the scripted users press (tour: red, test sessions: orange) and
-haptic_bench's deepest press (3.2 mm). Prints the markdown table for docs/fem.md.
+haptic_bench's deepest press (3.2 mm). Writes SUMMARY.csv: per part, press and model, the depth
+at which the force error first reaches 5 % and 10 % (linear between the two depths that bracket
+it; "< D" if it does at the first depth D, "> D" if not up to the deepest converged depth D;
+what `fem_accuracy --check` holds a re-run to), and prints it as the markdown table of
+docs/fem.md.
 """
 
 import csv
@@ -28,9 +32,11 @@ HAPTIC_BENCH_DEEPEST_MM = 3.2
 
 def main():
     rows = defaultdict(list)
+    all_rows = {}
     thickness = {}
     with open(sys.argv[1]) as f:
         for r in csv.DictReader(f):
+            all_rows.setdefault((r["part"], r["press"], r["model"]), []).append(r)
             if r["converged"] != "1":
                 continue
             rows[(r["part"], r["press"], r["model"])].append(r)
@@ -79,15 +85,39 @@ def main():
                  "solid). Lines: 5 % grey, 10 % black; a quarter of the local thickness dash-dot; users' presses: "
                  "tour red, test sessions orange; haptic_bench's deepest dotted", fontsize=10)
     fig.tight_layout(rect=(0, 0, 1, 0.96))
-    fig.savefig(sys.argv[4], dpi=80)
+    fig.savefig(sys.argv[3], dpi=80)
+    summary(all_rows, sys.argv[4])
 
-    print("| part | press | model | thickness [mm] | 5 % at [mm] | 10 % at [mm] | deepest run [mm] | error there |")
-    print("|---|---|---|---|---|---|---|---|")
-    with open(sys.argv[3]) as f:
-        for r in csv.DictReader(f):
-            print(f"| {r['part']} | {r['press']} | {r['model']} | {float(r['thickness_mm']):.0f} | "
-                  f"{r['depth_5pct_mm']} | {r['depth_10pct_mm']} | {float(r['deepest_mm']):g} | "
-                  f"{100 * float(r['err_at_deepest']):.1f} % |")
+
+def crossing(pts, threshold):
+    """The depth at which the force error first reaches threshold, as text."""
+    prev = None
+    for r in pts:
+        d, e = float(r["depth_mm"]), float(r["force_err"])
+        if e >= threshold:
+            if prev is None:
+                return f"< {d:g}"
+            return f"{prev[0] + (threshold - prev[1]) / (e - prev[1]) * (d - prev[0]):.2f}"
+        prev = (d, e)
+    return f"> {prev[0]:g}" if prev else "not converged"
+
+
+def summary(all_rows, out):
+    print("| part | press | model | thickness [mm] | 5 % at [mm] | 10 % at [mm] | deepest converged [mm] | error there | ccx stopped at [mm] |")
+    print("|---|---|---|---|---|---|---|---|---|")
+    with open(out, "w") as f:
+        f.write("part,press,model,thickness_mm,depth_5pct_mm,depth_10pct_mm,deepest_mm,err_at_deepest,failed_at_mm\n")
+        for (part, press, model), pts in all_rows.items():
+            ok = [r for r in pts if r["converged"] == "1"]
+            failed = [r["depth_mm"] for r in pts if r["converged"] != "1"]
+            d5, d10 = crossing(ok, 0.05), crossing(ok, 0.10)
+            deepest = ok[-1]["depth_mm"] if ok else ""
+            err = f"{float(ok[-1]['force_err']):.4f}" if ok else ""
+            fail = f"{float(failed[0]):g}" if failed else ""
+            f.write(f"{part},{press},{model},{float(pts[0]['thickness_mm']):.1f},{d5},{d10},{deepest},{err},{fail}\n")
+            print(f"| {part} | {press} | {model.replace('_', '-')} | {float(pts[0]['thickness_mm']):.0f} | {d5} | {d10} | "
+                  f"{float(deepest):g} | {100 * float(err):.1f} % | {fail or '-'} |" if ok else
+                  f"| {part} | {press} | {model.replace('_', '-')} | {float(pts[0]['thickness_mm']):.0f} | - | - | - | - | {fail} |")
 
 
 if __name__ == "__main__":
