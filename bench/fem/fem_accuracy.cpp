@@ -85,7 +85,7 @@ const std::vector<PartSpec>& Parts() {
        "visitor's side, 9 cm up"},
       {"belly", "microscopic_belly.json", "daphnia_belly", {0.025, 0.0, -1.0}, {0, 0, 1}, {1, 0, 0}, 0.015, true,
        "belly, 25 mm from the body's origin toward the head"},
-      {"horn", "microscopic_horn.json", "daphnia_horn", {-0.085, -1.0, 0.0}, {0, 1, 0}, {1, 0, 0}, 0.010, false,
+      {"horn", "microscopic_horn.json", "daphnia_horn", {-0.085, -1.0, 0.0005}, {0, 1, 0}, {1, 0, 0.16}, 0.010, false,
        "top of the spine, 85 mm from its root (near the tip)"},
   };
   return parts;
@@ -222,14 +222,15 @@ struct Finger {
 };
 
 // The fingers of a press: the centre one where the part's ray meets the surface, the others of
-// a row along row_O, each where a ray parallel to the first meets the surface.
+// a row along row_O (the horn's follows its curved spine), each where a ray parallel to the
+// first meets the surface.
 std::vector<Finger> FindFingers(const Part& part, int fingers) {
   const auto& mesh = *part.prepared.mesh;
   const auto& surface = *part.prepared.surface;
   std::vector<Finger> out;
   for (int k = 0; k < fingers; ++k) {
     const double offset = fingers == 1 ? 0.0 : (k - (fingers - 1) / 2.0) * part.spec->spacing_m;
-    const Vector3d from = part.spec->from_O + offset * part.spec->row_O;
+    const Vector3d from = part.spec->from_O + offset * part.spec->row_O.normalized();
     const auto hits = RayHits(mesh, surface, from, part.spec->approach_O, 0.0);
     if (hits.empty()) {
       Fail(std::string(part.spec->name) + ": the press ray of finger " + std::to_string(k) + " misses the part");
@@ -271,7 +272,8 @@ HeldPatch RuntimePatch(const Part& part, const std::vector<Finger>& fingers, boo
     p.n_out = f.n_out_O;
     if (oblique) {
       // Tilted along the row: the stick is the tangential offset of a press 30 deg off the normal.
-      Vector3d t = part.spec->row_O - part.spec->row_O.dot(f.n_out_O) * f.n_out_O;
+      const Vector3d row = part.spec->row_O.normalized();
+      const Vector3d t = row - row.dot(f.n_out_O) * f.n_out_O;
       p.slide_m = std::tan(kObliqueAngle_rad) * depth_m * t.normalized();
     }
     p.mu_static = p.mu_kinetic = kStickingMu;
@@ -281,14 +283,32 @@ HeldPatch RuntimePatch(const Part& part, const std::vector<Finger>& fingers, boo
   if (m == 0) return held;
   ContactSolver solver(part.prepared.compliance, {.max_contacts = m, .push_only = true});
   const StepStatus st = solver.Solve(std::span(in.data(), static_cast<std::size_t>(m)), patches);
-  if (st != StepStatus::kOk && st != StepStatus::kSomeRejected) return held;
+  if (st != StepStatus::kOk && st != StepStatus::kSomeRejected) {
+    std::fprintf(stderr, "%s: the contact solver returned status %d at %.2f mm\n", part.spec->name, static_cast<int>(st),
+                 1e3 * depth_m);
+    return held;
+  }
+  // A node under two fingers is held once, at the mean of its normal parts plus its first
+  // patch's slide, as the solver merges it.
+  std::map<std::int32_t, std::size_t> slot;
+  std::vector<Vector3d> normal_sum, slide;
+  std::vector<int> count;
   for (std::int32_t i = 0; i < m; ++i) {
     const ContactState s = solver.states()[static_cast<std::size_t>(i)];
     if (s != ContactState::kActive && s != ContactState::kSlipping) continue;
     const auto& c = in[static_cast<std::size_t>(i)];
-    held.imposed.push_back({c.node, c.u_m + solver.patch_states()[static_cast<std::size_t>(c.patch)].slide_m});
-    if (s == ContactState::kSlipping) ++held.normal_only;
+    auto [it, added] = slot.try_emplace(c.node, held.imposed.size());
+    if (added) {
+      held.imposed.push_back({c.node, Vector3d::Zero()});
+      normal_sum.push_back(Vector3d::Zero());
+      slide.push_back(solver.patch_states()[static_cast<std::size_t>(c.patch)].slide_m);
+      count.push_back(0);
+      if (s == ContactState::kSlipping) ++held.normal_only;
+    }
+    normal_sum[it->second] += c.u_m;
+    ++count[it->second];
   }
+  for (std::size_t k = 0; k < held.imposed.size(); ++k) held.imposed[k].value = normal_sum[k] / count[k] + slide[k];
   held.ok = !held.imposed.empty();
   return held;
 }
@@ -339,7 +359,10 @@ std::vector<Row> MeasurePress(const Part& part, const PressSpec& press, const st
   std::vector<Row> rows;
   for (double depth_mm : depths_mm) {
     const HeldPatch held = RuntimePatch(part, fingers, press.oblique, 1e-3 * depth_mm);
-    if (!held.ok) Fail(std::string(part.spec->name) + " " + press.name + ": no node held at " + std::to_string(depth_mm) + " mm");
+    if (!held.ok) {
+      std::fprintf(stderr, "%s %s: no node held at %.2f mm: the press ends here\n", part.spec->name, press.name, depth_mm);
+      break;
+    }
     // The linear model on those boundary conditions.
     std::vector<std::int32_t> imposed_nodes;
     std::vector<Vector3d> imposed_u;
@@ -575,20 +598,25 @@ int main(int argc, char** argv) {
       const std::vector<double> check_depths = {0.5, 0.8 * d5, 1.25 * d5};
       const auto rows = MeasurePress(part, press, check_depths, {model}, work, verbose);
       int failures = 0;
+      auto num = [](double v) {
+        char b[32];
+        std::snprintf(b, sizeof b, "%.3g", v);
+        return std::string(b);
+      };
       auto expect = [&](bool ok, const std::string& what) {
         std::printf("%s %s\n", ok ? "ok  " : "FAIL", what.c_str());
         if (!ok) ++failures;
       };
       for (const Row& r : rows) {
-        expect(r.converged, key + " at " + std::to_string(r.depth_mm) + " mm: ccx converged");
+        expect(r.converged, key + " at " + num(r.depth_mm) + " mm: ccx converged");
         expect(r.ccx_linear_err < 1e-5,
-               "linear solve = ccx linear at " + std::to_string(r.depth_mm) + " mm: " + std::to_string(r.ccx_linear_err));
+               "linear solve = ccx linear at " + num(r.depth_mm) + " mm: " + num(r.ccx_linear_err));
       }
-      expect(rows[0].force_err < 0.02, "force error at 0.5 mm below 2 %: " + std::to_string(rows[0].force_err));
-      expect(rows[1].force_err < 0.05, "force error at 0.8 x the 5 % depth (" + std::to_string(rows[1].depth_mm) +
-                                           " mm) below 5 %: " + std::to_string(rows[1].force_err));
-      expect(rows[2].force_err > 0.05, "force error at 1.25 x the 5 % depth (" + std::to_string(rows[2].depth_mm) +
-                                           " mm) above 5 %: " + std::to_string(rows[2].force_err));
+      expect(rows[0].force_err < 0.02, "force error at 0.5 mm below 2 %: " + num(rows[0].force_err));
+      expect(rows[1].force_err < 0.05, "force error at 0.8 x the 5 % depth (" + num(rows[1].depth_mm) +
+                                           " mm) below 5 %: " + num(rows[1].force_err));
+      expect(rows[2].force_err > 0.05, "force error at 1.25 x the 5 % depth (" + num(rows[2].depth_mm) +
+                                           " mm) above 5 %: " + num(rows[2].force_err));
       expect(rows[0].force_err < rows[1].force_err && rows[1].force_err < rows[2].force_err,
              "force error grows with depth");
       return failures == 0 ? 0 : 1;

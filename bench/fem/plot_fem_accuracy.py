@@ -87,6 +87,34 @@ def main():
     fig.tight_layout(rect=(0, 0, 1, 0.96))
     fig.savefig(sys.argv[3], dpi=80)
     summary(all_rows, sys.argv[4])
+    errors_table(all_rows)
+
+
+TABLE_DEPTHS = ["0.500", "2.000", "4.000", "8.000", "12.000", "20.000", "30.000"]
+
+
+def errors_table(all_rows):
+    """Force / displacement under the fingers / surface field errors at a few depths, each
+    part's reference model (neo-Hooke for the soft parts, NLGEOM for the horn)."""
+    print()
+    print("| part | press | model | " + " | ".join(f"{float(d):g} mm" for d in TABLE_DEPTHS) + " |")
+    print("|---|---|---|" + "---|" * len(TABLE_DEPTHS))
+    for (part, press, model), pts in all_rows.items():
+        reference = "nlgeom" if part == "horn" else "neo_hooke"
+        if model != reference:
+            continue
+        by_depth = {r["depth_mm"]: r for r in pts}
+        cells = []
+        for d in TABLE_DEPTHS:
+            r = by_depth.get(d)
+            if r is None:
+                cells.append("")
+            elif r["converged"] != "1":
+                cells.append("no conv.")
+            else:
+                cells.append(f"{100 * float(r['force_err']):.1f} / {100 * float(r['disp_err']):.1f} / "
+                             f"{100 * float(r['field_err']):.1f}")
+        print(f"| {part} | {press} | {model.replace('_', '-')} | " + " | ".join(cells) + " |")
 
 
 def crossing(pts, threshold):
