@@ -38,7 +38,10 @@ int main(int argc, char** argv) {
              "vertex_count, u_W_m: {vertex: [x, y, z]}}} (non-zero vertices only)", "")
       .Value("state-out", "FILE",
              "at exit, write what the spectator shows as JSON: scene, revision, board {message_id, text}, "
-             "objects {id: {p_WO_m, q_WO_wxyz, from}}", "");
+             "objects {id: {p_WO_m, q_WO_wxyz, from}}", "")
+      .Value("frame-log", "FILE",
+             "window: a CSV row per frame shown (frame, t_ns, the view user's hand base, where the world's "
+             "origin lands in pixels): what motion-to-photon is measured from", "");
   return handshare::node::RunNodeMain(argc, argv, options, [](const auto& o) {
     handshare::graphics::SpectatorConfig c;
     c.where = handshare::node::ReadSessionOptions(o);
@@ -52,6 +55,7 @@ int main(int argc, char** argv) {
     c.assets_dir = o.GetString("assets");
     c.deformation_out = o.GetString("deformation-out");
     c.state_out = o.GetString("state-out");
+    c.frame_log = o.GetString("frame-log");
     c.language = o.GetChoice("language", {"en", "ja"});
     const std::string view = o.GetString("view");
     if (view.rfind("user:", 0) == 0 && view.size() > 5) {

@@ -5,6 +5,9 @@ those events alone alice's hand (haptic_node --device desk) moves: the haptic no
 the hand base where the pointer put it; the hand presses the start menu's solar-system button
 and the world server opens the solar system; it grasps the ball on the Moon and lifts it (held
 weight m g within 5 %, a frame of the window grabbed meanwhile) and pushes the lever to Mars;
+presses the arrow to the dinosaur world and there, with a closed hand, the triceratops' tail
+beside bob's scripted hand (the deformation the world server publishes equals an independent
+FEM solve, fem_solve, of both users' contacts, and a spectator receives it, as in the tour);
 the window losing focus releases the hand, and so does the view going quiet (killed).
 
 Needs Xvfb and xdotool (Debian: xvfb, xdotool; deploy/install_deps.sh); without them the test is
@@ -23,7 +26,8 @@ import time
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 sys.path.insert(0, HERE)
-from session_test import Failure, check, read_trace, run_cases, wait_until  # noqa: E402
+from session_test import (DATA, PressWatch, check, check_shared_deformation, fem_cache, read_trace,  # noqa: E402
+                          run_cases, scene_object, wait_until)
 
 # The desk's mapping (graphics_node/include/handshare/graphics/desk_control.hpp, DeskControlConfig).
 HOME = (0.0, -0.20, 0.15)
@@ -120,9 +124,25 @@ def case_desk(h, domain):
     w = h.work
     trace = os.path.join(w, "alice.csv")
     common = ["--domain", domain, "--session", session]
+    # The dinosaur world's models, prepared before the session (as the README advises), in the
+    # build's shared model cache.
+    cache = fem_cache(w)
+    os.environ["HANDSHARE_CACHE"] = cache
+    prep = subprocess.run([os.path.join(h.bin_dir, "core", "world", "world_prepare"), "--cache", cache,
+                           "--scenes", "dinosaur"], capture_output=True, text=True, timeout=600)
+    check(prep.returncode == 0, f"world_prepare failed: {prep.stdout}{prep.stderr}")
     os.environ["DISPLAY"] = start_xvfb(h)
-    h.start("world_server", "world_server", *common, "--scene", "start_menu")
+    dump = os.path.join(w, "deformation")
+    received_file = os.path.join(w, "received_deformation.json")
+    h.start("world_server", "world_server", *common, "--scene", "start_menu",
+            "--dump-deformation", dump, "--deformation-threshold", "5e-5")
+    # A spectator, for what every screen receives of the tail alice and bob press.
+    h.start("spectator", "graphics_node", *common, "--headless", "--frames", 100000, "--fps", 2,
+            "--out", os.path.join(w, "frames"), "--deformation-out", received_file)
     h.start("alice", "haptic_node", *common, "--user", "alice", "--device", "desk", "--trace", trace)
+    # bob is a scripted hand: he waits high above the table until the dinosaur world is here,
+    # then presses the tail and holds (tests/data/desk_bob.hand).
+    h.start("bob", "haptic_node", *common, "--user", "bob", "--script", os.path.join(DATA, "desk_bob.hand"))
     h.start("view", "graphics_node", *common, "--name", "desk-alice", "--view", "user:alice", "--input", "desk",
             "--width", WIDTH, "--height", HEIGHT, "--fps", 30)
     h.wait_for_line("alice", "scene 'start_menu' revision 1", 60)
@@ -226,7 +246,56 @@ def case_desk(h, domain):
     h.wait_for_line("world_server", "gravity -3.71 m/s^2", 60)
     print("the wheel pushed the lever to Mars")
     xdotool("mousemove", "--window", window, *pointer_for(x_lever, 0.25))
-    xdotool("mousemove", "--window", window, *pointer_for(0.0, 0.25))
+    y_base = y_pushed
+    wait_until("alice's hand up from the lever", 30, lambda: hand_near(trace, x_lever, y_base, 0.25, tol=0.006),
+               lambda: f"newest trace row: {newest(trace)}")
+
+    # The arrow to the dinosaur world (0.25, -0.18, 0.01): the middle fingertip over it (the
+    # wheel towards you), then down onto it, as onto the start menu's button.
+    arrow = (0.25, -0.18, 0.01)
+    x_base = arrow[0] - middle[0]
+    notches = round((arrow[1] - middle[1] - y_base) / DEPTH_STEP_M)
+    for _ in range(abs(notches)):
+        xdotool("click", 4 if notches > 0 else 5)
+    y_base += notches * DEPTH_STEP_M
+    z_above = arrow[2] + 0.05 - middle[2]
+    xdotool("mousemove", "--window", window, *pointer_for(x_base, z_above))
+    wait_until("alice's middle finger above the arrow", 30, lambda: hand_near(trace, x_base, y_base, z_above, tol=0.006),
+               lambda: f"newest trace row: {newest(trace)}")
+    xdotool("mousemove", "--window", window, *pointer_for(x_base, 0.0 - middle[2]))
+    h.wait_for_line("world_server", "control arrow_next by alice: scene 'dinosaur'", 60)
+    xdotool("mousemove", "--window", window, *pointer_for(x_base, 0.25))
+    for user in ("alice", "bob"):
+        h.wait_for_line(user, "scene 'dinosaur' revision", 120)
+    print("the pointer pressed the arrow: the dinosaur world is open")
+
+    # The tail (at (0.32, 0.08, 0.045), its base attached to the body), beside bob: alice's hand
+    # closed (C ten times: the five fingertips on a 10 mm ring, a five-finger patch) over
+    # (0.225, 0.08), where the tour's alice presses, then down until the fingertips' centres are
+    # where the tour's fingertip presses the tail 3 mm (z 0.0649: the surface 8 mm lower, less 3).
+    xdotool("key", *["c"] * 10)
+    tail = scene_object("dinosaur", "triceratops_tail")
+    patch = (0.225, 0.08)
+    closed = fingertip_h(0, 1.0)
+    x_base = patch[0] - GRASP_CENTRE_H[0]
+    notches = round((patch[1] - GRASP_CENTRE_H[1] - y_base) / DEPTH_STEP_M)
+    for _ in range(abs(notches)):
+        xdotool("click", 4 if notches > 0 else 5)
+    y_base += notches * DEPTH_STEP_M
+    xdotool("mousemove", "--window", window, *pointer_for(x_base, 0.25))
+    wait_until("alice's closed hand over the tail", 30, lambda: hand_near(trace, x_base, y_base, 0.25, tol=0.006),
+               lambda: f"newest trace row: {newest(trace)}")
+    z_press = 0.0649 - closed[2]
+    xdotool("mousemove", "--window", window, *pointer_for(x_base, z_press))
+    held_file = os.path.join(dump, "triceratops_tail.json")
+    pressed = PressWatch(held_file, tail["position_m"], {"alice": patch, "bob": (0.27, 0.08)})
+    held = wait_until("the tail pressed by alice (at the desk) and bob, held still for 2.5 s", 90,
+                      lambda: pressed.still_for(2.5), pressed.explain)
+    grab_window(window, os.path.join(w, "desk_pressing_tail.png"))
+    check(h.stop("spectator", 20) == 0, "the spectator did not end cleanly")
+    check_shared_deformation(h, held, received_file, patch, (0.27, 0.08), tail["position_m"])
+    xdotool("mousemove", "--window", window, *pointer_for(x_base, 0.25))
+    xdotool("key", "o")
 
     # The window loses the keyboard focus (unmapped): the hand is released, and comes back.
     xdotool("windowunmap", "--sync", window)
@@ -245,6 +314,7 @@ def case_desk(h, domain):
     wait_until("a released hand in alice's trace", 10, lambda: newest(trace)["fault"] == 1.0)
     rc = h.stop("alice", 30)
     check(rc == 0, f"alice's haptic node ended with {rc}")
+    check(h.stop("bob", 30) == 0, "bob's haptic node failed")
     # (The rate bound is not asserted here: a world change under a pressing finger steps the
     # force whatever the device; DeskDevice.StepsOfTheTargetNeverTripTheForceRateBound holds
     # the desk's part.)

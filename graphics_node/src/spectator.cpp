@@ -12,6 +12,9 @@
 #include <set>
 #include <sstream>
 #include <thread>
+#include <atomic>
+#include <condition_variable>
+#include <mutex>
 
 #include <nlohmann/json.hpp>
 
@@ -31,6 +34,7 @@
 #include "handshare/hiro/hiro_model.hpp"
 #include "handshare/render/image.hpp"
 #include "handshare/render/offscreen_renderer.hpp"
+#include "handshare/render/projection.hpp"
 #include "handshare/render/window_renderer.hpp"
 #include "handshare/scene/scene.hpp"
 #include "handshare/contact/finger_contact.hpp"  // contact::ToPose
@@ -173,6 +177,23 @@ class WorldView {
     const auto it = hands_.find(user);
     if (it == hands_.end() || it->second.state.fault()) return fallback;
     return UserEyeCamera(HandPose(it->second.state), eye, fallback);
+  }
+
+  /// Blocks up to `timeout` for any user's device state to arrive. Another thread may wait here
+  /// while this one updates (DeviceStateWaker).
+  bool WaitForDeviceState(std::chrono::nanoseconds timeout) { return device_reader_.WaitForData(timeout); }
+
+  /// The stamp of a user's newest device state (0: none).
+  std::uint64_t HandStamp(const std::string& user) const {
+    const auto it = hands_.find(user);
+    return it == hands_.end() ? 0 : it->second.state.stamp_ns();
+  }
+
+  /// The hand base a user's hand is drawn at, if one is.
+  std::optional<Eigen::Vector3d> HandBase(const std::string& user) const {
+    const auto it = hands_.find(user);
+    if (it == hands_.end() || it->second.state.fault()) return std::nullopt;
+    return HandPose(it->second.state).translation();
   }
 
   /// The member ids (MemberInfo::member_id) of the members this view has heard.
@@ -344,6 +365,56 @@ dds::Writer<msg::DeskInput> MakeDeskWriter(dds::Participant& participant) {
   }
 }
 
+/// A desk's view draws the person's hand as soon as its new state is here, not when the next
+/// frame is due: this thread waits on the device-state reader and wakes the window's wait
+/// (render::WindowRenderer::Wake) when a state arrives; the main thread takes it
+/// (WorldView::Update), says so (Taken), and the thread waits again.
+class DeviceStateWaker {
+ public:
+  explicit DeviceStateWaker(WorldView& world) : thread_([this, &world] { Run(world); }) {}
+  ~DeviceStateWaker() {
+    {
+      std::lock_guard lock(mutex_);
+      stop_ = true;
+    }
+    taken_.notify_all();
+    thread_.join();
+  }
+  DeviceStateWaker(const DeviceStateWaker&) = delete;
+  DeviceStateWaker& operator=(const DeviceStateWaker&) = delete;
+
+  [[nodiscard]] bool arrived() const { return arrived_.load(); }
+  void Taken() {
+    {
+      std::lock_guard lock(mutex_);
+      arrived_ = false;
+    }
+    taken_.notify_all();
+  }
+
+ private:
+  void Run(WorldView& world) {
+    std::unique_lock lock(mutex_);
+    while (!stop_) {
+      lock.unlock();
+      const bool data = world.WaitForDeviceState(std::chrono::milliseconds(50));
+      lock.lock();
+      if (!data || stop_) continue;
+      arrived_ = true;
+      render::WindowRenderer::Wake();
+      // Until the main thread has taken it (the reader says data while it is there); a main
+      // thread busy drawing is asked again after 100 ms.
+      taken_.wait_for(lock, std::chrono::milliseconds(100), [this] { return stop_ || !arrived_; });
+    }
+  }
+
+  std::mutex mutex_;
+  std::condition_variable taken_;
+  bool stop_ = false;
+  std::atomic<bool> arrived_{false};
+  std::thread thread_;  // last: starts once the rest exists
+};
+
 /// Everything of a spectator that lives on DDS: its participant, what it reads and its member
 /// announcement. A rejoin makes a new one.
 struct SpectatorLink {
@@ -357,7 +428,8 @@ struct SpectatorLink {
             participant, dds::topics::kSessionRoster,
             [&name](const std::string& line) { std::fprintf(stderr, "[graphics_node %s] %s\n", name.c_str(), line.c_str()); },
             "no rejoin when a member stays unheard")),
-        desk_writer(desk ? MakeDeskWriter(participant) : dds::Writer<msg::DeskInput>{}) {}
+        desk_writer(desk ? MakeDeskWriter(participant) : dds::Writer<msg::DeskInput>{}),
+        waker(desk ? std::make_unique<DeviceStateWaker>(world) : nullptr) {}
   dds::Participant participant;
   // The readers first: the server re-sends body poses (best-effort) when it sees the member
   // join, and a reader created after the announcement could miss them.
@@ -365,6 +437,7 @@ struct SpectatorLink {
   dds::MemberAnnouncement member;
   dds::Reader<msg::SessionRoster> roster;  // the world server's members: to rejoin if one stays unheard
   dds::Writer<msg::DeskInput> desk_writer;  // --input desk: the person's input, to their haptic node
+  std::unique_ptr<DeviceStateWaker> waker;  // --input desk: before the readers' end, ends first
 };
 
 // One line on what the shared world received, for the node's log.
@@ -487,7 +560,8 @@ int Spectator::Run() {
     throw std::runtime_error("assets folder " + assets_dir.string() + " does not exist (option --assets)");
   }
   for (const auto& [file, option] : {std::pair{config_.deformation_out, "--deformation-out"},
-                                     std::pair{config_.state_out, "--state-out"}}) {
+                                     std::pair{config_.state_out, "--state-out"},
+                                     std::pair{config_.frame_log, "--frame-log"}}) {
     if (file.empty()) continue;
     const std::filesystem::path folder = std::filesystem::absolute(file).parent_path();
     if (!std::filesystem::is_directory(folder)) {
@@ -630,6 +704,13 @@ int Spectator::Run() {
   }
 
   render::WindowRenderer& window = *window_renderer;
+  std::ofstream frame_log;
+  if (!config_.frame_log.empty()) {
+    frame_log.open(config_.frame_log);
+    if (!frame_log) throw std::runtime_error("cannot write " + config_.frame_log.string() + " (option --frame-log)");
+    frame_log << "frame,t_ns,hand_x_m,hand_y_m,hand_z_m,anchor_x_px,anchor_y_px,hand_stamp_ns\n" << std::setprecision(9);
+  }
+  std::uint64_t frames_shown = 0;
   auto next = Clock::now();
   DeskControl desk;
   GamepadControl gamepad;
@@ -641,13 +722,27 @@ int Spectator::Run() {
     if (config_.where.duration.count() > 0 && Clock::now() - start >= config_.where.duration) break;
     rejoin_if_unheard();
     link->world.Update();
+    if (link->waker) link->waker->Taken();
     const std::string desk_user = config_.desk_input ? config_.view_user : std::string();
     const std::string help = pad ? GamepadControl::HelpText() : desk.help_shown() ? DeskControl::HelpText() : std::string();
-    window.Render(link->world.Build(desk_user, help),
-                  config_.view_user.empty() ? camera : link->world.UserCamera(config_.view_user, config_.eye, camera));
-    if (config_.desk_input) {
-      // What the person did while that frame was up (Render polls the window's events), to
-      // their haptic node at once: every frame, so a quiet desk is noticed there.
+    const render::Camera frame_camera =
+        config_.view_user.empty() ? camera : link->world.UserCamera(config_.view_user, config_.eye, camera);
+    window.Render(link->world.Build(desk_user, help), frame_camera);
+    if (frame_log.is_open()) {
+      frame_log << frames_shown << "," << common::SteadyNowNs() << ",";
+      if (const auto p = link->world.HandBase(config_.view_user)) {
+        frame_log << p->x() << "," << p->y() << "," << p->z() << ",";
+      } else {
+        frame_log << ",,,";
+      }
+      const Eigen::Vector3d anchor = render::ProjectToImage(frame_camera, Eigen::Vector3d::Zero());
+      frame_log << anchor.x() << "," << anchor.y() << "," << link->world.HandStamp(config_.view_user) << "\n";
+    }
+    ++frames_shown;
+    // What the person did, to their haptic node: every frame, so that a quiet desk is noticed
+    // there, and between frames as soon as it happens (the mouse and keys; a gamepad is read
+    // at the frame rate).
+    const auto send_input = [&] {
       const auto now = Clock::now();
       const double dt_s = std::chrono::duration<double>(now - last_frame).count();
       last_frame = now;
@@ -662,9 +757,29 @@ int Spectator::Run() {
         desk.Apply(window.TakeInput(), dt_s);
         desk_sender.Send(desk.target(), link->desk_writer);
       }
-    }
+    };
+    if (config_.desk_input) send_input();
     next += period;
-    std::this_thread::sleep_until(next);
+    if (config_.desk_input) {
+      // Until the next frame is due: the person's input goes out as it arrives, and a new state
+      // of their own hand is drawn at once (from half a frame period after the last frame on):
+      // the frames follow the hand's states, not a clock of their own.
+      const std::uint64_t drawn = link->world.HandStamp(config_.view_user);
+      const auto earliest = Clock::now() + period / 2;
+      for (auto now = Clock::now(); now < next; now = Clock::now()) {
+        const auto until = link->waker->arrived() ? std::min(next, std::max(now, earliest)) : next;
+        if (window.WaitForInput(std::chrono::duration<double>(until - now).count()) && !pad) send_input();
+        if (!link->waker->arrived() || Clock::now() < earliest) continue;
+        link->world.Update();
+        link->waker->Taken();
+        if (link->world.HandStamp(config_.view_user) != drawn) {
+          next = Clock::now();  // this frame now; the one after a period later
+          break;
+        }
+      }
+    } else {
+      std::this_thread::sleep_until(next);
+    }
   }
   if (config_.desk_input) desk_sender.Release(link->desk_writer);
   finish();

@@ -50,6 +50,7 @@ struct WindowRenderer::Impl {
   double wheel_steps = 0.0;
   std::vector<WindowInput::KeyPress> presses;
   double cursor_x = 0.5, cursor_y = 0.5;
+  bool input_arrived = false;  // any input event since the last WaitForInput
 
   // Makes the window's context current; forces a real re-bind if an OSMesa context was bound
   // since (see detail::g_offscreen_binds).
@@ -98,12 +99,26 @@ WindowRenderer::WindowRenderer(const Options& options) : impl_(std::make_unique<
                            (key >= GLFW_KEY_A && key <= GLFW_KEY_Z);
     if (!printable || action == GLFW_RELEASE) return;
     auto* impl = static_cast<Impl*>(glfwGetWindowUserPointer(window));
+    impl->input_arrived = true;
     if (impl->presses.size() < 256) {  // a stuck repeat between two takes cannot grow it without end
       impl->presses.push_back({static_cast<char>(key), (mods & GLFW_MOD_SHIFT) != 0, action == GLFW_REPEAT});
     }
   });
   glfwSetScrollCallback(impl_->window, [](GLFWwindow* window, double, double dy) {
-    static_cast<Impl*>(glfwGetWindowUserPointer(window))->wheel_steps += dy;
+    auto* impl = static_cast<Impl*>(glfwGetWindowUserPointer(window));
+    impl->wheel_steps += dy;
+    impl->input_arrived = true;
+  });
+  // Pointer motion, buttons and focus are read when taken (TakeInput); these only say that
+  // something arrived, so that WaitForInput wakes for it.
+  glfwSetCursorPosCallback(impl_->window, [](GLFWwindow* window, double, double) {
+    static_cast<Impl*>(glfwGetWindowUserPointer(window))->input_arrived = true;
+  });
+  glfwSetMouseButtonCallback(impl_->window, [](GLFWwindow* window, int, int, int) {
+    static_cast<Impl*>(glfwGetWindowUserPointer(window))->input_arrived = true;
+  });
+  glfwSetWindowFocusCallback(impl_->window, [](GLFWwindow* window, int) {
+    static_cast<Impl*>(glfwGetWindowUserPointer(window))->input_arrived = true;
   });
   impl_->offscreen_binds_seen = detail::g_offscreen_binds.load();
   glfwMakeContextCurrent(impl_->window);
@@ -181,6 +196,16 @@ WindowInput WindowRenderer::TakeInput() {
   in.presses.swap(impl_->presses);
   return in;
 }
+
+bool WindowRenderer::WaitForInput(double timeout_s) {
+  if (!impl_->input_arrived && timeout_s > 0.0) glfwWaitEventsTimeout(timeout_s);
+  if (!impl_->input_arrived) glfwPollEvents();  // woken for another window or an empty event
+  const bool arrived = impl_->input_arrived;
+  impl_->input_arrived = false;
+  return arrived;
+}
+
+void WindowRenderer::Wake() { glfwPostEmptyEvent(); }
 
 bool WindowRenderer::ShouldClose() const { return glfwWindowShouldClose(impl_->window) != 0; }
 

@@ -2,7 +2,13 @@
 
 #include <gtest/gtest.h>
 
+#include <unistd.h>
+
+#include <chrono>
 #include <cmath>
+#include <cstdlib>
+#include <future>
+#include <string>
 
 #include "handshare/render/offscreen_renderer.hpp"
 #include "test_oracle.hpp"
@@ -23,6 +29,40 @@ SceneView RedSphereScene(const Camera& camera) {
   scene.spheres.push_back({camera.target_W + Eigen::Vector3d(0.1, 0.0, 0.05), 0.04, {1.0F, 0.0F, 0.0F}});
   scene.caption = "window";
   return scene;
+}
+
+// A real X pointer motion (xdotool, as a person's mouse would send it) wakes WaitForInput
+// before its timeout, and TakeInput has the pointer where it was put; with nothing sent, the
+// wait says no input.
+TEST_F(RenderWindow, WaitForInputWakesForAPointerMotion) {
+  if (std::system("command -v xdotool > /dev/null 2>&1") != 0) GTEST_SKIP() << "no xdotool";
+  WindowRenderer::Options options;
+  options.width_px = 200;
+  options.height_px = 100;
+  options.title = "wait-for-input-" + std::to_string(getpid());
+  WindowRenderer window(options);
+  Camera camera;
+  window.Render(RedSphereScene(camera), camera);  // mapped and drawn once
+  (void)window.WaitForInput(0.2);                 // what mapping it sent (focus, enter)
+  (void)window.TakeInput();
+  EXPECT_FALSE(window.WaitForInput(0.05)) << "input reported where none was sent";
+  // xdotool in another thread: the main thread waits in WaitForInput meanwhile, as the view does.
+  auto moved = std::async(std::launch::async, [&] {
+    const std::string command = "xdotool search --sync --onlyvisible --name " + options.title +
+                                " mousemove --window %1 150 25 > /dev/null 2>&1";
+    return std::system(command.c_str());
+  });
+  // Woken for the motion: the input taken then has the pointer where xdotool put it (a wake
+  // for something else, a late focus event, is taken and waited past).
+  bool there = false;
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(30);
+  while (!there && std::chrono::steady_clock::now() < deadline) {
+    if (!window.WaitForInput(1.0)) continue;
+    const WindowInput in = window.TakeInput();
+    there = in.cursor_inside && std::abs(in.cursor_x - 0.75) < 0.02 && std::abs(in.cursor_y - 0.25) < 0.02;
+  }
+  ASSERT_EQ(moved.get(), 0) << "xdotool could not move the pointer";
+  EXPECT_TRUE(there) << "no wake with the pointer at (150, 25) within 30 s of its motion";
 }
 
 TEST_F(RenderWindow, ShowsTheSamePictureAsTheOffscreenRenderer) {

@@ -52,9 +52,9 @@ struct DeskTarget {
 struct DeskFilterConfig {
   /// Time constant of the critically damped filter [s]: a step is 90 % done after about 4 tau
   /// when no bound is reached.
-  double tau_s = 0.06;
+  double tau_s = 0.04;
   double max_speed_m_per_s = 0.25;             ///< hand base
-  double max_acceleration_m_per_s2 = 3.0;
+  double max_acceleration_m_per_s2 = 6.0;
   double max_turn_rate_rad_per_s = 1.2;        ///< hand base rotation
   double max_turn_acceleration_rad_per_s2 = 20.0;
   double max_closure_rate_per_s = 1.5;         ///< each finger, full closure per second

@@ -2,9 +2,6 @@
 // the reader of any mesh file by its extension. Uses mesh_io.cpp's readers; they never call here.
 // TetGen is GPL: it is only ever run as a separate process (posix_spawn), never linked.
 
-#include <fcntl.h>
-#include <spawn.h>
-#include <sys/wait.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -28,8 +25,7 @@
 #include "handshare/fem/error.hpp"
 #include "handshare/fem/mesh_io.hpp"
 #include "handshare/fem/surface_import.hpp"
-
-extern char** environ;
+#include "run_program.hpp"
 
 namespace handshare::fem {
 namespace {
@@ -57,45 +53,6 @@ class TempDir {
  private:
   fs::path path_;
 };
-
-std::string Tail(const fs::path& file, std::size_t max_chars) {
-  std::ifstream in(file);
-  std::stringstream ss;
-  ss << in.rdbuf();
-  std::string s = ss.str();
-  if (s.size() > max_chars) s = "..." + s.substr(s.size() - max_chars);
-  return s;
-}
-
-// Runs argv[0] (looked up in PATH) in `cwd` with stdout+stderr into `log`; returns the exit code.
-int RunProgram(const std::vector<std::string>& args, const fs::path& cwd, const fs::path& log) {
-  posix_spawn_file_actions_t actions;
-  posix_spawn_file_actions_init(&actions);
-  const std::string log_s = log.string();
-  posix_spawn_file_actions_addopen(&actions, STDOUT_FILENO, log_s.c_str(),
-                                   O_WRONLY | O_CREAT | O_TRUNC, 0644);
-  posix_spawn_file_actions_adddup2(&actions, STDOUT_FILENO, STDERR_FILENO);
-  posix_spawn_file_actions_addopen(&actions, STDIN_FILENO, "/dev/null", O_RDONLY, 0);
-  const std::string cwd_s = cwd.string();
-  // The child must run in cwd (tetgen writes next to its input); glibc 2.29+ has addchdir_np.
-  posix_spawn_file_actions_addchdir_np(&actions, cwd_s.c_str());
-  std::vector<char*> argv;
-  for (const auto& a : args) argv.push_back(const_cast<char*>(a.c_str()));
-  argv.push_back(nullptr);
-  pid_t pid = 0;
-  const int rc = posix_spawnp(&pid, argv[0], &actions, nullptr, argv.data(), environ);
-  posix_spawn_file_actions_destroy(&actions);
-  if (rc != 0) {
-    throw FemError("cannot run '" + args[0] + "': " + std::strerror(rc) +
-                   (rc == ENOENT ? " (install the Debian package tetgen)" : ""));
-  }
-  int status = 0;
-  while (::waitpid(pid, &status, 0) < 0) {
-    if (errno != EINTR) throw FemError("waitpid failed for '" + args[0] + "'");
-  }
-  if (WIFEXITED(status)) return WEXITSTATUS(status);
-  return 128 + (WIFSIGNALED(status) ? WTERMSIG(status) : 0);
-}
 
 std::string FormatG(double v) {
   char buf[40];
@@ -185,10 +142,10 @@ TetMesh TetrahedralizeSurface(const SurfaceMeshData& s, const TetgenOptions& opt
   if (options.max_radius_edge_ratio > 0.0) flags += "q" + FormatG(options.max_radius_edge_ratio);
   if (options.max_volume_m3 > 0.0) flags += "a" + FormatG(options.max_volume_m3);
   const fs::path log = dir.path() / "tetgen.log";
-  const int rc = RunProgram({options.program, flags, "surface.smesh"}, dir.path(), log);
+  const int rc = detail::RunProgram({options.program, flags, "surface.smesh"}, dir.path(), log, "tetgen");
   if (rc != 0 || !fs::exists(dir.path() / "surface.1.ele")) {
     throw FemError("tetgen failed on " + source + " (exit code " + std::to_string(rc) +
-                   ", flags " + flags + "): " + Tail(log, 600));
+                   ", flags " + flags + "): " + detail::Tail(log, 600));
   }
   TetMesh tetgen_mesh = ReadTetgen(dir.path() / "surface.1");
   // Keep the node sets but name the original surface as the source in later messages.

@@ -15,6 +15,7 @@
 #include <sstream>
 #include <string>
 
+#include "handshare/fem/calculix.hpp"
 #include "handshare/fem/compliance.hpp"
 #include "handshare/fem/contact_solver.hpp"
 #include "handshare/fem/mesh_io.hpp"
@@ -32,74 +33,12 @@ std::string G12(double v) {
   return b;
 }
 
-struct CcxCase {
-  Material material;
-  std::vector<std::int32_t> fixed;
-  std::vector<NodalValue> imposed;
-  std::vector<NodalValue> forces;
-};
-
-void WriteInp(const std::filesystem::path& file, const TetMesh& mesh, const CcxCase& c) {
-  std::ofstream o(file);
-  const auto& id = mesh.node_ids();
-  o << "*NODE, NSET=NALL\n";
-  for (std::int32_t v = 0; v < mesh.num_nodes(); ++v) {
-    const auto& x = mesh.positions_m()[v];
-    o << id[v] << ", " << G12(x.x()) << ", " << G12(x.y()) << ", " << G12(x.z()) << "\n";
-  }
-  o << "*ELEMENT, TYPE=C3D4, ELSET=EALL\n";
-  for (std::int32_t e = 0; e < mesh.num_tets(); ++e) {
-    const auto& t = mesh.tets()[e];
-    o << e + 1 << ", " << id[t[0]] << ", " << id[t[1]] << ", " << id[t[2]] << ", " << id[t[3]] << "\n";
-  }
-  o << "*NSET, NSET=NFIX\n";
-  for (std::int32_t v : c.fixed) o << id[v] << ",\n";
-  o << "*NSET, NSET=NIMP\n";
-  for (const auto& iv : c.imposed) o << id[iv.node] << ",\n";
-  o << "*MATERIAL, NAME=MAT\n*ELASTIC\n" << G12(c.material.E_Pa) << ", " << G12(c.material.nu) << "\n";
-  o << "*SOLID SECTION, ELSET=EALL, MATERIAL=MAT\n*STEP\n*STATIC\n*BOUNDARY\nNFIX, 1, 3\n";
-  for (const auto& iv : c.imposed)
-    for (int a = 0; a < 3; ++a) o << id[iv.node] << ", " << a + 1 << ", " << a + 1 << ", " << G12(iv.value[a]) << "\n";
-  if (!c.forces.empty()) {
-    o << "*CLOAD\n";
-    for (const auto& f : c.forces)
-      for (int a = 0; a < 3; ++a) o << id[f.node] << ", " << a + 1 << ", " << G12(f.value[a]) << "\n";
-  }
-  o << "*NODE PRINT, NSET=NALL\nU\n";
-  if (!c.imposed.empty()) o << "*NODE PRINT, NSET=NIMP\nRF\n";
-  o << "*END STEP\n";
-}
-
-// Reads the "displacements" and "forces" tables of job.dat: id -> vector.
-std::map<std::string, std::map<std::int64_t, Eigen::Vector3d>> ReadDat(const std::filesystem::path& file) {
-  std::map<std::string, std::map<std::int64_t, Eigen::Vector3d>> tables;
-  std::ifstream in(file);
-  std::string line, table;
-  while (std::getline(in, line)) {
-    if (line.find("displacements (vx,vy,vz)") != std::string::npos) {
-      table = "U";
-      continue;
-    }
-    if (line.find("forces (fx,fy,fz)") != std::string::npos) {
-      table = "RF";
-      continue;
-    }
-    std::istringstream ss(line);
-    std::int64_t id;
-    Eigen::Vector3d v;
-    if (!table.empty() && (ss >> id >> v.x() >> v.y() >> v.z())) tables[table][id] = v;
-  }
-  return tables;
-}
-
-// Runs ccx on the case in a scratch folder; returns the tables of job.dat.
-std::map<std::string, std::map<std::int64_t, Eigen::Vector3d>> RunCcx(const TetMesh& mesh, const CcxCase& c,
-                                                                   const test::TempDir& dir) {
-  WriteInp(dir.path() / "job.inp", mesh, c);
-  const std::string cmd = "cd '" + dir.path().string() + "' && OMP_NUM_THREADS=1 ccx -i job > ccx.log 2>&1";
-  EXPECT_EQ(std::system(cmd.c_str()), 0) << "ccx failed, see " << dir.path() / "ccx.log";
-  auto tables = ReadDat(dir.path() / "job.dat");
-  EXPECT_EQ(tables["U"].size(), static_cast<std::size_t>(mesh.num_nodes()));
+// Runs ccx on the case in a scratch folder (the deck writer and reader of calculix.hpp).
+CcxTables RunCcx(const TetMesh& mesh, const CcxCase& c, const test::TempDir& dir) {
+  const CcxResult r = RunCalculix(mesh, c, dir.path());
+  EXPECT_TRUE(r.converged) << r.message;
+  auto tables = ReadCalculixDat(dir.path() / "job.dat");
+  EXPECT_EQ(tables.u_m.size(), static_cast<std::size_t>(mesh.num_nodes()));
   return tables;
 }
 
@@ -109,7 +48,8 @@ double CompareToCcx(const TetMesh& mesh, const CcxCase& c, std::string* detail) 
   // Our solver on the mesh as written (12 digits) and re-read.
   const TetMesh ours_mesh = ReadAbaqusInp(dir.path() / "job.inp");
   EXPECT_EQ(ours_mesh.num_nodes(), mesh.num_nodes());
-  auto remap = [&](std::int32_t v) { return *ours_mesh.IndexOfId(mesh.node_ids()[v]); };
+  // The deck numbers nodes index + 1.
+  auto remap = [&](std::int32_t v) { return *ours_mesh.IndexOfId(v + 1); };
   StaticProblem p;
   for (std::int32_t v : c.fixed) p.fixed_nodes.push_back(remap(v));
   for (const auto& iv : c.imposed) p.imposed_u_m.push_back({remap(iv.node), iv.value});
@@ -120,11 +60,11 @@ double CompareToCcx(const TetMesh& mesh, const CcxCase& c, std::string* detail) 
   std::vector<Eigen::Vector3d> a, b, ra, rb;
   for (std::int32_t v = 0; v < ours_mesh.num_nodes(); ++v) {
     a.push_back(s.u_m[v]);
-    b.push_back(tables["U"][ours_mesh.node_ids()[v]]);
+    b.push_back(tables.u_m[ours_mesh.node_ids()[v]]);
   }
   for (const auto& iv : p.imposed_u_m) {
     ra.push_back(s.reaction_N[iv.node]);
-    rb.push_back(tables["RF"][ours_mesh.node_ids()[iv.node]]);
+    rb.push_back(tables.reaction_N[ours_mesh.node_ids()[iv.node]]);
   }
   const double eu = test::RelError(a, b);
   const double er = ra.empty() ? 0.0 : test::RelError(ra, rb);
@@ -201,12 +141,12 @@ TEST(CalculiX, FrictionPatchDraggedSidewaysAgrees) {
     test::TempDir dir;
     auto tables = RunCcx(mesh, c, dir);
     std::vector<Eigen::Vector3d> ccx_f, ours_u, ccx_u;
-    for (const auto& iv : c.imposed) ccx_f.push_back(tables["RF"][mesh.node_ids()[iv.node]]);
+    for (const auto& iv : c.imposed) ccx_f.push_back(tables.reaction_N[iv.node + 1]);
     std::vector<Eigen::Vector3d> field(static_cast<std::size_t>(C->num_nodes()));
     ASSERT_TRUE(solver.SurfaceDisplacements(field));
     for (std::int32_t k = 0; k < C->num_nodes(); ++k) {
       ours_u.push_back(field[static_cast<std::size_t>(k)]);
-      ccx_u.push_back(tables["U"][mesh.node_ids()[C->nodes()[k]]]);
+      ccx_u.push_back(tables.u_m[C->nodes()[k] + 1]);
     }
     const double ef = test::RelError(ours_f, ccx_f), eu = test::RelError(ours_u, ccx_u);
     RecordProperty(mu < 1.0 ? "slipping" : "sticking", "force rel. error " + test::Sci(ef) + ", field " + test::Sci(eu));
@@ -215,6 +155,52 @@ TEST(CalculiX, FrictionPatchDraggedSidewaysAgrees) {
     // The drag is real: a tangential force of a good fraction of the normal one.
     const Eigen::Vector3d F = solver.patch_states()[0].force_N;
     EXPECT_GT(F.head<2>().norm(), 0.1 * -F.z()) << "mu " << mu;
+  }
+}
+
+// The nonlinear decks (NLGEOM; neo-Hooke of the same small-strain moduli) against the linear
+// one: the 3 x 3 top nodes within 4.5 mm of a point pressed straight down. At 10 nm (strain
+// ~1e-6) all three must give the linear reaction to 1e-4 (measured 2e-6 and 7e-7): a
+// neo-Hookean solid with wrong constants (C10 = G instead of G / 2) or any other modelling slip
+// would be off by tens of percent, while the geometric terms are of the order of the strain. At
+// 1 mm (a tenth of the block's height) both nonlinear models must differ from the linear one by
+// more than 1 % (measured 20 % and 8 %): a deck that lost NLGEOM or the hyperelastic material
+// would not.
+TEST(CalculiX, NonlinearModelsMeetTheLinearOneAtSmallStrainAndLeaveItAtLarge) {
+  if (!HaveCcx()) GTEST_SKIP() << "ccx not installed (Debian package calculix-ccx)";
+  const TetMesh mesh = DistortedBlock();
+  const auto fixed = NodesOnPlane(mesh, 2, 0.0);
+  std::vector<std::int32_t> pressed;
+  for (std::int32_t v : NodesOnPlane(mesh, 2, 0.01)) {
+    const Eigen::Vector3d& x = mesh.positions_m()[static_cast<std::size_t>(v)];
+    if (std::abs(x.x() - 0.01) < 0.0045 && std::abs(x.y() - 0.011) < 0.0045) pressed.push_back(v);
+  }
+  ASSERT_GE(pressed.size(), 4u);
+  auto total_reaction = [&](CcxModel model, double depth_m) {
+    CcxCase c;
+    c.material = {30000.0, 0.45};
+    c.model = model;
+    c.fixed = fixed;
+    for (std::int32_t v : pressed) c.imposed.push_back({v, {0.0, 0.0, -depth_m}});
+    test::TempDir dir;
+    const CcxResult r = RunCalculix(mesh, c, dir.path());
+    EXPECT_TRUE(r.converged) << CcxModelName(model) << " at " << depth_m << " m: " << r.message;
+    Eigen::Vector3d F = Eigen::Vector3d::Zero();
+    for (const auto& f : r.reaction_N) F += f;
+    return F;
+  };
+  for (double depth_m : {1e-8, 1e-3}) {
+    const Eigen::Vector3d lin = total_reaction(CcxModel::kLinear, depth_m);
+    ASSERT_GT(-lin.z(), 0.0);
+    for (CcxModel model : {CcxModel::kNlgeom, CcxModel::kNeoHooke}) {
+      const double err = (total_reaction(model, depth_m) - lin).norm() / lin.norm();
+      RecordProperty(std::string(CcxModelName(model)) + "_at_" + G12(depth_m), test::Sci(err));
+      if (depth_m < 1e-6) {
+        EXPECT_LT(err, 1e-4) << CcxModelName(model);
+      } else {
+        EXPECT_GT(err, 0.01) << CcxModelName(model);
+      }
+    }
   }
 }
 

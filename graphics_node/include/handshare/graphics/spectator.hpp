@@ -43,6 +43,14 @@ struct SpectatorConfig {
   /// "objects": {id: {"p_WO_m", "q_WO_wxyz", "from": "object_state" | "scene_state"}}}: the
   /// scene, board and poses the spectator shows (a late joiner's check).
   std::filesystem::path state_out;
+  /// "" = none; else, in a window, a CSV row per frame shown: frame, t_ns (steady clock,
+  /// CLOCK_MONOTONIC, once the frame is swapped to the screen), the view user's hand base
+  /// hand_x_m, hand_y_m, hand_z_m as drawn (blank without a hand), and where the world's origin
+  /// lands in the frame, anchor_x_px, anchor_y_px (a user's view follows the hand: the scene
+  /// moves on the screen when the hand does), and the stamp of the hand's device state drawn,
+  /// hand_stamp_ns (the haptic loop's steady clock: the same clock on one machine).
+  /// bench/graphics/motion_to_photon.py reads it.
+  std::filesystem::path frame_log;
 };
 
 /// $HANDSHARE_ASSETS if set, else the installed or source tree's assets (common::AssetsDir, as

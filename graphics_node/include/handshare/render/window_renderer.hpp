@@ -73,6 +73,15 @@ class WindowRenderer {
   /// them). Main thread only.
   [[nodiscard]] WindowInput TakeInput();
 
+  /// Waits up to timeout_s for the person's input (pointer motion, a button, a key, the wheel,
+  /// focus) and handles the window's events meanwhile; true if input arrived since the last
+  /// call (take it with TakeInput). The time between two frames, spent awake for input: a
+  /// move reaches the hand at once, not when the next frame is due. Main thread only.
+  [[nodiscard]] bool WaitForInput(double timeout_s);
+
+  /// Ends a WaitForInput early, from any thread (it then returns false unless input came too).
+  static void Wake();
+
   /// True if GLFW can be initialized here (a display is reachable); never throws.
   [[nodiscard]] static bool DisplayAvailable() noexcept;
 
