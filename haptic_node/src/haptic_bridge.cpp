@@ -55,6 +55,9 @@ HapticBridge::HapticBridge(const HapticNodeConfig& config, Device& device, Hapti
     // The listeners only signal; this bridge's thread takes the samples (Couple).
     contact_reader_.OnDataAvailable([wake = wake_] { wake->Post(); });
     object_reader_.OnDataAvailable([wake = wake_] { wake->Post(); });
+    // The person at the desk: their input reaches the hand between ticks too (motion to photon,
+    // docs/devices.md).
+    if (desk_ != nullptr && desk_reader_) desk_reader_.OnDataAvailable([wake = wake_] { wake->Post(); });
   }
 }
 
@@ -136,6 +139,7 @@ void HapticBridge::Tick() {
 }
 
 void HapticBridge::Couple() {
+  FollowDeskInput();
   if (!renderer_) return;
   if (renderer_->TakeReport(report_)) {
     have_report_ = true;

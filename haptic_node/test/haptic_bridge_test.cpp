@@ -19,6 +19,7 @@
 #include "handshare/dds/messages.hpp"
 #include "handshare/haptic/haptic_loop.hpp"
 #include "handshare/haptic/sim_hand.hpp"
+#include "desk_device.hpp"
 
 namespace handshare::haptic {
 namespace {
@@ -122,6 +123,49 @@ TEST_F(BridgeCoupling, APeersContactSetWakesTheBridgeAndReachesTheNextHapticStep
   bridge.Couple();         // reads that step's report: the step that first used bob's set
   ASSERT_EQ(bridge.peer_contact_loop_age().count(), 1u) << "the haptic step after the wake did not use bob's set";
   EXPECT_GT(bridge.peer_contact_loop_age().max_us(), 0.0);
+}
+
+// The person's input from their view (DeskInput), written while the bridge sleeps between its
+// ticks, wakes it (the desk reader's listener) and reaches the desk device at once: the next
+// haptic step's reading is live and heads for the target. Before, the input waited for the
+// bridge's next 100 Hz tick (up to 10 ms of a desk's motion to photon); with coupling_on_wake
+// off the wait runs to its deadline and fails.
+TEST_F(BridgeCoupling, ADeskInputWakesTheBridgeAndReachesTheDevice) {
+  const std::string session = "desk_" + std::to_string(getpid());
+  HapticNodeConfig config;
+  config.where.domain_id = kDomain;
+  config.where.session = session;
+  config.user = "alice";
+  config.rejoin_after_s = 0.0;
+  dds::Participant alice_p(config.where, "haptic_node/alice");
+  dds::Participant view_p(kDomain, session, "graphics_node/desk-alice");
+  DeskDevice device;
+  HapticLoop loop(device, HapticLoopConfig{1000.0, false});
+  HapticBridge bridge(config, device, loop, alice_p, nullptr, [](const std::string&) {});
+  auto desk_writer = dds::MakeWriter<msg::DeskInput>(view_p, dds::topics::kDeskInput);
+  const auto give_up = Clock::now() + 60s;
+  while (desk_writer.matched_readers() == 0 && Clock::now() < give_up) std::this_thread::sleep_for(10ms);
+  ASSERT_GT(desk_writer.matched_readers(), 0) << "alice's desk reader never matched the view's writer";
+  bridge.Tick();
+  while (bridge.WaitForCoupling(Clock::now())) bridge.Couple();  // nothing owed before the view writes
+  ASSERT_EQ(bridge.desk_inputs(), 0u);
+
+  msg::DeskInput input;
+  input.user("alice");
+  input.session(session);
+  input.stamp_ns(common::SteadyNowNs());
+  input.seq(1);
+  input.p_WH_m({0.05, -0.2, 0.15});
+  input.q_WH_wxyz({1.0, 0.0, 0.0, 0.0});
+  input.focused(true);
+  desk_writer.Write(input);
+  // No tick from here on: only the wake-up can bring the input in.
+  ASSERT_TRUE(bridge.WaitForCoupling(Clock::now() + 10s)) << "the desk input did not wake the bridge";
+  bridge.Couple();
+  EXPECT_EQ(bridge.desk_inputs(), 1u) << "taken between ticks";
+  DeviceReading reading;
+  device.Read(0.0, reading);
+  EXPECT_TRUE(reading.valid) << "the desk's hand is not live after its first input";
 }
 
 }  // namespace
