@@ -61,6 +61,16 @@ msg::ContactSet BobOnTheBlock(const std::string& session, std::uint64_t stamp_ns
   return s;
 }
 
+// Alice's haptic node in a session of the test's domain, never rejoining.
+HapticNodeConfig AliceIn(const std::string& session) {
+  HapticNodeConfig config;
+  config.where.domain_id = kDomain;
+  config.where.session = session;
+  config.user = "alice";
+  config.rejoin_after_s = 0.0;
+  return config;
+}
+
 class BridgeCoupling : public ::testing::Test {
  protected:
   void SetUp() override {
@@ -78,11 +88,7 @@ class BridgeCoupling : public ::testing::Test {
 // bridge as it was: peers taken at its ticks only) the wait runs to its deadline and fails.
 TEST_F(BridgeCoupling, APeersContactSetWakesTheBridgeAndReachesTheNextHapticStep) {
   const std::string session = "coupling_" + std::to_string(getpid());
-  HapticNodeConfig config;
-  config.where.domain_id = kDomain;
-  config.where.session = session;
-  config.user = "alice";
-  config.rejoin_after_s = 0.0;
+  const HapticNodeConfig config = AliceIn(session);
   dds::Participant alice_p(config.where, "haptic_node/alice");
   dds::Participant bob_p(kDomain, session, "haptic_node/bob");
   SimDevice device(HandScript::Default(Eigen::Vector3d(0.2, 0.2, 0.3)));  // far from the block
@@ -132,11 +138,7 @@ TEST_F(BridgeCoupling, APeersContactSetWakesTheBridgeAndReachesTheNextHapticStep
 // off the wait runs to its deadline and fails.
 TEST_F(BridgeCoupling, ADeskInputWakesTheBridgeAndReachesTheDevice) {
   const std::string session = "desk_" + std::to_string(getpid());
-  HapticNodeConfig config;
-  config.where.domain_id = kDomain;
-  config.where.session = session;
-  config.user = "alice";
-  config.rejoin_after_s = 0.0;
+  const HapticNodeConfig config = AliceIn(session);
   dds::Participant alice_p(config.where, "haptic_node/alice");
   dds::Participant view_p(kDomain, session, "graphics_node/desk-alice");
   DeskDevice device;
