@@ -125,10 +125,7 @@ void HapticBridge::Tick() {
   loop_.CollectRetired();
   if (renderer_) {
     ForwardControlEvents();
-    if (renderer_->TakeReport(report_)) {
-      have_report_ = true;
-      RecordPeerLoopAge();
-    }
+    TakeReport();
     ReceivePeers(true);
     FollowPeerBodies(true);
     DumpLocalFields();
@@ -141,10 +138,7 @@ void HapticBridge::Tick() {
 void HapticBridge::Couple() {
   FollowDeskInput();
   if (!renderer_) return;
-  if (renderer_->TakeReport(report_)) {
-    have_report_ = true;
-    RecordPeerLoopAge();
-  }
+  TakeReport();
   ReceivePeers(false);
   FollowPeerBodies(false);
   PublishContactSet();
@@ -303,7 +297,9 @@ void HapticBridge::DumpLocalFields() {
   }
 }
 
-void HapticBridge::RecordPeerLoopAge() {
+void HapticBridge::TakeReport() {
+  if (!renderer_->TakeReport(report_)) return;
+  have_report_ = true;
   // The sender's write to the haptic step that first used the set (same host: one clock).
   if (report_.peer_stamp_ns == 0 || report_.peer_stamp_ns == last_loop_peer_stamp_ns_) return;
   last_loop_peer_stamp_ns_ = report_.peer_stamp_ns;

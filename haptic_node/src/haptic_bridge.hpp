@@ -143,8 +143,9 @@ class HapticBridge {
 
   /// This node's field of each touched deformable, to --dump-deformation DIR.
   void DumpLocalFields();
-  /// The newest report's peer set stamps, into peer_loop_age_.
-  void RecordPeerLoopAge();
+  /// The haptic loop's newest report, if there is one, and its peer set stamps into
+  /// peer_loop_age_. Needs a renderer.
+  void TakeReport();
   /// Builds the renderer of one scene state and hands it to the loop.
   void AdoptScene(const msg::SceneState& state);
 
