@@ -13,8 +13,8 @@
 #include <sstream>
 #include <thread>
 #include <atomic>
-#include <condition_variable>
-#include <mutex>
+#include <functional>
+#include <memory>
 
 #include <nlohmann/json.hpp>
 
@@ -179,9 +179,9 @@ class WorldView {
     return UserEyeCamera(HandPose(it->second.state), eye, fallback);
   }
 
-  /// Blocks up to `timeout` for any user's device state to arrive. Another thread may wait here
-  /// while this one updates (DeviceStateWaker).
-  bool WaitForDeviceState(std::chrono::nanoseconds timeout) { return device_reader_.WaitForData(timeout); }
+  /// From now on, `notify` runs on the middleware's thread whenever a device state arrives
+  /// (it must only signal; this thread takes the states in Update).
+  void OnDeviceState(std::function<void()> notify) { device_reader_.OnDataAvailable(std::move(notify)); }
 
   /// The stamp of a user's newest device state (0: none).
   std::uint64_t HandStamp(const std::string& user) const {
@@ -365,56 +365,6 @@ dds::Writer<msg::DeskInput> MakeDeskWriter(dds::Participant& participant) {
   }
 }
 
-/// A desk's view draws the person's hand as soon as its new state is here, not when the next
-/// frame is due: this thread waits on the device-state reader and wakes the window's wait
-/// (render::WindowRenderer::Wake) when a state arrives; the main thread takes it
-/// (WorldView::Update), says so (Taken), and the thread waits again.
-class DeviceStateWaker {
- public:
-  explicit DeviceStateWaker(WorldView& world) : thread_([this, &world] { Run(world); }) {}
-  ~DeviceStateWaker() {
-    {
-      std::lock_guard lock(mutex_);
-      stop_ = true;
-    }
-    taken_.notify_all();
-    thread_.join();
-  }
-  DeviceStateWaker(const DeviceStateWaker&) = delete;
-  DeviceStateWaker& operator=(const DeviceStateWaker&) = delete;
-
-  [[nodiscard]] bool arrived() const { return arrived_.load(); }
-  void Taken() {
-    {
-      std::lock_guard lock(mutex_);
-      arrived_ = false;
-    }
-    taken_.notify_all();
-  }
-
- private:
-  void Run(WorldView& world) {
-    std::unique_lock lock(mutex_);
-    while (!stop_) {
-      lock.unlock();
-      const bool data = world.WaitForDeviceState(std::chrono::milliseconds(50));
-      lock.lock();
-      if (!data || stop_) continue;
-      arrived_ = true;
-      render::WindowRenderer::Wake();
-      // Until the main thread has taken it (the reader says data while it is there); a main
-      // thread busy drawing is asked again after 100 ms.
-      taken_.wait_for(lock, std::chrono::milliseconds(100), [this] { return stop_ || !arrived_; });
-    }
-  }
-
-  std::mutex mutex_;
-  std::condition_variable taken_;
-  bool stop_ = false;
-  std::atomic<bool> arrived_{false};
-  std::thread thread_;  // last: starts once the rest exists
-};
-
 /// Everything of a spectator that lives on DDS: its participant, what it reads and its member
 /// announcement. A rejoin makes a new one.
 struct SpectatorLink {
@@ -428,8 +378,16 @@ struct SpectatorLink {
             participant, dds::topics::kSessionRoster,
             [&name](const std::string& line) { std::fprintf(stderr, "[graphics_node %s] %s\n", name.c_str(), line.c_str()); },
             "no rejoin when a member stays unheard")),
-        desk_writer(desk ? MakeDeskWriter(participant) : dds::Writer<msg::DeskInput>{}),
-        waker(desk ? std::make_unique<DeviceStateWaker>(world) : nullptr) {}
+        desk_writer(desk ? MakeDeskWriter(participant) : dds::Writer<msg::DeskInput>{}) {
+    // A desk's view draws the person's hand as soon as its new state is here, not when the
+    // next frame is due: the reader's listener wakes the window's wait.
+    if (desk) {
+      world.OnDeviceState([arrived = device_arrived] {
+        arrived->store(true);
+        render::WindowRenderer::Wake();
+      });
+    }
+  }
   dds::Participant participant;
   // The readers first: the server re-sends body poses (best-effort) when it sees the member
   // join, and a reader created after the announcement could miss them.
@@ -437,7 +395,8 @@ struct SpectatorLink {
   dds::MemberAnnouncement member;
   dds::Reader<msg::SessionRoster> roster;  // the world server's members: to rejoin if one stays unheard
   dds::Writer<msg::DeskInput> desk_writer;  // --input desk: the person's input, to their haptic node
-  std::unique_ptr<DeviceStateWaker> waker;  // --input desk: before the readers' end, ends first
+  /// --input desk: a device state arrived since the view last took them (set by the listener).
+  std::shared_ptr<std::atomic<bool>> device_arrived = std::make_shared<std::atomic<bool>>(false);
 };
 
 // One line on what the shared world received, for the node's log.
@@ -721,8 +680,8 @@ int Spectator::Run() {
   while (!window.ShouldClose() && !common::ShutdownRequested()) {
     if (config_.where.duration.count() > 0 && Clock::now() - start >= config_.where.duration) break;
     rejoin_if_unheard();
+    link->device_arrived->store(false);  // before the take: a state arriving during it wakes again
     link->world.Update();
-    if (link->waker) link->waker->Taken();
     const std::string desk_user = config_.desk_input ? config_.view_user : std::string();
     const std::string help = pad ? GamepadControl::HelpText() : desk.help_shown() ? DeskControl::HelpText() : std::string();
     const render::Camera frame_camera =
@@ -767,11 +726,11 @@ int Spectator::Run() {
       const std::uint64_t drawn = link->world.HandStamp(config_.view_user);
       const auto earliest = Clock::now() + period / 2;
       for (auto now = Clock::now(); now < next; now = Clock::now()) {
-        const auto until = link->waker->arrived() ? std::min(next, std::max(now, earliest)) : next;
+        const auto until = link->device_arrived->load() ? std::min(next, std::max(now, earliest)) : next;
         if (window.WaitForInput(std::chrono::duration<double>(until - now).count()) && !pad) send_input();
-        if (!link->waker->arrived() || Clock::now() < earliest) continue;
+        if (!link->device_arrived->load() || Clock::now() < earliest) continue;
+        link->device_arrived->store(false);
         link->world.Update();
-        link->waker->Taken();
         if (link->world.HandStamp(config_.view_user) != drawn) {
           next = Clock::now();  // this frame now; the one after a period later
           break;
