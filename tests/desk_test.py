@@ -56,25 +56,31 @@ def pointer_for(x_m, z_m):
     return min(max(col, 0), WIDTH - 1), min(max(row, 0), HEIGHT - 1)
 
 
-def start_xvfb(h):
-    """A virtual display of its own (Xvfb picks a free number and writes it to a pipe); it ends
-    with the test's other processes."""
+def launch_xvfb(screen, log):
+    """A virtual display of its own (Xvfb picks a free number and writes it to a pipe), its
+    screen WxHxD: (the Xvfb process, ':N')."""
     read_end, write_end = os.pipe()
-    log = open(os.path.join(h.work, "xvfb.log"), "w")
-    proc = subprocess.Popen(["Xvfb", "-displayfd", str(write_end), "-screen", "0", "1024x768x24", "-nolisten", "tcp"],
+    proc = subprocess.Popen(["Xvfb", "-displayfd", str(write_end), "-screen", "0", screen, "-nolisten", "tcp"],
                             pass_fds=(write_end,), stdout=log, stderr=subprocess.STDOUT)
     os.close(write_end)
-    h.procs["xvfb"] = (proc, log)
     number = b""
     deadline = time.monotonic() + 30
     while not number.endswith(b"\n"):
         ready, _, _ = select.select([read_end], [], [], max(0.0, deadline - time.monotonic()))
-        check(ready, f"Xvfb did not say its display number within 30 s:\n{h.log('xvfb')}")
+        check(ready, "Xvfb did not say its display number within 30 s")
         chunk = os.read(read_end, 16)
-        check(chunk, f"Xvfb ended without a display:\n{h.log('xvfb')}")
+        check(chunk, "Xvfb ended without a display")
         number += chunk
     os.close(read_end)
-    return ":" + number.decode().strip()
+    return proc, ":" + number.decode().strip()
+
+
+def start_xvfb(h):
+    """The test's virtual display; it ends with the test's other processes."""
+    log = open(os.path.join(h.work, "xvfb.log"), "w")
+    proc, display = launch_xvfb("1024x768x24", log)
+    h.procs["xvfb"] = (proc, log)
+    return display
 
 
 def xdotool(*args, timeout=30):

@@ -34,32 +34,14 @@ import ctypes
 import csv
 import os
 import random
-import select
 import shutil
 import signal
 import subprocess
 import sys
 import time
 
-
-def start_xvfb(width, height, log):
-    """A virtual display of its own (Xvfb picks a free number): (process, ':N')."""
-    read_end, write_end = os.pipe()
-    proc = subprocess.Popen(["Xvfb", "-displayfd", str(write_end), "-screen", "0", f"{width + 64}x{height + 64}x24",
-                             "-nolisten", "tcp"], pass_fds=(write_end,), stdout=log, stderr=subprocess.STDOUT)
-    os.close(write_end)
-    number = b""
-    deadline = time.monotonic() + 30
-    while not number.endswith(b"\n"):
-        ready, _, _ = select.select([read_end], [], [], max(0.0, deadline - time.monotonic()))
-        if not ready:
-            sys.exit("Xvfb did not say its display number within 30 s")
-        chunk = os.read(read_end, 16)
-        if not chunk:
-            sys.exit("Xvfb ended without a display")
-        number += chunk
-    os.close(read_end)
-    return proc, ":" + number.decode().strip()
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..", "tests"))
+from desk_test import launch_xvfb  # noqa: E402
 
 
 def xdotool(*args):
@@ -165,7 +147,7 @@ def main():
             time.sleep(0.05)
         sys.exit(f"{name} did not say '{text}' within {timeout} s (see {a.work}/{name}.log)")
 
-    xvfb, display = start_xvfb(a.width, a.height, log("xvfb"))
+    xvfb, display = launch_xvfb(f"{a.width + 64}x{a.height + 64}x24", log("xvfb"))
     procs.append(xvfb)
     os.environ["DISPLAY"] = display
     session = f"mtp-{os.getpid()}"
