@@ -686,6 +686,7 @@ int Spectator::Run() {
     const std::string help = pad ? GamepadControl::HelpText() : desk.help_shown() ? DeskControl::HelpText() : std::string();
     const render::Camera frame_camera =
         config_.view_user.empty() ? camera : link->world.UserCamera(config_.view_user, config_.eye, camera);
+    const auto frame_start = Clock::now();
     window.Render(link->world.Build(desk_user, help), frame_camera);
     if (frame_log.is_open()) {
       frame_log << frames_shown << "," << common::SteadyNowNs() << ",";
@@ -721,10 +722,11 @@ int Spectator::Run() {
     next += period;
     if (config_.desk_input) {
       // Until the next frame is due: the person's input goes out as it arrives, and a new state
-      // of their own hand is drawn at once (from half a frame period after the last frame on):
-      // the frames follow the hand's states, not a clock of their own.
+      // of their own hand is drawn at once (from half a frame period after the last frame
+      // began: at most twice the frame rate, however fast states come; the haptic node sends
+      // them at the view's rate): the frames follow the hand's states, not a clock of their own.
       const std::uint64_t drawn = link->world.HandStamp(config_.view_user);
-      const auto earliest = Clock::now() + period / 2;
+      const auto earliest = frame_start + period / 2;
       for (auto now = Clock::now(); now < next; now = Clock::now()) {
         const auto until = link->device_arrived->load() ? std::min(next, std::max(now, earliest)) : next;
         if (window.WaitForInput(std::chrono::duration<double>(until - now).count()) && !pad) send_input();

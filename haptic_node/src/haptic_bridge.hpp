@@ -80,6 +80,11 @@ class HapticBridge {
   void WriteCouplingTrace() const;
 
   std::uint64_t device_states_published() const { return device_states_published_; }
+  /// Of those, the ones sent on a motion wake rather than at a tick.
+  std::uint64_t device_states_on_motion() const { return device_states_on_motion_; }
+  /// A hand (base or fingertip) that moved this far since its last motion wake wakes the bridge
+  /// [m]: under a pixel of a 1280 x 720 user's view (0.75 mm, docs/devices.md).
+  static constexpr double kMotionWake_m = 0.5e-3;
   /// Whether a scene state of the session's world server has arrived since this bridge began.
   bool heard_world_server() const { return scene_revision_ != 0; }
   std::uint64_t control_events_sent() const { return control_events_sent_; }
@@ -129,7 +134,8 @@ class HapticBridge {
   /// at a tick; between ticks when a state arrived or the hand's report changed the hand-over).
   void FollowPeerBodies(bool tick);
   /// The newest haptic snapshot, to viewers (and the trace), at the fastest viewer's frame rate.
-  void PublishDeviceState();
+  /// moved: on the haptic step's motion wake (SceneRenderer::SetMotionWake), else at a tick.
+  void PublishDeviceState(bool moved);
   /// This hand's contacts: while touching, grasping or simulating, and once more at the end,
   /// each when it differs perceptibly from the last one sent or a keepalive is due; at the
   /// bridge's rate while a peer touches the same object, else at the world server's tick.
@@ -206,6 +212,8 @@ class HapticBridge {
   common::LatencyHistogram tick_interval_;
   Clock::time_point next_stats_;
   std::uint64_t device_states_published_ = 0;
+  std::uint64_t device_states_on_motion_ = 0;
+  std::uint64_t state_sent_ns_ = 0;  // steady clock of the last device state sent
   std::uint64_t control_events_sent_ = 0;
   std::deque<msg::ControlEvent> held_events_;  // taken, not yet written: no reader matched
   std::uint64_t held_events_dropped_ = 0;

@@ -92,9 +92,33 @@ void SceneRenderer::PostReport(const ContactReport& r) noexcept {
   if (changed || report_wake_.load(std::memory_order_relaxed)) wake_->Post();
 }
 
+void SceneRenderer::PostMotion(const DeviceReading& reading, std::uint64_t now_ns) noexcept {
+  const double threshold_m = motion_wake_m_.load(std::memory_order_relaxed);
+  if (!wake_ || !(threshold_m > 0.0)) return;
+  if (motion_due_) {
+    // The step before moved the hand, and its snapshot is out: the bridge can take it.
+    motion_due_ = false;
+    motion_posted_ns_ = now_ns;
+    motion_posted_.store(true, std::memory_order_release);
+    wake_->Post();
+  }
+  if (motion_from_set_ && now_ns - motion_posted_ns_ < motion_gap_ns_.load(std::memory_order_relaxed)) return;
+  double moved_m = motion_from_set_ ? (reading.p_WH - motion_from_[0]).norm() : 2.0 * threshold_m;
+  for (int f = 0; f < kFingers; ++f) {
+    if (HasFinger(reading.finger_mask, f)) moved_m = std::max(moved_m, (reading.p_WE[f] - motion_from_[f + 1]).norm());
+  }
+  if (!(moved_m > threshold_m)) return;  // NaN included: the loop's checks keep such readings out
+  motion_from_[0] = reading.p_WH;
+  for (int f = 0; f < kFingers; ++f) motion_from_[f + 1] = reading.p_WE[f];
+  motion_from_set_ = true;
+  motion_due_ = true;
+}
+
 void SceneRenderer::Render(double /*t_s*/, double dt_s, std::uint64_t now_ns, const DeviceReading& reading,
                            std::array<Eigen::Vector3d, kFingers>& f_E_W) noexcept {
   auto& world = *models_.world;
+  // 0. A hand that moved: the bridge's wake-up, so that its state reaches the screens at once.
+  PostMotion(reading, now_ns);
   // 1. Objects that move by themselves (the Daphnia swims, its body beats), on the session's
   // clock.
   if (!scripted_.empty()) scripted_.Apply(world, clock_.Now_s());

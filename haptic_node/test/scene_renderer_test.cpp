@@ -326,6 +326,100 @@ TEST(SceneRenderer, APeerBackAfterABridgeStallComesBackAtTheFadesRate) {
   std::filesystem::remove_all(dir);
 }
 
+// What a screen shows of a hand: with the motion wake on, the step after the one that moved the
+// hand (its base or a fingertip it has) half a millimetre past the last post posts the bridge's
+// wake-up, no sooner than the gap after the last post, without allocating; a hand at rest, a
+// finger the device lacks, or the wake off posts nothing.
+TEST(SceneRenderer, AHandThatMovesWakesTheBridgeTheStepAfter) {
+  const auto dir = LabDir("motion");
+  world::SceneModelsOptions options;
+  options.cache_dir = dir / "cache";
+  SceneRenderer r(scene::LoadScene(WriteLab(dir, kGroundAndBlock)), options);
+  auto wake = std::make_shared<common::Wakeup>();
+  r.SetWakeup(wake);
+  std::array<Eigen::Vector3d, kFingers> f{};
+  DeviceReading hand;
+  hand.valid = true;
+  hand.p_WH = Eigen::Vector3d(1.0, 1.0, 1.2);  // far from everything
+  for (auto& p : hand.p_WE) p = Eigen::Vector3d(1.0, 1.0, 1.0);
+  std::uint64_t t_ns = common::SteadyNowNs();
+  long allocations = 0;
+  auto step = [&] {
+    t_ns += 1'000'000;
+    const long before = testing::AllocationCount();
+    r.Render(0.0, 1e-3, t_ns, hand, f);
+    allocations += testing::AllocationCount() - before;
+  };
+  auto move_base = [&](double dx_m) {
+    hand.p_WH.x() += dx_m;
+    for (auto& p : hand.p_WE) p.x() += dx_m;
+  };
+  for (int i = 0; i < 10; ++i) {
+    move_base(2e-3);
+    step();
+  }
+  EXPECT_EQ(wake->posts(), 0u) << "the motion wake is off by default";
+  EXPECT_FALSE(r.TakeMotion());
+
+  const std::uint64_t gap_ns = 10'000'000;
+  r.SetMotionWake(0.5e-3, gap_ns);
+  step();
+  EXPECT_EQ(wake->posts(), 0u) << "the first step's state is not out yet";
+  step();
+  ASSERT_EQ(wake->posts(), 1u) << "the hand's first state once the wake is on";
+  EXPECT_TRUE(r.TakeMotion());
+  EXPECT_FALSE(r.TakeMotion()) << "taken once";
+  for (int i = 0; i < 30; ++i) step();
+  EXPECT_EQ(wake->posts(), 1u) << "a hand at rest";
+  EXPECT_FALSE(r.TakeMotion());
+
+  // 0.09 mm a step: the step that passes 0.5 mm moves it; the one after posts.
+  int steps = 0;
+  while (wake->posts() == 1u && steps < 20) {
+    move_base(0.9e-4);
+    step();
+    ++steps;
+  }
+  EXPECT_EQ(steps, 7) << "posted at the step after the sixth 0.09 mm (0.54 mm > 0.5 mm)";
+  EXPECT_TRUE(r.TakeMotion());
+
+  // Moving on fast: no post sooner than the gap after the last.
+  const std::uint32_t posts = wake->posts();
+  for (int i = 0; i < 9; ++i) {
+    move_base(1e-3);
+    step();
+  }
+  EXPECT_EQ(wake->posts(), posts) << "within the gap";
+  move_base(1e-3);
+  step();  // 10 ms after the post: this step moved past the threshold
+  move_base(1e-3);
+  step();
+  EXPECT_EQ(wake->posts(), posts + 1) << "the gap passed";
+  EXPECT_TRUE(r.TakeMotion());
+
+  // One fingertip closing alone wakes it; a finger the device lacks does not.
+  for (int i = 0; i < 20; ++i) step();
+  const std::uint32_t still = wake->posts();
+  hand.finger_mask = 0b00011;  // thumb and index only
+  hand.p_WE[4].z() -= 5e-3;
+  for (int i = 0; i < 3; ++i) step();
+  EXPECT_EQ(wake->posts(), still) << "the little finger is not this device's";
+  hand.p_WE[1].z() -= 1e-3;
+  step();
+  step();
+  EXPECT_EQ(wake->posts(), still + 1) << "the index fingertip moved 1 mm";
+  EXPECT_TRUE(r.TakeMotion());
+
+  r.SetMotionWake(0.0, gap_ns);
+  for (int i = 0; i < 20; ++i) {
+    move_base(1e-3);
+    step();
+  }
+  EXPECT_EQ(wake->posts(), still + 1) << "the motion wake turned off";
+  EXPECT_EQ(allocations, 0);
+  std::filesystem::remove_all(dir);
+}
+
 // The coupling path between ticks: the haptic step posts the bridge's wake-up when a finger
 // starts or stops touching an object, and after every step while the bridge asks for it (a
 // peer shares the object), without allocating; a report with nothing new posts nothing.

@@ -122,6 +122,18 @@ class SceneRenderer final : public ForceRenderer {
   /// Bridge side, any time: post after every step (a peer's loop solves an object with this
   /// hand's contacts: every report is offered to the deadband), or only on touch changes.
   void SetReportWake(bool every_step) noexcept { report_wake_.store(every_step, std::memory_order_relaxed); }
+  /// Bridge side, any time: post the wake-up, too, when the hand (its base or a fingertip it
+  /// has) has moved more than threshold_m since the last such post, and no sooner than
+  /// min_gap_ns after it. The post comes one step after the step that moved the hand, so the
+  /// loop has published that step's snapshot by then: a screen that draws this hand gets its
+  /// motion without waiting for a tick (docs/devices.md, "Motion to photon"). threshold_m <= 0
+  /// (the default): off.
+  void SetMotionWake(double threshold_m, std::uint64_t min_gap_ns) noexcept {
+    motion_gap_ns_.store(min_gap_ns, std::memory_order_relaxed);
+    motion_wake_m_.store(threshold_m, std::memory_order_relaxed);
+  }
+  /// Bridge side: whether the haptic step posted a motion wake since the last call.
+  bool TakeMotion() noexcept { return motion_posted_.exchange(false, std::memory_order_acq_rel); }
   bool TakeEvent(controls::ControlEvent& out) noexcept { return events_.Pop(out); }
   void SetRemote(const RemoteContacts& remote) noexcept { remote_in_.Write(remote); }
   /// The bodies to follow from the next step on (an empty set: this hand simulates them all).
@@ -151,6 +163,7 @@ class SceneRenderer final : public ForceRenderer {
  private:
   void WriteLoads(const contact::HapticWorld& world) noexcept;
   void PostReport(const ContactReport& r) noexcept;
+  void PostMotion(const DeviceReading& reading, std::uint64_t now_ns) noexcept;
 
   scene::Scene scene_;
   common::SessionClock clock_;
@@ -191,6 +204,14 @@ class SceneRenderer final : public ForceRenderer {
   std::shared_ptr<common::Wakeup> wake_;
   std::atomic<bool> report_wake_{false};
   std::array<std::int32_t, kFingers> touched_{-1, -1, -1, -1, -1};  // each finger's object at the last report
+  // The motion wake (SetMotionWake): the bridge's settings, the haptic thread's state.
+  std::atomic<double> motion_wake_m_{0.0};
+  std::atomic<std::uint64_t> motion_gap_ns_{0};
+  std::atomic<bool> motion_posted_{false};
+  std::array<Eigen::Vector3d, kFingers + 1> motion_from_{};  // hand base, then fingertips, at the last post
+  bool motion_from_set_ = false;
+  bool motion_due_ = false;  // the last step moved the hand: post at this step
+  std::uint64_t motion_posted_ns_ = 0;
   std::uint64_t seq_ = 0;
   std::uint64_t peer_stamp_ns_ = 0;  // the newest peer set used, and the step that first used it
   std::uint64_t peer_seen_ns_ = 0;
