@@ -22,6 +22,9 @@ int main(int argc, char** argv) {
              "joining (a secured join whose handshake never finished; 0: never)", "15")
       .Value("stereo", "MODE", "mono, side-by-side or anaglyph", "mono")
       .Value("language", "en|ja", "the message board's language shown", "en")
+      .Value("frame-pacing", "states|clock",
+             "window: draw a hand's new state as it arrives (states: up to twice --fps) or only at --fps (clock)",
+             "states")
       .Value("view", "spectator|user:NAME",
              "whose view: the spectator's, or a user's own (from their eye, following their hand)", "spectator")
       .Value("eye", "X,Y,Z", "user view: the eye in the hand base's frame [m] (fingers along +y, up +z)",
@@ -57,6 +60,7 @@ int main(int argc, char** argv) {
     c.state_out = o.GetString("state-out");
     c.frame_log = o.GetString("frame-log");
     c.language = o.GetChoice("language", {"en", "ja"});
+    c.frames_follow_states = o.GetChoice("frame-pacing", {"states", "clock"}) == "states";
     const std::string view = o.GetString("view");
     if (view.rfind("user:", 0) == 0 && view.size() > 5) {
       c.view_user = view.substr(5);

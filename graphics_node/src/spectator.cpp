@@ -183,6 +183,21 @@ class WorldView {
   /// (it must only signal; this thread takes the states in Update).
   void OnDeviceState(std::function<void()> notify) { device_reader_.OnDataAvailable(std::move(notify)); }
 
+  /// The user whose hand a frame follows: `user` (a user's view), or, for a spectator (""),
+  /// the one whose state is the newest.
+  std::string FrameUser(const std::string& user) const {
+    if (!user.empty()) return user;
+    std::string newest;
+    std::uint64_t stamp = 0;
+    for (const auto& [name, hand] : hands_) {
+      if (hand.state.stamp_ns() > stamp) {
+        stamp = hand.state.stamp_ns();
+        newest = name;
+      }
+    }
+    return newest;
+  }
+
   /// The stamp of a user's newest device state (0: none).
   std::uint64_t HandStamp(const std::string& user) const {
     const auto it = hands_.find(user);
@@ -370,7 +385,7 @@ dds::Writer<msg::DeskInput> MakeDeskWriter(dds::Participant& participant) {
 struct SpectatorLink {
   /// fps: the frame rate, announced so that haptic nodes send device states no faster.
   SpectatorLink(const common::SessionOptions& where, const std::filesystem::path& assets_dir, const std::string& name,
-                double fps, const std::string& language, bool desk)
+                double fps, const std::string& language, bool desk, bool draw_on_state)
       : participant(where, "graphics_node/" + name),  // the role picks its identity
         world(participant, assets_dir, name, where.session, language),
         member(participant, name, msg::NODE_GRAPHICS, "", fps),
@@ -379,9 +394,9 @@ struct SpectatorLink {
             [&name](const std::string& line) { std::fprintf(stderr, "[graphics_node %s] %s\n", name.c_str(), line.c_str()); },
             "no rejoin when a member stays unheard")),
         desk_writer(desk ? MakeDeskWriter(participant) : dds::Writer<msg::DeskInput>{}) {
-    // A desk's view draws the person's hand as soon as its new state is here, not when the
-    // next frame is due: the reader's listener wakes the window's wait.
-    if (desk) {
+    // A window draws a hand as soon as its new state is here, not when the next frame is due:
+    // the reader's listener wakes the window's wait.
+    if (draw_on_state) {
       world.OnDeviceState([arrived = device_arrived] {
         arrived->store(true);
         render::WindowRenderer::Wake();
@@ -395,7 +410,7 @@ struct SpectatorLink {
   dds::MemberAnnouncement member;
   dds::Reader<msg::SessionRoster> roster;  // the world server's members: to rejoin if one stays unheard
   dds::Writer<msg::DeskInput> desk_writer;  // --input desk: the person's input, to their haptic node
-  /// --input desk: a device state arrived since the view last took them (set by the listener).
+  /// A window: a device state arrived since the view last took them (set by the listener).
   std::shared_ptr<std::atomic<bool>> device_arrived = std::make_shared<std::atomic<bool>>(false);
 };
 
@@ -567,7 +582,7 @@ int Spectator::Run() {
 
   const auto open_link = [&] {
     return std::make_unique<SpectatorLink>(config_.where, assets_dir, name, config_.fps, config_.language,
-                                           config_.desk_input);
+                                           config_.desk_input, !config_.headless && config_.frames_follow_states);
   };
   auto link = open_link();
   node::RejoinClock rejoin(config_.rejoin_after);
@@ -690,13 +705,14 @@ int Spectator::Run() {
     window.Render(link->world.Build(desk_user, help), frame_camera);
     if (frame_log.is_open()) {
       frame_log << frames_shown << "," << common::SteadyNowNs() << ",";
-      if (const auto p = link->world.HandBase(config_.view_user)) {
+      const std::string frame_user = link->world.FrameUser(config_.view_user);
+      if (const auto p = link->world.HandBase(frame_user)) {
         frame_log << p->x() << "," << p->y() << "," << p->z() << ",";
       } else {
         frame_log << ",,,";
       }
       const Eigen::Vector3d anchor = render::ProjectToImage(frame_camera, Eigen::Vector3d::Zero());
-      frame_log << anchor.x() << "," << anchor.y() << "," << link->world.HandStamp(config_.view_user) << "\n";
+      frame_log << anchor.x() << "," << anchor.y() << "," << link->world.HandStamp(frame_user) << "\n";
     }
     ++frames_shown;
     // What the person did, to their haptic node: every frame, so that a quiet desk is noticed
@@ -720,26 +736,29 @@ int Spectator::Run() {
     };
     if (config_.desk_input) send_input();
     next += period;
-    if (config_.desk_input) {
-      // Until the next frame is due: the person's input goes out as it arrives, and a new state
-      // of their own hand is drawn at once (from half a frame period after the last frame
-      // began: at most twice the frame rate, however fast states come; the haptic node sends
-      // them at the view's rate): the frames follow the hand's states, not a clock of their own.
-      const std::uint64_t drawn = link->world.HandStamp(config_.view_user);
-      const auto earliest = frame_start + period / 2;
-      for (auto now = Clock::now(); now < next; now = Clock::now()) {
-        const auto until = link->device_arrived->load() ? std::min(next, std::max(now, earliest)) : next;
-        if (window.WaitForInput(std::chrono::duration<double>(until - now).count()) && !pad) send_input();
-        if (!link->device_arrived->load() || Clock::now() < earliest) continue;
-        link->device_arrived->store(false);
-        link->world.Update();
-        if (link->world.HandStamp(config_.view_user) != drawn) {
-          next = Clock::now();  // this frame now; the one after a period later
-          break;
-        }
+    // Until the next frame is due: the person's input goes out as it arrives, and a new state of
+    // a hand (a user's view: their own; a spectator: anyone's) is drawn at once, from half a
+    // frame period after the last frame began: at most twice the frame rate however fast states
+    // come (a haptic node sends them no faster than the fastest view draws). The frames follow
+    // the hands' states, not a clock of their own (docs/devices.md, "Motion to photon").
+    const std::string followed = config_.view_user;  // "": any hand
+    const auto newest_stamp = [&] {
+      return followed.empty() ? link->world.HandStamp(link->world.FrameUser("")) : link->world.HandStamp(followed);
+    };
+    const std::uint64_t drawn = newest_stamp();
+    const auto earliest = frame_start + period / 2;
+    for (auto now = Clock::now(); now < next; now = Clock::now()) {
+      const auto until = link->device_arrived->load() ? std::min(next, std::max(now, earliest)) : next;
+      if (window.WaitForInput(std::chrono::duration<double>(until - now).count()) && config_.desk_input && !pad) {
+        send_input();
       }
-    } else {
-      std::this_thread::sleep_until(next);
+      if (!link->device_arrived->load() || Clock::now() < earliest) continue;
+      link->device_arrived->store(false);
+      link->world.Update();
+      if (newest_stamp() != drawn) {
+        next = Clock::now();  // this frame now; the one after a period later
+        break;
+      }
     }
   }
   if (config_.desk_input) desk_sender.Release(link->desk_writer);

@@ -49,8 +49,13 @@ struct SpectatorConfig {
   /// lands in the frame, anchor_x_px, anchor_y_px (a user's view follows the hand: the scene
   /// moves on the screen when the hand does), and the stamp of the hand's device state drawn,
   /// hand_stamp_ns (the haptic loop's steady clock: the same clock on one machine).
-  /// bench/graphics/motion_to_photon.py reads it.
+  /// bench/graphics/motion_to_photon.py reads it. A spectator logs the hand whose state is the
+  /// newest (bench/graphics/spectator_to_photon.py).
   std::filesystem::path frame_log;
+  /// A window draws a new state of a hand (a user's view: their own; a spectator: anyone's) as
+  /// it arrives, from half a period after the last frame began (up to twice fps); false: only
+  /// at the frame clock (fps), for a machine that cannot spare the frames.
+  bool frames_follow_states = true;
 };
 
 /// $HANDSHARE_ASSETS if set, else the installed or source tree's assets (common::AssetsDir, as
