@@ -106,6 +106,8 @@ def main():
     frames = 0
     with open(frame_log) as f:
         for r in csv.DictReader(f):
+            if r.get("draw_ms") is None:
+                continue  # the last row, cut off when the spectator was stopped
             t_ns, stamp = int(r["t_ns"]), int(r["hand_stamp_ns"] or 0)
             if not (t_start <= t_ns <= t_end) or stamp == 0:
                 last_stamp = max(last_stamp, stamp)

@@ -682,7 +682,7 @@ int Spectator::Run() {
   if (!config_.frame_log.empty()) {
     frame_log.open(config_.frame_log);
     if (!frame_log) throw std::runtime_error("cannot write " + config_.frame_log.string() + " (option --frame-log)");
-    frame_log << "frame,t_ns,hand_x_m,hand_y_m,hand_z_m,anchor_x_px,anchor_y_px,hand_stamp_ns\n" << std::setprecision(9);
+    frame_log << "frame,t_ns,hand_x_m,hand_y_m,hand_z_m,anchor_x_px,anchor_y_px,hand_stamp_ns,draw_ms\n" << std::setprecision(9);
   }
   std::uint64_t frames_shown = 0;
   auto next = Clock::now();
@@ -712,7 +712,8 @@ int Spectator::Run() {
         frame_log << ",,,";
       }
       const Eigen::Vector3d anchor = render::ProjectToImage(frame_camera, Eigen::Vector3d::Zero());
-      frame_log << anchor.x() << "," << anchor.y() << "," << link->world.HandStamp(frame_user) << "\n";
+      frame_log << anchor.x() << "," << anchor.y() << "," << link->world.HandStamp(frame_user) << ","
+                << std::chrono::duration<double, std::milli>(Clock::now() - frame_start).count() << "\n";
     }
     ++frames_shown;
     // What the person did, to their haptic node: every frame, so that a quiet desk is noticed

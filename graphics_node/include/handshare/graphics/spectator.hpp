@@ -48,7 +48,8 @@ struct SpectatorConfig {
   /// hand_x_m, hand_y_m, hand_z_m as drawn (blank without a hand), and where the world's origin
   /// lands in the frame, anchor_x_px, anchor_y_px (a user's view follows the hand: the scene
   /// moves on the screen when the hand does), and the stamp of the hand's device state drawn,
-  /// hand_stamp_ns (the haptic loop's steady clock: the same clock on one machine).
+  /// hand_stamp_ns (the haptic loop's steady clock: the same clock on one machine), and how
+  /// long the frame took from its start to the swap, draw_ms.
   /// bench/graphics/motion_to_photon.py reads it. A spectator logs the hand whose state is the
   /// newest (bench/graphics/spectator_to_photon.py).
   std::filesystem::path frame_log;
