@@ -352,17 +352,21 @@ void HapticBridge::PublishDeviceState(bool moved) {
   const double rate_Hz = config_.paced_streams
                              ? session::DeviceStateRate(readers, viewers.count, viewers.fastest_Hz, config_.publish_Hz)
                              : (readers > 0 ? config_.publish_Hz : 0.0);
-  // A hand that moves: its state leaves on the haptic step's wake-up, a period after the last
-  // such wake-up and half a period after any send; the paced slots start again a period after
-  // it, so the rate stays the same. A hand at rest: at the ticks, paced (docs/devices.md,
-  // "Motion to photon").
+  // A hand that moves: its state leaves on the haptic step's wake-up (the step posts it at most
+  // once a period), and the paced sends pause while it moves (until one and a half periods
+  // after the last such send), so the rate stays the viewers'. A hand at rest: at the ticks,
+  // paced (docs/devices.md, "Motion to photon").
   const std::uint64_t now_ns = common::SteadyNowNs();
   const std::uint64_t period_ns = rate_Hz > 0.0 ? static_cast<std::uint64_t>(1e9 / rate_Hz) : 0;
   if (renderer_ && config_.coupling_on_wake) renderer_->SetMotionWake(rate_Hz > 0.0 ? kMotionWake_m : 0.0, period_ns);
-  const bool send = moved ? rate_Hz > 0.0 && now_ns >= state_sent_ns_ + period_ns / 2 : state_pacer_.Due(now_ns, rate_Hz);
+  bool send = false;
+  if (moved) {
+    send = rate_Hz > 0.0;
+    if (send) moved_sent_ns_ = now_ns;
+  } else {
+    send = state_pacer_.Due(now_ns, rate_Hz) && now_ns >= moved_sent_ns_ + period_ns + period_ns / 2;
+  }
   if (send) {
-    if (moved) state_pacer_.Sent(now_ns, rate_Hz);
-    state_sent_ns_ = now_ns;
     state_writer_.Write(state_msg_);
     ++device_states_published_;
     if (moved) ++device_states_on_motion_;

@@ -213,7 +213,7 @@ class HapticBridge {
   Clock::time_point next_stats_;
   std::uint64_t device_states_published_ = 0;
   std::uint64_t device_states_on_motion_ = 0;
-  std::uint64_t state_sent_ns_ = 0;  // steady clock of the last device state sent
+  std::uint64_t moved_sent_ns_ = 0;  // steady clock of the last device state sent as the hand moved
   std::uint64_t control_events_sent_ = 0;
   std::deque<msg::ControlEvent> held_events_;  // taken, not yet written: no reader matched
   std::uint64_t held_events_dropped_ = 0;

@@ -170,5 +170,88 @@ TEST_F(BridgeCoupling, ADeskInputWakesTheBridgeAndReachesTheDevice) {
   EXPECT_TRUE(reading.valid) << "the desk's hand is not live after its first input";
 }
 
+// What a screen shows of a hand: a desk hand that moves sends its device state on the haptic
+// step's motion wake-up (the step after it moved half a millimetre), with no tick, and while it
+// moves the paced ticks send nothing more, so the rate stays the viewers' (here 100 Hz: a reader
+// that did not say its frame rate). Without the motion wake-up no state leaves between ticks.
+TEST_F(BridgeCoupling, AMovingHandsStateLeavesOnTheStepsWakeAtTheViewersRate) {
+  const std::string session = "motion_" + std::to_string(getpid());
+  const HapticNodeConfig config = AliceIn(session);
+  dds::Participant alice_p(config.where, "haptic_node/alice");
+  dds::Participant view_p(kDomain, session, "graphics_node/view-alice");
+  DeskDevice device;
+  HapticLoop loop(device, HapticLoopConfig{1000.0, false});
+  HapticBridge bridge(config, device, loop, alice_p, nullptr, [](const std::string&) {});
+  auto scene_writer = dds::MakeWriter<msg::SceneState>(view_p, dds::topics::kSceneState);
+  auto state_reader = dds::MakeReader<msg::DeviceState>(view_p, dds::topics::kDeviceState);
+  msg::SceneState scene;
+  scene.session(session);
+  scene.scene("lab");
+  scene.revision(1);
+  scene.gravity_W_m_per_s2({0.0, 0.0, -9.81});
+  scene.tick_Hz(60.0f);
+  scene_writer.Write(scene);
+  const auto give_up = Clock::now() + 60s;
+  while (!bridge.heard_world_server() && Clock::now() < give_up) {
+    bridge.Tick();
+    std::this_thread::sleep_for(10ms);
+  }
+  ASSERT_TRUE(bridge.heard_world_server()) << "no scene state in 60 s";
+  while (state_reader.matched_writers() == 0 && Clock::now() < give_up) std::this_thread::sleep_for(10ms);
+  ASSERT_GT(state_reader.matched_writers(), 0) << "the view's reader never matched alice's device states";
+
+  // The hand at rest, high above the block.
+  DeskTarget target;
+  target.p_WH_m = {0.1, 0.1, 0.3};
+  target.received_ns = common::SteadyNowNs();
+  device.Post(target);
+  double t_s = 0.0;
+  for (int k = 0; k < 20; ++k) loop.Step(t_s += 1e-3);
+  bridge.Tick();  // the motion wake-up is set with the rate
+  while (bridge.WaitForCoupling(Clock::now())) bridge.Couple();
+  for (int k = 0; k < 20; ++k) loop.Step(t_s += 1e-3);
+  while (bridge.WaitForCoupling(Clock::now())) bridge.Couple();
+  const std::uint64_t on_motion_before = bridge.device_states_on_motion();
+  const std::uint64_t published_before = bridge.device_states_published();
+
+  // 60 mm to the side (a quarter of a second at the desk's 0.25 m/s): the loop steps at 1 kHz,
+  // the bridge takes only its wake-ups.
+  target.p_WH_m = {0.16, 0.1, 0.3};
+  target.received_ns = common::SteadyNowNs();
+  device.Post(target);
+  int first_at = -1;
+  std::this_thread::sleep_for(20ms);  // longer than a period since the hand's last motion wake-up
+  for (int k = 0; k < 40 && first_at < 0; ++k) {
+    loop.Step(t_s += 1e-3);
+    while (bridge.WaitForCoupling(Clock::now())) bridge.Couple();
+    if (bridge.device_states_on_motion() > on_motion_before) first_at = k;
+    std::this_thread::sleep_for(1ms);  // the loop's period, on the clock the wake-ups are spaced by
+  }
+  ASSERT_GE(first_at, 0) << "no device state left on a motion wake-up within 40 steps of the move";
+  // The desk's filter moves the hand 0.5 mm in about 12 ms (6 m/s^2): the state leaves the step
+  // after, not at a tick up to a period later.
+  EXPECT_LE(first_at, 20);
+
+  // Moving on for 150 ms of real time with the bridge's 100 Hz ticks as well: no more states
+  // than the rate allows, and the moving hand's states are sent on its motion.
+  const auto start = Clock::now();
+  auto next_tick = start + 10ms;
+  const std::uint64_t published_moving = bridge.device_states_published();
+  while (Clock::now() - start < 150ms) {
+    loop.Step(t_s += 1e-3);
+    while (bridge.WaitForCoupling(Clock::now())) bridge.Couple();
+    if (Clock::now() >= next_tick) {
+      bridge.Tick();
+      next_tick += 10ms;
+    }
+    std::this_thread::sleep_for(1ms);
+  }
+  const double elapsed_s = std::chrono::duration<double>(Clock::now() - start).count();
+  const std::uint64_t sent = bridge.device_states_published() - published_moving;
+  EXPECT_LE(static_cast<double>(sent), elapsed_s * 100.0 + 2.0) << "faster than the viewers' 100 Hz";
+  EXPECT_GE(bridge.device_states_on_motion() - on_motion_before, sent / 2) << "the ticks, not the motion, sent them";
+  EXPECT_GT(bridge.device_states_published(), published_before);
+}
+
 }  // namespace
 }  // namespace handshare::haptic

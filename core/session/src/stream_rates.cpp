@@ -57,9 +57,4 @@ bool StreamPacer::Due(std::uint64_t now_ns, double rate_Hz) {
   return true;
 }
 
-void StreamPacer::Sent(std::uint64_t now_ns, double rate_Hz) {
-  if (!(rate_Hz > 0.0) || rate_Hz >= tick_Hz_) return;
-  next_ns_ = now_ns + static_cast<std::uint64_t>(std::llround(1e9 / rate_Hz));
-}
-
 }  // namespace handshare::session

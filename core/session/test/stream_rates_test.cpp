@@ -101,18 +101,5 @@ TEST(StreamPacer, ALateTickMakesNoBurst) {
   EXPECT_TRUE(pacer.Due(2'100'000'000ull, 10.0));
 }
 
-// A send outside the slots (a hand's state sent as it moved) starts the slots again a period
-// after it: ticks and such sends together keep the rate.
-TEST(StreamPacer, ASendOnAnEventMovesTheNextSlot) {
-  StreamPacer pacer(100.0);
-  ASSERT_TRUE(pacer.Due(1'000'000'000ull, 20.0));  // slots every 50 ms
-  pacer.Sent(1'030'000'000ull, 20.0);
-  EXPECT_FALSE(pacer.Due(1'050'000'000ull, 20.0)) << "20 ms after the send: its slot has moved";
-  EXPECT_FALSE(pacer.Due(1'070'000'000ull, 20.0));
-  EXPECT_TRUE(pacer.Due(1'080'000'000ull, 20.0)) << "a period after the send";
-  pacer.Sent(1'085'000'000ull, 100.0);  // at the tick rate every tick is due anyway
-  EXPECT_TRUE(pacer.Due(1'090'000'000ull, 100.0));
-}
-
 }  // namespace
 }  // namespace handshare::session

@@ -51,8 +51,6 @@ class StreamPacer {
   /// rate_Hz <= 0: never due; at or above the tick rate: due on every tick. A tick up to half
   /// a tick period early for its slot counts as on time (the ticks jitter).
   bool Due(std::uint64_t now_ns, double rate_Hz);
-  /// A send outside the slots (a state sent on an event): the next slot is a period after it.
-  void Sent(std::uint64_t now_ns, double rate_Hz);
   /// Sends the next offer at once (a new scene, a stream that restarts).
   void Reset() { next_ns_ = 0; }
 
