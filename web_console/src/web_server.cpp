@@ -284,7 +284,6 @@ class HttpSession : public std::enable_shared_from_this<HttpSession<Stream>> {
     if (origin != req.end()) o = std::string_view(origin->value().data(), origin->value().size());
     const std::string_view host(req[http::field::host].data(), req[http::field::host].size());
     if (!OriginAllowed(o, host, kIsTls<Stream>)) {
-      ++server_.refused_;
       return Send(server_.Reply(req, http::status::forbidden, ErrorJson("Origin is not this console"), "application/json"));
     }
     beast::get_lowest_layer(stream_).expires_never();  // the WebSocket's own timeouts from here
@@ -292,8 +291,7 @@ class HttpSession : public std::enable_shared_from_this<HttpSession<Stream>> {
   }
 
   void Refuse(http::status status, const std::string& why) {
-    ++server_.refused_;
-    Request none;
+    Request none;  // counted as refused by Send, as every 4xx
     Response res = server_.Reply(none, status, ErrorJson(why), "application/json");
     res.keep_alive(false);
     Send(std::move(res));

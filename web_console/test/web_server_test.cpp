@@ -108,12 +108,22 @@ TEST_F(WebServerTest, AWorldChangeNeedsTheTokenAndAWellFormedBody) {
   EXPECT_EQ(ok.result_int(), 202u);
   EXPECT_EQ(actions_, 1);
   EXPECT_EQ(last_world_, "dinosaur");
-  // Another site's page may not act, even with the token.
+}
+
+TEST_F(WebServerTest, AnotherSitesPageMayNotActEvenWithTheToken) {
+  Start();
+  const std::string body = R"({"world":"dinosaur"})";
   EXPECT_EQ(Request(http::verb::post, "/api/world", body,
                     {{"Content-Type", "application/json"}, {"Authorization", std::string("Bearer ") + kToken},
                      {"Origin", "http://evil.example"}})
                 .result_int(),
             403u);
+  EXPECT_EQ(actions_, 0);
+  EXPECT_EQ(Request(http::verb::post, "/api/world", body,
+                    {{"Content-Type", "application/json"}, {"Authorization", std::string("Bearer ") + kToken},
+                     {"Origin", "http://127.0.0.1:" + std::to_string(server_->port())}})
+                .result_int(),
+            202u);  // the console's own page
   EXPECT_EQ(actions_, 1);
 }
 
