@@ -11,7 +11,13 @@ tls: the console with --tls-cert/--tls-key: HTTPS and WSS only. A client that tr
 certificate reads the state; a plain HTTP request to the port gets no answer; the page in
 chromium goes live over WSS and shows the world.
 
-usage: web_console_test.py operator|tls --bin-dir DIR --domain D --work DIR
+view: the live 3-D view at / in chromium with software WebGL (SwiftShader): it draws the start
+menu (every object and control, the meshes loaded from the glTF files the console exported),
+and alice's five fingertip spheres (where three.js has them in its scene) where her haptic
+node's trace has her fingertips while her hand holds still;
+with --screenshot FILE it saves what it drew.
+
+usage: web_console_test.py operator|tls|view --bin-dir DIR --domain D --work DIR
 """
 import json
 import os
@@ -25,7 +31,7 @@ import urllib.request
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 sys.path.insert(0, HERE)
-from session_test import DATA, check, run_cases, wait_until  # noqa: E402
+from session_test import DATA, check, last_trace_row, run_cases, settled_since, wait_until  # noqa: E402
 
 from selenium import webdriver  # noqa: E402  (python3-selenium, deploy/install_deps.sh)
 from selenium.webdriver.chrome.service import Service  # noqa: E402
@@ -42,7 +48,7 @@ def start_browser(work, extra_flags=()):
     options = webdriver.ChromeOptions()
     options.binary_location = CHROMIUM
     for flag in (*extra_flags, "--headless", "--no-sandbox", "--disable-gpu", "--disable-dev-shm-usage",
-                 "--window-size=1280,900", f"--user-data-dir={os.path.join(work, 'chromium-profile')}"):
+                 "--window-size=1280,1400", f"--user-data-dir={os.path.join(work, 'chromium-profile')}"):
         options.add_argument(flag)
     options.set_capability("goog:loggingPrefs", {"browser": "ALL"})
     service = Service(CHROMEDRIVER, log_path=os.path.join(work, "chromedriver.log"))
@@ -64,13 +70,14 @@ def post_world(base, world, token):
 
 
 def page_station(driver, user):
-    """The page's row of `user`'s station as {column class: text}, or None."""
-    rows = driver.find_elements(By.CSS_SELECTOR, f'#stations tbody tr[data-user="{user}"]')
-    if not rows:
+    """The page's row of `user`'s station as {column: text}, or None. Read in one script: the page
+    redraws the table with every state, so elements found in one call are gone in the next."""
+    cells = driver.execute_script(
+        "const row = document.querySelector('#stations tbody tr[data-user=\"' + arguments[0] + '\"]');"
+        "return row ? Array.from(row.cells, (c) => c.textContent) : null;", user)
+    if not cells:
         return None
-    cells = rows[0].find_elements(By.TAG_NAME, "td")
-    return {"user": cells[0].text, "device": cells[1].text, "rate": cells[2].text, "jitter": cells[3].text,
-            "age": cells[9].text}
+    return {"user": cells[0], "device": cells[1], "rate": cells[2], "jitter": cells[3], "age": cells[9]}
 
 
 def send_from_page(driver, world, token):
@@ -140,6 +147,10 @@ def case_operator(h, domain):
         check(len(re.findall(r"control \S+ by operator-console", log)) == 1,
               "the world server applied other control events of the console than the one sent with the token")
         check("scene 'dinosaur'" not in log, "a world change without the right token reached the world server")
+        wait_until("the page showing the solar system's board", 20,
+                   lambda: "Moon" in driver.find_element(By.ID, "board-en").text)
+        driver.execute_script("window.scrollTo(0, 0);")
+        driver.save_screenshot(os.path.join(h.work, "operator.png"))
         errors = [e for e in driver.get_log("browser") if e["level"] == "SEVERE" and "/api/world" not in e["message"]]
         check(not errors, f"the page logged errors: {errors}")
     finally:
@@ -196,5 +207,56 @@ def case_tls(h, domain):
     print(f"tls: state over HTTPS, plain HTTP {plain}, the page live over WSS")
 
 
+TIP_TOLERANCE_M = 1e-5  # the trace prints 6 significant digits (under 1 um here); 10 um is far below a fingertip
+
+
+def case_view(h, domain):
+    session = f"it-webview-{os.getpid()}"
+    trace = os.path.join(h.work, "alice.csv")
+    h.start("world_server", "world_server", "--domain", domain, "--session", session)
+    h.start("alice", "haptic_node", "--domain", domain, "--session", session, "--user", "alice",
+            "--device", "sim", "--script", os.path.join(DATA, "alice.hand"), "--trace", trace)
+    h.start("console", "web_console", "--domain", domain, "--session", session, "--listen", "127.0.0.1:0")
+    h.wait_for_line("console", "listening on http://127.0.0.1:", 30)
+    port = int(re.search(r"listening on http://127\.0\.0\.1:(\d+)", h.log("console")).group(1))
+    h.wait_for_line("console", "world 'start_menu' revision 1", 30)
+    with urllib.request.urlopen(f"http://127.0.0.1:{port}/api/state", timeout=10) as r:
+        world = json.loads(r.read())["world"]
+    meshes = sum(1 for o in world["view"] if o["mesh"])
+    check(len(world["view"]) == 7 and meshes == 6,
+          f"the start menu's view has {len(world['view'])} objects, {meshes} meshes (the table and 6 controls expected)")
+    wait_until("alice's hand still at its hold pose", 60, lambda: settled_since(trace) >= 0.5, lambda: h.log("alice"))
+    tips = last_trace_row(trace)
+    driver = start_browser(h.work, ("--use-angle=swiftshader", "--enable-unsafe-swiftshader", "--ignore-gpu-blocklist"))
+    try:
+        driver.get(f"http://127.0.0.1:{port}/")
+        state = wait_until("the view with the start menu's meshes and alice's hand", 60, lambda: (lambda v: v if v and
+                           v["world"] == "start_menu" and v["meshesLoaded"] + v["meshesFailed"] == meshes and
+                           "alice" in v["hands"] and v["frames"] > 5 else None)(
+                               driver.execute_script("return window.handshareView || null;")),
+                           lambda: str(driver.execute_script("return window.handshareView || null;")) +
+                           str(driver.get_log("browser")))
+        check(state["meshesFailed"] == 0, f"{state['meshesFailed']} meshes did not load: {driver.get_log('browser')}")
+        shown = state["hands"]["alice"]
+        check(len(shown) == 5, f"the view draws {len(shown)} of alice's fingertips, not 5")
+        worst = max(abs(a - b) for p, q in zip(shown, tips) for a, b in zip(p, q))
+        check(worst <= TIP_TOLERANCE_M, f"the view's fingertips are up to {worst} m from the trace's: {shown} vs {tips}")
+        drawn = driver.execute_script(
+            "const c = document.getElementById('view'); const g = c.getContext('webgl2') || c.getContext('webgl');"
+            "return g !== null;")
+        check(drawn, "the canvas has no WebGL context")
+        errors = [e for e in driver.get_log("browser") if e["level"] == "SEVERE"]
+        check(not errors, f"the view logged errors: {errors}")
+        shot = os.environ.get("HANDSHARE_WEB_SCREENSHOT") or os.path.join(h.work, "view.png")
+        driver.save_screenshot(shot)
+    finally:
+        driver.quit()
+    check(h.stop("console", 30) == 0, "web_console failed")
+    check(h.stop("alice", 30) == 0, "haptic_node alice failed")
+    check(h.stop("world_server", 30) == 0, "world_server failed")
+    print(f"view: {state['objects']} objects, {state['meshesLoaded']} meshes from glTF, alice's 5 fingertips within "
+          f"{worst:.1e} m of her trace, {state['frames']} frames drawn; screenshot {shot}")
+
+
 if __name__ == "__main__":
-    sys.exit(run_cases({"operator": case_operator, "tls": case_tls}))
+    sys.exit(run_cases({"operator": case_operator, "tls": case_tls, "view": case_view}))

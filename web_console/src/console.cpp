@@ -1,10 +1,14 @@
 #include "handshare/web_console/console.hpp"
 
 #include <algorithm>
+#include <fstream>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <mutex>
+#include <optional>
+#include <set>
+#include <unistd.h>
 #include <stdexcept>
 
 #include <nlohmann/json.hpp>
@@ -18,6 +22,7 @@
 #include "handshare/scene/scene.hpp"
 #include "handshare/session/control_events.hpp"
 #include "handshare/web_console/console_state.hpp"
+#include "handshare/web_console/gltf_export.hpp"
 #include "handshare/web_console/web_server.hpp"
 #include "handshare/web_console/world_routes.hpp"
 
@@ -29,6 +34,8 @@ using Clock = std::chrono::steady_clock;
 constexpr auto kPushPeriod = std::chrono::milliseconds(200);  // at most 5 states a second to viewers
 constexpr auto kHeartbeat = std::chrono::seconds(1);          // at least one a second (stations age)
 constexpr auto kStationForgotten = std::chrono::seconds(30);  // no statistics this long: gone
+constexpr auto kHandsPeriod = std::chrono::milliseconds(50);  // the view's hands: at most 20 a second
+constexpr double kViewHz = 20.0;                               // announced: device states this often
 
 std::string ErrorJson(const std::string& error) {
   return nlohmann::json{{"error", error}}.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace);
@@ -52,6 +59,37 @@ std::string Hex(const dds::SampleMeta::Key& key) {
   for (const auto b : key) {
     out += kDigits[b >> 4];
     out += kDigits[b & 15];
+  }
+  return out;
+}
+
+// What the 3-D view draws of the world: the scene state's objects, controls included (at rest),
+// with the scene file's mesh scale; meshes by the URL of their exported .glb.
+std::vector<ViewObject> ViewOf(const msg::SceneState& state, const scene::Scene* file,
+                               const std::set<std::string>& exported) {
+  const auto url = [&](const std::string& mesh_uri) {
+    const std::string stem = std::filesystem::path(mesh_uri).stem().string();
+    return exported.count(stem) > 0 ? "/meshes/" + stem + ".glb" : std::string();
+  };
+  std::vector<ViewObject> out;
+  for (const auto& o : state.objects()) {
+    ViewObject v;
+    v.id = o.object_id().to_string();
+    v.kind = o.kind() == msg::OBJECT_RIGID ? "rigid" : o.kind() == msg::OBJECT_DEFORMABLE ? "deformable" : "control";
+    v.shape = o.shape().to_string();
+    if (v.shape == "mesh") v.mesh = url(o.mesh_uri().to_string());
+    for (int k = 0; k < 3; ++k) {
+      v.p_WO_m[k] = o.p_WO_m()[k];
+      v.half_extent_m[k] = o.half_extent_m()[k];
+      v.rgb[k] = o.rgb()[k];
+    }
+    for (int k = 0; k < 4; ++k) v.q_WO_wxyz[k] = o.q_WO_wxyz()[k];
+    if (file != nullptr) {
+      for (const auto& f : file->objects) {
+        if (f.id == v.id) v.mesh_scale = {f.mesh_scale.x(), f.mesh_scale.y(), f.mesh_scale.z()};
+      }
+    }
+    out.push_back(std::move(v));
   }
   return out;
 }
@@ -108,13 +146,14 @@ int Console::Run() {
   const std::string session = config_.where.session;
 
   dds::Participant participant(config_.where, "web_console/" + name);
-  // The console joins as a screen that reads no device states (view_Hz 0): the IDL has no kind
-  // of its own for it yet (docs/web_console.md, "Not done yet").
-  dds::MemberAnnouncement member(participant, name, msg::NODE_GRAPHICS);
+  // The console joins as a screen that reads device states for its 3-D view at 20 Hz: the IDL
+  // has no kind of its own for it yet (docs/web_console.md, "Not done yet").
+  dds::MemberAnnouncement member(participant, name, msg::NODE_GRAPHICS, "", kViewHz);
   auto scene_reader = dds::MakeReader<msg::SceneState>(participant, dds::topics::kSceneState);
   auto board_reader = dds::MakeReader<msg::MessageBoard>(participant, dds::topics::kMessageBoard);
   auto stats_reader = dds::MakeReader<msg::LoopStatistics>(participant, dds::topics::kLoopStatistics);
   auto member_reader = dds::MakeReader<msg::MemberInfo>(participant, dds::topics::kMemberInfo);
+  auto device_reader = dds::MakeReader<msg::DeviceState>(participant, dds::topics::kDeviceState);
   auto events = dds::MakeWriter<msg::ControlEvent>(participant, dds::topics::kControlEvent);
 
   std::mutex mutex;  // guards state (the DDS thread writes it, the web thread reads it)
@@ -133,7 +172,26 @@ int Console::Run() {
   web.files = {{"/", www / "index.html"},
                {"/operator", www / "operator.html"},
                {"/static/operator.js", www / "operator.js"},
-               {"/static/console.css", www / "console.css"}};
+               {"/static/console.css", www / "console.css"},
+               {"/static/view.js", www / "view.js"},
+               // three.js from Debian's libjs-three, at the paths its loader imports it from.
+               {"/three/build/three.module.js", std::filesystem::path(HANDSHARE_THREE_DIR) / "build/three.module.js"},
+               {"/three/examples/jsm/loaders/GLTFLoader.js",
+                std::filesystem::path(HANDSHARE_THREE_DIR) / "examples/jsm/loaders/GLTFLoader.js"}};
+  // Every mesh of the assets exported once to glTF 2.0, through a folder of this process's
+  // that the server reads at start and that goes right after.
+  std::set<std::string> exported;
+  const auto glb_dir = std::filesystem::temp_directory_path() / ("handshare-web-console-" + std::to_string(getpid()));
+  std::filesystem::create_directories(glb_dir);
+  const auto mesh_dir = common::AssetsDir() / "meshes";
+  for (const auto& entry : std::filesystem::directory_iterator(mesh_dir)) {
+    if (entry.path().extension() != ".obj") continue;
+    const std::string stem = entry.path().stem().string();
+    const std::string glb = ExportGlb(entry.path());
+    std::ofstream(glb_dir / (stem + ".glb"), std::ios::binary).write(glb.data(), static_cast<std::streamsize>(glb.size()));
+    web.files["/meshes/" + stem + ".glb"] = glb_dir / (stem + ".glb");
+    exported.insert(stem);
+  }
 
   const auto state_json = [&] {
     std::lock_guard lock(mutex);
@@ -171,7 +229,16 @@ int Console::Run() {
     say("the operator sends the session from '" + from + "' to '" + r.world + "' (control " + route.control_id + ")");
     return {202, nlohmann::json{{"world", r.world}, {"control", route.control_id}, {"from", from}}.dump()};
   };
-  WebServer server(web, state_json, change_world);
+  std::optional<WebServer> server_or;
+  try {
+    server_or.emplace(web, state_json, change_world);
+  } catch (...) {
+    std::filesystem::remove_all(glb_dir);
+    throw;
+  }
+  std::filesystem::remove_all(glb_dir);
+  WebServer& server = *server_or;
+  say(std::to_string(exported.size()) + " meshes exported to glTF 2.0 for the view at /");
   say(std::string("listening on ") + (server.tls() ? "https://" : "http://") +
       (listen.address.find(':') != std::string::npos ? "[" + listen.address + "]" : listen.address) + ":" +
       std::to_string(server.port()) + " (the operator's page: /operator; actions " +
@@ -179,6 +246,9 @@ int Console::Run() {
 
   dds::SampleMeta meta;
   dds::DroppedSamples dropped;
+  std::optional<scene::Scene> world_file;  // the current world's scene file, if the console has it
+  std::map<std::string, HandView> hands;   // by DeviceState instance (its user); the DDS thread's only
+  bool hands_changed = false;
   const auto sender = [](const dds::SampleMeta& m) { return "participant " + dds::ParticipantOf(m.writer); };
   // Takes every new sample into the state; true if anything changed.
   const auto take = [&]() {
@@ -201,15 +271,17 @@ int Console::Run() {
       w.objects = scene.objects().size();
       if (new_world) {
         try {
-          const scene::Scene file = scene::LoadSceneByName(scene_name, scene::DefaultSceneDir(), {.load_meshes = false});
-          w.title = file.title;
-          state.routes = WorldRoutes(file);
+          world_file = scene::LoadSceneByName(scene_name, scene::DefaultSceneDir(), {.load_meshes = false});
+          w.title = world_file->title;
+          state.routes = WorldRoutes(*world_file);
         } catch (const std::exception& e) {
+          world_file.reset();
           w.title.clear();
           state.routes.clear();
           say("cannot read the world '" + scene_name + "' (" + e.what() + "): no world changes from it");
         }
       }
+      w.view = ViewOf(scene, world_file ? &*world_file : nullptr, exported);
       char line[160];
       std::snprintf(line, sizeof line, "world '%s' revision %u (server tick %.0f Hz)", scene_name.c_str(),
                     scene.revision(), static_cast<double>(scene.tick_Hz()));
@@ -240,6 +312,26 @@ int Console::Run() {
       }
       state.members[key] = MemberRow{info.user().to_string(), dds::ToString(info.kind()), info.device().to_string()};
       changed = true;
+    }
+    msg::DeviceState device;
+    while (device_reader.TakeNext(device, meta)) {
+      const std::string key = Hex(meta.instance);  // the user's instance: a left user's hand goes
+      if (!meta.valid_data) {
+        if (meta.instance_state != dds::InstanceState::kAlive) hands_changed |= hands.erase(key) > 0;
+        continue;
+      }
+      if (!dropped.Accept("device_state", sender(meta), dds::CheckDeviceState(device, session), say)) continue;
+      HandView& h = hands[key];
+      h.user = device.user().to_string();
+      h.fingers.clear();
+      h.p_WE_m.clear();
+      for (int f = 0; f < static_cast<int>(device.p_WE_m().size()); ++f) {
+        if ((device.absent_fingers() >> f) & 1u) continue;
+        h.fingers.push_back(f);
+        h.p_WE_m.push_back({device.p_WE_m()[f][0], device.p_WE_m()[f][1], device.p_WE_m()[f][2]});
+      }
+      h.fingertip_radius_m = device.fingertip_radius_m();
+      hands_changed = true;
     }
     msg::LoopStatistics stats;
     const auto now = Clock::now();
@@ -274,6 +366,7 @@ int Console::Run() {
 
   const auto start = Clock::now();
   auto last_push = Clock::time_point{};
+  auto last_hands = Clock::time_point{};
   bool dirty = true;
   while (!common::ShutdownRequested()) {
     if (config_.where.duration.count() > 0 && Clock::now() - start >= config_.where.duration) break;
@@ -292,6 +385,11 @@ int Console::Run() {
       server.Broadcast(std::move(json));
       last_push = now;
       dirty = false;
+    }
+    if (hands_changed && now - last_hands >= kHandsPeriod) {
+      server.Broadcast(HandsJson(hands));
+      last_hands = now;
+      hands_changed = false;
     }
   }
   const WebServerCounts c = server.counts();

@@ -19,6 +19,15 @@ const char* KindName(controls::EventKind k) {
 }
 }  // namespace
 
+std::string HandsJson(const std::map<std::string, HandView>& hands) {
+  using nlohmann::json;
+  json list = json::array();
+  for (const auto& [user, h] : hands) {
+    list.push_back({{"user", h.user}, {"fingers", h.fingers}, {"p_WE_m", h.p_WE_m}, {"radius_m", h.fingertip_radius_m}});
+  }
+  return json{{"type", "hands"}, {"hands", std::move(list)}}.dump(-1, ' ', false, json::error_handler_t::replace);
+}
+
 std::string UserOfNode(const std::string& node) {
   const auto slash = node.rfind('/');
   return slash == std::string::npos ? node : node.substr(slash + 1);
@@ -38,6 +47,15 @@ std::string ToJson(const ConsoleState& s, std::chrono::steady_clock::time_point 
     j["world"] = {{"scene", s.world.scene},       {"title", s.world.title},
                   {"revision", s.world.revision}, {"tick_Hz", s.world.tick_Hz},
                   {"gravity_z_m_per_s2", s.world.gravity_z_m_per_s2}, {"objects", s.world.objects}};
+    json view = json::array();
+    for (const auto& o : s.world.view) {
+      view.push_back({{"id", o.id},           {"kind", o.kind},
+                      {"shape", o.shape},     {"mesh", o.mesh},
+                      {"p_WO_m", o.p_WO_m},   {"q_WO_wxyz", o.q_WO_wxyz},
+                      {"half_extent_m", o.half_extent_m}, {"mesh_scale", o.mesh_scale},
+                      {"rgb", o.rgb}});
+    }
+    j["world"]["view"] = std::move(view);
   } else {
     j["world"] = nullptr;
   }

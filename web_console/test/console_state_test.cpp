@@ -14,7 +14,7 @@ TEST(ConsoleState, TheDocumentCarriesEveryStationAndTheWorld) {
   s.session = "s1";
   s.console_name = "web-console";
   s.actions_enabled = true;
-  s.world = WorldView{true, "start_menu", "Encyclopedia", 3, 60.0, -9.81, 1};
+  s.world = WorldView{true, "start_menu", "Encyclopedia", 3, 60.0, -9.81, 1, {}};
   s.routes.push_back(WorldRoute{"dinosaur", "button_dinosaur", controls::EventKind::kPressed, -1});
   s.boards["en"] = BoardView{7, "Welcome", "Press a button"};
   StationStats st;
@@ -45,6 +45,31 @@ TEST(ConsoleState, TextThatIsNotUtf8IsReplacedNotRefused) {
   const auto j = nlohmann::json::parse(ToJson(s, std::chrono::steady_clock::now()));
   EXPECT_EQ(j["boards"]["en"]["text"], "bad \xEF\xBF\xBD byte");
   EXPECT_TRUE(j["world"].is_null());
+}
+
+TEST(ConsoleState, TheViewGetsEveryObjectAndEveryFingertipTheDeviceHas) {
+  ConsoleState s;
+  s.world.known = true;
+  ViewObject o;
+  o.id = "button_dinosaur";
+  o.shape = "mesh";
+  o.mesh = "/meshes/button.glb";
+  o.p_WO_m = {0.0, -0.08, 0.012};
+  o.mesh_scale = {2, 2, 2};
+  s.world.view.push_back(o);
+  const auto j = nlohmann::json::parse(ToJson(s, std::chrono::steady_clock::now()));
+  ASSERT_EQ(j["world"]["view"].size(), 1u);
+  EXPECT_EQ(j["world"]["view"][0]["mesh"], "/meshes/button.glb");
+  EXPECT_EQ(j["world"]["view"][0]["p_WO_m"][1], -0.08);
+  EXPECT_EQ(j["world"]["view"][0]["mesh_scale"][0], 2.0);
+
+  std::map<std::string, HandView> hands;
+  hands["k"] = HandView{"alice", {1}, {{0.1, 0.2, 0.3}}, 0.008};  // a stylus: the index only
+  const auto h = nlohmann::json::parse(HandsJson(hands));
+  EXPECT_EQ(h["type"], "hands");
+  EXPECT_EQ(h["hands"][0]["user"], "alice");
+  EXPECT_EQ(h["hands"][0]["fingers"], nlohmann::json::array({1}));
+  EXPECT_EQ(h["hands"][0]["p_WE_m"][0][2], 0.3);
 }
 
 }  // namespace

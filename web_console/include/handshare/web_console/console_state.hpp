@@ -2,6 +2,7 @@
 /// What the operator's page shows, as plain data (no DDS types): filled by the console from the
 /// session's topics, turned into the one JSON document every viewer receives (over the
 /// WebSocket, and at GET /api/state). Not real-time.
+#include <array>
 #include <chrono>
 #include <cstdint>
 #include <map>
@@ -35,6 +36,28 @@ struct MemberRow {
   std::string device;
 };
 
+/// One object of the current world as the 3-D view draws it (the scene state's object, with the
+/// scene file's mesh scale).
+struct ViewObject {
+  std::string id;
+  std::string kind;                 ///< "rigid", "deformable", "control"
+  std::string shape;                ///< "box", "sphere", "mesh"
+  std::string mesh;                 ///< URL of its .glb ("/meshes/NAME.glb"); "" unless a mesh
+  std::array<double, 3> p_WO_m{};
+  std::array<double, 4> q_WO_wxyz{1, 0, 0, 0};
+  std::array<double, 3> half_extent_m{};
+  std::array<double, 3> mesh_scale{1, 1, 1};
+  std::array<float, 3> rgb{};
+};
+
+/// One user's hand for the view: the fingertips the device has, in W.
+struct HandView {
+  std::string user;
+  std::vector<int> fingers;                    ///< finger index of each tip (thumb 0)
+  std::vector<std::array<double, 3>> p_WE_m;   ///< fingertip centres
+  double fingertip_radius_m = 0.0;
+};
+
 struct WorldView {
   bool known = false;   ///< a scene state has come
   std::string scene;
@@ -43,6 +66,7 @@ struct WorldView {
   double tick_Hz = 0.0;
   double gravity_z_m_per_s2 = 0.0;
   std::size_t objects = 0;
+  std::vector<ViewObject> view;  ///< what the 3-D view draws
 };
 
 struct BoardView {
@@ -68,6 +92,10 @@ struct ConsoleState {
 /// The state as the page reads it (docs/web_console.md, "The state document"). Text from the
 /// session that is not valid UTF-8 is replaced, not refused. `now` ages the stations.
 std::string ToJson(const ConsoleState& state, std::chrono::steady_clock::time_point now);
+
+/// The hands document the view reads ({"type": "hands", "hands": [...]}), sent apart from the
+/// state and more often.
+std::string HandsJson(const std::map<std::string, HandView>& hands);  // any key: the order of the list
 
 /// The user of a station's node key: what follows the last '/', else the whole key.
 std::string UserOfNode(const std::string& node);
