@@ -55,6 +55,12 @@ function loadGlb(url) {
 }
 
 function buildWorld(w) {
+  // The last world's GPU buffers go with it (the glTF meshes' geometry stays: cached and shared).
+  worldGroup.traverse((n) => {
+    if (!n.isMesh) return;
+    n.material.dispose();
+    if (!n.userData.shared) n.geometry.dispose();
+  });
   scene.remove(worldGroup);
   worldGroup = new THREE.Group();
   scene.add(worldGroup);
@@ -80,7 +86,11 @@ function buildWorld(w) {
         if (group !== worldGroup) return;  // a newer world came meanwhile
         const copy = loaded.clone();
         copy.scale.set(o.mesh_scale[0], o.mesh_scale[1], o.mesh_scale[2]);
-        copy.traverse((n) => { if (n.isMesh) n.material = material; });
+        copy.traverse((n) => {
+          if (!n.isMesh) return;
+          n.material = material;
+          n.userData.shared = true;
+        });
         holder.add(copy);
         view.meshesLoaded += 1;
       }, () => { view.meshesFailed += 1; });
@@ -88,19 +98,37 @@ function buildWorld(w) {
   }
 }
 
+const tips = new Map();  // "user/finger" -> its sphere, kept from one hands document to the next
+
 function showHands(hands) {
-  handGroup.clear ? handGroup.clear() : handGroup.children.slice().forEach((c) => handGroup.remove(c));
+  // Spheres are made once per fingertip and moved after: 20 documents a second allocate nothing
+  // on the GPU; a fingertip that is gone (its user left) is removed and freed.
+  const seen = new Set();
   view.hands = {};
   for (const h of hands) {
     view.hands[h.user] = [];  // where the spheres are drawn, in W
     h.p_WE_m.forEach((p, k) => {
-      const tip = new THREE.Mesh(new THREE.SphereBufferGeometry(h.radius_m, 16, 12),
-                                 new THREE.MeshPhongMaterial({color: FINGER_RGB[h.fingers[k]]}));
+      const name = h.user + "/" + h.fingers[k];
+      let tip = tips.get(name);
+      if (!tip) {
+        tip = new THREE.Mesh(new THREE.SphereBufferGeometry(1, 16, 12),
+                             new THREE.MeshPhongMaterial({color: FINGER_RGB[h.fingers[k]]}));
+        tip.name = name;
+        tips.set(name, tip);
+        handGroup.add(tip);
+      }
+      tip.scale.setScalar(h.radius_m);
       tip.position.set(p[0], p[1], p[2]);
-      tip.name = h.user + "/" + h.fingers[k];
-      handGroup.add(tip);
+      seen.add(name);
       view.hands[h.user].push(tip.getWorldPosition(new THREE.Vector3()).toArray());
     });
+  }
+  for (const [name, tip] of tips) {
+    if (seen.has(name)) continue;
+    handGroup.remove(tip);
+    tip.geometry.dispose();
+    tip.material.dispose();
+    tips.delete(name);
   }
 }
 
