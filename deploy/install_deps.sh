@@ -32,6 +32,10 @@ PACKAGES=(
   # DDS-Security keystores (deploy/security/make_keystore.sh); the security tests set a
   # station's clock back with faketime (tests/security_test.py)
   openssl faketime
+  # the web console (web_console): HTTP, WebSocket and TLS through Boost.Beast and OpenSSL;
+  # three.js for the browser's view, served from the install; its browser tests run Debian's
+  # chromium headless through selenium and chromium-driver (tests/web_console_test.py)
+  libboost-dev libssl-dev libjs-three chromium chromium-driver python3-selenium
   # plots for bench/ and WAV checks
   python3 python3-matplotlib python3-numpy python3-pil sox
 )

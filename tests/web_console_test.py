@@ -1,0 +1,262 @@
+#!/usr/bin/env python3
+"""Cross-process tests of the web console (web_console) in a real browser: Debian's chromium,
+headless, driven through python3-selenium and chromium-driver (docs/web_console.md).
+
+operator: a world server and a haptic node with a scripted hand; the console; its operator's
+page open in chromium. The page shows the station with the loop rate the haptic node reports;
+a world change with a wrong token gets 401 and the world stays; one sent from the page with
+the token reaches the world server and comes back to the page as the new world.
+
+tls: the console with --tls-cert/--tls-key: HTTPS and WSS only. A client that trusts the
+certificate reads the state; a plain HTTP request to the port gets no answer; the page in
+chromium goes live over WSS and shows the world.
+
+view: the live 3-D view at / in chromium with software WebGL (SwiftShader): it draws the start
+menu (every object and control, the meshes loaded from the glTF files the console exported),
+and alice's five fingertip spheres (where three.js has them in its scene) where her haptic
+node's trace has her fingertips while her hand holds still;
+with --screenshot FILE it saves what it drew.
+
+usage: web_console_test.py operator|tls|view --bin-dir DIR --domain D --work DIR
+"""
+import json
+import os
+import re
+import secrets
+import ssl
+import subprocess
+import sys
+import urllib.error
+import urllib.request
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+sys.path.insert(0, HERE)
+from session_test import DATA, check, last_trace_row, run_cases, settled_since, wait_until  # noqa: E402
+
+from selenium import webdriver  # noqa: E402  (python3-selenium, deploy/install_deps.sh)
+from selenium.webdriver.chrome.service import Service  # noqa: E402
+from selenium.webdriver.common.by import By  # noqa: E402
+from selenium.webdriver.support.ui import Select  # noqa: E402
+
+CHROMIUM = "/usr/bin/chromium"
+CHROMEDRIVER = "/usr/bin/chromedriver"
+RATE_TOLERANCE = 0.05  # the page's last 1 s window against the node's whole-run mean: a sim loop at 1 kHz
+
+
+def start_browser(work, extra_flags=()):
+    """Headless chromium under chromedriver, with a profile of its own in the work folder."""
+    options = webdriver.ChromeOptions()
+    options.binary_location = CHROMIUM
+    for flag in (*extra_flags, "--headless", "--no-sandbox", "--disable-gpu", "--disable-dev-shm-usage",
+                 "--window-size=1280,1400", f"--user-data-dir={os.path.join(work, 'chromium-profile')}"):
+        options.add_argument(flag)
+    options.set_capability("goog:loggingPrefs", {"browser": "ALL"})
+    service = Service(CHROMEDRIVER, log_path=os.path.join(work, "chromedriver.log"))
+    return webdriver.Chrome(service=service, options=options)
+
+
+def post_world(base, world, token):
+    """POST /api/world as a script would: (status, body)."""
+    headers = {"Content-Type": "application/json"}
+    if token is not None:
+        headers["Authorization"] = "Bearer " + token
+    req = urllib.request.Request(base + "/api/world", data=json.dumps({"world": world}).encode(),
+                                 headers=headers, method="POST")
+    try:
+        with urllib.request.urlopen(req, timeout=10) as r:
+            return r.status, r.read().decode()
+    except urllib.error.HTTPError as e:
+        return e.code, e.read().decode()
+
+
+def page_station(driver, user):
+    """The page's row of `user`'s station as {column: text}, or None. Read in one script: the page
+    redraws the table with every state, so elements found in one call are gone in the next."""
+    cells = driver.execute_script(
+        "const row = document.querySelector('#stations tbody tr[data-user=\"' + arguments[0] + '\"]');"
+        "return row ? Array.from(row.cells, (c) => c.textContent) : null;", user)
+    if not cells:
+        return None
+    return {"user": cells[0], "device": cells[1], "rate": cells[2], "jitter": cells[3], "age": cells[9]}
+
+
+def send_from_page(driver, world, token):
+    """Chooses `world` on the page, types the token, presses Send; returns the status the page shows."""
+    result = driver.find_element(By.ID, "goto-result")
+    driver.execute_script("arguments[0].removeAttribute('data-status'); arguments[0].textContent = '';", result)
+    Select(driver.find_element(By.ID, "goto-world")).select_by_value(world)
+    field = driver.find_element(By.ID, "goto-token")
+    field.clear()
+    field.send_keys(token)
+    driver.find_element(By.ID, "goto-send").click()
+    status = wait_until(f"the page's answer to sending {world}", 20, lambda: result.get_attribute("data-status"))
+    return int(status), result.text
+
+
+def case_operator(h, domain):
+    session = f"it-web-{os.getpid()}"
+    token = secrets.token_urlsafe(24)
+    token_file = os.path.join(h.work, "token")
+    with open(token_file, "w") as f:
+        f.write(token + "\n")
+    os.chmod(token_file, 0o600)
+    h.start("world_server", "world_server", "--domain", domain, "--session", session)
+    h.start("alice", "haptic_node", "--domain", domain, "--session", session, "--user", "alice",
+            "--device", "sim", "--script", os.path.join(DATA, "alice.hand"))
+    h.wait_for_line("world_server", "member joined: user=alice", 30)
+    h.start("console", "web_console", "--domain", domain, "--session", session, "--name", "operator-console",
+            "--listen", "127.0.0.1:0", "--token-file", token_file)
+    h.wait_for_line("console", "listening on http://127.0.0.1:", 30)
+    port = int(re.search(r"listening on http://127\.0\.0\.1:(\d+)", h.log("console")).group(1))
+    base = f"http://127.0.0.1:{port}"
+    h.wait_for_line("console", "world 'start_menu' revision 1", 30)
+
+    driver = start_browser(h.work)
+    try:
+        driver.get(base + "/operator")
+        # The station appears with a fresh loop rate (LoopStatistics, once a second).
+        row = wait_until("alice's station on the page with a fresh rate", 30,
+                         lambda: (lambda r: r if r and r["rate"] and float(r["age"] or 99) < 2.5 else None)(
+                             page_station(driver, "alice")),
+                         lambda: driver.find_element(By.TAG_NAME, "body").text)
+        page_rate = float(row["rate"])
+        check(row["device"] == "sim", f"the page shows alice's device as '{row['device']}', not 'sim'")
+        check(driver.find_element(By.ID, "world").text == "start_menu", "the page does not show the start menu")
+        check(driver.find_element(By.ID, "tick").text == "60 Hz", "the page does not show the server's 60 Hz tick")
+        check("Welcome" in driver.find_element(By.ID, "board-en").text, "the page does not show the board")
+
+        # Wrong and missing tokens: 401, from the page and from a script; the world stays.
+        status, text = send_from_page(driver, "dinosaur", "not-the-token-" + secrets.token_hex(8))
+        check(status == 401, f"a wrong token from the page got {status} ({text}), not 401")
+        status, body = post_world(base, "dinosaur", None)
+        check(status == 401, f"no token got {status} ({body}), not 401")
+        status, body = post_world(base, "dinosaur", token + "x")
+        check(status == 401, f"a wrong token got {status} ({body}), not 401")
+        status, body = post_world(base, "no_such_world", token)
+        check(status == 404, f"an unknown world got {status} ({body}), not 404")
+
+        # The token: the session goes to the solar system, and the page follows it.
+        status, text = send_from_page(driver, "solar_system", token)
+        check(status == 202, f"the world change from the page got {status} ({text}), not 202")
+        h.wait_for_line("world_server", "control button_solar_system by operator-console: scene 'solar_system'", 30)
+        wait_until("the page showing the solar system", 20,
+                   lambda: driver.find_element(By.ID, "world").text == "solar_system")
+        # The refused requests were never published: the console's one control event (the
+        # events of one writer arrive in order, so a refused one would have come first).
+        log = h.log("world_server")
+        check(len(re.findall(r"control \S+ by operator-console", log)) == 1,
+              "the world server applied other control events of the console than the one sent with the token")
+        check("scene 'dinosaur'" not in log, "a world change without the right token reached the world server")
+        wait_until("the page showing the solar system's board", 20,
+                   lambda: "Moon" in driver.find_element(By.ID, "board-en").text)
+        driver.execute_script("window.scrollTo(0, 0);")
+        driver.save_screenshot(os.path.join(h.work, "operator.png"))
+        errors = [e for e in driver.get_log("browser") if e["level"] == "SEVERE" and "/api/world" not in e["message"]]
+        check(not errors, f"the page logged errors: {errors}")
+    finally:
+        driver.quit()
+
+    check(h.stop("console", 30) == 0, "web_console failed")
+    summary = re.search(r"served (\d+) requests \((\d+) refused\)", h.log("console"))
+    check(summary and int(summary.group(2)) >= 4, "web_console did not count the refused requests")
+    check(h.stop("alice", 30) == 0, "haptic_node alice failed")
+    node_rate = float(re.search(r"loop statistics: rate ([0-9.]+) Hz", h.log("alice")).group(1))
+    check(abs(page_rate - node_rate) <= RATE_TOLERANCE * node_rate,
+          f"the page showed alice's loop at {page_rate} Hz, the node reports {node_rate} Hz")
+    check(h.stop("world_server", 30) == 0, "world_server failed")
+    print(f"operator page: alice's loop {page_rate} Hz on the page, {node_rate} Hz at the node; "
+          f"wrong tokens 401; the page's world change reached the world server")
+
+
+def case_tls(h, domain):
+    session = f"it-webtls-{os.getpid()}"
+    cert, key = os.path.join(h.work, "cert.pem"), os.path.join(h.work, "key.pem")
+    made = subprocess.run(["openssl", "req", "-x509", "-newkey", "rsa:2048", "-nodes", "-days", "1",
+                           "-subj", "/CN=127.0.0.1", "-addext", "subjectAltName=IP:127.0.0.1",
+                           "-keyout", key, "-out", cert], capture_output=True, text=True, timeout=60)
+    check(made.returncode == 0, f"openssl could not make a certificate: {made.stderr}")
+    h.start("world_server", "world_server", "--domain", domain, "--session", session)
+    h.start("console", "web_console", "--domain", domain, "--session", session, "--listen", "127.0.0.1:0",
+            "--tls-cert", cert, "--tls-key", key)
+    h.wait_for_line("console", "listening on https://127.0.0.1:", 30)
+    port = int(re.search(r"listening on https://127\.0\.0\.1:(\d+)", h.log("console")).group(1))
+    h.wait_for_line("console", "world 'start_menu' revision 1", 30)
+    trusted = ssl.create_default_context(cafile=cert)
+    with urllib.request.urlopen(f"https://127.0.0.1:{port}/api/state", context=trusted, timeout=10) as r:
+        state = json.loads(r.read())
+    check(state["world"]["scene"] == "start_menu", f"the state over HTTPS has world {state['world']}")
+    check(state["console"]["actions_enabled"] is False, "actions are on without a token file")
+    try:
+        urllib.request.urlopen(f"http://127.0.0.1:{port}/api/state", timeout=10)
+        plain = "answered"
+    except (urllib.error.URLError, ConnectionError, OSError) as e:
+        plain = f"refused ({e})"
+    check(plain != "answered", "the TLS console answered plain HTTP")
+    driver = start_browser(h.work, ("--ignore-certificate-errors",))
+    try:
+        driver.get(f"https://127.0.0.1:{port}/operator")
+        wait_until("the page live over WSS", 30, lambda: driver.find_element(By.ID, "link").text == "live",
+                   lambda: driver.find_element(By.TAG_NAME, "body").text)
+        wait_until("the page showing the start menu", 20,
+                   lambda: driver.find_element(By.ID, "world").text == "start_menu")
+        check(not driver.find_element(By.ID, "goto-send").is_enabled(), "the page offers actions without a token")
+    finally:
+        driver.quit()
+    check(h.stop("console", 30) == 0, "web_console failed")
+    check(h.stop("world_server", 30) == 0, "world_server failed")
+    print(f"tls: state over HTTPS, plain HTTP {plain}, the page live over WSS")
+
+
+TIP_TOLERANCE_M = 1e-5  # the trace prints 6 significant digits (under 1 um here); 10 um is far below a fingertip
+
+
+def case_view(h, domain):
+    session = f"it-webview-{os.getpid()}"
+    trace = os.path.join(h.work, "alice.csv")
+    h.start("world_server", "world_server", "--domain", domain, "--session", session)
+    h.start("alice", "haptic_node", "--domain", domain, "--session", session, "--user", "alice",
+            "--device", "sim", "--script", os.path.join(DATA, "alice.hand"), "--trace", trace)
+    h.start("console", "web_console", "--domain", domain, "--session", session, "--listen", "127.0.0.1:0")
+    h.wait_for_line("console", "listening on http://127.0.0.1:", 30)
+    port = int(re.search(r"listening on http://127\.0\.0\.1:(\d+)", h.log("console")).group(1))
+    h.wait_for_line("console", "world 'start_menu' revision 1", 30)
+    with urllib.request.urlopen(f"http://127.0.0.1:{port}/api/state", timeout=10) as r:
+        world = json.loads(r.read())["world"]
+    meshes = sum(1 for o in world["view"] if o["mesh"])
+    check(len(world["view"]) == 7 and meshes == 6,
+          f"the start menu's view has {len(world['view'])} objects, {meshes} meshes (the table and 6 controls expected)")
+    wait_until("alice's hand still at its hold pose", 60, lambda: settled_since(trace) >= 0.5, lambda: h.log("alice"))
+    tips = last_trace_row(trace)
+    driver = start_browser(h.work, ("--use-angle=swiftshader", "--enable-unsafe-swiftshader", "--ignore-gpu-blocklist"))
+    try:
+        driver.get(f"http://127.0.0.1:{port}/")
+        state = wait_until("the view with the start menu's meshes and alice's hand", 60, lambda: (lambda v: v if v and
+                           v["world"] == "start_menu" and v["meshesLoaded"] + v["meshesFailed"] == meshes and
+                           "alice" in v["hands"] and v["frames"] > 5 else None)(
+                               driver.execute_script("return window.handshareView || null;")),
+                           lambda: str(driver.execute_script("return window.handshareView || null;")) +
+                           str(driver.get_log("browser")))
+        check(state["meshesFailed"] == 0, f"{state['meshesFailed']} meshes did not load: {driver.get_log('browser')}")
+        shown = state["hands"]["alice"]
+        check(len(shown) == 5, f"the view draws {len(shown)} of alice's fingertips, not 5")
+        worst = max(abs(a - b) for p, q in zip(shown, tips) for a, b in zip(p, q))
+        check(worst <= TIP_TOLERANCE_M, f"the view's fingertips are up to {worst} m from the trace's: {shown} vs {tips}")
+        drawn = driver.execute_script(
+            "const c = document.getElementById('view'); const g = c.getContext('webgl2') || c.getContext('webgl');"
+            "return g !== null;")
+        check(drawn, "the canvas has no WebGL context")
+        errors = [e for e in driver.get_log("browser") if e["level"] == "SEVERE"]
+        check(not errors, f"the view logged errors: {errors}")
+        shot = os.environ.get("HANDSHARE_WEB_SCREENSHOT") or os.path.join(h.work, "view.png")
+        driver.save_screenshot(shot)
+    finally:
+        driver.quit()
+    check(h.stop("console", 30) == 0, "web_console failed")
+    check(h.stop("alice", 30) == 0, "haptic_node alice failed")
+    check(h.stop("world_server", 30) == 0, "world_server failed")
+    print(f"view: {state['objects']} objects, {state['meshesLoaded']} meshes from glTF, alice's 5 fingertips within "
+          f"{worst:.1e} m of her trace, {state['frames']} frames drawn; screenshot {shot}")
+
+
+if __name__ == "__main__":
+    sys.exit(run_cases({"operator": case_operator, "tls": case_tls, "view": case_view}))

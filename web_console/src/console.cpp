@@ -1,0 +1,409 @@
+#include "handshare/web_console/console.hpp"
+
+#include <algorithm>
+#include <fstream>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <mutex>
+#include <optional>
+#include <set>
+#include <unistd.h>
+#include <stdexcept>
+
+#include <nlohmann/json.hpp>
+
+#include "handshare/common/data_dir.hpp"
+#include "handshare/common/shutdown.hpp"
+#include "handshare/dds/membership.hpp"
+#include "handshare/dds/messages.hpp"
+#include "handshare/dds/name_binding.hpp"
+#include "handshare/dds/sample_checks.hpp"
+#include "handshare/scene/scene.hpp"
+#include "handshare/session/control_events.hpp"
+#include "handshare/web_console/console_state.hpp"
+#include "handshare/web_console/gltf_export.hpp"
+#include "handshare/web_console/web_server.hpp"
+#include "handshare/web_console/world_routes.hpp"
+
+namespace handshare::web_console {
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+constexpr auto kPushPeriod = std::chrono::milliseconds(200);  // at most 5 states a second to viewers
+constexpr auto kHeartbeat = std::chrono::seconds(1);          // at least one a second (stations age)
+constexpr auto kStationForgotten = std::chrono::seconds(30);  // no statistics this long: gone
+constexpr auto kHandsPeriod = std::chrono::milliseconds(50);  // the view's hands: at most 20 a second
+constexpr double kViewHz = 20.0;                               // announced: device states this often
+
+std::string ErrorJson(const std::string& error) {
+  return nlohmann::json{{"error", error}}.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace);
+}
+
+// LoopStatistics has no check in the DDS layer yet: the console reads it alone.
+std::string CheckLoopStatistics(const msg::LoopStatistics& s, const std::string& session) {
+  if (s.session().to_string() != session) return "session '" + s.session().to_string() + "' is not this session";
+  if (s.node().size() == 0) return "empty node";
+  const double values[] = {s.rate_Hz(), s.jitter_p50_us(), s.jitter_p99_us(), s.jitter_max_us(), s.step_p50_us(),
+                           s.step_p99_us()};
+  for (const double v : values) {
+    if (!std::isfinite(v) || v < 0.0 || v > 1e9) return "a rate or time that is negative, not finite or above 1e9";
+  }
+  return {};
+}
+
+std::string Hex(const dds::SampleMeta::Key& key) {
+  static constexpr char kDigits[] = "0123456789abcdef";
+  std::string out;
+  for (const auto b : key) {
+    out += kDigits[b >> 4];
+    out += kDigits[b & 15];
+  }
+  return out;
+}
+
+// What the 3-D view draws of the world: the scene state's objects, controls included (at rest),
+// with the scene file's mesh scale; meshes by the URL of their exported .glb.
+std::vector<ViewObject> ViewOf(const msg::SceneState& state, const scene::Scene* file,
+                               const std::set<std::string>& exported) {
+  const auto url = [&](const std::string& mesh_uri) {
+    const std::string stem = std::filesystem::path(mesh_uri).stem().string();
+    return exported.count(stem) > 0 ? "/meshes/" + stem + ".glb" : std::string();
+  };
+  std::vector<ViewObject> out;
+  for (const auto& o : state.objects()) {
+    ViewObject v;
+    v.id = o.object_id().to_string();
+    v.kind = o.kind() == msg::OBJECT_RIGID ? "rigid" : o.kind() == msg::OBJECT_DEFORMABLE ? "deformable" : "control";
+    v.shape = o.shape().to_string();
+    if (v.shape == "mesh") v.mesh = url(o.mesh_uri().to_string());
+    for (int k = 0; k < 3; ++k) {
+      v.p_WO_m[k] = o.p_WO_m()[k];
+      v.half_extent_m[k] = o.half_extent_m()[k];
+      v.rgb[k] = o.rgb()[k];
+    }
+    for (int k = 0; k < 4; ++k) v.q_WO_wxyz[k] = o.q_WO_wxyz()[k];
+    if (file != nullptr) {
+      for (const auto& f : file->objects) {
+        if (f.id == v.id) v.mesh_scale = {f.mesh_scale.x(), f.mesh_scale.y(), f.mesh_scale.z()};
+      }
+    }
+    out.push_back(std::move(v));
+  }
+  return out;
+}
+
+std::string Join(const std::vector<WorldRoute>& routes) {
+  std::string out;
+  for (const auto& r : routes) out += (out.empty() ? "" : ", ") + r.world;
+  return out.empty() ? "nothing" : out;
+}
+
+}  // namespace
+
+ListenAddress ParseListen(const std::string& text) {
+  std::string address;
+  std::string port;
+  if (!text.empty() && text.front() == '[') {
+    const auto close = text.find("]:");
+    if (close == std::string::npos) throw std::invalid_argument("--listen '" + text + "': expected [IPv6]:PORT");
+    address = text.substr(1, close - 1);
+    port = text.substr(close + 2);
+  } else {
+    const auto colon = text.rfind(':');
+    if (colon == std::string::npos || text.find(':') != colon) {
+      throw std::invalid_argument("--listen '" + text + "': expected ADDR:PORT (an IPv6 address in brackets)");
+    }
+    address = text.substr(0, colon);
+    port = text.substr(colon + 1);
+  }
+  if (address.empty()) throw std::invalid_argument("--listen '" + text + "': no address");
+  if (port.empty() || port.size() > 5 || !std::all_of(port.begin(), port.end(), [](char c) { return c >= '0' && c <= '9'; }) ||
+      std::stoi(port) > 65535) {
+    throw std::invalid_argument("--listen '" + text + "': the port is not 0 to 65535");
+  }
+  return ListenAddress{address, static_cast<std::uint16_t>(std::stoi(port))};
+}
+
+std::filesystem::path WwwDir() {
+  const auto& installed = common::InstalledDataDir();
+  return installed.empty() ? std::filesystem::path(HANDSHARE_WEB_SOURCE_DIR) / "www" : installed / "www";
+}
+
+Console::Console(ConsoleConfig config) : config_(std::move(config)) {}
+
+int Console::Run() {
+  const std::string& name = config_.name;
+  const auto say = [&name](const std::string& line) {
+    std::printf("[web_console %s] %s\n", name.c_str(), line.c_str());
+    std::fflush(stdout);
+  };
+  // Everything the command line gives is checked before the session is joined.
+  const ListenAddress listen = ParseListen(config_.listen);
+  const std::string token = config_.token_file.empty() ? std::string() : ReadTokenFile(config_.token_file);
+  const std::filesystem::path www = config_.www_dir.empty() ? WwwDir() : config_.www_dir;
+  const std::string session = config_.where.session;
+
+  dds::Participant participant(config_.where, "web_console/" + name);
+  // The console joins as a screen that reads device states for its 3-D view at 20 Hz: the IDL
+  // has no kind of its own for it yet (docs/web_console.md, "Not done yet").
+  dds::MemberAnnouncement member(participant, name, msg::NODE_GRAPHICS, "", kViewHz);
+  auto scene_reader = dds::MakeReader<msg::SceneState>(participant, dds::topics::kSceneState);
+  auto board_reader = dds::MakeReader<msg::MessageBoard>(participant, dds::topics::kMessageBoard);
+  auto stats_reader = dds::MakeReader<msg::LoopStatistics>(participant, dds::topics::kLoopStatistics);
+  auto member_reader = dds::MakeReader<msg::MemberInfo>(participant, dds::topics::kMemberInfo);
+  auto device_reader = dds::MakeReader<msg::DeviceState>(participant, dds::topics::kDeviceState);
+  auto events = dds::MakeWriter<msg::ControlEvent>(participant, dds::topics::kControlEvent);
+
+  std::mutex mutex;  // guards state (the DDS thread writes it, the web thread reads it)
+  ConsoleState state;
+  state.session = session;
+  state.console_name = name;
+  state.actions_enabled = !token.empty();
+
+  WebServerConfig web;
+  web.address = listen.address;
+  web.port = listen.port;
+  web.tls_cert = config_.tls_cert;
+  web.tls_key = config_.tls_key;
+  web.token = token;
+  web.max_connections = config_.max_connections;
+  web.files = {{"/", www / "index.html"},
+               {"/operator", www / "operator.html"},
+               {"/static/operator.js", www / "operator.js"},
+               {"/static/console.css", www / "console.css"},
+               {"/static/view.js", www / "view.js"},
+               // three.js from Debian's libjs-three, at the paths its loader imports it from.
+               {"/three/build/three.module.js", std::filesystem::path(HANDSHARE_THREE_DIR) / "build/three.module.js"},
+               {"/three/examples/jsm/loaders/GLTFLoader.js",
+                std::filesystem::path(HANDSHARE_THREE_DIR) / "examples/jsm/loaders/GLTFLoader.js"}};
+  // Every mesh of the assets exported once to glTF 2.0, through a folder of this process's
+  // that the server reads at start and that goes right after.
+  std::set<std::string> exported;
+  const auto glb_dir = std::filesystem::temp_directory_path() / ("handshare-web-console-" + std::to_string(getpid()));
+  std::filesystem::create_directories(glb_dir);
+  const auto mesh_dir = common::AssetsDir() / "meshes";
+  for (const auto& entry : std::filesystem::directory_iterator(mesh_dir)) {
+    if (entry.path().extension() != ".obj") continue;
+    const std::string stem = entry.path().stem().string();
+    const std::string glb = ExportGlb(entry.path());
+    std::ofstream(glb_dir / (stem + ".glb"), std::ios::binary).write(glb.data(), static_cast<std::streamsize>(glb.size()));
+    web.files["/meshes/" + stem + ".glb"] = glb_dir / (stem + ".glb");
+    exported.insert(stem);
+  }
+
+  const auto state_json = [&] {
+    std::lock_guard lock(mutex);
+    return ToJson(state, Clock::now());
+  };
+  const auto change_world = [&](const WorldRequest& r) -> ActionReply {
+    WorldRoute route;
+    std::string from;
+    {
+      std::lock_guard lock(mutex);
+      if (!state.world.known) return {503, ErrorJson("no world yet: the world server has not been heard")};
+      from = state.world.scene;
+      const WorldRoute* found = FindRoute(state.routes, r.world);
+      if (found == nullptr) {
+        if (r.world == from) return {409, ErrorJson("the session is in '" + from + "' already")};
+        const auto names = scene::SceneNames();
+        if (std::find(names.begin(), names.end(), r.world) == names.end()) {
+          return {404, ErrorJson("no world '" + r.world + "'")};
+        }
+        return {409, ErrorJson("'" + r.world + "' is not linked from '" + from + "' (it links to " +
+                               Join(state.routes) + ")")};
+      }
+      route = *found;
+    }
+    msg::ControlEvent e;
+    e.session(session);
+    e.user(name);
+    e.control_id(route.control_id);
+    e.kind(session::ToMessage(route.kind));
+    e.index(route.index);
+    e.value(route.index >= 0 ? route.index : 0.0);
+    e.stamp_ns(static_cast<std::uint64_t>(
+        std::chrono::duration_cast<std::chrono::nanoseconds>(Clock::now().time_since_epoch()).count()));
+    events.Write(e);
+    say("the operator sends the session from '" + from + "' to '" + r.world + "' (control " + route.control_id + ")");
+    return {202, nlohmann::json{{"world", r.world}, {"control", route.control_id}, {"from", from}}.dump()};
+  };
+  std::optional<WebServer> server_or;
+  try {
+    server_or.emplace(web, state_json, change_world);
+  } catch (...) {
+    std::filesystem::remove_all(glb_dir);
+    throw;
+  }
+  std::filesystem::remove_all(glb_dir);
+  WebServer& server = *server_or;
+  say(std::to_string(exported.size()) + " meshes exported to glTF 2.0 for the view at /");
+  say(std::string("listening on ") + (server.tls() ? "https://" : "http://") +
+      (listen.address.find(':') != std::string::npos ? "[" + listen.address + "]" : listen.address) + ":" +
+      std::to_string(server.port()) + " (the operator's page: /operator; actions " +
+      (token.empty() ? "off: no --token-file" : "need the token") + ")");
+
+  dds::SampleMeta meta;
+  dds::DroppedSamples dropped;
+  std::optional<scene::Scene> world_file;  // the current world's scene file, if the console has it
+  std::map<std::string, HandView> hands;   // by DeviceState instance (its user); the DDS thread's only
+  bool hands_changed = false;
+  const auto sender = [](const dds::SampleMeta& m) { return "participant " + dds::ParticipantOf(m.writer); };
+  // Takes every new sample into the state; true if anything changed.
+  const auto take = [&]() {
+    bool changed = false;
+    std::lock_guard lock(mutex);
+    msg::SceneState scene;
+    while (scene_reader.TakeNext(scene, meta)) {
+      if (!meta.valid_data ||
+          !dropped.Accept("scene_state", sender(meta), dds::CheckSceneState(scene, session), say)) {
+        continue;
+      }
+      WorldView& w = state.world;
+      const std::string scene_name = scene.scene().to_string();
+      const bool new_world = !w.known || w.scene != scene_name;
+      w.known = true;
+      w.scene = scene_name;
+      w.revision = scene.revision();
+      w.tick_Hz = scene.tick_Hz();
+      w.gravity_z_m_per_s2 = scene.gravity_W_m_per_s2()[2];
+      w.objects = scene.objects().size();
+      if (new_world) {
+        try {
+          world_file = scene::LoadSceneByName(scene_name, scene::DefaultSceneDir(), {.load_meshes = false});
+          w.title = world_file->title;
+          state.routes = WorldRoutes(*world_file);
+        } catch (const std::exception& e) {
+          world_file.reset();
+          w.title.clear();
+          state.routes.clear();
+          say("cannot read the world '" + scene_name + "' (" + e.what() + "): no world changes from it");
+        }
+      }
+      w.view = ViewOf(scene, world_file ? &*world_file : nullptr, exported);
+      char line[160];
+      std::snprintf(line, sizeof line, "world '%s' revision %u (server tick %.0f Hz)", scene_name.c_str(),
+                    scene.revision(), static_cast<double>(scene.tick_Hz()));
+      say(std::string(line) + (new_world ? ": links to " + Join(state.routes) : ""));
+      changed = true;
+    }
+    msg::MessageBoard board;
+    while (board_reader.TakeNext(board, meta)) {
+      if (!meta.valid_data ||
+          !dropped.Accept("message_board", sender(meta), dds::CheckMessageBoard(board, session), say)) {
+        continue;
+      }
+      state.boards[board.language().to_string()] =
+          BoardView{board.message_id(), board.text().to_string(), board.next_action().to_string()};
+      changed = true;
+    }
+    msg::MemberInfo info;
+    while (member_reader.TakeNext(info, meta)) {
+      const std::string key = Hex(meta.instance);
+      if (!meta.valid_data) {
+        if (meta.instance_state != dds::InstanceState::kAlive) changed |= state.members.erase(key) > 0;
+        continue;
+      }
+      if (!dropped.Accept("member_info", sender(meta), dds::CheckMemberInfo(info, session), say)) continue;
+      if (info.leaving()) {
+        changed |= state.members.erase(key) > 0;
+        continue;
+      }
+      state.members[key] = MemberRow{info.user().to_string(), dds::ToString(info.kind()), info.device().to_string()};
+      changed = true;
+    }
+    msg::DeviceState device;
+    while (device_reader.TakeNext(device, meta)) {
+      const std::string key = Hex(meta.instance);  // the user's instance: a left user's hand goes
+      if (!meta.valid_data) {
+        if (meta.instance_state != dds::InstanceState::kAlive) hands_changed |= hands.erase(key) > 0;
+        continue;
+      }
+      if (!dropped.Accept("device_state", sender(meta), dds::CheckDeviceState(device, session), say)) continue;
+      HandView& h = hands[key];
+      h.user = device.user().to_string();
+      h.fingers.clear();
+      h.p_WE_m.clear();
+      for (int f = 0; f < static_cast<int>(device.p_WE_m().size()); ++f) {
+        if ((device.absent_fingers() >> f) & 1u) continue;
+        h.fingers.push_back(f);
+        h.p_WE_m.push_back({device.p_WE_m()[f][0], device.p_WE_m()[f][1], device.p_WE_m()[f][2]});
+      }
+      h.fingertip_radius_m = device.fingertip_radius_m();
+      hands_changed = true;
+    }
+    msg::LoopStatistics stats;
+    const auto now = Clock::now();
+    while (stats_reader.TakeNext(stats, meta)) {
+      if (!meta.valid_data ||
+          !dropped.Accept("loop_statistics", sender(meta), CheckLoopStatistics(stats, session), say)) {
+        continue;
+      }
+      StationStats& st = state.stations[stats.node().to_string()];
+      st.node = stats.node().to_string();
+      st.user = UserOfNode(st.node);
+      st.rate_Hz = stats.rate_Hz();
+      st.jitter_p50_us = stats.jitter_p50_us();
+      st.jitter_p99_us = stats.jitter_p99_us();
+      st.step_p99_us = stats.step_p99_us();
+      st.steps = stats.steps();
+      st.overruns = stats.overruns();
+      st.resyncs = stats.resyncs();
+      st.faults = stats.faults();
+      st.samples_dropped = stats.samples_dropped();
+      st.received = now;
+      st.device.clear();
+      for (const auto& [key, m] : state.members) {
+        if (m.user == st.user && m.kind == "haptic") st.device = m.device;
+      }
+      changed = true;
+    }
+    changed |= std::erase_if(state.stations, [&](const auto& s) { return now - s.second.received > kStationForgotten; }) > 0;
+    state.samples_refused = dropped.total();
+    return changed;
+  };
+
+  const auto start = Clock::now();
+  auto last_push = Clock::time_point{};
+  auto last_hands = Clock::time_point{};
+  bool dirty = true;
+  while (!common::ShutdownRequested()) {
+    if (config_.where.duration.count() > 0 && Clock::now() - start >= config_.where.duration) break;
+    scene_reader.WaitForData(std::chrono::milliseconds(50));
+    dirty |= take();
+    const auto now = Clock::now();
+    if ((dirty && now - last_push >= kPushPeriod) || now - last_push >= kHeartbeat) {
+      const WebServerCounts counts = server.counts();
+      std::string json;
+      {
+        std::lock_guard lock(mutex);
+        state.viewers = counts.viewers;
+        state.viewers_dropped = counts.viewers_dropped;
+        json = ToJson(state, now);
+      }
+      server.Broadcast(std::move(json));
+      last_push = now;
+      dirty = false;
+    }
+    if (hands_changed && now - last_hands >= kHandsPeriod) {
+      server.Broadcast(HandsJson(hands));
+      last_hands = now;
+      hands_changed = false;
+    }
+  }
+  const WebServerCounts c = server.counts();
+  char line[256];
+  std::snprintf(line, sizeof line,
+                "served %llu requests (%llu refused), %llu viewers (%llu dropped for not keeping up), %llu bytes of "
+                "state to viewers",
+                static_cast<unsigned long long>(c.requests), static_cast<unsigned long long>(c.refused),
+                static_cast<unsigned long long>(c.viewers_total), static_cast<unsigned long long>(c.viewers_dropped),
+                static_cast<unsigned long long>(c.bytes_sent));
+  say(line);
+  say("samples refused: " + dropped.Summary());
+  say(participant.TrafficSummary());
+  return 0;
+}
+
+}  // namespace handshare::web_console

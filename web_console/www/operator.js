@@ -1,0 +1,132 @@
+// The operator's page: the console pushes the whole state over a WebSocket (at most 5 times a
+// second); this script shows it. Text from the session goes in with textContent only, never as
+// markup. The one action, a world change, is a POST with the token the operator types (kept in
+// the page only, never stored).
+"use strict";
+
+const $ = (id) => document.getElementById(id);
+let socket = null;
+let lastRoutes = "";
+
+function text(id, value) {
+  $(id).textContent = value === undefined || value === null ? "" : String(value);
+}
+
+function fixed(v, digits) {
+  return typeof v === "number" && isFinite(v) ? v.toFixed(digits) : "";
+}
+
+function cell(row, value, cls) {
+  const td = document.createElement("td");
+  td.textContent = value;
+  if (cls) td.className = cls;
+  row.appendChild(td);
+  return td;
+}
+
+function showStations(stations) {
+  const body = $("stations").querySelector("tbody");
+  body.replaceChildren();
+  for (const s of stations) {
+    const tr = document.createElement("tr");
+    tr.dataset.user = s.user;
+    if (s.age_s > 3) tr.className = "stale";
+    cell(tr, s.user);
+    cell(tr, s.device);
+    cell(tr, fixed(s.rate_Hz, 1), "num rate");
+    cell(tr, fixed(s.jitter_p99_us, 0), "num jitter");
+    cell(tr, fixed(s.step_p99_us, 0), "num step");
+    cell(tr, String(s.overruns), "num overruns" + (s.overruns > 0 ? " bad" : ""));
+    cell(tr, String(s.resyncs), "num resyncs");
+    cell(tr, String(s.faults), "num faults" + (s.faults > 0 ? " bad" : ""));
+    cell(tr, String(s.samples_dropped), "num dropped");
+    cell(tr, fixed(s.age_s, 1), "num age");
+    body.appendChild(tr);
+  }
+}
+
+function showRoutes(routes) {
+  const key = JSON.stringify(routes);
+  if (key === lastRoutes) return;  // keep the operator's choice while the world stays
+  lastRoutes = key;
+  const select = $("goto-world");
+  select.replaceChildren();
+  for (const r of routes) {
+    const option = document.createElement("option");
+    option.value = r.world;
+    option.textContent = r.world + " (" + r.control + ")";
+    select.appendChild(option);
+  }
+}
+
+function show(state) {
+  text("session", state.session);
+  const w = state.world;
+  text("world", w ? w.scene : "none yet");
+  text("title", w ? w.title : "");
+  text("revision", w ? w.revision : "");
+  text("tick", w ? fixed(w.tick_Hz, 0) + " Hz" : "");
+  text("gravity", w ? fixed(w.gravity_z_m_per_s2, 2) + " m/s\u00b2" : "");
+  text("objects", w ? w.objects : "");
+  for (const lang of ["en", "ja"]) {
+    const b = state.boards[lang];
+    text("board-" + lang, b ? b.text + " " + b.next_action : "");
+  }
+  showStations(state.stations);
+  const members = $("members");
+  members.replaceChildren();
+  for (const m of state.members) {
+    const li = document.createElement("li");
+    li.textContent = m.user + " (" + m.kind + (m.device ? ", " + m.device : "") + ")";
+    members.appendChild(li);
+  }
+  showRoutes(state.routes);
+  $("goto-send").disabled = !state.console.actions_enabled;
+  text("console", "console " + state.console.name + ": " + state.console.viewers + " viewer(s), " +
+       state.console.viewers_dropped + " dropped; " + state.console.samples_refused + " samples refused" +
+       (state.console.actions_enabled ? "" : "; actions are off (no token file)"));
+}
+
+function connect() {
+  const scheme = location.protocol === "https:" ? "wss://" : "ws://";
+  socket = new WebSocket(scheme + location.host + "/ws");
+  socket.onopen = () => { $("link").textContent = "live"; $("link").className = "up"; };
+  socket.onmessage = (event) => {
+    try {
+      const state = JSON.parse(event.data);
+      if (state.type === "state") show(state);
+    } catch (e) {
+      $("link").textContent = "bad state: " + e;
+    }
+  };
+  socket.onclose = () => {
+    $("link").textContent = "disconnected, reconnecting";
+    $("link").className = "down";
+    setTimeout(connect, 2000);
+  };
+}
+
+async function sendWorld(event) {
+  event.preventDefault();
+  const world = $("goto-world").value;
+  const token = $("goto-token").value;
+  text("goto-result", "sending " + world + " ...");
+  try {
+    const response = await fetch("/api/world", {
+      method: "POST",
+      headers: {"Content-Type": "application/json", "Authorization": "Bearer " + token},
+      body: JSON.stringify({world: world}),
+      cache: "no-store",
+    });
+    const body = await response.json().catch(() => ({}));
+    const result = $("goto-result");
+    result.dataset.status = String(response.status);
+    result.textContent = response.status + ": " +
+        (response.ok ? "sent to " + body.world + " (control " + body.control + ")" : (body.error || response.statusText));
+  } catch (e) {
+    text("goto-result", "failed: " + e);
+  }
+}
+
+$("goto").addEventListener("submit", sendWorld);
+connect();
