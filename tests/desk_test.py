@@ -15,6 +15,7 @@ skipped (77).
 
 usage: desk_test.py --bin-dir DIR --domain D --work DIR
 """
+import ctypes
 import math
 import os
 import select
@@ -60,7 +61,11 @@ def launch_xvfb(screen, log):
     """A virtual display of its own (Xvfb picks a free number and writes it to a pipe), its
     screen WxHxD: (the Xvfb process, ':N')."""
     read_end, write_end = os.pipe()
-    proc = subprocess.Popen(["Xvfb", "-displayfd", str(write_end), "-screen", "0", screen, "-nolisten", "tcp"],
+    # -noreset: by default the server resets when its last client goes, and refuses connections
+    # meanwhile (a view starting just as the readiness check below or xdotool disconnects got
+    # "Failed to open display").
+    proc = subprocess.Popen(["Xvfb", "-displayfd", str(write_end), "-screen", "0", screen, "-nolisten", "tcp",
+                             "-noreset"],
                             pass_fds=(write_end,), stdout=log, stderr=subprocess.STDOUT)
     os.close(write_end)
     number = b""
@@ -72,7 +77,21 @@ def launch_xvfb(screen, log):
         check(chunk, "Xvfb ended without a display")
         number += chunk
     os.close(read_end)
-    return proc, ":" + number.decode().strip()
+    display = ":" + number.decode().strip()
+    # The number is written once the server listens; a client is only sure of it once it
+    # connects: wait until a connection is taken (or say why not).
+    x11 = ctypes.CDLL("libX11.so.6")
+    x11.XOpenDisplay.restype = ctypes.c_void_p
+    x11.XOpenDisplay.argtypes = [ctypes.c_char_p]
+    x11.XCloseDisplay.argtypes = [ctypes.c_void_p]
+    while True:
+        check(proc.poll() is None, f"Xvfb on {display} exited ({proc.returncode}) right after it started")
+        connection = x11.XOpenDisplay(display.encode())
+        if connection:
+            x11.XCloseDisplay(connection)
+            return proc, display
+        check(time.monotonic() < deadline, f"Xvfb said {display} but took no connection within 30 s")
+        time.sleep(0.05)
 
 
 def start_xvfb(h):
