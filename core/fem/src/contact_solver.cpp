@@ -23,6 +23,10 @@ namespace {
 // SolveWithPatches: a fingertip that moved less than this along the surface this step is at
 // rest: 1 mm/s at 1 kHz, where a stroke is 10-100 um a step and a device's noise well under 1 um.
 constexpr double kRestMotion_m = 1e-6;
+// Kinetic friction on nodes held along their normal (KineticDirection): a patch that slipped in
+// the previous step keeps sliding the way its fingertip moves while that is more than this a
+// step (a slow stroke's smoothed motion dips under kRestMotion_m); any other needs kRestMotion_m.
+constexpr double kKineticRestMotion_m = 1e-7;
 // Most rounds that only turn the slipping patches' directions since the held set last changed,
 // and most updates of the given forces.
 constexpr std::int32_t kMaxDirectionRounds = 16;
@@ -164,17 +168,27 @@ void ContactSolver::AllocatePatchBuffers() {
   slip_dir_.assign(P, Eigen::Vector2d::Zero());
   patch_state_.assign(P, FrictionPatchState{});
   slipping_list_.assign(P, -1);
-  Z_.assign(3 * M * (2 * P + 1), 0.0);
-  slip_M_.assign(4 * P * P, 0.0);
-  slip_rhs_.assign(2 * P, 0.0);
-  slip_piv_.assign(2 * P, 0);
+  // Kinetic nodes: two per patch at most (a fingertip on a stiff spine holds one or two nodes;
+  // beyond that a node that pulls keeps no friction, as before).
+  max_kinetic_ = static_cast<std::int32_t>(std::min(M, 2 * P));
+  const auto K = static_cast<std::size_t>(max_kinetic_);
+  const std::size_t unknowns = 2 * P + 2 * K;  // slides and kinetic loads
+  Z_.assign(3 * M * (unknowns + 1), 0.0);
+  slip_M_.assign(unknowns * unknowns, 0.0);
+  slip_rhs_.assign(unknowns, 0.0);
+  slip_piv_.assign(unknowns, 0);
+  kin_list_.assign(K, -1);
+  kin_dir_.assign(K, Eigen::Vector2d::Zero());
+  kin_of_.assign(M, -1);
+  kin_force_.assign(M, Eigen::Vector2d::Zero());
+  kin_given_.assign(M, Eigen::Vector2d::Zero());
   slip_members_.assign(M, -1);
   slip_begin_.assign(P + 1, 0);
   slip_row_.assign(3 * M, 0);
   slip_row_begin_.assign(P + 1, 0);
   slip_row_w0_.assign(3 * M, 0.0);
   slip_row_w1_.assign(3 * M, 0.0);
-  slip_sum_.assign(2 * (2 * P + 1), 0.0);
+  slip_sum_.assign(2 * (unknowns + 1), 0.0);
 }
 
 void ContactSolver::ZeroOutputs() noexcept {
@@ -329,7 +343,9 @@ bool ContactSolver::AverageMergedTouches() noexcept {
     active_[j] = 1;
     slipping_[j] = 0;
     mode_in_[j] = mode_[j];
+    kin_of_[j] = -1;
   }
+  num_kinetic_ = 0;
   return valid;
 }
 
@@ -720,6 +736,8 @@ bool ContactSolver::ForcesFromRows() noexcept {
     const int k = row_of_[j];
     if (mode_[j] == ContactMode::kFull3d) {
       f_N_[j] = Eigen::Vector3d(rhs_[k], rhs_[k + 1], rhs_[k + 2]);
+    } else if (kin_of_[j] >= 0) {  // with its kinetic friction
+      f_N_[j] = rhs_[k] * n_[j] + tangent_[patch_of_[j]] * kin_force_[j];
     } else {
       f_N_[j] = rhs_[k] * n_[j];
     }
@@ -775,6 +793,8 @@ bool ContactSolver::SolvePatchedSystem(bool refactor, bool same_columns) noexcep
   const int r = same_columns ? patched_rows_ : AssembleHeld(refactor, p0);
   patched_rows_ = r;
   num_slipping_ = 0;
+  for (std::int32_t k = 0; k < num_kinetic_; ++k) kin_of_[kin_list_[k]] = -1;
+  num_kinetic_ = 0;
   if (new_columns) AddSticks();
   if (r == 0) {
     fac_valid_ = false;
@@ -782,8 +802,9 @@ bool ContactSolver::SolvePatchedSystem(bool refactor, bool same_columns) noexcep
   }
   if (refactor && new_columns && !FactorHeld(r, p0)) return false;
   ListSlippingPatches();
+  ListKineticNodes();
   SolveColumns(r, same_columns);
-  if (num_slipping_ > 0 && !SolveSlides(r)) return false;
+  if (num_slipping_ + num_kinetic_ > 0 && !SolveSlides(r)) return false;
   return ForcesFromRows();
 }
 
@@ -874,45 +895,170 @@ void ContactSolver::SolveColumns(int r, bool same_columns) noexcept {
       }
     }
   }
+  KineticColumns(r);
   std::copy(rhs_.begin(), rhs_.begin() + r, Z_.begin());
-  SolveFactored(A_.data(), r, ld, Z_.data(), 1 + 2 * num_slipping_, ld);
+  SolveFactored(A_.data(), r, ld, Z_.data(), 1 + 2 * (num_slipping_ + num_kinetic_), ld);
   std::copy(Z_.begin(), Z_.begin() + r, rhs_.begin());
+}
+
+Eigen::Vector2d ContactSolver::KineticDirection(std::int32_t p) const noexcept {
+  // Kinetic friction opposes the sliding. A slipping patch's nodes slide the way the patch
+  // does (its cone's direction: a node held normal-only then lies on the same cone as the
+  // patch). Under a moving fingertip the nodes of a sticking patch that cannot be held along
+  // the surface (they pull) slide the way the fingertip moves over them. A sticking patch
+  // under a fingertip at rest: none, as before (0.1 um a step for every patch let a fingertip
+  // held on the beating horn toggle with the beat: 372 buzzing steps against 249).
+  if (patch_in_[p].mu_kinetic <= 0.0) return Eigen::Vector2d::Zero();
+  if (patch_state_[p].slipping) return slip_dir_[p];
+  const Eigen::Vector2d m = MotionAlongSurface(p);
+  const bool slides = m.norm() > kRestMotion_m || (patch_in_[p].slipped_before && m.norm() > kKineticRestMotion_m);
+  return slides ? Eigen::Vector2d(m.normalized()) : Eigen::Vector2d::Zero();
+}
+
+void ContactSolver::ListKineticNodes() noexcept {
+  // The nodes held along their normal only (they pulled when held in 3-D) of a patch that holds
+  // no node in 3-D, whose patch gives them a way to slide: each carries the kinetic friction
+  // mu_k N_j along it, N_j its own normal force, as a tangential load g_j = -mu_k y_j e (y_j its
+  // row: the normal force, negative for a push). The load enters the solve as two more unknowns
+  // with their columns, and two equations tie it to the node's normal force: the exact static
+  // FEM answer for that load, as a slip's is. Without it such a patch carried no tangential
+  // force at all, and on the horn toggled between none and its whole cone (docs/fem.md). Only
+  // such patches: where some node still holds the patch in 3-D, the patch's own stick or slip
+  // carries its friction, and kinetic loads on its other nodes made a peer's solve of a contact
+  // set differ from its sender's in 84 of 39,590 steps (5 without; a peer's patch does not know
+  // the way its sender's fingertip moved).
+  for (std::int32_t q = 0; q < num_unique_ && num_kinetic_ < max_kinetic_; ++q) {
+    const std::int32_t j = perm_[q];
+    const std::int32_t p = patch_of_[j];
+    if (!active_[j] || p < 0 || mode_[j] != ContactMode::kNormalOnly) continue;
+    bool holds = false;  // a node of its patch held in 3-D (m is small: a scan)
+    for (std::int32_t i = 0; i < num_unique_ && !holds; ++i) {
+      holds = active_[i] && patch_of_[i] == p && mode_[i] == ContactMode::kFull3d;
+    }
+    if (holds) continue;
+    const Eigen::Vector2d e = KineticDirection(p);
+    if (e.squaredNorm() == 0.0) continue;
+    kin_of_[j] = num_kinetic_;
+    kin_dir_[num_kinetic_] = e;
+    kin_list_[num_kinetic_++] = j;
+  }
+}
+
+void ContactSolver::KineticColumns(int r) noexcept {
+  // A tangential load t at node j moves the held rows by G C_{.j} t, so A y = b0 - sum_j G C_{.j}
+  // T g_j: the columns -G C_{.j} T (two per kinetic node), after the slides' in Z_.
+  const int ld = 3 * options_.max_contacts;
+  for (std::int32_t k = 0; k < num_kinetic_; ++k) {
+    const std::int32_t j = kin_list_[k];
+    const Eigen::Matrix<double, 3, 2>& T = tangent_[patch_of_[j]];
+    for (int c = 0; c < 2; ++c) {
+      double* z = Zcol(2 * (num_slipping_ + k) + c);
+      std::fill(z, z + r, 0.0);
+      for (std::int32_t i = 0; i < num_unique_; ++i) {
+        if (!active_[i]) continue;
+        Eigen::Map<const Eigen::Matrix3d, 0, Eigen::OuterStride<>> Cij(
+            Ccc_.data() + static_cast<std::ptrdiff_t>(3 * j) * ld + 3 * i, 3, 3, Eigen::OuterStride<>(ld));
+        const Eigen::Vector3d v = Cij * T.col(c);
+        if (mode_[i] == ContactMode::kFull3d) {
+          for (int rr = 0; rr < 3; ++rr) z[row_of_[i] + rr] = -v[rr];
+        } else {
+          z[row_of_[i]] = -n_[i].dot(v);
+        }
+      }
+    }
+  }
+}
+
+void ContactSolver::MarkKineticPatchesSlipping() noexcept {
+  // A patch that holds no node in 3-D but kinetic ones slides: it slips, and its slide is where
+  // the material under it went along the surface (the mean tangential displacement of those
+  // nodes), so that its anchor, the contact point minus the slide, is the material point under
+  // the fingertip. Kept at the stick instead, the anchor stayed behind a stroke, the patch
+  // drifted off the fingertip and its nodes came and went (a second difference of up to 1.1 F_n
+  // on the horn).
+  const int ld = 3 * options_.max_contacts;
+  for (std::int32_t p = 0; p < num_patches_; ++p) {
+    bool holds = false;
+    std::int32_t kinetic = 0;
+    Eigen::Vector3d u_sum = Eigen::Vector3d::Zero();
+    for (std::int32_t j = 0; j < num_unique_; ++j) {
+      if (!active_[j] || patch_of_[j] != p) continue;
+      holds = holds || mode_[j] == ContactMode::kFull3d;
+      if (kin_of_[j] < 0) continue;
+      ++kinetic;
+      for (std::int32_t i = 0; i < num_unique_; ++i) {
+        if (!active_[i]) continue;
+        Eigen::Map<const Eigen::Matrix3d, 0, Eigen::OuterStride<>> Cji(
+            Ccc_.data() + static_cast<std::ptrdiff_t>(3 * i) * ld + 3 * j, 3, 3, Eigen::OuterStride<>(ld));
+        u_sum.noalias() += Cji * f_N_[i];
+      }
+    }
+    if (holds || kinetic == 0) continue;
+    if (!patch_state_[p].slipping) slip_dir_[p] = KineticDirection(p);
+    patch_state_[p].slipping = true;
+    patch_state_[p].slide_m = tangent_[p] * (tangent_[p].transpose() * u_sum) / static_cast<double>(kinetic);
+  }
 }
 
 bool ContactSolver::SolveSlides(int r) noexcept {
   const std::int32_t ns = num_slipping_;
   const int n2 = 2 * ns;
+  const int n = n2 + 2 * num_kinetic_;  // unknowns: the slides, then the kinetic loads
   // Phi_a applied to the columns (the patch's held nodes' rows), both equations of a patch
   // from one read of each row. With given forces the equations are T^T F = g instead
-  // (symmetric: Phi Z = B^T A^-1 B).
+  // (symmetric: Phi Z = B^T A^-1 B). A kinetic node's load g_j adds T^T T g_j = g_j to its
+  // patch's equations (the weights' n part is orthogonal to T).
   // Every column's sums at once (column 0: z0, as rhs_; then Z).
   const std::ptrdiff_t ldz = 3 * static_cast<std::ptrdiff_t>(options_.max_contacts);
   double* s0 = slip_sum_.data();
-  double* s1 = s0 + (n2 + 1);
+  double* s1 = s0 + (n + 1);
   for (std::int32_t a = 0; a < ns; ++a) {
     const std::int32_t b = slip_row_begin_[a];
-    detail::WeightedRowSums(Z_.data(), ldz, n2 + 1, slip_row_.data() + b, slip_row_w0_.data() + b,
+    detail::WeightedRowSums(Z_.data(), ldz, n + 1, slip_row_.data() + b, slip_row_w0_.data() + b,
                             slip_row_w1_.data() + b, slip_row_begin_[a + 1] - b, s0, s1, detail::BestIsa());
     const Eigen::Vector2d g = given_force_ ? slip_force_[slipping_list_[a]] : Eigen::Vector2d::Zero();
     slip_rhs_[2 * a] = g[0] - s0[0];
     slip_rhs_[2 * a + 1] = g[1] - s1[0];
-    for (int col = 1; col <= n2; ++col) {
-      slip_M_[static_cast<std::ptrdiff_t>(col - 1) * n2 + 2 * a] = s0[col];
-      slip_M_[static_cast<std::ptrdiff_t>(col - 1) * n2 + 2 * a + 1] = s1[col];
+    for (int col = 1; col <= n; ++col) {
+      slip_M_[static_cast<std::ptrdiff_t>(col - 1) * n + 2 * a] = s0[col];
+      slip_M_[static_cast<std::ptrdiff_t>(col - 1) * n + 2 * a + 1] = s1[col];
+    }
+    for (std::int32_t m = slip_begin_[a]; m < slip_begin_[a + 1]; ++m) {
+      const std::int32_t k = kin_of_[slip_members_[m]];
+      if (k < 0) continue;
+      slip_M_[static_cast<std::ptrdiff_t>(n2 + 2 * k) * n + 2 * a] += 1.0;
+      slip_M_[static_cast<std::ptrdiff_t>(n2 + 2 * k + 1) * n + 2 * a + 1] += 1.0;
     }
   }
-  if (!detail::LuInPlace(slip_M_.data(), n2, n2, slip_piv_.data())) return false;
-  detail::LuSolveInPlace(slip_M_.data(), n2, n2, slip_piv_.data(), slip_rhs_.data());
-  for (int col = 0; col < n2; ++col) {
+  // A kinetic node's two equations: g_j + mu_k e y_j = 0 (kinetic friction mu_k N_j along e,
+  // N_j = -y_j), or g_j = its given load.
+  for (std::int32_t k = 0; k < num_kinetic_; ++k) {
+    const std::int32_t j = kin_list_[k];
+    const int row = row_of_[j];
+    const double mu = patch_in_[patch_of_[j]].mu_kinetic;
+    for (int c = 0; c < 2; ++c) {
+      const int eq = n2 + 2 * k + c;
+      const double w = mu * kin_dir_[k][c];
+      for (int col = 1; col <= n; ++col) slip_M_[static_cast<std::ptrdiff_t>(col - 1) * n + eq] = w * Z_[(col)*ldz + row];
+      slip_M_[static_cast<std::ptrdiff_t>(eq) * n + eq] += 1.0;
+      slip_rhs_[eq] = -w * Z_[row];
+    }
+  }
+  if (!detail::LuInPlace(slip_M_.data(), n, n, slip_piv_.data())) return false;
+  detail::LuSolveInPlace(slip_M_.data(), n, n, slip_piv_.data(), slip_rhs_.data());
+  for (int col = 0; col < n; ++col) {
     if (!std::isfinite(slip_rhs_[col])) return false;
   }
   // y = z0 + Z s, a matrix-vector product over Z's columns.
   Eigen::Map<Eigen::VectorXd>(rhs_.data(), r).noalias() +=
-      Eigen::Map<const Eigen::MatrixXd, 0, Eigen::OuterStride<>>(Zcol(0), r, n2, Eigen::OuterStride<>(ldz)) *
-      Eigen::Map<const Eigen::VectorXd>(slip_rhs_.data(), n2);
+      Eigen::Map<const Eigen::MatrixXd, 0, Eigen::OuterStride<>>(Zcol(0), r, n, Eigen::OuterStride<>(ldz)) *
+      Eigen::Map<const Eigen::VectorXd>(slip_rhs_.data(), n);
   for (std::int32_t a = 0; a < ns; ++a) {
     const std::int32_t p = slipping_list_[a];
     patch_state_[p].slide_m = tangent_[p] * Eigen::Vector2d(slip_rhs_[2 * a], slip_rhs_[2 * a + 1]);
+  }
+  for (std::int32_t k = 0; k < num_kinetic_; ++k) {
+    kin_force_[kin_list_[k]] = Eigen::Vector2d(slip_rhs_[n2 + 2 * k], slip_rhs_[n2 + 2 * k + 1]);
   }
   return true;
 }
@@ -974,9 +1120,10 @@ bool ContactSolver::WouldStick(std::int32_t a) const noexcept {
   const Eigen::Vector2d delta = SlidOver(a);
   const double* z0 = Zcol(2 * a);
   const double* z1 = Zcol(2 * a + 1);
+  // Its kinetic nodes lie on its cone whatever it does: the rest decides.
   Eigen::Vector3d force = Eigen::Vector3d::Zero();
   for (std::int32_t j = 0; j < num_unique_; ++j) {
-    if (!active_[j] || patch_of_[j] != p) continue;
+    if (!active_[j] || patch_of_[j] != p || kin_of_[j] >= 0) continue;
     const int k = row_of_[j];
     auto row = [&](int c) { return rhs_[k + c] + z0[k + c] * delta[0] + z1[k + c] * delta[1]; };
     force += mode_[j] == ContactMode::kFull3d ? Eigen::Vector3d(row(0), row(1), row(2))
@@ -1007,10 +1154,14 @@ int ContactSolver::TurnTowardTheSlide(std::int32_t a, double tol) noexcept {
   const FrictionPatch& in = patch_in_[p];
   const double* z0 = Zcol(2 * a);
   const double* z1 = Zcol(2 * a + 1);
-  Eigen::Vector3d dF0 = Eigen::Vector3d::Zero(), dF1 = Eigen::Vector3d::Zero();
+  // Its kinetic nodes pull mu_k N_j along e whatever e is, so they leave the cone equation
+  // (F_t - mu_k F_n e): the patch's other nodes decide its direction.
+  Eigen::Vector3d dF0 = Eigen::Vector3d::Zero(), dF1 = Eigen::Vector3d::Zero(), F_rest = Eigen::Vector3d::Zero();
   for (std::int32_t m = slip_begin_[a]; m < slip_begin_[a + 1]; ++m) {
     const std::int32_t j = slip_members_[m];
     const int k = row_of_[j];
+    if (kin_of_[j] >= 0) continue;
+    F_rest += f_N_[j];
     if (mode_[j] == ContactMode::kFull3d) {
       dF0 += Eigen::Vector3d(z0[k], z0[k + 1], z0[k + 2]);
       dF1 += Eigen::Vector3d(z1[k], z1[k + 1], z1[k + 2]);
@@ -1020,7 +1171,7 @@ int ContactSolver::TurnTowardTheSlide(std::int32_t a, double tol) noexcept {
     }
   }
   const Eigen::Vector2d slid = SlidOver(a);  // sigma - s
-  const Eigen::Vector3d F3 = patch_state_[p].force_N + dF0 * slid[0] + dF1 * slid[1];
+  const Eigen::Vector3d F3 = F_rest + dF0 * slid[0] + dF1 * slid[1];
   const Eigen::Vector2d F_sigma = tangent_[p].transpose() * F3;
   const double N_sigma = -in.n_out.dot(F3);
   Eigen::Matrix2d G;
@@ -1123,6 +1274,7 @@ bool ContactSolver::SolveWithPatches(StepStatus& status) noexcept {
     }
     if (!RunPatchedPass(rounds, status)) return false;
   }
+  MarkKineticPatchesSlipping();
   SumPatchForces();
   return true;
 }
@@ -1248,6 +1400,7 @@ void ContactSolver::RestartPass(PatchRounds& rounds) noexcept {
     releases_[j] = 0;
     mode_[j] = mode_in_[j];
     slipping_[j] = 0;
+    kin_given_[j].setZero();
   }
   for (std::int32_t p = 0; p < num_patches_; ++p) {
     warm_slip_[p] = Settles(p) ? 0 : 1;
@@ -1383,9 +1536,15 @@ std::int32_t ContactSolver::FindPatchedViolations(PatchRounds& rounds, double f_
     const std::int32_t p = patch_of_[j];
     return p >= 0 ? Eigen::Vector3d(d_m_[j] + patch_state_[p].slide_m) : d_m_[j];
   };
+  // A held node's pull: its normal force (a kinetic node's tangential load is along its patch's
+  // surface, not quite its own).
+  auto pull = [&](std::int32_t j) {
+    const double f = f_N_[j].dot(n_[j]);
+    return kin_of_[j] >= 0 ? f - (tangent_[patch_of_[j]] * kin_force_[j]).dot(n_[j]) : f;
+  };
   std::int32_t violations = 0;
   for (std::int32_t j = 0; j < num_unique_; ++j) {
-    bool v = active_[j] ? f_N_[j].dot(n_[j]) / f_scale > kTol
+    bool v = active_[j] ? pull(j) / f_scale > kTol
                         : (u_c_m_[j] - target(j)).dot(n_[j]) / rounds.d_scale > kTol;
     if (frozen_[j]) {  // stays released in this pass (see SolveWithPatches)
       rounds.frozen_pushed = rounds.frozen_pushed || v;
@@ -1398,6 +1557,7 @@ std::int32_t ContactSolver::FindPatchedViolations(PatchRounds& rounds, double f_
     if (v && active_[j] && mode_[j] == ContactMode::kFull3d) {
       mode_[j] = ContactMode::kNormalOnly;
       slipping_[j] = 1;
+      kin_given_[j].setZero();
       slipped = true;
     }
   }
@@ -1419,15 +1579,17 @@ void ContactSolver::PivotPatched(PatchRounds& rounds, std::int32_t violations, b
       if (releases_[j] < 255) ++releases_[j];
     } else {
       active_[j] = 1;
-      if (mode_[j] == ContactMode::kFull3d) {  // re-engages frictionless
+      if (mode_[j] == ContactMode::kFull3d) {  // re-engages normal-only (kinetic friction)
         mode_[j] = ContactMode::kNormalOnly;
         slipping_[j] = 1;
+        kin_given_[j].setZero();
       }
       if (releases_[j] >= 2 && !given_force_) {  // came back twice: switch (see SolveWithPatches)
         given_force_ = true;
         for (std::int32_t p = 0; p < num_patches_; ++p) {
           if (patch_state_[p].slipping) slip_force_[p] = ConeForce(p);
         }
+        for (std::int32_t i = 0; i < num_unique_; ++i) kin_given_[i] = kin_of_[i] >= 0 ? kin_force_[i] : Eigen::Vector2d::Zero();
         rounds.pivoting = BlockPivoting(num_unique_);
         rounds.pivots = 0;
       }
@@ -1444,6 +1606,14 @@ double ContactSolver::UpdateGivenForces() noexcept {
     const Eigen::Vector2d g = ConeForce(p);
     change = std::max(change, (g - slip_force_[p]).norm());
     slip_force_[p] = g;
+  }
+  // The kinetic nodes' loads from their normal forces (N_j >= 0).
+  for (std::int32_t k = 0; k < num_kinetic_; ++k) {
+    const std::int32_t j = kin_list_[k];
+    const double y = f_N_[j].dot(n_[j]) - (tangent_[patch_of_[j]] * kin_force_[j]).dot(n_[j]);
+    const Eigen::Vector2d g = patch_in_[patch_of_[j]].mu_kinetic * std::max(-y, 0.0) * kin_dir_[k];
+    change = std::max(change, (g - kin_given_[j]).norm());
+    kin_given_[j] = g;
   }
   return change;
 }

@@ -17,7 +17,10 @@
 /// e in which the force and the slide agree (a stroke's slip carried on: the way the fingertip
 /// moves), checked once the push-only held set has settled. Both states are
 /// linear solves on C_cc, so each is the exact static FEM solution for its displacements;
-/// docs/fem.md ("Friction") gives the equations.
+/// docs/fem.md ("Friction") gives the equations. A patch whose held nodes all pulled when held in
+/// 3-D (kept along their normal only) gives them kinetic friction mu_k N_j along its slip or its
+/// fingertip's motion, solved exactly with the slides (docs/fem.md, "Kinetic friction on nodes
+/// held along their normal"); it then slips.
 /// Solve() and the displacement queries are noexcept and do not allocate: everything is sized by
 /// the constructor for ContactSolverOptions::max_contacts.
 
@@ -286,6 +289,14 @@ class ContactSolver {
   // For list index a of the last SolvePatchedSystem: how far its fingertip slid over the
   // material, the stick minus the slide it solved (tangent coordinates).
   Eigen::Vector2d SlidOver(std::int32_t a) const noexcept;
+  // Kinetic friction on the patch nodes held along their normal only (they pulled when held in
+  // 3-D): the way patch p's such nodes drag the body (tangent coordinates; zero: none), the
+  // list of them in this solve (kin_list_) and their tangential loads' columns.
+  Eigen::Vector2d KineticDirection(std::int32_t p) const noexcept;
+  void ListKineticNodes() noexcept;
+  void KineticColumns(int r) noexcept;
+  // Patches left with no node held in 3-D but kinetic ones: they slide (slipping, at the stick).
+  void MarkKineticPatchesSlipping() noexcept;
 
   // Push-only with every contact frictionless: the scalar problem on S = N^T C_cc N, warm
   // started from the previous Solve()'s active set. Returns false on a numerical failure.
@@ -425,6 +436,18 @@ class ContactSolver {
   std::vector<std::int32_t> slip_row_begin_;
   std::vector<double> slip_row_w0_, slip_row_w1_;
   std::vector<double> slip_sum_;  // a patch's two sums over every column
+  // Kinetic friction on the patch nodes held normal-only (KineticDirection): the nodes in the
+  // last SolvePatchedSystem (at most max_kinetic_; their unknown tangential loads g, two each,
+  // follow the slides in Z_'s columns and in the system), per distinct node its index in that
+  // list (-1: none), the tangential load solved and the load given (given_force_; tangent
+  // coordinates of its patch), and per listed node the way it drags.
+  std::vector<std::int32_t> kin_list_;
+  std::vector<std::int32_t> kin_of_;
+  std::vector<Eigen::Vector2d> kin_force_;
+  std::vector<Eigen::Vector2d> kin_given_;
+  std::vector<Eigen::Vector2d> kin_dir_;
+  std::int32_t num_kinetic_ = 0;
+  std::int32_t max_kinetic_ = 0;
   std::int32_t num_patches_ = 0;
   mutable SurfaceField field_;
 };
