@@ -54,7 +54,7 @@ struct DeskFilterConfig {
   /// when no bound is reached.
   double tau_s = 0.04;
   double max_speed_m_per_s = 0.25;             ///< hand base
-  double max_acceleration_m_per_s2 = 6.0;
+  double max_acceleration_m_per_s2 = 12.0;      ///< a pointer's jump: a pixel of the view in 11 ms
   double max_turn_rate_rad_per_s = 1.2;        ///< hand base rotation
   double max_turn_acceleration_rad_per_s2 = 20.0;
   double max_closure_rate_per_s = 1.5;         ///< each finger, full closure per second

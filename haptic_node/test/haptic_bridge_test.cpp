@@ -228,7 +228,7 @@ TEST_F(BridgeCoupling, AMovingHandsStateLeavesOnTheStepsWakeAtTheViewersRate) {
     std::this_thread::sleep_for(1ms);  // the loop's period, on the clock the wake-ups are spaced by
   }
   ASSERT_GE(first_at, 0) << "no device state left on a motion wake-up within 40 steps of the move";
-  // The desk's filter moves the hand 0.5 mm in about 12 ms (6 m/s^2): the state leaves the step
+  // The desk's filter moves the hand 0.5 mm in about 9 ms (12 m/s^2): the state leaves the step
   // after, not at a tick up to a period later.
   EXPECT_LE(first_at, 20);
 
