@@ -71,6 +71,25 @@ HapticNodeConfig AliceIn(const std::string& session) {
   return config;
 }
 
+// `server` plays the world server: it writes the lab's scene state once, and the bridge ticks
+// every 10 ms until it has adopted it or give_up comes. The writer is returned to stay alive.
+dds::Writer<msg::SceneState> ServeLab(dds::Participant& server, const std::string& session, HapticBridge& bridge,
+                                      Clock::time_point give_up) {
+  auto writer = dds::MakeWriter<msg::SceneState>(server, dds::topics::kSceneState);
+  msg::SceneState scene;
+  scene.session(session);
+  scene.scene("lab");
+  scene.revision(1);
+  scene.gravity_W_m_per_s2({0.0, 0.0, -9.81});
+  scene.tick_Hz(60.0f);
+  writer.Write(scene);
+  while (!bridge.heard_world_server() && Clock::now() < give_up) {
+    bridge.Tick();
+    std::this_thread::sleep_for(10ms);
+  }
+  return writer;
+}
+
 class BridgeCoupling : public ::testing::Test {
  protected:
   void SetUp() override {
@@ -96,20 +115,9 @@ TEST_F(BridgeCoupling, APeersContactSetWakesTheBridgeAndReachesTheNextHapticStep
   HapticBridge bridge(config, device, loop, alice_p, nullptr, [](const std::string&) {});
 
   // Bob's side plays the world server too: the scene, then his contact set.
-  auto scene_writer = dds::MakeWriter<msg::SceneState>(bob_p, dds::topics::kSceneState);
   auto contact_writer = dds::MakeWriter<msg::ContactSet>(bob_p, dds::topics::kContactSet);
-  msg::SceneState scene;
-  scene.session(session);
-  scene.scene("lab");
-  scene.revision(1);
-  scene.gravity_W_m_per_s2({0.0, 0.0, -9.81});
-  scene.tick_Hz(60.0f);
-  scene_writer.Write(scene);
   const auto give_up = Clock::now() + 60s;
-  while (!bridge.heard_world_server() && Clock::now() < give_up) {
-    bridge.Tick();
-    std::this_thread::sleep_for(10ms);
-  }
+  const auto scene_writer = ServeLab(bob_p, session, bridge, give_up);
   ASSERT_TRUE(bridge.heard_world_server()) << "no scene state in 60 s";
   while (contact_writer.matched_readers() == 0 && Clock::now() < give_up) std::this_thread::sleep_for(10ms);
   ASSERT_GT(contact_writer.matched_readers(), 0) << "alice's contact reader never matched bob's writer";
@@ -182,20 +190,9 @@ TEST_F(BridgeCoupling, AMovingHandsStateLeavesOnTheStepsWakeAtTheViewersRate) {
   DeskDevice device;
   HapticLoop loop(device, HapticLoopConfig{1000.0, false});
   HapticBridge bridge(config, device, loop, alice_p, nullptr, [](const std::string&) {});
-  auto scene_writer = dds::MakeWriter<msg::SceneState>(view_p, dds::topics::kSceneState);
   auto state_reader = dds::MakeReader<msg::DeviceState>(view_p, dds::topics::kDeviceState);
-  msg::SceneState scene;
-  scene.session(session);
-  scene.scene("lab");
-  scene.revision(1);
-  scene.gravity_W_m_per_s2({0.0, 0.0, -9.81});
-  scene.tick_Hz(60.0f);
-  scene_writer.Write(scene);
   const auto give_up = Clock::now() + 60s;
-  while (!bridge.heard_world_server() && Clock::now() < give_up) {
-    bridge.Tick();
-    std::this_thread::sleep_for(10ms);
-  }
+  const auto scene_writer = ServeLab(view_p, session, bridge, give_up);
   ASSERT_TRUE(bridge.heard_world_server()) << "no scene state in 60 s";
   while (state_reader.matched_writers() == 0 && Clock::now() < give_up) std::this_thread::sleep_for(10ms);
   ASSERT_GT(state_reader.matched_writers(), 0) << "the view's reader never matched alice's device states";

@@ -326,30 +326,48 @@ TEST(SceneRenderer, APeerBackAfterABridgeStallComesBackAtTheFadesRate) {
   std::filesystem::remove_all(dir);
 }
 
+// The ground-and-block lab's renderer with the bridge's wake-up set, and a hand (every fingertip
+// far from everything) stepped through it 1 ms at a time, counting the steps' heap allocations.
+struct WokenLab {
+  explicit WokenLab(const std::string& name) : dir(LabDir(name)), options(OptionsIn(dir)) {
+    renderer.SetWakeup(wake);
+    hand.valid = true;
+    for (auto& p : hand.p_WE) p = Eigen::Vector3d(1.0, 1.0, 1.0);
+  }
+  ~WokenLab() { std::filesystem::remove_all(dir); }
+  void Step() {
+    t_ns += 1'000'000;
+    const long before = testing::AllocationCount();
+    renderer.Render(0.0, 1e-3, t_ns, hand, f);
+    allocations += testing::AllocationCount() - before;
+  }
+  static world::SceneModelsOptions OptionsIn(const std::filesystem::path& dir) {
+    world::SceneModelsOptions o;
+    o.cache_dir = dir / "cache";
+    return o;
+  }
+  std::filesystem::path dir;
+  world::SceneModelsOptions options;
+  SceneRenderer renderer{scene::LoadScene(WriteLab(dir, kGroundAndBlock)), options};
+  std::shared_ptr<common::Wakeup> wake = std::make_shared<common::Wakeup>();
+  DeviceReading hand;
+  std::array<Eigen::Vector3d, kFingers> f{};
+  std::uint64_t t_ns = common::SteadyNowNs();
+  long allocations = 0;
+};
+
 // What a screen shows of a hand: with the motion wake on, the step after the one that moved the
 // hand (its base or a fingertip it has) half a millimetre past the last post posts the bridge's
 // wake-up, no sooner than the gap after the last post, without allocating; a hand at rest, a
 // finger the device lacks, or the wake off posts nothing.
 TEST(SceneRenderer, AHandThatMovesWakesTheBridgeTheStepAfter) {
-  const auto dir = LabDir("motion");
-  world::SceneModelsOptions options;
-  options.cache_dir = dir / "cache";
-  SceneRenderer r(scene::LoadScene(WriteLab(dir, kGroundAndBlock)), options);
-  auto wake = std::make_shared<common::Wakeup>();
-  r.SetWakeup(wake);
-  std::array<Eigen::Vector3d, kFingers> f{};
-  DeviceReading hand;
-  hand.valid = true;
-  hand.p_WH = Eigen::Vector3d(1.0, 1.0, 1.2);  // far from everything
-  for (auto& p : hand.p_WE) p = Eigen::Vector3d(1.0, 1.0, 1.0);
-  std::uint64_t t_ns = common::SteadyNowNs();
-  long allocations = 0;
-  auto step = [&] {
-    t_ns += 1'000'000;
-    const long before = testing::AllocationCount();
-    r.Render(0.0, 1e-3, t_ns, hand, f);
-    allocations += testing::AllocationCount() - before;
-  };
+  WokenLab lab("motion");
+  SceneRenderer& r = lab.renderer;
+  const std::shared_ptr<common::Wakeup>& wake = lab.wake;
+  DeviceReading& hand = lab.hand;
+  hand.p_WH = Eigen::Vector3d(1.0, 1.0, 1.2);  // far from everything, as the fingertips
+  const long& allocations = lab.allocations;
+  auto step = [&] { lab.Step(); };
   auto move_base = [&](double dx_m) {
     hand.p_WH.x() += dx_m;
     for (auto& p : hand.p_WE) p.x() += dx_m;
@@ -417,34 +435,21 @@ TEST(SceneRenderer, AHandThatMovesWakesTheBridgeTheStepAfter) {
   }
   EXPECT_EQ(wake->posts(), still + 1) << "the motion wake turned off";
   EXPECT_EQ(allocations, 0);
-  std::filesystem::remove_all(dir);
 }
 
 // The coupling path between ticks: the haptic step posts the bridge's wake-up when a finger
 // starts or stops touching an object, and after every step while the bridge asks for it (a
 // peer shares the object), without allocating; a report with nothing new posts nothing.
 TEST(SceneRenderer, TheStepWakesTheBridgeForAReportWorthOffering) {
-  const auto dir = LabDir("wake");
-  world::SceneModelsOptions options;
-  options.cache_dir = dir / "cache";
-  SceneRenderer r(scene::LoadScene(WriteLab(dir, kGroundAndBlock)), options);
-  auto wake = std::make_shared<common::Wakeup>();
-  r.SetWakeup(wake);
-  std::array<Eigen::Vector3d, kFingers> f{};
-  DeviceReading hand;
-  hand.valid = true;
-  for (auto& p : hand.p_WE) p = Eigen::Vector3d(1.0, 1.0, 1.0);  // far from everything
+  WokenLab lab("wake");
+  SceneRenderer& r = lab.renderer;
+  const std::shared_ptr<common::Wakeup>& wake = lab.wake;
+  DeviceReading& hand = lab.hand;
   // The index fingertip 2 mm above the block's top (z = 0.02 m).
-  const double above_m = 0.02 + options.fingertip_radius_m + 0.002;
+  const double above_m = 0.02 + lab.options.fingertip_radius_m + 0.002;
   hand.p_WE[0] = Eigen::Vector3d(-0.1, 0.0, above_m);
-  std::uint64_t t_ns = common::SteadyNowNs();
-  long allocations = 0;
-  auto step = [&] {
-    t_ns += 1'000'000;
-    const long before = testing::AllocationCount();
-    r.Render(0.0, 1e-3, t_ns, hand, f);
-    allocations += testing::AllocationCount() - before;
-  };
+  const long& allocations = lab.allocations;
+  auto step = [&] { lab.Step(); };
   for (int i = 0; i < 5; ++i) step();
   EXPECT_EQ(wake->posts(), 0u) << "no finger touches anything: nothing to offer";
   // It comes down 0.1 mm a step: the step that touches posts, none before.
@@ -469,7 +474,6 @@ TEST(SceneRenderer, TheStepWakesTheBridgeForAReportWorthOffering) {
   step();
   EXPECT_EQ(wake->posts(), 7u) << "the touch ended";
   EXPECT_EQ(allocations, 0);
-  std::filesystem::remove_all(dir);
 }
 
 // --dump-deformation: the haptic thread's snapshot of its solve's loads, turned into a field by
