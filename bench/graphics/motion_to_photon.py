@@ -35,13 +35,11 @@ import csv
 import os
 import random
 import shutil
-import signal
 import subprocess
 import sys
 import time
 
-sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..", "tests"))
-from desk_test import launch_xvfb  # noqa: E402
+from bench_session import BenchSession  # noqa: E402
 
 
 def xdotool(*args):
@@ -127,42 +125,21 @@ def main():
     frame_log = os.path.join(a.work, "frames.csv")
     if os.path.exists(frame_log):
         os.remove(frame_log)
-    procs = []
-
-    def log(name):
-        return open(os.path.join(a.work, name + ".log"), "w")
-
-    def start(name, exe, *args):
-        p = subprocess.Popen([os.path.join(a.bin_dir, exe.split("/")[0], exe.split("/")[-1]), *map(str, args)],
-                             stdout=log(name), stderr=subprocess.STDOUT, env=os.environ.copy())
-        procs.append(p)
-        return p
-
-    def wait_log(name, text, timeout):
-        deadline = time.monotonic() + timeout
-        while time.monotonic() < deadline:
-            with open(os.path.join(a.work, name + ".log")) as f:
-                if text in f.read():
-                    return
-            time.sleep(0.05)
-        sys.exit(f"{name} did not say '{text}' within {timeout} s (see {a.work}/{name}.log)")
-
-    xvfb, display = launch_xvfb(f"{a.width + 64}x{a.height + 64}x24", log("xvfb"))
-    procs.append(xvfb)
-    os.environ["DISPLAY"] = display
+    run = BenchSession(a.bin_dir, a.work)
+    display = run.start_display(a.width, a.height)
     session = f"mtp-{os.getpid()}"
     common = ["--domain", a.domain, "--session", session]
     try:
-        start("world_server", "world_server/world_server", *common, "--scene", a.world)
-        start("alice", "haptic_node/haptic_node", *common, "--user", "alice", "--device", "desk")
-        start("view", "graphics_node/graphics_node", *common, "--name", "mtp-view", "--view", "user:alice",
-              "--input", "desk", "--width", a.width, "--height", a.height, "--fps", a.fps, "--frame-log", frame_log)
-        wait_log("alice", f"scene '{a.world}' revision", 120)
+        run.start("world_server", "world_server/world_server", *common, "--scene", a.world)
+        run.start("alice", "haptic_node/haptic_node", *common, "--user", "alice", "--device", "desk")
+        run.start("view", "graphics_node/graphics_node", *common, "--name", "mtp-view", "--view", "user:alice",
+                  "--input", "desk", "--width", a.width, "--height", a.height, "--fps", a.fps, "--frame-log", frame_log)
+        run.wait_log("alice", f"scene '{a.world}' revision", 120)
         window = xdotool("search", "--sync", "--onlyvisible", "--name", "alice at the desk").split()[0]
         xdotool("windowfocus", "--sync", window)
         centre_x, centre_y = a.width // 2, a.height // 2
         xdotool("mousemove", "--window", window, centre_x, centre_y)
-        wait_log("alice", "desk: the hand is live", 60)
+        run.wait_log("alice", "desk: the hand is live", 60)
         frames = FrameLog(frame_log)
         geometry = dict(line.split("=", 1) for line in xdotool("getwindowgeometry", "--shell", window).splitlines())
         origin_x, origin_y = int(geometry["X"]), int(geometry["Y"])
@@ -220,15 +197,7 @@ def main():
         load = os.getloadavg()
         xtest.close()
     finally:
-        for p in reversed(procs):
-            if p.poll() is None:
-                p.send_signal(signal.SIGINT)
-        for p in reversed(procs):
-            try:
-                p.wait(timeout=20)
-            except subprocess.TimeoutExpired:
-                p.kill()
-                p.wait()
+        run.stop()
     latencies = [r[3] for r in results if r[3] == r[3]]
     missing = len(results) - len(latencies)
     if not latencies:

@@ -22,14 +22,11 @@ import argparse
 import csv
 import os
 import shutil
-import signal
-import subprocess
 import sys
 import time
 
 HERE = os.path.dirname(os.path.abspath(__file__))
-sys.path.insert(0, os.path.join(HERE, "..", "..", "tests"))
-from desk_test import launch_xvfb  # noqa: E402
+from bench_session import BenchSession  # noqa: E402
 from motion_to_photon import percentile  # noqa: E402
 
 
@@ -54,53 +51,24 @@ def main():
     frame_log = os.path.join(a.work, "frames.csv")
     if os.path.exists(frame_log):
         os.remove(frame_log)
-    procs = []
-
-    def log(name):
-        return open(os.path.join(a.work, name + ".log"), "w")
-
-    def start(name, exe, *args):
-        p = subprocess.Popen([os.path.join(a.bin_dir, exe.split("/")[0], exe.split("/")[-1]), *map(str, args)],
-                             stdout=log(name), stderr=subprocess.STDOUT, env=os.environ.copy())
-        procs.append(p)
-        return p
-
-    def wait_log(name, text, timeout):
-        deadline = time.monotonic() + timeout
-        while time.monotonic() < deadline:
-            with open(os.path.join(a.work, name + ".log")) as f:
-                if text in f.read():
-                    return
-            time.sleep(0.05)
-        sys.exit(f"{name} did not say '{text}' within {timeout} s (see {a.work}/{name}.log)")
-
-    xvfb, display = launch_xvfb(f"{a.width + 64}x{a.height + 64}x24", log("xvfb"))
-    procs.append(xvfb)
-    os.environ["DISPLAY"] = display
+    run = BenchSession(a.bin_dir, a.work)
+    run.start_display(a.width, a.height)
     session = f"stp-{os.getpid()}"
     common = ["--domain", a.domain, "--session", session]
     try:
-        start("world_server", "world_server/world_server", *common, "--scene", a.world)
-        start("screen", "graphics_node/graphics_node", *common, "--name", "stp-screen", "--width", a.width,
-              "--height", a.height, "--fps", a.fps, "--frame-log", frame_log, "--frame-pacing", a.frame_pacing)
-        start("alice", "haptic_node/haptic_node", *common, "--user", "alice", "--device", "sim", "--script",
-              os.path.join(HERE, "spectator_sweep.hand"))
-        wait_log("alice", f"scene '{a.world}' revision", 120)
+        run.start("world_server", "world_server/world_server", *common, "--scene", a.world)
+        run.start("screen", "graphics_node/graphics_node", *common, "--name", "stp-screen", "--width", a.width,
+                  "--height", a.height, "--fps", a.fps, "--frame-log", frame_log, "--frame-pacing", a.frame_pacing)
+        run.start("alice", "haptic_node/haptic_node", *common, "--user", "alice", "--device", "sim", "--script",
+                  os.path.join(HERE, "spectator_sweep.hand"))
+        run.wait_log("alice", f"scene '{a.world}' revision", 120)
         time.sleep(2.0)  # the spectator's window opens and the sweeps begin
         t_start = time.monotonic_ns()
         time.sleep(a.seconds)  # the measurement window: the frames logged meanwhile
         t_end = time.monotonic_ns()
         load = os.getloadavg()
     finally:
-        for p in reversed(procs):
-            if p.poll() is None:
-                p.send_signal(signal.SIGINT)
-        for p in reversed(procs):
-            try:
-                p.wait(timeout=20)
-            except subprocess.TimeoutExpired:
-                p.kill()
-                p.wait()
+        run.stop()
     rows = []
     last_stamp = 0
     frames = 0
