@@ -17,6 +17,12 @@ void Resolve(GlApi::Loader loader, const char* name, Fn& fn) {
   fn = reinterpret_cast<Fn>(address);
 }
 
+// An optional entry point: null when the context lacks it.
+template <typename Fn>
+void ResolveOptional(GlApi::Loader loader, const char* name, Fn& fn) {
+  fn = reinterpret_cast<Fn>(loader(name));
+}
+
 }  // namespace
 
 void GlApi::Load(Loader loader) {
@@ -71,6 +77,15 @@ void GlApi::Load(Loader loader) {
   Resolve(loader, "glVertex3d", Vertex3d);
   Resolve(loader, "glVertexPointer", VertexPointer);
   Resolve(loader, "glViewport", Viewport);
+  Resolve(loader, "glFlush", Flush);
+  ResolveOptional(loader, "glFenceSync", FenceSync);
+  ResolveOptional(loader, "glClientWaitSync", ClientWaitSync);
+  ResolveOptional(loader, "glDeleteSync", DeleteSync);
+  if (FenceSync == nullptr || ClientWaitSync == nullptr || DeleteSync == nullptr) {
+    FenceSync = nullptr;  // all three or none
+    ClientWaitSync = nullptr;
+    DeleteSync = nullptr;
+  }
 }
 
 void GlApi::CheckError(const char* what) const {

@@ -6,6 +6,7 @@
 // an OSMesa context draws nothing). Loading per context makes each path call its own driver.
 
 #include <GL/gl.h>
+#include <GL/glext.h>
 
 namespace handshare::render::detail {
 
@@ -65,9 +66,16 @@ struct GlApi {
   decltype(&::glVertex3d) Vertex3d = nullptr;
   decltype(&::glVertexPointer) VertexPointer = nullptr;
   decltype(&::glViewport) Viewport = nullptr;
+  decltype(&::glFlush) Flush = nullptr;
+
+  // Optional (OpenGL 3.2 / ARB_sync; null when the context lacks them): a fence after a frame's
+  // commands, so that the caller can do other work while the driver draws.
+  PFNGLFENCESYNCPROC FenceSync = nullptr;
+  PFNGLCLIENTWAITSYNCPROC ClientWaitSync = nullptr;
+  PFNGLDELETESYNCPROC DeleteSync = nullptr;
 
   /// Resolves every entry point with `loader` (the current context's GetProcAddress).
-  /// Throws std::runtime_error naming the first missing function.
+  /// Throws std::runtime_error naming the first missing function (of the required ones).
   void Load(Loader loader);
 
   /// Throws std::runtime_error with `what` if glGetError reports an error.

@@ -701,24 +701,9 @@ int Spectator::Run() {
     const std::string help = pad ? GamepadControl::HelpText() : desk.help_shown() ? DeskControl::HelpText() : std::string();
     const render::Camera frame_camera =
         config_.view_user.empty() ? camera : link->world.UserCamera(config_.view_user, config_.eye, camera);
-    const auto frame_start = Clock::now();
-    window.Render(link->world.Build(desk_user, help), frame_camera);
-    if (frame_log.is_open()) {
-      frame_log << frames_shown << "," << common::SteadyNowNs() << ",";
-      const std::string frame_user = link->world.FrameUser(config_.view_user);
-      if (const auto p = link->world.HandBase(frame_user)) {
-        frame_log << p->x() << "," << p->y() << "," << p->z() << ",";
-      } else {
-        frame_log << ",,,";
-      }
-      const Eigen::Vector3d anchor = render::ProjectToImage(frame_camera, Eigen::Vector3d::Zero());
-      frame_log << anchor.x() << "," << anchor.y() << "," << link->world.HandStamp(frame_user) << ","
-                << std::chrono::duration<double, std::milli>(Clock::now() - frame_start).count() << "\n";
-    }
-    ++frames_shown;
     // What the person did, to their haptic node: every frame, so that a quiet desk is noticed
-    // there, and between frames as soon as it happens (the mouse and keys; a gamepad is read
-    // at the frame rate).
+    // there, and as soon as it happens, between frames and while the driver draws one (the
+    // mouse and keys; a gamepad is read at the frame rate).
     const auto send_input = [&] {
       const auto now = Clock::now();
       const double dt_s = std::chrono::duration<double>(now - last_frame).count();
@@ -735,6 +720,25 @@ int Spectator::Run() {
         desk_sender.Send(desk.target(), link->desk_writer);
       }
     };
+    const auto input_while_drawing = [&](double wait_s) {
+      if (window.WaitForInput(wait_s)) send_input();
+    };
+    const auto frame_start = Clock::now();
+    window.Render(link->world.Build(desk_user, help), frame_camera,
+                  config_.desk_input && !pad ? std::function<void(double)>(input_while_drawing) : nullptr);
+    if (frame_log.is_open()) {
+      frame_log << frames_shown << "," << common::SteadyNowNs() << ",";
+      const std::string frame_user = link->world.FrameUser(config_.view_user);
+      if (const auto p = link->world.HandBase(frame_user)) {
+        frame_log << p->x() << "," << p->y() << "," << p->z() << ",";
+      } else {
+        frame_log << ",,,";
+      }
+      const Eigen::Vector3d anchor = render::ProjectToImage(frame_camera, Eigen::Vector3d::Zero());
+      frame_log << anchor.x() << "," << anchor.y() << "," << link->world.HandStamp(frame_user) << ","
+                << std::chrono::duration<double, std::milli>(Clock::now() - frame_start).count() << "\n";
+    }
+    ++frames_shown;
     if (config_.desk_input) send_input();
     next += period;
     // Until the next frame is due: the person's input goes out as it arrives, and a new state of

@@ -138,12 +138,28 @@ WindowRenderer::~WindowRenderer() {
   ReleaseGlfw();
 }
 
-void WindowRenderer::Render(const SceneView& scene, const Camera& camera) {
+void WindowRenderer::Render(const SceneView& scene, const Camera& camera,
+                            const std::function<void(double wait_s)>& while_drawing) {
   impl_->MakeCurrent();
   int width_px = 0;
   int height_px = 0;
   glfwGetFramebufferSize(impl_->window, &width_px, &height_px);
   detail::DrawFrame(impl_->gl, scene, camera, impl_->stereo, width_px, height_px, impl_->text);
+  const detail::GlApi& gl = impl_->gl;
+  if (while_drawing && gl.FenceSync != nullptr) {
+    // The frame's commands end with a fence and go to the driver; until it has drawn them, the
+    // caller's turn (at most kMaxOverlap_s, so that a driver that never signals cannot stall the
+    // window: the swap then waits as it always did).
+    constexpr double kPoll_s = 1e-3;
+    constexpr double kMaxOverlap_s = 0.25;
+    GLsync fence = gl.FenceSync(GL_SYNC_GPU_COMMANDS_COMPLETE, 0);
+    gl.Flush();
+    const double until_s = glfwGetTime() + kMaxOverlap_s;
+    while (fence != nullptr && gl.ClientWaitSync(fence, 0, 0) == GL_TIMEOUT_EXPIRED && glfwGetTime() < until_s) {
+      while_drawing(kPoll_s);
+    }
+    if (fence != nullptr) gl.DeleteSync(fence);
+  }
   glfwSwapBuffers(impl_->window);
   glfwPollEvents();
 }

@@ -7,6 +7,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdlib>
+#include <atomic>
 #include <future>
 #include <string>
 
@@ -63,6 +64,53 @@ TEST_F(RenderWindow, WaitForInputWakesForAPointerMotion) {
   }
   ASSERT_EQ(moved.get(), 0) << "xdotool could not move the pointer";
   EXPECT_TRUE(there) << "no wake with the pointer at (150, 25) within 30 s of its motion";
+}
+
+// While the driver draws a frame (Mesa's software rasterizer, on threads of its own), the main
+// thread is the caller's: a real X pointer motion (xdotool) that arrives then is taken before
+// the frame's swap, not after it. The pointer is moved again and again from another thread until
+// one motion lands inside a frame's drawing; a window that only takes input between frames
+// never sees one there.
+TEST_F(RenderWindow, InputArrivingWhileAFrameIsDrawnIsTakenBeforeItsSwap) {
+  if (std::system("command -v xdotool > /dev/null 2>&1") != 0) GTEST_SKIP() << "no xdotool";
+  WindowRenderer::Options options;
+  options.width_px = 1000;  // near the desk's 1280 x 720 (the virtual screen is 1024 x 768): milliseconds a frame
+  options.height_px = 720;
+  options.title = "input-while-drawing-" + std::to_string(getpid());
+  WindowRenderer window(options);
+  Camera camera;
+  SceneView scene = RedSphereScene(camera);
+  for (int i = 0; i < 5; ++i) {  // fill the window, so that every frame has pixels to shade
+    scene.spheres.push_back({camera.target_W + Eigen::Vector3d(0.1 * (i - 2), 0.3, 0.0), 0.25, {0.2F, 0.6F, 0.9F}});
+  }
+  window.Render(scene, camera);
+  (void)window.WaitForInput(0.2);
+  (void)window.TakeInput();
+  std::atomic<bool> stop{false};
+  auto mover = std::async(std::launch::async, [&] {
+    int failures = 0;
+    for (int k = 0; !stop.load() && k < 400; ++k) {
+      const std::string command = "xdotool search --sync --onlyvisible --name " + options.title +
+                                  " mousemove --window %1 " + std::to_string(200 + 40 * (k % 20)) + " 300 > /dev/null 2>&1";
+      if (std::system(command.c_str()) != 0) ++failures;
+    }
+    return failures;
+  });
+  int calls = 0;
+  int taken_while_drawing = 0;
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(60);
+  while (taken_while_drawing == 0 && std::chrono::steady_clock::now() < deadline) {
+    window.Render(scene, camera, [&](double wait_s) {
+      ++calls;
+      EXPECT_LE(wait_s, 0.01);
+      if (window.WaitForInput(wait_s) && window.TakeInput().cursor_inside) ++taken_while_drawing;
+    });
+    if (window.WaitForInput(0.0)) (void)window.TakeInput();  // between frames: not counted
+  }
+  stop = true;
+  EXPECT_EQ(mover.get(), 0) << "xdotool could not move the pointer";
+  EXPECT_GT(calls, 0) << "the window never handed its time back while a frame was drawn";
+  EXPECT_GT(taken_while_drawing, 0) << "no pointer motion was taken while a frame was drawn, in 60 s of frames";
 }
 
 TEST_F(RenderWindow, ShowsTheSamePictureAsTheOffscreenRenderer) {

@@ -2,6 +2,7 @@
 /// @file
 /// On-screen rendering of a SceneView in a GLFW window (needs a display; X11 on Debian).
 
+#include <functional>
 #include <memory>
 #include <string>
 #include <vector>
@@ -55,7 +56,16 @@ class WindowRenderer {
   /// Draws `scene` into the whole framebuffer (its current size sets the aspect ratio; the
   /// camera's width_px / height_px are ignored), swaps buffers and polls window events.
   /// Throws std::invalid_argument for an invalid camera or mesh.
-  void Render(const SceneView& scene, const Camera& camera);
+  ///
+  /// while_drawing (optional): called again and again, with a time it may wait [s] (1 ms),
+  /// between issuing the frame's commands and the swap, while the driver draws them (Mesa's
+  /// software rasterizer does so on threads of its own: at 1280 x 720 most of a frame). The
+  /// main thread is free meanwhile, so a person's input need not wait for the frame to be
+  /// drawn (docs/devices.md, "Motion to photon"): the caller waits for input there
+  /// (WaitForInput) and sends it. It must not draw or call Render. Not called where the context
+  /// has no fences (OpenGL 3.2 / ARB_sync) or the frame was drawn before the first check.
+  void Render(const SceneView& scene, const Camera& camera,
+              const std::function<void(double wait_s)>& while_drawing = nullptr);
 
   /// True once the user asked to close the window (close button, or Escape).
   [[nodiscard]] bool ShouldClose() const;
