@@ -1,5 +1,12 @@
 // graphics_node: a spectator's view of a session, headless (PNG frames) or in a window.
 
+#include <sys/resource.h>
+
+#include <cerrno>
+#include <cstdio>
+#include <cstring>
+#include <string>
+
 #include "handshare/node/node_main.hpp"
 #include "handshare/graphics/spectator.hpp"
 #include "handshare/render/window_renderer.hpp"
@@ -42,6 +49,11 @@ int main(int argc, char** argv) {
       .Value("state-out", "FILE",
              "at exit, write what the spectator shows as JSON: scene, revision, board {message_id, text}, "
              "objects {id: {p_WO_m, q_WO_wxyz, from}}", "")
+      .Value("nice", "N",
+             "CPU priority (Linux nice, -20..19; below 0 needs the right to raise it). Default: 10 for a "
+             "spectator's screen, 0 for a user's own view: on a machine without room the screens draw fewer frames "
+             "and the haptic nodes' bridges and the world server keep their rates (docs/network.md, \"A busy "
+             "machine\")", "")
       .Value("frame-log", "FILE",
              "window: a CSV row per frame shown (frame, t_ns, the view user's hand base, where the world's "
              "origin lands in pixels): what motion-to-photon is measured from", "");
@@ -88,6 +100,13 @@ int main(int argc, char** argv) {
       if (c.out_dir.empty()) throw OptionError("option --out DIR is required with --headless");
     } else if (!handshare::render::WindowRenderer::DisplayAvailable()) {
       throw OptionError("no display is reachable for a window: use --headless --frames N --out DIR");
+    }
+    // Before any thread starts (DDS, the software rasterizer's): Linux keeps a nice value per
+    // thread, and new threads take their creator's.
+    const int nice = o.GetString("nice").empty() ? (c.view_user.empty() ? 10 : 0)
+                                                 : static_cast<int>(o.GetInt("nice", -20, 19));
+    if (setpriority(PRIO_PROCESS, 0, nice) != 0) {
+      throw OptionError("option --nice " + std::to_string(nice) + ": " + std::strerror(errno));
     }
     return handshare::graphics::Spectator(c).Run();
   });

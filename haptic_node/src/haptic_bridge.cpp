@@ -119,6 +119,7 @@ void HapticBridge::Tick() {
   if (last_tick_ns_ != 0) tick_interval_.Record(1e-3 * static_cast<double>(start_ns - last_tick_ns_));
   last_tick_ns_ = start_ns;
   ++ticks_;
+  if (std::string line = overload_.Tick(start_ns); !line.empty()) say_(line);
   FollowDeskInput();
   FollowControlStates();
   ApplySceneChange();

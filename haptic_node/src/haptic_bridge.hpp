@@ -20,6 +20,7 @@
 #include "desk_device.hpp"
 #include "local_field_dump.hpp"
 #include "handshare/common/latency_histogram.hpp"
+#include "handshare/common/overload_watch.hpp"
 #include "handshare/common/session_clock.hpp"
 #include "handshare/common/wakeup.hpp"
 #include "handshare/dds/messages.hpp"
@@ -113,6 +114,9 @@ class HapticBridge {
   /// The bridge's own rate: ticks, and the time from one tick's start to the next's.
   std::uint64_t ticks() const { return ticks_; }
   const common::LatencyHistogram& tick_interval() const { return tick_interval_; }
+  /// Whether the bridge fell below half its rate (or stalled 100 ms) for a while: said in the
+  /// log when it starts and ends (common::OverloadWatch).
+  const common::OverloadWatch& overload() const { return overload_; }
 
  private:
   // ---- the stages of a tick ----
@@ -210,6 +214,8 @@ class HapticBridge {
   std::uint64_t ticks_ = 0;
   std::uint64_t last_tick_ns_ = 0;
   common::LatencyHistogram tick_interval_;
+  // Below half its rate (the bar: 50 Hz of 100) or a 100 ms stall: overloaded.
+  common::OverloadWatch overload_{"the bridge", common::OverloadLimits{config_.publish_Hz, 0.5 * config_.publish_Hz}};
   Clock::time_point next_stats_;
   std::uint64_t device_states_published_ = 0;
   std::uint64_t device_states_on_motion_ = 0;

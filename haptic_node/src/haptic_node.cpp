@@ -125,14 +125,14 @@ void PrintBridgeSummary(const HapticNodeConfig& config, const HapticBridge& brid
   const double seconds = 1e-6 * interval.mean_us() * static_cast<double>(interval.count());
   std::printf("[haptic_node %s] bridge: %llu ticks, %.1f Hz of %.0f, interval p50 %.2f ms p99 %.2f ms max %.2f ms; "
               "streams %s: device states %llu, contact sets %llu (%llu at the full rate: a peer on the same object); "
-              "device states sent as the hand moved %llu\n",
+              "device states sent as the hand moved %llu; %s\n",
               config.user.c_str(), static_cast<unsigned long long>(bridge.ticks()),
               seconds > 0.0 ? static_cast<double>(interval.count()) / seconds : 0.0, config.publish_Hz,
               1e-3 * interval.Quantile(0.5), 1e-3 * interval.Quantile(0.99), 1e-3 * interval.max_us(),
               config.paced_streams ? "paced" : "full", static_cast<unsigned long long>(bridge.device_states_published()),
               static_cast<unsigned long long>(bridge.contact_sets_sent()),
               static_cast<unsigned long long>(bridge.contact_sets_shared()),
-              static_cast<unsigned long long>(bridge.device_states_on_motion()));
+              static_cast<unsigned long long>(bridge.device_states_on_motion()), bridge.overload().Summary().c_str());
   if (config.device == "desk") {
     std::printf("[haptic_node %s] desk: %llu inputs taken from the view\n", config.user.c_str(),
                 static_cast<unsigned long long>(bridge.desk_inputs()));

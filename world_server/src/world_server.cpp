@@ -12,6 +12,7 @@
 
 #include "handshare/common/clock.hpp"
 #include "handshare/common/latency_histogram.hpp"
+#include "handshare/common/overload_watch.hpp"
 #include "handshare/common/shutdown.hpp"
 #include "handshare/dds/messages.hpp"
 #include "handshare/scene/scene.hpp"
@@ -125,6 +126,8 @@ int WorldServer::Run() {
   Clock::time_point last_tick{};
   common::LatencyHistogram tick_work;      // one tick's stages, start to end
   common::LatencyHistogram tick_interval;  // one tick's start to the next's (period 1 / tick_Hz)
+  // Below half its rate or a 100 ms stall: said in the log (the bar: tick p99 <= 100 ms).
+  common::OverloadWatch overload("the world server's tick", {config_.tick_Hz, 0.5 * config_.tick_Hz});
   while (!common::ShutdownRequested()) {
     if (config_.where.duration.count() > 0 && Clock::now() - start_ >= config_.where.duration) break;
     const auto now = Clock::now();
@@ -132,6 +135,7 @@ int WorldServer::Run() {
                                                          : std::chrono::duration<double>(now - last_tick).count();
     if (last_tick != Clock::time_point{}) tick_interval.Record(1e6 * dt_s);
     last_tick = now;
+    if (std::string line = overload.Tick(static_cast<std::uint64_t>(std::chrono::duration_cast<std::chrono::nanoseconds>(now.time_since_epoch()).count())); !line.empty()) Say(line);
     intake.Take(inputs);
     deliver(session.Tick(inputs, now, std::min(dt_s, 0.1)), now);
     CheckLog();
@@ -144,12 +148,12 @@ int WorldServer::Run() {
       std::to_string(session.members().present().size()) + " still present, " +
       std::to_string(publisher.deformations_sent()) + " deformation samples sent, samples dropped: " +
       session.dropped().Summary());
-  char line[240];
+  char line[320];
   std::snprintf(line, sizeof line,
-                "ticks: %llu at %.0f Hz, work p50 %.0f us p99 %.0f us max %.0f us, interval p99 %.1f ms max %.1f ms",
+                "ticks: %llu at %.0f Hz, work p50 %.0f us p99 %.0f us max %.0f us, interval p99 %.1f ms max %.1f ms; %s",
                 static_cast<unsigned long long>(tick_work.count()), config_.tick_Hz, tick_work.Quantile(0.5),
                 tick_work.Quantile(0.99), tick_work.max_us(), 1e-3 * tick_interval.Quantile(0.99),
-                1e-3 * tick_interval.max_us());
+                1e-3 * tick_interval.max_us(), overload.Summary().c_str());
   Say(line);
   Say(participant.TrafficSummary());
   CloseLog();

@@ -1,0 +1,58 @@
+#include "handshare/common/overload_watch.hpp"
+
+#include <algorithm>
+#include <cstdio>
+#include <utility>
+
+namespace handshare::common {
+
+OverloadWatch::OverloadWatch(std::string what, OverloadLimits limits) : what_(std::move(what)), limits_(limits) {}
+
+std::string OverloadWatch::Tick(std::uint64_t now_ns) {
+  if (window_start_ns_ == 0) {
+    window_start_ns_ = last_ns_ = now_ns;
+    return {};
+  }
+  const double interval_s = now_ns > last_ns_ ? 1e-9 * static_cast<double>(now_ns - last_ns_) : 0.0;
+  if (overloaded_) overloaded_s_ += interval_s;
+  last_ns_ = now_ns;
+  ++ticks_;
+  longest_s_ = std::max(longest_s_, interval_s);
+  const double span_s = 1e-9 * static_cast<double>(now_ns - window_start_ns_);
+  // A single interval past the bound says so at once; the rate only over a whole window.
+  const bool late = longest_s_ > limits_.max_interval_s;
+  if (span_s < limits_.window_s && !(late && !overloaded_)) return {};
+  const double rate_Hz = span_s > 0.0 ? ticks_ / span_s : 0.0;
+  const bool slow = span_s >= limits_.window_s && rate_Hz < limits_.min_rate_Hz;
+  const double longest_ms = 1e3 * longest_s_;
+  window_start_ns_ = now_ns;
+  ticks_ = 0;
+  longest_s_ = 0.0;
+  char line[320];
+  if (!overloaded_ && (slow || late)) {
+    overloaded_ = true;
+    ++episodes_;
+    since_ns_ = now_ns;
+    std::snprintf(line, sizeof line,
+                  "the machine is overloaded: %s ran at %.1f Hz of %.0f over the last %.1f s (longest interval "
+                  "%.0f ms): what it carries arrives late",
+                  what_.c_str(), rate_Hz, limits_.rate_Hz, span_s, longest_ms);
+    return line;
+  }
+  if (overloaded_ && !slow && !late && span_s >= limits_.window_s) {
+    overloaded_ = false;
+    std::snprintf(line, sizeof line, "%s keeps its rate again (%.1f Hz of %.0f, longest interval %.0f ms) after %.1f s overloaded",
+                  what_.c_str(), rate_Hz, limits_.rate_Hz, longest_ms, 1e-9 * static_cast<double>(now_ns - since_ns_));
+    return line;
+  }
+  return {};
+}
+
+std::string OverloadWatch::Summary() const {
+  if (episodes_ == 0) return "no overload";
+  char line[96];
+  std::snprintf(line, sizeof line, "overloaded %d time(s), %.1f s in all", episodes_, overloaded_s_);
+  return line;
+}
+
+}  // namespace handshare::common

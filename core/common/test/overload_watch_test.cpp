@@ -1,0 +1,66 @@
+#include "handshare/common/overload_watch.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+namespace handshare::common {
+namespace {
+
+// Ticks every period_s from t_s for duration_s; returns the lines the watch said, and moves t_s.
+std::vector<std::string> TickFor(OverloadWatch& watch, double& t_s, double period_s, double duration_s) {
+  std::vector<std::string> said;
+  const double end_s = t_s + duration_s;
+  for (; t_s < end_s - 1e-12; t_s += period_s) {
+    std::string line = watch.Tick(static_cast<std::uint64_t>(t_s * 1e9) + 1'000'000'000ULL);
+    if (!line.empty()) said.push_back(line);
+  }
+  return said;
+}
+
+TEST(OverloadWatch, AThreadThatKeepsItsRateSaysNothing) {
+  OverloadWatch watch("the bridge", {});
+  double t_s = 0.0;
+  EXPECT_TRUE(TickFor(watch, t_s, 0.010, 10.0).empty());
+  EXPECT_TRUE(TickFor(watch, t_s, 0.018, 10.0).empty()) << "55 Hz is above the 50 Hz bound";
+  EXPECT_FALSE(watch.overloaded());
+  EXPECT_EQ(watch.Summary(), "no overload");
+}
+
+TEST(OverloadWatch, AStarvedThreadSaysSoOnceAndAgainWhenItRecovers) {
+  OverloadWatch watch("the bridge", {});
+  double t_s = 0.0;
+  ASSERT_TRUE(TickFor(watch, t_s, 0.010, 3.0).empty());
+  // 20 Hz: every interval 50 ms (under the 100 ms bound), the rate under 50 Hz.
+  const std::vector<std::string> starved = TickFor(watch, t_s, 0.050, 6.0);
+  ASSERT_EQ(starved.size(), 1U) << "one line for the whole overload, not one per window";
+  EXPECT_NE(starved[0].find("the machine is overloaded: the bridge ran at"), std::string::npos) << starved[0];
+  EXPECT_TRUE(watch.overloaded());
+  const std::vector<std::string> well = TickFor(watch, t_s, 0.010, 5.0);
+  ASSERT_EQ(well.size(), 1U);
+  EXPECT_NE(well[0].find("the bridge keeps its rate again ("), std::string::npos) << well[0];
+  EXPECT_FALSE(watch.overloaded());
+  EXPECT_EQ(watch.episodes(), 1);
+  // Overloaded from the end of the first slow window until the first whole good window closed.
+  EXPECT_GT(watch.overloaded_s(), 3.5);
+  EXPECT_LT(watch.overloaded_s(), 9.0);
+  EXPECT_NE(watch.Summary().find("overloaded 1 time(s)"), std::string::npos);
+}
+
+TEST(OverloadWatch, OneLongStallIsAnOverloadAtOnce) {
+  OverloadWatch watch("the tick", {60.0, 30.0, 0.1, 2.0});
+  double t_s = 0.0;
+  ASSERT_TRUE(TickFor(watch, t_s, 1.0 / 60.0, 0.5).empty());
+  t_s += 0.3;  // the thread got no CPU for 300 ms
+  const std::string line = watch.Tick(static_cast<std::uint64_t>(t_s * 1e9) + 1'000'000'000ULL);
+  EXPECT_NE(line.find("the machine is overloaded: the tick ran at"), std::string::npos) << line;
+  EXPECT_NE(line.find("longest interval 31"), std::string::npos) << line;
+  const std::vector<std::string> after = TickFor(watch, t_s, 1.0 / 60.0, 3.0);
+  ASSERT_EQ(after.size(), 1U);
+  EXPECT_NE(after[0].find("the tick keeps its rate again"), std::string::npos) << after[0];
+}
+
+}  // namespace
+}  // namespace handshare::common
