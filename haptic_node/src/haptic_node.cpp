@@ -66,7 +66,7 @@ struct SessionLink {
 };
 
 void PrintLoopSummary(const std::string& user, const common::LoopStats& stats, std::uint64_t faults,
-                      std::uint64_t rate_limited_steps, const HapticBridge& bridge) {
+                      const std::string& fault_causes, std::uint64_t rate_limited_steps, const HapticBridge& bridge) {
   std::printf("[haptic_node %s] loop statistics: rate %.1f Hz, steps %llu, jitter p50 %.0f us "
               "p99 %.0f us max %.0f us, step p50 %.1f us p99 %.1f us, overruns %llu, resyncs %llu, "
               "faults %llu, rate-limited steps %llu, device states published %llu, control events %llu, samples dropped %s\n",
@@ -76,6 +76,9 @@ void PrintLoopSummary(const std::string& user, const common::LoopStats& stats, s
               static_cast<unsigned long long>(faults), static_cast<unsigned long long>(rate_limited_steps),
               static_cast<unsigned long long>(bridge.device_states_published()),
               static_cast<unsigned long long>(bridge.control_events_sent()), bridge.dropped().Summary().c_str());
+  if (faults > 0) {
+    std::printf("[haptic_node %s] faulted steps by cause: %s\n", user.c_str(), fault_causes.c_str());
+  }
   if (const auto& age = bridge.peer_contact_age(); age.count() > 0) {
     std::printf("[haptic_node %s] peer contact sets: %llu taken, age at the bridge (sender's write to take, "
                 "same host) p50 %.0f us p99 %.0f us max %.0f us\n",
@@ -196,7 +199,7 @@ int HapticNode::Run() {
   link->bridge.WriteCouplingTrace();
   common::LoopStats stats;
   loop.TakeStats(stats);
-  PrintLoopSummary(config_.user, stats, loop.faults(), loop.rate_limited_steps(), link->bridge);
+  PrintLoopSummary(config_.user, stats, loop.faults(), loop.FaultCauses(), loop.rate_limited_steps(), link->bridge);
   PrintBridgeSummary(config_, link->bridge);
   if (plugin != nullptr) {
     const PluginFaults f = plugin->faults();

@@ -657,6 +657,7 @@ def case_delayed_tail(args):
     os.environ["HANDSHARE_ASSETS"] = session_test.edited_assets(args.work, frictionless_tail)
     server_exe, node_exe = dinosaur_ready(args)
     results, forces, fields = [], [], []
+    fault_causes = {}  # (delay, user): the node's "faulted steps by cause" line, if it had faults
     with Network(3, nfq_delay=args.nfq_delay) as net:
         a, b, c = net.hosts
         for delay_ms in DELAYS_MS:
@@ -729,6 +730,8 @@ def case_delayed_tail(args):
                 after = [(t, d) for t, d, _ in diffs if inputs_stop <= t < STILL_WINDOW[1]]
                 converged = max([t for t, d in after if d > FIELD_BOUND_M], default=inputs_stop) - inputs_stop
                 summary = loop_summary(nodes[user].log(), user)
+                causes = re.search(rf"\[haptic_node {user}\] faulted steps by cause: (.*)", nodes[user].log())
+                fault_causes[(delay_ms, user)] = causes.group(1) if causes else "no causes printed"
                 coupling = coupling_summary(nodes[user].log(), user)
                 check(coupling is not None, f"{user}'s node printed no coupling-passivity line at {delay_ms} ms")
                 check(coupling["on"], f"{user}'s coupling-passivity controller is not on by default")
@@ -770,7 +773,7 @@ def case_delayed_tail(args):
     for r in results:
         what = f"{r['user']} at {r['delay_ms']} ms"
         check(r["hf_rms_N"] < HF_LIMIT_N, f"{what}: force RMS above 5 Hz {r['hf_rms_N']:.4f} N (>= {HF_LIMIT_N} N)")
-        check(r["faults"] == 0, f"{what}: {r['faults']} safety faults")
+        check(r["faults"] == 0, f"{what}: {r['faults']} safety faults ({fault_causes[(r['delay_ms'], r['user'])]})")
         check(r["observer_min_J"] >= OBSERVER_BOUND_J,
               f"{what}: the coupling observer fell to {r['observer_min_J']:.3e} J (< {OBSERVER_BOUND_J} J)")
         check(r["k_N_per_m"] > 0.0, f"{what}: stiffness {r['k_N_per_m']:.1f} N/m")

@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <string>
 
 #include "handshare/common/clock.hpp"
 
@@ -64,6 +65,20 @@ double HapticLoop::now_s() const noexcept {
   return std::chrono::duration<double>(common::PeriodicLoop::Clock::now() - start_).count();
 }
 
+std::string HapticLoop::FaultCauses() const {
+  static constexpr const char* kNames[kFaultCauses] = {"device reading invalid", "device reading not finite",
+                                                       "device reading stale", "force or fingertip not finite",
+                                                       "fingertip out of range", "fingertip jump"};
+  std::string out;
+  for (int c = 0; c < kFaultCauses; ++c) {
+    const std::uint64_t n = fault_causes_[c].load(std::memory_order_relaxed);
+    if (n == 0) continue;
+    if (!out.empty()) out += ", ";
+    out += std::string(kNames[c]) + " " + std::to_string(n);
+  }
+  return out;
+}
+
 void HapticLoop::Stop() {
   running_.store(false);
   if (thread_.joinable()) thread_.join();
@@ -107,7 +122,8 @@ void HapticLoop::Step(double t_s) noexcept {
   const std::uint64_t now_ns = common::SteadyNowNs();
   const bool stale = reading_.stamp_ns != 0 && now_ns > reading_.stamp_ns &&
                      static_cast<double>(now_ns - reading_.stamp_ns) * 1e-9 > config_.stale_after_s;
-  const bool device_fault = !reading_.valid || !AllFinite(reading_) || stale;
+  const bool reading_finite = AllFinite(reading_);
+  const bool device_fault = !reading_.valid || !reading_finite || stale;
 
   // 2. Contacts and controls: the forces the world asks for.
   for (auto& f : f_E_W_) f.setZero();
@@ -125,6 +141,7 @@ void HapticLoop::Step(double t_s) noexcept {
 
   // 3. Safety: clamp, passivity, rate bound; a fault ramps the force to zero.
   safety_in_.device_fault = device_fault;
+  safety_in_.elapsed_s = dt_s;
   for (int i = 0; i < kFingers; ++i) {
     safety_in_.finger[i].f_desired_E_W = f_E_W_[i];
     safety_in_.finger[i].p_WE = reading_.p_WE[i];
@@ -134,7 +151,16 @@ void HapticLoop::Step(double t_s) noexcept {
   for (int i = 0; i < kFingers; ++i) impulse_E_W_Ns_[i] += safety_out_.f_E_W[i] * dt_s;
   safety_.Step(safety_in_, safety_out_);
   const bool fault = device_fault || safety_out_.any_fault;
-  if (fault) faults_.fetch_add(1, std::memory_order_relaxed);
+  if (fault) {
+    faults_.fetch_add(1, std::memory_order_relaxed);
+    std::uint8_t bits = 0;
+    for (const auto& f : safety_out_.finger) bits |= f.fault_bits;
+    const bool cause[kFaultCauses] = {!reading_.valid, !reading_finite, stale, (bits & kFaultNonFinite) != 0,
+                                      (bits & kFaultOutOfRange) != 0, (bits & kFaultJump) != 0};
+    for (int c = 0; c < kFaultCauses; ++c) {
+      if (cause[c]) fault_causes_[c].fetch_add(1, std::memory_order_relaxed);
+    }
+  }
   rate_limited_steps_.store(safety_.rate_limited_steps(), std::memory_order_relaxed);
   device_.Command(safety_out_.f_E_W);
 

@@ -211,11 +211,12 @@ class StaleDevice final : public Device {
   void Read(double, DeviceReading& out) noexcept override {
     out.valid = true;
     out.stamp_ns = common::SteadyNowNs() - age_ns;
-    for (auto& p : out.p_WE) p = Eigen::Vector3d(0.01, 0.02, 0.03);
+    for (auto& p : out.p_WE) p = Eigen::Vector3d(0.01, 0.02, 0.03 + shift_m);
   }
   void Command(const std::array<Eigen::Vector3d, kFingers>&) noexcept override {}
   const char* name() const noexcept override { return "stale"; }
   std::uint64_t age_ns = 0;
+  double shift_m = 0.0;  // every fingertip moved this far along z
 };
 
 TEST(HapticLoop, StaleDeviceDataIsAFault) {
@@ -223,9 +224,26 @@ TEST(HapticLoop, StaleDeviceDataIsAFault) {
   HapticLoop loop(device, HapticLoopConfig{1000.0, false});
   loop.Step(0.0);
   EXPECT_EQ(loop.faults(), 0u);
+  EXPECT_EQ(loop.FaultCauses(), "");
   device.age_ns = 200'000'000;  // 0.2 s old, limit 0.05 s
   loop.Step(0.001);
   EXPECT_EQ(loop.faults(), 1u);
+  EXPECT_EQ(loop.FaultCauses(), "device reading stale 1");
+}
+
+// A loop that stalled 40 ms (a busy machine) reads a fingertip that moved 10 mm meanwhile:
+// motion at 0.25 m/s, no fault. The same 10 mm from one step to the next is a jump.
+TEST(HapticLoop, AFingertipThatMovedThroughAStallIsNotAFault) {
+  StaleDevice device;
+  HapticLoop loop(device, HapticLoopConfig{1000.0, false});
+  loop.Step(0.0);
+  device.shift_m = 0.010;
+  loop.Step(0.040);
+  EXPECT_EQ(loop.faults(), 0u) << loop.FaultCauses();
+  device.shift_m = 0.020;
+  loop.Step(0.041);
+  EXPECT_EQ(loop.faults(), 1u);
+  EXPECT_EQ(loop.FaultCauses(), "fingertip jump 1");
 }
 
 // The bridge swaps renderers while the loop runs; the old one is freed only after the

@@ -63,7 +63,8 @@ void ForceSafety::Step(const ForceSafetyInput& in, ForceSafetyOutput& out) noexc
   out.any_fault = false;
   for (int i = 0; i < kFingers; ++i) {
     const bool was_ok = fingers_[i].state == SafetyState::kOk;
-    StepFinger(in.finger[i], in.device_fault, fingers_[i], out.f_E_W[i], out.finger[i]);
+    StepFinger(in.finger[i], in.device_fault, std::max(dt_s_, in.elapsed_s), fingers_[i], out.f_E_W[i],
+               out.finger[i]);
     const bool faulted = out.finger[i].fault_bits != kFaultNone;
     onset = onset || (was_ok && faulted);
     limited = limited || out.finger[i].rate_limited;
@@ -73,7 +74,7 @@ void ForceSafety::Step(const ForceSafetyInput& in, ForceSafetyOutput& out) noexc
   if (limited) ++rate_limited_steps_;
 }
 
-void ForceSafety::StepFinger(const FingerSafetyInput& in, bool device_fault, Finger& s,
+void ForceSafety::StepFinger(const FingerSafetyInput& in, bool device_fault, double elapsed_s, Finger& s,
                              Eigen::Vector3d& f_out, FingerSafetyStatus& status) noexcept {
   // Stage 1: input checks.
   std::uint8_t bits = kFaultNone;
@@ -95,11 +96,11 @@ void ForceSafety::StepFinger(const FingerSafetyInput& in, bool device_fault, Fin
   Eigen::Vector3d v = Eigen::Vector3d::Zero();
   if (p_in_range && s.have_p_prev) {
     const Eigen::Vector3d dp = in.p_WE - s.p_prev;
-    if (dp.norm() > config_.max_speed_m_per_s * dt_s_) {
-      bits |= kFaultOutOfRange;  // a jump no fingertip makes: do not count it as work
+    if (dp.norm() > config_.max_speed_m_per_s * elapsed_s) {
+      bits |= kFaultJump;  // a jump no fingertip makes: do not count it as work
     } else {
       s.energy_J -= s.f_prev.dot(dp);
-      v = dp / dt_s_;
+      v = dp / elapsed_s;
       s.v_moving += moving_gain_ * (v - s.v_moving);
     }
   }

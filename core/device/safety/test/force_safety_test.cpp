@@ -170,9 +170,29 @@ TEST(ForceSafety, OutOfRangePositionsAndJumpsAreFaults) {
   in.finger[4].p_WE += Eigen::Vector3d(0.05, 0, 0); // 50 mm in 1 ms = 50 m/s > 5 m/s
   safety.Step(in, out);
   EXPECT_EQ(out.finger[0].fault_bits, kFaultOutOfRange);
-  EXPECT_EQ(out.finger[4].fault_bits, kFaultOutOfRange);
+  EXPECT_EQ(out.finger[4].fault_bits, kFaultJump);
   EXPECT_EQ(out.finger[2].fault_bits, kFaultNone);
   EXPECT_DOUBLE_EQ(out.finger[4].observed_energy_J, 0.0);  // the jump counted no work
+}
+
+// net.delayed_tail failed in CI with one fault at one delay: the loop stalled (jitter max 40 ms
+// on a busy machine) and a fingertip's motion over the stall was judged over one period. Over
+// the interval that really passed, 10 mm in 40 ms (0.25 m/s) is motion, and its speed is that.
+TEST(ForceSafety, MotionOverAStalledIntervalIsNotAJump) {
+  ForceSafety safety(ForceSafetyConfig{});
+  ForceSafetyOutput out;
+  ForceSafetyInput in = Uniform(Eigen::Vector3d::Zero(), Eigen::Vector3d(0.1, 0.2, 0.3));
+  safety.Step(in, out);
+  in.finger[1].p_WE += Eigen::Vector3d(0.0, 0.0, 0.010);
+  in.elapsed_s = 0.040;
+  safety.Step(in, out);
+  EXPECT_FALSE(out.any_fault);
+  EXPECT_NEAR(out.finger[1].v_WE.z(), 0.25, 1e-12);
+  // The same 10 mm in one period (10 m/s) is still a jump.
+  in.finger[1].p_WE += Eigen::Vector3d(0.0, 0.0, 0.010);
+  in.elapsed_s = 0.0;
+  safety.Step(in, out);
+  EXPECT_EQ(out.finger[1].fault_bits, kFaultJump);
 }
 
 TEST(ForceSafety, PassivityObserverMatchesAHandComputedCase) {

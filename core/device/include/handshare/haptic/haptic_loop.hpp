@@ -37,6 +37,7 @@
 #include <atomic>
 #include <cstdint>
 #include <memory>
+#include <string>
 #include <thread>
 #include <vector>
 
@@ -105,6 +106,9 @@ class HapticLoop {
   /// Bridge side: loop statistics, refreshed about 10 times a second by the haptic thread.
   bool TakeStats(common::LoopStats& out) noexcept { return stats_.Read(out); }
   std::uint64_t faults() const noexcept { return faults_.load(std::memory_order_relaxed); }
+  /// Faulted steps by cause (a step counts under each cause it had), so that a fault in a long
+  /// session says what it was: "invalid 3, jump 1". Empty when there were none.
+  std::string FaultCauses() const;
   /// Steps in which the safety's rate bound cut a finger's force change (a step in what the
   /// world renders: a peer's contact appearing or vanishing at once, a body thrown).
   std::uint64_t rate_limited_steps() const noexcept { return rate_limited_steps_.load(std::memory_order_relaxed); }
@@ -146,6 +150,10 @@ class HapticLoop {
   common::TripleBuffer<common::LoopStats>& stats_ = *stats_holder_;
   std::atomic<bool> running_{false};
   std::atomic<std::uint64_t> faults_{0};
+  // Causes, in FaultCauses()'s order: the device's reading invalid, not finite, stale; the
+  // safety's not finite, out of range, jump. Written only on faulted steps.
+  static constexpr int kFaultCauses = 6;
+  std::array<std::atomic<std::uint64_t>, kFaultCauses> fault_causes_{};
   std::atomic<std::uint64_t> rate_limited_steps_{0};
   std::thread thread_;
 };

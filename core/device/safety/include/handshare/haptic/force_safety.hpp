@@ -46,7 +46,7 @@ struct ForceSafetyConfig {
   double moving_cutoff_Hz = 20.0;
   /// A fingertip farther than this from the world origin is out-of-range data [m].
   double max_position_m = 3.0;
-  /// A fingertip moving faster than this between two steps is a data glitch [m/s].
+  /// A fingertip moving faster than this between two samples is a data glitch [m/s].
   double max_speed_m_per_s = 5.0;
 };
 
@@ -62,7 +62,8 @@ enum SafetyFault : std::uint8_t {
   kFaultNone = 0,
   kFaultCaller = 1 << 0,      // the caller's flag (device lost, stale data, ...)
   kFaultNonFinite = 1 << 1,   // NaN or Inf in the desired force or the position
-  kFaultOutOfRange = 1 << 2,  // position beyond max_position_m or jump beyond max_speed
+  kFaultOutOfRange = 1 << 2,  // position beyond max_position_m
+  kFaultJump = 1 << 3,        // moved faster than max_speed_m_per_s since the previous sample
 };
 
 /// One finger's inputs to a step.
@@ -75,6 +76,10 @@ struct FingerSafetyInput {
 struct ForceSafetyInput {
   std::array<FingerSafetyInput, kFingers> finger{};
   bool device_fault = false;  // faults every finger (device lost, invalid reading)
+  /// Time since the previous step's sample [s]; 0 or less: one period. A loop that stalled
+  /// (an overloaded machine, 40 ms in CI) samples a fingertip that moved for the whole stall:
+  /// that is motion, not a jump, and its speed is the distance over this interval.
+  double elapsed_s = 0.0;
 };
 
 /// One finger's state after a step, for telemetry and tests.
@@ -125,8 +130,8 @@ class ForceSafety {
     Eigen::Vector3d f_ramp_start = Eigen::Vector3d::Zero();
     int ramp_step = 0;
   };
-  void StepFinger(const FingerSafetyInput& in, bool device_fault, Finger& s, Eigen::Vector3d& f_out,
-                  FingerSafetyStatus& status) noexcept;
+  void StepFinger(const FingerSafetyInput& in, bool device_fault, double elapsed_s, Finger& s,
+                  Eigen::Vector3d& f_out, FingerSafetyStatus& status) noexcept;
 
   ForceSafetyConfig config_;
   double dt_s_;
