@@ -50,10 +50,10 @@ int main(int argc, char** argv) {
              "at exit, write what the spectator shows as JSON: scene, revision, board {message_id, text}, "
              "objects {id: {p_WO_m, q_WO_wxyz, from}}", "")
       .Value("nice", "N",
-             "CPU priority (Linux nice, -20..19; below 0 needs the right to raise it). Default: 10 for a "
-             "spectator's screen, 0 for a user's own view: on a machine without room the screens draw fewer frames "
-             "and the haptic nodes' bridges and the world server keep their rates (docs/network.md, \"A busy "
-             "machine\")", "")
+             "CPU priority (Linux nice, -20..19; below 0 needs the right to raise it). 10 makes a spectator's screen "
+             "give way on a machine without room, so that the haptic nodes' bridges and the world server keep their "
+             "rates (docs/network.md, \"A busy machine\": a screen starved so may be aborted by Fast DDS 2.9.1, "
+             "hence not the default: without it the screen keeps the priority it was started with)", "")
       .Value("frame-log", "FILE",
              "window: a CSV row per frame shown (frame, t_ns, the view user's hand base, where the world's "
              "origin lands in pixels): what motion-to-photon is measured from", "");
@@ -103,10 +103,11 @@ int main(int argc, char** argv) {
     }
     // Before any thread starts (DDS, the software rasterizer's): Linux keeps a nice value per
     // thread, and new threads take their creator's.
-    const int nice = o.GetString("nice").empty() ? (c.view_user.empty() ? 10 : 0)
-                                                 : static_cast<int>(o.GetInt("nice", -20, 19));
-    if (setpriority(PRIO_PROCESS, 0, nice) != 0) {
-      throw OptionError("option --nice " + std::to_string(nice) + ": " + std::strerror(errno));
+    if (!o.GetString("nice").empty()) {
+      const int nice = static_cast<int>(o.GetInt("nice", -20, 19));
+      if (setpriority(PRIO_PROCESS, 0, nice) != 0) {
+        throw OptionError("option --nice " + std::to_string(nice) + ": " + std::strerror(errno));
+      }
     }
     return handshare::graphics::Spectator(c).Run();
   });

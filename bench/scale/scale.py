@@ -18,7 +18,11 @@ wrote per second (all topics; device states and contact sets apart), over its wh
 
 usage: scale.py --bin-dir BUILD [--users 8] [--spectators 8] [--seconds 60] [--fps 5]
                 [--streams paced|full] [--sweep 2,4,6,8,... [--sweep-spectators K]] [--domain 215] [--work DIR]
-                [--csv FILE] [--png FILE]
+                [--screen-nice N] [--busy K] [--csv FILE] [--png FILE]
+--screen-nice N starts the spectators with `graphics_node --nice N` (default: the node's own, 10);
+--busy K runs K other processes that keep a core busy each (a spin loop at nice 0) from the world
+server's start to the end, as a neighbouring test or build would. The summary row counts the
+nodes that said the machine was overloaded (`overloaded`) and the spin loops' CPU (`busy_cpu_pct`).
 --sweep runs one session per user count (with as many spectators, as in the point's 8 + 8, or
 --sweep-spectators K of them) and writes one summary row per session; otherwise one session, a row per process. A bench: it
 asserts nothing (tests/scale_test.py runs one session and checks what must hold).
@@ -139,7 +143,8 @@ def wait_for(path, pattern, timeout, procs):
     raise RuntimeError(f"timed out after {timeout} s waiting for /{pattern}/ in {path}")
 
 
-def run_session(bin_dir, work, domain, users=8, spectators=8, seconds=60.0, fps=5.0, streams="paced", cache=""):
+def run_session(bin_dir, work, domain, users=8, spectators=8, seconds=60.0, fps=5.0, streams="paced", cache="",
+                screen_nice=None, busy=0):
     """Runs one session (FEM models cached in `cache`, default WORK/fem_cache) and returns {"rows": [per-process dict], "window_s": s, "logs": {label: text},
     "load": (before, after)}. Raises RuntimeError if a process fails to start or ends early."""
     os.makedirs(work, exist_ok=True)
@@ -163,8 +168,10 @@ def run_session(bin_dir, work, domain, users=8, spectators=8, seconds=60.0, fps=
     for k in range(spectators):
         commands[f"screen{k + 1}"] = [exe("graphics_node", "graphics_node"), *common, "--name", f"screen{k + 1}",
                                       "--headless", "--fps", str(fps), "--frames", str(int((seconds + 300) * fps)),
-                                      "--out", os.path.join(work, f"screen{k + 1}")]
+                                      "--out", os.path.join(work, f"screen{k + 1}"),
+                                      *([] if screen_nice is None else ["--nice", str(screen_nice)])]
     procs, logs, started, ended = {}, {}, {}, {}
+    spinners = []
     paths = {label: os.path.join(work, label + ".log") for label in commands}
     try:
         for label, argv in commands.items():
@@ -173,6 +180,7 @@ def run_session(bin_dir, work, domain, users=8, spectators=8, seconds=60.0, fps=
             started[label] = time.monotonic()
             if label == "world_server":
                 wait_for(paths[label], r"scene 'commons'", 60, procs)
+                spinners = [subprocess.Popen([sys.executable, "-c", "while True: pass"]) for _ in range(busy)]
         # Every user has its world and has begun its script; every screen has the world.
         for name in names:
             wait_for(paths[name], r"scene 'commons' revision", 120, procs)
@@ -182,10 +190,12 @@ def run_session(bin_dir, work, domain, users=8, spectators=8, seconds=60.0, fps=
         time.sleep(6.0)  # the scripts' reach to their sites (at most 5.5 s after the world): not measured
         load_before = open("/proc/loadavg").read().split()[0]
         cpu0 = {label: cpu_seconds(p.pid) for label, p in procs.items()}
+        spin0 = [cpu_seconds(p.pid) for p in spinners]
         t0 = time.monotonic()
         time.sleep(seconds)  # the measured window
         window = time.monotonic() - t0
         cpu1 = {label: cpu_seconds(p.pid) for label, p in procs.items()}
+        spin_pct = sum(100.0 * (cpu_seconds(p.pid) - c) / window for p, c in zip(spinners, spin0))
         rss = {label: rss_mb(p.pid) for label, p in procs.items()}
         load_after = open("/proc/loadavg").read().split()[0]
         for label, p in procs.items():
@@ -193,6 +203,9 @@ def run_session(bin_dir, work, domain, users=8, spectators=8, seconds=60.0, fps=
                 raise RuntimeError(f"{label} ended during the run (exit {p.returncode}):\n"
                                    + open(paths[label]).read()[-3000:])
     finally:
+        for p in spinners:
+            p.kill()
+            p.wait()
         # The haptic nodes first (their last contact sets end the presses), the server last.
         order = sorted(procs, key=lambda l: (l == "world_server", l))
         for label in order:
@@ -223,18 +236,20 @@ def run_session(bin_dir, work, domain, users=8, spectators=8, seconds=60.0, fps=
                "device_kB_per_s": kB_s(("device_state",)),
                "contact_kB_per_s": kB_s(("contact_set",)),
                "run_s": run_s,
-               "traffic": traffic}
+               "traffic": traffic,
+               "overloaded": "the machine is overloaded" in text[label]}
         if kind == "haptic":
             row.update(parse_haptic(text[label]))
         if kind == "world_server":
             row.update(parse_server(text[label]))
         rows.append(row)
-    return {"rows": rows, "window_s": window, "logs": text, "load": (load_before, load_after), "session": session}
+    return {"rows": rows, "window_s": window, "logs": text, "load": (load_before, load_after), "session": session,
+            "busy": busy, "busy_cpu_pct": spin_pct}
 
 
 COLUMNS = ["users", "spectators", "node", "kind", "cpu_pct", "server_cpu_pct", "haptic_cpu_pct", "spectator_cpu_pct", "rss_mb", "loop_Hz", "jitter_p99_us", "jitter_max_us",
            "overruns", "step_p99_us", "bridge_Hz", "bridge_p99_ms", "tick_work_p99_us", "tick_interval_p99_ms",
-           "reliable_lost", "out_kB_per_s", "device_kB_per_s", "contact_kB_per_s", "load"]
+           "reliable_lost", "out_kB_per_s", "device_kB_per_s", "contact_kB_per_s", "load", "overloaded", "busy", "busy_cpu_pct"]
 
 
 def fmt(v):
@@ -268,7 +283,9 @@ def summary_row(users, spectators, result):
             "out_kB_per_s": sum(r["out_kB_per_s"] for r in rows),
             "device_kB_per_s": sum(r["device_kB_per_s"] for r in rows),
             "contact_kB_per_s": sum(r["contact_kB_per_s"] for r in rows),
-            "load": "->".join(result["load"])}
+            "load": "->".join(result["load"]),
+            "overloaded": sum(1 for r in rows if r["overloaded"]),
+            "busy": result["busy"], "busy_cpu_pct": result["busy_cpu_pct"]}
 
 
 def main():
@@ -285,18 +302,21 @@ def main():
     ap.add_argument("--work", default="/tmp/handshare-scale")
     ap.add_argument("--csv", default="")
     ap.add_argument("--png", default="")
+    ap.add_argument("--screen-nice", type=int, default=None)
+    ap.add_argument("--busy", type=int, default=0)
     a = ap.parse_args()
     out_rows = []
     if a.sweep:
         for users in [int(u) for u in a.sweep.split(",")]:
             screens = users if a.sweep_spectators < 0 else a.sweep_spectators
             result = run_session(a.bin_dir, os.path.join(a.work, f"u{users}"), a.domain, users, screens, a.seconds, a.fps,
-                                 a.streams)
+                                 a.streams, screen_nice=a.screen_nice, busy=a.busy)
             row = summary_row(users, screens, result)
             out_rows.append(row)
             print(", ".join(f"{c} {fmt(row.get(c))}" for c in COLUMNS), flush=True)
     else:
-        result = run_session(a.bin_dir, a.work, a.domain, a.users, a.spectators, a.seconds, a.fps, a.streams)
+        result = run_session(a.bin_dir, a.work, a.domain, a.users, a.spectators, a.seconds, a.fps, a.streams,
+                             screen_nice=a.screen_nice, busy=a.busy)
         for r in result["rows"]:
             r.update(users=a.users, spectators=a.spectators, load="->".join(result["load"]))
             out_rows.append(r)
