@@ -122,7 +122,11 @@ void HapticBridge::Tick() {
   if (std::string line = overload_.Tick(start_ns); !line.empty()) say_(line);
   FollowDeskInput();
   FollowControlStates();
+  const std::uint32_t revision = scene_revision_;
   ApplySceneChange();
+  // Building a world's models (1.1 s for the dinosaur) is this thread's own work, not a machine
+  // without room: the overload watch starts a new window after it.
+  if (scene_revision_ != revision) overload_.Restart(common::SteadyNowNs());
   loop_.CollectRetired();
   if (renderer_) {
     ForwardControlEvents();

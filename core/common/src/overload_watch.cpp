@@ -48,6 +48,14 @@ std::string OverloadWatch::Tick(std::uint64_t now_ns) {
   return {};
 }
 
+void OverloadWatch::Restart(std::uint64_t now_ns) {
+  if (window_start_ns_ == 0) return;  // no tick yet: the first tick starts the window
+  if (overloaded_ && now_ns > last_ns_) overloaded_s_ += 1e-9 * static_cast<double>(now_ns - last_ns_);
+  window_start_ns_ = last_ns_ = now_ns;
+  ticks_ = 0;
+  longest_s_ = 0.0;
+}
+
 std::string OverloadWatch::Summary() const {
   if (episodes_ == 0) return "no overload";
   char line[96];

@@ -28,6 +28,10 @@ class OverloadWatch {
 
   /// One tick at now_ns (steady clock). The line to log if the state changed, else "".
   std::string Tick(std::uint64_t now_ns);
+  /// The thread was busy with work of its own since its last tick (the bridge building a world's
+  /// models, 1.1 s for the dinosaur): that gap says nothing of the machine. The next window
+  /// starts at now_ns; an overload under way stays one (its time counts on).
+  void Restart(std::uint64_t now_ns);
 
   bool overloaded() const noexcept { return overloaded_; }
   /// Overloads so far, and the time spent overloaded (until the last tick) [s].
