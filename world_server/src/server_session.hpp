@@ -67,7 +67,7 @@ struct VisitAnswersInput {
   std::string user;     ///< who sent it (a console's member name)
   InstanceKey writer{};
   std::string refused;  ///< why the sample check refused it ("" accepted)
-  session::VisitAnswers answers;  ///< accepted samples only
+  controls::VisitAnswers answers;  ///< accepted samples only
 };
 
 /// What one tick takes, in the order it takes it.

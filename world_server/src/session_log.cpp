@@ -66,7 +66,7 @@ struct ForgetPlacesRow {};
 struct AnswersRow {
   std::uint64_t unix_ns;
   std::string sent_by;
-  session::VisitAnswers answers;
+  controls::VisitAnswers answers;
 };
 struct ControlKindRow {
   std::string control_id;
@@ -297,20 +297,20 @@ struct SessionLog::Impl {
           turn->Reset();
         } else if (const auto* a = std::get_if<AnswersRow>(&row)) {
           // One row per answered score: the report groups them by kind and question in SQL's order.
-          for (std::size_t k = 0; k < session::kVisitControlKinds; ++k) {
-            for (std::size_t q = 0; q < session::kVisitQuestions; ++q) {
+          for (std::size_t k = 0; k < controls::kVisitControlKinds; ++k) {
+            for (std::size_t q = 0; q < controls::kVisitQuestions; ++q) {
               const int score = a->answers.scores[k][q];
               if (score == 0) continue;
               answer->Bind(1, session_id).Bind(2, Ns(a->unix_ns)).Bind(3, a->answers.visitor).Bind(4, a->sent_by)
-                  .Bind(5, std::string_view(session::ToString(static_cast<scene::ControlType>(k))))
-                  .Bind(6, std::string_view(session::ToString(static_cast<session::VisitQuestion>(q))))
+                  .Bind(5, std::string_view(controls::ToString(static_cast<scene::ControlType>(k))))
+                  .Bind(6, std::string_view(controls::ToString(static_cast<controls::VisitQuestion>(q))))
                   .Bind(7, static_cast<std::int64_t>(score));
               answer->Step();
               answer->Reset();
             }
           }
         } else if (const auto* ck = std::get_if<ControlKindRow>(&row)) {
-          kind->Bind(1, session_id).Bind(2, ck->control_id).Bind(3, std::string_view(session::ToString(ck->kind)));
+          kind->Bind(1, session_id).Bind(2, ck->control_id).Bind(3, std::string_view(controls::ToString(ck->kind)));
           kind->Step();
           kind->Reset();
         } else if (const auto* e = std::get_if<EndRow>(&row)) {
@@ -419,7 +419,7 @@ void SessionLog::OnControlPlace(const ControlPlace& place) { impl_->Push(place);
 
 void SessionLog::OnTurnEnded(const TurnRecord& turn) { impl_->Push(turn); }
 
-void SessionLog::OnVisitAnswers(const std::string& sent_by, const session::VisitAnswers& answers, std::uint64_t unix_ns) {
+void SessionLog::OnVisitAnswers(const std::string& sent_by, const controls::VisitAnswers& answers, std::uint64_t unix_ns) {
   impl_->Push(AnswersRow{unix_ns, sent_by, answers});
 }
 

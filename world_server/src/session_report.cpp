@@ -74,7 +74,7 @@ std::vector<KindStats> ComputeKindStats(const std::vector<ControlRecord>& events
   std::map<std::string, Acc> by_kind;
   for (const auto& e : events) {
     const auto k = kinds.find(e.control_id);
-    const std::string kind = k == kinds.end() ? kUnknown : session::ToString(k->second);
+    const std::string kind = k == kinds.end() ? kUnknown : controls::ToString(k->second);
     Acc& a = by_kind[kind];
     a.stats.kind = kind;
     a.controls.insert(e.control_id);
@@ -103,7 +103,7 @@ std::vector<KindStats> ComputeKindStats(const std::vector<ControlRecord>& events
 
 std::vector<QuestionStats> ComputeQuestionnaire(const std::vector<AnswerRow>& answers) {
   using scene::ControlType;
-  using session::VisitQuestion;
+  using controls::VisitQuestion;
   std::vector<QuestionStats> out;
   for (ControlType kind : {ControlType::kArrow, ControlType::kBook, ControlType::kButton, ControlType::kLever}) {
     for (VisitQuestion q : {VisitQuestion::kEase, VisitQuestion::kNaturalness, VisitQuestion::kSatisfaction}) {
@@ -260,7 +260,7 @@ void ReadVisits(sqlite::Db& db, std::int64_t id, const std::vector<ControlRecord
       s.Bind(1, id);
       while (s.Step()) {
         const std::string kind = s.Text(1);
-        const auto k = session::ControlTypeFromString(kind);
+        const auto k = controls::ControlTypeFromString(kind);
         if (!k) throw SessionLogError(db.file_name() + ": unknown kind of control '" + kind + "'");
         kinds[s.Text(0)] = *k;
       }
@@ -280,8 +280,8 @@ void ReadVisits(sqlite::Db& db, std::int64_t id, const std::vector<ControlRecord
                           "reading the questionnaires");
       s.Bind(1, id);
       while (s.Step()) {
-        const auto kind = session::ControlTypeFromString(s.Text(1));
-        const auto question = session::VisitQuestionFromString(s.Text(2));
+        const auto kind = controls::ControlTypeFromString(s.Text(1));
+        const auto question = controls::VisitQuestionFromString(s.Text(2));
         if (!kind || !question) {
           throw SessionLogError(db.file_name() + ": unknown questionnaire row '" + s.Text(1) + "', '" + s.Text(2) + "'");
         }
@@ -459,7 +459,7 @@ void PrintReport(std::ostream& out, const SessionReport& r) {
       << " questionnaire(s); scores 1 (least) to 7 (most)\n";
   out << Format("  %-8s %-13s %4s %6s %6s\n", "kind", "question", "n", "mean", "sd");
   for (const auto& q : r.questionnaire) {
-    out << Format("  %-8s %-13s %4zu %6.2f %6.2f\n", session::ToString(q.kind), session::ToString(q.question),
+    out << Format("  %-8s %-13s %4zu %6.2f %6.2f\n", controls::ToString(q.kind), controls::ToString(q.question),
                   q.score.n, q.score.mean, q.score.sd);
   }
 }
@@ -528,7 +528,7 @@ void PrintReportCsv(std::ostream& out, const SessionReport& r) {
   }
   row("questionnaire", sid, "count", std::to_string(r.questionnaires));
   for (const auto& q : r.questionnaire) {
-    const std::string item = std::string(session::ToString(q.kind)) + "/" + session::ToString(q.question);
+    const std::string item = std::string(controls::ToString(q.kind)) + "/" + controls::ToString(q.question);
     row("questionnaire", item, "n", std::to_string(q.score.n));
     row("questionnaire", item, "mean", Format("%.6g", q.score.mean));
     row("questionnaire", item, "sd", Format("%.6g", q.score.sd));

@@ -113,7 +113,7 @@ struct TurnEnded {
 /// A visitor's questionnaire, as a console (`sent_by`) sent it.
 struct VisitAnswered {
   std::string sent_by;
-  session::VisitAnswers answers;
+  controls::VisitAnswers answers;
 };
 
 /// Control events and what they did are complete: a server killed after this point must find

@@ -20,7 +20,7 @@
 #include "handshare/contact/finger_contact.hpp"  // contact::Vec3, QuatWxyz
 #include "handshare/controls/controls.hpp"
 #include "handshare/scene/scene.hpp"
-#include "handshare/session/visit_answers.hpp"
+#include "handshare/controls/visit_answers.hpp"
 #include "handshare/world_server/member_registry.hpp"
 
 namespace handshare::server {
@@ -162,7 +162,7 @@ class SessionLog {
   /// A visitor's turn ended.
   void OnTurnEnded(const TurnRecord& turn);
   /// A visitor's questionnaire (sent by the console `sent_by`): a row per answered score.
-  void OnVisitAnswers(const std::string& sent_by, const session::VisitAnswers& answers, std::uint64_t unix_ns);
+  void OnVisitAnswers(const std::string& sent_by, const controls::VisitAnswers& answers, std::uint64_t unix_ns);
   /// The kinds of the controls of a world the session shows (replaces a control's earlier kind).
   void OnControlKinds(const scene::Scene& scene);
   /// Marks the session as ended at unix_ns (once; later calls are ignored).

@@ -58,14 +58,14 @@ std::vector<KindStats> ComputeKindStats(const std::vector<ControlRecord>& events
 struct AnswerRow {
   std::string visitor;
   scene::ControlType kind = scene::ControlType::kButton;
-  session::VisitQuestion question = session::VisitQuestion::kEase;
+  controls::VisitQuestion question = controls::VisitQuestion::kEase;
   int score = 0;  // 1..7
 };
 /// The questionnaire's table (the paper's Fig. 16 and Table 3): count, mean and sd of the
 /// scores of each question for each kind of control.
 struct QuestionStats {
   scene::ControlType kind = scene::ControlType::kButton;
-  session::VisitQuestion question = session::VisitQuestion::kEase;
+  controls::VisitQuestion question = controls::VisitQuestion::kEase;
   Summary score;
 };
 /// Every kind (paper's order: arrow, book, button, lever) times every question (ease,

@@ -3,8 +3,8 @@
 /// Table 3): for each kind of control (scene::ControlType: button, arrow, lever, book), ease of
 /// use in selecting and moving between scenes, naturalness of its manipulation and satisfaction
 /// with it, each on the paper's 1-7 scale. The web console sends them, the world server stores
-/// them in the session log, session_report summarises them. No DDS: the sample's mapping is in
-/// visit_answers_message.hpp. Not real-time.
+/// them in the session log, session_report summarises them. No DDS: the sample's mapping is
+/// handshare/session/visit_answers_message.hpp's. Not real-time.
 #include <array>
 #include <cstdint>
 #include <optional>
@@ -13,7 +13,7 @@
 
 #include "handshare/scene/scene.hpp"
 
-namespace handshare::session {
+namespace handshare::controls {
 
 inline constexpr std::size_t kVisitControlKinds = 4;  ///< scene::ControlType's kinds
 inline constexpr std::size_t kVisitQuestions = 3;
@@ -43,4 +43,4 @@ struct VisitAnswers {
   }
 };
 
-}  // namespace handshare::session
+}  // namespace handshare::controls
