@@ -219,10 +219,12 @@ TEST_F(ServerSessionTest, AVisitorsTurnEndsOnceAfterItsLengthAndTheBoardSaysSo) 
   EXPECT_EQ(Kinds(events), (std::vector<std::string>{"TurnEnded", "MessageSaid", "SessionStateChanged",
                                                      "SessionCheckpoint"}));
   const auto ended = All<TurnEnded>(events);
+  ASSERT_EQ(ended.size(), 1u);
   EXPECT_EQ(ended[0].member.user, "alice");
   EXPECT_EQ(ended[0].turn, std::chrono::seconds(3));
   EXPECT_DOUBLE_EQ(ended[0].minutes, 0.05);
   const auto said = All<MessageSaid>(events);
+  ASSERT_EQ(said.size(), 1u);
   EXPECT_EQ(said[0].message_id, 2u);  // the start's board was #1
   ASSERT_EQ(said[0].messages.size(), 2u);
   EXPECT_EQ(said[0].messages[0].language, "en");
