@@ -1,7 +1,8 @@
 #pragma once
-/// The session report: what a session log says about one session. Per control, hits, misses and
-/// the mean and standard deviation of the errors (after the paper's Table 4), time spent in each
-/// world, and who was there. The statistics are pure functions of rows; ReadReport reads them
+/// The session report: what a session log says about one session. Per control and per kind of
+/// control, hits, misses and the mean and standard deviation of the errors (after the paper's
+/// Table 4), time spent in each world, who was there, the visitors' turns, and the
+/// questionnaire's count, mean and sd per kind of control and question (the paper's Fig. 16). The statistics are pure functions of rows; ReadReport reads them
 /// from a log file (read-only) and throws SessionLogError for a missing or foreign file.
 #include <cstdint>
 #include <filesystem>
