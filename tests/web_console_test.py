@@ -17,7 +17,15 @@ and alice's five fingertip spheres (where three.js has them in its scene) where 
 node's trace has her fingertips while her hand holds still;
 with --screenshot FILE it saves what it drew.
 
-usage: web_console_test.py operator|tls|view --bin-dir DIR --domain D --work DIR
+visit: the questionnaire at /visit on a phone-sized chromium. A world server whose visitors'
+turns last 0.05 minutes (--visit-minutes) and logs the session; alice's haptic node; her turn
+ends and the board says so (the console's state, and the page). The page with a wrong token
+gets 401 and a script without or with a wrong token too; the answers sent from the page with
+the token reach the world server, and session_report finds them, alone, in its questionnaire
+table (count, mean, sd per kind and question) and her turn in its turns.
+HANDSHARE_VISIT_SCREENSHOT=FILE saves the page.
+
+usage: web_console_test.py operator|tls|view|visit --bin-dir DIR --domain D --work DIR
 """
 import json
 import os
@@ -43,12 +51,17 @@ CHROMEDRIVER = "/usr/bin/chromedriver"
 RATE_TOLERANCE = 0.05  # the page's last 1 s window against the node's whole-run mean: a sim loop at 1 kHz
 
 
-def start_browser(work, extra_flags=()):
-    """Headless chromium under chromedriver, with a profile of its own in the work folder."""
+def start_browser(work, extra_flags=(), window_size="1280,1400", phone=None):
+    """Headless chromium under chromedriver, with a profile of its own in the work folder.
+    phone=(width, height): a phone's screen in CSS pixels (chromium's device emulation: a
+    headless window is never narrower than 500 px)."""
     options = webdriver.ChromeOptions()
     options.binary_location = CHROMIUM
+    if phone:
+        options.add_experimental_option("mobileEmulation", {"deviceMetrics": {
+            "width": phone[0], "height": phone[1], "pixelRatio": 1.0, "touch": True}})
     for flag in (*extra_flags, "--headless", "--no-sandbox", "--disable-gpu", "--disable-dev-shm-usage",
-                 "--window-size=1280,1400", f"--user-data-dir={os.path.join(work, 'chromium-profile')}"):
+                 f"--window-size={window_size}", f"--user-data-dir={os.path.join(work, 'chromium-profile')}"):
         options.add_argument(flag)
     options.set_capability("goog:loggingPrefs", {"browser": "ALL"})
     service = Service(CHROMEDRIVER, log_path=os.path.join(work, "chromedriver.log"))
@@ -258,5 +271,133 @@ def case_view(h, domain):
           f"{worst:.1e} m of her trace, {state['frames']} frames drawn; screenshot {shot}")
 
 
+def post_visit(base, body, token):
+    """POST /api/visit as a script would: (status, body)."""
+    headers = {"Content-Type": "application/json"}
+    if token is not None:
+        headers["Authorization"] = "Bearer " + token
+    req = urllib.request.Request(base + "/api/visit", data=json.dumps(body).encode(), headers=headers, method="POST")
+    try:
+        with urllib.request.urlopen(req, timeout=10) as r:
+            return r.status, r.read().decode()
+    except urllib.error.HTTPError as e:
+        return e.code, e.read().decode()
+
+
+def fill_questionnaire(driver, visitor, answers, token):
+    """Chooses the visitor, ticks every score of `answers` ({kind: {question: score}}), types the
+    token and presses Send, as a visitor on a tablet would; returns the status the page shows."""
+    result = driver.find_element(By.ID, "visit-result")
+    driver.execute_script("arguments[0].removeAttribute('data-status'); arguments[0].textContent = '';", result)
+    Select(driver.find_element(By.ID, "visitor")).select_by_value(visitor)
+    for kind, scores in answers.items():
+        for question, score in scores.items():
+            box = driver.find_element(By.ID, f"q-{kind}-{question}-{score}")
+            driver.execute_script("arguments[0].scrollIntoView({block: 'center'});", box)
+            box.click()
+            check(box.is_selected(), f"the page did not tick {kind} {question} {score}")
+    field = driver.find_element(By.ID, "visit-token")
+    field.clear()
+    field.send_keys(token)
+    driver.find_element(By.ID, "visit-send").click()
+    status = wait_until(f"the page's answer to sending {visitor}'s questionnaire", 20,
+                        lambda: result.get_attribute("data-status"))
+    return status, result.text
+
+
+# What alice answers: two kinds of control she used; arrows and levers she leaves empty.
+VISIT_ANSWERS = {"button": {"ease": 6, "naturalness": 5, "satisfaction": 7},
+                 "book": {"ease": 4, "naturalness": 3, "satisfaction": 2}}
+VISIT_MINUTES = 0.05  # 3 s
+
+
+def case_visit(h, domain):
+    session = f"it-webvisit-{os.getpid()}"
+    token = secrets.token_urlsafe(24)
+    token_file = os.path.join(h.work, "token")
+    with open(token_file, "w") as f:
+        f.write(token + "\n")
+    os.chmod(token_file, 0o600)
+    log_db = os.path.join(h.work, "session.sqlite")
+    h.start("world_server", "world_server", "--domain", domain, "--session", session,
+            "--visit-minutes", VISIT_MINUTES, "--log", log_db)
+    h.start("alice", "haptic_node", "--domain", domain, "--session", session, "--user", "alice",
+            "--device", "sim", "--script", os.path.join(DATA, "alice.hand"))
+    h.wait_for_line("world_server", "member joined: user=alice", 60)
+    # Her turn ends 3 s after her join, once, and the board says so in both languages.
+    h.wait_for_line("world_server", "visitor's turn ended: user=alice", 30)
+    turn_s = float(re.search(r"visitor's turn ended: user=alice after ([0-9.]+) s", h.log("world_server")).group(1))
+    check(turn_s >= VISIT_MINUTES * 60, f"alice's turn ended after {turn_s} s, before its {VISIT_MINUTES * 60} s")
+    check("message board #2: Thank you, alice: your 0.05 minutes are over." in h.log("world_server"),
+          "the world server did not put the turn's end on the board")
+    h.start("console", "web_console", "--domain", domain, "--session", session, "--name", "visit-console",
+            "--listen", "127.0.0.1:0", "--token-file", token_file)
+    h.wait_for_line("console", "listening on http://127.0.0.1:", 30)
+    port = int(re.search(r"listening on http://127\.0\.0\.1:(\d+)", h.log("console")).group(1))
+    base = f"http://127.0.0.1:{port}"
+
+    def boards():
+        with urllib.request.urlopen(base + "/api/state", timeout=10) as r:
+            b = json.loads(r.read())["boards"]
+        return b if "en" in b and "Thank you, alice" in b["en"]["text"] else None
+    b = wait_until("the console's board saying alice's turn is over", 30, boards)
+    check("alice" in b["ja"]["text"] and "終わりました" in b["ja"]["text"],
+          f"the Japanese board does not say the turn is over: {b['ja']}")
+
+    driver = start_browser(h.work, phone=(412, 1700))  # a phone's width (a tall one: the screenshot shows more)
+    try:
+        driver.get(base + "/visit")
+        wait_until("the questionnaire offering alice and showing the board", 30,
+                   lambda: "alice" in driver.execute_script("return window.handshareVisit.visitors;") and
+                   "Thank you, alice" in driver.find_element(By.ID, "board-en").text,
+                   lambda: driver.find_element(By.TAG_NAME, "body").text)
+        width = driver.execute_script("return [document.documentElement.scrollWidth, window.innerWidth];")
+        check(width[1] == 412 and width[0] <= width[1], f"the questionnaire is wider than a phone's 412 px: {width}")
+        # A wrong token from the page, none and a wrong one from a script: 401, nothing sent.
+        status, text = fill_questionnaire(driver, "alice", VISIT_ANSWERS, "not-the-token-" + secrets.token_hex(8))
+        check(status == "401", f"a wrong token from the page got {status} ({text}), not 401")
+        body = {"visitor": "alice", "answers": {"lever": {"ease": 1, "naturalness": 1, "satisfaction": 1}}}
+        status, text = post_visit(base, body, None)
+        check(status == 401, f"no token got {status} ({text}), not 401")
+        status, text = post_visit(base, body, token + "x")
+        check(status == 401, f"a wrong token got {status} ({text}), not 401")
+        # The token: 202, and the world server takes the answers.
+        status, text = fill_questionnaire(driver, "alice", VISIT_ANSWERS, token)
+        check(status == "202", f"the questionnaire from the page got {status} ({text}), not 202")
+        h.wait_for_line("world_server", "questionnaire: visitor=alice sent by visit-console, 6 answers", 30)
+        driver.execute_script("window.scrollTo(0, 0);")
+        shot = os.environ.get("HANDSHARE_VISIT_SCREENSHOT") or os.path.join(h.work, "visit.png")
+        driver.save_screenshot(shot)
+        errors = [e for e in driver.get_log("browser") if e["level"] == "SEVERE" and "/api/visit" not in e["message"]]
+        check(not errors, f"the page logged errors: {errors}")
+    finally:
+        driver.quit()
+    check(h.stop("console", 30) == 0, "web_console failed")
+    check(h.log("console").count("questionnaire of visitor alice sent") == 1,
+          "the console sent other questionnaires than the one with the token")
+    check(h.stop("alice", 30) == 0, "haptic_node alice failed")
+    check(h.stop("world_server", 30) == 0, "world_server failed")
+
+    report_exe = os.path.join(h.bin_dir, "world_server", "session_report")
+    report = subprocess.run([report_exe, log_db], capture_output=True, text=True, timeout=60)
+    check(report.returncode == 0, f"session_report failed: {report.stderr}")
+    text = report.stdout
+    check("questionnaire (the paper's Fig. 16 and Table 3): 1 questionnaire(s)" in text,
+          f"session_report does not count one questionnaire (the refused ones stored nothing):\n{text}")
+    # One visitor: n 1, the score as the mean, sd 0; the kinds she left empty: n 0.
+    for kind in ("arrow", "book", "button", "lever"):
+        for question in ("ease", "naturalness", "satisfaction"):
+            score = VISIT_ANSWERS.get(kind, {}).get(question)
+            row = (rf"^  {kind}\s+{question}\s+1\s+{score}\.00\s+0\.00$" if score else
+                   rf"^  {kind}\s+{question}\s+0\s+0\.00\s+0\.00$")
+            check(re.search(row, text, re.M), f"session_report has no row '{row}':\n{text}")
+    check(re.search(r"^visitors' turns ended: 1$", text, re.M) and re.search(r"^  alice\s+[0-9.]+", text, re.M),
+          f"session_report does not show alice's turn:\n{text}")
+    csv = subprocess.run([report_exe, log_db, "--csv"], capture_output=True, text=True, timeout=60).stdout
+    check(",questionnaire,book/satisfaction,mean,2\n" in csv, f"the CSV lacks the book's satisfaction:\n{csv}")
+    print(f"visit: alice's turn ended after {turn_s} s and the board said so (en, ja); wrong tokens 401; "
+          f"her answers from the page in session_report's questionnaire table; screenshot {shot}")
+
+
 if __name__ == "__main__":
-    sys.exit(run_cases({"operator": case_operator, "tls": case_tls, "view": case_view}))
+    sys.exit(run_cases({"operator": case_operator, "tls": case_tls, "view": case_view, "visit": case_visit}))

@@ -11,8 +11,9 @@
 int main(int argc, char** argv) {
   handshare::common::Options options(
       "session_report FILE", "Prints a session of a handshare session log: per control hits, misses and the "
-                             "mean and standard deviation of the errors (the paper's Table 4), time spent in "
-                             "each world, and the members. Without --session: the newest session.");
+                             "mean and standard deviation of the errors (the paper's Table 4, also by kind of "
+                             "control), time spent in each world, the members, the visitors' turns and "
+                             "their questionnaires (the paper's Fig. 16). Without --session: the newest session.");
   options.Value("session", "ID", "session id (the log's sessions are numbered from 1)", "")
       .Flag("csv", "print long-format CSV (session,section,item,field,value) instead of tables")
       .Flag("list", "list the sessions in the file");

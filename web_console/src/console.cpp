@@ -21,6 +21,7 @@
 #include "handshare/dds/sample_checks.hpp"
 #include "handshare/scene/scene.hpp"
 #include "handshare/session/control_events.hpp"
+#include "handshare/session/visit_answers_message.hpp"
 #include "handshare/web_console/console_state.hpp"
 #include "handshare/web_console/gltf_export.hpp"
 #include "handshare/web_console/web_server.hpp"
@@ -155,6 +156,7 @@ int Console::Run() {
   auto member_reader = dds::MakeReader<msg::MemberInfo>(participant, dds::topics::kMemberInfo);
   auto device_reader = dds::MakeReader<msg::DeviceState>(participant, dds::topics::kDeviceState);
   auto events = dds::MakeWriter<msg::ControlEvent>(participant, dds::topics::kControlEvent);
+  auto visits = dds::MakeWriter<msg::VisitAnswers>(participant, dds::topics::kVisitAnswers);
 
   std::mutex mutex;  // guards state (the DDS thread writes it, the web thread reads it)
   ConsoleState state;
@@ -172,6 +174,8 @@ int Console::Run() {
   web.files = {{"/", www / "index.html"},
                {"/operator", www / "operator.html"},
                {"/static/operator.js", www / "operator.js"},
+               {"/visit", www / "visit.html"},
+               {"/static/visit.js", www / "visit.js"},
                {"/static/console.css", www / "console.css"},
                {"/static/view.js", www / "view.js"},
                // three.js from Debian's libjs-three, at the paths its loader imports it from.
@@ -229,9 +233,28 @@ int Console::Run() {
     say("the operator sends the session from '" + from + "' to '" + r.world + "' (control " + route.control_id + ")");
     return {202, nlohmann::json{{"world", r.world}, {"control", route.control_id}, {"from", from}}.dump()};
   };
+  // A visitor's questionnaire (checked by ParseVisitRequest) goes to the world server, which
+  // stores it in its session log; the console keeps nothing of it.
+  const auto send_visit = [&](const controls::VisitAnswers& answers) -> ActionReply {
+    {
+      std::lock_guard lock(mutex);
+      if (!state.world.known) return {503, ErrorJson("no world server heard yet: the answers would be lost")};
+    }
+    int answered = 0;
+    for (const auto& kind : answers.scores) {
+      for (auto score : kind) answered += score > 0 ? 1 : 0;
+    }
+    visits.Write(session::ToMessage(answers, session, name,
+                                    static_cast<std::uint64_t>(std::chrono::duration_cast<std::chrono::nanoseconds>(
+                                                                   Clock::now().time_since_epoch())
+                                                                   .count())));
+    say("questionnaire of visitor " + answers.visitor + " sent to the world server (" + std::to_string(answered) +
+        " answers)");
+    return {202, nlohmann::json{{"visitor", answers.visitor}, {"answers", answered}}.dump()};
+  };
   std::optional<WebServer> server_or;
   try {
-    server_or.emplace(web, state_json, change_world);
+    server_or.emplace(web, state_json, change_world, send_visit);
   } catch (...) {
     std::filesystem::remove_all(glb_dir);
     throw;
@@ -241,7 +264,7 @@ int Console::Run() {
   say(std::to_string(exported.size()) + " meshes exported to glTF 2.0 for the view at /");
   say(std::string("listening on ") + (server.tls() ? "https://" : "http://") +
       (listen.address.find(':') != std::string::npos ? "[" + listen.address + "]" : listen.address) + ":" +
-      std::to_string(server.port()) + " (the operator's page: /operator; actions " +
+      std::to_string(server.port()) + " (the operator's page: /operator; the questionnaire: /visit; actions " +
       (token.empty() ? "off: no --token-file" : "need the token") + ")");
 
   dds::SampleMeta meta;

@@ -12,6 +12,27 @@ namespace handshare::web_console {
 namespace {
 bool IsTokenChar(char c) { return c > ' ' && c < 127; }
 bool IsWorldChar(char c) { return (c >= 'a' && c <= 'z') || (c >= '0' && c <= '9') || c == '_'; }
+bool IsUserChar(char c) {
+  return (c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') || (c >= '0' && c <= '9') || c == '_' || c == '.' || c == '-';
+}
+
+// A JSON body's object, or why not (size first: nothing over the limit is parsed).
+std::optional<nlohmann::json> ParseObject(std::string_view body, std::string& error) {
+  if (body.size() > kMaxActionBodyBytes) {
+    error = "body of " + std::to_string(body.size()) + " bytes (at most " + std::to_string(kMaxActionBodyBytes) + ")";
+    return {};
+  }
+  nlohmann::json j = nlohmann::json::parse(body.begin(), body.end(), nullptr, /*allow_exceptions=*/false);
+  if (j.is_discarded()) {
+    error = "body is not JSON";
+    return {};
+  }
+  if (!j.is_object()) {
+    error = "body is not a JSON object";
+    return {};
+  }
+  return j;
+}
 }  // namespace
 
 std::string ReadTokenFile(const std::filesystem::path& file) {
@@ -57,19 +78,9 @@ bool TokensEqual(std::string_view a, std::string_view b) noexcept {
 
 ParsedWorldRequest ParseWorldRequest(std::string_view body) {
   ParsedWorldRequest out;
-  if (body.size() > kMaxActionBodyBytes) {
-    out.error = "body of " + std::to_string(body.size()) + " bytes (at most " + std::to_string(kMaxActionBodyBytes) + ")";
-    return out;
-  }
-  const nlohmann::json j = nlohmann::json::parse(body.begin(), body.end(), nullptr, /*allow_exceptions=*/false);
-  if (j.is_discarded()) {
-    out.error = "body is not JSON";
-    return out;
-  }
-  if (!j.is_object()) {
-    out.error = "body is not a JSON object";
-    return out;
-  }
+  const auto parsed = ParseObject(body, out.error);
+  if (!parsed) return out;
+  const nlohmann::json& j = *parsed;
   for (const auto& [key, value] : j.items()) {
     if (key != "world") {
       out.error = "unknown field '" + key.substr(0, 64) + "' (the only field is 'world')";
@@ -86,6 +97,61 @@ ParsedWorldRequest ParseWorldRequest(std::string_view body) {
     return out;
   }
   out.request = WorldRequest{world};
+  return out;
+}
+
+ParsedVisitRequest ParseVisitRequest(std::string_view body) {
+  ParsedVisitRequest out;
+  const auto j = ParseObject(body, out.error);
+  if (!j) return out;
+  for (const auto& [key, value] : j->items()) {
+    if (key != "visitor" && key != "answers") {
+      out.error = "unknown field '" + key.substr(0, 64) + "' (the fields are 'visitor' and 'answers')";
+      return out;
+    }
+  }
+  if (!j->contains("visitor") || !(*j)["visitor"].is_string()) {
+    out.error = "field 'visitor' missing or not a string";
+    return out;
+  }
+  controls::VisitAnswers answers;
+  answers.visitor = (*j)["visitor"].get<std::string>();
+  if (answers.visitor.empty() || answers.visitor.size() > 64 ||
+      !std::all_of(answers.visitor.begin(), answers.visitor.end(), IsUserChar)) {
+    out.error = "field 'visitor' is not 1 to 64 of A-Z, a-z, 0-9, _, ., -";
+    return out;
+  }
+  if (!j->contains("answers") || !(*j)["answers"].is_object() || (*j)["answers"].empty()) {
+    out.error = "field 'answers' missing, not an object, or empty";
+    return out;
+  }
+  for (const auto& [kind_name, questions] : (*j)["answers"].items()) {
+    const auto kind = controls::ControlTypeFromString(kind_name);
+    if (!kind) {
+      out.error = "answers: '" + kind_name.substr(0, 64) + "' is not button, arrow, lever or book";
+      return out;
+    }
+    if (!questions.is_object() || questions.size() != controls::kVisitQuestions) {
+      out.error = "answers." + kind_name + ": not an object of ease, naturalness and satisfaction";
+      return out;
+    }
+    for (const auto& [question_name, score] : questions.items()) {
+      const auto question = controls::VisitQuestionFromString(question_name);
+      if (!question) {
+        out.error = "answers." + kind_name + ": '" + question_name.substr(0, 64) +
+                    "' is not ease, naturalness or satisfaction";
+        return out;
+      }
+      // An integer, not 5.0 nor "5" nor true: the page sends the radio button's number.
+      if (!score.is_number_integer() || score.get<std::int64_t>() < controls::kMinScore ||
+          score.get<std::int64_t>() > controls::kMaxScore) {
+        out.error = "answers." + kind_name + "." + question_name + ": not an integer from 1 to 7";
+        return out;
+      }
+      answers.at(*kind, *question) = static_cast<std::uint8_t>(score.get<std::int64_t>());
+    }
+  }
+  out.answers = std::move(answers);
   return out;
 }
 

@@ -92,7 +92,7 @@ class Viewer {
 
 class WebServer::Impl {
  public:
-  Impl(WebServerConfig config, StateSource state, WorldHandler world);
+  Impl(WebServerConfig config, StateSource state, WorldHandler world, VisitHandler visit);
   ~Impl();
 
   struct File {
@@ -104,6 +104,7 @@ class WebServer::Impl {
   WebServerConfig config_;
   StateSource state_;
   WorldHandler world_;
+  VisitHandler visit_;
   std::optional<ssl::context> tls_;
   tcp::acceptor acceptor_{ioc_};
   std::uint16_t port_ = 0;
@@ -121,7 +122,8 @@ class WebServer::Impl {
   void Accept();
   void OnAccept(tcp::socket socket);
   Response Respond(const Request& req, const std::string& remote, bool tls);
-  Response Act(const Request& req, const std::string& remote, bool tls);
+  /// An action's checks (rate, token, Origin, Content-Type), then its body's and its handler.
+  Response Act(const Request& req, const std::string& remote, bool tls, const std::string& path);
   Response Reply(const Request& req, http::status status, std::string body, const std::string& type);
   void Join(const std::shared_ptr<Viewer>& v) {
     viewers_[v.get()] = v;
@@ -328,10 +330,11 @@ class HttpSession : public std::enable_shared_from_this<HttpSession<Stream>> {
 
 }  // namespace
 
-WebServer::Impl::Impl(WebServerConfig config, StateSource state, WorldHandler world)
+WebServer::Impl::Impl(WebServerConfig config, StateSource state, WorldHandler world, VisitHandler visit)
     : config_(std::move(config)),
       state_(std::move(state)),
       world_(std::move(world)),
+      visit_(std::move(visit)),
       requests_(config_.requests_per_s, 2.0 * config_.requests_per_s),
       actions_(config_.actions_per_min / 60.0, 5.0) {
   for (const auto& [url, path] : config_.files) {
@@ -423,13 +426,13 @@ Response WebServer::Impl::Respond(const Request& req, const std::string& remote,
     return Reply(req, http::status::uri_too_long, ErrorJson("target too long"), "application/json");
   }
   const std::string path(target.substr(0, target.find('?')));
-  if (path == "/api/world") {
+  if (path == "/api/world" || (path == "/api/visit" && visit_)) {
     if (req.method() != http::verb::post) {
       Response res = Reply(req, http::status::method_not_allowed, ErrorJson("POST only"), "application/json");
       res.set(http::field::allow, "POST");
       return res;
     }
-    return Act(req, remote, tls);
+    return Act(req, remote, tls, path);
   }
   if (req.method() != http::verb::get) {
     Response res = Reply(req, http::status::method_not_allowed, ErrorJson("GET only"), "application/json");
@@ -444,7 +447,7 @@ Response WebServer::Impl::Respond(const Request& req, const std::string& remote,
   return Reply(req, http::status::not_found, ErrorJson("no such page: " + path.substr(0, 64)), "application/json");
 }
 
-Response WebServer::Impl::Act(const Request& req, const std::string& remote, bool tls) {
+Response WebServer::Impl::Act(const Request& req, const std::string& remote, bool tls, const std::string& path) {
   if (!actions_.Allow(remote, std::chrono::steady_clock::now())) {
     return Reply(req, http::status::too_many_requests, ErrorJson("too many actions from this address"),
                  "application/json");
@@ -473,14 +476,21 @@ Response WebServer::Impl::Act(const Request& req, const std::string& remote, boo
     return Reply(req, http::status::unsupported_media_type, ErrorJson("Content-Type must be application/json"),
                  "application/json");
   }
-  const ParsedWorldRequest parsed = ParseWorldRequest(req.body());
-  if (!parsed.request) return Reply(req, http::status::bad_request, ErrorJson(parsed.error), "application/json");
-  const ActionReply reply = world_(*parsed.request);
+  ActionReply reply;
+  if (path == "/api/visit") {
+    const ParsedVisitRequest parsed = ParseVisitRequest(req.body());
+    if (!parsed.answers) return Reply(req, http::status::bad_request, ErrorJson(parsed.error), "application/json");
+    reply = visit_(*parsed.answers);
+  } else {
+    const ParsedWorldRequest parsed = ParseWorldRequest(req.body());
+    if (!parsed.request) return Reply(req, http::status::bad_request, ErrorJson(parsed.error), "application/json");
+    reply = world_(*parsed.request);
+  }
   return Reply(req, static_cast<http::status>(reply.status), reply.json, "application/json");
 }
 
-WebServer::WebServer(WebServerConfig config, StateSource state, WorldHandler world)
-    : impl_(std::make_unique<Impl>(std::move(config), std::move(state), std::move(world))) {}
+WebServer::WebServer(WebServerConfig config, StateSource state, WorldHandler world, VisitHandler visit)
+    : impl_(std::make_unique<Impl>(std::move(config), std::move(state), std::move(world), std::move(visit))) {}
 
 WebServer::~WebServer() = default;
 

@@ -36,6 +36,63 @@ TEST(TokensEqual, EqualOnlyWhenTheSame) {
   EXPECT_FALSE(TokensEqual("", "x"));
 }
 
+TEST(ParseVisitRequest, AcceptsAVisitorAndTheThreeScoresOfEachKindAnswered) {
+  const auto ok = ParseVisitRequest(
+      R"({"visitor": "alice.B-2", "answers": {"button": {"ease": 1, "naturalness": 4, "satisfaction": 7},
+                                              "lever": {"satisfaction": 2, "ease": 3, "naturalness": 5}}})");
+  ASSERT_TRUE(ok.answers) << ok.error;
+  EXPECT_EQ(ok.answers->visitor, "alice.B-2");
+  using controls::VisitQuestion;
+  using scene::ControlType;
+  EXPECT_EQ(ok.answers->at(ControlType::kButton, VisitQuestion::kEase), 1);
+  EXPECT_EQ(ok.answers->at(ControlType::kButton, VisitQuestion::kSatisfaction), 7);
+  EXPECT_EQ(ok.answers->at(ControlType::kLever, VisitQuestion::kEase), 3);
+  EXPECT_EQ(ok.answers->at(ControlType::kLever, VisitQuestion::kSatisfaction), 2);
+  EXPECT_EQ(ok.answers->at(ControlType::kArrow, VisitQuestion::kEase), 0);  // not used: not answered
+  EXPECT_EQ(ok.answers->at(ControlType::kBook, VisitQuestion::kNaturalness), 0);
+}
+
+TEST(ParseVisitRequest, RefusesEverythingElseSayingWhat) {
+  const std::string three = R"({"ease": 5, "naturalness": 5, "satisfaction": 5})";
+  const struct {
+    std::string body;
+    const char* says;
+  } cases[] = {
+      {"", "not JSON"},
+      {"[1]", "not a JSON object"},
+      {R"({"answers": {"book": )" + three + "}}", "'visitor' missing"},
+      {R"({"visitor": "", "answers": {"book": )" + three + "}}", "'visitor' is not"},
+      {R"({"visitor": ")" + std::string(65, 'a') + R"(", "answers": {"book": )" + three + "}}", "'visitor' is not"},
+      {R"({"visitor": "<b>", "answers": {"book": )" + three + "}}", "'visitor' is not"},
+      {R"({"visitor": 7, "answers": {"book": )" + three + "}}", "'visitor' missing or not a string"},
+      {R"({"visitor": "a"})", "'answers' missing"},
+      {R"({"visitor": "a", "answers": {}})", "or empty"},
+      {R"({"visitor": "a", "answers": [1]})", "not an object"},
+      {R"({"visitor": "a", "answers": {"book": )" + three + R"(}, "rating": 1})", "unknown field 'rating'"},
+      {R"({"visitor": "a", "answers": {"sword": )" + three + "}}", "'sword' is not button, arrow, lever or book"},
+      {R"({"visitor": "a", "answers": {"book": {"ease": 5, "naturalness": 5}}})", "answers.book: not an object"},
+      {R"({"visitor": "a", "answers": {"book": {"ease": 5, "naturalness": 5, "satisfaction": 5, "fun": 5}}})",
+       "answers.book: not an object"},
+      {R"({"visitor": "a", "answers": {"book": {"ease": 5, "naturalness": 5, "fun": 5}}})", "'fun' is not ease"},
+      {R"({"visitor": "a", "answers": {"book": {"ease": 8, "naturalness": 5, "satisfaction": 5}}})",
+       "answers.book.ease: not an integer from 1 to 7"},
+      {R"({"visitor": "a", "answers": {"book": {"ease": 0, "naturalness": 5, "satisfaction": 5}}})", "from 1 to 7"},
+      {R"({"visitor": "a", "answers": {"book": {"ease": -3, "naturalness": 5, "satisfaction": 5}}})", "from 1 to 7"},
+      {R"({"visitor": "a", "answers": {"book": {"ease": 4.5, "naturalness": 5, "satisfaction": 5}}})", "from 1 to 7"},
+      {R"({"visitor": "a", "answers": {"book": {"ease": "4", "naturalness": 5, "satisfaction": 5}}})", "from 1 to 7"},
+      {R"({"visitor": "a", "answers": {"book": {"ease": true, "naturalness": 5, "satisfaction": 5}}})", "from 1 to 7"},
+      {R"({"visitor": "a", "answers": {"book": {"ease": 1e400, "naturalness": 5, "satisfaction": 5}}})", "not JSON"},
+      {R"({"visitor": "a", "answers": {"book": {"ease": 4294967301, "naturalness": 5, "satisfaction": 5}}})",
+       "from 1 to 7"},
+      {std::string(kMaxActionBodyBytes + 1, ' '), "bytes (at most 1024)"},
+  };
+  for (const auto& c : cases) {
+    const auto p = ParseVisitRequest(c.body);
+    EXPECT_FALSE(p.answers) << c.body;
+    EXPECT_NE(p.error.find(c.says), std::string::npos) << c.body << " -> " << p.error;
+  }
+}
+
 TEST(ParseWorldRequest, AcceptsExactlyOneWorldName) {
   const auto ok = ParseWorldRequest(R"({"world": "solar_system"})");
   ASSERT_TRUE(ok.request) << ok.error;

@@ -36,10 +36,11 @@ class WebServerTest : public ::testing::Test {
     page_ = std::filesystem::temp_directory_path() / ("web_server_test_" + std::to_string(getpid()) + ".html");
     std::ofstream(page_) << "<p>operator</p>";
   }
-  void Start(const std::string& token = kToken) {
+  void Start(const std::string& token = kToken, double actions_per_min = 12.0) {
     WebServerConfig c;
     c.port = 0;
     c.token = token;
+    c.actions_per_min = actions_per_min;
     c.files = {{"/operator", page_}};
     server_ = std::make_unique<WebServer>(
         c, [] { return std::string(R"({"type":"state"})"); },
@@ -47,7 +48,18 @@ class WebServerTest : public ::testing::Test {
           ++actions_;
           last_world_ = r.world;
           return ActionReply{202, R"({"world":")" + r.world + "\"}"};
+        },
+        [this](const controls::VisitAnswers& a) {
+          ++visits_;
+          last_visit_ = a;
+          return ActionReply{202, R"({"visitor":")" + a.visitor + "\"}"};
         });
+  }
+  http::response<http::string_body> PostVisit(const std::string& body, const std::string& token,
+                                              const std::string& type = "application/json") {
+    std::map<std::string, std::string> h{{"Content-Type", type}};
+    if (!token.empty()) h["Authorization"] = "Bearer " + token;
+    return Request(http::verb::post, "/api/visit", body, h);
   }
   http::response<http::string_body> Request(http::verb verb, const std::string& target, const std::string& body = "",
                                             const std::map<std::string, std::string>& headers = {}) {
@@ -76,6 +88,8 @@ class WebServerTest : public ::testing::Test {
   std::unique_ptr<WebServer> server_;
   std::atomic<int> actions_{0};
   std::string last_world_;
+  std::atomic<int> visits_{0};
+  controls::VisitAnswers last_visit_;
 };
 
 TEST_F(WebServerTest, ServesItsPagesWithAStrictContentSecurityPolicy) {
@@ -108,6 +122,54 @@ TEST_F(WebServerTest, AWorldChangeNeedsTheTokenAndAWellFormedBody) {
   EXPECT_EQ(ok.result_int(), 202u);
   EXPECT_EQ(actions_, 1);
   EXPECT_EQ(last_world_, "dinosaur");
+}
+
+// The questionnaire (/visit's POST): the operator's token, the Origin, the Content-Type and a
+// body of the exact schema, or a 4xx and nothing reaches the session.
+TEST_F(WebServerTest, AQuestionnaireNeedsTheTokenAndAWellFormedBody) {
+  Start(kToken, /*actions_per_min=*/6e6);  // this test's many refusals are not about the rate
+  const std::string body =
+      R"({"visitor":"alice","answers":{"book":{"ease":6,"naturalness":5,"satisfaction":7}}})";
+  EXPECT_EQ(PostVisit(body, "").result_int(), 401u);
+  EXPECT_EQ(PostVisit(body, "0123456789abcdef-wrong").result_int(), 401u);
+  EXPECT_EQ(PostVisit(body, kToken, "text/plain").result_int(), 415u);
+  EXPECT_EQ(Request(http::verb::post, "/api/visit", body,
+                    {{"Content-Type", "application/json"}, {"Authorization", std::string("Bearer ") + kToken},
+                     {"Origin", "http://evil.example"}})
+                .result_int(),
+            403u);
+  for (const char* bad : {R"({"visitor":"alice","answers":{"book":{"ease":8,"naturalness":5,"satisfaction":7}}})",
+                          R"({"visitor":"alice","answers":{"book":{"ease":0,"naturalness":5,"satisfaction":7}}})",
+                          R"({"visitor":"alice","answers":{"book":{"ease":5.5,"naturalness":5,"satisfaction":7}}})",
+                          R"({"visitor":"alice","answers":{"book":{"ease":"5","naturalness":5,"satisfaction":7}}})",
+                          R"({"visitor":"alice","answers":{"book":{"ease":5,"naturalness":5}}})",
+                          R"({"visitor":"alice","answers":{"piano":{"ease":5,"naturalness":5,"satisfaction":7}}})",
+                          R"({"visitor":"al ice","answers":{"book":{"ease":5,"naturalness":5,"satisfaction":7}}})",
+                          R"({"visitor":"alice","answers":{}})", R"({"visitor":"alice"})", R"([])"}) {
+    EXPECT_EQ(PostVisit(bad, kToken).result_int(), 400u) << bad;
+  }
+  EXPECT_EQ(PostVisit(R"({"visitor":")" + std::string(2000, 'a') + "\"}", kToken).result_int(), 413u);
+  EXPECT_EQ(Request(http::verb::get, "/api/visit").result_int(), 405u);
+  EXPECT_EQ(visits_, 0);  // nothing reached the session
+  const auto ok = PostVisit(body, kToken);
+  EXPECT_EQ(ok.result_int(), 202u) << ok.body();
+  EXPECT_EQ(visits_, 1);
+  EXPECT_EQ(last_visit_.visitor, "alice");
+  EXPECT_EQ(last_visit_.at(scene::ControlType::kBook, controls::VisitQuestion::kSatisfaction), 7);
+  EXPECT_EQ(last_visit_.at(scene::ControlType::kButton, controls::VisitQuestion::kEase), 0);  // not answered
+  EXPECT_EQ(actions_, 0);  // and no world change
+}
+
+TEST_F(WebServerTest, QuestionnairesShareTheActionsRate) {
+  Start();
+  const std::string body =
+      R"({"visitor":"alice","answers":{"book":{"ease":6,"naturalness":5,"satisfaction":7}}})";
+  int limited = 0;
+  for (int i = 0; i < 8; ++i) limited += PostVisit(body, "0123456789abcdef-guess").result_int() == 429u;
+  EXPECT_EQ(limited, 3);  // a burst of 5, then 12 a minute: guessing the token is slow here too
+  EXPECT_EQ(PostVisit(body, kToken).result_int(), 429u);
+  EXPECT_EQ(PostWorld(R"({"world":"dinosaur"})", kToken).result_int(), 429u);
+  EXPECT_EQ(visits_, 0);
 }
 
 TEST_F(WebServerTest, AnotherSitesPageMayNotActEvenWithTheToken) {

@@ -43,6 +43,22 @@ std::string Line(const MessageSaid& e) {
   return "message board #" + std::to_string(e.message_id) + ": " + (en != e.messages.end() ? en->text : e.messages[0].text);
 }
 
+std::string Line(const TurnEnded& e) {
+  char line[200];
+  std::snprintf(line, sizeof line, "visitor's turn ended: user=%s after %.3f s (--visit-minutes %g)",
+                e.member.user.c_str(), std::chrono::duration<double>(e.turn).count(), e.minutes);
+  return line;
+}
+
+std::string Line(const VisitAnswered& e) {
+  int answered = 0;
+  for (const auto& kind : e.answers.scores) {
+    for (auto score : kind) answered += score > 0 ? 1 : 0;
+  }
+  return "questionnaire: visitor=" + e.answers.visitor + " sent by " + e.sent_by + ", " + std::to_string(answered) +
+         " answers";
+}
+
 template <typename Event>
 std::string Line(const Event&) {
   return "";

@@ -2,6 +2,7 @@
 
 #include "handshare/common/clock.hpp"
 #include "handshare/dds/sample_checks.hpp"
+#include "handshare/session/visit_answers_message.hpp"
 #include "server_conversions.hpp"
 
 namespace handshare::server {
@@ -10,13 +11,15 @@ SampleIntake::SampleIntake(dds::Participant& participant, std::string session)
     : session_(std::move(session)),
       member_reader_(dds::MakeReader<msg::MemberInfo>(participant, dds::topics::kMemberInfo)),
       contact_reader_(dds::MakeReader<msg::ContactSet>(participant, dds::topics::kContactSet)),
-      control_reader_(dds::MakeReader<msg::ControlEvent>(participant, dds::topics::kControlEvent)) {}
+      control_reader_(dds::MakeReader<msg::ControlEvent>(participant, dds::topics::kControlEvent)),
+      visit_reader_(dds::MakeReader<msg::VisitAnswers>(participant, dds::topics::kVisitAnswers)) {}
 
 void SampleIntake::Take(TickInputs& in) {
   in.clear();
   TakeMembers(in);
   TakeControlEvents(in);
   TakeContactSets(in);
+  TakeVisitAnswers(in);
 }
 
 void SampleIntake::TakeMembers(TickInputs& in) {
@@ -71,6 +74,20 @@ void SampleIntake::TakeContactSets(TickInputs& in) {
   while (contact_reader_.TakeNext(set, meta)) {
     if (!meta.valid_data) continue;
     in.contacts.push_back({set, meta.writer, dds::CheckContactSet(set, session_)});
+  }
+}
+
+void SampleIntake::TakeVisitAnswers(TickInputs& in) {
+  msg::VisitAnswers sample;
+  dds::SampleMeta meta;
+  while (visit_reader_.TakeNext(sample, meta)) {
+    if (!meta.valid_data) continue;
+    VisitAnswersInput v;
+    v.user = sample.user().to_string();
+    v.writer = meta.writer;
+    v.refused = dds::CheckVisitAnswers(sample, session_);
+    if (v.refused.empty()) v.answers = session::FromMessage(sample);
+    in.visits.push_back(std::move(v));
   }
 }
 

@@ -22,11 +22,13 @@ class SampleIntake {
   void TakeMembers(TickInputs& in);
   void TakeControlEvents(TickInputs& in);
   void TakeContactSets(TickInputs& in);
+  void TakeVisitAnswers(TickInputs& in);
 
   std::string session_;
   dds::Reader<msg::MemberInfo> member_reader_;
   dds::Reader<msg::ContactSet> contact_reader_;
   dds::Reader<msg::ControlEvent> control_reader_;
+  dds::Reader<msg::VisitAnswers> visit_reader_;
 };
 
 }  // namespace handshare::server

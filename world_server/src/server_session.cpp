@@ -23,7 +23,8 @@ ServerSession::ServerSession(ServerSessionConfig config, scene::Scene scene, con
     : config_(std::move(config)),
       clock_(resume ? common::SessionClock::FromEpoch(resume->state.epoch_unix_ns) : common::SessionClock()),
       scene_(ResumedScene(std::move(scene), resume, config_.load)),
-      objects_(config_.session, config_.objects, clock_) {
+      objects_(config_.session, config_.objects, clock_),
+      turns_(std::chrono::duration_cast<Clock::duration>(config_.visit_turn)) {
   if (resume == nullptr) return;
   resume_ = *resume;
   // The same revision and message number again: nodes that have them change nothing.
@@ -63,6 +64,8 @@ ServerSession::Events ServerSession::Tick(const TickInputs& in, Clock::time_poin
   TakeControlEvents(in, out);
   TakeContactSets(in, now, out);
   StepObjects(now, dt_s, out);
+  TakeVisitAnswers(in, out);
+  EndTurns(now, out);
   return out;
 }
 
@@ -101,6 +104,7 @@ void ServerSession::TakeMembers(const TickInputs& in, Clock::time_point now, Eve
   if (!events.empty()) SayRoster(out);
   const std::size_t present = members_.present().size();
   for (const auto& event : events) {
+    turns_.OnMember(event.change, event.member, now);
     out.push_back(MemberChanged{event, present});
     if (event.change != MemberChange::kJoined) {
       objects_.OnUserGone(event.member.user, now);
@@ -167,6 +171,30 @@ void ServerSession::StepObjects(Clock::time_point now, double dt_s, Events& out)
   for (auto& change : step.ownership) out.push_back(OwnershipChanged{std::move(change)});
   for (auto& body : step.bodies) out.push_back(BodyMoved{std::move(body)});
   for (auto& [object_id, sample] : step.deformations) out.push_back(FieldChanged{object_id, std::move(sample)});
+}
+
+void ServerSession::TakeVisitAnswers(const TickInputs& in, Events& out) {
+  bool taken = false;
+  for (const VisitAnswersInput& v : in.visits) {
+    if (!Accepted("visit_answers", v.user, v.refused, out) ||
+        !Accepted("visit_answers", v.user, members_.CheckAuthor(v.user, v.writer), out)) {
+      continue;
+    }
+    out.push_back(VisitAnswered{v.user, v.answers});
+    taken = true;
+  }
+  // A visitor's answers are few and not to be lost with a killed server.
+  if (taken) out.push_back(SessionCheckpoint{});
+}
+
+void ServerSession::EndTurns(Clock::time_point now, Events& out) {
+  const auto ended = turns_.TakeEnded(now);
+  const double minutes = std::chrono::duration<double, std::ratio<60>>(config_.visit_turn).count();
+  for (const auto& e : ended) {
+    out.push_back(TurnEnded{e.member, std::chrono::duration_cast<std::chrono::nanoseconds>(e.turn), minutes});
+    ShowMessage(TurnOverMessages(e.member.user, minutes), out);
+  }
+  if (!ended.empty()) out.push_back(SessionCheckpoint{});
 }
 
 void ServerSession::ResetControlStates(const std::vector<ControlPlace>* places, Events& out) {

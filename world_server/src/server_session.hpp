@@ -20,6 +20,7 @@
 #include "handshare/world_server/object_authority.hpp"
 #include "handshare/world_server/session_events.hpp"
 #include "handshare/world_server/session_log.hpp"
+#include "handshare/world_server/visit_turns.hpp"
 
 namespace handshare::server {
 
@@ -61,13 +62,23 @@ struct ContactSetInput {
   std::string refused;  ///< why the sample check refused it ("" accepted)
 };
 
+/// A visitor's questionnaire as taken (valid data only).
+struct VisitAnswersInput {
+  std::string user;     ///< who sent it (a console's member name)
+  InstanceKey writer{};
+  std::string refused;  ///< why the sample check refused it ("" accepted)
+  controls::VisitAnswers answers;  ///< accepted samples only
+};
+
 /// What one tick takes, in the order it takes it.
 struct TickInputs {
   std::vector<MemberInput> members;
   std::vector<WriterInput> member_writers;  ///< after the member samples
   std::vector<ControlEventInput> controls;
   std::vector<ContactSetInput> contacts;
+  std::vector<VisitAnswersInput> visits;
   void clear() {
+    visits.clear();
     members.clear();
     member_writers.clear();
     controls.clear();
@@ -81,6 +92,8 @@ struct ServerSessionConfig {
   double tick_Hz = 60.0;   ///< announced in the scene state: how often contact sets are read
   ObjectAuthorityOptions objects;
   SceneLoader load = LoadWorld;  ///< the worlds a control's action opens, and a resumed one
+  /// A visitor's turn (a haptic member's, from its join); zero: turns never end.
+  std::chrono::nanoseconds visit_turn{0};
 };
 
 class ServerSession {
@@ -119,6 +132,10 @@ class ServerSession {
   void TakeContactSets(const TickInputs& in, Clock::time_point now, Events& out);
   /// One step of the shared objects, and what it publishes: owners, poses, deformations.
   void StepObjects(Clock::time_point now, double dt_s, Events& out);
+  /// Visitors' questionnaires, for the log.
+  void TakeVisitAnswers(const TickInputs& in, Events& out);
+  /// Visitors' turns that are over: each said on the board, once.
+  void EndTurns(Clock::time_point now, Events& out);
 
   /// True when `reason` is empty; else the sample is dropped, counted and (rate-limited) named.
   bool Accepted(std::string_view topic, std::string_view sender, const std::string& reason, Events& out);
@@ -149,6 +166,7 @@ class ServerSession {
   std::vector<ControlStateRecord> control_states_; // the current world's controls, as events left them
   ObjectAuthority objects_;
   MemberRegistry members_;
+  VisitTurns turns_;
   dds::DroppedSamples dropped_;
 };
 

@@ -63,8 +63,17 @@ struct EndRow {
 };
 struct ForgetPosesRow {};
 struct ForgetPlacesRow {};
+struct AnswersRow {
+  std::uint64_t unix_ns;
+  std::string sent_by;
+  controls::VisitAnswers answers;
+};
+struct ControlKindRow {
+  std::string control_id;
+  scene::ControlType kind;
+};
 using Row = std::variant<MemberRow, SceneRow, ControlRecord, OwnershipRow, EndRow, SessionState, ObjectPose, ForgetPosesRow,
-                         ControlPlace, ForgetPlacesRow>;
+                         ControlPlace, ForgetPlacesRow, TurnRecord, AnswersRow, ControlKindRow>;
 
 std::string BoardJson(const std::vector<scene::Message>& board) {
   nlohmann::json j = nlohmann::json::array();
@@ -103,6 +112,7 @@ void OpenSchema(sqlite::Db& db) {
       db.Exec(schema::kStampV1, "writing the schema version");
       db.Exec(schema::kMigrateV1ToV2, "creating the schema's version 2");
       db.Exec(schema::kMigrateV2ToV3, "creating the schema's version 3");
+      db.Exec(schema::kMigrateV3ToV4, "creating the schema's version 4");
       db.Exec("COMMIT", "committing the schema");
     } catch (...) {
       sqlite3_exec(db.get(), "ROLLBACK", nullptr, nullptr, nullptr);  // the first error is the one to report
@@ -124,12 +134,13 @@ void OpenSchema(sqlite::Db& db) {
   if (version < SessionLog::kSchemaVersion) {
     // Every row stays; the version is read again inside the transaction, so two servers
     // opening one old log at once migrate it once.
-    db.Exec("BEGIN IMMEDIATE", "starting the migration to schema version 3");
+    db.Exec("BEGIN IMMEDIATE", "starting the migration to schema version 4");
     try {
       const std::int64_t now = db.QueryInt("PRAGMA user_version", "reading the schema version");
       if (now == 1) db.Exec(schema::kMigrateV1ToV2, "migrating the session log to schema version 2");
       if (now <= 2) db.Exec(schema::kMigrateV2ToV3, "migrating the session log to schema version 3");
-      db.Exec("COMMIT", "committing the migration to schema version 3");
+      if (now <= 3) db.Exec(schema::kMigrateV3ToV4, "migrating the session log to schema version 4");
+      db.Exec("COMMIT", "committing the migration to schema version 4");
     } catch (...) {
       sqlite3_exec(db.get(), "ROLLBACK", nullptr, nullptr, nullptr);
       throw;
@@ -173,7 +184,8 @@ struct SessionLog::Impl {
 
   // Prepared in the constructor, in the caller's thread, so a broken file fails there; the
   // writer thread owns the connection from then on.
-  std::optional<sqlite::Statement> member, scene, control, owner, end, seen, state, pose, forget, place, forget_places;
+  std::optional<sqlite::Statement> member, scene, control, owner, end, seen, state, pose, forget, place, forget_places,
+      turn, answer, kind;
 
   void Prepare() {
     member.emplace(db, schema::kInsertMember, "inserting a member event");
@@ -187,6 +199,9 @@ struct SessionLog::Impl {
     forget.emplace(db, "DELETE FROM object_poses WHERE session_id = ?1", "forgetting the object poses");
     place.emplace(db, schema::kUpsertControlState, "writing a control's place");
     forget_places.emplace(db, "DELETE FROM control_states WHERE session_id = ?1", "forgetting the controls' places");
+    turn.emplace(db, schema::kInsertTurn, "inserting a visitor's turn");
+    answer.emplace(db, schema::kInsertAnswer, "inserting a questionnaire's answer");
+    kind.emplace(db, schema::kUpsertControlKind, "writing a control's kind");
   }
 
   void WriterLoop() {
@@ -275,6 +290,29 @@ struct SessionLog::Impl {
           forget_places->Bind(1, session_id);
           forget_places->Step();
           forget_places->Reset();
+        } else if (const auto* t = std::get_if<TurnRecord>(&row)) {
+          turn->Bind(1, session_id).Bind(2, Ns(t->started_unix_ns)).Bind(3, Ns(t->ended_unix_ns)).Bind(4, t->member_id)
+              .Bind(5, t->user);
+          turn->Step();
+          turn->Reset();
+        } else if (const auto* a = std::get_if<AnswersRow>(&row)) {
+          // One row per answered score: the report groups them by kind and question in SQL's order.
+          for (std::size_t k = 0; k < controls::kVisitControlKinds; ++k) {
+            for (std::size_t q = 0; q < controls::kVisitQuestions; ++q) {
+              const int score = a->answers.scores[k][q];
+              if (score == 0) continue;
+              answer->Bind(1, session_id).Bind(2, Ns(a->unix_ns)).Bind(3, a->answers.visitor).Bind(4, a->sent_by)
+                  .Bind(5, std::string_view(controls::ToString(static_cast<scene::ControlType>(k))))
+                  .Bind(6, std::string_view(controls::ToString(static_cast<controls::VisitQuestion>(q))))
+                  .Bind(7, static_cast<std::int64_t>(score));
+              answer->Step();
+              answer->Reset();
+            }
+          }
+        } else if (const auto* ck = std::get_if<ControlKindRow>(&row)) {
+          kind->Bind(1, session_id).Bind(2, ck->control_id).Bind(3, std::string_view(controls::ToString(ck->kind)));
+          kind->Step();
+          kind->Reset();
         } else if (const auto* e = std::get_if<EndRow>(&row)) {
           end->Bind(1, Ns(e->unix_ns)).Bind(2, session_id);
           end->Step();
@@ -378,6 +416,16 @@ void SessionLog::OnObjectPose(const ObjectPose& pose) { impl_->Push(pose); }
 void SessionLog::ForgetObjectPoses() { impl_->Push(ForgetPosesRow{}); }
 
 void SessionLog::OnControlPlace(const ControlPlace& place) { impl_->Push(place); }
+
+void SessionLog::OnTurnEnded(const TurnRecord& turn) { impl_->Push(turn); }
+
+void SessionLog::OnVisitAnswers(const std::string& sent_by, const controls::VisitAnswers& answers, std::uint64_t unix_ns) {
+  impl_->Push(AnswersRow{unix_ns, sent_by, answers});
+}
+
+void SessionLog::OnControlKinds(const scene::Scene& scene) {
+  for (const auto& c : scene.controls) impl_->Push(ControlKindRow{c.id, c.type});
+}
 
 void SessionLog::ForgetControlPlaces() { impl_->Push(ForgetPlacesRow{}); }
 

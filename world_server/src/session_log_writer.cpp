@@ -1,5 +1,7 @@
 #include "session_log_writer.hpp"
 
+#include <algorithm>
+
 #include "handshare/common/clock.hpp"
 
 namespace handshare::server {
@@ -28,6 +30,13 @@ void SessionLogWriter::Take(std::span<const SessionEvent> events, Clock::time_po
       },
       [&](const BodyMoved& e) { LogPose(e.body, now); },
       [&](const SessionCheckpoint&) { Commit(); },
+      [&](const SceneRevised& e) { log_.OnControlKinds(e.scene); },
+      [&](const TurnEnded& e) {
+        const std::uint64_t end = unix_now_();
+        const auto turn_ns = static_cast<std::uint64_t>(std::max<std::int64_t>(0, e.turn.count()));
+        log_.OnTurnEnded(TurnRecord{end >= turn_ns ? end - turn_ns : 0, end, e.member.member_id, e.member.user});
+      },
+      [&](const VisitAnswered& e) { log_.OnVisitAnswers(e.sent_by, e.answers, unix_now_()); },
       [](const auto&) {},
   };
   for (const SessionEvent& event : events) std::visit(record, event);

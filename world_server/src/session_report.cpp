@@ -7,6 +7,7 @@
 #include <ctime>
 #include <map>
 #include <ostream>
+#include <set>
 #include <system_error>
 
 #include "sqlite_db.hpp"
@@ -56,6 +57,62 @@ std::vector<ControlStats> ComputeControlStats(const std::vector<ControlRecord>& 
     for (const auto& [user, n] : a.misses_by_user) misses.push_back(static_cast<double>(n));
     a.stats.misses_per_user = Summarize(misses);
     out.push_back(a.stats);
+  }
+  return out;
+}
+
+std::vector<KindStats> ComputeKindStats(const std::vector<ControlRecord>& events,
+                                        const std::map<std::string, scene::ControlType>& kinds) {
+  struct Acc {
+    KindStats stats;
+    std::set<std::string> controls;
+    std::vector<double> errors;
+    std::map<std::string, std::size_t> misses_by_user;  // every user who tried, 0 if never missed
+  };
+  // "unknown" sorts after the four kinds' names, which std::map keeps in the paper's order.
+  constexpr const char* kUnknown = "unknown";
+  std::map<std::string, Acc> by_kind;
+  for (const auto& e : events) {
+    const auto k = kinds.find(e.control_id);
+    const std::string kind = k == kinds.end() ? kUnknown : controls::ToString(k->second);
+    Acc& a = by_kind[kind];
+    a.stats.kind = kind;
+    a.controls.insert(e.control_id);
+    if (IsHit(e.kind)) {
+      ++a.stats.hits;
+      a.misses_by_user.try_emplace(e.user, 0);
+      if (e.error_m && std::isfinite(*e.error_m)) a.errors.push_back(*e.error_m);
+    } else if (e.kind == controls::EventKind::kMissed) {
+      ++a.stats.misses;
+      ++a.misses_by_user[e.user];
+    } else {
+      ++a.stats.released;
+    }
+  }
+  std::vector<KindStats> out;
+  for (auto& [kind, a] : by_kind) {
+    a.stats.controls = a.controls.size();
+    a.stats.error_m = Summarize(a.errors);
+    std::vector<double> misses;
+    for (const auto& [user, n] : a.misses_by_user) misses.push_back(static_cast<double>(n));
+    a.stats.misses_per_user = Summarize(misses);
+    out.push_back(a.stats);
+  }
+  return out;
+}
+
+std::vector<QuestionStats> ComputeQuestionnaire(const std::vector<AnswerRow>& answers) {
+  using scene::ControlType;
+  using controls::VisitQuestion;
+  std::vector<QuestionStats> out;
+  for (ControlType kind : {ControlType::kArrow, ControlType::kBook, ControlType::kButton, ControlType::kLever}) {
+    for (VisitQuestion q : {VisitQuestion::kEase, VisitQuestion::kNaturalness, VisitQuestion::kSatisfaction}) {
+      std::vector<double> scores;
+      for (const auto& a : answers) {
+        if (a.kind == kind && a.question == q) scores.push_back(static_cast<double>(a.score));
+      }
+      out.push_back(QuestionStats{kind, q, Summarize(scores)});
+    }
   }
   return out;
 }
@@ -191,6 +248,59 @@ std::string CsvField(const std::string& text) {
   return out + "\"";
 }
 
+// Version 4's tables: the controls' kinds, the visitors' turns and questionnaires. A log of an
+// older version has none: every control's kind is unknown, and there are no turns or answers.
+void ReadVisits(sqlite::Db& db, std::int64_t id, const std::vector<ControlRecord>& controls, SessionReport& report) {
+  std::map<std::string, scene::ControlType> kinds;
+  std::vector<AnswerRow> answers;
+  if (db.QueryInt("PRAGMA user_version", "reading the schema version") >= 4) {
+    {
+      sqlite::Statement s(db, "SELECT control_id, kind FROM control_kinds WHERE session_id = ?1",
+                          "reading the controls' kinds");
+      s.Bind(1, id);
+      while (s.Step()) {
+        const std::string kind = s.Text(1);
+        const auto k = controls::ControlTypeFromString(kind);
+        if (!k) throw SessionLogError(db.file_name() + ": unknown kind of control '" + kind + "'");
+        kinds[s.Text(0)] = *k;
+      }
+    }
+    {
+      sqlite::Statement s(db,
+                          "SELECT started_unix_ns, ended_unix_ns, member_id, user FROM visit_turns "
+                          "WHERE session_id = ?1 ORDER BY ended_unix_ns, id",
+                          "reading the visitors' turns");
+      s.Bind(1, id);
+      while (s.Step()) report.turns.push_back(TurnRecord{U64(s.Int(0)), U64(s.Int(1)), s.Text(2), s.Text(3)});
+    }
+    {
+      sqlite::Statement s(db,
+                          "SELECT visitor, control_kind, question, score FROM visit_answers "
+                          "WHERE session_id = ?1 ORDER BY id",
+                          "reading the questionnaires");
+      s.Bind(1, id);
+      while (s.Step()) {
+        const auto kind = controls::ControlTypeFromString(s.Text(1));
+        const auto question = controls::VisitQuestionFromString(s.Text(2));
+        if (!kind || !question) {
+          throw SessionLogError(db.file_name() + ": unknown questionnaire row '" + s.Text(1) + "', '" + s.Text(2) + "'");
+        }
+        answers.push_back(AnswerRow{s.Text(0), *kind, *question, static_cast<int>(s.Int(3))});
+      }
+    }
+    {
+      sqlite::Statement s(db,
+                          "SELECT count(*) FROM (SELECT DISTINCT unix_ns, visitor, sent_by FROM visit_answers "
+                          "WHERE session_id = ?1)",
+                          "counting the questionnaires");
+      s.Bind(1, id);
+      if (s.Step()) report.questionnaires = U64(s.Int(0));
+    }
+  }
+  report.kinds = ComputeKindStats(controls, kinds);
+  report.questionnaire = ComputeQuestionnaire(answers);
+}
+
 }  // namespace
 
 std::vector<SessionSummary> ListSessions(const std::filesystem::path& file) {
@@ -267,6 +377,7 @@ SessionReport ReadReport(const std::filesystem::path& file, std::optional<std::i
     s.Bind(1, id);
     if (s.Step()) report.ownership_changes = U64(s.Int(0));
   }
+  ReadVisits(*db, id, controls, report);
   db->Exec("COMMIT", "ending the read transaction");
   return report;
 }
@@ -321,6 +432,36 @@ void PrintReport(std::ostream& out, const SessionReport& r) {
     }
   }
   out << "\nownership changes: " << r.ownership_changes << "\n";
+
+  out << "\ncontrols by kind (the paper's Table 4): the rows above summed over the controls of each kind\n";
+  if (r.kinds.empty()) {
+    out << "  (no control events logged)\n";
+  } else {
+    out << Format("  %-8s %8s %6s %7s %8s %10s %10s %6s %9s %7s\n", "kind", "controls", "hits", "misses", "hit errs",
+                  "mean [mm]", "sd [mm]", "users", "miss mean", "miss sd");
+    for (const auto& k : r.kinds) {
+      out << Format("  %-8s %8zu %6zu %7zu %8zu %10.2f %10.2f %6zu %9.2f %7.2f\n", k.kind.c_str(), k.controls, k.hits,
+                    k.misses, k.error_m.n, k.error_m.mean * 1e3, k.error_m.sd * 1e3, k.misses_per_user.n,
+                    k.misses_per_user.mean, k.misses_per_user.sd);
+    }
+  }
+
+  out << "\nvisitors' turns ended: " << r.turns.size() << "\n";
+  if (!r.turns.empty()) {
+    out << Format("  %-16s %10s %10s %10s\n", "user", "joined [s]", "ended [s]", "turn [s]");
+    for (const auto& t : r.turns) {
+      out << Format("  %-16s %10.3f %10.3f %10.3f\n", t.user.c_str(), Seconds(s.started_unix_ns, t.started_unix_ns),
+                    Seconds(s.started_unix_ns, t.ended_unix_ns), Seconds(t.started_unix_ns, t.ended_unix_ns));
+    }
+  }
+
+  out << "\nquestionnaire (the paper's Fig. 16 and Table 3): " << r.questionnaires
+      << " questionnaire(s); scores 1 (least) to 7 (most)\n";
+  out << Format("  %-8s %-13s %4s %6s %6s\n", "kind", "question", "n", "mean", "sd");
+  for (const auto& q : r.questionnaire) {
+    out << Format("  %-8s %-13s %4zu %6.2f %6.2f\n", controls::ToString(q.kind), controls::ToString(q.question),
+                  q.score.n, q.score.mean, q.score.sd);
+  }
 }
 
 void PrintReportCsv(std::ostream& out, const SessionReport& r) {
@@ -366,6 +507,32 @@ void PrintReportCsv(std::ostream& out, const SessionReport& r) {
     row("control", c.control_id, "misses_per_user_sd", Format("%.6g", c.misses_per_user.sd));
   }
   row("ownership", sid, "changes", std::to_string(r.ownership_changes));
+  for (const auto& k : r.kinds) {
+    row("control_kind", k.kind, "controls", std::to_string(k.controls));
+    row("control_kind", k.kind, "hits", std::to_string(k.hits));
+    row("control_kind", k.kind, "misses", std::to_string(k.misses));
+    row("control_kind", k.kind, "released", std::to_string(k.released));
+    row("control_kind", k.kind, "error_n", std::to_string(k.error_m.n));
+    row("control_kind", k.kind, "error_mean_m", Format("%.6g", k.error_m.mean));
+    row("control_kind", k.kind, "error_sd_m", Format("%.6g", k.error_m.sd));
+    row("control_kind", k.kind, "users", std::to_string(k.misses_per_user.n));
+    row("control_kind", k.kind, "misses_per_user_mean", Format("%.6g", k.misses_per_user.mean));
+    row("control_kind", k.kind, "misses_per_user_sd", Format("%.6g", k.misses_per_user.sd));
+  }
+  std::map<std::string, int> turn_number;
+  for (const auto& t : r.turns) {
+    const std::string item = t.member_id + "#" + std::to_string(++turn_number[t.member_id]);
+    row("turn", item, "user", t.user);
+    row("turn", item, "joined_s", Format("%.3f", Seconds(s.started_unix_ns, t.started_unix_ns)));
+    row("turn", item, "ended_s", Format("%.3f", Seconds(s.started_unix_ns, t.ended_unix_ns)));
+  }
+  row("questionnaire", sid, "count", std::to_string(r.questionnaires));
+  for (const auto& q : r.questionnaire) {
+    const std::string item = std::string(controls::ToString(q.kind)) + "/" + controls::ToString(q.question);
+    row("questionnaire", item, "n", std::to_string(q.score.n));
+    row("questionnaire", item, "mean", Format("%.6g", q.score.mean));
+    row("questionnaire", item, "sd", Format("%.6g", q.score.sd));
+  }
 }
 
 }  // namespace handshare::server

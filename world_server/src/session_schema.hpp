@@ -8,6 +8,9 @@
 //              sessions.resumed_from names the session a resumed one continues.
 //   version 3: control_states holds where each control of the current world settled, so a
 //              restarted server publishes them again (a node joining later builds them there).
+//   version 4: visit_turns (a visitor's turn ended after --visit-minutes), visit_answers (the
+//              questionnaire at its end, the paper's Fig. 16) and control_kinds (each control's
+//              kind, for the paper's Table 4 by kind of control).
 namespace handshare::server::schema {
 
 inline constexpr const char* kCreateV1 = R"sql(
@@ -126,6 +129,36 @@ CREATE TABLE control_states(                     -- where each control of the cu
 PRAGMA user_version = 3;
 )sql";
 
+// Version 4 on top of version 3.
+inline constexpr const char* kMigrateV3ToV4 = R"sql(
+CREATE TABLE visit_turns(                        -- a visitor's turn that ended (--visit-minutes)
+  id              INTEGER PRIMARY KEY,
+  session_id      INTEGER NOT NULL REFERENCES sessions(id),
+  started_unix_ns INTEGER NOT NULL,              -- the member's join
+  ended_unix_ns   INTEGER NOT NULL,
+  member_id       TEXT    NOT NULL,
+  user            TEXT    NOT NULL
+);
+CREATE TABLE visit_answers(                      -- the questionnaire at a turn's end, one score a row
+  id           INTEGER PRIMARY KEY,
+  session_id   INTEGER NOT NULL REFERENCES sessions(id),
+  unix_ns      INTEGER NOT NULL,                 -- when the world server took them
+  visitor      TEXT    NOT NULL,                 -- whose turn
+  sent_by      TEXT    NOT NULL,                 -- the console's member name
+  control_kind TEXT    NOT NULL CHECK (control_kind IN ('button', 'arrow', 'lever', 'book')),
+  question     TEXT    NOT NULL CHECK (question IN ('ease', 'naturalness', 'satisfaction')),
+  score        INTEGER NOT NULL CHECK (score BETWEEN 1 AND 7)
+);
+CREATE TABLE control_kinds(                      -- the kind of every control of the worlds shown
+  session_id INTEGER NOT NULL REFERENCES sessions(id),
+  control_id TEXT    NOT NULL,
+  kind       TEXT    NOT NULL CHECK (kind IN ('button', 'arrow', 'lever', 'book')),
+  PRIMARY KEY(session_id, control_id)
+);
+CREATE INDEX visit_answers_by_session ON visit_answers(session_id, visitor);
+PRAGMA user_version = 4;
+)sql";
+
 // 0x48534C47 = "HSLG"; PRAGMAs take no parameters, so the numbers are spelled out.
 inline constexpr const char* kStampV1 = "PRAGMA application_id = 1213418567; PRAGMA user_version = 1;";
 
@@ -151,6 +184,13 @@ inline constexpr const char* kUpsertPose =
 inline constexpr const char* kUpsertControlState =
     "INSERT OR REPLACE INTO control_states(session_id, control_id, unix_ns, scene, idx, engaged, user, changes) "
     "VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8)";
+inline constexpr const char* kInsertTurn =
+    "INSERT INTO visit_turns(session_id, started_unix_ns, ended_unix_ns, member_id, user) VALUES (?1, ?2, ?3, ?4, ?5)";
+inline constexpr const char* kInsertAnswer =
+    "INSERT INTO visit_answers(session_id, unix_ns, visitor, sent_by, control_kind, question, score) "
+    "VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7)";
+inline constexpr const char* kUpsertControlKind =
+    "INSERT OR REPLACE INTO control_kinds(session_id, control_id, kind) VALUES (?1, ?2, ?3)";
 inline constexpr const char* kUpdateResumedFrom = "UPDATE sessions SET resumed_from = ?1 WHERE id = ?2";
 inline constexpr const char* kUpdateEnd = "UPDATE sessions SET ended_unix_ns = ?1 WHERE id = ?2";
 inline constexpr const char* kUpdateSeen =

@@ -15,6 +15,7 @@
 #include "handshare/common/overload_watch.hpp"
 #include "handshare/common/shutdown.hpp"
 #include "handshare/dds/messages.hpp"
+#include "handshare/node/node_main.hpp"
 #include "handshare/scene/scene.hpp"
 #include "console_log.hpp"
 #include "pose_trace.hpp"
@@ -35,6 +36,8 @@ ServerSessionConfig SessionConfig(const WorldServerConfig& config) {
   if (!config.cache_dir.empty()) c.objects.models.cache_dir = config.cache_dir;
   c.objects.dump_dir = config.dump_dir;
   c.objects.delta.threshold_m = config.deformation_threshold_m;
+  c.visit_turn = std::chrono::duration_cast<std::chrono::nanoseconds>(
+      std::chrono::duration<double, std::ratio<60>>(config.visit_minutes));
   return c;
 }
 
@@ -45,6 +48,37 @@ std::string HostName() {
 }
 
 }  // namespace
+
+void DeclareWorldServerOptions(common::Options& options) {
+  options.Value("scene", "NAME", "scene to start with (assets/scenes/NAME.json)", "start_menu")
+      .Value("log", "FILE", "record the session in this SQLite session log (a new session is appended; "
+                            "read it with session_report)", "")
+      .Value("cache", "DIR", "deformable models' cache (default: $HANDSHARE_CACHE, else ~/.cache/handshare)", "")
+      .Value("dump-deformation", "DIR", "write the loads and field of every published deformation to DIR "
+                                        "(for an independent FEM check)", "")
+      .Value("pose-trace", "FILE", "write every published rigid-body state to a CSV file (stamp_ns on the host's "
+                                   "steady clock, object_id, owner, position, velocity)", "")
+      .Value("deformation-threshold", "M", "re-send a deformed surface node when it moved more than M metres", "1e-4")
+      .Value("resume-within", "SEC", "with --log: a session of this name whose server was killed less than SEC "
+                                     "ago is resumed where it was (0: always start afresh)", "600")
+      .Value("visit-minutes", "M", "a visitor's turn (a haptic member's, from its join) ends M minutes later: the "
+                                   "board says so and --log records it (fractions allowed; 0: turns never end; "
+                                   "the paper's 10 by default)", "10");
+}
+
+WorldServerConfig ReadWorldServerOptions(const common::Options& o) {
+  WorldServerConfig config;
+  config.where = node::ReadSessionOptions(o);
+  config.scene = o.GetString("scene");
+  config.log_file = o.GetString("log");
+  config.cache_dir = o.GetString("cache");
+  config.dump_dir = o.GetString("dump-deformation");
+  config.pose_trace_file = o.GetString("pose-trace");
+  config.deformation_threshold_m = o.GetDouble("deformation-threshold", 1e-9, 0.01);
+  config.resume_within_s = o.GetDouble("resume-within", 0.0, 1e9);
+  config.visit_minutes = o.GetDouble("visit-minutes", 0.0, 24.0 * 60.0);  // up to a day
+  return config;
+}
 
 WorldServer::WorldServer(WorldServerConfig config)
     : config_(std::move(config)), start_(std::chrono::steady_clock::now()) {}

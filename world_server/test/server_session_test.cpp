@@ -31,7 +31,7 @@ std::string KindOf(const SessionEvent& e) {
   static const char* const kNames[] = {"LineSaid",       "MemberChanged",       "RosterChanged", "SceneRevised",
                                        "SceneShown",     "SessionStateChanged", "MessageSaid",   "ControlApplied",
                                        "ControlStateChanged", "WorldEntered",   "OwnershipChanged", "BodyMoved",
-                                       "FieldChanged",   "SessionCheckpoint"};
+                                       "FieldChanged",   "SessionCheckpoint",   "TurnEnded",     "VisitAnswered"};
   static_assert(std::size(kNames) == std::variant_size_v<SessionEvent>);
   return kNames[e.index()];
 }
@@ -199,6 +199,84 @@ TEST_F(ServerSessionTest, AMemberJoiningGivesMemberJoinedAndTheRosterAndLeavingG
   EXPECT_EQ(left[0].event.change, MemberChange::kLeft);
   EXPECT_EQ(left[0].present, 0u);
   EXPECT_TRUE(All<RosterChanged>(events).at(0).member_ids.empty());
+}
+
+// --visit-minutes: a haptic member's turn ends that long after its join, once: TurnEnded, then
+// the board's message in English and Japanese under the next number; a screen takes no turn.
+TEST_F(ServerSessionTest, AVisitorsTurnEndsOnceAfterItsLengthAndTheBoardSaysSo) {
+  ServerSessionConfig config = Config();
+  config.visit_turn = std::chrono::seconds(3);  // 0.05 minutes
+  ServerSession session(config, worlds_["start_menu"]);
+  StartAndWaitForModels(session);
+  TickInputs in;
+  in.members.push_back(Announced("alice", 1));
+  in.members.push_back(Announced("screen", 2, "graphics"));
+  const Clock::time_point joined = now_;
+  session.Tick(in, joined, 1.0 / 60);
+  Events events = session.Tick({}, joined + std::chrono::milliseconds(2999), 1.0 / 60);
+  EXPECT_TRUE(All<TurnEnded>(events).empty());
+  events = session.Tick({}, joined + std::chrono::seconds(3), 1.0 / 60);
+  EXPECT_EQ(Kinds(events), (std::vector<std::string>{"TurnEnded", "MessageSaid", "SessionStateChanged",
+                                                     "SessionCheckpoint"}));
+  const auto ended = All<TurnEnded>(events);
+  ASSERT_EQ(ended.size(), 1u);
+  EXPECT_EQ(ended[0].member.user, "alice");
+  EXPECT_EQ(ended[0].turn, std::chrono::seconds(3));
+  EXPECT_DOUBLE_EQ(ended[0].minutes, 0.05);
+  const auto said = All<MessageSaid>(events);
+  ASSERT_EQ(said.size(), 1u);
+  EXPECT_EQ(said[0].message_id, 2u);  // the start's board was #1
+  ASSERT_EQ(said[0].messages.size(), 2u);
+  EXPECT_EQ(said[0].messages[0].language, "en");
+  EXPECT_EQ(said[0].messages[0].text, "Thank you, alice: your 0.05 minutes are over.");
+  EXPECT_EQ(said[0].messages[1].language, "ja");
+  EXPECT_NE(said[0].messages[1].text.find("alice"), std::string::npos);
+  EXPECT_EQ(All<SessionStateChanged>(events)[0].state.board.size(), 2u);  // a restart shows it again
+  // Once: later ticks say nothing more.
+  EXPECT_TRUE(All<TurnEnded>(session.Tick({}, joined + std::chrono::seconds(60), 1.0 / 60)).empty());
+}
+
+TEST_F(ServerSessionTest, TurnsNeverEndWithoutALengthAndEndWithTheMemberLeaving) {
+  ServerSession off(Config(), worlds_["start_menu"]);  // visit_turn 0: off
+  StartAndWaitForModels(off);
+  TickInputs in;
+  in.members.push_back(Announced("alice", 1));
+  off.Tick(in, now_, 1.0 / 60);
+  EXPECT_TRUE(All<TurnEnded>(off.Tick({}, now_ + std::chrono::hours(2), 1.0 / 60)).empty());
+
+  ServerSessionConfig config = Config();
+  config.visit_turn = std::chrono::seconds(3);
+  ServerSession session(config, worlds_["start_menu"]);
+  StartAndWaitForModels(session);
+  session.Tick(in, now_, 1.0 / 60);
+  in.members[0].kind = MemberInput::Kind::kDisposed;
+  session.Tick(in, now_ + std::chrono::seconds(1), 1.0 / 60);  // alice leaves before her turn's end
+  EXPECT_TRUE(All<TurnEnded>(session.Tick({}, now_ + std::chrono::seconds(5), 1.0 / 60)).empty());
+}
+
+// A questionnaire from the console: VisitAnswered and a checkpoint (committed at once); a
+// refused sample is counted and said, and gives nothing to the log.
+TEST_F(ServerSessionTest, AVisitorsAnswersGoToTheLogAndARefusedSampleDoesNot) {
+  ServerSession session(Config(), worlds_["start_menu"]);
+  StartAndWaitForModels(session);
+  TickInputs in;
+  VisitAnswersInput v;
+  v.user = "web-console";
+  v.writer = Key(5, 4);
+  v.answers.visitor = "alice";
+  v.answers.at(scene::ControlType::kBook, controls::VisitQuestion::kEase) = 6;
+  in.visits.push_back(v);
+  VisitAnswersInput bad = v;
+  bad.refused = "scores[0][0] 9 is not 0..7";
+  in.visits.push_back(bad);
+  const Events events = session.Tick(in, now_, 1.0 / 60);
+  const auto answered = All<VisitAnswered>(events);
+  ASSERT_EQ(answered.size(), 1u);
+  EXPECT_EQ(answered[0].sent_by, "web-console");
+  EXPECT_EQ(answered[0].answers.visitor, "alice");
+  EXPECT_EQ(answered[0].answers.at(scene::ControlType::kBook, controls::VisitQuestion::kEase), 6);
+  EXPECT_EQ(All<SessionCheckpoint>(events).size(), 1u);
+  EXPECT_EQ(session.dropped().total(), 1u);
 }
 
 TEST_F(ServerSessionTest, AMemberWhoseWriterIsLostVanishes) {

@@ -55,6 +55,38 @@ SessionState State(std::uint32_t revision, std::uint32_t message_id) {
   return st;
 }
 
+// A world's controls' kinds (from its revision), a visitor's turn and her questionnaire go to the
+// log as rows of their own; the answers are committed at once (their checkpoint).
+TEST(SessionLogWriter, WritesTheControlsKindsATurnAndAQuestionnaire) {
+  TempDir dir;
+  const auto file = dir / "log.sqlite";
+  const Member alice{"m-alice", "alice", "haptic", "sim", 42};
+  const Clock::time_point t0 = Clock::now();
+  SessionLog log(file, SessionStart{"s", 7, "h", 1, kT0});
+  std::uint64_t clock = kT0;
+  SessionLogWriter writer(log, [&clock] { return clock += kSecond; });
+  scene::Scene world;
+  world.controls = {testing::Control("lever", scene::ControlType::kLever),
+                    testing::Control("book", scene::ControlType::kBook)};
+  writer.Take(std::vector<SessionEvent>{SceneRevised{world, 1, kT0, 60.0}}, t0);
+  controls::VisitAnswers answers;
+  answers.visitor = "alice";
+  answers.at(scene::ControlType::kBook, controls::VisitQuestion::kNaturalness) = 6;
+  answers.at(scene::ControlType::kLever, controls::VisitQuestion::kEase) = 2;
+  writer.Take(std::vector<SessionEvent>{TurnEnded{alice, std::chrono::seconds(3), 0.05},
+                                        VisitAnswered{"web-console", answers}, SessionCheckpoint{}},
+              t0 + std::chrono::seconds(1));
+  EXPECT_EQ(Query(file, "SELECT group_concat(control_id || ':' || kind, ',') FROM "
+                        "(SELECT * FROM control_kinds ORDER BY control_id)"),
+            "book:book,lever:lever");
+  // The turn ended at the writer's clock (kT0 + 2 s) and began 3 s before.
+  EXPECT_EQ(Query(file, "SELECT user || ':' || member_id || ':' || (ended_unix_ns - started_unix_ns) FROM visit_turns"),
+            "alice:m-alice:3000000000");
+  EXPECT_EQ(Query(file, "SELECT group_concat(visitor || ':' || sent_by || ':' || control_kind || ':' || question || ':' "
+                        "|| score, ',') FROM (SELECT * FROM visit_answers ORDER BY id)"),
+            "alice:web-console:lever:ease:2,alice:web-console:book:naturalness:6");
+}
+
 TEST(SessionLogWriter, WritesWhatAGivenEventSequenceSays) {
   TempDir dir;
   const auto file = dir / "log.sqlite";

@@ -242,6 +242,179 @@ TEST_F(ReportFromFile, ASessionThatWasNotEndedRunsUntilItsLastHeartbeat) {
   EXPECT_NE(text.str().find("not ended cleanly"), std::string::npos) << text.str();
 }
 
+// A session of visitors in a real log (SessionLog writes it, ReadReport reads it): the kinds of
+// its controls, three visitors' turns and questionnaires, and control events. Every expected
+// mean and sd below is worked out by hand from the rows (sample sd, n - 1).
+class VisitReport : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    SessionLog log(file_, SessionStart{"museum", 123, "host", 30, kT0});
+    scene::Scene world;
+    world.name = "start_menu";
+    world.controls = {testing::Control("button_a", scene::ControlType::kButton),
+                      testing::Control("button_b", scene::ControlType::kButton),
+                      testing::Control("lever_x", scene::ControlType::kLever)};
+    log.OnControlKinds(world);
+    log.OnSceneChange("start_menu", "Start menu", kT0);
+    // Buttons: alice hits button_a (2 mm); bob misses button_b twice, then hits it (4 mm).
+    // Lever: carol misses once, then hits (10 mm). "gone" is a control of no known kind.
+    log.OnControlEvent({kT0 + 1 * kSecond, "alice", "button_a", controls::EventKind::kPressed, 1.0, 0.002});
+    log.OnControlEvent({kT0 + 2 * kSecond, "alice", "button_a", controls::EventKind::kReleased, 0.0, std::nullopt});
+    log.OnControlEvent({kT0 + 3 * kSecond, "bob", "button_b", controls::EventKind::kMissed, 0.0, 0.03});
+    log.OnControlEvent({kT0 + 4 * kSecond, "bob", "button_b", controls::EventKind::kMissed, 0.0, 0.03});
+    log.OnControlEvent({kT0 + 5 * kSecond, "bob", "button_b", controls::EventKind::kPressed, 1.0, 0.004});
+    log.OnControlEvent({kT0 + 6 * kSecond, "carol", "lever_x", controls::EventKind::kMissed, 0.0, 0.05});
+    log.OnControlEvent({kT0 + 7 * kSecond, "carol", "lever_x", controls::EventKind::kMoved, 0.4, 0.010});
+    log.OnControlEvent({kT0 + 8 * kSecond, "carol", "gone", controls::EventKind::kPressed, 1.0, std::nullopt});
+    log.OnTurnEnded(TurnRecord{kT0 + 10 * kSecond, kT0 + 70 * kSecond, "museum/alice", "alice"});
+    log.OnTurnEnded(TurnRecord{kT0 + 20 * kSecond, kT0 + 80 * kSecond, "museum/bob", "bob"});
+    // Button ease 5, 6, 7 (mean 6, sd 1); button naturalness 4, 4, 7 (mean 5, sd sqrt(3));
+    // button satisfaction 7, 7, 7 (mean 7, sd 0); lever ease 2, 4 (mean 3, sd sqrt(2)), the
+    // lever's other two 3, 6 (mean 4.5, sd sqrt(4.5)); nobody answered for arrows or books.
+    log.OnVisitAnswers("console", Answers("alice", {{scene::ControlType::kButton, {5, 4, 7}}}), kT0 + 71 * kSecond);
+    log.OnVisitAnswers("console", Answers("bob", {{scene::ControlType::kButton, {6, 4, 7}},
+                                                  {scene::ControlType::kLever, {2, 3, 3}}}), kT0 + 81 * kSecond);
+    log.OnVisitAnswers("console", Answers("carol", {{scene::ControlType::kButton, {7, 7, 7}},
+                                                    {scene::ControlType::kLever, {4, 6, 6}}}), kT0 + 91 * kSecond);
+    log.End(kT0 + 100 * kSecond);
+  }
+  static controls::VisitAnswers Answers(const std::string& visitor,
+                                        const std::vector<std::pair<scene::ControlType, std::array<int, 3>>>& rows) {
+    controls::VisitAnswers a;
+    a.visitor = visitor;
+    for (const auto& [kind, scores] : rows) {
+      for (std::size_t q = 0; q < 3; ++q) a.scores[static_cast<std::size_t>(kind)][q] = static_cast<std::uint8_t>(scores[q]);
+    }
+    return a;
+  }
+  const QuestionStats& Question(const SessionReport& r, scene::ControlType kind, controls::VisitQuestion q) {
+    for (const auto& row : r.questionnaire) {
+      if (row.kind == kind && row.question == q) return row;
+    }
+    throw std::runtime_error("no questionnaire row");
+  }
+  TempDir dir_;
+  std::filesystem::path file_ = dir_ / "visits.sqlite";
+};
+
+TEST_F(VisitReport, QuestionnaireCountMeanAndSdPerKindAndQuestion) {
+  using controls::VisitQuestion;
+  using scene::ControlType;
+  const SessionReport r = ReadReport(file_);
+  EXPECT_EQ(r.questionnaires, 3u);
+  ASSERT_EQ(r.questionnaire.size(), 12u);  // every kind times every question
+  EXPECT_EQ(r.questionnaire.front().kind, ControlType::kArrow);  // the paper's order
+  EXPECT_EQ(r.questionnaire.back().kind, ControlType::kLever);
+  const struct {
+    ControlType kind;
+    VisitQuestion q;
+    std::size_t n;
+    double mean, sd;
+  } expected[] = {
+      {ControlType::kButton, VisitQuestion::kEase, 3, 6.0, 1.0},
+      {ControlType::kButton, VisitQuestion::kNaturalness, 3, 5.0, std::sqrt(3.0)},
+      {ControlType::kButton, VisitQuestion::kSatisfaction, 3, 7.0, 0.0},
+      {ControlType::kLever, VisitQuestion::kEase, 2, 3.0, std::sqrt(2.0)},
+      {ControlType::kLever, VisitQuestion::kNaturalness, 2, 4.5, std::sqrt(4.5)},
+      {ControlType::kLever, VisitQuestion::kSatisfaction, 2, 4.5, std::sqrt(4.5)},
+      {ControlType::kArrow, VisitQuestion::kEase, 0, 0.0, 0.0},
+      {ControlType::kBook, VisitQuestion::kSatisfaction, 0, 0.0, 0.0},
+  };
+  for (const auto& e : expected) {
+    const QuestionStats& q = Question(r, e.kind, e.q);
+    SCOPED_TRACE(std::string(controls::ToString(e.kind)) + "/" + controls::ToString(e.q));
+    EXPECT_EQ(q.score.n, e.n);
+    EXPECT_NEAR(q.score.mean, e.mean, 1e-12);
+    EXPECT_NEAR(q.score.sd, e.sd, 1e-12);
+  }
+  std::ostringstream text;
+  PrintReport(text, r);
+  const std::string t = text.str();
+  EXPECT_NE(t.find("questionnaire (the paper's Fig. 16 and Table 3): 3 questionnaire(s)"), std::string::npos) << t;
+  EXPECT_NE(t.find("  button   ease             3   6.00   1.00\n"), std::string::npos) << t;
+  EXPECT_NE(t.find("  button   naturalness      3   5.00   1.73\n"), std::string::npos) << t;
+  EXPECT_NE(t.find("  lever    ease             2   3.00   1.41\n"), std::string::npos) << t;
+  EXPECT_NE(t.find("  arrow    ease             0   0.00   0.00\n"), std::string::npos) << t;
+  std::ostringstream csv;
+  PrintReportCsv(csv, r);
+  const std::string c = csv.str();
+  EXPECT_NE(c.find("1,questionnaire,button/ease,n,3\n"), std::string::npos) << c;
+  EXPECT_NE(c.find("1,questionnaire,button/ease,mean,6\n"), std::string::npos) << c;
+  EXPECT_NE(c.find("1,questionnaire,lever/satisfaction,mean,4.5\n"), std::string::npos) << c;
+  EXPECT_NE(c.find("1,questionnaire,lever/ease,sd,1.41421\n"), std::string::npos) << c;
+  EXPECT_NE(c.find("1,questionnaire,1,count,3\n"), std::string::npos) << c;
+}
+
+TEST_F(VisitReport, Table4ByKindOfControlBesideThePerControlRows) {
+  const SessionReport r = ReadReport(file_);
+  ASSERT_EQ(r.controls.size(), 4u);  // the per-control rows stay
+  ASSERT_EQ(r.kinds.size(), 3u);
+  // button: button_a and button_b; hits 2, misses 2; errors 2 and 4 mm (mean 3, sd sqrt(2));
+  // misses per user alice 0, bob 2 (mean 1, sd sqrt(2)).
+  const KindStats& button = r.kinds[0];
+  EXPECT_EQ(button.kind, "button");
+  EXPECT_EQ(button.controls, 2u);
+  EXPECT_EQ(button.hits, 2u);
+  EXPECT_EQ(button.misses, 2u);
+  EXPECT_EQ(button.released, 1u);
+  EXPECT_EQ(button.error_m.n, 2u);
+  EXPECT_NEAR(button.error_m.mean, 0.003, 1e-12);
+  EXPECT_NEAR(button.error_m.sd, std::sqrt(2.0) * 1e-3, 1e-12);
+  EXPECT_EQ(button.misses_per_user.n, 2u);
+  EXPECT_NEAR(button.misses_per_user.mean, 1.0, 1e-12);
+  EXPECT_NEAR(button.misses_per_user.sd, std::sqrt(2.0), 1e-12);
+  // lever: carol alone, 1 miss, one hit at 10 mm.
+  const KindStats& lever = r.kinds[1];
+  EXPECT_EQ(lever.kind, "lever");
+  EXPECT_EQ(lever.misses_per_user.n, 1u);
+  EXPECT_NEAR(lever.misses_per_user.mean, 1.0, 1e-12);
+  EXPECT_NEAR(lever.error_m.mean, 0.010, 1e-12);
+  // A control the log gives no kind for is counted, under "unknown", last.
+  EXPECT_EQ(r.kinds[2].kind, "unknown");
+  EXPECT_EQ(r.kinds[2].hits, 1u);
+
+  std::ostringstream text;
+  PrintReport(text, r);
+  const std::string t = text.str();
+  // The new tables come after every line the report printed before (a contract for readers).
+  EXPECT_LT(t.find("ownership changes: 0\n"), t.find("controls by kind"));
+  EXPECT_NE(t.find("  button          2      2       2        2       3.00       1.41      2      1.00    1.41\n"),
+            std::string::npos)
+      << t;
+  EXPECT_NE(t.find("visitors' turns ended: 2\n"), std::string::npos) << t;
+  EXPECT_NE(t.find("  bob                  20.000     80.000     60.000\n"), std::string::npos) << t;
+  std::ostringstream csv;
+  PrintReportCsv(csv, r);
+  const std::string c = csv.str();
+  EXPECT_NE(c.find("1,control_kind,button,misses_per_user_sd,1.41421\n"), std::string::npos) << c;
+  EXPECT_NE(c.find("1,control_kind,lever,controls,1\n"), std::string::npos) << c;
+  EXPECT_NE(c.find("1,turn,museum/alice#1,ended_s,70.000\n"), std::string::npos) << c;
+  // The older sections come first, as before.
+  EXPECT_LT(c.find("1,ownership,1,changes,0\n"), c.find("1,control_kind,"));
+}
+
+// A log of schema version 3 (no tables of visits) reads as before, every control of unknown kind.
+TEST(ReadReport, ALogWithoutVisitTablesReportsNone) {
+  TempDir dir;
+  const auto file = dir / "v3.sqlite";
+  {
+    SessionLog log(file, SessionStart{"museum", 5, "h", 1, kT0});
+    log.OnControlEvent({kT0 + kSecond, "alice", "lever_x", controls::EventKind::kMoved, 0.4, 0.002});
+    log.End(kT0 + 2 * kSecond);
+  }
+  sqlite3* db = nullptr;
+  ASSERT_EQ(sqlite3_open(file.c_str(), &db), SQLITE_OK);
+  EXPECT_EQ(sqlite3_exec(db, "DROP TABLE visit_turns; DROP TABLE visit_answers; DROP TABLE control_kinds; "
+                             "PRAGMA user_version = 3;", nullptr, nullptr, nullptr),
+            SQLITE_OK);
+  sqlite3_close(db);
+  const SessionReport r = ReadReport(file);
+  EXPECT_TRUE(r.turns.empty());
+  EXPECT_EQ(r.questionnaires, 0u);
+  ASSERT_EQ(r.kinds.size(), 1u);
+  EXPECT_EQ(r.kinds[0].kind, "unknown");
+}
+
 TEST(ReadReport, MissingEmptyForeignAndCorruptFilesSayWhat) {
   TempDir dir;
   EXPECT_NE(ErrorOf([&] { ReadReport(dir / "absent.sqlite"); }).find("absent.sqlite: no such file"),

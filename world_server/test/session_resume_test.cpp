@@ -208,7 +208,7 @@ TEST(SessionResume, AVersionTwoLogIsMigratedAndResumesWithoutPlaces) {
     log.Flush();
     EXPECT_TRUE(log.error().empty()) << log.error();
   }
-  EXPECT_EQ(QueryInt(file, "PRAGMA user_version"), 3);
+  EXPECT_EQ(QueryInt(file, "PRAGMA user_version"), SessionLog::kSchemaVersion);
   EXPECT_EQ(QueryInt(file, "SELECT count(*) FROM session_state WHERE session_id = 1"), 1);
   EXPECT_EQ(QueryInt(file, "SELECT count(*) FROM control_states WHERE session_id = 2"), 1);
 }

@@ -159,6 +159,23 @@ std::string CheckControlEvent(const msg::ControlEvent& s, std::string_view sessi
   return c.reason();
 }
 
+std::string CheckVisitAnswers(const msg::VisitAnswers& s, std::string_view session) {
+  Checker c;
+  c.Session(s.session().to_string(), session);
+  c.NonEmpty("user", s.user().to_string());
+  c.NonEmpty("visitor", s.visitor().to_string());
+  bool answered = false;
+  for (std::size_t k = 0; k < s.scores().size() && c.ok(); ++k) {
+    for (std::size_t q = 0; q < s.scores()[k].size() && c.ok(); ++q) {
+      const int score = s.scores()[k][q];
+      if (score > 7) c.Fail("scores[" + std::to_string(k) + "][" + std::to_string(q) + "] " + std::to_string(score) + " is not 0..7");
+      answered = answered || score > 0;
+    }
+  }
+  if (c.ok() && !answered) c.Fail("no score answered");
+  return c.reason();
+}
+
 std::string CheckDeviceState(const msg::DeviceState& s, std::string_view session, const SampleBounds& b) {
   Checker c;
   c.Session(s.session().to_string(), session);

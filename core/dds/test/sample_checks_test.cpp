@@ -105,6 +105,31 @@ TEST(SampleChecks, SceneStatesNameAPlainWorldWithFiniteGravity) {
   EXPECT_EQ(CheckSceneState(s, "museum"), "tick_Hz is inf (expected 0 to 10000)");
 }
 
+// A visitor's questionnaire: every score 0 (not answered) or 1..7, one answered at least, the
+// sender and the visitor named, this session's.
+TEST(SampleChecks, VisitAnswersOutsideTheScaleOrEmptyAreRefused) {
+  msg::VisitAnswers v;
+  v.session("museum");
+  v.user("web-console");
+  v.visitor("alice");
+  v.scores()[3][2] = 7;
+  EXPECT_EQ(CheckVisitAnswers(v, "museum"), "");
+  EXPECT_NE(CheckVisitAnswers(v, "other").find("session"), std::string::npos);
+  v.scores()[1][0] = 8;
+  EXPECT_EQ(CheckVisitAnswers(v, "museum"), "scores[1][0] 8 is not 0..7");
+  v.scores()[1][0] = 255;
+  EXPECT_EQ(CheckVisitAnswers(v, "museum"), "scores[1][0] 255 is not 0..7");
+  v.scores()[1][0] = 0;
+  v.scores()[3][2] = 0;
+  EXPECT_EQ(CheckVisitAnswers(v, "museum"), "no score answered");
+  v.scores()[0][0] = 1;
+  v.visitor("");
+  EXPECT_NE(CheckVisitAnswers(v, "museum").find("visitor"), std::string::npos);
+  v.visitor("alice");
+  v.user("");
+  EXPECT_NE(CheckVisitAnswers(v, "museum").find("user"), std::string::npos);
+}
+
 TEST(SampleChecks, ControlEventsOfUnknownKindOrIndexAreRefused) {
   msg::ControlEvent e;
   e.session("museum");

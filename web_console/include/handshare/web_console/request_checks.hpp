@@ -11,6 +11,8 @@
 #include <string>
 #include <string_view>
 
+#include "handshare/controls/visit_answers.hpp"
+
 namespace handshare::web_console {
 
 /// The operator's token from `file`: its content without surrounding white space. Throws
@@ -37,6 +39,16 @@ struct ParsedWorldRequest {
 };
 inline constexpr std::size_t kMaxActionBodyBytes = 1024;
 ParsedWorldRequest ParseWorldRequest(std::string_view body);
+
+/// POST /api/visit's body: a visitor's questionnaire, exactly
+///   {"visitor": NAME, "answers": {KIND: {"ease": S, "naturalness": S, "satisfaction": S}, ...}}
+/// NAME 1 to 64 of [A-Za-z0-9_.-]; KIND one of button, arrow, lever, book, at least one (a kind the visitor did not use is left out); every score an integer 1 to 7, all
+/// three given. Anything else (another field, a float, a string, 0 or 8) is refused.
+struct ParsedVisitRequest {
+  std::optional<controls::VisitAnswers> answers;
+  std::string error;  ///< why not, when answers is empty
+};
+ParsedVisitRequest ParseVisitRequest(std::string_view body);
 
 /// A browser's Origin header against the Host header it sent: a page of another site may not
 /// act on the console nor open its socket (cross-site request forgery, cross-site WebSocket

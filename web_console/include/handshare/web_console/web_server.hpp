@@ -2,8 +2,9 @@
 /// The console's HTTP and WebSocket side (Boost.Beast over Boost.Asio, OpenSSL for TLS), on a
 /// thread of its own. It serves the pages' files from memory (read once at start: nothing is
 /// fetched or read at run time), the state document (GET /api/state), the state pushed to every
-/// viewer (WebSocket /ws) and the one action (POST /api/world). Every input is checked
-/// (request_checks.hpp): sizes, rates per address, the action's schema, its token, the Origin.
+/// viewer (WebSocket /ws) and the actions (POST /api/world, and POST /api/visit: a visitor's
+/// questionnaire). Every input is checked (request_checks.hpp): sizes, rates per address, the
+/// action's schema, its token, the Origin.
 /// A viewer whose queue of unsent states is full is dropped: the session's side never waits for
 /// a browser. Not real-time.
 #include <cstddef>
@@ -29,7 +30,7 @@ struct WebServerConfig {
   std::size_t max_connections = 64;     ///< HTTP and WebSocket together; more are closed at once
   std::size_t max_viewer_queue = 8;     ///< states waiting for one viewer; one more drops it
   double requests_per_s = 20.0;         ///< per address, all requests (burst 2x)
-  double actions_per_min = 12.0;        ///< per address, POST /api/world, refused ones too (burst 5)
+  double actions_per_min = 12.0;        ///< per address, POST /api/world and /api/visit, refused ones too (burst 5)
 };
 
 /// The answer to an action: an HTTP status and a JSON body.
@@ -55,10 +56,12 @@ class WebServer {
   using StateSource = std::function<std::string()>;
   /// A checked, authorized world change; called on the server's thread.
   using WorldHandler = std::function<ActionReply(const WorldRequest&)>;
+  /// A checked, authorized questionnaire; called on the server's thread.
+  using VisitHandler = std::function<ActionReply(const controls::VisitAnswers&)>;
 
-  /// Binds and starts serving. Throws std::runtime_error naming the address, a file or the TLS
-  /// setup that failed.
-  WebServer(WebServerConfig config, StateSource state, WorldHandler world);
+  /// Binds and starts serving. Without `visit`, POST /api/visit is not a path (404). Throws
+  /// std::runtime_error naming the address, a file or the TLS setup that failed.
+  WebServer(WebServerConfig config, StateSource state, WorldHandler world, VisitHandler visit = {});
   ~WebServer();
   WebServer(const WebServer&) = delete;
   WebServer& operator=(const WebServer&) = delete;

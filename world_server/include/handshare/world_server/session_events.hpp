@@ -103,13 +103,26 @@ struct FieldChanged {
   DeformationSample sample;
 };
 
+/// A visitor's turn is over (--visit-minutes after its join); the board's message follows.
+struct TurnEnded {
+  Member member;
+  std::chrono::nanoseconds turn{};  ///< how long it lasted
+  double minutes = 0.0;             ///< the turn's length it was given
+};
+
+/// A visitor's questionnaire, as a console (`sent_by`) sent it.
+struct VisitAnswered {
+  std::string sent_by;
+  controls::VisitAnswers answers;
+};
+
 /// Control events and what they did are complete: a server killed after this point must find
 /// them on restart (the log commits now, not at its next period).
 struct SessionCheckpoint {};
 
 using SessionEvent = std::variant<LineSaid, MemberChanged, RosterChanged, SceneRevised, SceneShown,
                                   SessionStateChanged, MessageSaid, ControlApplied, ControlStateChanged, WorldEntered,
-                                  OwnershipChanged, BodyMoved, FieldChanged, SessionCheckpoint>;
+                                  OwnershipChanged, BodyMoved, FieldChanged, SessionCheckpoint, TurnEnded, VisitAnswered>;
 
 /// A visitor made of lambdas, one per kind of event a consumer takes (and `auto` for the rest):
 /// std::visit(Overloaded{[](const BodyMoved& e) {...}, [](const auto&) {}}, event).

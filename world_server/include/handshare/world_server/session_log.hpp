@@ -20,6 +20,7 @@
 #include "handshare/contact/finger_contact.hpp"  // contact::Vec3, QuatWxyz
 #include "handshare/controls/controls.hpp"
 #include "handshare/scene/scene.hpp"
+#include "handshare/controls/visit_answers.hpp"
 #include "handshare/world_server/member_registry.hpp"
 
 namespace handshare::server {
@@ -48,6 +49,14 @@ struct ControlRecord {
   controls::EventKind kind = controls::EventKind::kPressed;
   double value = 0.0;                 // lever angle [rad], page number, ...
   std::optional<double> error_m;      // distance of the touch from the control's target [m]
+};
+
+/// A visitor's turn that ended (world_server --visit-minutes): from the member's join.
+struct TurnRecord {
+  std::uint64_t started_unix_ns = 0;
+  std::uint64_t ended_unix_ns = 0;
+  std::string member_id;
+  std::string user;
 };
 
 /// Who and where a session is: written once when the log opens.
@@ -117,7 +126,7 @@ struct SessionLogConfig {
 class SessionLog {
  public:
   /// Schema version (PRAGMA user_version); the file also carries kApplicationId.
-  static constexpr int kSchemaVersion = 3;
+  static constexpr int kSchemaVersion = 4;
   static constexpr std::int32_t kApplicationId = 0x48534C47;  // "HSLG"
 
   /// Opens `file` (created with the schema if absent or empty), checks it is a handshare log
@@ -150,6 +159,12 @@ class SessionLog {
   void OnControlPlace(const ControlPlace& place);
   /// Another world: the places of the last one's controls are forgotten.
   void ForgetControlPlaces();
+  /// A visitor's turn ended.
+  void OnTurnEnded(const TurnRecord& turn);
+  /// A visitor's questionnaire (sent by the console `sent_by`): a row per answered score.
+  void OnVisitAnswers(const std::string& sent_by, const controls::VisitAnswers& answers, std::uint64_t unix_ns);
+  /// The kinds of the controls of a world the session shows (replaces a control's earlier kind).
+  void OnControlKinds(const scene::Scene& scene);
   /// Marks the session as ended at unix_ns (once; later calls are ignored).
   void End(std::uint64_t unix_ns);
 

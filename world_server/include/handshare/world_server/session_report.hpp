@@ -1,11 +1,13 @@
 #pragma once
-/// The session report: what a session log says about one session. Per control, hits, misses and
-/// the mean and standard deviation of the errors (after the paper's Table 4), time spent in each
-/// world, and who was there. The statistics are pure functions of rows; ReadReport reads them
+/// The session report: what a session log says about one session. Per control and per kind of
+/// control, hits, misses and the mean and standard deviation of the errors (after the paper's
+/// Table 4), time spent in each world, who was there, the visitors' turns, and the
+/// questionnaire's count, mean and sd per kind of control and question (the paper's Fig. 16). The statistics are pure functions of rows; ReadReport reads them
 /// from a log file (read-only) and throws SessionLogError for a missing or foreign file.
 #include <cstdint>
 #include <filesystem>
 #include <iosfwd>
+#include <map>
 #include <optional>
 #include <string>
 #include <vector>
@@ -37,6 +39,39 @@ struct ControlStats {
 };
 /// One row per control id, sorted by id.
 std::vector<ControlStats> ComputeControlStats(const std::vector<ControlRecord>& events);
+
+/// The paper's Table 4 by kind of control (arrow, book, button, lever; "unknown" for controls of
+/// a log that does not say their kind, before schema version 4): the events of every control
+/// of a kind together, as ControlStats does for one control. Users: those who tried a control
+/// of the kind; their misses are counted over all its controls.
+struct KindStats {
+  std::string kind;
+  std::size_t controls = 0;   // control ids of this kind with events
+  std::size_t hits = 0, misses = 0, released = 0;
+  Summary error_m;
+  Summary misses_per_user;
+};
+/// One row per kind with events, in the paper's order (alphabetical), "unknown" last.
+std::vector<KindStats> ComputeKindStats(const std::vector<ControlRecord>& events,
+                                        const std::map<std::string, scene::ControlType>& kinds);
+
+/// One score of a visitor's questionnaire, as the log holds it.
+struct AnswerRow {
+  std::string visitor;
+  scene::ControlType kind = scene::ControlType::kButton;
+  controls::VisitQuestion question = controls::VisitQuestion::kEase;
+  int score = 0;  // 1..7
+};
+/// The questionnaire's table (the paper's Fig. 16 and Table 3): count, mean and sd of the
+/// scores of each question for each kind of control.
+struct QuestionStats {
+  scene::ControlType kind = scene::ControlType::kButton;
+  controls::VisitQuestion question = controls::VisitQuestion::kEase;
+  Summary score;
+};
+/// Every kind (paper's order: arrow, book, button, lever) times every question (ease,
+/// naturalness, satisfaction), 12 rows, n = 0 where nobody answered.
+std::vector<QuestionStats> ComputeQuestionnaire(const std::vector<AnswerRow>& answers);
 
 struct SceneChange {
   std::uint64_t unix_ns = 0;
@@ -85,6 +120,10 @@ struct SessionReport {
   std::vector<ControlStats> controls;
   std::size_t control_events = 0;
   std::size_t ownership_changes = 0;
+  std::vector<KindStats> kinds;              // Table 4 by kind of control
+  std::vector<TurnRecord> turns;             // visitors' turns that ended, by end
+  std::vector<QuestionStats> questionnaire;  // 12 rows (ComputeQuestionnaire)
+  std::size_t questionnaires = 0;            // visitors' questionnaires (distinct sends)
 };
 
 /// Every session in the file, oldest first.
@@ -93,9 +132,11 @@ std::vector<SessionSummary> ListSessions(const std::filesystem::path& file);
 /// (missing file, not a log, unknown session, empty log).
 SessionReport ReadReport(const std::filesystem::path& file, std::optional<std::int64_t> session_id = {});
 
-/// Human-readable tables.
+/// Human-readable tables. The questionnaire, Table 4 by kind and the visitors' turns come
+/// after every line older reports printed, which stay as they were.
 void PrintReport(std::ostream& out, const SessionReport& report);
-/// Long-format CSV, one value per line: session,section,item,field,value.
+/// Long-format CSV, one value per line: session,section,item,field,value. Sections
+/// control_kind, questionnaire and turn follow the older ones.
 void PrintReportCsv(std::ostream& out, const SessionReport& report);
 
 }  // namespace handshare::server

@@ -10,8 +10,10 @@
 #include <memory>
 #include <string>
 
+#include "handshare/common/options.hpp"
 #include "handshare/common/session_options.hpp"
 #include "handshare/world_server/session_log.hpp"
+#include "handshare/world_server/visit_turns.hpp"
 
 namespace handshare::server {
 
@@ -27,7 +29,16 @@ struct WorldServerConfig {
   /// With a log file: a session of this name whose server was killed (never ended) at most this
   /// long ago is resumed where its log says it was; 0 never resumes.
   double resume_within_s = 600.0;
+  /// A visitor's turn (a haptic member's, from its join) ends this many minutes later and the
+  /// board says so; 0: turns never end.
+  double visit_minutes = kDefaultVisitMinutes;
 };
+
+/// world_server's own options, beside node::DeclareSessionOptions'.
+void DeclareWorldServerOptions(common::Options& options);
+/// The configuration the parsed options give. Throws common::OptionError naming the option
+/// and the range of a bad value.
+WorldServerConfig ReadWorldServerOptions(const common::Options& options);
 
 class WorldServer {
  public:

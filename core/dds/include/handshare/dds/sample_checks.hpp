@@ -38,6 +38,9 @@ std::string CheckContactSet(const msg::ContactSet& s, std::string_view session, 
 std::string CheckObjectState(const msg::ObjectState& s, std::string_view session, const SampleBounds& b = {});
 std::string CheckSceneState(const msg::SceneState& s, std::string_view session, const SampleBounds& b = {});
 std::string CheckControlEvent(const msg::ControlEvent& s, std::string_view session);
+/// A visitor's questionnaire: session, sender and visitor named, every score 0 (not answered)
+/// or 1..7, at least one answered.
+std::string CheckVisitAnswers(const msg::VisitAnswers& s, std::string_view session);
 std::string CheckControlState(const msg::ControlState& s, std::string_view session);
 std::string CheckSessionRoster(const msg::SessionRoster& s, std::string_view session);
 std::string CheckDeviceState(const msg::DeviceState& s, std::string_view session, const SampleBounds& b = {});

@@ -1,0 +1,49 @@
+#include "handshare/world_server/visit_turns.hpp"
+
+#include <algorithm>
+#include <cstdio>
+
+namespace handshare::server {
+
+std::vector<scene::Message> TurnOverMessages(const std::string& user, double minutes) {
+  char length[32];
+  std::snprintf(length, sizeof length, "%g", minutes);
+  scene::Message en;
+  en.language = "en";
+  en.text = "Thank you, " + user + ": your " + length + " minutes are over.";
+  en.next_action = "Please take your hand out of the device, then answer the questionnaire on the tablet.";
+  scene::Message ja;
+  ja.language = "ja";
+  ja.text = user + "さん、" + length + "分の体験が終わりました。ありがとうございました。";
+  ja.next_action = "手を装置から外して、タブレットのアンケートに答えてください。";
+  // The ja voice reads kana and ASCII only (common::FirstOutsideKanaReading).
+  ja.reading = user + " さん、" + length + " ふんの たいけんが おわりました。ありがとう ございました。" +
+               "てを そうちから はずして、タブレットの アンケートに こたえて ください。";
+  return {en, ja};
+}
+
+void VisitTurns::OnMember(MemberChange change, const Member& member, Clock::time_point now) {
+  if (!enabled()) return;
+  if (change != MemberChange::kJoined) {
+    open_.erase(member.member_id);
+    return;
+  }
+  if (member.kind != "haptic") return;  // screens, guides, consoles take no turn
+  open_.try_emplace(member.member_id, Turn{member, now});
+}
+
+std::vector<VisitTurns::Ended> VisitTurns::TakeEnded(Clock::time_point now) {
+  std::vector<Ended> out;
+  for (auto it = open_.begin(); it != open_.end();) {
+    if (now - it->second.start >= length_) {
+      out.push_back(Ended{it->second.member, now - it->second.start});
+      it = open_.erase(it);
+    } else {
+      ++it;
+    }
+  }
+  std::sort(out.begin(), out.end(), [](const Ended& a, const Ended& b) { return a.turn > b.turn; });
+  return out;
+}
+
+}  // namespace handshare::server
