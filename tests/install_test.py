@@ -29,7 +29,7 @@ INSTALLED_EXES = ["world_server", "session_report", "haptic_node", "graphics_nod
 INSTALLED_DATA = ["assets/scenes/start_menu.json", "assets/meshes/button.obj", "assets/images/solar_system.png",
                   "assets/devices/hiro2.json",
                   "qos/handshare_qos.xml", "scripts/tour_alice.hand", "scripts/tour_bob.hand",
-                  "examples/scripted_stylus.c", "www/operator.html", "www/operator.js", "www/view.js"]
+                  "examples/scripted_stylus.c", "www/operator.html", "www/operator.js", "www/live.js", "www/view.js"]
 # The device plug-in ABI (docs/devices.md): its one header and the example plug-in.
 INSTALLED_PLUGIN = ["include/handshare/device_plugin.h", "lib/handshare/devices/libhandshare_scripted_stylus.so"]
 

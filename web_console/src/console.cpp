@@ -173,6 +173,7 @@ int Console::Run() {
   web.max_connections = config_.max_connections;
   web.files = {{"/", www / "index.html"},
                {"/operator", www / "operator.html"},
+               {"/static/live.js", www / "live.js"},
                {"/static/operator.js", www / "operator.js"},
                {"/visit", www / "visit.html"},
                {"/static/visit.js", www / "visit.js"},

@@ -5,7 +5,6 @@
 "use strict";
 
 const $ = (id) => document.getElementById(id);
-let socket = null;
 let lastRoutes = "";
 
 function text(id, value) {
@@ -87,24 +86,6 @@ function show(state) {
        (state.console.actions_enabled ? "" : "; actions are off (no token file)"));
 }
 
-function connect() {
-  const scheme = location.protocol === "https:" ? "wss://" : "ws://";
-  socket = new WebSocket(scheme + location.host + "/ws");
-  socket.onopen = () => { $("link").textContent = "live"; $("link").className = "up"; };
-  socket.onmessage = (event) => {
-    try {
-      const state = JSON.parse(event.data);
-      if (state.type === "state") show(state);
-    } catch (e) {
-      $("link").textContent = "bad state: " + e;
-    }
-  };
-  socket.onclose = () => {
-    $("link").textContent = "disconnected, reconnecting";
-    $("link").className = "down";
-    setTimeout(connect, 2000);
-  };
-}
 
 async function sendWorld(event) {
   event.preventDefault();
@@ -129,4 +110,4 @@ async function sendWorld(event) {
 }
 
 $("goto").addEventListener("submit", sendWorld);
-connect();
+connectState(show);

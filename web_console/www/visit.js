@@ -92,24 +92,6 @@ function show(state) {
   $("visit-send").disabled = !state.console.actions_enabled;
 }
 
-function connect() {
-  const scheme = location.protocol === "https:" ? "wss://" : "ws://";
-  const socket = new WebSocket(scheme + location.host + "/ws");
-  socket.onopen = () => { $("link").textContent = "live"; $("link").className = "up"; };
-  socket.onmessage = (event) => {
-    try {
-      const state = JSON.parse(event.data);
-      if (state.type === "state") show(state);
-    } catch (e) {
-      $("link").textContent = "bad state: " + e;
-    }
-  };
-  socket.onclose = () => {
-    $("link").textContent = "disconnected, reconnecting";
-    $("link").className = "down";
-    setTimeout(connect, 2000);
-  };
-}
 
 // The answers as /api/visit takes them, or a string saying what is missing.
 function collect() {
@@ -164,4 +146,4 @@ async function send(event) {
 
 buildForm();
 $("visit").addEventListener("submit", send);
-connect();
+connectState(show);

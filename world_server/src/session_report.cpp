@@ -29,74 +29,72 @@ Summary Summarize(const std::vector<double>& values) {
   return s;
 }
 
-std::vector<ControlStats> ComputeControlStats(const std::vector<ControlRecord>& events) {
-  struct Acc {
-    ControlStats stats;
-    std::vector<double> errors;
-    std::map<std::string, std::size_t> misses_by_user;  // every user who tried, 0 if never missed
-  };
-  std::map<std::string, Acc> by_control;
-  for (const auto& e : events) {
-    Acc& a = by_control[e.control_id];
-    a.stats.control_id = e.control_id;
+namespace {
+
+/// The events of one group (a control, or a kind of control), as both Table 4s count them.
+struct EventTally {
+  std::size_t hits = 0, misses = 0, released = 0;
+  std::vector<double> errors;
+  std::map<std::string, std::size_t> misses_by_user;  // every user who tried, 0 if never missed
+
+  void Add(const ControlRecord& e) {
     if (IsHit(e.kind)) {
-      ++a.stats.hits;
-      a.misses_by_user.try_emplace(e.user, 0);
-      if (e.error_m && std::isfinite(*e.error_m)) a.errors.push_back(*e.error_m);
+      ++hits;
+      misses_by_user.try_emplace(e.user, 0);
+      if (e.error_m && std::isfinite(*e.error_m)) errors.push_back(*e.error_m);
     } else if (e.kind == controls::EventKind::kMissed) {
-      ++a.stats.misses;
-      ++a.misses_by_user[e.user];
+      ++misses;
+      ++misses_by_user[e.user];
     } else {
-      ++a.stats.released;
+      ++released;
     }
   }
+  /// Copies the counts and the two summaries into a row (ControlStats or KindStats).
+  template <class Row>
+  void Fill(Row& row) const {
+    row.hits = hits;
+    row.misses = misses;
+    row.released = released;
+    row.error_m = Summarize(errors);
+    std::vector<double> per_user;
+    for (const auto& [user, n] : misses_by_user) per_user.push_back(static_cast<double>(n));
+    row.misses_per_user = Summarize(per_user);
+  }
+};
+
+}  // namespace
+
+std::vector<ControlStats> ComputeControlStats(const std::vector<ControlRecord>& events) {
+  std::map<std::string, EventTally> by_control;
+  for (const auto& e : events) by_control[e.control_id].Add(e);
   std::vector<ControlStats> out;
-  for (auto& [id, a] : by_control) {
-    a.stats.error_m = Summarize(a.errors);
-    std::vector<double> misses;
-    for (const auto& [user, n] : a.misses_by_user) misses.push_back(static_cast<double>(n));
-    a.stats.misses_per_user = Summarize(misses);
-    out.push_back(a.stats);
+  for (const auto& [id, tally] : by_control) {
+    ControlStats row;
+    row.control_id = id;
+    tally.Fill(row);
+    out.push_back(row);
   }
   return out;
 }
 
 std::vector<KindStats> ComputeKindStats(const std::vector<ControlRecord>& events,
                                         const std::map<std::string, scene::ControlType>& kinds) {
-  struct Acc {
-    KindStats stats;
-    std::set<std::string> controls;
-    std::vector<double> errors;
-    std::map<std::string, std::size_t> misses_by_user;  // every user who tried, 0 if never missed
-  };
   // "unknown" sorts after the four kinds' names, which std::map keeps in the paper's order.
   constexpr const char* kUnknown = "unknown";
-  std::map<std::string, Acc> by_kind;
+  std::map<std::string, std::pair<EventTally, std::set<std::string>>> by_kind;  // tally, control ids
   for (const auto& e : events) {
     const auto k = kinds.find(e.control_id);
-    const std::string kind = k == kinds.end() ? kUnknown : controls::ToString(k->second);
-    Acc& a = by_kind[kind];
-    a.stats.kind = kind;
-    a.controls.insert(e.control_id);
-    if (IsHit(e.kind)) {
-      ++a.stats.hits;
-      a.misses_by_user.try_emplace(e.user, 0);
-      if (e.error_m && std::isfinite(*e.error_m)) a.errors.push_back(*e.error_m);
-    } else if (e.kind == controls::EventKind::kMissed) {
-      ++a.stats.misses;
-      ++a.misses_by_user[e.user];
-    } else {
-      ++a.stats.released;
-    }
+    auto& [tally, ids] = by_kind[k == kinds.end() ? kUnknown : controls::ToString(k->second)];
+    tally.Add(e);
+    ids.insert(e.control_id);
   }
   std::vector<KindStats> out;
-  for (auto& [kind, a] : by_kind) {
-    a.stats.controls = a.controls.size();
-    a.stats.error_m = Summarize(a.errors);
-    std::vector<double> misses;
-    for (const auto& [user, n] : a.misses_by_user) misses.push_back(static_cast<double>(n));
-    a.stats.misses_per_user = Summarize(misses);
-    out.push_back(a.stats);
+  for (const auto& [kind, group] : by_kind) {
+    KindStats row;
+    row.kind = kind;
+    row.controls = group.second.size();
+    group.first.Fill(row);
+    out.push_back(row);
   }
   return out;
 }
