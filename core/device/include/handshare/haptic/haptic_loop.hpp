@@ -107,7 +107,8 @@ class HapticLoop {
   bool TakeStats(common::LoopStats& out) noexcept { return stats_.Read(out); }
   std::uint64_t faults() const noexcept { return faults_.load(std::memory_order_relaxed); }
   /// Faulted steps by cause (a step counts under each cause it had), so that a fault in a long
-  /// session says what it was: "invalid 3, jump 1". Empty when there were none.
+  /// session says what it was: "device reading invalid 3, fingertip jump 1". Empty when there
+  /// were none.
   std::string FaultCauses() const;
   /// Steps in which the safety's rate bound cut a finger's force change (a step in what the
   /// world renders: a peer's contact appearing or vanishing at once, a body thrown).
