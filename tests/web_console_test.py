@@ -384,12 +384,12 @@ def case_visit(h, domain):
     text = report.stdout
     check("questionnaire (the paper's Fig. 16 and Table 3): 1 questionnaire(s)" in text,
           f"session_report does not count one questionnaire (the refused ones stored nothing):\n{text}")
-    # One visitor: n 1, the score as the mean, sd 0; the kinds she left empty: n 0.
+    # One visitor: n 1, the score as the mean, no spread (-); the kinds she left empty: n 0, -.
     for kind in ("arrow", "book", "button", "lever"):
         for question in ("ease", "naturalness", "satisfaction"):
             score = VISIT_ANSWERS.get(kind, {}).get(question)
-            row = (rf"^  {kind}\s+{question}\s+1\s+{score}\.00\s+0\.00$" if score else
-                   rf"^  {kind}\s+{question}\s+0\s+0\.00\s+0\.00$")
+            row = (rf"^  {kind}\s+{question}\s+1\s+{score}\.00\s+-$" if score else
+                   rf"^  {kind}\s+{question}\s+0\s+-\s+-$")
             check(re.search(row, text, re.M), f"session_report has no row '{row}':\n{text}")
     check(re.search(r"^visitors' turns ended: 1$", text, re.M) and re.search(r"^  alice\s+[0-9.]+", text, re.M),
           f"session_report does not show alice's turn:\n{text}")

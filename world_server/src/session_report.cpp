@@ -457,8 +457,11 @@ void PrintReport(std::ostream& out, const SessionReport& r) {
       << " questionnaire(s); scores 1 (least) to 7 (most)\n";
   out << Format("  %-8s %-13s %4s %6s %6s\n", "kind", "question", "n", "mean", "sd");
   for (const auto& q : r.questionnaire) {
-    out << Format("  %-8s %-13s %4zu %6.2f %6.2f\n", controls::ToString(q.kind), controls::ToString(q.question),
-                  q.score.n, q.score.mean, q.score.sd);
+    // No answer has no mean, one answer no spread: a dash, not a 0.00 that reads as a score.
+    const std::string mean = q.score.n > 0 ? Format("%6.2f", q.score.mean) : "     -";
+    const std::string sd = q.score.n > 1 ? Format("%6.2f", q.score.sd) : "     -";
+    out << Format("  %-8s %-13s %4zu %s %s\n", controls::ToString(q.kind), controls::ToString(q.question),
+                  q.score.n, mean.c_str(), sd.c_str());
   }
 }
 
