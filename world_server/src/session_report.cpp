@@ -496,29 +496,23 @@ void PrintReportCsv(std::ostream& out, const SessionReport& r) {
     row("world", w.scene, "visits", std::to_string(w.visits));
     row("world", w.scene, "seconds", Format("%.3f", w.seconds));
   }
-  for (const auto& c : r.controls) {
-    row("control", c.control_id, "hits", std::to_string(c.hits));
-    row("control", c.control_id, "misses", std::to_string(c.misses));
-    row("control", c.control_id, "released", std::to_string(c.released));
-    row("control", c.control_id, "error_n", std::to_string(c.error_m.n));
-    row("control", c.control_id, "error_mean_m", Format("%.6g", c.error_m.mean));
-    row("control", c.control_id, "error_sd_m", Format("%.6g", c.error_m.sd));
-    row("control", c.control_id, "users", std::to_string(c.misses_per_user.n));
-    row("control", c.control_id, "misses_per_user_mean", Format("%.6g", c.misses_per_user.mean));
-    row("control", c.control_id, "misses_per_user_sd", Format("%.6g", c.misses_per_user.sd));
-  }
+  // A Table 4 row's counts and summaries, the same fields per control and per kind.
+  auto tally_rows = [&](const char* section, const std::string& item, const auto& t) {
+    row(section, item, "hits", std::to_string(t.hits));
+    row(section, item, "misses", std::to_string(t.misses));
+    row(section, item, "released", std::to_string(t.released));
+    row(section, item, "error_n", std::to_string(t.error_m.n));
+    row(section, item, "error_mean_m", Format("%.6g", t.error_m.mean));
+    row(section, item, "error_sd_m", Format("%.6g", t.error_m.sd));
+    row(section, item, "users", std::to_string(t.misses_per_user.n));
+    row(section, item, "misses_per_user_mean", Format("%.6g", t.misses_per_user.mean));
+    row(section, item, "misses_per_user_sd", Format("%.6g", t.misses_per_user.sd));
+  };
+  for (const auto& c : r.controls) tally_rows("control", c.control_id, c);
   row("ownership", sid, "changes", std::to_string(r.ownership_changes));
   for (const auto& k : r.kinds) {
     row("control_kind", k.kind, "controls", std::to_string(k.controls));
-    row("control_kind", k.kind, "hits", std::to_string(k.hits));
-    row("control_kind", k.kind, "misses", std::to_string(k.misses));
-    row("control_kind", k.kind, "released", std::to_string(k.released));
-    row("control_kind", k.kind, "error_n", std::to_string(k.error_m.n));
-    row("control_kind", k.kind, "error_mean_m", Format("%.6g", k.error_m.mean));
-    row("control_kind", k.kind, "error_sd_m", Format("%.6g", k.error_m.sd));
-    row("control_kind", k.kind, "users", std::to_string(k.misses_per_user.n));
-    row("control_kind", k.kind, "misses_per_user_mean", Format("%.6g", k.misses_per_user.mean));
-    row("control_kind", k.kind, "misses_per_user_sd", Format("%.6g", k.misses_per_user.sd));
+    tally_rows("control_kind", k.kind, k);
   }
   std::map<std::string, int> turn_number;
   for (const auto& t : r.turns) {
