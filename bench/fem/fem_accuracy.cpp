@@ -45,6 +45,7 @@
 #include "handshare/fem/contact_patch.hpp"
 #include "handshare/fem/contact_solver.hpp"
 #include "handshare/fem/static_solver.hpp"
+#include "handshare/fem/stiffening.hpp"
 #include "handshare/scene/scene.hpp"
 #include "handshare/world/deformable_prep.hpp"
 
@@ -198,7 +199,8 @@ struct Part {
   Eigen::Isometry3d X_WO = Eigen::Isometry3d::Identity();
 };
 
-Part PreparePart(const PartSpec& spec, const fs::path& assets, const fs::path& cache) {
+// `table`: a stiffening table instead of the scene's (none: the scene's, if it names one).
+Part PreparePart(const PartSpec& spec, const fs::path& assets, const fs::path& cache, const fs::path& table) {
   Part part;
   part.spec = &spec;
   part.scene = handshare::scene::LoadScene(assets / "scenes" / spec.scene_file);
@@ -208,6 +210,10 @@ Part PreparePart(const PartSpec& spec, const fs::path& assets, const fs::path& c
   }
   if (object == nullptr) Fail(std::string(spec.scene_file) + " has no object '" + spec.object_id + "'");
   part.prepared = handshare::world::PrepareDeformable(part.scene, *object, cache);
+  if (!table.empty()) {
+    part.prepared.stiffening = std::make_shared<handshare::fem::StiffeningTable>(
+        *part.prepared.mesh, *part.prepared.surface, handshare::fem::ReadStiffeningSamples(table));
+  }
   part.material = {object->deformable.E_Pa, object->deformable.nu};
   part.held_fixed = part.prepared.fixed_nodes;
   part.held_fixed.insert(part.held_fixed.end(), part.prepared.driven_nodes.begin(), part.prepared.driven_nodes.end());
@@ -250,23 +256,29 @@ double LocalThickness(const Part& part, const Finger& f) {
 // What the real-time solver holds for a press at depth_m: node -> imposed displacement (3-D).
 struct HeldPatch {
   std::vector<handshare::fem::NodalValue> imposed;
+  std::vector<Vector3d> n_out;  // per imposed node: the outward normal of the first finger holding it
+  std::vector<int> finger;      // per imposed node: that finger
+  std::vector<double> gain;     // per finger: the stiffening table's patch gain (1 without a table)
   int normal_only = 0;  // nodes the push-only solve held along the normal only (imposed in 3-D here)
   bool ok = false;
 };
 
-HeldPatch RuntimePatch(const Part& part, const std::vector<Finger>& fingers, bool oblique, double depth_m) {
+HeldPatch RuntimePatch(const Part& part, const std::vector<Finger>& fingers, bool oblique, double depth_m,
+                       const handshare::fem::StiffeningTable* table) {
   using namespace handshare::fem;
   const auto& mesh = *part.prepared.mesh;
   ContactPatchFinder finder(mesh, *part.prepared.surface, *part.prepared.compliance);
   std::vector<ContactInput> in(4096);
   std::vector<FrictionPatch> patches;
   std::int32_t m = 0;
+  std::vector<std::pair<std::int32_t, std::int32_t>> finger_inputs;  // begin, count
   for (std::size_t k = 0; k < fingers.size(); ++k) {
     const Finger& f = fingers[k];
     const PatchResult r = finder.Sphere(f.p_O, f.n_out_O, kFingertipRadius_m, depth_m, ContactMode::kNormalOnly,
                                         std::span(in).subspan(static_cast<std::size_t>(m)));
     if (r.truncated) Fail(std::string(part.spec->name) + ": a patch of more than 4096 nodes");
     for (std::int32_t i = m; i < m + r.count; ++i) in[static_cast<std::size_t>(i)].patch = static_cast<std::int16_t>(k);
+    finger_inputs.emplace_back(m, r.count);
     m += r.count;
     FrictionPatch p;
     p.n_out = f.n_out_O;
@@ -288,6 +300,15 @@ HeldPatch RuntimePatch(const Part& part, const std::vector<Finger>& fingers, boo
                  1e3 * depth_m);
     return held;
   }
+  // Each finger's gain as the haptic world computes it (HapticWorld::ApplyFingerPatch).
+  for (std::size_t k = 0; k < fingers.size(); ++k) {
+    const auto [b, n] = finger_inputs[k];
+    held.gain.push_back(table == nullptr || n == 0
+                            ? 1.0
+                            : table->PatchGain(std::span(in).subspan(static_cast<std::size_t>(b), static_cast<std::size_t>(n)),
+                                               solver.forces_N().subspan(static_cast<std::size_t>(b), static_cast<std::size_t>(n)),
+                                               fingers[k].n_out_O, solver.patch_states()[k].slide_m));
+  }
   // A node under two fingers is held once, at the mean of its normal parts plus its first
   // patch's slide, as the solver merges it.
   std::map<std::int32_t, std::size_t> slot;
@@ -300,6 +321,8 @@ HeldPatch RuntimePatch(const Part& part, const std::vector<Finger>& fingers, boo
     auto [it, added] = slot.try_emplace(c.node, held.imposed.size());
     if (added) {
       held.imposed.push_back({c.node, Vector3d::Zero()});
+      held.n_out.push_back(fingers[static_cast<std::size_t>(c.patch)].n_out_O);
+      held.finger.push_back(c.patch);
       normal_sum.push_back(Vector3d::Zero());
       slide.push_back(solver.patch_states()[static_cast<std::size_t>(c.patch)].slide_m);
       count.push_back(0);
@@ -327,28 +350,38 @@ struct Row {
   double depth_mm = 0, thickness_mm = 0;
   int fingers = 0, held_nodes = 0, normal_only = 0;
   double f_linear_N = 0, f_model_N = 0, force_ratio = 0, force_err = 0, disp_err = 0, field_err = 0,
-         ccx_linear_err = 0;
+         ccx_linear_err = 0, f_corrected_N = 0, corrected_err = 0;
   bool converged = false;
   int increments = 0;
 };
 
 const char* kCsvHeader =
     "part,press,model,fingers,depth_mm,thickness_mm,depth_over_thickness,held_nodes,normal_only_nodes,"
-    "f_linear_N,f_model_N,force_ratio,force_err,disp_err,field_err,ccx_linear_err,converged,increments";
+    "f_linear_N,f_model_N,force_ratio,force_err,disp_err,field_err,ccx_linear_err,converged,increments,f_corrected_N,"
+    "corrected_err";
 
 void WriteRow(std::ostream& o, const Row& r) {
   char b[512];
-  std::snprintf(b, sizeof b, "%s,%s,%s,%d,%.3f,%.2f,%.4f,%d,%d,%.6g,%.6g,%.6g,%.6g,%.6g,%.6g,%.3g,%d,%d",
+  std::snprintf(b, sizeof b, "%s,%s,%s,%d,%.3f,%.2f,%.4f,%d,%d,%.6g,%.6g,%.6g,%.6g,%.6g,%.6g,%.3g,%d,%d,%.6g,%.6g",
                 r.part.c_str(), r.press.c_str(), r.model.c_str(), r.fingers, r.depth_mm, r.thickness_mm,
                 r.depth_mm / r.thickness_mm, r.held_nodes, r.normal_only, r.f_linear_N, r.f_model_N, r.force_ratio,
-                r.force_err, r.disp_err, r.field_err, r.ccx_linear_err, r.converged ? 1 : 0, r.increments);
+                r.force_err, r.disp_err, r.field_err, r.ccx_linear_err, r.converged ? 1 : 0, r.increments, r.f_corrected_N,
+                r.corrected_err);
   o << b << "\n";
 }
 
 // All rows of one part and press over the depths (one linear solve and one ccx run per model
 // and depth).
+// With `nodes` open, one line per held node of every converged run: its self-compliance along
+// the finger's normal n^T C_kk n, the linear and the nonlinear reactions (what
+// fit_stiffening.py fits the stiffening law to).
+const char* kNodesCsvHeader =
+    "part,press,model,depth_mm,node,E_Pa,nu,c_nn_m_per_N,nx,ny,nz,ux_m,uy_m,uz_m,f_lin_x_N,f_lin_y_N,f_lin_z_N,"
+    "f_model_x_N,f_model_y_N,f_model_z_N";
+
 std::vector<Row> MeasurePress(const Part& part, const PressSpec& press, const std::vector<double>& depths_mm,
-                              const std::vector<CcxModel>& models, const fs::path& work, bool verbose) {
+                              const std::vector<CcxModel>& models, const fs::path& work, bool verbose,
+                              std::ostream* nodes_out = nullptr) {
   using namespace handshare::fem;
   const auto& mesh = *part.prepared.mesh;
   const auto& surface = *part.prepared.surface;
@@ -358,7 +391,7 @@ std::vector<Row> MeasurePress(const Part& part, const PressSpec& press, const st
   for (auto v : part.held_fixed) constrained[static_cast<std::size_t>(v)] = 1;
   std::vector<Row> rows;
   for (double depth_mm : depths_mm) {
-    const HeldPatch held = RuntimePatch(part, fingers, press.oblique, 1e-3 * depth_mm);
+    const HeldPatch held = RuntimePatch(part, fingers, press.oblique, 1e-3 * depth_mm, part.prepared.stiffening.get());
     if (!held.ok) {
       // A coarse surface has no node under a shallow fingertip (the belly: 1-4 nodes under a
       // fingertip), and a failed contact solve holds nothing: no row at this depth.
@@ -374,8 +407,12 @@ std::vector<Row> MeasurePress(const Part& part, const PressSpec& press, const st
     }
     StaticSolver solver(mesh, part.material, part.held_fixed, imposed_nodes);
     const StaticSolution lin = solver.Solve(imposed_u);
-    Vector3d F_lin = Vector3d::Zero();
-    for (auto v : imposed_nodes) F_lin += lin.reaction_N[static_cast<std::size_t>(v)];
+    Vector3d F_lin = Vector3d::Zero(), F_corr = Vector3d::Zero();
+    for (std::size_t q = 0; q < imposed_nodes.size(); ++q) {
+      const Vector3d& f = lin.reaction_N[static_cast<std::size_t>(imposed_nodes[q])];
+      F_lin += f;
+      F_corr += held.gain[static_cast<std::size_t>(held.finger[q])] * f;
+    }
     // The free surface nodes under the fingers (within a fingertip radius of a contact point,
     // across the normal), and every free surface node.
     std::vector<char> is_held(constrained);
@@ -439,14 +476,34 @@ std::vector<Row> MeasurePress(const Part& part, const PressSpec& press, const st
       row.f_model_N = r.converged ? F.norm() : nan;
       row.force_ratio = r.converged ? F_lin.dot(F) / F.squaredNorm() : nan;
       row.force_err = r.converged ? (F_lin - F).norm() / F.norm() : nan;
+      row.f_corrected_N = F_corr.norm();
+      row.corrected_err = r.converged ? (F_corr - F).norm() / F.norm() : nan;
       row.disp_err = r.converged ? field_error(under, r.u_m) : nan;
       row.field_err = r.converged ? field_error(free_surface, r.u_m) : nan;
       rows.push_back(row);
+      if (nodes_out != nullptr && r.converged) {
+        const auto& C = *part.prepared.compliance;
+        for (std::size_t q = 0; q < held.imposed.size(); ++q) {
+          const auto v = held.imposed[q].node;
+          const Vector3d& n = held.n_out[q];
+          const double c_nn = n.dot(C.Block(C.SlotOf(v), C.SlotOf(v)) * n);
+          const Vector3d& u = held.imposed[q].value;
+          const Vector3d& fl = lin.reaction_N[static_cast<std::size_t>(v)];
+          const Vector3d& fm = r.reaction_N[q];
+          char b[512];
+          std::snprintf(b, sizeof b, "%s,%s,%s,%.3f,%d,%.6g,%.4g,%.6g,%.6f,%.6f,%.6f,%.6g,%.6g,%.6g,%.6g,%.6g,%.6g,%.6g,%.6g,%.6g",
+                        row.part.c_str(), row.press.c_str(), row.model.c_str(), depth_mm, v, part.material.E_Pa,
+                        part.material.nu, c_nn, n.x(), n.y(), n.z(), u.x(), u.y(), u.z(), fl.x(), fl.y(), fl.z(),
+                        fm.x(), fm.y(), fm.z());
+          *nodes_out << b << "\n";
+        }
+      }
       if (verbose) {
         std::fprintf(stderr, "%-5s %-12s %-9s %6.2f mm  held %3d  F_lin %8.4f N  F %8.4f N  force %7.2f %%  "
-                     "under %7.2f %%  field %7.2f %%  (ccx lin %.1e, %d inc, %.1f s)%s\n",
+                     "under %7.2f %%  field %7.2f %%  corrected %7.2f %%  (ccx lin %.1e, %d inc, %.1f s)%s\n",
                      row.part.c_str(), row.press.c_str(), row.model.c_str(), depth_mm, row.held_nodes, row.f_linear_N,
-                     row.f_model_N, 100 * row.force_err, 100 * row.disp_err, 100 * row.field_err, ccx_linear_err,
+                     row.f_model_N, 100 * row.force_err, 100 * row.disp_err, 100 * row.field_err, 100 * row.corrected_err,
+                     ccx_linear_err,
                      r.increments, std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count(),
                      r.converged ? "" : (" NOT CONVERGED: " + r.message.substr(0, 120)).c_str());
       }
@@ -529,6 +586,114 @@ std::map<std::string, std::string> ReadSummary(const fs::path& file) {
   return out;
 }
 
+// One held node pressed alone along its finger's normal, at each depth: its linear reaction and
+// the reference model's (neo-Hooke for rubber-like parts). The single-node responses a per-node
+// stiffening law would be precomputed from; fit_stiffening.py holds them against the presses.
+void NodeCurves(const Part& part, std::int32_t node, const Vector3d& n_out, const std::vector<double>& depths_mm,
+                const fs::path& work, std::ostream& out, double tilt_rad) {
+  using namespace handshare::fem;
+  StaticSolver solver(*part.prepared.mesh, part.material,
+                      part.held_fixed, std::vector<std::int32_t>{node});
+  for (double depth_mm : depths_mm) {
+    const Vector3d row = part.spec->row_O.normalized();
+    const Vector3d t = (row - row.dot(n_out) * n_out).normalized();
+    const Vector3d u = 1e-3 * depth_mm * (-n_out + std::tan(tilt_rad) * t);
+    const StaticSolution lin = solver.Solve(std::vector<Vector3d>{u});
+    CcxCase c;
+    c.material = part.material;
+    c.fixed = part.held_fixed;
+    c.imposed = {{node, u}};
+    c.model = part.spec->rubber_like ? CcxModel::kNeoHooke : CcxModel::kNlgeom;
+    c.initial_increment = c.max_increment = 0.25;
+    const CcxResult r = RunCalculix(*part.prepared.mesh, c, work / (std::string(part.spec->name) + "_node"));
+    const Vector3d& fl = lin.reaction_N[static_cast<std::size_t>(node)];
+    const Vector3d fm = r.converged ? r.reaction_N[0] : Vector3d::Constant(std::nan(""));
+    char b[512];
+    std::snprintf(b, sizeof b, "%s,%d,%.6f,%.6f,%.6f,%.3f,%.6g,%.6g,%.6g,%.6g,%.6g,%.6g,%d", part.spec->name, node,
+                  n_out.x(), n_out.y(), n_out.z(), depth_mm, fl.x(), fl.y(), fl.z(), fm.x(), fm.y(), fm.z(),
+                  r.converged ? 1 : 0);
+    out << b << "\n";
+    out.flush();
+  }
+}
+
+// The stiffening table of one part (handshare/fem/stiffening.hpp): `count` surface nodes chosen
+// by farthest-point sampling (from the first free surface node, so not from where anyone
+// presses), each pressed alone by CalculiX (the part's reference model) along its normal and 30
+// degrees oblique toward each of two tangents, at the table's depths; a gain is the nonlinear
+// reaction projected on the linear one, over the linear one squared. A run that does not
+// converge drops its sample.
+std::vector<handshare::fem::StiffeningSample> SampleTable(const Part& part, std::size_t count, double radius_m,
+                                                          const fs::path& work, bool verbose) {
+  using namespace handshare::fem;
+  const auto& mesh = *part.prepared.mesh;
+  const auto& surface = *part.prepared.surface;
+  std::vector<char> held(static_cast<std::size_t>(mesh.num_nodes()), 0);
+  for (auto v : part.held_fixed) held[static_cast<std::size_t>(v)] = 1;
+  // Within radius_m of where the part is pressed (the centre finger's contact point).
+  const Vector3d centre = FindFingers(part, 1)[0].p_O;
+  std::vector<std::size_t> free_idx;
+  for (std::size_t i = 0; i < surface.nodes.size(); ++i) {
+    const auto v = static_cast<std::size_t>(surface.nodes[i]);
+    if (held[v] == 0 && (mesh.positions_m()[v] - centre).norm() <= radius_m) free_idx.push_back(i);
+  }
+  if (free_idx.empty()) Fail(std::string(part.spec->name) + ": no free surface node");
+  std::vector<double> dist(free_idx.size(), 1e300);
+  std::vector<std::size_t> chosen;
+  std::size_t next = 0;
+  while (chosen.size() < std::min(count, free_idx.size())) {
+    chosen.push_back(free_idx[next]);
+    const Vector3d& p = mesh.positions_m()[static_cast<std::size_t>(surface.nodes[free_idx[next]])];
+    std::size_t far = 0;
+    for (std::size_t j = 0; j < free_idx.size(); ++j) {
+      dist[j] = std::min(dist[j], (mesh.positions_m()[static_cast<std::size_t>(surface.nodes[free_idx[j]])] - p).squaredNorm());
+      if (dist[j] > dist[far]) far = j;
+    }
+    next = far;
+  }
+  const Vector3d axis = part.spec->row_O.normalized();
+  std::vector<StiffeningSample> out;
+  for (std::size_t i : chosen) {
+    const std::int32_t node = surface.nodes[i];
+    StiffeningSample s;
+    s.p_m = mesh.positions_m()[static_cast<std::size_t>(node)];
+    s.n_out = surface.normals[i].normalized();
+    s.axis = axis;
+    const Vector3d t1 = StiffeningTangent(axis, s.n_out), t2 = s.n_out.cross(t1);
+    StaticSolver solver(mesh, part.material, part.held_fixed, std::vector<std::int32_t>{node});
+    bool ok = true;
+    for (int dir = 0; dir < 3 && ok; ++dir) {
+      const Vector3d lean = dir == 0 ? Vector3d::Zero() : Vector3d(std::tan(kStiffeningObliqueRad) * (dir == 1 ? t1 : t2));
+      const Vector3d way = -s.n_out + lean;
+      for (std::size_t d = 0; d < kStiffeningDepths_m.size() && ok; ++d) {
+        const Vector3d u = kStiffeningDepths_m[d] * way;
+        const StaticSolution lin = solver.Solve(std::vector<Vector3d>{u});
+        CcxCase c;
+        c.material = part.material;
+        c.fixed = part.held_fixed;
+        c.imposed = {{node, u}};
+        c.model = part.spec->rubber_like ? CcxModel::kNeoHooke : CcxModel::kNlgeom;
+        c.initial_increment = c.max_increment = 0.25;
+        const CcxResult r = RunCalculix(mesh, c, work / (std::string(part.spec->name) + "_sample"));
+        if (!r.converged) {
+          ok = false;
+          break;
+        }
+        const Vector3d& fl = lin.reaction_N[static_cast<std::size_t>(node)];
+        const double g = fl.dot(r.reaction_N[0]) / fl.squaredNorm();
+        (dir == 0 ? s.g_normal : dir == 1 ? s.g_t1 : s.g_t2)[d] = std::clamp(g, 0.2, 5.0);
+      }
+    }
+    if (verbose) {
+      std::fprintf(stderr, "%s sample %zu/%zu node %d: %s normal %.3f %.3f t1 %.3f %.3f t2 %.3f %.3f\n", part.spec->name,
+                   out.size() + 1, chosen.size(), node, ok ? "ok" : "NOT CONVERGED", s.g_normal[0], s.g_normal[1],
+                   s.g_t1[0], s.g_t1[1], s.g_t2[0], s.g_t2[1]);
+    }
+    if (ok) out.push_back(s);
+  }
+  return out;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -544,10 +709,19 @@ int main(int argc, char** argv) {
              "one_normal,one_oblique,five_normal,five_oblique")
       .Value("depths-mm", "A,B", "press depths [mm] (default: 0.5 mm to a third of the local thickness)", "")
       .Value("csv", "FILE", "per-depth rows", "")
+      .Value("nodes-csv", "FILE", "per held node of every converged run: compliance, linear and nonlinear reactions", "")
       .Value("user-depths", "FILE", "depths the scripted users press (CSV)", "")
       .Value("scripts", "A,B", "hand scripts whose presses are the users' depths (PATH or PATH:FIRST_WORLD)", "")
       .Value("check-summary", "FILE", "--check: the committed summary to hold the run to", "")
       .Flag("check", "check one part and press (the first of --parts and --presses) against --check-summary")
+      .Value("node-curves-from", "FILE", "a --nodes-csv file: press each of its held nodes alone (with --node-curves)", "")
+      .Value("node-curves", "FILE", "single-node responses at --depths-mm of every node in --node-curves-from", "")
+      .Value("stiffening-table", "FILE", "the first of --parts' stiffening table instead of its scene's", "")
+      .Value("sample-table", "FILE", "write the stiffening table of the first of --parts (see --samples)", "")
+      .Value("samples", "N", "--sample-table: how many surface nodes to press alone", "30")
+      .Value("sample-radius-mm", "R", "--sample-table: sample within R of where the part is pressed", "45")
+      .Flag("oblique-curves", "--node-curves: press each node 30 degrees oblique along the part's row, not along its normal")
+      .Flag("reference-only", "only each part's reference model (neo-Hooke for rubber-like parts, else NLGEOM)")
       .Flag("quiet", "no line per run on stderr");
   try {
     if (!options.Parse(argc, argv)) return 0;
@@ -583,8 +757,50 @@ int main(int argc, char** argv) {
     const bool verbose = !options.FlagSet("quiet");
 
     std::vector<Part> parts;
-    for (const PartSpec* s : part_specs) parts.push_back(PreparePart(*s, assets, cache));
+    for (const PartSpec* s : part_specs) {
+      parts.push_back(PreparePart(*s, assets, cache, parts.empty() ? fs::path(options.GetString("stiffening-table")) : fs::path()));
+    }
 
+    if (!options.GetString("sample-table").empty()) {
+      const Part& part = parts.front();
+      const auto count = static_cast<std::size_t>(std::stoul(options.GetString("samples")));
+      const double radius_m = 1e-3 * std::stod(options.GetString("sample-radius-mm"));
+      const auto samples = SampleTable(part, count, radius_m, work, verbose);
+      char comment[512];
+      std::snprintf(comment, sizeof comment,
+                    "The stiffening table of %s (%s, %s): %zu of %zu surface nodes sampled within %s mm of %s, each pressed "
+                    "alone by CalculiX (%s) at 4 and 10 mm, along its normal and 30 deg oblique toward t1 and t2.\n"
+                    "Written by: fem_accuracy --parts %s --sample-table FILE --samples %zu --sample-radius-mm %s",
+                    part.spec->name, part.spec->scene_file, part.spec->object_id, samples.size(), count,
+                    options.GetString("sample-radius-mm").c_str(), part.spec->where,
+                    part.spec->rubber_like ? "neo-Hooke of the same small-strain moduli" : "NLGEOM", part.spec->name, count,
+                    options.GetString("sample-radius-mm").c_str());
+      handshare::fem::WriteStiffeningSamples(options.GetString("sample-table"), samples, comment);
+      return 0;
+    }
+    if (!options.GetString("node-curves").empty()) {
+      std::ifstream in(options.GetString("node-curves-from"));
+      if (!in) Fail("cannot read --node-curves-from '" + options.GetString("node-curves-from") + "'");
+      std::ofstream out(options.GetString("node-curves"));
+      if (!out) Fail("cannot write " + options.GetString("node-curves"));
+      out << "part,node,nx,ny,nz,depth_mm,f_lin_x_N,f_lin_y_N,f_lin_z_N,f_model_x_N,f_model_y_N,f_model_z_N,converged\n";
+      std::string line;
+      std::getline(in, line);
+      std::map<std::pair<std::string, int>, Vector3d> seen;
+      while (std::getline(in, line)) {
+        const auto f = SplitList(line);
+        if (f.size() < 11) continue;
+        seen.try_emplace({f[0], std::stoi(f[4])}, Vector3d(std::stod(f[8]), std::stod(f[9]), std::stod(f[10])));
+      }
+      for (const auto& [key, n] : seen) {
+        for (const Part& part : parts) {
+          if (key.first == part.spec->name) {
+            NodeCurves(part, key.second, n, depths, work, out, options.FlagSet("oblique-curves") ? kObliqueAngle_rad : 0.0);
+          }
+        }
+      }
+      return 0;
+    }
     if (check) {
       // One part and press: depths 0.5 mm and either side of the committed 5 % depth.
       const fs::path summary_file = options.GetString("check-summary");
@@ -630,13 +846,21 @@ int main(int argc, char** argv) {
       if (!csv) Fail("cannot write " + options.GetString("csv"));
       csv << kCsvHeader << "\n";
     }
+    std::ofstream nodes_csv;
+    if (!options.GetString("nodes-csv").empty()) {
+      nodes_csv.open(options.GetString("nodes-csv"));
+      if (!nodes_csv) Fail("cannot write " + options.GetString("nodes-csv"));
+      nodes_csv << kNodesCsvHeader << "\n";
+    }
     for (const Part& part : parts) {
-      std::vector<CcxModel> models = {CcxModel::kNlgeom};
+      std::vector<CcxModel> models;
+      if (!options.FlagSet("reference-only") || !part.spec->rubber_like) models.push_back(CcxModel::kNlgeom);
       if (part.spec->rubber_like) models.push_back(CcxModel::kNeoHooke);
       for (const PressSpec* press : press_specs) {
         const double thickness_mm = 1e3 * LocalThickness(part, FindFingers(part, 1)[0]);
         const auto rows = MeasurePress(part, *press, depths.empty() ? DefaultDepths(thickness_mm) : depths, models,
-                                       work, verbose);
+                                       work, verbose, nodes_csv.is_open() ? &nodes_csv : nullptr);
+        if (nodes_csv.is_open()) nodes_csv.flush();
         for (const Row& r : rows) {
           if (csv.is_open()) WriteRow(csv, r);
         }

@@ -32,9 +32,21 @@ void HapticWorld::StepDeformable(const Object& m, ObjectData& d, std::size_t k, 
     if (count == 0) continue;
     Eigen::Vector3d f_obj = Eigen::Vector3d::Zero();
     for (std::int32_t q = 0; q < count; ++q) f_obj += forces[static_cast<std::size_t>(begin + q)];
-    remote_force_O_[r] = f_obj;
+    remote_force_O_[r] = PatchGain(m, d, begin, count, forces, remote_n_O_[r], remote_stick_O_[r]) * f_obj;
   }
-  for (int i = 0; i < kFingers; ++i) ApplyFingerPatch(d, hand_->at(i, k, data_.size()), forces);
+  for (int i = 0; i < kFingers; ++i) ApplyFingerPatch(m, d, hand_->at(i, k, data_.size()), forces);
+}
+
+// The stiffening table's gain of one patch (fem::StiffeningTable::PatchGain): the patch's sum
+// is scaled, not each node's force, for neighbouring nodes under a fingertip can carry large
+// forces that cancel (docs/fem.md).
+double HapticWorld::PatchGain(const Object& m, const ObjectData& d, std::int32_t begin, std::int32_t count,
+                              std::span<const Eigen::Vector3d> forces, const Eigen::Vector3d& n_O,
+                              const Eigen::Vector3d& stick_O) const noexcept {
+  if (!m.stiffening || count <= 0) return 1.0;
+  const auto b = static_cast<std::size_t>(begin), n = static_cast<std::size_t>(count);
+  return m.stiffening->PatchGain(std::span<const fem::ContactInput>(d.inputs.data() + b, n), forces.subspan(b, n), n_O,
+                                 stick_O);
 }
 
 // A patch of the fingertip's sphere at p_O along n_O, depth deep, appended to the object's
@@ -177,7 +189,11 @@ void HapticWorld::GatherRemotePatch(const Object& m, ObjectData& d, std::size_t 
   AddPatch(m, d, g, p_OC - (sticks ? stick_O : Eigen::Vector3d::Zero()), n_O, depth, count, trunc,
            memo ? &d.remote_memo[r] : nullptr,
            memo ? d.remote_memo_inputs.data() + r * static_cast<std::size_t>(m.max_patch) : nullptr);
-  if (r < kMaxRemoteForces) remote_patch_[r] = {begin, count};
+  if (r < kMaxRemoteForces) {
+    remote_patch_[r] = {begin, count};
+    remote_n_O_[r] = n_O;
+    remote_stick_O_[r] = sticks ? stick_O : Eigen::Vector3d::Zero();
+  }
   if (!sticks || count == 0) return;
   for (std::int32_t q = 0; q < count; ++q) d.inputs[static_cast<std::size_t>(begin + q)].patch = g.num_friction;
   d.friction[static_cast<std::size_t>(g.num_friction++)] = {n_O, stick_O, m.mu_static, m.mu_kinetic, false,
@@ -186,10 +202,17 @@ void HapticWorld::GatherRemotePatch(const Object& m, ObjectData& d, std::size_t 
 
 // A local fingertip's share of the solve: the force its patch puts on the object, felt as minus
 // that, and with friction where its anchor goes next.
-void HapticWorld::ApplyFingerPatch(ObjectData& d, FingerObject& fo, std::span<const Eigen::Vector3d> forces) noexcept {
+void HapticWorld::ApplyFingerPatch(const Object& m, ObjectData& d, FingerObject& fo,
+                                   std::span<const Eigen::Vector3d> forces) noexcept {
   if (!fo.contact.touching) return;
   Eigen::Vector3d f_obj = Eigen::Vector3d::Zero();
   for (std::int32_t q = 0; q < fo.patch_count; ++q) f_obj += forces[static_cast<std::size_t>(fo.patch_begin + q)];
+  if (m.stiffening) {
+    const Eigen::Vector3d stick =
+        fo.friction_patch >= 0 ? d.solver->patch_states()[static_cast<std::size_t>(fo.friction_patch)].slide_m
+                               : Eigen::Vector3d::Zero();
+    f_obj *= PatchGain(m, d, fo.patch_begin, fo.patch_count, forces, fo.contact.n_O, stick);
+  }
   fo.f_W_N = -(d.X_WO.linear() * f_obj);  // the fingertip feels minus the force on the object
   if (fo.friction_patch >= 0) {
     const fem::FrictionPatchState& ps = d.solver->patch_states()[static_cast<std::size_t>(fo.friction_patch)];

@@ -233,6 +233,7 @@ ObjectId HapticWorld::AddDeformable(const DeformableDesc& d) {
   o->max_patch = d.max_patch_nodes;
   o->mu_static = d.mu_static;
   o->mu_kinetic = d.mu_kinetic;
+  o->stiffening = d.stiffening;
   fem::ContactSolverOptions& so = o->solver_options;
   so.max_contacts = config().max_hands * kFingers * d.max_patch_nodes;
   so.push_only = true;

@@ -50,6 +50,7 @@ struct HapticModel::Object {
   std::int32_t max_patch = 0;
   double mu_static = 0.0, mu_kinetic = 0.0;
   std::shared_ptr<const std::vector<Eigen::Vector3d>> mode;  // per node, frame O; null: none
+  std::shared_ptr<const fem::StiffeningTable> stiffening;    // null: the linear force
   double mode_reach_m = 0.0;  // largest |mode|
 };
 

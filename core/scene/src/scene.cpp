@@ -518,7 +518,7 @@ SceneObject ParseObject(const Context& c, const json& j, const std::string& path
   }
   if (o.kind == ObjectKind::kDeformable) {
     const json& m = c.Object(c.Require(j, "material", path), path + "material");
-    c.OnlyKnown(m, mpath, {"E_Pa", "nu", "density_kg_per_m3", "mu_static", "mu_kinetic", "note"});
+    c.OnlyKnown(m, mpath, {"E_Pa", "nu", "density_kg_per_m3", "mu_static", "mu_kinetic", "stiffening_table", "note"});
     DeformableMaterial& d = o.deformable;
     d.E_Pa = c.Number(c.Require(m, "E_Pa", mpath), mpath + "E_Pa", 100.0, 1e12);
     d.nu = c.Number(c.Require(m, "nu", mpath), mpath + "nu", 0.0, 0.499);
@@ -526,6 +526,13 @@ SceneObject ParseObject(const Context& c, const json& j, const std::string& path
     d.mu_static = c.Number(m, "mu_static", mpath, 0.0, 5.0, 0.0);
     d.mu_kinetic = c.Number(m, "mu_kinetic", mpath, 0.0, 5.0, d.mu_static);
     if (d.mu_kinetic > d.mu_static) c.Fail(mpath + "mu_kinetic", "larger than mu_static");
+    if (m.contains("stiffening_table")) {
+      d.stiffening_table_uri = c.String(m, "stiffening_table", mpath, 255);
+      d.stiffening_table_path = ResolveAsset(file, d.stiffening_table_uri);
+      if (!std::filesystem::is_regular_file(d.stiffening_table_path)) {
+        c.Fail(mpath + "stiffening_table", "no such file: " + d.stiffening_table_path.string());
+      }
+    }
 
     const std::string fpath = path + "fixed.";
     const json& f = c.Object(c.Require(j, "fixed", path), path + "fixed");

@@ -133,6 +133,10 @@ PreparedDeformable PrepareDeformable(const scene::Scene& scene, const scene::Sce
   out.surface = std::make_shared<fem::Surface>(fem::ExtractSurface(*mesh));
   out.mesh = std::move(mesh);
   out.compliance = std::move(compliance);
+  if (!o.deformable.stiffening_table_path.empty()) {
+    const auto samples = fem::ReadStiffeningSamples(o.deformable.stiffening_table_path);
+    out.stiffening = std::make_shared<fem::StiffeningTable>(*out.mesh, *out.surface, samples);
+  }
   out.prepare_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   return out;
 }

@@ -81,6 +81,7 @@ SceneModels BuildSceneModels(const scene::Scene& scene, const SceneModelsOptions
         desc.mu_static = o.deformable.mu_static;
         desc.mu_kinetic = o.deformable.mu_kinetic;
         desc.mode_O_m = prepared.mode_O_m;
+        if (options.stiffening) desc.stiffening = prepared.stiffening;
         id = w.AddDeformable(desc);
         out.deformables.push_back(std::move(prepared));
         break;

@@ -47,6 +47,7 @@
 #include "handshare/fem/contact_patch.hpp"
 #include "handshare/fem/contact_solver.hpp"
 #include "handshare/fem/mesh.hpp"
+#include "handshare/fem/stiffening.hpp"
 
 namespace handshare::contact {
 
@@ -121,6 +122,10 @@ struct DeformableDesc {
   /// SetModeScale. The compliance must hold the nodes that drive it (linear elasticity: a
   /// fingertip's field adds to s mode). Null: no mode.
   std::shared_ptr<const std::vector<Eigen::Vector3d>> mode_O_m;
+  /// The large-deformation correction (fem::StiffeningTable; docs/fem.md, "A correction beyond
+  /// the paper"): each fingertip patch's force, a hand's and a peer's, scaled by its nodes' gains
+  /// weighted by their push. Null: the linear model's force.
+  std::shared_ptr<const fem::StiffeningTable> stiffening;
 };
 
 struct WorldConfig {
@@ -333,7 +338,11 @@ class HapticWorld {
   void AddPatch(const Object& m, ObjectData& d, PatchGather& g, const Eigen::Vector3d& p_O, const Eigen::Vector3d& n_O,
                 double depth, std::int32_t& count, bool& truncated, PatchMemo* memo = nullptr,
                 fem::ContactInput* kept = nullptr) noexcept;
-  void ApplyFingerPatch(ObjectData& d, FingerObject& fo, std::span<const Eigen::Vector3d> forces) noexcept;
+  void ApplyFingerPatch(const Object& m, ObjectData& d, FingerObject& fo, std::span<const Eigen::Vector3d> forces) noexcept;
+  // The stiffening gain of the patch of `count` inputs from `begin` (1 without a table).
+  double PatchGain(const Object& m, const ObjectData& d, std::int32_t begin, std::int32_t count,
+                   std::span<const Eigen::Vector3d> forces, const Eigen::Vector3d& n_O,
+                   const Eigen::Vector3d& stick_O) const noexcept;
   /// A moded deformable: s mode at the surface point nearest g_O (interpolated over its
   /// triangle), zero if no surface is within reach of the fingertip.
   Eigen::Vector3d ModeShift(const Object& m, const ObjectData& d, const Eigen::Vector3d& g_O) noexcept;
@@ -364,6 +373,9 @@ class HapticWorld {
   std::size_t num_remote_forces_ = 0;
   // Each remote contact's patch in its deformable's inputs (begin, count), this step.
   std::array<std::pair<std::int32_t, std::int32_t>, kMaxRemoteForces> remote_patch_{};
+  // Each remote patch's normal and stick (frame O), for the stiffening gain of its force.
+  std::array<Eigen::Vector3d, kMaxRemoteForces> remote_n_O_{};
+  std::array<Eigen::Vector3d, kMaxRemoteForces> remote_stick_O_{};
 };
 
 }  // namespace handshare::contact

@@ -18,7 +18,7 @@
 ///           absolute; OBJ, STL or PLY read with assimp; mesh_scale: number or [3], default 1
 ///     position_m [3] (required), orientation_wxyz [4] (unit), mass_kg, rgb [3] in 0..1
 ///     material: rigid      {stiffness_N_per_m, damping_N_s_per_m, mu_static, mu_kinetic}
-///               deformable {E_Pa, nu, density_kg_per_m3, mu_static, mu_kinetic}
+///               deformable {E_Pa, nu, density_kg_per_m3, mu_static, mu_kinetic, stiffening_table}
 ///               (required for deformables; mu: fingertip friction, default 0 = frictionless)
 ///     fixed (deformables, required): {below_m} | {plane_point_m [3], plane_normal [3]} |
 ///           {nodes [indices]}: nodes of the tetrahedral mesh held fixed, in frame O
@@ -103,6 +103,10 @@ struct DeformableMaterial {
   /// Coulomb friction of a fingertip on the skin (contact::DeformableDesc): 0 = frictionless.
   double mu_static = 0.0;
   double mu_kinetic = 0.0;
+  /// The large-deformation correction's table (fem::ReadStiffeningSamples; docs/fem.md, "A
+  /// correction beyond the paper"), resolved like a mesh; empty = the linear model's force.
+  std::string stiffening_table_uri;
+  std::filesystem::path stiffening_table_path;
 };
 
 /// Which nodes of a deformable's tetrahedral mesh are fixed (Dirichlet boundary).

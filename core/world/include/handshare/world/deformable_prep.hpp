@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "handshare/fem/compliance.hpp"
+#include "handshare/fem/stiffening.hpp"
 #include "handshare/fem/mesh.hpp"
 #include "handshare/scene/scene.hpp"
 
@@ -30,6 +31,9 @@ struct PreparedDeformable {
   /// body that does not beat.
   std::vector<std::int32_t> driven_nodes;
   std::shared_ptr<const std::vector<Eigen::Vector3d>> mode_O_m;
+  /// The scene's stiffening table on this mesh (scene::DeformableMaterial::stiffening_table);
+  /// null when the scene names none.
+  std::shared_ptr<const fem::StiffeningTable> stiffening;
   std::filesystem::path cache_file;
   std::string cache_note;  ///< why the cache was (not) used
   double prepare_s = 0.0;

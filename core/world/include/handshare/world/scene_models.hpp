@@ -22,6 +22,9 @@ struct SceneModelsOptions {
   bool include_controls = false;   ///< controls are rendered by handshare::controls, not here
   /// Rest dynamic bodies on the top face of the static box with this id (if present).
   std::string support_object = "ground";
+  /// The large-deformation correction where a deformable's scene names a stiffening table
+  /// (docs/fem.md, "A correction beyond the paper"); false: the paper's linear force.
+  bool stiffening = true;
 };
 
 struct SceneModels {
