@@ -23,6 +23,11 @@ Mars and back (tests/data/lever_alice.hand), beside a headless graphics node: th
 lever turned to Mars' detent (the scene file's angle) with Mars' board, and the lifted ball where
 the graphics node draws it (its --state-out at exit, read between two looks at the page).
 
+view_book: the view of the start menu while alice opens the solar system's book
+(tests/data/book_alice.hand), beside a headless graphics node: once the graphics node logs it
+open at its first spread, the page draws it open with that spread's text from the scene file, in
+English, and in Japanese after the switch.
+
 view_deform: the view of the dinosaur world while alice presses the triceratops' tail and holds
 (tests/data/tail_alice.hand), beside a headless graphics node: once the world server's field is
 still, every vertex of the tail is drawn where the graphics node draws it (X_WO p_OV + u_W, its
@@ -37,7 +42,7 @@ the token reach the world server, and session_report finds them, alone, in its q
 table (count, mean, sd per kind and question) and her turn in its turns.
 HANDSHARE_VISIT_SCREENSHOT=FILE saves the page.
 
-usage: web_console_test.py operator|tls|view|view_bodies|view_deform|visit --bin-dir DIR --domain D --work DIR
+usage: web_console_test.py operator|tls|view|view_bodies|view_deform|view_book|visit --bin-dir DIR --domain D --work DIR
 """
 import json
 import math
@@ -270,8 +275,8 @@ def case_view(h, domain):
         worst = max(abs(a - b) for p, q in zip(shown, tips) for a, b in zip(p, q))
         check(worst <= TIP_TOLERANCE_M, f"the view's fingertips are up to {worst} m from the trace's: {shown} vs {tips}")
         # Her palm at her hand base H (the trace's hx..qz), as the screens' hand figure puts it.
-        palm = state["palms"].get("alice")
-        check(palm is not None, f"the view draws no palm for alice: {state['palms']}")
+        palm = state.get("palms", {}).get("alice")
+        check(palm is not None, f"the view draws no palm for alice: {state.get('palms')}")
         p_WH = [base_row[a] for a in ("hx", "hy", "hz")]
         q_WH = [base_row[a] for a in ("qw", "qx", "qy", "qz")]
         palm_off = max(abs(a - b) for a, b in zip(palm["p_WH_m"], p_WH))
@@ -369,10 +374,9 @@ def case_view_bodies(h, domain):
         # The lever in Mars' detent: drawn turned by the detent's angle about x of its frame, and
         # the board says Mars.
         h.wait_for_line("spectator", "control 'lever_planet' of 'solar_system' at index 1 (by alice)", 90)
-        lever = wait_until("the page's lever in Mars' detent", 20, lambda: (lambda v: v["controls"].get("lever_planet") if
-                           v["controls"].get("lever_planet", {}).get("index") == 1 and
-                           not v["controls"]["lever_planet"]["moving"] else None)(page_view(driver)),
-                           lambda: str(page_view(driver)["controls"]))
+        lever = wait_until("the page's lever in Mars' detent", 20, lambda: (lambda c: c if c and c["index"] == 1 and
+                           not c["moving"] else None)(page_view(driver).get("controls", {}).get("lever_planet")),
+                           lambda: f"the page's controls: {page_view(driver).get('controls')}")
         with open(os.path.join(ASSETS, "scenes", "solar_system.json")) as f:
             spec = [c for c in json.load(f)["controls"] if c["id"] == "lever_planet"][0]
         angle = spec["min_angle_rad"] + (spec["max_angle_rad"] - spec["min_angle_rad"]) / (spec["detents"] - 1)
@@ -382,16 +386,16 @@ def case_view_bodies(h, domain):
               f"the page draws the lever at {lever}, not turned {angle} rad about its x at {spec['position_m']} "
               f"({lever_off} rad off)")
         check(lever["user"] == "alice" and lever["type"] == "lever", f"the lever's state: {lever}")
-        mars = wait_until("Mars' board on the page", 20, lambda: (lambda b: b if b and "Mars" in b["text"] else None)(
-                          page_view(driver)["board"]), lambda: str(page_view(driver)["board"]))
+        wait_until("Mars' board on the page", 20, lambda: (lambda b: b if b and "Mars" in b["text"] else None)(
+                   page_view(driver).get("board")), lambda: str(page_view(driver).get("board")))
         # The ball, lifted again after the lever went back, held still: where the graphics node
         # draws it (its state at exit, between two looks at the page).
         ball = scene_object("solar_system", "ball")
         wait_until("alice holding the ball twice", 120, lambda: len(held_weights(trace, 0.5 * ball["mass_kg"] * 1.62)) >= 2,
                    lambda: h.log("alice")[-2000:])
-        before = page_view(driver)["bodies"].get("ball")
+        before = page_view(driver).get("bodies", {}).get("ball")
         check(h.stop("spectator", 20) == 0, "the spectator did not end cleanly")
-        after = page_view(driver)["bodies"].get("ball")
+        after = page_view(driver).get("bodies", {}).get("ball")
         shown = read_json(state_file)
         check(shown is not None and shown["objects"]["ball"]["from"] == "object_state",
               f"the graphics node drew no object state of the ball: {shown}")
@@ -417,6 +421,48 @@ def case_view_bodies(h, domain):
     print(f"view_bodies: the lever in Mars' detent ({lever_off:.1e} rad off the scene file's angle), Mars' board; "
           f"the ball lifted {lift * 1e3:.1f} mm, drawn within {body_off * 1e3:.3f} mm and {body_turn:.1e} rad of the "
           f"graphics node; screenshot {shot}")
+
+
+def case_view_book(h, domain):
+    session = f"it-webbook-{os.getpid()}"
+    h.start("world_server", "world_server", "--domain", domain, "--session", session, "--scene", "start_menu")
+    h.wait_for_line("world_server", "message board #1", 30)
+    h.start("spectator", "graphics_node", "--domain", domain, "--session", session, "--headless",
+            "--frames", 100000, "--fps", 2, "--out", os.path.join(h.work, "frames"))
+    port = start_view(h, domain, session)
+    h.wait_for_line("console", "world 'start_menu' revision 1", 30)
+    with open(os.path.join(ASSETS, "scenes", "start_menu.json")) as f:
+        spec = [c for c in json.load(f)["controls"] if c["id"] == "book_solar_system"][0]
+    first = {t["language"]: t["text"] for t in spec["pages"][0]["text"]}
+    driver = start_browser(h.work, SOFTWARE_WEBGL)
+    try:
+        driver.get(f"http://127.0.0.1:{port}/")
+        wait_until("the view of the start menu", 60, lambda: (lambda v: v and v["world"] == "start_menu" and
+                   v["frames"] > 5)(page_view(driver)), lambda: str(page_view(driver)) + str(driver.get_log("browser")))
+        h.start("alice", "haptic_node", "--domain", domain, "--session", session, "--user", "alice",
+                "--script", os.path.join(DATA, "book_alice.hand"))
+        # Open at its first spread (index 0) as the graphics node draws it: the page's text in the
+        # view's language, English, then Japanese after the switch (the book stays open at it
+        # about 3 s before alice turns the page).
+        h.wait_for_line("spectator", "control 'book_solar_system' of 'start_menu' at index 0, engaged (by alice)", 90)
+        book = wait_until("the page's book open at its first spread", 10, lambda: (lambda c: c if c and c["engaged"] and
+                          c["index"] == 0 else None)(page_view(driver).get("controls", {}).get("book_solar_system")),
+                          lambda: f"the page's controls: {page_view(driver).get('controls')}")
+        check(book["page"] == first["en"], f"the open book's page shows {book['page']!r}, not {first['en']!r}")
+        driver.find_element(By.CSS_SELECTOR, "#languages button[data-lang='ja']").click()
+        book_ja = page_view(driver)["controls"]["book_solar_system"]
+        check(book_ja["index"] == 0 and book_ja["page"] == first["ja"],
+              f"in Japanese the open book shows {book_ja}, not {first['ja']!r}")
+        shot = os.path.join(h.work, "view_book.png")
+        driver.save_screenshot(shot)
+        h.wait_for_line("world_server", "control book_solar_system by alice: scene 'solar_system'", 90)
+        errors = [e for e in driver.get_log("browser") if e["level"] == "SEVERE"]
+        check(not errors, f"the view logged errors: {errors}")
+    finally:
+        driver.quit()
+    for label in ("spectator", "console", "alice", "world_server"):
+        check(h.stop(label, 30) == 0, f"{label} failed")
+    print(f"view_book: the book open at its first spread with its text in English and Japanese; screenshot {shot}")
 
 
 FIELD_TOLERANCE_M = 1e-6  # the console sends whole micrometres (0.5 um) of the samples' floats; the page's float32 positions
@@ -447,8 +493,8 @@ def case_view_deform(h, domain):
         pressed = PressWatch(os.path.join(dump, "triceratops_tail.json"), tail["position_m"], {"alice": (0.27, 0.08)})
         held = wait_until("the tail pressed by alice, held still for 2.5 s", 120, lambda: pressed.still_for(2.5),
                           pressed.explain)
-        page = driver.execute_script("return [window.handshareView.deformations, "
-                                     "window.handshareView.meshVertices('triceratops_tail')];")
+        page = driver.execute_script("const v = window.handshareView; return [v.deformations || {}, "
+                                     "v.meshVertices ? v.meshVertices('triceratops_tail') : null];")
         check(h.stop("spectator", 20) == 0, "the spectator did not end cleanly")
     finally:
         driver.quit()
@@ -612,4 +658,4 @@ def case_visit(h, domain):
 
 if __name__ == "__main__":
     sys.exit(run_cases({"operator": case_operator, "tls": case_tls, "view": case_view, "view_bodies": case_view_bodies,
-                        "view_deform": case_view_deform, "visit": case_visit}))
+                        "view_deform": case_view_deform, "view_book": case_view_book, "visit": case_visit}))
