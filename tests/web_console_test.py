@@ -53,12 +53,13 @@ import ssl
 import subprocess
 import sys
 import urllib.error
+import urllib.parse
 import urllib.request
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 sys.path.insert(0, HERE)
-from session_test import (ASSETS, DATA, PressWatch, check, fem_cache, held_weights, last_trace_row, read_json,  # noqa: E402
-                          read_inp_nodes, read_trace, run_cases, scene_object, settled_since, wait_until)
+from session_test import (ASSETS, DATA, PressWatch, check, fem_cache, held_weights, last_frame, last_trace_row,  # noqa: E402
+                          read_inp_nodes, read_json, read_trace, run_cases, scene_object, settled_since, wait_until)
 
 from selenium import webdriver  # noqa: E402  (python3-selenium, deploy/install_deps.sh)
 from selenium.webdriver.chrome.service import Service  # noqa: E402
@@ -248,6 +249,11 @@ def case_view(h, domain):
     h.start("world_server", "world_server", "--domain", domain, "--session", session)
     h.start("alice", "haptic_node", "--domain", domain, "--session", session, "--user", "alice",
             "--device", "sim", "--script", os.path.join(DATA, "alice.hand"), "--trace", trace)
+    # A screen beside the view: its frames from its camera, compared with the page's canvas from
+    # the same camera at the end.
+    frames = os.path.join(h.work, "frames")
+    h.start("spectator", "graphics_node", "--domain", domain, "--session", session, "--headless",
+            "--frames", 100000, "--fps", 2, "--out", frames)
     h.start("console", "web_console", "--domain", domain, "--session", session, "--listen", "127.0.0.1:0")
     h.wait_for_line("console", "listening on http://127.0.0.1:", 30)
     port = int(re.search(r"listening on http://127\.0\.0\.1:(\d+)", h.log("console")).group(1))
@@ -303,6 +309,7 @@ def case_view(h, domain):
         check(not errors, f"the view logged errors: {errors}")
         shot = os.environ.get("HANDSHARE_WEB_SCREENSHOT") or os.path.join(h.work, "view.png")
         driver.save_screenshot(shot)
+        pixels = compare_with_frame(h, driver, port, frames, meshes)
     finally:
         driver.quit()
     check(h.stop("console", 30) == 0, "web_console failed")
@@ -311,6 +318,80 @@ def case_view(h, domain):
     print(f"view: {state['objects']} objects, {state['meshesLoaded']} meshes from glTF, alice's 5 fingertips within "
           f"{worst:.1e} m of her trace and her palm within {palm_off:.1e} m, {palm_turn:.1e} rad; the board in "
           f"English and Japanese; {state['frames']} frames drawn; screenshot {shot}")
+    print(f"view: against the graphics node's frame from its camera: {pixels}")
+
+
+# What the page's canvas and a graphics node's frame from the same camera are compared by: the
+# pixels of each colour that only these objects have (the fingertips' colours, and the books'
+# and buttons' colours of the start menu, a book and its button sharing one; the blue pair is
+# left out: alice's hand lies over the blue book, and the screens draw her fingers' links over
+# it, which the page does not draw, so its visible part differs), classified by
+# chromaticity (r, g, b) / (r + g + b), which the two renderers' white lights leave alone, among
+# bright (max >= 60 of 255) and saturated ((max - min) / max >= 0.3) pixels: the table, the palm
+# and the screens' hand links, labels, grid and caption fall out. Each colour's mask must cover
+# at least 20 pixels in both, and its centroid lie within FRAME_TOLERANCE_PX of the other's.
+FRAME_COLOURS = {"thumb": (1.0, 0.0, 0.0), "index": (0.0, 1.0, 0.0), "middle": (0.0, 0.0, 1.0),
+                 "ring": (1.0, 1.0, 0.0), "little": (0.0, 1.0, 1.0), "green book and button": (0.3, 0.6, 0.3), "purple book and button": (0.7, 0.4, 0.7)}
+FRAME_CHROMA_DISTANCE = 0.1
+FRAME_TOLERANCE_PX = 4.0  # of 640 x 480: the screens draw labels over the books, a closed book's white pages, finger links over the fingertips
+
+
+def colour_masks(image):
+    """{colour name: set of (x, y)} of an RGB PIL image, by FRAME_COLOURS."""
+    refs = {name: [c / sum(rgb) for c in rgb] for name, rgb in FRAME_COLOURS.items()}
+    masks = {name: set() for name in FRAME_COLOURS}
+    w, h = image.size
+    data = image.load()
+    for y in range(h):
+        for x in range(w):
+            r, g, b = data[x, y][:3]
+            hi, lo = max(r, g, b), min(r, g, b)
+            if hi < 60 or (hi - lo) < 0.3 * hi:
+                continue
+            total = float(r + g + b)
+            c = (r / total, g / total, b / total)
+            name, d = min(((n, math.dist(c, ref)) for n, ref in refs.items()), key=lambda t: t[1])
+            if d <= FRAME_CHROMA_DISTANCE:
+                masks[name].add((x, y))
+    return masks
+
+
+def compare_with_frame(h, driver, port, frames, meshes):
+    """The page from the graphics node's camera (its camera.json in the URL) against the graphics
+    node's last frame, both while alice's hand holds still: every colour of FRAME_COLOURS where
+    the frame has it. Returns a line to print."""
+    import base64
+    import io
+    from PIL import Image
+
+    camera = wait_until("the graphics node's camera", 30, lambda: read_json(os.path.join(frames, "camera.json")))
+    query = urllib.parse.urlencode({"eye": ",".join(map(repr, camera["eye_W_m"])),
+                                    "target": ",".join(map(repr, camera["target_W_m"])),
+                                    "up": ",".join(map(repr, camera["up_W"])), "fov_y": repr(camera["fov_y_rad"]),
+                                    "size": f"{camera['width_px']}x{camera['height_px']}"})
+    driver.get(f"http://127.0.0.1:{port}/?{query}")
+    wait_until("the view from the graphics node's camera", 60, lambda: (lambda v: v and v["world"] == "start_menu" and
+               v["meshesLoaded"] == meshes and "alice" in v["hands"] and v["frames"] > 5)(page_view(driver)),
+               lambda: str(page_view(driver)) + str(driver.get_log("browser")))
+    check("bad URL" not in driver.find_element(By.ID, "status").text, driver.find_element(By.ID, "status").text)
+    png = driver.execute_script("return document.getElementById('view').toDataURL('image/png');")
+    page = Image.open(io.BytesIO(base64.b64decode(png.split(",", 1)[1]))).convert("RGB")
+    page.save(os.path.join(h.work, "page_from_camera.png"))
+    check(h.stop("spectator", 20) == 0, "the spectator did not end cleanly")
+    _, frame_file, _, frame, _ = last_frame(frames)
+    check(page.size == frame.size, f"the page's canvas is {page.size}, the graphics node's frame {frame.size}")
+    page_masks, frame_masks = colour_masks(page), colour_masks(frame)
+    worst, lines = 0.0, []
+    for name in FRAME_COLOURS:
+        a, b = page_masks[name], frame_masks[name]
+        check(len(a) >= 20 and len(b) >= 20, f"{name}: {len(a)} pixels on the page, {len(b)} in {frame_file}")
+        ca = [sum(p[k] for p in a) / len(a) for k in range(2)]
+        cb = [sum(p[k] for p in b) / len(b) for k in range(2)]
+        d = math.dist(ca, cb)
+        worst = max(worst, d)
+        lines.append(f"{name} {d:.1f} px (IoU {len(a & b) / len(a | b):.2f})")
+        check(d <= FRAME_TOLERANCE_PX, f"{name}: the page's centroid {ca} is {d:.1f} px from the frame's {cb} ({frame_file})")
+    return f"{len(FRAME_COLOURS)} colours' centroids within {worst:.1f} px: " + ", ".join(lines)
 
 
 SOFTWARE_WEBGL = ("--use-angle=swiftshader", "--enable-unsafe-swiftshader", "--ignore-gpu-blocklist")
@@ -433,7 +514,7 @@ def case_view_book(h, domain):
     h.wait_for_line("console", "world 'start_menu' revision 1", 30)
     with open(os.path.join(ASSETS, "scenes", "start_menu.json")) as f:
         spec = [c for c in json.load(f)["controls"] if c["id"] == "book_solar_system"][0]
-    first = {t["language"]: t["text"] for t in spec["pages"][0]["text"]}
+    first = {t["language"]: t["text"] for t in spec["pages"][0]["text"]}  # its first spread
     driver = start_browser(h.work, SOFTWARE_WEBGL)
     try:
         driver.get(f"http://127.0.0.1:{port}/")
@@ -449,10 +530,13 @@ def case_view_book(h, domain):
                           c["index"] == 0 else None)(page_view(driver).get("controls", {}).get("book_solar_system")),
                           lambda: f"the page's controls: {page_view(driver).get('controls')}")
         check(book["page"] == first["en"], f"the open book's page shows {book['page']!r}, not {first['en']!r}")
-        driver.find_element(By.CSS_SELECTOR, "#languages button[data-lang='ja']").click()
-        book_ja = page_view(driver)["controls"]["book_solar_system"]
-        check(book_ja["index"] == 0 and book_ja["page"] == first["ja"],
-              f"in Japanese the open book shows {book_ja}, not {first['ja']!r}")
+        # The switch and the look in one script: the book stays open at this spread for a few
+        # seconds only (a click through the driver can take longer on a loaded machine).
+        book_ja = driver.execute_script("document.querySelector(\"#languages button[data-lang='ja']\").click();"
+                                        "return window.handshareView.controls.book_solar_system || null;")
+        spread = {t["language"]: t["text"] for t in spec["pages"][max(0, book_ja["index"])]["text"]} if book_ja else {}
+        check(book_ja is not None and book_ja["engaged"] and book_ja["page"] == spread.get("ja"),
+              f"in Japanese the open book shows {book_ja}, not its spread's {spread.get('ja')!r}")
         shot = os.path.join(h.work, "view_book.png")
         driver.save_screenshot(shot)
         h.wait_for_line("world_server", "control book_solar_system by alice: scene 'solar_system'", 90)

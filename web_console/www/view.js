@@ -7,6 +7,8 @@
 // - the deformed meshes, from the deformation document (10/s at most);
 // - every user's hand base (a palm) and fingertips, from the hands document (20/s at most);
 // - the message board in English or Japanese (the switch, or ?lang=ja).
+// A graphics node's camera may be given in the URL, to see what its frames show:
+//   ?eye=X,Y,Z&target=X,Y,Z&up=X,Y,Z&fov_y=RAD&size=WxH  (its camera.json; W and H in CSS px)
 import * as THREE from "/three/build/three.module.js";
 import {GLTFLoader} from "/three/examples/jsm/loaders/GLTFLoader.js";
 
@@ -25,14 +27,36 @@ const view = {
 };
 window.handshareView = view;  // what the page shows, for tests and the curious
 
+// The camera: the visitor's side (-y), above the table, unless the URL names one (checked: a
+// bad parameter is said in the status line and the default kept).
+const badParams = [];
+function numbers(name, count, min, max) {
+  const text = params.get(name);
+  if (text === null) return null;
+  const v = text.split(name === "size" ? "x" : ",").map(Number);
+  if (v.length !== count || !v.every((x) => Number.isFinite(x) && x >= min && x <= max)) {
+    badParams.push(name);
+    return null;
+  }
+  return v;
+}
+const cameraSpec = {
+  eye: numbers("eye", 3, -100, 100) || [0, -0.75, 0.55],
+  target: numbers("target", 3, -100, 100) || [0, 0, 0.03],
+  up: numbers("up", 3, -1, 1) || [0, 0, 1],
+  fov_y_rad: (numbers("fov_y", 1, 0.01, 3.1) || [45 * Math.PI / 180])[0],
+  size: numbers("size", 2, 16, 8192),  // null: the window's
+};
+view.camera = cameraSpec;
+// preserveDrawingBuffer: the canvas can be read back (a test compares it with a graphics node's frame).
 const renderer = new THREE.WebGLRenderer({antialias: true, canvas: document.getElementById("view"),
                                           preserveDrawingBuffer: true});
 const scene = new THREE.Scene();
 scene.background = new THREE.Color(0x20262e);
-const camera = new THREE.PerspectiveCamera(45, 1, 0.01, 50);
-camera.up.set(0, 0, 1);
-camera.position.set(0, -0.75, 0.55);  // the visitor's side (-y), above the table
-camera.lookAt(0, 0, 0.03);
+const camera = new THREE.PerspectiveCamera(cameraSpec.fov_y_rad * 180 / Math.PI, 1, 0.01, 50);
+camera.up.set(...cameraSpec.up);
+camera.position.set(...cameraSpec.eye);
+camera.lookAt(...cameraSpec.target);
 scene.add(new THREE.AmbientLight(0xffffff, 0.45));
 const sun = new THREE.DirectionalLight(0xffffff, 0.8);
 sun.position.set(0.5, -1, 2);
@@ -50,6 +74,13 @@ let lastDeformation = null;  // world rebuilt or a mesh loaded after them
 let lastBoards = {};
 
 function resize() {
+  if (cameraSpec.size) {  // a graphics node's image: its pixels, one per CSS pixel
+    renderer.setPixelRatio(1);
+    renderer.setSize(cameraSpec.size[0], cameraSpec.size[1], true);
+    camera.aspect = cameraSpec.size[0] / cameraSpec.size[1];
+    camera.updateProjectionMatrix();
+    return;
+  }
   const w = window.innerWidth, h = window.innerHeight;
   renderer.setSize(w, h, false);
   renderer.setPixelRatio(window.devicePixelRatio || 1);
@@ -161,7 +192,9 @@ function pageTexture(text) {
     line += piece;
   }
   if (line.trim()) g.fillText(line.trim(), 12, y);
-  return new THREE.CanvasTexture(canvas);
+  const texture = new THREE.CanvasTexture(canvas);
+  texture.minFilter = THREE.LinearFilter;  // no mipmaps: WebGL 1 would scale the canvas to a power of two
+  return texture;
 }
 
 // An open book as the screens draw it (graphics_node's SceneReplica::AddBook): its front cover
@@ -361,9 +394,13 @@ for (const button of document.querySelectorAll("#languages button")) {
 }
 showBoard();
 
+function badNote() {
+  return badParams.length ? " (bad URL parameters, not used: " + badParams.join(", ") + ")" : "";
+}
+
 function connect() {
   const socket = new WebSocket((location.protocol === "https:" ? "wss://" : "ws://") + location.host + "/ws");
-  socket.onopen = () => { status.textContent = "live"; };
+  socket.onopen = () => { status.textContent = "live" + badNote(); };
   socket.onmessage = (event) => {
     const doc = JSON.parse(event.data);
     if (doc.type === "hands") {
@@ -375,7 +412,7 @@ function connect() {
     } else if (doc.type === "state") {
       if (doc.world && (doc.world.scene !== view.world || doc.world.revision !== view.revision)) {
         buildWorld(doc.world);
-        status.textContent = "live: " + doc.world.scene;
+        status.textContent = "live: " + doc.world.scene + badNote();
       }
       lastBoards = doc.boards || {};
       showBoard();
