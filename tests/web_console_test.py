@@ -13,9 +13,30 @@ chromium goes live over WSS and shows the world.
 
 view: the live 3-D view at / in chromium with software WebGL (SwiftShader): it draws the start
 menu (every object and control, the meshes loaded from the glTF files the console exported),
-and alice's five fingertip spheres (where three.js has them in its scene) where her haptic
-node's trace has her fingertips while her hand holds still;
-with --screenshot FILE it saves what it drew.
+and alice's five fingertip spheres and her palm (where three.js has them in its scene) where
+her haptic node's trace has her fingertips and hand base while her hand holds still; the board
+shows the start menu's message in English, and in Japanese after the switch; the page's canvas
+from a headless graphics node's camera shows the fingertips, books and buttons where the
+graphics node's frame does (colour masks' centroids within 4 px);
+HANDSHARE_WEB_SCREENSHOT=FILE saves what it drew.
+
+view_bodies: the view of the solar system while alice lifts the ball and pushes the lever to
+Mars and back (tests/data/lever_alice.hand), beside a headless graphics node: the page draws the
+lever turned to Mars' detent (the scene file's angle) with Mars' board, and the lifted ball where
+the graphics node draws it (its --state-out at exit, read between two looks at the page); the
+page's canvas from the graphics node's camera shows her fingertips and the lever where its last
+frame does.
+
+view_book: the view of the start menu while alice opens the solar system's book
+(tests/data/book_alice.hand), beside a headless graphics node: once the graphics node logs it
+open at its first spread, the page draws it open with that spread's text from the scene file, in
+English, and in Japanese after the switch.
+
+view_deform: the view of the dinosaur world while alice presses the triceratops' tail and holds
+(tests/data/tail_alice.hand), beside a headless graphics node: once the world server's field is
+still, every vertex of the tail is drawn where the graphics node draws it (X_WO p_OV + u_W, its
+--deformation-out), the page's vertex v being the world server's node v (its --dump-deformation
+mesh).
 
 visit: the questionnaire at /visit on a phone-sized chromium. A world server whose visitors'
 turns last 0.05 minutes (--visit-minutes) and logs the session; alice's haptic node; her turn
@@ -25,9 +46,10 @@ the token reach the world server, and session_report finds them, alone, in its q
 table (count, mean, sd per kind and question) and her turn in its turns.
 HANDSHARE_VISIT_SCREENSHOT=FILE saves the page.
 
-usage: web_console_test.py operator|tls|view|visit --bin-dir DIR --domain D --work DIR
+usage: web_console_test.py operator|tls|view|view_bodies|view_deform|view_book|visit --bin-dir DIR --domain D --work DIR
 """
 import json
+import math
 import os
 import re
 import secrets
@@ -35,11 +57,13 @@ import ssl
 import subprocess
 import sys
 import urllib.error
+import urllib.parse
 import urllib.request
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 sys.path.insert(0, HERE)
-from session_test import DATA, check, last_trace_row, run_cases, settled_since, wait_until  # noqa: E402
+from session_test import (ASSETS, DATA, PressWatch, check, fem_cache, held_weights, last_frame, last_trace_row,  # noqa: E402
+                          read_inp_nodes, read_json, read_trace, run_cases, scene_object, settled_since, wait_until)
 
 from selenium import webdriver  # noqa: E402  (python3-selenium, deploy/install_deps.sh)
 from selenium.webdriver.chrome.service import Service  # noqa: E402
@@ -229,6 +253,11 @@ def case_view(h, domain):
     h.start("world_server", "world_server", "--domain", domain, "--session", session)
     h.start("alice", "haptic_node", "--domain", domain, "--session", session, "--user", "alice",
             "--device", "sim", "--script", os.path.join(DATA, "alice.hand"), "--trace", trace)
+    # A screen beside the view: its frames from its camera, compared with the page's canvas from
+    # the same camera at the end.
+    frames = os.path.join(h.work, "frames")
+    h.start("spectator", "graphics_node", "--domain", domain, "--session", session, "--headless",
+            "--frames", 100000, "--fps", 2, "--out", frames)
     h.start("console", "web_console", "--domain", domain, "--session", session, "--listen", "127.0.0.1:0")
     h.wait_for_line("console", "listening on http://127.0.0.1:", 30)
     port = int(re.search(r"listening on http://127\.0\.0\.1:(\d+)", h.log("console")).group(1))
@@ -240,7 +269,8 @@ def case_view(h, domain):
           f"the start menu's view has {len(world['view'])} objects, {meshes} meshes (the table and 6 controls expected)")
     wait_until("alice's hand still at its hold pose", 60, lambda: settled_since(trace) >= 0.5, lambda: h.log("alice"))
     tips = last_trace_row(trace)
-    driver = start_browser(h.work, ("--use-angle=swiftshader", "--enable-unsafe-swiftshader", "--ignore-gpu-blocklist"))
+    base_row = read_trace(trace)[-1]
+    driver = start_browser(h.work, SOFTWARE_WEBGL)
     try:
         driver.get(f"http://127.0.0.1:{port}/")
         state = wait_until("the view with the start menu's meshes and alice's hand", 60, lambda: (lambda v: v if v and
@@ -254,6 +284,27 @@ def case_view(h, domain):
         check(len(shown) == 5, f"the view draws {len(shown)} of alice's fingertips, not 5")
         worst = max(abs(a - b) for p, q in zip(shown, tips) for a, b in zip(p, q))
         check(worst <= TIP_TOLERANCE_M, f"the view's fingertips are up to {worst} m from the trace's: {shown} vs {tips}")
+        # Her palm at her hand base H (the trace's hx..qz), as the screens' hand figure puts it.
+        palm = state.get("palms", {}).get("alice")
+        check(palm is not None, f"the view draws no palm for alice: {state.get('palms')}")
+        p_WH = [base_row[a] for a in ("hx", "hy", "hz")]
+        q_WH = [base_row[a] for a in ("qw", "qx", "qy", "qz")]
+        palm_off = max(abs(a - b) for a, b in zip(palm["p_WH_m"], p_WH))
+        check(palm_off <= TIP_TOLERANCE_M, f"the view's palm is {palm_off} m off her hand base: {palm} vs {p_WH}")
+        palm_turn = quaternion_angle(palm["q_WH_wxyz"], q_WH)
+        check(palm_turn <= ANGLE_TOLERANCE_RAD, f"the view's palm is turned {palm_turn} rad off her hand base: {palm} vs {q_WH}")
+        # The board: the start menu's message, in English, then in Japanese after the switch.
+        with open(os.path.join(ASSETS, "scenes", "start_menu.json")) as f:
+            messages = {m["language"]: m for m in json.load(f)["messages"]}
+        board = wait_until("the board in English", 20, lambda: driver.execute_script("return window.handshareView.board;"))
+        check(board["language"] == "en" and board["text"] == messages["en"]["text"] and
+              board["next_action"] == messages["en"]["next_action"], f"the board in English: {board}")
+        driver.find_element(By.CSS_SELECTOR, "#languages button[data-lang='ja']").click()
+        board_ja = driver.execute_script("return window.handshareView.board;")
+        check(board_ja["language"] == "ja" and board_ja["text"] == messages["ja"]["text"] and
+              board_ja["next_action"] == messages["ja"]["next_action"], f"the board in Japanese: {board_ja}")
+        check(driver.find_element(By.ID, "board-text").text == messages["ja"]["text"],
+              "the page does not show the Japanese board")
         drawn = driver.execute_script(
             "const c = document.getElementById('view'); const g = c.getContext('webgl2') || c.getContext('webgl');"
             "return g !== null;")
@@ -262,13 +313,319 @@ def case_view(h, domain):
         check(not errors, f"the view logged errors: {errors}")
         shot = os.environ.get("HANDSHARE_WEB_SCREENSHOT") or os.path.join(h.work, "view.png")
         driver.save_screenshot(shot)
+        pixels = compare_with_frame(h, driver, port, frames, "start_menu", meshes, FRAME_COLOURS)
     finally:
         driver.quit()
     check(h.stop("console", 30) == 0, "web_console failed")
     check(h.stop("alice", 30) == 0, "haptic_node alice failed")
     check(h.stop("world_server", 30) == 0, "world_server failed")
     print(f"view: {state['objects']} objects, {state['meshesLoaded']} meshes from glTF, alice's 5 fingertips within "
-          f"{worst:.1e} m of her trace, {state['frames']} frames drawn; screenshot {shot}")
+          f"{worst:.1e} m of her trace and her palm within {palm_off:.1e} m, {palm_turn:.1e} rad; the board in "
+          f"English and Japanese; {state['frames']} frames drawn; screenshot {shot}")
+    print(f"view: against the graphics node's frame from its camera: {pixels}")
+
+
+# What the page's canvas and a graphics node's frame from the same camera are compared by: the
+# pixels of each colour that only these objects have (the fingertips' colours, and the books'
+# and buttons' colours of the start menu, a book and its button sharing one; the blue pair is
+# left out: alice's hand lies over the blue book, and the screens draw her fingers' links over
+# it, which the page does not draw, so its visible part differs), classified by
+# chromaticity (r, g, b) / (r + g + b), which the two renderers' white lights leave alone, among
+# bright (max >= 60 of 255) and saturated ((max - min) / max >= 0.3) pixels: the table, the palm
+# and the screens' hand links, labels, grid and caption fall out. Each colour's mask must cover
+# at least 20 pixels in both, and its centroid lie within FRAME_TOLERANCE_PX of the other's.
+FINGERTIP_COLOURS = {"thumb": (1.0, 0.0, 0.0), "index": (0.0, 1.0, 0.0), "middle": (0.0, 0.0, 1.0),
+                     "ring": (1.0, 1.0, 0.0), "little": (0.0, 1.0, 1.0)}
+FRAME_COLOURS = {**FINGERTIP_COLOURS, "green book and button": (0.3, 0.6, 0.3), "purple book and button": (0.7, 0.4, 0.7)}
+FRAME_CHROMA_DISTANCE = 0.1
+FRAME_TOLERANCE_PX = 4.0  # of 640 x 480: the screens draw labels over the books, a closed book's white pages, finger links over the fingertips
+
+
+def colour_masks(image, colours):
+    """{colour name: set of (x, y)} of an RGB PIL image, by colours ({name: rgb})."""
+    refs = {name: [c / sum(rgb) for c in rgb] for name, rgb in colours.items()}
+    masks = {name: set() for name in colours}
+    w, h = image.size
+    data = image.load()
+    for y in range(h):
+        for x in range(w):
+            r, g, b = data[x, y][:3]
+            hi, lo = max(r, g, b), min(r, g, b)
+            if hi < 60 or (hi - lo) < 0.3 * hi:
+                continue
+            total = float(r + g + b)
+            c = (r / total, g / total, b / total)
+            name, d = min(((n, math.dist(c, ref)) for n, ref in refs.items()), key=lambda t: t[1])
+            if d <= FRAME_CHROMA_DISTANCE:
+                masks[name].add((x, y))
+    return masks
+
+
+def compare_with_frame(h, driver, port, frames, world, meshes, colours, hidden_allowed=(), ready=lambda v: True):
+    """The page from the graphics node's camera (its camera.json in the URL) against the graphics
+    node's last frame, both while alice's hand holds still (the graphics node is stopped here):
+    every colour of `colours`; those of hidden_allowed may be hidden in both (under 20 pixels:
+    a fingertip behind a held ball). Returns a line to print."""
+    import base64
+    import io
+    from PIL import Image
+
+    camera = wait_until("the graphics node's camera", 30, lambda: read_json(os.path.join(frames, "camera.json")))
+    query = urllib.parse.urlencode({"eye": ",".join(map(repr, camera["eye_W_m"])),
+                                    "target": ",".join(map(repr, camera["target_W_m"])),
+                                    "up": ",".join(map(repr, camera["up_W"])), "fov_y": repr(camera["fov_y_rad"]),
+                                    "size": f"{camera['width_px']}x{camera['height_px']}"})
+    driver.get(f"http://127.0.0.1:{port}/?{query}")
+    wait_until("the view from the graphics node's camera", 60, lambda: (lambda v: v and v["world"] == world and
+               v["meshesLoaded"] == meshes and "alice" in v["hands"] and v["frames"] > 5 and ready(v))(page_view(driver)),
+               lambda: str(page_view(driver)) + str(driver.get_log("browser")))
+    check("bad URL" not in driver.find_element(By.ID, "status").text, driver.find_element(By.ID, "status").text)
+    png = driver.execute_script("return document.getElementById('view').toDataURL('image/png');")
+    page = Image.open(io.BytesIO(base64.b64decode(png.split(",", 1)[1]))).convert("RGB")
+    page.save(os.path.join(h.work, "page_from_camera.png"))
+    check(h.stop("spectator", 20) == 0, "the spectator did not end cleanly")
+    _, frame_file, _, frame, _ = last_frame(frames)
+    check(page.size == frame.size, f"the page's canvas is {page.size}, the graphics node's frame {frame.size}")
+    page_masks, frame_masks = colour_masks(page, colours), colour_masks(frame, colours)
+    worst, lines, compared = 0.0, [], 0
+    for name in colours:
+        a, b = page_masks[name], frame_masks[name]
+        if name in hidden_allowed and len(a) < 20 and len(b) < 20:
+            lines.append(f"{name} hidden in both")
+            continue
+        check(len(a) >= 20 and len(b) >= 20, f"{name}: {len(a)} pixels on the page, {len(b)} in {frame_file}")
+        compared += 1
+        ca = [sum(p[k] for p in a) / len(a) for k in range(2)]
+        cb = [sum(p[k] for p in b) / len(b) for k in range(2)]
+        d = math.dist(ca, cb)
+        worst = max(worst, d)
+        lines.append(f"{name} {d:.1f} px (IoU {len(a & b) / len(a | b):.2f})")
+        check(d <= FRAME_TOLERANCE_PX, f"{name}: the page's centroid {ca} is {d:.1f} px from the frame's {cb} ({frame_file})")
+    return f"{compared} colours' centroids within {worst:.1f} px: " + ", ".join(lines)
+
+
+SOFTWARE_WEBGL = ("--use-angle=swiftshader", "--enable-unsafe-swiftshader", "--ignore-gpu-blocklist")
+ANGLE_TOLERANCE_RAD = 1e-4  # the trace's 6 significant digits of a unit quaternion: ~1e-6; the page's floats
+
+
+def quaternion_angle(a, b):
+    """The angle [rad] between two rotations given as (w, x, y, z) quaternions (q and -q alike)."""
+    na = math.sqrt(sum(x * x for x in a))
+    nb = math.sqrt(sum(x * x for x in b))
+    d = min(1.0, abs(sum(x * y for x, y in zip(a, b))) / (na * nb))
+    return 2.0 * math.acos(d)
+
+
+def quaternion_multiply(a, b):
+    aw, ax, ay, az = a
+    bw, bx, by, bz = b
+    return [aw * bw - ax * bx - ay * by - az * bz, aw * bx + ax * bw + ay * bz - az * by,
+            aw * by - ax * bz + ay * bw + az * bx, aw * bz + ax * by - ay * bx + az * bw]
+
+
+def rotate(q, v):
+    """v rotated by the unit quaternion q = (w, x, y, z)."""
+    w, x, y, z = quaternion_multiply(quaternion_multiply(q, [0.0, *v]), [q[0], -q[1], -q[2], -q[3]])
+    return [x, y, z]
+
+
+def page_view(driver):
+    return driver.execute_script("return window.handshareView || null;")
+
+
+def start_view(h, domain, session, port_label="console"):
+    """The console on a free port, and the port once it listens."""
+    h.start(port_label, "web_console", "--domain", domain, "--session", session, "--listen", "127.0.0.1:0")
+    h.wait_for_line(port_label, "listening on http://127.0.0.1:", 30)
+    return int(re.search(r"listening on http://127\.0\.0\.1:(\d+)", h.log(port_label)).group(1))
+
+
+BODY_TOLERANCE_M = 5e-4  # a held ball jiggles in the grip between two reads (about 1e-4 m); 0.5 mm is a pixel of the view here
+LEVER_TOLERANCE_RAD = 1e-6  # the console's double arithmetic against this script's
+
+
+def case_view_bodies(h, domain):
+    session = f"it-webbodies-{os.getpid()}"
+    trace = os.path.join(h.work, "alice.csv")
+    state_file = os.path.join(h.work, "spectator_state.json")
+    h.start("world_server", "world_server", "--domain", domain, "--session", session, "--scene", "solar_system")
+    h.wait_for_line("world_server", "message board #1", 30)
+    h.start("spectator", "graphics_node", "--domain", domain, "--session", session, "--headless",
+            "--frames", 100000, "--fps", 2, "--out", os.path.join(h.work, "frames"), "--state-out", state_file)
+    port = start_view(h, domain, session)
+    h.wait_for_line("console", "world 'solar_system' revision 1", 30)
+    driver = start_browser(h.work, SOFTWARE_WEBGL)
+    try:
+        driver.get(f"http://127.0.0.1:{port}/")
+        wait_until("the view of the solar system", 60, lambda: (lambda v: v and v["world"] == "solar_system" and
+                   v["meshesLoaded"] + v["meshesFailed"] >= 1 and v["frames"] > 5)(page_view(driver)),
+                   lambda: str(page_view(driver)) + str(driver.get_log("browser")))
+        h.start("alice", "haptic_node", "--domain", domain, "--session", session, "--user", "alice",
+                "--script", os.path.join(DATA, "lever_alice.hand"), "--trace", trace)
+        # The lever in Mars' detent: drawn turned by the detent's angle about x of its frame, and
+        # the board says Mars.
+        h.wait_for_line("spectator", "control 'lever_planet' of 'solar_system' at index 1 (by alice)", 90)
+        lever = wait_until("the page's lever in Mars' detent", 20, lambda: (lambda c: c if c and c["index"] == 1 and
+                           not c["moving"] else None)(page_view(driver).get("controls", {}).get("lever_planet")),
+                           lambda: f"the page's controls: {page_view(driver).get('controls')}")
+        with open(os.path.join(ASSETS, "scenes", "solar_system.json")) as f:
+            spec = [c for c in json.load(f)["controls"] if c["id"] == "lever_planet"][0]
+        angle = spec["min_angle_rad"] + (spec["max_angle_rad"] - spec["min_angle_rad"]) / (spec["detents"] - 1)
+        expected = quaternion_multiply(spec["orientation_wxyz"], [math.cos(angle / 2), math.sin(angle / 2), 0.0, 0.0])
+        lever_off = quaternion_angle(lever["q_WO_wxyz"], expected)
+        check(lever_off <= LEVER_TOLERANCE_RAD and max(abs(a - b) for a, b in zip(lever["p_WO_m"], spec["position_m"])) <= 1e-9,
+              f"the page draws the lever at {lever}, not turned {angle} rad about its x at {spec['position_m']} "
+              f"({lever_off} rad off)")
+        check(lever["user"] == "alice" and lever["type"] == "lever", f"the lever's state: {lever}")
+        wait_until("Mars' board on the page", 20, lambda: (lambda b: b if b and "Mars" in b["text"] else None)(
+                   page_view(driver).get("board")), lambda: str(page_view(driver).get("board")))
+        # The ball, lifted again after the lever went back, held still: where the graphics node
+        # draws it (its state at exit, between two looks at the page).
+        ball = scene_object("solar_system", "ball")
+        wait_until("alice holding the ball twice", 120, lambda: len(held_weights(trace, 0.5 * ball["mass_kg"] * 1.62)) >= 2,
+                   lambda: h.log("alice")[-2000:])
+        before = page_view(driver).get("bodies", {}).get("ball")
+        errors = [e for e in driver.get_log("browser") if e["level"] == "SEVERE"]
+        check(not errors, f"the view logged errors: {errors}")
+        shot = os.path.join(h.work, "view_bodies.png")
+        driver.save_screenshot(shot)
+        # The page again, from the graphics node's camera, against its last frame (it stops
+        # here): her fingertips around the held ball (two of them behind it in both) and the
+        # lever, which only this world's lever has the colour of.
+        pixels = compare_with_frame(h, driver, port, os.path.join(h.work, "frames"), "solar_system", 3,
+                                    {**FINGERTIP_COLOURS, "lever": (0.8, 0.6, 0.1)}, hidden_allowed=("middle", "ring"),
+                                    ready=lambda v: "ball" in v.get("bodies", {}))
+        after = page_view(driver).get("bodies", {}).get("ball")
+        shown = read_json(state_file)
+        check(shown is not None and shown["objects"]["ball"]["from"] == "object_state",
+              f"the graphics node drew no object state of the ball: {shown}")
+        drawn = shown["objects"]["ball"]
+        check(before is not None and after is not None, f"the page drew no pose of the ball: {before}, {after}")
+        lift = drawn["p_WO_m"][2] - ball["position_m"][2]
+        check(lift >= 0.03, f"the ball is {lift} m above where the world began: not lifted")
+        body_off = max(max(abs(a - b) for a, b in zip(look["p_WO_m"], drawn["p_WO_m"])) for look in (before, after))
+        check(body_off <= BODY_TOLERANCE_M,
+              f"the page draws the ball up to {body_off} m from the graphics node: {before}, {after} vs {drawn}")
+        body_turn = max(quaternion_angle(look["q_WO_wxyz"], drawn["q_WO_wxyz"]) for look in (before, after))
+        check(body_turn <= 0.02, f"the page's ball is turned {body_turn} rad from the graphics node's")
+        check(after["owner"] == "alice", f"the page says the ball's owner is {after['owner']!r}, not alice")
+    finally:
+        driver.quit()
+    check(h.stop("console", 30) == 0, "web_console failed")
+    check(h.stop("alice", 30) == 0, "haptic_node alice failed")
+    check(h.stop("world_server", 30) == 0, "world_server failed")
+    print(f"view_bodies: the lever in Mars' detent ({lever_off:.1e} rad off the scene file's angle), Mars' board; "
+          f"the ball lifted {lift * 1e3:.1f} mm, drawn within {body_off * 1e3:.3f} mm and {body_turn:.1e} rad of the "
+          f"graphics node; screenshot {shot}")
+    print(f"view_bodies: against the graphics node's frame from its camera: {pixels}")
+
+
+def case_view_book(h, domain):
+    session = f"it-webbook-{os.getpid()}"
+    h.start("world_server", "world_server", "--domain", domain, "--session", session, "--scene", "start_menu")
+    h.wait_for_line("world_server", "message board #1", 30)
+    h.start("spectator", "graphics_node", "--domain", domain, "--session", session, "--headless",
+            "--frames", 100000, "--fps", 2, "--out", os.path.join(h.work, "frames"))
+    port = start_view(h, domain, session)
+    h.wait_for_line("console", "world 'start_menu' revision 1", 30)
+    with open(os.path.join(ASSETS, "scenes", "start_menu.json")) as f:
+        spec = [c for c in json.load(f)["controls"] if c["id"] == "book_solar_system"][0]
+    first = {t["language"]: t["text"] for t in spec["pages"][0]["text"]}  # its first spread
+    driver = start_browser(h.work, SOFTWARE_WEBGL)
+    try:
+        driver.get(f"http://127.0.0.1:{port}/")
+        wait_until("the view of the start menu", 60, lambda: (lambda v: v and v["world"] == "start_menu" and
+                   v["frames"] > 5)(page_view(driver)), lambda: str(page_view(driver)) + str(driver.get_log("browser")))
+        h.start("alice", "haptic_node", "--domain", domain, "--session", session, "--user", "alice",
+                "--script", os.path.join(DATA, "book_alice.hand"))
+        # Open at its first spread (index 0) as the graphics node draws it: the page's text in the
+        # view's language, English, then Japanese after the switch (the book stays open at it
+        # about 3 s before alice turns the page).
+        h.wait_for_line("spectator", "control 'book_solar_system' of 'start_menu' at index 0, engaged (by alice)", 90)
+        book = wait_until("the page's book open at its first spread", 10, lambda: (lambda c: c if c and c["engaged"] and
+                          c["index"] == 0 else None)(page_view(driver).get("controls", {}).get("book_solar_system")),
+                          lambda: f"the page's controls: {page_view(driver).get('controls')}")
+        check(book["page"] == first["en"], f"the open book's page shows {book['page']!r}, not {first['en']!r}")
+        # The switch and the look in one script: the book stays open at this spread for a few
+        # seconds only (a click through the driver can take longer on a loaded machine).
+        book_ja = driver.execute_script("document.querySelector(\"#languages button[data-lang='ja']\").click();"
+                                        "return window.handshareView.controls.book_solar_system || null;")
+        spread = {t["language"]: t["text"] for t in spec["pages"][max(0, book_ja["index"])]["text"]} if book_ja else {}
+        check(book_ja is not None and book_ja["engaged"] and book_ja["page"] == spread.get("ja"),
+              f"in Japanese the open book shows {book_ja}, not its spread's {spread.get('ja')!r}")
+        shot = os.path.join(h.work, "view_book.png")
+        driver.save_screenshot(shot)
+        h.wait_for_line("world_server", "control book_solar_system by alice: scene 'solar_system'", 90)
+        errors = [e for e in driver.get_log("browser") if e["level"] == "SEVERE"]
+        check(not errors, f"the view logged errors: {errors}")
+    finally:
+        driver.quit()
+    for label in ("spectator", "console", "alice", "world_server"):
+        check(h.stop(label, 30) == 0, f"{label} failed")
+    print(f"view_book: the book open at its first spread with its text in English and Japanese; screenshot {shot}")
+
+
+FIELD_TOLERANCE_M = 1e-6  # the console sends whole micrometres (0.5 um) of the samples' floats; the page's float32 positions
+
+
+def case_view_deform(h, domain):
+    session = f"it-webdeform-{os.getpid()}"
+    os.environ["HANDSHARE_CACHE"] = fem_cache(h.work)
+    dump = os.path.join(h.work, "deformation")
+    received_file = os.path.join(h.work, "received_deformation.json")
+    h.start("world_server", "world_server", "--domain", domain, "--session", session, "--scene", "dinosaur",
+            "--dump-deformation", dump, "--deformation-threshold", "5e-5")
+    h.wait_for_line("world_server", "models of 'dinosaur' ready", 400)
+    h.start("spectator", "graphics_node", "--domain", domain, "--session", session, "--headless",
+            "--frames", 100000, "--fps", 2, "--out", os.path.join(h.work, "frames"), "--deformation-out", received_file)
+    port = start_view(h, domain, session)
+    h.wait_for_line("console", "world 'dinosaur' revision 1", 30)
+    tail = scene_object("dinosaur", "triceratops_tail")
+    driver = start_browser(h.work, SOFTWARE_WEBGL)
+    try:
+        driver.get(f"http://127.0.0.1:{port}/")
+        wait_until("the view of the dinosaur world", 60, lambda: (lambda v: v and v["world"] == "dinosaur" and
+                   v["meshesLoaded"] + v["meshesFailed"] == 5 and v["frames"] > 5)(page_view(driver)),
+                   lambda: str(page_view(driver)) + str(driver.get_log("browser")))
+        h.start("alice", "haptic_node", "--domain", domain, "--session", session, "--user", "alice",
+                "--script", os.path.join(DATA, "tail_alice.hand"))
+        h.wait_for_line("alice", "hand script starts at loop time", 120)
+        pressed = PressWatch(os.path.join(dump, "triceratops_tail.json"), tail["position_m"], {"alice": (0.27, 0.08)})
+        held = wait_until("the tail pressed by alice, held still for 2.5 s", 120, lambda: pressed.still_for(2.5),
+                          pressed.explain)
+        page = driver.execute_script("const v = window.handshareView; return [v.deformations || {}, "
+                                     "v.meshVertices ? v.meshVertices('triceratops_tail') : null];")
+        check(h.stop("spectator", 20) == 0, "the spectator did not end cleanly")
+    finally:
+        driver.quit()
+    shown, vertices = page
+    received = read_json(received_file)
+    check(received is not None and "triceratops_tail" in received, f"the graphics node received no field of the tail: {received}")
+    field = received["triceratops_tail"]
+    check(shown.get("triceratops_tail", {}).get("revision") == field["revision"] == held["revision"],
+          f"revisions: the page {shown}, the graphics node {field['revision']}, the world server {held['revision']}")
+    count = field["vertex_count"]
+    check(vertices is not None and len(vertices["p_MV"]) == 3 * count, f"the page's tail has not the {count} vertices")
+    # Vertex v of the page is node v + 1 of the world server's mesh (its surface nodes first).
+    nodes = read_inp_nodes(os.path.join(dump, held["mesh"]))
+    order_off = max(abs(vertices["p_MV"][3 * v + k] - nodes[v + 1][k]) for v in range(count) for k in range(3))
+    check(order_off <= 1e-6, f"the page's vertices are not the world server's nodes in order ({order_off} m off)")
+    # Drawn where the graphics node draws them: X_WO p_OV + u_W (the tail is not turned in W).
+    q = tail.get("orientation_wxyz", [1.0, 0.0, 0.0, 0.0])
+    worst, u_max = 0.0, 0.0
+    for v in range(count):
+        u = field["u_W_m"].get(str(v), [0.0, 0.0, 0.0])
+        u_max = max(u_max, math.sqrt(sum(c * c for c in u)))
+        p_OV = vertices["p_MV"][3 * v:3 * v + 3]
+        expected = [a + b + c for a, b, c in zip(rotate(q, p_OV), tail["position_m"], u)]
+        worst = max(worst, max(abs(a - b) for a, b in zip(vertices["p_WV"][3 * v:3 * v + 3], expected)))
+    check(u_max >= 1e-3, f"the tail's largest displacement is {u_max * 1e3:.2f} mm: not a press")
+    check(worst <= FIELD_TOLERANCE_M, f"the page draws a vertex of the tail {worst} m from the graphics node's")
+    check(h.stop("console", 30) == 0, "web_console failed")
+    check(h.stop("alice", 30) == 0, "haptic_node alice failed")
+    check(h.stop("world_server", 30) == 0, "world_server failed")
+    print(f"view_deform: the tail pressed {u_max * 1e3:.2f} mm, its {count} vertices drawn within {worst:.1e} m of the "
+          f"graphics node's (revision {field['revision']}), in the world server's node order ({order_off:.1e} m)")
 
 
 def post_visit(base, body, token):
@@ -400,4 +757,5 @@ def case_visit(h, domain):
 
 
 if __name__ == "__main__":
-    sys.exit(run_cases({"operator": case_operator, "tls": case_tls, "view": case_view, "visit": case_visit}))
+    sys.exit(run_cases({"operator": case_operator, "tls": case_tls, "view": case_view, "view_bodies": case_view_bodies,
+                        "view_deform": case_view_deform, "view_book": case_view_book, "visit": case_visit}))

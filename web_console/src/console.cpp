@@ -35,7 +35,11 @@ using Clock = std::chrono::steady_clock;
 constexpr auto kPushPeriod = std::chrono::milliseconds(200);  // at most 5 states a second to viewers
 constexpr auto kHeartbeat = std::chrono::seconds(1);          // at least one a second (stations age)
 constexpr auto kStationForgotten = std::chrono::seconds(30);  // no statistics this long: gone
-constexpr auto kHandsPeriod = std::chrono::milliseconds(50);  // the view's hands: at most 20 a second
+constexpr auto kHandsPeriod = std::chrono::milliseconds(50);  // the view's hands and bodies: at most 20 a second
+// The view's deformed meshes: at most 10 a second (a document holds every displaced vertex of
+// every deformed mesh, some 15 kB for a pressed tail: twice the rate would double the bytes).
+constexpr auto kDeformationPeriod = std::chrono::milliseconds(100);
+const std::vector<std::string> kLanguages = {"en", "ja"};     // the view's board and book pages
 constexpr double kViewHz = 20.0;                               // announced: device states this often
 
 std::string ErrorJson(const std::string& error) {
@@ -155,6 +159,10 @@ int Console::Run() {
   auto stats_reader = dds::MakeReader<msg::LoopStatistics>(participant, dds::topics::kLoopStatistics);
   auto member_reader = dds::MakeReader<msg::MemberInfo>(participant, dds::topics::kMemberInfo);
   auto device_reader = dds::MakeReader<msg::DeviceState>(participant, dds::topics::kDeviceState);
+  // What the screens draw besides the scene state: moving bodies, deformations, controls' states.
+  auto object_reader = dds::MakeReader<msg::ObjectState>(participant, dds::topics::kObjectState);
+  auto deformation_reader = dds::MakeReader<msg::Deformation>(participant, dds::topics::kDeformation);
+  auto control_reader = dds::MakeReader<msg::ControlState>(participant, dds::topics::kControlState);
   auto events = dds::MakeWriter<msg::ControlEvent>(participant, dds::topics::kControlEvent);
   auto visits = dds::MakeWriter<msg::VisitAnswers>(participant, dds::topics::kVisitAnswers);
 
@@ -186,14 +194,17 @@ int Console::Run() {
   // Every mesh of the assets exported once to glTF 2.0, through a folder of this process's
   // that the server reads at start and that goes right after.
   std::set<std::string> exported;
+  std::map<std::string, std::size_t> vertex_counts;  // by mesh stem: what a deformation's node ids index
   const auto glb_dir = std::filesystem::temp_directory_path() / ("handshare-web-console-" + std::to_string(getpid()));
   std::filesystem::create_directories(glb_dir);
   const auto mesh_dir = common::AssetsDir() / "meshes";
   for (const auto& entry : std::filesystem::directory_iterator(mesh_dir)) {
     if (entry.path().extension() != ".obj") continue;
     const std::string stem = entry.path().stem().string();
-    const std::string glb = ExportGlb(entry.path());
-    std::ofstream(glb_dir / (stem + ".glb"), std::ios::binary).write(glb.data(), static_cast<std::streamsize>(glb.size()));
+    const GlbMesh mesh = ExportGlb(entry.path());
+    std::ofstream(glb_dir / (stem + ".glb"), std::ios::binary)
+        .write(mesh.glb.data(), static_cast<std::streamsize>(mesh.glb.size()));
+    vertex_counts[stem] = mesh.vertex_count;
     web.files["/meshes/" + stem + ".glb"] = glb_dir / (stem + ".glb");
     exported.insert(stem);
   }
@@ -273,6 +284,31 @@ int Console::Run() {
   std::optional<scene::Scene> world_file;  // the current world's scene file, if the console has it
   std::map<std::string, HandView> hands;   // by DeviceState instance (its user); the DDS thread's only
   bool hands_changed = false;
+  // The moving parts of the current world (the DDS thread's only): bodies by object id, the
+  // controls' states by control id (with the world they belong to), mesh fields by object id.
+  std::map<std::string, BodyView> bodies;
+  std::map<std::string, std::pair<std::string, ControlStateIn>> control_states;
+  std::vector<ControlView> controls;
+  std::map<std::string, ViewField> fields;
+  bool bodies_changed = false;
+  bool fields_changed = false;
+  const auto in_world = [&](const std::string& id) -> const ViewObject* {
+    for (const auto& o : state.world.view) {
+      if (o.id == id) return &o;
+    }
+    return nullptr;
+  };
+  // The controls as drawn: those of the current world with a state, at the scene state's pose.
+  const auto draw_controls = [&] {
+    controls.clear();
+    if (!world_file) return;
+    for (const auto& spec : world_file->controls) {
+      const auto it = control_states.find(spec.id);
+      const ViewObject* o = in_world(spec.id);
+      if (it == control_states.end() || it->second.first != state.world.scene || o == nullptr) continue;
+      controls.push_back(DrawnControl(spec, it->second.second, o->p_WO_m, o->q_WO_wxyz, kLanguages));
+    }
+  };
   const auto sender = [](const dds::SampleMeta& m) { return "participant " + dds::ParticipantOf(m.writer); };
   // Takes every new sample into the state; true if anything changed.
   const auto take = [&]() {
@@ -306,11 +342,74 @@ int Console::Run() {
         }
       }
       w.view = ViewOf(scene, world_file ? &*world_file : nullptr, exported);
+      // Poses and fields belong to the world they were sent for; a new revision keeps those of
+      // the objects that remain.
+      if (new_world) {
+        bodies.clear();
+        fields.clear();
+      }
+      std::erase_if(bodies, [&](const auto& b) { return in_world(b.first) == nullptr; });
+      std::map<std::string, ViewField> kept;
+      for (const auto& o : w.view) {
+        if (o.mesh.empty()) continue;
+        const std::size_t count = vertex_counts.at(std::filesystem::path(o.mesh).stem().string());
+        const auto it = fields.find(o.id);
+        kept.emplace(o.id, it != fields.end() && it->second.vertex_count() == count ? it->second : ViewField(count));
+      }
+      fields = std::move(kept);
+      draw_controls();
+      bodies_changed = fields_changed = true;
       char line[160];
       std::snprintf(line, sizeof line, "world '%s' revision %u (server tick %.0f Hz)", scene_name.c_str(),
                     scene.revision(), static_cast<double>(scene.tick_Hz()));
       say(std::string(line) + (new_world ? ": links to " + Join(state.routes) : ""));
       changed = true;
+    }
+    // Object states and deformations name objects of a world: taken once a world is known, after
+    // its scene state (a late joiner may get their history first), for the objects it has.
+    if (state.world.known) {
+      msg::ObjectState object;
+      while (object_reader.TakeNext(object, meta)) {
+        if (!meta.valid_data ||
+            !dropped.Accept("object_state", sender(meta), dds::CheckObjectState(object, session), say)) {
+          continue;
+        }
+        const std::string id = object.object_id().to_string();
+        if (in_world(id) == nullptr) continue;  // another world's, around a world change
+        BodyView& b = bodies[id];
+        for (int k = 0; k < 3; ++k) b.p_WO_m[k] = object.p_WO_m()[k];
+        for (int k = 0; k < 4; ++k) b.q_WO_wxyz[k] = object.q_WO_wxyz()[k];
+        b.owner = object.owner().to_string();
+        bodies_changed = true;
+      }
+      msg::Deformation deformation;
+      while (deformation_reader.TakeNext(deformation, meta)) {
+        if (!meta.valid_data ||
+            !dropped.Accept("deformation", sender(meta), dds::CheckDeformation(deformation, session), say)) {
+          continue;
+        }
+        const auto it = fields.find(deformation.object_id().to_string());
+        if (it == fields.end()) continue;  // not a mesh of this world
+        fields_changed |= it->second.Apply(deformation.revision(), deformation.keyframe(), deformation.node_ids(),
+                                           deformation.u_W_m());
+      }
+    }
+    msg::ControlState control;
+    bool controls_changed = false;
+    while (control_reader.TakeNext(control, meta)) {
+      if (!meta.valid_data ||
+          !dropped.Accept("control_state", sender(meta), dds::CheckControlState(control, session), say)) {
+        continue;
+      }
+      control_states[control.control_id().to_string()] = {
+          control.scene().to_string(),
+          ControlStateIn{control.index(), control.engaged(), control.moving(), control.position(),
+                         control.user().to_string()}};
+      controls_changed = true;
+    }
+    if (controls_changed) {
+      draw_controls();
+      bodies_changed = true;
     }
     msg::MessageBoard board;
     while (board_reader.TakeNext(board, meta)) {
@@ -347,6 +446,8 @@ int Console::Run() {
       if (!dropped.Accept("device_state", sender(meta), dds::CheckDeviceState(device, session), say)) continue;
       HandView& h = hands[key];
       h.user = device.user().to_string();
+      for (int k = 0; k < 3; ++k) h.p_WH_m[k] = device.p_WH_m()[k];
+      for (int k = 0; k < 4; ++k) h.q_WH_wxyz[k] = device.q_WH_wxyz()[k];
       h.fingers.clear();
       h.p_WE_m.clear();
       for (int f = 0; f < static_cast<int>(device.p_WE_m().size()); ++f) {
@@ -391,6 +492,8 @@ int Console::Run() {
   const auto start = Clock::now();
   auto last_push = Clock::time_point{};
   auto last_hands = Clock::time_point{};
+  auto last_bodies = Clock::time_point{};
+  auto last_fields = Clock::time_point{};
   bool dirty = true;
   while (!common::ShutdownRequested()) {
     if (config_.where.duration.count() > 0 && Clock::now() - start >= config_.where.duration) break;
@@ -414,6 +517,30 @@ int Console::Run() {
       server.Broadcast(HandsJson(hands));
       last_hands = now;
       hands_changed = false;
+    }
+    // Bodies and fields: when they change, and once a second while there are any (a viewer
+    // that came meanwhile gets them).
+    const bool any_bodies = !bodies.empty() || !controls.empty();
+    if ((bodies_changed && now - last_bodies >= kHandsPeriod) || (any_bodies && now - last_bodies >= kHeartbeat)) {
+      std::string scene_name;
+      {
+        std::lock_guard lock(mutex);
+        scene_name = state.world.scene;
+      }
+      server.Broadcast(BodiesJson(scene_name, bodies, controls));
+      last_bodies = now;
+      bodies_changed = false;
+    }
+    const bool any_field = std::any_of(fields.begin(), fields.end(), [](const auto& f) { return f.second.revision().has_value(); });
+    if ((fields_changed && now - last_fields >= kDeformationPeriod) || (any_field && now - last_fields >= kHeartbeat)) {
+      std::string scene_name;
+      {
+        std::lock_guard lock(mutex);
+        scene_name = state.world.scene;
+      }
+      server.Broadcast(DeformationJson(scene_name, fields));
+      last_fields = now;
+      fields_changed = false;
     }
   }
   const WebServerCounts c = server.counts();

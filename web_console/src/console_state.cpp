@@ -1,5 +1,9 @@
 #include "handshare/web_console/console_state.hpp"
 
+#include <algorithm>
+#include <cmath>
+
+#include <Eigen/Geometry>
 #include <nlohmann/json.hpp>
 
 namespace handshare::web_console {
@@ -23,9 +27,114 @@ std::string HandsJson(const std::map<std::string, HandView>& hands) {
   using nlohmann::json;
   json list = json::array();
   for (const auto& [user, h] : hands) {
-    list.push_back({{"user", h.user}, {"fingers", h.fingers}, {"p_WE_m", h.p_WE_m}, {"radius_m", h.fingertip_radius_m}});
+    list.push_back({{"user", h.user}, {"p_WH_m", h.p_WH_m}, {"q_WH_wxyz", h.q_WH_wxyz}, {"fingers", h.fingers},
+                    {"p_WE_m", h.p_WE_m}, {"radius_m", h.fingertip_radius_m}});
   }
   return json{{"type", "hands"}, {"hands", std::move(list)}}.dump(-1, ' ', false, json::error_handler_t::replace);
+}
+
+ControlView DrawnControl(const scene::ControlSpec& spec, const ControlStateIn& state,
+                         const std::array<double, 3>& p_WO_m, const std::array<double, 4>& q_WO_wxyz,
+                         const std::vector<std::string>& languages) {
+  ControlView v;
+  v.id = spec.id;
+  v.type = spec.type == scene::ControlType::kButton  ? "button"
+           : spec.type == scene::ControlType::kArrow ? "arrow"
+           : spec.type == scene::ControlType::kLever ? "lever"
+                                                     : "book";
+  v.index = state.index;
+  v.engaged = state.engaged;
+  v.moving = state.moving;
+  v.position = state.position;
+  v.user = state.user;
+  Eigen::Isometry3d X_WO = Eigen::Isometry3d::Identity();
+  X_WO.translation() = Eigen::Vector3d(p_WO_m[0], p_WO_m[1], p_WO_m[2]);
+  X_WO.linear() = Eigen::Quaterniond(q_WO_wxyz[0], q_WO_wxyz[1], q_WO_wxyz[2], q_WO_wxyz[3]).normalized().toRotationMatrix();
+  // As graphics_node's SceneReplica::DrawnPose: where a moving hand has it, else its detent, else
+  // pressed down its travel.
+  const bool lever = spec.type == scene::ControlType::kLever;
+  const bool push = spec.type == scene::ControlType::kButton || spec.type == scene::ControlType::kArrow;
+  const double travel_m = push ? spec.push.travel_m : 0.0;
+  Eigen::Isometry3d X_WD = X_WO;
+  if (state.moving && lever) {
+    X_WD = X_WO * Eigen::AngleAxisd(state.position, Eigen::Vector3d::UnitX());
+  } else if (state.moving && push && travel_m > 0.0) {
+    X_WD = X_WO * Eigen::Translation3d(0.0, 0.0, -std::clamp(state.position, 0.0, travel_m));
+  } else if (lever && state.index >= 0 && state.index < spec.lever.detents) {
+    X_WD = X_WO * Eigen::AngleAxisd(spec.lever.detent_angle_rad(state.index), Eigen::Vector3d::UnitX());
+  } else if (state.engaged && push) {
+    X_WD = X_WO * Eigen::Translation3d(0.0, 0.0, -travel_m);
+  }
+  const Eigen::Quaterniond q(X_WD.linear());
+  v.p_WO_m = {X_WD.translation().x(), X_WD.translation().y(), X_WD.translation().z()};
+  v.q_WO_wxyz = {q.w(), q.x(), q.y(), q.z()};
+  if (spec.type == scene::ControlType::kBook) {
+    v.size_m = {spec.size_m.x(), spec.size_m.y(), spec.size_m.z()};
+    const int page = std::max(0, state.index);
+    if (state.engaged && static_cast<std::size_t>(page) < spec.page_content.size()) {
+      for (const auto& language : languages) v.page_text[language] = spec.page_content[static_cast<std::size_t>(page)].TextIn(language);
+    }
+  }
+  return v;
+}
+
+bool ViewField::Apply(std::uint32_t revision, bool keyframe, std::span<const std::uint32_t> node_ids,
+                      std::span<const float> u_W_m) {
+  if (u_W_m.size() != 3 * node_ids.size()) return false;
+  if (keyframe && revision_ != revision) std::fill(u_W_m_.begin(), u_W_m_.end(), std::array<float, 3>{0.0F, 0.0F, 0.0F});
+  for (std::size_t i = 0; i < node_ids.size(); ++i) {
+    const std::array<float, 3> u{u_W_m[3 * i], u_W_m[3 * i + 1], u_W_m[3 * i + 2]};
+    if (node_ids[i] >= u_W_m_.size() || !std::isfinite(u[0]) || !std::isfinite(u[1]) || !std::isfinite(u[2])) {
+      ++skipped_;
+      continue;
+    }
+    u_W_m_[node_ids[i]] = u;
+  }
+  revision_ = revision;
+  return true;
+}
+
+std::string BodiesJson(const std::string& scene, const std::map<std::string, BodyView>& bodies,
+                       const std::vector<ControlView>& controls) {
+  using nlohmann::json;
+  json list = json::array();
+  for (const auto& [id, b] : bodies) {
+    list.push_back({{"id", id}, {"p_WO_m", b.p_WO_m}, {"q_WO_wxyz", b.q_WO_wxyz}, {"owner", b.owner}});
+  }
+  json drawn = json::array();
+  for (const auto& c : controls) {
+    json j = {{"id", c.id},         {"type", c.type},         {"index", c.index},         {"engaged", c.engaged},
+              {"moving", c.moving}, {"position", c.position}, {"user", c.user},           {"p_WO_m", c.p_WO_m},
+              {"q_WO_wxyz", c.q_WO_wxyz}};
+    if (c.type == "book") {
+      j["size_m"] = c.size_m;
+      j["page_text"] = c.page_text;
+    }
+    drawn.push_back(std::move(j));
+  }
+  return json{{"type", "bodies"}, {"scene", scene}, {"bodies", std::move(list)}, {"controls", std::move(drawn)}}.dump(
+      -1, ' ', false, json::error_handler_t::replace);
+}
+
+std::string DeformationJson(const std::string& scene, const std::map<std::string, ViewField>& fields) {
+  using nlohmann::json;
+  json objects = json::array();
+  for (const auto& [id, f] : fields) {
+    if (!f.revision()) continue;
+    std::vector<std::uint32_t> ids;
+    std::vector<long> u_um;
+    for (std::size_t v = 0; v < f.vertex_count(); ++v) {
+      const auto& u = f.u_W_m()[v];
+      const long x = std::lround(1e6 * u[0]), y = std::lround(1e6 * u[1]), z = std::lround(1e6 * u[2]);
+      if (x == 0 && y == 0 && z == 0) continue;
+      ids.push_back(static_cast<std::uint32_t>(v));
+      u_um.insert(u_um.end(), {x, y, z});
+    }
+    objects.push_back({{"id", id}, {"revision", *f.revision()}, {"vertex_count", f.vertex_count()},
+                       {"ids", std::move(ids)}, {"u_um", std::move(u_um)}});
+  }
+  return json{{"type", "deformation"}, {"scene", scene}, {"objects", std::move(objects)}}.dump(
+      -1, ' ', false, json::error_handler_t::replace);
 }
 
 std::string UserOfNode(const std::string& node) {

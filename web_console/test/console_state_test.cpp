@@ -2,6 +2,8 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
+
 #include <nlohmann/json.hpp>
 
 namespace handshare::web_console {
@@ -64,12 +66,118 @@ TEST(ConsoleState, TheViewGetsEveryObjectAndEveryFingertipTheDeviceHas) {
   EXPECT_EQ(j["world"]["view"][0]["mesh_scale"][0], 2.0);
 
   std::map<std::string, HandView> hands;
-  hands["k"] = HandView{"alice", {1}, {{0.1, 0.2, 0.3}}, 0.008};  // a stylus: the index only
+  hands["k"] = HandView{"alice", {0.1, 0.15, 0.25}, {0.0, 0.0, 0.0, 1.0}, {1}, {{0.1, 0.2, 0.3}}, 0.008};  // a stylus
   const auto h = nlohmann::json::parse(HandsJson(hands));
   EXPECT_EQ(h["type"], "hands");
   EXPECT_EQ(h["hands"][0]["user"], "alice");
+  EXPECT_EQ(h["hands"][0]["p_WH_m"][1], 0.15);
+  EXPECT_EQ(h["hands"][0]["q_WH_wxyz"][3], 1.0);
   EXPECT_EQ(h["hands"][0]["fingers"], nlohmann::json::array({1}));
   EXPECT_EQ(h["hands"][0]["p_WE_m"][0][2], 0.3);
+}
+
+// The receiver rule of graphics_node's DeformationField: a keyframe of a new revision starts from
+// zero, a delta of the same revision adds to what is there, a bad entry is skipped.
+TEST(ViewField, KeyframesStartFromZeroAndDeltasUpdateVertices) {
+  ViewField f(4);
+  const std::vector<std::uint32_t> ids = {0, 2};
+  const std::vector<float> u = {1e-3F, 0.0F, 0.0F, 0.0F, -2e-3F, 0.0F};
+  ASSERT_TRUE(f.Apply(1, true, ids, u));
+  EXPECT_EQ(f.u_W_m()[2][1], -2e-3F);
+  const std::vector<std::uint32_t> delta_ids = {1, 7};  // 7: beyond the mesh
+  const std::vector<float> delta = {0.0F, 0.0F, 5e-4F, 1.0F, 1.0F, 1.0F};
+  ASSERT_TRUE(f.Apply(1, false, delta_ids, delta));
+  EXPECT_EQ(f.u_W_m()[0][0], 1e-3F);  // kept: same revision, not a keyframe
+  EXPECT_EQ(f.u_W_m()[1][2], 5e-4F);
+  EXPECT_EQ(f.skipped(), 1u);
+  const std::vector<std::uint32_t> next_ids = {3};
+  const std::vector<float> next = {0.0F, 1e-4F, 0.0F};
+  ASSERT_TRUE(f.Apply(2, true, next_ids, next));
+  EXPECT_EQ(f.u_W_m()[0][0], 0.0F);  // a new keyframe zeroed it
+  EXPECT_EQ(f.u_W_m()[3][1], 1e-4F);
+  EXPECT_EQ(*f.revision(), 2u);
+  const std::vector<float> short_u = {1.0F};
+  EXPECT_FALSE(f.Apply(3, true, next_ids, short_u));
+  EXPECT_EQ(*f.revision(), 2u);
+  const std::vector<float> nan_u = {std::nanf(""), 0.0F, 0.0F};
+  ASSERT_TRUE(f.Apply(2, false, next_ids, nan_u));
+  EXPECT_EQ(f.u_W_m()[3][1], 1e-4F);  // the non-finite entry skipped
+}
+
+TEST(DeformationJson, ListsTheDisplacedVerticesInWholeMicrometres) {
+  std::map<std::string, ViewField> fields;
+  fields.emplace("tail", ViewField(3));
+  fields.emplace("head", ViewField(2));  // no sample yet: not listed
+  const std::vector<std::uint32_t> ids = {0, 1, 2};
+  const std::vector<float> u = {0.0F, 0.0F, -3.2504e-3F, 4e-7F, 0.0F, 0.0F, 0.0F, 2.6e-6F, 0.0F};
+  fields.at("tail").Apply(5, true, ids, u);
+  const auto j = nlohmann::json::parse(DeformationJson("dinosaur", fields));
+  EXPECT_EQ(j["type"], "deformation");
+  EXPECT_EQ(j["scene"], "dinosaur");
+  ASSERT_EQ(j["objects"].size(), 1u);
+  const auto& o = j["objects"][0];
+  EXPECT_EQ(o["id"], "tail");
+  EXPECT_EQ(o["revision"], 5);
+  EXPECT_EQ(o["vertex_count"], 3);
+  EXPECT_EQ(o["ids"], nlohmann::json::array({0, 2}));  // vertex 1 rounds to 0 um
+  EXPECT_EQ(o["u_um"], nlohmann::json::array({0, 0, -3250, 0, 3, 0}));
+}
+
+scene::ControlSpec Control(scene::ControlType type) {
+  scene::ControlSpec c;
+  c.id = "c";
+  c.type = type;
+  c.push.travel_m = 0.004;
+  c.lever.min_angle_rad = 0.0;
+  c.lever.max_angle_rad = 0.6;
+  c.lever.detents = 3;
+  return c;
+}
+
+// Drawn as graphics_node's SceneReplica::DrawnPose draws them.
+TEST(DrawnControl, ALeverTurnsToItsDetentAndAPressedButtonGoesDownItsTravel) {
+  const std::array<double, 3> p = {0.25, 0.1, 0.0};
+  const std::array<double, 4> q_z90 = {std::sqrt(0.5), 0.0, 0.0, std::sqrt(0.5)};  // 90 degrees about z
+  const ControlView lever = DrawnControl(Control(scene::ControlType::kLever), {2, false, false, 0.0, "alice"}, p, q_z90, {"en"});
+  EXPECT_EQ(lever.type, "lever");
+  EXPECT_EQ(lever.user, "alice");
+  // q_z90 * (0.6 rad about x): w = cos(0.3) sqrt(0.5), x = y = sin(0.3) sqrt(0.5), z = cos(0.3) sqrt(0.5)
+  EXPECT_NEAR(lever.q_WO_wxyz[0], std::cos(0.3) * std::sqrt(0.5), 1e-12);
+  EXPECT_NEAR(lever.q_WO_wxyz[1], std::sin(0.3) * std::sqrt(0.5), 1e-12);
+  EXPECT_NEAR(lever.q_WO_wxyz[2], std::sin(0.3) * std::sqrt(0.5), 1e-12);
+  EXPECT_NEAR(lever.q_WO_wxyz[3], std::cos(0.3) * std::sqrt(0.5), 1e-12);
+  EXPECT_EQ(lever.p_WO_m, p);
+  const ControlView moving = DrawnControl(Control(scene::ControlType::kLever), {0, false, true, 0.2, "bob"}, p, {1, 0, 0, 0}, {"en"});
+  EXPECT_NEAR(moving.q_WO_wxyz[1], std::sin(0.1), 1e-12);  // where the hand has it, not its detent
+  const std::array<double, 4> q_x180 = {0.0, 1.0, 0.0, 0.0};  // upside down: its -z is +z of W
+  const ControlView button = DrawnControl(Control(scene::ControlType::kButton), {-1, true, false, 0.0, ""}, p, q_x180, {"en"});
+  EXPECT_NEAR(button.p_WO_m[2], 0.004, 1e-12);
+  const ControlView half = DrawnControl(Control(scene::ControlType::kArrow), {-1, false, true, 0.009, ""}, p, {1, 0, 0, 0}, {"en"});
+  EXPECT_NEAR(half.p_WO_m[2], -0.004, 1e-12);  // clamped to its travel
+  const ControlView rest = DrawnControl(Control(scene::ControlType::kButton), {-1, false, false, 0.0, ""}, p, {1, 0, 0, 0}, {"en"});
+  EXPECT_EQ(rest.p_WO_m, p);
+}
+
+TEST(DrawnControl, AnOpenBookShowsItsPageInEachLanguage) {
+  scene::ControlSpec book = Control(scene::ControlType::kBook);
+  book.size_m = {0.1, 0.14, 0.02};
+  book.page_content.resize(2);
+  book.page_content[1].text = {{"en", "The Moon"}, {"ja", "月"}};
+  const ControlView open = DrawnControl(book, {1, true, false, 0.0, "alice"}, {0, 0, 0}, {1, 0, 0, 0}, {"en", "ja"});
+  EXPECT_EQ(open.type, "book");
+  EXPECT_EQ(open.page_text.at("en"), "The Moon");
+  EXPECT_EQ(open.page_text.at("ja"), "月");
+  EXPECT_EQ(open.size_m[1], 0.14);
+  const ControlView shut = DrawnControl(book, {1, false, false, 0.0, "alice"}, {0, 0, 0}, {1, 0, 0, 0}, {"en", "ja"});
+  EXPECT_TRUE(shut.page_text.empty());
+  const auto j = nlohmann::json::parse(BodiesJson("start_menu", {{"ball", BodyView{{0, 0.05, 0.1}, {1, 0, 0, 0}, "alice"}}},
+                                                  {open}));
+  EXPECT_EQ(j["type"], "bodies");
+  EXPECT_EQ(j["bodies"][0]["id"], "ball");
+  EXPECT_EQ(j["bodies"][0]["owner"], "alice");
+  EXPECT_EQ(j["bodies"][0]["p_WO_m"][2], 0.1);
+  EXPECT_EQ(j["controls"][0]["page_text"]["ja"], "月");
+  EXPECT_EQ(j["controls"][0]["engaged"], true);
 }
 
 }  // namespace

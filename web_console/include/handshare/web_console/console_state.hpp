@@ -6,8 +6,12 @@
 #include <chrono>
 #include <cstdint>
 #include <map>
+#include <optional>
+#include <span>
 #include <string>
 #include <vector>
+
+#include "handshare/scene/scene.hpp"
 
 #include "handshare/web_console/world_routes.hpp"
 
@@ -50,12 +54,76 @@ struct ViewObject {
   std::array<float, 3> rgb{};
 };
 
-/// One user's hand for the view: the fingertips the device has, in W.
+/// One user's hand for the view: the hand base and the fingertips the device has, in W.
 struct HandView {
   std::string user;
+  std::array<double, 3> p_WH_m{};              ///< hand base H (the palm; fingers along +y of H, up +z)
+  std::array<double, 4> q_WH_wxyz{1, 0, 0, 0};
   std::vector<int> fingers;                    ///< finger index of each tip (thumb 0)
   std::vector<std::array<double, 3>> p_WE_m;   ///< fingertip centres
   double fingertip_radius_m = 0.0;
+};
+
+/// A body of the current world that moves: its newest ObjectState pose, as the screens draw it.
+struct BodyView {
+  std::array<double, 3> p_WO_m{};
+  std::array<double, 4> q_WO_wxyz{1, 0, 0, 0};
+  std::string owner;  ///< the user who holds it, "" when the world server simulates it
+};
+
+/// A control of the current world in its state (the world server's ControlState), drawn as the
+/// screens draw it (graphics_node's SceneReplica::DrawnPose): a lever turned about x of its
+/// frame to its detent's angle, a pressed button or arrow down its travel along -z, while a hand
+/// moves it where the hand has it; a book open at its page.
+struct ControlView {
+  std::string id;
+  std::string type;          ///< "button", "arrow", "lever", "book"
+  std::int32_t index = -1;   ///< lever: detent; book: page; -1 otherwise
+  bool engaged = false;      ///< button, arrow: pressed; book: open
+  bool moving = false;       ///< a hand moves it: drawn at position
+  double position = 0.0;     ///< button travel [m], lever angle [rad], book cover angle [rad]
+  std::string user;          ///< who changed it last
+  std::array<double, 3> p_WO_m{};  ///< the pose it is drawn at
+  std::array<double, 4> q_WO_wxyz{1, 0, 0, 0};
+  std::array<double, 3> size_m{};  ///< a book's size (its frame C: the closed book's top at z = 0)
+  std::map<std::string, std::string> page_text;  ///< an open book's page, by language
+};
+
+/// The state of a control as the world server sent it (ControlState), before it is drawn.
+struct ControlStateIn {
+  std::int32_t index = -1;
+  bool engaged = false;
+  bool moving = false;
+  double position = 0.0;
+  std::string user;
+};
+
+/// `spec` in `state`, drawn from the pose the scene state gives it (p_WO_m, q_WO_wxyz), as
+/// ControlView says. Book pages in every language of `languages`.
+ControlView DrawnControl(const scene::ControlSpec& spec, const ControlStateIn& state,
+                         const std::array<double, 3>& p_WO_m, const std::array<double, 4>& q_WO_wxyz,
+                         const std::vector<std::string>& languages);
+
+/// One mesh object's surface field for the view, fed by Deformation samples with the graphics
+/// node's receiver rule (graphics_node's DeformationField): a keyframe of a revision not seen
+/// last zeroes every vertex first; then u[node_ids[i]] = u_W_m[3i..3i+2]. Vertex v is the mesh's
+/// vertex v as scene::LoadMesh reads it, which is the view's glTF vertex v (gltf_export.hpp).
+class ViewField {
+ public:
+  explicit ViewField(std::size_t vertex_count) : u_W_m_(vertex_count, {0.0F, 0.0F, 0.0F}) {}
+  /// Applies a sample. false (nothing changed) if u_W_m does not hold 3 values per node id; ids
+  /// at or above the vertex count and non-finite displacements are skipped (and counted).
+  bool Apply(std::uint32_t revision, bool keyframe, std::span<const std::uint32_t> node_ids,
+             std::span<const float> u_W_m);
+  std::size_t vertex_count() const { return u_W_m_.size(); }
+  const std::vector<std::array<float, 3>>& u_W_m() const { return u_W_m_; }
+  std::optional<std::uint32_t> revision() const { return revision_; }
+  std::uint64_t skipped() const { return skipped_; }
+
+ private:
+  std::vector<std::array<float, 3>> u_W_m_;
+  std::optional<std::uint32_t> revision_;
+  std::uint64_t skipped_ = 0;
 };
 
 struct WorldView {
@@ -96,6 +164,19 @@ std::string ToJson(const ConsoleState& state, std::chrono::steady_clock::time_po
 /// The hands document the view reads ({"type": "hands", "hands": [...]}), sent apart from the
 /// state and more often.
 std::string HandsJson(const std::map<std::string, HandView>& hands);  // any key: the order of the list
+
+/// The moving bodies and the controls in their states ({"type": "bodies", "scene": ...,
+/// "bodies": [{"id", "p_WO_m", "q_WO_wxyz", "owner"}], "controls": [...]}), sent apart from
+/// the state and as often as the hands.
+std::string BodiesJson(const std::string& scene, const std::map<std::string, BodyView>& bodies,
+                       const std::vector<ControlView>& controls);
+
+/// The deformed meshes ({"type": "deformation", "scene": ..., "objects": [{"id", "revision",
+/// "vertex_count", "ids": [v, ...], "u_um": [ux, uy, uz, ...]}]}): every vertex whose
+/// displacement rounds to a non-zero number of micrometres, u in W in whole micrometres (0.5 um
+/// at most off the sample's float; far below a pixel). Objects whose field is all zero are listed
+/// with no ids, so that a view puts them back.
+std::string DeformationJson(const std::string& scene, const std::map<std::string, ViewField>& fields);
 
 /// The user of a station's node key: what follows the last '/', else the whole key.
 std::string UserOfNode(const std::string& node);
