@@ -586,6 +586,22 @@ std::map<std::string, std::string> ReadSummary(const fs::path& file) {
   return out;
 }
 
+// One node of the part held alone at u_m: its linear reaction (solver: the part's with that node
+// imposed) and the reference model's (NaN where ccx did not converge).
+std::pair<Vector3d, Vector3d> SingleNodePress(const Part& part, handshare::fem::StaticSolver& solver, std::int32_t node,
+                                              const Vector3d& u_m, const fs::path& dir) {
+  using namespace handshare::fem;
+  const StaticSolution lin = solver.Solve(std::vector<Vector3d>{u_m});
+  CcxCase c;
+  c.material = part.material;
+  c.fixed = part.held_fixed;
+  c.imposed = {{node, u_m}};
+  c.model = part.spec->rubber_like ? CcxModel::kNeoHooke : CcxModel::kNlgeom;
+  c.initial_increment = c.max_increment = 0.25;
+  const CcxResult r = RunCalculix(*part.prepared.mesh, c, dir);
+  return {lin.reaction_N[static_cast<std::size_t>(node)], r.converged ? r.reaction_N[0] : Vector3d::Constant(std::nan(""))};
+}
+
 // One held node pressed alone along its finger's normal, at each depth: its linear reaction and
 // the reference model's (neo-Hooke for rubber-like parts). The single-node responses a per-node
 // stiffening law would be precomputed from; fit_stiffening.py holds them against the presses.
@@ -598,20 +614,12 @@ void NodeCurves(const Part& part, std::int32_t node, const Vector3d& n_out, cons
     const Vector3d row = part.spec->row_O.normalized();
     const Vector3d t = (row - row.dot(n_out) * n_out).normalized();
     const Vector3d u = 1e-3 * depth_mm * (-n_out + std::tan(tilt_rad) * t);
-    const StaticSolution lin = solver.Solve(std::vector<Vector3d>{u});
-    CcxCase c;
-    c.material = part.material;
-    c.fixed = part.held_fixed;
-    c.imposed = {{node, u}};
-    c.model = part.spec->rubber_like ? CcxModel::kNeoHooke : CcxModel::kNlgeom;
-    c.initial_increment = c.max_increment = 0.25;
-    const CcxResult r = RunCalculix(*part.prepared.mesh, c, work / (std::string(part.spec->name) + "_node"));
-    const Vector3d& fl = lin.reaction_N[static_cast<std::size_t>(node)];
-    const Vector3d fm = r.converged ? r.reaction_N[0] : Vector3d::Constant(std::nan(""));
+    const auto [fl, fm] = SingleNodePress(part, solver, node, u, work / (std::string(part.spec->name) + "_node"));
+    const bool converged = fm.allFinite();
     char b[512];
     std::snprintf(b, sizeof b, "%s,%d,%.6f,%.6f,%.6f,%.3f,%.6g,%.6g,%.6g,%.6g,%.6g,%.6g,%d", part.spec->name, node,
                   n_out.x(), n_out.y(), n_out.z(), depth_mm, fl.x(), fl.y(), fl.z(), fm.x(), fm.y(), fm.z(),
-                  r.converged ? 1 : 0);
+                  converged ? 1 : 0);
     out << b << "\n";
     out.flush();
   }
@@ -666,21 +674,13 @@ std::vector<handshare::fem::StiffeningSample> SampleTable(const Part& part, std:
       const Vector3d lean = dir == 0 ? Vector3d::Zero() : Vector3d(std::tan(kStiffeningObliqueRad) * (dir == 1 ? t1 : t2));
       const Vector3d way = -s.n_out + lean;
       for (std::size_t d = 0; d < kStiffeningDepths_m.size() && ok; ++d) {
-        const Vector3d u = kStiffeningDepths_m[d] * way;
-        const StaticSolution lin = solver.Solve(std::vector<Vector3d>{u});
-        CcxCase c;
-        c.material = part.material;
-        c.fixed = part.held_fixed;
-        c.imposed = {{node, u}};
-        c.model = part.spec->rubber_like ? CcxModel::kNeoHooke : CcxModel::kNlgeom;
-        c.initial_increment = c.max_increment = 0.25;
-        const CcxResult r = RunCalculix(mesh, c, work / (std::string(part.spec->name) + "_sample"));
-        if (!r.converged) {
+        const auto [fl, fm] = SingleNodePress(part, solver, node, kStiffeningDepths_m[d] * way,
+                                              work / (std::string(part.spec->name) + "_sample"));
+        if (!fm.allFinite()) {
           ok = false;
           break;
         }
-        const Vector3d& fl = lin.reaction_N[static_cast<std::size_t>(node)];
-        const double g = fl.dot(r.reaction_N[0]) / fl.squaredNorm();
+        const double g = fl.dot(fm) / fl.squaredNorm();
         (dir == 0 ? s.g_normal : dir == 1 ? s.g_t1 : s.g_t2)[d] = std::clamp(g, 0.2, 5.0);
       }
     }
