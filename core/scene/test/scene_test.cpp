@@ -567,6 +567,29 @@ TEST(Scene, DeformableFrictionIsReadAndChecked) {
   EXPECT_NE(negative.find("objects[0].material.mu_static'"), std::string::npos) << negative;
 }
 
+// A deformable's stiffening table (docs/fem.md, "A correction beyond the paper"): resolved like a
+// mesh, relative to the assets folder; a file that is not there is named.
+TEST(Scene, AStiffeningTableIsResolvedAndAMissingOneNamed) {
+  const std::string head = std::string(R"({"name": "x", )") + kMsg + R"(, "objects": [)";
+  auto object = [&](const std::string& table) {
+    return head + R"({"id": "t", "kind": "deformable", "shape": "sphere", "radius_m": 0.05,
+      "position_m": [0,0,0], "material": {"E_Pa": 30000, "nu": 0.45, "stiffening_table": ")" + table + R"("},
+      "fixed": {"nodes": [0]}}]})";
+  };
+  const std::filesystem::path file = WriteTemp("stiff", object("stiffening.csv"));
+  const std::filesystem::path table = file.parent_path().parent_path() / "stiffening.csv";
+  std::ofstream(table) << "x\n";
+  const Scene given = LoadScene(file);
+  EXPECT_EQ(given.objects[0].deformable.stiffening_table_uri, "stiffening.csv");
+  EXPECT_EQ(given.objects[0].deformable.stiffening_table_path, table);
+  std::filesystem::remove(table);
+  const std::string missing = ErrorOf("stiff_missing", object("no_such_table.csv"));
+  EXPECT_NE(missing.find("objects[0].material.stiffening_table': no such file"), std::string::npos) << missing;
+  const std::string no_table = head + R"({"id": "t", "kind": "deformable", "shape": "sphere", "radius_m": 0.05,
+      "position_m": [0,0,0], "material": {"E_Pa": 30000, "nu": 0.45}, "fixed": {"nodes": [0]}}]})";
+  EXPECT_TRUE(LoadScene(WriteTemp("nostiff", no_table)).objects[0].deformable.stiffening_table_path.empty());
+}
+
 TEST(Scene, UnknownSceneListsAvailable) {
   try {
     LoadSceneByName("atlantis", kScenes);
