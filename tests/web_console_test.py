@@ -316,9 +316,7 @@ def case_view(h, domain):
         pixels = compare_with_frame(h, driver, port, frames, "start_menu", meshes, FRAME_COLOURS)
     finally:
         driver.quit()
-    check(h.stop("console", 30) == 0, "web_console failed")
-    check(h.stop("alice", 30) == 0, "haptic_node alice failed")
-    check(h.stop("world_server", 30) == 0, "world_server failed")
+    stop_all(h, "console", "alice", "world_server")
     print(f"view: {state['objects']} objects, {state['meshesLoaded']} meshes from glTF, alice's 5 fingertips within "
           f"{worst:.1e} m of her trace and her palm within {palm_off:.1e} m, {palm_turn:.1e} rad; the board in "
           f"English and Japanese; {state['frames']} frames drawn; screenshot {shot}")
@@ -433,6 +431,15 @@ def page_view(driver):
     return driver.execute_script("return window.handshareView || null;")
 
 
+PROGRAM_OF = {"console": "web_console", "alice": "haptic_node alice"}
+
+
+def stop_all(h, *labels):
+    """Stops each process in turn (SIGTERM); each must exit 0 within 30 s."""
+    for label in labels:
+        check(h.stop(label, 30) == 0, f"{PROGRAM_OF.get(label, label)} failed")
+
+
 def start_view(h, domain, session, port_label="console"):
     """The console on a free port, and the port once it listens."""
     h.start(port_label, "web_console", "--domain", domain, "--session", session, "--listen", "127.0.0.1:0")
@@ -511,9 +518,7 @@ def case_view_bodies(h, domain):
         check(after["owner"] == "alice", f"the page says the ball's owner is {after['owner']!r}, not alice")
     finally:
         driver.quit()
-    check(h.stop("console", 30) == 0, "web_console failed")
-    check(h.stop("alice", 30) == 0, "haptic_node alice failed")
-    check(h.stop("world_server", 30) == 0, "world_server failed")
+    stop_all(h, "console", "alice", "world_server")
     print(f"view_bodies: the lever in Mars' detent ({lever_off:.1e} rad off the scene file's angle), Mars' board; "
           f"the ball lifted {lift * 1e3:.1f} mm, drawn within {body_off * 1e3:.3f} mm and {body_turn:.1e} rad of the "
           f"graphics node; screenshot {shot}")
@@ -560,8 +565,7 @@ def case_view_book(h, domain):
         check(not errors, f"the view logged errors: {errors}")
     finally:
         driver.quit()
-    for label in ("spectator", "console", "alice", "world_server"):
-        check(h.stop(label, 30) == 0, f"{label} failed")
+    stop_all(h, "spectator", "console", "alice", "world_server")
     print(f"view_book: the book open at its first spread with its text in English and Japanese; screenshot {shot}")
 
 
@@ -621,9 +625,7 @@ def case_view_deform(h, domain):
         worst = max(worst, max(abs(a - b) for a, b in zip(vertices["p_WV"][3 * v:3 * v + 3], expected)))
     check(u_max >= 1e-3, f"the tail's largest displacement is {u_max * 1e3:.2f} mm: not a press")
     check(worst <= FIELD_TOLERANCE_M, f"the page draws a vertex of the tail {worst} m from the graphics node's")
-    check(h.stop("console", 30) == 0, "web_console failed")
-    check(h.stop("alice", 30) == 0, "haptic_node alice failed")
-    check(h.stop("world_server", 30) == 0, "world_server failed")
+    stop_all(h, "console", "alice", "world_server")
     print(f"view_deform: the tail pressed {u_max * 1e3:.2f} mm, its {count} vertices drawn within {worst:.1e} m of the "
           f"graphics node's (revision {field['revision']}), in the world server's node order ({order_off:.1e} m)")
 

@@ -180,6 +180,11 @@ StiffeningTable::StiffeningTable(const TetMesh& mesh, const Surface& surface, st
 }
 
 double StiffeningTable::NodeGain(std::int32_t node, const Eigen::Vector3d& u_m, const Eigen::Vector3d& n_out) const noexcept {
+  return NodeGain(node, u_m, n_out, StiffeningTangent(axis_, n_out));
+}
+
+double StiffeningTable::NodeGain(std::int32_t node, const Eigen::Vector3d& u_m, const Eigen::Vector3d& n_out,
+                                 const Eigen::Vector3d& t1) const noexcept {
   if (node < 0 || static_cast<std::size_t>(node) >= gains_.size()) return 1.0;
   const Gains& g = gains_[static_cast<std::size_t>(node)];
   if (!g.covered) return 1.0;
@@ -189,7 +194,6 @@ double StiffeningTable::NodeGain(std::int32_t node, const Eigen::Vector3d& u_m, 
   const Eigen::Vector3d ut = u_m + depth * n_out;
   const double lean = std::min(1.0, ut.norm() / (depth * std::tan(kStiffeningObliqueRad)));
   if (!(lean > 0.0)) return normal;
-  const Eigen::Vector3d t1 = StiffeningTangent(axis_, n_out);
   const double c = ut.dot(t1) / ut.norm();
   const double oblique = c * c * GainAt(g.g_t1, depth) + (1.0 - c * c) * GainAt(g.g_t2, depth);
   return (1.0 - lean) * normal + lean * oblique;
@@ -197,11 +201,12 @@ double StiffeningTable::NodeGain(std::int32_t node, const Eigen::Vector3d& u_m, 
 
 double StiffeningTable::PatchGain(std::span<const ContactInput> inputs, std::span<const Eigen::Vector3d> forces,
                                   const Eigen::Vector3d& n_out, const Eigen::Vector3d& stick_m) const noexcept {
+  const Eigen::Vector3d t1 = StiffeningTangent(axis_, n_out);  // one tangent for the patch
   double num = 0.0, den = 0.0;
   for (std::size_t i = 0; i < inputs.size() && i < forces.size(); ++i) {
     const double push = -forces[i].dot(n_out);
     if (!(push > 0.0)) continue;
-    num += push * NodeGain(inputs[i].node, inputs[i].u_m + stick_m, n_out);
+    num += push * NodeGain(inputs[i].node, inputs[i].u_m + stick_m, n_out, t1);
     den += push;
   }
   return den > 0.0 ? num / den : 1.0;

@@ -81,6 +81,9 @@ class StiffeningTable {
   std::size_t num_samples() const noexcept { return num_samples_; }
 
  private:
+  // NodeGain with the tangent t1 of n_out already found (a patch finds it once for its nodes).
+  double NodeGain(std::int32_t node, const Eigen::Vector3d& u_m, const Eigen::Vector3d& n_out,
+                  const Eigen::Vector3d& t1) const noexcept;
   struct Gains {
     float g_normal[2];
     float g_t1[2];
