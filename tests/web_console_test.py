@@ -46,7 +46,16 @@ the token reach the world server, and session_report finds them, alone, in its q
 table (count, mean, sd per kind and question) and her turn in its turns.
 HANDSHARE_VISIT_SCREENSHOT=FILE saves the page.
 
-usage: web_console_test.py operator|tls|view|view_bodies|view_deform|view_book|visit --bin-dir DIR --domain D --work DIR
+operator_tour: the operator's actions and Table 4 live. A logged world server in the start menu,
+the console, then alice opening the solar system's book (tests/data/book_alice.hand). Commands
+for a visitor nobody get 404; from the page: the session sent to the dinosaurs through the
+solar system's arrow (a control event), then to a world no control of the current one links to
+(an operator command), the tour restarted
+(the start menu again, alice's turn begun afresh) and alice's turn ended (the board thanks her).
+The page's Table 4 by kind of control equals session_report's on the world server's log, which
+has alice's two turns.
+
+usage: web_console_test.py operator|operator_tour|tls|view|view_bodies|view_deform|view_book|visit --bin-dir DIR --domain D --work DIR
 """
 import json
 import math
@@ -758,6 +767,149 @@ def case_visit(h, domain):
           f"her answers from the page in session_report's questionnaire table; screenshot {shot}")
 
 
+def post_json(base, path, body, token):
+    """POST `body` (JSON) to `path` as a script would: (status, body text)."""
+    headers = {"Content-Type": "application/json"}
+    if token is not None:
+        headers["Authorization"] = "Bearer " + token
+    req = urllib.request.Request(base + path, data=json.dumps(body).encode(), headers=headers, method="POST")
+    try:
+        with urllib.request.urlopen(req, timeout=10) as r:
+            return r.status, r.read().decode()
+    except urllib.error.HTTPError as e:
+        return e.code, e.read().decode()
+
+
+def page_table4(driver):
+    """The page's Table 4 as {kind: {column: text}}, read in one script (the page redraws it)."""
+    rows = driver.execute_script(
+        "return Array.from(document.querySelectorAll('#table4 tbody tr'), (r) => "
+        "[r.dataset.kind, Object.fromEntries(Array.from(r.cells).slice(1).map((c) => [c.className.split(' ')[1], c.textContent]))]);")
+    return {kind: cells for kind, cells in rows}
+
+
+def click_and_wait(driver, element_id=None, css=None):
+    """Clicks a button of the page's actions and returns (status, text) of its answer."""
+    result = driver.find_element(By.ID, "goto-result")
+    driver.execute_script("arguments[0].removeAttribute('data-status'); arguments[0].textContent = '';", result)
+    (driver.find_element(By.ID, element_id) if element_id else driver.find_element(By.CSS_SELECTOR, css)).click()
+    status = wait_until("the page's answer", 20, lambda: result.get_attribute("data-status"))
+    return int(status), result.text
+
+
+def case_operator_tour(h, domain):
+    session = f"it-webtour-{os.getpid()}"
+    token = secrets.token_urlsafe(24)
+    token_file = os.path.join(h.work, "token")
+    with open(token_file, "w") as f:
+        f.write(token + "\n")
+    os.chmod(token_file, 0o600)
+    log_db = os.path.join(h.work, "session.sqlite")
+    h.start("world_server", "world_server", "--domain", domain, "--session", session, "--scene", "start_menu",
+            "--log", log_db)
+    h.wait_for_line("world_server", "message board #1", 30)
+    # The console before alice: it hears every control event the world server logs.
+    h.start("console", "web_console", "--domain", domain, "--session", session, "--name", "operator-console",
+            "--listen", "127.0.0.1:0", "--token-file", token_file)
+    h.wait_for_line("console", "listening on http://127.0.0.1:", 30)
+    port = int(re.search(r"listening on http://127\.0\.0\.1:(\d+)", h.log("console")).group(1))
+    base = f"http://127.0.0.1:{port}"
+    h.wait_for_line("console", "world 'start_menu' revision 1", 30)
+    h.wait_for_line("world_server", "member joined: user=operator-console", 30)
+    driver = start_browser(h.work)
+    try:
+        driver.get(base + "/operator")
+        wait_until("the page showing the start menu", 30, lambda: driver.find_element(By.ID, "world").text == "start_menu")
+        # Alice opens the solar system's book and turns its page: book events, and the solar system.
+        h.start("alice", "haptic_node", "--domain", domain, "--session", session, "--user", "alice",
+                "--device", "sim", "--script", os.path.join(DATA, "book_alice.hand"))
+        h.wait_for_line("world_server", "by alice: scene 'solar_system'", 120)
+        wait_until("the page showing the solar system", 20,
+                   lambda: driver.find_element(By.ID, "world").text == "solar_system")
+        wait_until("alice as a visitor with an end-turn button", 20,
+                   lambda: driver.find_elements(By.CSS_SELECTOR, "#visitors button[data-visitor='alice']"))
+
+        # A command needs a visitor who is there; refused, it changes nothing. (The token, a bad
+        # body: web_console_test's WebServerTest; five actions at most at once per address: this
+        # one and the four below.)
+        status, text = post_json(base, "/api/command", {"command": "end_turn", "visitor": "mallory"}, token)
+        check(status == 404, f"ending the turn of nobody got {status} ({text}), not 404")
+
+        # The dinosaurs through the solar system's arrow (a control event of the console's: an
+        # arrow's hit in Table 4), then back to the solar system, which no control of the
+        # dinosaur world goes to: the operator's command.
+        status, text = send_from_page(driver, "dinosaur", token)
+        check(status == 202, f"sending the session to a linked world got {status} ({text}), not 202")
+        h.wait_for_line("world_server", "control arrow_next by operator-console: scene 'dinosaur'", 30)
+        wait_until("the page showing the dinosaurs", 20, lambda: driver.find_element(By.ID, "world").text == "dinosaur")
+        status, text = send_from_page(driver, "solar_system", token)
+        check(status == 202, f"sending the session to an unlinked world got {status} ({text}), not 202")
+        h.wait_for_line("world_server", "operator command go_to_world by operator-console: scene 'solar_system'", 30)
+        wait_until("the page showing the solar system again", 20,
+                   lambda: driver.find_element(By.ID, "world").text == "solar_system")
+
+        # Restart the tour: the start menu and its first message again, alice's turn begun afresh.
+        status, text = click_and_wait(driver, element_id="restart-tour")
+        check(status == 202, f"restarting the tour from the page got {status} ({text}), not 202")
+        h.wait_for_line("world_server", "operator command restart_tour by operator-console: scene 'start_menu'", 30)
+        h.wait_for_line("world_server", "visitor's turn ended: user=alice after", 30)
+        check("(by the operator, operator-console)" in h.log("world_server"),
+              "the world server does not say the operator ended alice's turn at the restart")
+        wait_until("the page back in the start menu with its welcome", 20,
+                   lambda: driver.find_element(By.ID, "world").text == "start_menu" and
+                   "Welcome" in driver.find_element(By.ID, "board-en").text)
+
+        # End alice's turn: the board thanks her, in both languages.
+        status, text = click_and_wait(driver, css="#visitors button[data-visitor='alice']")
+        check(status == 202, f"ending alice's turn from the page got {status} ({text}), not 202")
+        wait_until("the page's board thanking alice", 20,
+                   lambda: "Thank you, alice: your turn is over." in driver.find_element(By.ID, "board-en").text)
+        check("alice" in driver.find_element(By.ID, "board-ja").text, "the Japanese board does not name alice")
+        page = page_table4(driver)
+        driver.execute_script("window.scrollTo(0, document.body.scrollHeight);")
+        driver.save_screenshot(os.path.join(h.work, "operator_tour.png"))
+        errors = [e for e in driver.get_log("browser") if e["level"] == "SEVERE" and "/api/" not in e["message"]]
+        check(not errors, f"the page logged errors: {errors}")
+    finally:
+        driver.quit()
+    check(h.stop("console", 30) == 0, "web_console failed")
+    check(h.stop("alice", 30) == 0, "haptic_node alice failed")
+    check(h.stop("world_server", 30) == 0, "world_server failed")
+    log = h.log("world_server")
+    # The refused requests were never published: the world server took exactly the three sent.
+    check("operator_command in 3;" in log, "the world server took other operator commands than the three sent")
+    check(log.count("(by the operator, operator-console)") == 2,
+          "the world server did not end alice's turn once at the restart and once at the end of her turn")
+
+    # The page's Table 4 is the session log's (session_report's control_kind rows).
+    report_exe = os.path.join(h.bin_dir, "world_server", "session_report")
+    csv = subprocess.run([report_exe, log_db, "--csv"], capture_output=True, text=True, timeout=60).stdout
+    logged = {}
+    for line in csv.splitlines():
+        fields = line.split(",")
+        if len(fields) == 5 and fields[1] == "control_kind":
+            logged.setdefault(fields[2], {})[fields[3]] = fields[4]
+    check(logged, f"session_report has no Table 4 by kind:\n{csv}")
+    check(set(page) == set(logged), f"the page's kinds {sorted(page)} are not the log's {sorted(logged)}")
+    for kind, row in logged.items():
+        for column, field in (("controls", "controls"), ("hits", "hits"), ("misses", "misses"), ("users", "users")):
+            check(page[kind][column] == row[field],
+                  f"{kind} {column}: the page shows {page[kind][column]}, the log {row[field]}")
+        if int(row["error_n"]) > 0:
+            check(abs(float(page[kind]["error"]) - 1000 * float(row["error_mean_m"])) <= 0.05 + 1e-9,
+                  f"{kind} hit error: the page {page[kind]['error']} mm, the log {row['error_mean_m']} m")
+        check(abs(float(page[kind]["misses-per-user"] or 0) - float(row["misses_per_user_mean"])) <= 0.005 + 1e-9,
+              f"{kind} misses per user: the page {page[kind]['misses-per-user']}, the log {row['misses_per_user_mean']}")
+    check(int(logged.get("book", {}).get("hits", 0)) >= 2 and int(logged.get("arrow", {}).get("hits", 0)) == 1,
+          f"alice's book events or the console's arrow are not in the log:\n{csv}")
+    turns = [line for line in csv.splitlines() if ",turn," in line and line.endswith(",alice")]
+    check(len(turns) == 2, f"session_report has {len(turns)} turns of alice, not 2 (the restart's and the end's):\n{csv}")
+    kinds = ", ".join(f"{k} {v['hits']} hits" for k, v in logged.items())
+    print(f"operator tour: Table 4 on the page equals the log's ({kinds}); "
+          f"an unlinked world, the tour's restart and alice's turn's end from the page reached the world server")
+
+
 if __name__ == "__main__":
     sys.exit(run_cases({"operator": case_operator, "tls": case_tls, "view": case_view, "view_bodies": case_view_bodies,
-                        "view_deform": case_view_deform, "view_book": case_view_book, "visit": case_visit}))
+                        "view_deform": case_view_deform, "view_book": case_view_book, "visit": case_visit,
+                        "operator_tour": case_operator_tour}))

@@ -43,6 +43,7 @@ T_CONTROL=handshare/control_state
 T_STATS=handshare/loop_statistics
 T_ROSTER=handshare/session_roster
 T_VISIT=handshare/visit_answers
+T_OPCMD=handshare/operator_command
 ALL_TOPICS="$T_MEMBER $T_SCENE $T_BOARD $T_DEVICE $T_CONTACT $T_OBJECT $T_DEFORM $T_EVENT $T_STATS $T_CONTROL"
 
 # Least privilege, from who creates which writer and reader (grep MakeWriter / MakeReader):
@@ -58,7 +59,7 @@ role_publish() {
 }
 role_subscribe() {
   case "$1" in
-    world_server) echo "$T_MEMBER $T_CONTACT $T_EVENT $T_VISIT" ;;
+    world_server) echo "$T_MEMBER $T_CONTACT $T_EVENT $T_VISIT $T_OPCMD" ;;
     haptic) echo "$T_MEMBER $T_SCENE $T_CONTACT $T_OBJECT $T_CONTROL" ;;
     spectator) echo "$T_MEMBER $T_SCENE $T_BOARD $T_DEVICE $T_OBJECT $T_DEFORM $T_CONTROL $T_ROSTER" ;;  # roster: to rejoin
     audio_guide) echo "$T_BOARD $T_SCENE $T_CONTROL" ;;  # scene, controls: the sound cues

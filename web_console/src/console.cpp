@@ -21,6 +21,7 @@
 #include "handshare/dds/sample_checks.hpp"
 #include "handshare/scene/scene.hpp"
 #include "handshare/session/control_events.hpp"
+#include "handshare/session/operator_command.hpp"
 #include "handshare/session/visit_answers_message.hpp"
 #include "handshare/web_console/console_state.hpp"
 #include "handshare/web_console/gltf_export.hpp"
@@ -163,14 +164,30 @@ int Console::Run() {
   auto object_reader = dds::MakeReader<msg::ObjectState>(participant, dds::topics::kObjectState);
   auto deformation_reader = dds::MakeReader<msg::Deformation>(participant, dds::topics::kDeformation);
   auto control_reader = dds::MakeReader<msg::ControlState>(participant, dds::topics::kControlState);
+  // The control events, for the paper's Table 4 live (counted as session_report counts the log).
+  auto event_reader = dds::MakeReader<msg::ControlEvent>(participant, dds::topics::kControlEvent);
   auto events = dds::MakeWriter<msg::ControlEvent>(participant, dds::topics::kControlEvent);
   auto visits = dds::MakeWriter<msg::VisitAnswers>(participant, dds::topics::kVisitAnswers);
+  auto commands = dds::MakeWriter<msg::OperatorCommand>(participant, dds::topics::kOperatorCommand);
 
   std::mutex mutex;  // guards state (the DDS thread writes it, the web thread reads it)
   ConsoleState state;
+  // Every world's controls' kinds, for Table 4 by kind (a control of a scene file the console
+  // cannot read counts as "unknown", as in a log that does not say).
+  std::map<std::string, scene::ControlType> control_kinds;
+  for (const auto& world : scene::SceneNames()) {
+    try {
+      for (const auto& c : scene::LoadSceneByName(world, scene::DefaultSceneDir(), {.load_meshes = false}).controls) {
+        control_kinds[c.id] = c.type;
+      }
+    } catch (const std::exception& e) {
+      say("cannot read the world '" + world + "' (" + e.what() + "): its controls count as unknown in Table 4");
+    }
+  }
   state.session = session;
   state.console_name = name;
   state.actions_enabled = !token.empty();
+  state.worlds = scene::SceneNames();
 
   WebServerConfig web;
   web.address = listen.address;
@@ -213,6 +230,10 @@ int Console::Run() {
     std::lock_guard lock(mutex);
     return ToJson(state, Clock::now());
   };
+  const auto stamp_ns = [] {
+    return static_cast<std::uint64_t>(
+        std::chrono::duration_cast<std::chrono::nanoseconds>(Clock::now().time_since_epoch()).count());
+  };
   const auto change_world = [&](const WorldRequest& r) -> ActionReply {
     WorldRoute route;
     std::string from;
@@ -227,8 +248,12 @@ int Console::Run() {
         if (std::find(names.begin(), names.end(), r.world) == names.end()) {
           return {404, ErrorJson("no world '" + r.world + "'")};
         }
-        return {409, ErrorJson("'" + r.world + "' is not linked from '" + from + "' (it links to " +
-                               Join(state.routes) + ")")};
+        // No control of this world goes there: the operator's own command does (the world
+        // server takes it only from the console's participant).
+        commands.Write(session::ToMessage({controls::OperatorAction::kGoToWorld, r.world, ""}, session, name, stamp_ns()));
+        say("the operator sends the session from '" + from + "' to '" + r.world + "' (operator command: no control of '" +
+            from + "' links it)");
+        return {202, nlohmann::json{{"world", r.world}, {"command", "go_to_world"}, {"from", from}}.dump()};
       }
       route = *found;
     }
@@ -239,8 +264,7 @@ int Console::Run() {
     e.kind(session::ToMessage(route.kind));
     e.index(route.index);
     e.value(route.index >= 0 ? route.index : 0.0);
-    e.stamp_ns(static_cast<std::uint64_t>(
-        std::chrono::duration_cast<std::chrono::nanoseconds>(Clock::now().time_since_epoch()).count()));
+    e.stamp_ns(stamp_ns());
     events.Write(e);
     say("the operator sends the session from '" + from + "' to '" + r.world + "' (control " + route.control_id + ")");
     return {202, nlohmann::json{{"world", r.world}, {"control", route.control_id}, {"from", from}}.dump()};
@@ -256,17 +280,34 @@ int Console::Run() {
     for (const auto& kind : answers.scores) {
       for (auto score : kind) answered += score > 0 ? 1 : 0;
     }
-    visits.Write(session::ToMessage(answers, session, name,
-                                    static_cast<std::uint64_t>(std::chrono::duration_cast<std::chrono::nanoseconds>(
-                                                                   Clock::now().time_since_epoch())
-                                                                   .count())));
+    visits.Write(session::ToMessage(answers, session, name, stamp_ns()));
     say("questionnaire of visitor " + answers.visitor + " sent to the world server (" + std::to_string(answered) +
         " answers)");
     return {202, nlohmann::json{{"visitor", answers.visitor}, {"answers", answered}}.dump()};
   };
+  // The operator's commands no hand can give: the tour from its first world again, a
+  // visitor's turn ended now. The world server says what it did on the board and in its log.
+  const auto send_command = [&](const controls::OperatorCommand& c) -> ActionReply {
+    {
+      std::lock_guard lock(mutex);
+      if (!state.world.known) return {503, ErrorJson("no world server heard yet: the command would be lost")};
+      if (c.action == controls::OperatorAction::kEndTurn &&
+          std::none_of(state.members.begin(), state.members.end(),
+                       [&](const auto& m) { return m.second.user == c.visitor && m.second.kind == "haptic"; })) {
+        return {404, ErrorJson("no visitor '" + c.visitor + "' in the session")};
+      }
+    }
+    commands.Write(session::ToMessage(c, session, name, stamp_ns()));
+    say(std::string("operator command ") + controls::ToString(c.action) +
+        (c.action == controls::OperatorAction::kEndTurn ? " (visitor " + c.visitor + ")" : "") +
+        " sent to the world server");
+    nlohmann::json reply{{"command", controls::ToString(c.action)}};
+    if (c.action == controls::OperatorAction::kEndTurn) reply["visitor"] = c.visitor;
+    return {202, reply.dump()};
+  };
   std::optional<WebServer> server_or;
   try {
-    server_or.emplace(web, state_json, change_world, send_visit);
+    server_or.emplace(web, state_json, change_world, send_visit, send_command);
   } catch (...) {
     std::filesystem::remove_all(glb_dir);
     throw;
@@ -363,6 +404,22 @@ int Console::Run() {
       std::snprintf(line, sizeof line, "world '%s' revision %u (server tick %.0f Hz)", scene_name.c_str(),
                     scene.revision(), static_cast<double>(scene.tick_Hz()));
       say(std::string(line) + (new_world ? ": links to " + Join(state.routes) : ""));
+      changed = true;
+    }
+    msg::ControlEvent event;
+    while (event_reader.TakeNext(event, meta)) {
+      if (!meta.valid_data ||
+          !dropped.Accept("control_event", sender(meta), dds::CheckControlEvent(event, session), say)) {
+        continue;
+      }
+      const auto kind = session::FromMessage(event.kind());
+      if (!kind || *kind == controls::EventKind::kMoving) continue;  // motion: for the screens, not the table
+      const std::string id = event.control_id().to_string();
+      const auto k = control_kinds.find(id);
+      state.table4.Add(id, k == control_kinds.end() ? std::nullopt : std::optional<scene::ControlType>(k->second), *kind,
+                       event.user().to_string(),
+                       std::isfinite(event.error_m()) ? std::optional<double>(event.error_m()) : std::nullopt);
+      ++state.control_events;
       changed = true;
     }
     // Object states and deformations name objects of a world: taken once a world is known, after

@@ -173,6 +173,19 @@ std::string ToJson(const ConsoleState& s, std::chrono::steady_clock::time_point 
     routes.push_back({{"world", r.world}, {"control", r.control_id}, {"event", KindName(r.kind)}, {"index", r.index}});
   }
   j["routes"] = std::move(routes);
+  j["worlds"] = s.worlds;
+  json table4 = json::array();
+  const auto summary = [](const controls::Summary& x) { return json{{"n", x.n}, {"mean", x.mean}, {"sd", x.sd}}; };
+  for (const auto& r : s.table4.Rows()) {
+    table4.push_back({{"kind", r.kind},
+                      {"controls", r.controls},
+                      {"hits", r.tally.hits()},
+                      {"misses", r.tally.misses()},
+                      {"released", r.tally.released()},
+                      {"error_m", summary(r.tally.error_m())},
+                      {"misses_per_user", summary(r.tally.misses_per_user())}});
+  }
+  j["table4"] = {{"control_events", s.control_events}, {"kinds", std::move(table4)}};
   json boards = json::object();
   for (const auto& [language, b] : s.boards) {
     boards[language] = {{"message_id", b.message_id}, {"text", b.text}, {"next_action", b.next_action}};

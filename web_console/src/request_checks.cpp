@@ -155,6 +155,48 @@ ParsedVisitRequest ParseVisitRequest(std::string_view body) {
   return out;
 }
 
+ParsedCommandRequest ParseCommandRequest(std::string_view body) {
+  ParsedCommandRequest out;
+  const auto parsed = ParseObject(body, out.error);
+  if (!parsed) return out;
+  const nlohmann::json& j = *parsed;
+  for (const auto& [key, value] : j.items()) {
+    if (key != "command" && key != "visitor") {
+      out.error = "unknown field '" + key.substr(0, 64) + "' (the fields are 'command' and, to end a turn, 'visitor')";
+      return out;
+    }
+  }
+  if (!j.contains("command") || !j["command"].is_string()) {
+    out.error = "field 'command' missing or not a string";
+    return out;
+  }
+  const std::string command = j["command"].get<std::string>();
+  controls::OperatorCommand c;
+  if (command == "restart_tour") {
+    if (j.contains("visitor")) {
+      out.error = "restart_tour takes no 'visitor'";
+      return out;
+    }
+    c.action = controls::OperatorAction::kRestartTour;
+  } else if (command == "end_turn") {
+    if (!j.contains("visitor") || !j["visitor"].is_string()) {
+      out.error = "end_turn: field 'visitor' missing or not a string";
+      return out;
+    }
+    c.visitor = j["visitor"].get<std::string>();
+    if (c.visitor.empty() || c.visitor.size() > 64 || !std::all_of(c.visitor.begin(), c.visitor.end(), IsUserChar)) {
+      out.error = "end_turn: field 'visitor' is not 1 to 64 of A-Z, a-z, 0-9, _, ., -";
+      return out;
+    }
+    c.action = controls::OperatorAction::kEndTurn;
+  } else {
+    out.error = "command '" + command.substr(0, 64) + "' is not restart_tour or end_turn";
+    return out;
+  }
+  out.command = std::move(c);
+  return out;
+}
+
 bool OriginAllowed(std::optional<std::string_view> origin, std::string_view host, bool tls) {
   if (!origin) return true;
   if (host.empty()) return false;

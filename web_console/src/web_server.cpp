@@ -92,7 +92,7 @@ class Viewer {
 
 class WebServer::Impl {
  public:
-  Impl(WebServerConfig config, StateSource state, WorldHandler world, VisitHandler visit);
+  Impl(WebServerConfig config, StateSource state, WorldHandler world, VisitHandler visit, CommandHandler command);
   ~Impl();
 
   struct File {
@@ -105,6 +105,7 @@ class WebServer::Impl {
   StateSource state_;
   WorldHandler world_;
   VisitHandler visit_;
+  CommandHandler command_;
   std::optional<ssl::context> tls_;
   tcp::acceptor acceptor_{ioc_};
   std::uint16_t port_ = 0;
@@ -330,11 +331,13 @@ class HttpSession : public std::enable_shared_from_this<HttpSession<Stream>> {
 
 }  // namespace
 
-WebServer::Impl::Impl(WebServerConfig config, StateSource state, WorldHandler world, VisitHandler visit)
+WebServer::Impl::Impl(WebServerConfig config, StateSource state, WorldHandler world, VisitHandler visit,
+                      CommandHandler command)
     : config_(std::move(config)),
       state_(std::move(state)),
       world_(std::move(world)),
       visit_(std::move(visit)),
+      command_(std::move(command)),
       requests_(config_.requests_per_s, 2.0 * config_.requests_per_s),
       actions_(config_.actions_per_min / 60.0, 5.0) {
   for (const auto& [url, path] : config_.files) {
@@ -426,7 +429,7 @@ Response WebServer::Impl::Respond(const Request& req, const std::string& remote,
     return Reply(req, http::status::uri_too_long, ErrorJson("target too long"), "application/json");
   }
   const std::string path(target.substr(0, target.find('?')));
-  if (path == "/api/world" || (path == "/api/visit" && visit_)) {
+  if (path == "/api/world" || (path == "/api/visit" && visit_) || (path == "/api/command" && command_)) {
     if (req.method() != http::verb::post) {
       Response res = Reply(req, http::status::method_not_allowed, ErrorJson("POST only"), "application/json");
       res.set(http::field::allow, "POST");
@@ -481,6 +484,10 @@ Response WebServer::Impl::Act(const Request& req, const std::string& remote, boo
     const ParsedVisitRequest parsed = ParseVisitRequest(req.body());
     if (!parsed.answers) return Reply(req, http::status::bad_request, ErrorJson(parsed.error), "application/json");
     reply = visit_(*parsed.answers);
+  } else if (path == "/api/command") {
+    const ParsedCommandRequest parsed = ParseCommandRequest(req.body());
+    if (!parsed.command) return Reply(req, http::status::bad_request, ErrorJson(parsed.error), "application/json");
+    reply = command_(*parsed.command);
   } else {
     const ParsedWorldRequest parsed = ParseWorldRequest(req.body());
     if (!parsed.request) return Reply(req, http::status::bad_request, ErrorJson(parsed.error), "application/json");
@@ -489,8 +496,10 @@ Response WebServer::Impl::Act(const Request& req, const std::string& remote, boo
   return Reply(req, static_cast<http::status>(reply.status), reply.json, "application/json");
 }
 
-WebServer::WebServer(WebServerConfig config, StateSource state, WorldHandler world, VisitHandler visit)
-    : impl_(std::make_unique<Impl>(std::move(config), std::move(state), std::move(world), std::move(visit))) {}
+WebServer::WebServer(WebServerConfig config, StateSource state, WorldHandler world, VisitHandler visit,
+                     CommandHandler command)
+    : impl_(std::make_unique<Impl>(std::move(config), std::move(state), std::move(world), std::move(visit),
+                                   std::move(command))) {}
 
 WebServer::~WebServer() = default;
 

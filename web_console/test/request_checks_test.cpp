@@ -107,6 +107,29 @@ TEST(ParseWorldRequest, AcceptsExactlyOneWorldName) {
   EXPECT_FALSE(ParseWorldRequest(std::string(kMaxActionBodyBytes + 1, ' ')).request);
 }
 
+// The operator's commands other than a world change: exactly restart_tour, or end_turn with a
+// visitor's name; anything else says what is wrong.
+TEST(ParseCommandRequest, AcceptsRestartingTheTourAndEndingANamedVisitorsTurn) {
+  const auto restart = ParseCommandRequest(R"({"command": "restart_tour"})");
+  ASSERT_TRUE(restart.command) << restart.error;
+  EXPECT_EQ(restart.command->action, controls::OperatorAction::kRestartTour);
+  const auto end = ParseCommandRequest(R"({"command": "end_turn", "visitor": "alice.b-2"})");
+  ASSERT_TRUE(end.command) << end.error;
+  EXPECT_EQ(end.command->action, controls::OperatorAction::kEndTurn);
+  EXPECT_EQ(end.command->visitor, "alice.b-2");
+  for (const char* bad : {"", "[]", "{}", R"({"command": 1})", R"({"command": "reboot"})",
+                          R"({"command": "go_to_world", "world": "dinosaur"})", R"({"command": "end_turn"})",
+                          R"({"command": "end_turn", "visitor": ""})", R"({"command": "end_turn", "visitor": "al ice"})",
+                          R"({"command": "end_turn", "visitor": 7})", R"({"command": "restart_tour", "visitor": "alice"})",
+                          R"({"command": "restart_tour", "extra": 1})"}) {
+    const auto p = ParseCommandRequest(bad);
+    EXPECT_FALSE(p.command) << bad;
+    EXPECT_FALSE(p.error.empty()) << bad;
+  }
+  EXPECT_EQ(ParseCommandRequest(R"({"command": "reboot"})").error, "command 'reboot' is not restart_tour or end_turn");
+  EXPECT_FALSE(ParseCommandRequest(R"({"command": "end_turn", "visitor": ")" + std::string(65, 'a') + "\"}").command);
+}
+
 TEST(OriginAllowed, SameOriginOrNone) {
   EXPECT_TRUE(OriginAllowed(std::nullopt, "127.0.0.1:8080", false));
   EXPECT_TRUE(OriginAllowed("http://127.0.0.1:8080", "127.0.0.1:8080", false));

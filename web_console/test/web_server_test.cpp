@@ -53,6 +53,11 @@ class WebServerTest : public ::testing::Test {
           ++visits_;
           last_visit_ = a;
           return ActionReply{202, R"({"visitor":")" + a.visitor + "\"}"};
+        },
+        [this](const controls::OperatorCommand& command) {
+          ++commands_;
+          last_command_ = command;
+          return ActionReply{202, R"({"command":"x"})"};
         });
   }
   http::response<http::string_body> PostVisit(const std::string& body, const std::string& token,
@@ -90,7 +95,39 @@ class WebServerTest : public ::testing::Test {
   std::string last_world_;
   std::atomic<int> visits_{0};
   controls::VisitAnswers last_visit_;
+  std::atomic<int> commands_{0};
+  controls::OperatorCommand last_command_;
 };
+
+// The operator's commands (POST /api/command): the token, the Origin, the Content-Type and a
+// body of the exact schema, or a 4xx and nothing reaches the session; the shared rate.
+TEST_F(WebServerTest, AnOperatorsCommandNeedsTheTokenAndAWellFormedBody) {
+  Start(kToken, /*actions_per_min=*/6e6);
+  const auto post = [this](const std::string& body, const std::string& token, const std::string& type = "application/json") {
+    std::map<std::string, std::string> h{{"Content-Type", type}};
+    if (!token.empty()) h["Authorization"] = "Bearer " + token;
+    return Request(http::verb::post, "/api/command", body, h);
+  };
+  const std::string body = R"({"command":"end_turn","visitor":"alice"})";
+  EXPECT_EQ(post(body, "").result_int(), 401u);
+  EXPECT_EQ(post(body, "0123456789abcdef-wrong").result_int(), 401u);
+  EXPECT_EQ(post(body, kToken, "text/plain").result_int(), 415u);
+  EXPECT_EQ(Request(http::verb::post, "/api/command", body,
+                    {{"Content-Type", "application/json"}, {"Authorization", std::string("Bearer ") + kToken},
+                     {"Origin", "http://evil.example"}})
+                .result_int(),
+            403u);
+  EXPECT_EQ(post(R"({"command":"reboot"})", kToken).result_int(), 400u);
+  EXPECT_EQ(Request(http::verb::get, "/api/command").result_int(), 405u);
+  EXPECT_EQ(commands_, 0);
+  const auto ok = post(body, kToken);
+  EXPECT_EQ(ok.result_int(), 202u) << ok.body();
+  EXPECT_EQ(commands_, 1);
+  EXPECT_EQ(last_command_.action, controls::OperatorAction::kEndTurn);
+  EXPECT_EQ(last_command_.visitor, "alice");
+  EXPECT_EQ(actions_, 0);
+  EXPECT_EQ(visits_, 0);
+}
 
 TEST_F(WebServerTest, ServesItsPagesWithAStrictContentSecurityPolicy) {
   Start();

@@ -1,7 +1,7 @@
 // The operator's page: the console pushes the whole state over a WebSocket (at most 5 times a
 // second); this script shows it. Text from the session goes in with textContent only, never as
-// markup. The one action, a world change, is a POST with the token the operator types (kept in
-// the page only, never stored).
+// markup. The actions (a world change, restarting the tour, ending a visitor's turn) are POSTs
+// with the token the operator types (kept in the page only, never stored).
 "use strict";
 
 const $ = (id) => document.getElementById(id);
@@ -44,17 +44,73 @@ function showStations(stations) {
   }
 }
 
-function showRoutes(routes) {
-  const key = JSON.stringify(routes);
+// The worlds the current one links to first (the console actuates the control that goes
+// there, as a hand would), then every other world but the current one (an operator's command).
+function showRoutes(routes, worlds, current) {
+  const key = JSON.stringify([routes, worlds, current]);
   if (key === lastRoutes) return;  // keep the operator's choice while the world stays
   lastRoutes = key;
   const select = $("goto-world");
   select.replaceChildren();
+  const linked = new Set();
   for (const r of routes) {
     const option = document.createElement("option");
     option.value = r.world;
     option.textContent = r.world + " (" + r.control + ")";
     select.appendChild(option);
+    linked.add(r.world);
+  }
+  for (const w of worlds || []) {
+    if (linked.has(w) || w === current) continue;
+    const option = document.createElement("option");
+    option.value = w;
+    option.textContent = w + " (operator command)";
+    select.appendChild(option);
+  }
+}
+
+function mm(summary) {
+  return summary && summary.n > 0 ? (summary.mean * 1000).toFixed(1) : "";
+}
+
+function showTable4(table) {
+  const body = $("table4").querySelector("tbody");
+  body.replaceChildren();
+  for (const k of table.kinds) {
+    const tr = document.createElement("tr");
+    tr.dataset.kind = k.kind;
+    cell(tr, k.kind);
+    cell(tr, String(k.controls), "num controls");
+    cell(tr, String(k.hits), "num hits");
+    cell(tr, String(k.misses), "num misses");
+    cell(tr, mm(k.error_m), "num error");
+    cell(tr, k.error_m.n > 1 ? (k.error_m.sd * 1000).toFixed(1) : "", "num error-sd");
+    cell(tr, String(k.misses_per_user.n), "num users");
+    cell(tr, fixed(k.misses_per_user.mean, 2), "num misses-per-user");
+    cell(tr, fixed(k.misses_per_user.sd, 2), "num misses-per-user-sd");
+    body.appendChild(tr);
+  }
+  text("table4-note", table.control_events + " control events since the console started");
+}
+
+// Every visitor (a haptic member) with a button that ends their turn now.
+function showVisitors(members, enabled) {
+  const list = $("visitors");
+  const visitors = members.filter((m) => m.kind === "haptic").map((m) => m.user);
+  const key = JSON.stringify([visitors, enabled]);
+  if (list.dataset.key === key) return;
+  list.dataset.key = key;
+  list.replaceChildren();
+  for (const user of visitors) {
+    const li = document.createElement("li");
+    const button = document.createElement("button");
+    button.type = "button";
+    button.dataset.visitor = user;
+    button.textContent = "End " + user + "'s turn";
+    button.disabled = !enabled;
+    button.addEventListener("click", () => post("/api/command", {command: "end_turn", visitor: user}));
+    li.appendChild(button);
+    list.appendChild(li);
   }
 }
 
@@ -79,35 +135,44 @@ function show(state) {
     li.textContent = m.user + " (" + m.kind + (m.device ? ", " + m.device : "") + ")";
     members.appendChild(li);
   }
-  showRoutes(state.routes);
+  showRoutes(state.routes, state.worlds, w ? w.scene : "");
+  if (state.table4) showTable4(state.table4);
+  showVisitors(state.members, state.console.actions_enabled);
   $("goto-send").disabled = !state.console.actions_enabled;
+  $("restart-tour").disabled = !state.console.actions_enabled;
   text("console", "console " + state.console.name + ": " + state.console.viewers + " viewer(s), " +
        state.console.viewers_dropped + " dropped; " + state.console.samples_refused + " samples refused" +
        (state.console.actions_enabled ? "" : "; actions are off (no token file)"));
 }
 
 
-async function sendWorld(event) {
-  event.preventDefault();
-  const world = $("goto-world").value;
+// An action: a POST with the token the operator typed; the answer goes in the status line.
+async function post(path, request) {
   const token = $("goto-token").value;
-  text("goto-result", "sending " + world + " ...");
+  text("goto-result", "sending " + JSON.stringify(request) + " ...");
   try {
-    const response = await fetch("/api/world", {
+    const response = await fetch(path, {
       method: "POST",
       headers: {"Content-Type": "application/json", "Authorization": "Bearer " + token},
-      body: JSON.stringify({world: world}),
+      body: JSON.stringify(request),
       cache: "no-store",
     });
     const body = await response.json().catch(() => ({}));
     const result = $("goto-result");
     result.dataset.status = String(response.status);
-    result.textContent = response.status + ": " +
-        (response.ok ? "sent to " + body.world + " (control " + body.control + ")" : (body.error || response.statusText));
+    let done = "";
+    if (body.world) done = "sent to " + body.world + (body.control ? " (control " + body.control + ")" : " (operator command)");
+    else if (body.command === "restart_tour") done = "the tour restarts";
+    else if (body.command === "end_turn") done = body.visitor + "'s turn ends";
+    result.textContent = response.status + ": " + (response.ok ? done : (body.error || response.statusText));
   } catch (e) {
     text("goto-result", "failed: " + e);
   }
 }
 
-$("goto").addEventListener("submit", sendWorld);
+$("goto").addEventListener("submit", (event) => {
+  event.preventDefault();
+  post("/api/world", {world: $("goto-world").value});
+});
+$("restart-tour").addEventListener("click", () => post("/api/command", {command: "restart_tour"}));
 connectState(show);

@@ -44,9 +44,14 @@ std::string Line(const MessageSaid& e) {
 }
 
 std::string Line(const TurnEnded& e) {
-  char line[200];
-  std::snprintf(line, sizeof line, "visitor's turn ended: user=%s after %.3f s (--visit-minutes %g)",
-                e.member.user.c_str(), std::chrono::duration<double>(e.turn).count(), e.minutes);
+  char line[300];
+  if (e.ended_by.empty()) {
+    std::snprintf(line, sizeof line, "visitor's turn ended: user=%s after %.3f s (--visit-minutes %g)",
+                  e.member.user.c_str(), std::chrono::duration<double>(e.turn).count(), e.minutes);
+  } else {
+    std::snprintf(line, sizeof line, "visitor's turn ended: user=%s after %.3f s (by the operator, %s)",
+                  e.member.user.c_str(), std::chrono::duration<double>(e.turn).count(), e.ended_by.c_str());
+  }
   return line;
 }
 

@@ -16,6 +16,20 @@ const scene::ControlSpec* FindControl(const scene::Scene& scene, const std::stri
 
 scene::Scene LoadWorld(const std::string& name) { return scene::LoadSceneByName(name); }
 
+ControlOutcome GoToWorld(scene::Scene& scene, const std::string& world, const std::string& by, const SceneLoader& load) {
+  ControlOutcome out;
+  try {
+    scene = load(world);
+  } catch (const std::exception& e) {
+    out.notes.push_back(by + ": cannot go to '" + world + "': " + e.what());
+    return out;
+  }
+  out.world_changed = out.revised = true;
+  if (!scene.messages.empty()) out.boards.push_back(scene.messages);
+  out.notes.push_back(by + ": scene '" + scene.name + "'");
+  return out;
+}
+
 const scene::Action* ActionOf(const scene::Scene& scene, const ControlInput& input) {
   const scene::ControlSpec* spec = FindControl(scene, input.control_id);
   if (spec == nullptr) return nullptr;  // a control of a world already left
@@ -31,15 +45,10 @@ ControlOutcome ApplyControlAction(scene::Scene& scene, const ControlInput& input
   const scene::Action action = *found;
   const std::string by = "control " + input.control_id + " by " + input.user;
   if (!action.goto_scene.empty()) {
-    try {
-      scene = load(action.goto_scene);
-    } catch (const std::exception& e) {
-      out.notes.push_back(by + ": cannot go to '" + action.goto_scene + "': " + e.what());
-      return out;
-    }
-    out.world_changed = out.revised = true;
-    if (!scene.messages.empty()) out.boards.push_back(scene.messages);
-    out.notes.push_back(by + ": scene '" + scene.name + "'");
+    ControlOutcome went = GoToWorld(scene, action.goto_scene, by, load);
+    went.taken = true;
+    if (!went.world_changed) return went;
+    out = std::move(went);
   }
   if (action.set_gravity) {
     scene.gravity_W_m_per_s2 = action.gravity_W_m_per_s2;

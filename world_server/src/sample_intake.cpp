@@ -2,6 +2,7 @@
 
 #include "handshare/common/clock.hpp"
 #include "handshare/dds/sample_checks.hpp"
+#include "handshare/session/operator_command.hpp"
 #include "handshare/session/visit_answers_message.hpp"
 #include "server_conversions.hpp"
 
@@ -12,7 +13,8 @@ SampleIntake::SampleIntake(dds::Participant& participant, std::string session)
       member_reader_(dds::MakeReader<msg::MemberInfo>(participant, dds::topics::kMemberInfo)),
       contact_reader_(dds::MakeReader<msg::ContactSet>(participant, dds::topics::kContactSet)),
       control_reader_(dds::MakeReader<msg::ControlEvent>(participant, dds::topics::kControlEvent)),
-      visit_reader_(dds::MakeReader<msg::VisitAnswers>(participant, dds::topics::kVisitAnswers)) {}
+      visit_reader_(dds::MakeReader<msg::VisitAnswers>(participant, dds::topics::kVisitAnswers)),
+      command_reader_(dds::MakeReader<msg::OperatorCommand>(participant, dds::topics::kOperatorCommand)) {}
 
 void SampleIntake::Take(TickInputs& in) {
   in.clear();
@@ -20,6 +22,7 @@ void SampleIntake::Take(TickInputs& in) {
   TakeControlEvents(in);
   TakeContactSets(in);
   TakeVisitAnswers(in);
+  TakeOperatorCommands(in);
 }
 
 void SampleIntake::TakeMembers(TickInputs& in) {
@@ -88,6 +91,24 @@ void SampleIntake::TakeVisitAnswers(TickInputs& in) {
     v.refused = dds::CheckVisitAnswers(sample, session_);
     if (v.refused.empty()) v.answers = session::FromMessage(sample);
     in.visits.push_back(std::move(v));
+  }
+}
+
+void SampleIntake::TakeOperatorCommands(TickInputs& in) {
+  msg::OperatorCommand sample;
+  dds::SampleMeta meta;
+  while (command_reader_.TakeNext(sample, meta)) {
+    if (!meta.valid_data) continue;
+    OperatorCommandInput c;
+    c.user = sample.user().to_string();
+    c.writer = meta.writer;
+    c.refused = dds::CheckOperatorCommand(sample, session_);
+    if (c.refused.empty()) {
+      const auto command = session::FromMessage(sample);
+      if (!command) continue;  // CheckOperatorCommand refused every kind FromMessage cannot map
+      c.command = *command;
+    }
+    in.commands.push_back(std::move(c));
   }
 }
 

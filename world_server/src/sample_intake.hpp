@@ -15,7 +15,7 @@ class SampleIntake {
   SampleIntake(dds::Participant& participant, std::string session);
 
   /// Replaces `in` with what the readers hold now (member samples, then their writers' changes,
-  /// control events, contact sets).
+  /// control events, contact sets, questionnaires, operator commands).
   void Take(TickInputs& in);
 
  private:
@@ -23,12 +23,14 @@ class SampleIntake {
   void TakeControlEvents(TickInputs& in);
   void TakeContactSets(TickInputs& in);
   void TakeVisitAnswers(TickInputs& in);
+  void TakeOperatorCommands(TickInputs& in);
 
   std::string session_;
   dds::Reader<msg::MemberInfo> member_reader_;
   dds::Reader<msg::ContactSet> contact_reader_;
   dds::Reader<msg::ControlEvent> control_reader_;
   dds::Reader<msg::VisitAnswers> visit_reader_;
+  dds::Reader<msg::OperatorCommand> command_reader_;
 };
 
 }  // namespace handshare::server

@@ -23,6 +23,7 @@ ServerSession::ServerSession(ServerSessionConfig config, scene::Scene scene, con
     : config_(std::move(config)),
       clock_(resume ? common::SessionClock::FromEpoch(resume->state.epoch_unix_ns) : common::SessionClock()),
       scene_(ResumedScene(std::move(scene), resume, config_.load)),
+      first_world_(scene_.name),
       objects_(config_.session, config_.objects, clock_),
       turns_(std::chrono::duration_cast<Clock::duration>(config_.visit_turn)) {
   if (resume == nullptr) return;
@@ -65,6 +66,7 @@ ServerSession::Events ServerSession::Tick(const TickInputs& in, Clock::time_poin
   TakeContactSets(in, now, out);
   StepObjects(now, dt_s, out);
   TakeVisitAnswers(in, out);
+  TakeOperatorCommands(in, now, out);
   EndTurns(now, out);
   return out;
 }
@@ -139,20 +141,23 @@ void ServerSession::TakeControlEvents(const TickInputs& in, Events& out) {
     if (const ControlStateRecord* changed = UpdateControlState(control_states_, e.input)) {
       out.push_back(ControlStateChanged{*changed, /*settled=*/true});
     }
-    const ControlOutcome outcome = ApplyControlAction(scene_, e.input, config_.load);
-    if (outcome.world_changed) ResetControlStates(nullptr, out);
-    if (outcome.world_changed || outcome.gravity_changed) objects_.SetScene(scene_);
-    if (outcome.revised) ReviseScene(out);
-    for (const auto& note : outcome.notes) {
-      out.push_back(LineSaid{outcome.revised ? note + " (revision " + std::to_string(revision_) + ")" : note});
-    }
-    if (outcome.revised) out.push_back(SceneShown{scene_.name, scene_.title});
-    for (const auto& board : outcome.boards) ShowMessage(board, out);
+    ApplyOutcome(ApplyControlAction(scene_, e.input, config_.load), out);
     applied = true;
   }
   // A control event and what it did are committed before the tick goes on (a few a minute):
   // a server killed right after still leaves them in the log, and a restart resumes from them.
   if (applied) out.push_back(SessionCheckpoint{});
+}
+
+void ServerSession::ApplyOutcome(const ControlOutcome& outcome, Events& out) {
+  if (outcome.world_changed) ResetControlStates(nullptr, out);
+  if (outcome.world_changed || outcome.gravity_changed) objects_.SetScene(scene_);
+  if (outcome.revised) ReviseScene(out);
+  for (const auto& note : outcome.notes) {
+    out.push_back(LineSaid{outcome.revised ? note + " (revision " + std::to_string(revision_) + ")" : note});
+  }
+  if (outcome.revised) out.push_back(SceneShown{scene_.name, scene_.title});
+  for (const auto& board : outcome.boards) ShowMessage(board, out);
 }
 
 void ServerSession::TakeContactSets(const TickInputs& in, Clock::time_point now, Events& out) {
@@ -191,10 +196,51 @@ void ServerSession::EndTurns(Clock::time_point now, Events& out) {
   const auto ended = turns_.TakeEnded(now);
   const double minutes = std::chrono::duration<double, std::ratio<60>>(config_.visit_turn).count();
   for (const auto& e : ended) {
-    out.push_back(TurnEnded{e.member, std::chrono::duration_cast<std::chrono::nanoseconds>(e.turn), minutes});
+    out.push_back(TurnEnded{e.member, std::chrono::duration_cast<std::chrono::nanoseconds>(e.turn), minutes, ""});
     ShowMessage(TurnOverMessages(e.member.user, minutes), out);
   }
   if (!ended.empty()) out.push_back(SessionCheckpoint{});
+}
+
+void ServerSession::TakeOperatorCommands(const TickInputs& in, Clock::time_point now, Events& out) {
+  bool applied = false;
+  const double minutes = std::chrono::duration<double, std::ratio<60>>(config_.visit_turn).count();
+  for (const OperatorCommandInput& c : in.commands) {
+    if (!Accepted("operator_command", c.user, c.refused, out) ||
+        !Accepted("operator_command", c.user, members_.CheckAuthor(c.user, c.writer), out)) {
+      continue;
+    }
+    const std::string by = std::string("operator command ") + controls::ToString(c.command.action) + " by " + c.user;
+    switch (c.command.action) {
+      case controls::OperatorAction::kGoToWorld:
+        ApplyOutcome(GoToWorld(scene_, c.command.world, by, config_.load), out);
+        break;
+      case controls::OperatorAction::kRestartTour: {
+        // The tour's first world afresh (also when the session is in it: its controls at rest
+        // and its first message again), and every present visitor's turn from now.
+        const std::string start = config_.tour_start.empty() ? first_world_ : config_.tour_start;
+        ApplyOutcome(GoToWorld(scene_, start, by, config_.load), out);
+        for (const auto& e : turns_.Restart(now)) {
+          out.push_back(TurnEnded{e.member, std::chrono::duration_cast<std::chrono::nanoseconds>(e.turn), minutes, c.user});
+        }
+        break;
+      }
+      case controls::OperatorAction::kEndTurn: {
+        const auto ended = turns_.EndNow(c.command.visitor, now);
+        if (!ended) {
+          out.push_back(LineSaid{by + ": " + c.command.visitor + " has no turn to end (not a present visitor, or it ended)"});
+          continue;
+        }
+        out.push_back(TurnEnded{ended->member, std::chrono::duration_cast<std::chrono::nanoseconds>(ended->turn), minutes,
+                                c.user});
+        ShowMessage(TurnOverMessages(ended->member.user, std::nullopt), out);
+        break;
+      }
+    }
+    applied = true;
+  }
+  // Like a control event's action: committed before the tick goes on.
+  if (applied) out.push_back(SessionCheckpoint{});
 }
 
 void ServerSession::ResetControlStates(const std::vector<ControlPlace>* places, Events& out) {

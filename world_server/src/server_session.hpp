@@ -15,6 +15,7 @@
 #include "handshare/dds/messages.hpp"
 #include "handshare/dds/sample_checks.hpp"
 #include "handshare/scene/scene.hpp"
+#include "handshare/controls/operator_command.hpp"
 #include "handshare/world_server/control_actions.hpp"
 #include "handshare/world_server/member_registry.hpp"
 #include "handshare/world_server/object_authority.hpp"
@@ -70,6 +71,14 @@ struct VisitAnswersInput {
   controls::VisitAnswers answers;  ///< accepted samples only
 };
 
+/// An operator's command as taken (valid data only).
+struct OperatorCommandInput {
+  std::string user;     ///< who sent it (a console's member name)
+  InstanceKey writer{};
+  std::string refused;  ///< why the sample check refused it ("" accepted)
+  controls::OperatorCommand command;  ///< accepted samples only
+};
+
 /// What one tick takes, in the order it takes it.
 struct TickInputs {
   std::vector<MemberInput> members;
@@ -77,7 +86,9 @@ struct TickInputs {
   std::vector<ControlEventInput> controls;
   std::vector<ContactSetInput> contacts;
   std::vector<VisitAnswersInput> visits;
+  std::vector<OperatorCommandInput> commands;
   void clear() {
+    commands.clear();
     visits.clear();
     members.clear();
     member_writers.clear();
@@ -92,8 +103,11 @@ struct ServerSessionConfig {
   double tick_Hz = 60.0;   ///< announced in the scene state: how often contact sets are read
   ObjectAuthorityOptions objects;
   SceneLoader load = LoadWorld;  ///< the worlds a control's action opens, and a resumed one
-  /// A visitor's turn (a haptic member's, from its join); zero: turns never end.
+  /// A visitor's turn (a haptic member's, from its join); zero: turns never end by themselves.
   std::chrono::nanoseconds visit_turn{0};
+  /// The world a tour starts in (world_server --scene): where the operator's "restart the
+  /// tour" takes the session. Empty: the world the session was made with.
+  std::string tour_start;
 };
 
 class ServerSession {
@@ -134,8 +148,14 @@ class ServerSession {
   void StepObjects(Clock::time_point now, double dt_s, Events& out);
   /// Visitors' questionnaires, for the log.
   void TakeVisitAnswers(const TickInputs& in, Events& out);
+  /// The operator's commands: another world, the tour again, a visitor's turn ended.
+  void TakeOperatorCommands(const TickInputs& in, Clock::time_point now, Events& out);
   /// Visitors' turns that are over: each said on the board, once.
   void EndTurns(Clock::time_point now, Events& out);
+  /// What a world change, a new gravity or title did (a control's action or the operator's):
+  /// the controls of a new world at rest, the models rebuilt, the revision, the notes and the
+  /// board.
+  void ApplyOutcome(const ControlOutcome& outcome, Events& out);
 
   /// True when `reason` is empty; else the sample is dropped, counted and (rate-limited) named.
   bool Accepted(std::string_view topic, std::string_view sender, const std::string& reason, Events& out);
@@ -159,6 +179,7 @@ class ServerSession {
   ServerSessionConfig config_;
   common::SessionClock clock_;
   scene::Scene scene_;
+  std::string first_world_;  // the world the session was made with (or resumed in)
   std::optional<ResumePoint> resume_;  // until Start()
   std::uint32_t revision_ = 0;
   std::uint32_t message_id_ = 0;

@@ -37,12 +37,6 @@ std::optional<controls::EventKind> EventKindFromLogName(std::string_view text) {
   return std::nullopt;
 }
 
-bool IsHit(controls::EventKind kind) {
-  using controls::EventKind;
-  return kind == EventKind::kPressed || kind == EventKind::kMoved || kind == EventKind::kPageTurned ||
-         kind == EventKind::kOpened;
-}
-
 namespace {
 
 struct MemberRow {

@@ -14,64 +14,28 @@
 
 namespace handshare::server {
 
-Summary Summarize(const std::vector<double>& values) {
-  Summary s;
-  s.n = values.size();
-  if (s.n == 0) return s;
-  double sum = 0.0;
-  for (double v : values) sum += v;
-  s.mean = sum / static_cast<double>(s.n);
-  if (s.n < 2) return s;
-  // Two passes: the sum of squared deviations does not cancel like sum(x^2) - n mean^2.
-  double squares = 0.0;
-  for (double v : values) squares += (v - s.mean) * (v - s.mean);
-  s.sd = std::sqrt(squares / static_cast<double>(s.n - 1));
-  return s;
-}
-
 namespace {
 
-/// The events of one group (a control, or a kind of control), as both Table 4s count them.
-struct EventTally {
-  std::size_t hits = 0, misses = 0, released = 0;
-  std::vector<double> errors;
-  std::map<std::string, std::size_t> misses_by_user;  // every user who tried, 0 if never missed
-
-  void Add(const ControlRecord& e) {
-    if (IsHit(e.kind)) {
-      ++hits;
-      misses_by_user.try_emplace(e.user, 0);
-      if (e.error_m && std::isfinite(*e.error_m)) errors.push_back(*e.error_m);
-    } else if (e.kind == controls::EventKind::kMissed) {
-      ++misses;
-      ++misses_by_user[e.user];
-    } else {
-      ++released;
-    }
-  }
-  /// Copies the counts and the two summaries into a row (ControlStats or KindStats).
-  template <class Row>
-  void Fill(Row& row) const {
-    row.hits = hits;
-    row.misses = misses;
-    row.released = released;
-    row.error_m = Summarize(errors);
-    std::vector<double> per_user;
-    for (const auto& [user, n] : misses_by_user) per_user.push_back(static_cast<double>(n));
-    row.misses_per_user = Summarize(per_user);
-  }
-};
+/// Copies a tally's counts and its two summaries into a row (ControlStats or KindStats).
+template <class Row>
+void Fill(const controls::EventTally& tally, Row& row) {
+  row.hits = tally.hits();
+  row.misses = tally.misses();
+  row.released = tally.released();
+  row.error_m = tally.error_m();
+  row.misses_per_user = tally.misses_per_user();
+}
 
 }  // namespace
 
 std::vector<ControlStats> ComputeControlStats(const std::vector<ControlRecord>& events) {
-  std::map<std::string, EventTally> by_control;
-  for (const auto& e : events) by_control[e.control_id].Add(e);
+  std::map<std::string, controls::EventTally> by_control;
+  for (const auto& e : events) by_control[e.control_id].Add(e.kind, e.user, e.error_m);
   std::vector<ControlStats> out;
   for (const auto& [id, tally] : by_control) {
     ControlStats row;
     row.control_id = id;
-    tally.Fill(row);
+    Fill(tally, row);
     out.push_back(row);
   }
   return out;
@@ -79,21 +43,18 @@ std::vector<ControlStats> ComputeControlStats(const std::vector<ControlRecord>& 
 
 std::vector<KindStats> ComputeKindStats(const std::vector<ControlRecord>& events,
                                         const std::map<std::string, scene::ControlType>& kinds) {
-  // "unknown" sorts after the four kinds' names, which std::map keeps in the paper's order.
-  constexpr const char* kUnknown = "unknown";
-  std::map<std::string, std::pair<EventTally, std::set<std::string>>> by_kind;  // tally, control ids
+  controls::KindTable table;
   for (const auto& e : events) {
     const auto k = kinds.find(e.control_id);
-    auto& [tally, ids] = by_kind[k == kinds.end() ? kUnknown : controls::ToString(k->second)];
-    tally.Add(e);
-    ids.insert(e.control_id);
+    table.Add(e.control_id, k == kinds.end() ? std::nullopt : std::optional<scene::ControlType>(k->second), e.kind, e.user,
+              e.error_m);
   }
   std::vector<KindStats> out;
-  for (const auto& [kind, group] : by_kind) {
+  for (const auto& r : table.Rows()) {
     KindStats row;
-    row.kind = kind;
-    row.controls = group.second.size();
-    group.first.Fill(row);
+    row.kind = r.kind;
+    row.controls = r.controls;
+    Fill(r.tally, row);
     out.push_back(row);
   }
   return out;

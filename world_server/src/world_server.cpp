@@ -38,6 +38,7 @@ ServerSessionConfig SessionConfig(const WorldServerConfig& config) {
   c.objects.delta.threshold_m = config.deformation_threshold_m;
   c.visit_turn = std::chrono::duration_cast<std::chrono::nanoseconds>(
       std::chrono::duration<double, std::ratio<60>>(config.visit_minutes));
+  c.tour_start = config.scene;
   return c;
 }
 

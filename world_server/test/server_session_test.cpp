@@ -279,6 +279,136 @@ TEST_F(ServerSessionTest, AVisitorsAnswersGoToTheLogAndARefusedSampleDoesNot) {
   EXPECT_EQ(session.dropped().total(), 1u);
 }
 
+OperatorCommandInput Command(controls::OperatorAction action, const std::string& world = "",
+                             const std::string& visitor = "") {
+  OperatorCommandInput c;
+  c.user = "web-console";
+  c.writer = Key(5, 6);
+  c.command = controls::OperatorCommand{action, world, visitor};
+  return c;
+}
+
+// The operator's "send the session to a world" reaches a world no control of the current one
+// links to (the start menu links only the dinosaurs and the solar system's book; from the
+// dinosaurs nothing leads to the solar system), through the same path as a control's action;
+// a world that cannot be loaded changes nothing and is said; a refused sample is counted.
+TEST_F(ServerSessionTest, TheOperatorSendsTheSessionToAWorldNoControlLinks) {
+  ServerSession session(Config(), worlds_["dinosaur"]);
+  StartAndWaitForModels(session);
+  TickInputs in;
+  in.members.push_back(Announced("web-console", 5, "graphics"));
+  session.Tick(in, now_, 1.0 / 60);
+  in = {};
+  in.commands.push_back(Command(controls::OperatorAction::kGoToWorld, "solar_system"));
+  Events events = session.Tick(in, now_ + std::chrono::milliseconds(17), 1.0 / 60);
+  EXPECT_EQ(Kinds(events, /*with_lines=*/false),
+            (std::vector<std::string>{"WorldEntered", "ControlStateChanged", "SceneRevised", "SessionStateChanged",
+                                      "SceneShown", "MessageSaid", "SessionStateChanged", "SessionCheckpoint"}));
+  EXPECT_EQ(session.scene().name, "solar_system");
+  EXPECT_EQ(All<SceneRevised>(events)[0].revision, 2u);
+  ASSERT_FALSE(Lines(events).empty());
+  EXPECT_EQ(Lines(events)[0], "operator command go_to_world by web-console: scene 'solar_system' (revision 2)");
+  EXPECT_TRUE(All<ControlApplied>(events).empty());  // not a control's event: not in Table 4
+
+  in = {};
+  in.commands.push_back(Command(controls::OperatorAction::kGoToWorld, "atlantis"));
+  OperatorCommandInput refused = Command(controls::OperatorAction::kGoToWorld, "dinosaur");
+  refused.refused = "world 'Dinosaur' is not a world's name ([a-z0-9_])";
+  in.commands.push_back(refused);
+  OperatorCommandInput impostor = Command(controls::OperatorAction::kGoToWorld, "dinosaur");
+  impostor.writer = Key(9, 6);  // another participant in the console's name
+  in.commands.push_back(impostor);
+  events = session.Tick(in, now_ + std::chrono::milliseconds(34), 1.0 / 60);
+  EXPECT_EQ(session.scene().name, "solar_system");
+  EXPECT_TRUE(All<SceneRevised>(events).empty());
+  const auto lines = Lines(events);
+  ASSERT_FALSE(lines.empty());
+  EXPECT_NE(lines[0].find("cannot go to 'atlantis'"), std::string::npos) << lines[0];
+  EXPECT_EQ(session.dropped().total(), 2u);
+}
+
+// "Restart the tour": the world the session started in again, from its first message with
+// its controls at rest, also when the session is there; every present visitor's turn ended
+// (by the operator, no thank-you on the board: the tour's first message is shown) and begun
+// again, so it ends its full length after the restart.
+TEST_F(ServerSessionTest, RestartingTheTourGoesToItsFirstWorldAndStartsEveryVisitorsTurnAgain) {
+  ServerSessionConfig config = Config();
+  config.visit_turn = std::chrono::seconds(3);
+  config.tour_start = "start_menu";
+  ServerSession session(config, worlds_["start_menu"]);
+  StartAndWaitForModels(session);
+  TickInputs in;
+  in.members.push_back(Announced("alice", 1));
+  in.members.push_back(Announced("web-console", 5, "graphics"));
+  const Clock::time_point joined = now_;
+  session.Tick(in, joined, 1.0 / 60);
+  in = {};
+  in.controls.push_back(Event("button_dino", EventKind::kPressed, -1, 1.0));
+  session.Tick(in, joined + std::chrono::seconds(1), 1.0 / 60);
+  ASSERT_EQ(session.scene().name, "dinosaur");
+
+  in = {};
+  in.commands.push_back(Command(controls::OperatorAction::kRestartTour));
+  const Clock::time_point restarted = joined + std::chrono::seconds(2);
+  Events events = session.Tick(in, restarted, 1.0 / 60);
+  EXPECT_EQ(session.scene().name, "start_menu");
+  EXPECT_EQ(All<WorldEntered>(events).at(0).scene, "start_menu");
+  const auto ended = All<TurnEnded>(events);
+  ASSERT_EQ(ended.size(), 1u);
+  EXPECT_EQ(ended[0].member.user, "alice");
+  EXPECT_EQ(ended[0].turn, std::chrono::seconds(2));
+  EXPECT_EQ(ended[0].ended_by, "web-console");
+  const auto said = All<MessageSaid>(events);
+  ASSERT_EQ(said.size(), 1u);
+  EXPECT_EQ(said[0].messages[0].text, "welcome to start_menu");
+  // Her new turn runs 3 s from the restart: not over at the first one's end.
+  EXPECT_TRUE(All<TurnEnded>(session.Tick({}, joined + std::chrono::seconds(4), 1.0 / 60)).empty());
+  EXPECT_EQ(All<TurnEnded>(session.Tick({}, restarted + std::chrono::seconds(3), 1.0 / 60)).size(), 1u);
+
+  // Restarting in the first world still begins it afresh (a new revision, its first message).
+  in = {};
+  in.commands.push_back(Command(controls::OperatorAction::kRestartTour));
+  events = session.Tick(in, restarted + std::chrono::seconds(4), 1.0 / 60);
+  EXPECT_EQ(All<SceneRevised>(events).size(), 1u);
+  EXPECT_EQ(All<MessageSaid>(events).at(0).messages[0].text, "welcome to start_menu");
+  // Her turn had ended by itself, yet the restart gives her a new one.
+  EXPECT_TRUE(All<TurnEnded>(events).empty());
+  EXPECT_EQ(All<TurnEnded>(session.Tick({}, restarted + std::chrono::seconds(7), 1.0 / 60)).size(), 1u);
+}
+
+// "End a visitor's turn": now, once, with the board's thanks without a length, also when turns
+// do not end by themselves (--visit-minutes 0); a visitor without an open turn is said, and
+// nothing else happens.
+TEST_F(ServerSessionTest, TheOperatorEndsAVisitorsTurnOnceAndTheBoardThanksThem) {
+  ServerSession session(Config(), worlds_["start_menu"]);  // visit_turn 0: turns never end by themselves
+  StartAndWaitForModels(session);
+  TickInputs in;
+  in.members.push_back(Announced("alice", 1));
+  in.members.push_back(Announced("bob", 2));
+  session.Tick(in, now_, 1.0 / 60);
+  in = {};
+  in.commands.push_back(Command(controls::OperatorAction::kEndTurn, "", "alice"));
+  Events events = session.Tick(in, now_ + std::chrono::seconds(90), 1.0 / 60);
+  EXPECT_EQ(Kinds(events, /*with_lines=*/false),
+            (std::vector<std::string>{"TurnEnded", "MessageSaid", "SessionStateChanged", "SessionCheckpoint"}));
+  const auto ended = All<TurnEnded>(events);
+  EXPECT_EQ(ended.at(0).member.user, "alice");
+  EXPECT_EQ(ended.at(0).turn, std::chrono::seconds(90));
+  EXPECT_EQ(ended.at(0).ended_by, "web-console");
+  EXPECT_EQ(All<MessageSaid>(events).at(0).messages.at(0).text, "Thank you, alice: your turn is over.");
+
+  in = {};
+  in.commands.push_back(Command(controls::OperatorAction::kEndTurn, "", "alice"));
+  in.commands.push_back(Command(controls::OperatorAction::kEndTurn, "", "carol"));
+  events = session.Tick(in, now_ + std::chrono::seconds(91), 1.0 / 60);
+  EXPECT_TRUE(All<TurnEnded>(events).empty());
+  EXPECT_TRUE(All<MessageSaid>(events).empty());
+  const auto lines = Lines(events);
+  ASSERT_EQ(lines.size(), 2u);
+  EXPECT_NE(lines[0].find("alice has no turn to end"), std::string::npos) << lines[0];
+  EXPECT_NE(lines[1].find("carol has no turn to end"), std::string::npos) << lines[1];
+}
+
 TEST_F(ServerSessionTest, AMemberWhoseWriterIsLostVanishes) {
   ServerSession session(Config(), worlds_["start_menu"]);
   StartAndWaitForModels(session);

@@ -73,7 +73,7 @@ TEST(SessionLogWriter, WritesTheControlsKindsATurnAndAQuestionnaire) {
   answers.visitor = "alice";
   answers.at(scene::ControlType::kBook, controls::VisitQuestion::kNaturalness) = 6;
   answers.at(scene::ControlType::kLever, controls::VisitQuestion::kEase) = 2;
-  writer.Take(std::vector<SessionEvent>{TurnEnded{alice, std::chrono::seconds(3), 0.05},
+  writer.Take(std::vector<SessionEvent>{TurnEnded{alice, std::chrono::seconds(3), 0.05, ""},
                                         VisitAnswered{"web-console", answers}, SessionCheckpoint{}},
               t0 + std::chrono::seconds(1));
   EXPECT_EQ(Query(file, "SELECT group_concat(control_id || ':' || kind, ',') FROM "

@@ -176,6 +176,25 @@ std::string CheckVisitAnswers(const msg::VisitAnswers& s, std::string_view sessi
   return c.reason();
 }
 
+std::string CheckOperatorCommand(const msg::OperatorCommand& s, std::string_view session) {
+  Checker c;
+  c.Session(s.session().to_string(), session);
+  c.NonEmpty("user", s.user().to_string());
+  const auto kind = static_cast<int>(s.kind());
+  if (c.ok() && (kind < static_cast<int>(msg::OPERATOR_GO_TO_WORLD) || kind > static_cast<int>(msg::OPERATOR_END_TURN))) {
+    c.Fail("kind " + std::to_string(kind) + " is not an operator command");
+  }
+  if (c.ok() && s.kind() == msg::OPERATOR_GO_TO_WORLD) {
+    const std::string world = s.world().to_string();
+    c.NonEmpty("world", world);
+    if (c.ok() && world.find_first_not_of("abcdefghijklmnopqrstuvwxyz0123456789_") != std::string::npos) {
+      c.Fail("world '" + world + "' is not a world's name ([a-z0-9_])");
+    }
+  }
+  if (c.ok() && s.kind() == msg::OPERATOR_END_TURN) c.NonEmpty("visitor", s.visitor().to_string());
+  return c.reason();
+}
+
 std::string CheckDeviceState(const msg::DeviceState& s, std::string_view session, const SampleBounds& b) {
   Checker c;
   c.Session(s.session().to_string(), session);

@@ -130,6 +130,33 @@ TEST(SampleChecks, VisitAnswersOutsideTheScaleOrEmptyAreRefused) {
   EXPECT_NE(CheckVisitAnswers(v, "museum").find("user"), std::string::npos);
 }
 
+// An operator's command: this session's, the sender named, a kind the IDL has, the world of
+// GO_TO_WORLD a world's name, the visitor of END_TURN named.
+TEST(SampleChecks, OperatorCommandsOfUnknownKindOrWithoutTheirNameAreRefused) {
+  msg::OperatorCommand c;
+  c.session("museum");
+  c.user("web-console");
+  c.kind(msg::OPERATOR_GO_TO_WORLD);
+  c.world("dinosaur");
+  EXPECT_EQ(CheckOperatorCommand(c, "museum"), "");
+  EXPECT_NE(CheckOperatorCommand(c, "other").find("session"), std::string::npos);
+  c.world("../dinosaur");
+  EXPECT_EQ(CheckOperatorCommand(c, "museum"), "world '../dinosaur' is not a world's name ([a-z0-9_])");
+  c.world("");
+  EXPECT_NE(CheckOperatorCommand(c, "museum").find("world"), std::string::npos);
+  c.kind(msg::OPERATOR_RESTART_TOUR);
+  EXPECT_EQ(CheckOperatorCommand(c, "museum"), "");
+  c.kind(msg::OPERATOR_END_TURN);
+  EXPECT_NE(CheckOperatorCommand(c, "museum").find("visitor"), std::string::npos);
+  c.visitor("alice");
+  EXPECT_EQ(CheckOperatorCommand(c, "museum"), "");
+  c.kind(static_cast<msg::OperatorCommandKind>(7));
+  EXPECT_EQ(CheckOperatorCommand(c, "museum"), "kind 7 is not an operator command");
+  c.kind(msg::OPERATOR_RESTART_TOUR);
+  c.user("");
+  EXPECT_NE(CheckOperatorCommand(c, "museum").find("user"), std::string::npos);
+}
+
 TEST(SampleChecks, ControlEventsOfUnknownKindOrIndexAreRefused) {
   msg::ControlEvent e;
   e.session("museum");

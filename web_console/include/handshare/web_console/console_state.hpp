@@ -13,6 +13,7 @@
 
 #include "handshare/scene/scene.hpp"
 
+#include "handshare/controls/control_table.hpp"
 #include "handshare/web_console/world_routes.hpp"
 
 namespace handshare::web_console {
@@ -149,12 +150,17 @@ struct ConsoleState {
   bool actions_enabled = false;                  ///< a token is set (--token-file)
   WorldView world;
   std::vector<WorldRoute> routes;                ///< worlds the current one links to
+  std::vector<std::string> worlds;               ///< every world the operator may send the session to
   std::map<std::string, BoardView> boards;       ///< by language
   std::map<std::string, StationStats> stations;  ///< by node
   std::map<std::string, MemberRow> members;      ///< by member id
   std::uint64_t samples_refused = 0;             ///< samples the console's checks dropped
   std::uint64_t viewers = 0;                     ///< WebSocket viewers now
   std::uint64_t viewers_dropped = 0;             ///< viewers dropped for not keeping up
+  /// The paper's Table 4 by kind of control, from the control events heard since the console
+  /// started (session_report's rule: handshare/controls/control_table.hpp).
+  controls::KindTable table4;
+  std::uint64_t control_events = 0;              ///< control events counted in it
 };
 
 /// The state as the page reads it (docs/web_console.md, "The state document"). Text from the

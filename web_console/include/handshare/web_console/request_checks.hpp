@@ -12,6 +12,7 @@
 #include <string_view>
 
 #include "handshare/controls/visit_answers.hpp"
+#include "handshare/controls/operator_command.hpp"
 
 namespace handshare::web_console {
 
@@ -49,6 +50,15 @@ struct ParsedVisitRequest {
   std::string error;  ///< why not, when answers is empty
 };
 ParsedVisitRequest ParseVisitRequest(std::string_view body);
+
+/// POST /api/command's body: an operator's command other than a world change (that is
+/// POST /api/world), exactly {"command": "restart_tour"} or {"command": "end_turn", "visitor":
+/// NAME}, NAME 1 to 64 of [A-Za-z0-9_.-]. Anything else is refused.
+struct ParsedCommandRequest {
+  std::optional<controls::OperatorCommand> command;
+  std::string error;  ///< why not, when command is empty
+};
+ParsedCommandRequest ParseCommandRequest(std::string_view body);
 
 /// A browser's Origin header against the Host header it sent: a page of another site may not
 /// act on the console nor open its socket (cross-site request forgery, cross-site WebSocket

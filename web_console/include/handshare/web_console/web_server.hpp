@@ -30,7 +30,7 @@ struct WebServerConfig {
   std::size_t max_connections = 64;     ///< HTTP and WebSocket together; more are closed at once
   std::size_t max_viewer_queue = 8;     ///< states waiting for one viewer; one more drops it
   double requests_per_s = 20.0;         ///< per address, all requests (burst 2x)
-  double actions_per_min = 12.0;        ///< per address, POST /api/world and /api/visit, refused ones too (burst 5)
+  double actions_per_min = 12.0;        ///< per address, POST /api/world, /api/visit and /api/command, refused ones too (burst 5)
 };
 
 /// The answer to an action: an HTTP status and a JSON body.
@@ -58,10 +58,15 @@ class WebServer {
   using WorldHandler = std::function<ActionReply(const WorldRequest&)>;
   /// A checked, authorized questionnaire; called on the server's thread.
   using VisitHandler = std::function<ActionReply(const controls::VisitAnswers&)>;
+  /// A checked, authorized operator's command (restart the tour, end a turn); called on the
+  /// server's thread.
+  using CommandHandler = std::function<ActionReply(const controls::OperatorCommand&)>;
 
-  /// Binds and starts serving. Without `visit`, POST /api/visit is not a path (404). Throws
-  /// std::runtime_error naming the address, a file or the TLS setup that failed.
-  WebServer(WebServerConfig config, StateSource state, WorldHandler world, VisitHandler visit = {});
+  /// Binds and starts serving. Without `visit`, POST /api/visit is not a path (404); without
+  /// `command`, POST /api/command. Throws std::runtime_error naming the address, a file or the
+  /// TLS setup that failed.
+  WebServer(WebServerConfig config, StateSource state, WorldHandler world, VisitHandler visit = {},
+            CommandHandler command = {});
   ~WebServer();
   WebServer(const WebServer&) = delete;
   WebServer& operator=(const WebServer&) = delete;

@@ -39,6 +39,14 @@ struct ControlOutcome {
   std::vector<std::string> notes;        ///< lines for the server's log (errors included)
 };
 
+/// Loads a world by name (LoadWorld in the server; tests pass their own).
+using SceneLoader = std::function<scene::Scene(const std::string& name)>;
+
+/// `scene` becomes world `world` (a control's goto, or the operator's command; `by` names who
+/// for the notes): the new world's messages for the board. A world that cannot be loaded
+/// leaves the scene as it was, with a note saying why.
+ControlOutcome GoToWorld(scene::Scene& scene, const std::string& world, const std::string& by, const SceneLoader& load);
+
 /// What the server knows of one control of the current world: where the control events it
 /// applied left it. Published on handshare/control_state so that every haptic node builds the
 /// control there (also when a new revision of the same world rebuilds it: the lever that set
@@ -73,8 +81,6 @@ bool IndexFits(const scene::ControlSpec& control, std::int32_t index);
 /// states with the new world's (InitialControlStates).
 const ControlStateRecord* UpdateControlState(std::vector<ControlStateRecord>& states, const ControlInput& input);
 
-/// Loads a world by name (LoadWorld in the server; tests pass their own).
-using SceneLoader = std::function<scene::Scene(const std::string& name)>;
 /// The server's loader: scene::LoadSceneByName from the assets' scenes folder.
 scene::Scene LoadWorld(const std::string& name);
 

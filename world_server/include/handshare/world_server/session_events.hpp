@@ -103,11 +103,13 @@ struct FieldChanged {
   DeformationSample sample;
 };
 
-/// A visitor's turn is over (--visit-minutes after its join); the board's message follows.
+/// A visitor's turn is over (--visit-minutes after its join, or the operator ended it); the
+/// board's message follows (not when the operator restarted the tour: its first world's does).
 struct TurnEnded {
   Member member;
   std::chrono::nanoseconds turn{};  ///< how long it lasted
   double minutes = 0.0;             ///< the turn's length it was given
+  std::string ended_by;             ///< "": its time ran out; else the operator's console
 };
 
 /// A visitor's questionnaire, as a console (`sent_by`) sent it.

@@ -20,6 +20,7 @@
 #include "handshare/contact/finger_contact.hpp"  // contact::Vec3, QuatWxyz
 #include "handshare/controls/controls.hpp"
 #include "handshare/scene/scene.hpp"
+#include "handshare/controls/control_table.hpp"
 #include "handshare/controls/visit_answers.hpp"
 #include "handshare/world_server/member_registry.hpp"
 
@@ -40,7 +41,7 @@ class SessionLogError : public std::runtime_error {
 /// miss; kMissed is a try that did not hit the control.
 const char* LogName(controls::EventKind kind);
 std::optional<controls::EventKind> EventKindFromLogName(std::string_view text);
-bool IsHit(controls::EventKind kind);
+using controls::IsHit;  // the rule both Table 4s count by (handshare/controls/control_table.hpp)
 
 struct ControlRecord {
   std::uint64_t unix_ns = 0;

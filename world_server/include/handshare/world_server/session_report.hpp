@@ -16,14 +16,10 @@
 
 namespace handshare::server {
 
-/// Sample mean and standard deviation (n - 1 in the denominator, as SPSS reports and as the
-/// paper's Table 4 is consistent with). sd is 0 for n < 2; mean is 0 for n = 0.
-struct Summary {
-  std::size_t n = 0;
-  double mean = 0.0;
-  double sd = 0.0;
-};
-Summary Summarize(const std::vector<double>& values);
+/// Sample mean and standard deviation (handshare/controls/control_table.hpp: the web console's
+/// live Table 4 counts by the same rule).
+using controls::Summary;
+using controls::Summarize;
 
 struct ControlStats {
   std::string control_id;

@@ -5,6 +5,7 @@
 /// has, and the session log records its end. No DDS, no clock: ServerSession keeps the turns.
 #include <chrono>
 #include <map>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -17,11 +18,13 @@ namespace handshare::server {
 inline constexpr double kDefaultVisitMinutes = 10.0;
 
 /// The board's message when `user`'s turn of `minutes` is over: English and Japanese (with its
-/// kana reading for the ja voice), under one number as every board message.
-std::vector<scene::Message> TurnOverMessages(const std::string& user, double minutes);
+/// kana reading for the ja voice), under one number as every board message. Without `minutes`
+/// (the operator ended the turn) it says the turn is over without a length.
+std::vector<scene::Message> TurnOverMessages(const std::string& user, std::optional<double> minutes);
 
 /// The turns of the members present: a haptic member's turn starts when it joins and ends once,
-/// `length` later (0: turns never end). A member that leaves or is lost takes its turn along.
+/// `length` later (0: turns never end by themselves), or when the operator ends it. A member
+/// that leaves or is lost takes its turn along.
 class VisitTurns {
  public:
   using Clock = std::chrono::steady_clock;
@@ -35,6 +38,12 @@ class VisitTurns {
   };
   /// The turns that are over at `now`, each once, in the order they began.
   std::vector<Ended> TakeEnded(Clock::time_point now);
+  /// `user`'s open turn, ended now (the operator's "end a visitor's turn"); nullopt when the
+  /// user has none (not a present visitor, or its turn already ended).
+  std::optional<Ended> EndNow(const std::string& user, Clock::time_point now);
+  /// Every open turn ended now, and every present visitor's turn begun again at `now` (the
+  /// operator's "restart the tour"): a visitor whose turn had ended gets a new one too.
+  std::vector<Ended> Restart(Clock::time_point now);
   bool enabled() const { return length_ > Clock::duration::zero(); }
 
  private:
@@ -43,7 +52,8 @@ class VisitTurns {
     Clock::time_point start;
   };
   Clock::duration length_;
-  std::map<std::string, Turn> open_;  // by member_id
+  std::map<std::string, Turn> open_;        // by member_id
+  std::map<std::string, Member> visitors_;  // the haptic members present, by member_id
 };
 
 }  // namespace handshare::server

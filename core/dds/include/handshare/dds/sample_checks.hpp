@@ -41,6 +41,9 @@ std::string CheckControlEvent(const msg::ControlEvent& s, std::string_view sessi
 /// A visitor's questionnaire: session, sender and visitor named, every score 0 (not answered)
 /// or 1..7, at least one answered.
 std::string CheckVisitAnswers(const msg::VisitAnswers& s, std::string_view session);
+/// An operator's command: session and sender named, a known kind, the world named for
+/// GO_TO_WORLD and the visitor for END_TURN (each of `[a-z0-9_]` / a user name's characters).
+std::string CheckOperatorCommand(const msg::OperatorCommand& s, std::string_view session);
 std::string CheckControlState(const msg::ControlState& s, std::string_view session);
 std::string CheckSessionRoster(const msg::SessionRoster& s, std::string_view session);
 std::string CheckDeviceState(const msg::DeviceState& s, std::string_view session, const SampleBounds& b = {});

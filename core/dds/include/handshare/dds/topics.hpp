@@ -17,6 +17,7 @@ inline constexpr TopicSpec kDeformation{"handshare/deformation", "bulk_writer", 
 inline constexpr TopicSpec kObjectState{"handshare/object_state", "stream_writer", "stream_reader"};
 inline constexpr TopicSpec kControlEvent{"handshare/control_event", "event_writer", "event_reader"};
 inline constexpr TopicSpec kVisitAnswers{"handshare/visit_answers", "event_writer", "event_reader"};
+inline constexpr TopicSpec kOperatorCommand{"handshare/operator_command", "event_writer", "event_reader"};
 inline constexpr TopicSpec kControlState{"handshare/control_state", "state_writer", "state_reader"};
 inline constexpr TopicSpec kSessionRoster{"handshare/session_roster", "state_writer", "state_reader"};
 inline constexpr TopicSpec kMessageBoard{"handshare/message_board", "state_writer", "state_reader"};
