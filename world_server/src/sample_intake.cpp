@@ -1,5 +1,7 @@
 #include "sample_intake.hpp"
 
+#include <cstdio>
+
 #include "handshare/common/clock.hpp"
 #include "handshare/dds/sample_checks.hpp"
 #include "handshare/session/visit_answers_message.hpp"
@@ -12,7 +14,11 @@ SampleIntake::SampleIntake(dds::Participant& participant, std::string session)
       member_reader_(dds::MakeReader<msg::MemberInfo>(participant, dds::topics::kMemberInfo)),
       contact_reader_(dds::MakeReader<msg::ContactSet>(participant, dds::topics::kContactSet)),
       control_reader_(dds::MakeReader<msg::ControlEvent>(participant, dds::topics::kControlEvent)),
-      visit_reader_(dds::MakeReader<msg::VisitAnswers>(participant, dds::topics::kVisitAnswers)) {}
+      visit_reader_(dds::MakeReader<msg::VisitAnswers>(participant, dds::topics::kVisitAnswers)),
+      stats_reader_(dds::MakeReaderIfGranted<msg::LoopStatistics>(
+          participant, dds::topics::kLoopStatistics,
+          [](const std::string& line) { std::fprintf(stderr, "[world_server] %s\n", line.c_str()); },
+          "the session log keeps no loop statistics")) {}
 
 void SampleIntake::Take(TickInputs& in) {
   in.clear();
@@ -20,6 +26,7 @@ void SampleIntake::Take(TickInputs& in) {
   TakeControlEvents(in);
   TakeContactSets(in);
   TakeVisitAnswers(in);
+  TakeStations(in);
 }
 
 void SampleIntake::TakeMembers(TickInputs& in) {
@@ -88,6 +95,19 @@ void SampleIntake::TakeVisitAnswers(TickInputs& in) {
     v.refused = dds::CheckVisitAnswers(sample, session_);
     if (v.refused.empty()) v.answers = session::FromMessage(sample);
     in.visits.push_back(std::move(v));
+  }
+}
+
+void SampleIntake::TakeStations(TickInputs& in) {
+  msg::LoopStatistics sample;
+  dds::SampleMeta meta;
+  while (stats_reader_ && stats_reader_.TakeNext(sample, meta)) {
+    if (!meta.valid_data) continue;
+    LoopStatisticsInput s;
+    s.node = sample.node().to_string();
+    s.refused = dds::CheckLoopStatistics(sample, session_);
+    if (s.refused.empty()) s.loop = ToLoopRecord(sample, common::UnixNowNs());
+    in.stations.push_back(std::move(s));
   }
 }
 

@@ -23,12 +23,14 @@ class SampleIntake {
   void TakeControlEvents(TickInputs& in);
   void TakeContactSets(TickInputs& in);
   void TakeVisitAnswers(TickInputs& in);
+  void TakeStations(TickInputs& in);
 
   std::string session_;
   dds::Reader<msg::MemberInfo> member_reader_;
   dds::Reader<msg::ContactSet> contact_reader_;
   dds::Reader<msg::ControlEvent> control_reader_;
   dds::Reader<msg::VisitAnswers> visit_reader_;
+  dds::Reader<msg::LoopStatistics> stats_reader_;
 };
 
 }  // namespace handshare::server

@@ -70,6 +70,13 @@ struct VisitAnswersInput {
   controls::VisitAnswers answers;  ///< accepted samples only
 };
 
+/// A station's loop statistics as taken (valid data only).
+struct LoopStatisticsInput {
+  std::string node;
+  std::string refused;  ///< why the sample check refused it ("" accepted)
+  LoopRecord loop;      ///< accepted samples only
+};
+
 /// What one tick takes, in the order it takes it.
 struct TickInputs {
   std::vector<MemberInput> members;
@@ -77,7 +84,9 @@ struct TickInputs {
   std::vector<ControlEventInput> controls;
   std::vector<ContactSetInput> contacts;
   std::vector<VisitAnswersInput> visits;
+  std::vector<LoopStatisticsInput> stations;
   void clear() {
+    stations.clear();
     visits.clear();
     members.clear();
     member_writers.clear();
@@ -134,6 +143,8 @@ class ServerSession {
   void StepObjects(Clock::time_point now, double dt_s, Events& out);
   /// Visitors' questionnaires, for the log.
   void TakeVisitAnswers(const TickInputs& in, Events& out);
+  /// Stations' loop statistics, for the log.
+  void TakeStations(const TickInputs& in, Events& out);
   /// Visitors' turns that are over: each said on the board, once.
   void EndTurns(Clock::time_point now, Events& out);
 
