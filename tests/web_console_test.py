@@ -2,8 +2,11 @@
 """Cross-process tests of the web console (web_console) in a real browser: Debian's chromium,
 headless, driven through python3-selenium and chromium-driver (docs/web_console.md).
 
-operator: a world server and a haptic node with a scripted hand; the console; its operator's
-page open in chromium. The page shows the station with the loop rate the haptic node reports;
+operator: a world server (with its session log) and a haptic node with a scripted hand, a
+headless graphics node and an audio guide; the console; its operator's page open in chromium.
+The page shows the station with the loop rate the haptic node reports, the screen and the guide
+as stations of their own, and for each the sample the session log stored (rate, overruns,
+faults, deadline misses, bytes per second), which session_report's newest counts are too;
 a world change with a wrong token gets 401 and the world stays; one sent from the page with
 the token reaches the world server and comes back to the page as the new world.
 
@@ -115,15 +118,61 @@ def post_world(base, world, token):
         return e.code, e.read().decode()
 
 
+# Every row of the page's stations table: its node, user and kind (data attributes), the text of
+# its kind, user and device cells, and each numeric cell by its class (rate, jitter, step,
+# overruns, resyncs, faults, deadlines, sent, dropped, age). Read in one script: the page redraws
+# the table with every state, so elements found in one call are gone in the next.
+STATION_ROWS_JS = (
+    "return Array.from(document.querySelectorAll('#stations tbody tr'), (row) => {"
+    "  const r = {node: row.dataset.node, data_user: row.dataset.user};"
+    "  for (const c of row.cells) r[c.classList.contains('num') ? c.classList[1] : (c.className || 'text' + c.cellIndex)] ="
+    "      c.textContent;"
+    "  return r;"
+    "});")
+
+
 def page_station(driver, user):
-    """The page's row of `user`'s station as {column: text}, or None. Read in one script: the page
-    redraws the table with every state, so elements found in one call are gone in the next."""
-    cells = driver.execute_script(
-        "const row = document.querySelector('#stations tbody tr[data-user=\"' + arguments[0] + '\"]');"
-        "return row ? Array.from(row.cells, (c) => c.textContent) : null;", user)
-    if not cells:
-        return None
-    return {"user": cells[0], "device": cells[1], "rate": cells[2], "jitter": cells[3], "age": cells[9]}
+    """The page's row of `user`'s first station as {column: text} (device: its device), or None."""
+    for r in driver.execute_script(STATION_ROWS_JS):
+        if r["data_user"] == user:
+            return {**r, "device": r.get("device", r.get("text1", ""))}  # text1: a page without cell classes
+    return None
+
+
+def page_stations(driver):
+    """The page's stations by node: {node: {kind, user, device, rate, ..., age}}."""
+    return {r["node"]: r for r in driver.execute_script(STATION_ROWS_JS) if r.get("node")}
+
+
+# The operator page's numbers against the session log's row of the same sample: the page rounds
+# the rate to 0.1 Hz and bytes per second to 1 B/s; counts are exact.
+PAGE_RATE_ROUNDING_HZ = 0.05 + 1e-9
+PAGE_BYTES_ROUNDING = 0.5 + 1e-9
+
+
+def logged_rows(log_db, node):
+    """The session log's loop statistics rows of `node`, newest first (read-only, beside the
+    world server's writing: WAL)."""
+    import sqlite3
+    db = sqlite3.connect(f"file:{log_db}?mode=ro", uri=True, timeout=5)
+    try:
+        return db.execute("SELECT unix_ns, rate_hz, overruns, faults, deadline_misses, sent_bytes_per_s "
+                          "FROM loop_statistics WHERE node = ? ORDER BY id DESC LIMIT 20", (node,)).fetchall()
+    except sqlite3.OperationalError:
+        return []  # the table is made with the log: only while the world server creates it
+    finally:
+        db.close()
+
+
+def page_row_in_log(row, rows):
+    """The log row that is the page's sample (rate, overruns, faults, deadline misses, bytes/s
+    within the page's rounding), or None."""
+    for unix_ns, rate, overruns, faults, deadlines, sent in rows:
+        if (abs(float(row["rate"]) - rate) <= PAGE_RATE_ROUNDING_HZ and int(row["overruns"]) == overruns
+                and int(row["faults"]) == faults and int(row["deadlines"]) == deadlines
+                and abs(float(row["sent"]) - sent) <= PAGE_BYTES_ROUNDING):
+            return unix_ns, rate, overruns, faults, deadlines, sent
+    return None
 
 
 def send_from_page(driver, world, token):
@@ -146,10 +195,16 @@ def case_operator(h, domain):
     with open(token_file, "w") as f:
         f.write(token + "\n")
     os.chmod(token_file, 0o600)
-    h.start("world_server", "world_server", "--domain", domain, "--session", session)
+    log_db = os.path.join(h.work, "session.sqlite")
+    h.start("world_server", "world_server", "--domain", domain, "--session", session, "--log", log_db)
     h.start("alice", "haptic_node", "--domain", domain, "--session", session, "--user", "alice",
             "--device", "sim", "--script", os.path.join(DATA, "alice.hand"))
     h.wait_for_line("world_server", "member joined: user=alice", 30)
+    # A screen and a guide: stations of their own on the page, with their loops' numbers.
+    h.start("screen", "graphics_node", "--domain", domain, "--session", session, "--name", "screen", "--headless",
+            "--frames", 100000, "--fps", 2, "--out", os.path.join(h.work, "frames"))
+    h.start("guide", "audio_guide", "--domain", domain, "--session", session, "--name", "guide",
+            "--out", os.path.join(h.work, "speech"))
     h.start("console", "web_console", "--domain", domain, "--session", session, "--name", "operator-console",
             "--listen", "127.0.0.1:0", "--token-file", token_file)
     h.wait_for_line("console", "listening on http://127.0.0.1:", 30)
@@ -170,6 +225,35 @@ def case_operator(h, domain):
         check(driver.find_element(By.ID, "world").text == "start_menu", "the page does not show the start menu")
         check(driver.find_element(By.ID, "tick").text == "60 Hz", "the page does not show the server's 60 Hz tick")
         check("Welcome" in driver.find_element(By.ID, "board-en").text, "the page does not show the board")
+
+        # Every station, screen and guide, fresh, as its kind; and what the page shows of each is
+        # the sample the world server logged (found among its newest rows of that node).
+        nodes = {"haptic_node/alice": ("station", "sim"), "graphics_node/screen": ("screen", ""),
+                 "audio_guide/guide": ("guide", "")}
+        rows = wait_until("alice's station, the screen and the guide on the page, fresh", 60,
+                          lambda: (lambda r: r if all(n in r and r[n]["rate"] and float(r[n]["age"] or 99) < 2.5
+                                                      for n in nodes) else None)(page_stations(driver)),
+                          lambda: driver.find_element(By.ID, "stations").text)
+        for node, (kind, device) in nodes.items():
+            check(rows[node]["kind"] == kind and rows[node]["device"] == device,
+                  f"the page shows {node} as kind '{rows[node]['kind']}', device '{rows[node]['device']}', "
+                  f"not '{kind}', '{device}'")
+        def in_log(node):
+            row = page_stations(driver).get(node)
+            return page_row_in_log(row, logged_rows(log_db, node)) if row else None
+        matched = {}
+        for node in nodes:
+            matched[node] = wait_until(f"the session log's row of the sample the page shows for {node}", 20,
+                                       lambda: in_log(node),
+                                       lambda: f"page {page_stations(driver).get(node)}, log {logged_rows(log_db, node)[:3]}")
+        # Numbers that are measured, not zeros: alice sends device states (the console's 20 Hz),
+        # the screen draws at most its 2 frames a second (a loaded machine's second may hold 3),
+        # the guide's loop runs (a pass that speaks takes seconds: no lower bound beyond 0).
+        check(matched["haptic_node/alice"][5] > 1000, f"alice sent {matched['haptic_node/alice'][5]} B/s")
+        check(0.2 <= matched["graphics_node/screen"][1] <= 3, f"the screen drew {matched['graphics_node/screen'][1]} Hz")
+        check(matched["audio_guide/guide"][1] > 0, f"the guide's loop ran at {matched['audio_guide/guide'][1]} Hz")
+        for node in nodes:
+            check(matched[node][5] > 0, f"{node} sent no bytes by its statistics")
 
         # Wrong and missing tokens: 401, from the page and from a script; the world stays.
         status, text = send_from_page(driver, "dinosaur", "not-the-token-" + secrets.token_hex(8))
@@ -209,9 +293,25 @@ def case_operator(h, domain):
     node_rate = float(re.search(r"loop statistics: rate ([0-9.]+) Hz", h.log("alice")).group(1))
     check(abs(page_rate - node_rate) <= RATE_TOLERANCE * node_rate,
           f"the page showed alice's loop at {page_rate} Hz, the node reports {node_rate} Hz")
+    check(h.stop("screen", 30) == 0, "graphics_node screen failed")
+    check(h.stop("guide", 30) == 0, "audio_guide failed")
     check(h.stop("world_server", 30) == 0, "world_server failed")
+    # session_report: each node's samples, and its newest sample's counts as the log has them.
+    report_exe = os.path.join(h.bin_dir, "world_server", "session_report")
+    csv = subprocess.run([report_exe, log_db, "--csv"], capture_output=True, text=True, timeout=60)
+    check(csv.returncode == 0, f"session_report failed: {csv.stderr}")
+    for node in nodes:
+        newest = logged_rows(log_db, node)[0]
+        samples = re.search(rf"^\d+,station,{re.escape(node)},samples,(\d+)$", csv.stdout, re.M)
+        check(samples and int(samples.group(1)) >= 3, f"session_report has no samples of {node}:\n{csv.stdout}")
+        for field, value in (("overruns", newest[2]), ("faults", newest[3]), ("deadline_misses", newest[4])):
+            check(f",station,{node},{field},{value}\n" in csv.stdout,
+                  f"session_report's {field} of {node} is not the log's newest {value}:\n{csv.stdout}")
+    shown = "; ".join(f"{n}: {m[1]:.1f} Hz, {m[2]} overruns, {m[3]} faults, {m[4]} deadline misses, {m[5]:.0f} B/s"
+                      for n, m in matched.items())
     print(f"operator page: alice's loop {page_rate} Hz on the page, {node_rate} Hz at the node; "
-          f"wrong tokens 401; the page's world change reached the world server")
+          f"wrong tokens 401; the page's world change reached the world server; the page's stations are "
+          f"the session log's samples ({shown})")
 
 
 def case_tls(h, domain):

@@ -10,9 +10,11 @@
 
 #include "handshare/node/rejoin_clock.hpp"
 #include "handshare/common/shutdown.hpp"
+#include "handshare/dds/loop_traffic.hpp"
 #include "handshare/dds/membership.hpp"
 #include "handshare/dds/messages.hpp"
 #include "handshare/dds/name_binding.hpp"
+#include "handshare/dds/pass_statistics.hpp"
 #include "handshare/dds/sample_checks.hpp"
 #include "handshare/speech/audio_clip.hpp"
 #include "handshare/speech/cues.hpp"
@@ -38,7 +40,12 @@ int Guide::Run() {
          const std::function<void(const std::string&)>& say)
         : participant(where, "audio_guide/" + name),  // the role picks its identity
           member(participant, name, msg::NODE_AUDIO_GUIDE),
-          board_reader(dds::MakeReader<msg::MessageBoard>(participant, dds::topics::kMessageBoard)) {
+          board_reader(dds::MakeReader<msg::MessageBoard>(participant, dds::topics::kMessageBoard)),
+          stats_writer(dds::MakeWriterIfGranted<msg::LoopStatistics>(
+              participant, dds::topics::kLoopStatistics, say, "the operator's page shows no statistics of this guide")),
+          stats_traffic(participant) {
+      stats.node("audio_guide/" + name);
+      stats.session(where.session);
       if (!cues) return;
       // A keystore made before the guide had cues grants neither: the guide speaks without them.
       scene_reader = dds::MakeReaderIfGranted<msg::SceneState>(participant, dds::topics::kSceneState, say,
@@ -51,6 +58,9 @@ int Guide::Run() {
     dds::Reader<msg::MessageBoard> board_reader;
     dds::Reader<msg::SceneState> scene_reader;
     dds::Reader<msg::ControlState> control_reader;
+    dds::Writer<msg::LoopStatistics> stats_writer;  // empty: a keystore without the grant
+    dds::LoopTraffic stats_traffic;
+    msg::LoopStatistics stats;
   };
   auto link = std::make_unique<Link>(config_.where, name, config_.cues, say);
   node::RejoinClock rejoin(std::chrono::duration<double>(config_.rejoin_after_s));
@@ -65,6 +75,7 @@ int Guide::Run() {
   speech::CueWatch cue_watch;
   int cues = 0;
   // A cue into its own WAV file with an output folder, else to the sound device.
+  std::uint64_t playback_faults = 0;  // messages and cues the sound device did not play
   const auto sound = [&](speech::Cue cue, const std::string& why) {
     const speech::AudioClip clip = speech::SynthesizeCue(cue, synthesizer.sample_rate_hz());
     ++cues;
@@ -76,13 +87,36 @@ int Guide::Run() {
                   file.c_str());
     } else if (const speech::PlaybackStatus status = speech::Play(clip.samples, clip.sample_rate_hz, config_.alsa_device);
                !status.ok()) {
+      ++playback_faults;
       std::fprintf(stderr, "[audio_guide %s] cannot play cue %s: %s\n", name.c_str(), speech::CueName(cue),
                    status.message.c_str());
     }
     std::fflush(stdout);
   };
   const auto sender = [](const dds::SampleMeta& m) { return "participant " + dds::ParticipantOf(m.writer); };
+  // The board loop's statistics, once a second: its passes (each takes what arrived, or waits
+  // up to 50 ms for a board: some 20 a second while quiet, one per message while it speaks), the
+  // work of each (taking samples, speaking: synthesis and playback or the WAV written; not the
+  // wait), failed playbacks as faults. The loop has no period: no jitter, no overruns.
+  dds::PassStatistics passes(Clock::duration::max(), start);
+  auto next_stats = start + std::chrono::seconds(1);
+  Clock::time_point pass_began = start;
+  Clock::duration waited{};
+  bool in_pass = false;
   while (!common::ShutdownRequested()) {
+    const auto pass_start = Clock::now();
+    if (in_pass) passes.Record(pass_began, pass_began, pass_start - waited);
+    in_pass = true;
+    pass_began = pass_start;
+    waited = {};
+    if (pass_start >= next_stats) {
+      passes.Fill(link->stats, pass_start);
+      link->stats.faults(playback_faults);
+      link->stats.samples_dropped(dropped.total());
+      link->stats_traffic.Fill(link->stats, pass_start);
+      if (link->stats_writer && link->stats_writer.matched_readers() > 0) link->stats_writer.Write(link->stats);
+      next_stats = pass_start + std::chrono::seconds(1);
+    }
     if (config_.where.duration.count() > 0 && Clock::now() - start >= config_.where.duration) break;
     msg::SceneState scene;
     while (link->scene_reader && link->scene_reader.TakeNext(scene, meta)) {
@@ -111,7 +145,9 @@ int Guide::Run() {
         std::fprintf(stderr, "[audio_guide %s] %s\n", name.c_str(), joined.c_str());
         continue;
       }
+      const auto wait_start = Clock::now();
       link->board_reader.WaitForData(std::chrono::milliseconds(50));
+      waited = Clock::now() - wait_start;
       continue;
     }
     if (!meta.valid_data) continue;
@@ -139,6 +175,7 @@ int Guide::Run() {
       const speech::PlaybackStatus status = speech::Play(u.audio.samples, u.audio.sample_rate_hz, config_.alsa_device);
       if (!status.ok()) {
         // No sound device is an expected condition on a headless box: say so, keep going.
+        ++playback_faults;
         std::fprintf(stderr, "[audio_guide %s] cannot play message #%u: %s\n", name.c_str(), last_id,
                      status.message.c_str());
       } else {

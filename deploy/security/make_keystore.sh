@@ -52,14 +52,14 @@ role_publish() {
   case "$1" in
     world_server) echo "$T_SCENE $T_BOARD $T_OBJECT $T_DEFORM $T_CONTROL $T_ROSTER" ;;
     haptic) echo "$T_MEMBER $T_DEVICE $T_CONTACT $T_EVENT $T_STATS" ;;
-    spectator | audio_guide) echo "$T_MEMBER" ;;
+    spectator | audio_guide) echo "$T_MEMBER $T_STATS" ;;  # stats: their frames' and board loop's
     recorder) echo "" ;;
     player) echo "$ALL_TOPICS" ;;
   esac
 }
 role_subscribe() {
   case "$1" in
-    world_server) echo "$T_MEMBER $T_CONTACT $T_EVENT $T_VISIT $T_OPCMD" ;;
+    world_server) echo "$T_MEMBER $T_CONTACT $T_EVENT $T_VISIT $T_OPCMD $T_STATS" ;;  # stats: for the session log
     haptic) echo "$T_MEMBER $T_SCENE $T_CONTACT $T_OBJECT $T_CONTROL" ;;
     spectator) echo "$T_MEMBER $T_SCENE $T_BOARD $T_DEVICE $T_OBJECT $T_DEFORM $T_CONTROL $T_ROSTER" ;;  # roster: to rejoin
     audio_guide) echo "$T_BOARD $T_SCENE $T_CONTROL" ;;  # scene, controls: the sound cues

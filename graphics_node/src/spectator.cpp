@@ -26,6 +26,8 @@
 #include "handshare/dds/name_binding.hpp"
 #include "handshare/dds/sample_checks.hpp"
 #include "handshare/common/clock.hpp"
+#include "handshare/dds/loop_traffic.hpp"
+#include "handshare/dds/pass_statistics.hpp"
 #include "handshare/graphics/desk_control.hpp"
 #include "handshare/graphics/desk_feedback.hpp"
 #include "handshare/graphics/gamepad_control.hpp"
@@ -51,6 +53,8 @@ constexpr double kDeskMaxForce_N = 3.5;
 
 /// A user's hand is drawn while its device state is fresher than this.
 constexpr auto kHandTimeout = std::chrono::seconds(2);
+// The frame loop's statistics (LoopStatistics): as often as a haptic node's.
+constexpr auto kStatisticsPeriod = std::chrono::seconds(1);
 
 struct UserHand {
   msg::DeviceState state;
@@ -393,7 +397,14 @@ struct SpectatorLink {
             participant, dds::topics::kSessionRoster,
             [&name](const std::string& line) { std::fprintf(stderr, "[graphics_node %s] %s\n", name.c_str(), line.c_str()); },
             "no rejoin when a member stays unheard")),
-        desk_writer(desk ? MakeDeskWriter(participant) : dds::Writer<msg::DeskInput>{}) {
+        desk_writer(desk ? MakeDeskWriter(participant) : dds::Writer<msg::DeskInput>{}),
+        stats_writer(dds::MakeWriterIfGranted<msg::LoopStatistics>(
+            participant, dds::topics::kLoopStatistics,
+            [&name](const std::string& line) { std::fprintf(stderr, "[graphics_node %s] %s\n", name.c_str(), line.c_str()); },
+            "the operator's page shows no frame statistics of this screen")),
+        stats_traffic(participant) {
+    stats.node("graphics_node/" + name);
+    stats.session(where.session);
     // A window draws a hand as soon as its new state is here, not when the next frame is due:
     // the reader's listener wakes the window's wait.
     if (draw_on_state) {
@@ -410,6 +421,18 @@ struct SpectatorLink {
   dds::MemberAnnouncement member;
   dds::Reader<msg::SessionRoster> roster;  // the world server's members: to rejoin if one stays unheard
   dds::Writer<msg::DeskInput> desk_writer;  // --input desk: the person's input, to their haptic node
+  dds::Writer<msg::LoopStatistics> stats_writer;  // the frame loop's, once a second; empty: not granted
+  dds::LoopTraffic stats_traffic;
+  msg::LoopStatistics stats;
+
+  /// Once a second: the frames' statistics, with this participant's traffic and the samples
+  /// the world's checks refused. The frames' period restarts whether or not a reader listens.
+  void PublishStatistics(dds::PassStatistics& frames, Clock::time_point now) {
+    frames.Fill(stats, now);
+    stats.samples_dropped(world.dropped().total());
+    stats_traffic.Fill(stats, now);
+    if (stats_writer && stats_writer.matched_readers() > 0) stats_writer.Write(stats);
+  }
   /// A window: a device state arrived since the view last took them (set by the listener).
   std::shared_ptr<std::atomic<bool>> device_arrived = std::make_shared<std::atomic<bool>>(false);
 };
@@ -641,8 +664,12 @@ int Spectator::Run() {
     }
     if (!link->world.has_scene()) std::fprintf(stderr, "[graphics_node %s] no scene state received; drawing hands only\n", name.c_str());
     auto next = Clock::now();
+    dds::PassStatistics frame_stats(period, next);
+    auto next_stats = next + kStatisticsPeriod;
     int written = 0;
     for (; written < config_.frames && !common::ShutdownRequested(); ++written) {
+      const auto due = next;
+      const auto began = Clock::now();
       rejoin_if_unheard();
       WorldView& world = link->world;
       world.Update();
@@ -668,6 +695,12 @@ int Spectator::Run() {
         sep = ";";
       }
       times << "," << world.world().pose_stamps() << "\n";
+      const auto ended = Clock::now();
+      frame_stats.Record(due, began, ended);
+      if (ended >= next_stats) {
+        link->PublishStatistics(frame_stats, ended);
+        next_stats = ended + kStatisticsPeriod;
+      }
       next += period;
       std::this_thread::sleep_until(next);
     }
@@ -686,6 +719,8 @@ int Spectator::Run() {
   }
   std::uint64_t frames_shown = 0;
   auto next = Clock::now();
+  dds::PassStatistics frame_stats(period, next);
+  auto next_stats = next + kStatisticsPeriod;
   DeskControl desk;
   GamepadControl gamepad;
   std::optional<render::Gamepad> pad;
@@ -723,6 +758,7 @@ int Spectator::Run() {
     const auto input_while_drawing = [&](double wait_s) {
       if (window.WaitForInput(wait_s)) send_input();
     };
+    const auto frame_due = next;
     const auto frame_start = Clock::now();
     window.Render(link->world.Build(desk_user, help), frame_camera,
                   config_.desk_input && !pad ? std::function<void(double)>(input_while_drawing) : nullptr);
@@ -739,6 +775,12 @@ int Spectator::Run() {
                 << std::chrono::duration<double, std::milli>(Clock::now() - frame_start).count() << "\n";
     }
     ++frames_shown;
+    const auto shown = Clock::now();
+    frame_stats.Record(frame_due, frame_start, shown);
+    if (shown >= next_stats) {
+      link->PublishStatistics(frame_stats, shown);
+      next_stats = shown + kStatisticsPeriod;
+    }
     if (config_.desk_input) send_input();
     next += period;
     // Until the next frame is due: the person's input goes out as it arrives, and a new state of

@@ -33,6 +33,7 @@ HapticBridge::HapticBridge(const HapticNodeConfig& config, Device& device, Hapti
       desk_reader_(desk_ == nullptr ? dds::Reader<msg::DeskInput>{}
                                     : dds::MakeReaderIfGranted<msg::DeskInput>(participant, dds::topics::kDeskInput, say_,
                                                                                "the desk's hand stays released")),
+      stats_traffic_(participant),
       deadband_(session::DeadbandConfig{.weber = config.deadband_weber}),
       state_pacer_(config.publish_Hz),
       contact_pacer_(config.publish_Hz),
@@ -423,6 +424,7 @@ void HapticBridge::PublishStatistics() {
   if (loop_.TakeStats(stats) && stats_writer_.matched_readers() > 0) {
     ToLoopStatistics(stats, loop_.faults(), stats_msg_);
     stats_msg_.samples_dropped(dropped_.total());
+    stats_traffic_.Fill(stats_msg_);
     stats_writer_.Write(stats_msg_);
   }
 }

@@ -23,6 +23,7 @@
 #include "handshare/common/overload_watch.hpp"
 #include "handshare/common/session_clock.hpp"
 #include "handshare/common/wakeup.hpp"
+#include "handshare/dds/loop_traffic.hpp"
 #include "handshare/dds/messages.hpp"
 #include "handshare/haptic/haptic_loop.hpp"
 #include "handshare/haptic/haptic_node.hpp"
@@ -203,6 +204,7 @@ class HapticBridge {
 
   msg::DeviceState state_msg_;
   msg::LoopStatistics stats_msg_;
+  dds::LoopTraffic stats_traffic_;  ///< the statistics' deadline misses and bytes sent per second
   msg::ContactSet contacts_msg_;
   session::ContactSetDeadband deadband_;
   // The coupling passivity of the renderers before this one (summed), and of this one.

@@ -47,18 +47,6 @@ std::string ErrorJson(const std::string& error) {
   return nlohmann::json{{"error", error}}.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace);
 }
 
-// LoopStatistics has no check in the DDS layer yet: the console reads it alone.
-std::string CheckLoopStatistics(const msg::LoopStatistics& s, const std::string& session) {
-  if (s.session().to_string() != session) return "session '" + s.session().to_string() + "' is not this session";
-  if (s.node().size() == 0) return "empty node";
-  const double values[] = {s.rate_Hz(), s.jitter_p50_us(), s.jitter_p99_us(), s.jitter_max_us(), s.step_p50_us(),
-                           s.step_p99_us()};
-  for (const double v : values) {
-    if (!std::isfinite(v) || v < 0.0 || v > 1e9) return "a rate or time that is negative, not finite or above 1e9";
-  }
-  return {};
-}
-
 std::string Hex(const dds::SampleMeta::Key& key) {
   static constexpr char kDigits[] = "0123456789abcdef";
   std::string out;
@@ -519,7 +507,7 @@ int Console::Run() {
     const auto now = Clock::now();
     while (stats_reader.TakeNext(stats, meta)) {
       if (!meta.valid_data ||
-          !dropped.Accept("loop_statistics", sender(meta), CheckLoopStatistics(stats, session), say)) {
+          !dropped.Accept("loop_statistics", sender(meta), dds::CheckLoopStatistics(stats, session), say)) {
         continue;
       }
       StationStats& st = state.stations[stats.node().to_string()];
@@ -534,10 +522,15 @@ int Console::Run() {
       st.resyncs = stats.resyncs();
       st.faults = stats.faults();
       st.samples_dropped = stats.samples_dropped();
+      st.deadline_misses = stats.deadline_misses();
+      st.sent_bytes_per_s = stats.sent_bytes_per_s();
       st.received = now;
+      // A station is its user's member of its program's kind (alice's haptic node and alice's
+      // own screen are two members named alice).
+      st.kind = KindOfNode(st.node);
       st.device.clear();
       for (const auto& [key, m] : state.members) {
-        if (m.user == st.user && m.kind == "haptic") st.device = m.device;
+        if (m.user == st.user && m.kind == st.kind) st.device = m.device;
       }
       changed = true;
     }

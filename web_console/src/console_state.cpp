@@ -142,6 +142,15 @@ std::string UserOfNode(const std::string& node) {
   return slash == std::string::npos ? node : node.substr(slash + 1);
 }
 
+std::string KindOfNode(const std::string& node) {
+  static const std::pair<const char*, const char*> kPrograms[] = {
+      {"haptic_node/", "haptic"}, {"graphics_node/", "graphics"}, {"audio_guide/", "audio_guide"}};
+  for (const auto& [prefix, kind] : kPrograms) {
+    if (node.rfind(prefix, 0) == 0) return kind;
+  }
+  return "";
+}
+
 std::string ToJson(const ConsoleState& s, std::chrono::steady_clock::time_point now) {
   using nlohmann::json;
   json j;
@@ -195,6 +204,7 @@ std::string ToJson(const ConsoleState& s, std::chrono::steady_clock::time_point 
   for (const auto& [node, st] : s.stations) {
     stations.push_back({{"node", st.node},
                         {"user", st.user},
+                        {"kind", st.kind},
                         {"device", st.device},
                         {"rate_Hz", st.rate_Hz},
                         {"jitter_p50_us", st.jitter_p50_us},
@@ -205,6 +215,8 @@ std::string ToJson(const ConsoleState& s, std::chrono::steady_clock::time_point 
                         {"resyncs", st.resyncs},
                         {"faults", st.faults},
                         {"samples_dropped", st.samples_dropped},
+                        {"deadline_misses", st.deadline_misses},
+                        {"sent_bytes_per_s", st.sent_bytes_per_s},
                         {"age_s", std::chrono::duration<double>(now - st.received).count()}});
   }
   j["stations"] = std::move(stations);

@@ -25,6 +25,9 @@ TEST(ConsoleState, TheDocumentCarriesEveryStationAndTheWorld) {
   st.rate_Hz = 999.5;
   st.jitter_p99_us = 42.0;
   st.overruns = 2;
+  st.kind = KindOfNode(st.node);
+  st.deadline_misses = 3;
+  st.sent_bytes_per_s = 2048.5;
   st.received = now - 1500ms;
   s.stations[st.node] = st;
   const auto j = nlohmann::json::parse(ToJson(s, now));
@@ -37,8 +40,21 @@ TEST(ConsoleState, TheDocumentCarriesEveryStationAndTheWorld) {
   EXPECT_EQ(j["stations"][0]["user"], "alice");
   EXPECT_EQ(j["stations"][0]["rate_Hz"], 999.5);
   EXPECT_EQ(j["stations"][0]["overruns"], 2);
+  EXPECT_EQ(j["stations"][0]["kind"], "haptic");
+  EXPECT_EQ(j["stations"][0]["deadline_misses"], 3);
+  EXPECT_EQ(j["stations"][0]["sent_bytes_per_s"], 2048.5);
   EXPECT_NEAR(j["stations"][0]["age_s"].get<double>(), 1.5, 1e-6);
   EXPECT_TRUE(j["console"]["actions_enabled"].get<bool>());
+}
+
+// Screens and guides are stations too: their kind comes from their program's node key.
+TEST(ConsoleState, AStationsKindIsItsProgramsMemberKind) {
+  EXPECT_EQ(KindOfNode("haptic_node/alice"), "haptic");
+  EXPECT_EQ(KindOfNode("graphics_node/screen-1"), "graphics");
+  EXPECT_EQ(KindOfNode("audio_guide/guide"), "audio_guide");
+  EXPECT_EQ(KindOfNode("alice"), "");
+  EXPECT_EQ(KindOfNode("x/haptic_node/alice"), "");
+  EXPECT_EQ(UserOfNode("graphics_node/screen-1"), "screen-1");
 }
 
 TEST(ConsoleState, TextThatIsNotUtf8IsReplacedNotRefused) {

@@ -23,21 +23,31 @@ function cell(row, value, cls) {
   return td;
 }
 
+// A station's kind as the page names it: haptic stations first, then screens, then guides.
+const KINDS = {haptic: [0, "station"], graphics: [1, "screen"], audio_guide: [2, "guide"]};
+
 function showStations(stations) {
   const body = $("stations").querySelector("tbody");
   body.replaceChildren();
-  for (const s of stations) {
+  const order = (s) => (KINDS[s.kind] || [3])[0];
+  const sorted = stations.slice().sort((a, b) => order(a) - order(b) || (a.node < b.node ? -1 : a.node > b.node ? 1 : 0));
+  for (const s of sorted) {
     const tr = document.createElement("tr");
     tr.dataset.user = s.user;
+    tr.dataset.node = s.node;
+    tr.dataset.kind = s.kind;
     if (s.age_s > 3) tr.className = "stale";
-    cell(tr, s.user);
-    cell(tr, s.device);
+    cell(tr, (KINDS[s.kind] || [3, s.kind || "?"])[1], "kind");
+    cell(tr, s.user, "user");
+    cell(tr, s.device, "device");
     cell(tr, fixed(s.rate_Hz, 1), "num rate");
     cell(tr, fixed(s.jitter_p99_us, 0), "num jitter");
     cell(tr, fixed(s.step_p99_us, 0), "num step");
     cell(tr, String(s.overruns), "num overruns" + (s.overruns > 0 ? " bad" : ""));
     cell(tr, String(s.resyncs), "num resyncs");
     cell(tr, String(s.faults), "num faults" + (s.faults > 0 ? " bad" : ""));
+    cell(tr, String(s.deadline_misses), "num deadlines" + (s.deadline_misses > 0 ? " bad" : ""));
+    cell(tr, fixed(s.sent_bytes_per_s, 0), "num sent");
     cell(tr, String(s.samples_dropped), "num dropped");
     cell(tr, fixed(s.age_s, 1), "num age");
     body.appendChild(tr);

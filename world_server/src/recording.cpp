@@ -327,6 +327,26 @@ bool RecordingReader::Next(RecordedSample& sample) {
 
 namespace {
 
+// LoopStatistics gained deadline_misses and sent_bytes_per_s (an 8-byte count and an 8-byte
+// rate appended to a @final XCDR1 type, session log schema 5): a sample recorded before ends
+// 16 bytes early, right after samples_dropped (8-aligned: no padding), and reads with both 0.
+msg::LoopStatistics DeserializeLoopStatistics(std::span<const std::uint8_t> cdr) {
+  msg::LoopStatistics sample;
+  try {
+    dds::Deserialize(cdr, sample);
+    return sample;
+  } catch (const dds::SerializationError&) {
+    std::vector<std::uint8_t> padded(cdr.begin(), cdr.end());
+    padded.resize(padded.size() + 16, 0);
+    try {
+      dds::Deserialize(padded, sample);
+      return sample;
+    } catch (const dds::SerializationError&) {
+    }
+    throw;  // not an older sample either: where the payload as recorded stops
+  }
+}
+
 // Calls f(msg::T&) with the sample of `topic` deserialized; false for an unknown topic.
 template <class F>
 bool WithSample(const RecordedSample& s, F&& f) {
@@ -344,7 +364,11 @@ bool WithSample(const RecordedSample& s, F&& f) {
   if (s.topic == t::kObjectState.name) return as(msg::ObjectState{});
   if (s.topic == t::kDeformation.name) return as(msg::Deformation{});
   if (s.topic == t::kControlEvent.name) return as(msg::ControlEvent{});
-  if (s.topic == t::kLoopStatistics.name) return as(msg::LoopStatistics{});
+  if (s.topic == t::kLoopStatistics.name) {
+    msg::LoopStatistics sample = DeserializeLoopStatistics(s.cdr);
+    f(sample);
+    return true;
+  }
   if (s.topic == t::kControlState.name) return as(msg::ControlState{});
   return false;
 }

@@ -1,5 +1,7 @@
 #include "sample_intake.hpp"
 
+#include <cstdio>
+
 #include "handshare/common/clock.hpp"
 #include "handshare/dds/sample_checks.hpp"
 #include "handshare/session/operator_command.hpp"
@@ -14,7 +16,11 @@ SampleIntake::SampleIntake(dds::Participant& participant, std::string session)
       contact_reader_(dds::MakeReader<msg::ContactSet>(participant, dds::topics::kContactSet)),
       control_reader_(dds::MakeReader<msg::ControlEvent>(participant, dds::topics::kControlEvent)),
       visit_reader_(dds::MakeReader<msg::VisitAnswers>(participant, dds::topics::kVisitAnswers)),
-      command_reader_(dds::MakeReader<msg::OperatorCommand>(participant, dds::topics::kOperatorCommand)) {}
+      command_reader_(dds::MakeReader<msg::OperatorCommand>(participant, dds::topics::kOperatorCommand)),
+      stats_reader_(dds::MakeReaderIfGranted<msg::LoopStatistics>(
+          participant, dds::topics::kLoopStatistics,
+          [](const std::string& line) { std::fprintf(stderr, "[world_server] %s\n", line.c_str()); },
+          "the session log keeps no loop statistics")) {}
 
 void SampleIntake::Take(TickInputs& in) {
   in.clear();
@@ -23,6 +29,7 @@ void SampleIntake::Take(TickInputs& in) {
   TakeContactSets(in);
   TakeVisitAnswers(in);
   TakeOperatorCommands(in);
+  TakeStations(in);
 }
 
 void SampleIntake::TakeMembers(TickInputs& in) {
@@ -109,6 +116,19 @@ void SampleIntake::TakeOperatorCommands(TickInputs& in) {
       c.command = *command;
     }
     in.commands.push_back(std::move(c));
+  }
+}
+
+void SampleIntake::TakeStations(TickInputs& in) {
+  msg::LoopStatistics sample;
+  dds::SampleMeta meta;
+  while (stats_reader_ && stats_reader_.TakeNext(sample, meta)) {
+    if (!meta.valid_data) continue;
+    LoopStatisticsInput s;
+    s.node = sample.node().to_string();
+    s.refused = dds::CheckLoopStatistics(sample, session_);
+    if (s.refused.empty()) s.loop = ToLoopRecord(sample, common::UnixNowNs());
+    in.stations.push_back(std::move(s));
   }
 }
 

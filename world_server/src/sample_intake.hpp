@@ -24,6 +24,7 @@ class SampleIntake {
   void TakeContactSets(TickInputs& in);
   void TakeVisitAnswers(TickInputs& in);
   void TakeOperatorCommands(TickInputs& in);
+  void TakeStations(TickInputs& in);
 
   std::string session_;
   dds::Reader<msg::MemberInfo> member_reader_;
@@ -31,6 +32,7 @@ class SampleIntake {
   dds::Reader<msg::ControlEvent> control_reader_;
   dds::Reader<msg::VisitAnswers> visit_reader_;
   dds::Reader<msg::OperatorCommand> command_reader_;
+  dds::Reader<msg::LoopStatistics> stats_reader_;
 };
 
 }  // namespace handshare::server

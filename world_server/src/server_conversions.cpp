@@ -18,6 +18,26 @@ std::optional<ControlInput> ToControlInput(const msg::ControlEvent& e) {
   return ControlInput{e.control_id().to_string(), *kind, e.index(), e.user().to_string(), e.value()};
 }
 
+LoopRecord ToLoopRecord(const msg::LoopStatistics& s, std::uint64_t unix_ns) {
+  LoopRecord r;
+  r.unix_ns = unix_ns;
+  r.node = s.node().to_string();
+  r.rate_Hz = s.rate_Hz();
+  r.jitter_p50_us = s.jitter_p50_us();
+  r.jitter_p99_us = s.jitter_p99_us();
+  r.jitter_max_us = s.jitter_max_us();
+  r.step_p50_us = s.step_p50_us();
+  r.step_p99_us = s.step_p99_us();
+  r.steps = s.steps();
+  r.overruns = s.overruns();
+  r.resyncs = s.resyncs();
+  r.faults = s.faults();
+  r.samples_dropped = s.samples_dropped();
+  r.deadline_misses = s.deadline_misses();
+  r.sent_bytes_per_s = s.sent_bytes_per_s();
+  return r;
+}
+
 ControlRecord ToControlRecord(const msg::ControlEvent& e, const ControlInput& input, std::uint64_t unix_ns) {
   ControlRecord record;
   record.unix_ns = unix_ns;

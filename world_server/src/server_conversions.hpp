@@ -30,6 +30,8 @@ std::optional<ControlInput> ToControlInput(const msg::ControlEvent& e);
 
 /// The session log's row of a control event received at unix_ns (a non-finite error is none).
 ControlRecord ToControlRecord(const msg::ControlEvent& e, const ControlInput& input, std::uint64_t unix_ns);
+/// A station's loop statistics for the log, taken at unix_ns.
+LoopRecord ToLoopRecord(const msg::LoopStatistics& s, std::uint64_t unix_ns);
 
 /// A control's state as published on handshare/control_state.
 msg::ControlState ToControlState(const ControlStateRecord& r, const std::string& session);

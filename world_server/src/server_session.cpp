@@ -67,6 +67,7 @@ ServerSession::Events ServerSession::Tick(const TickInputs& in, Clock::time_poin
   StepObjects(now, dt_s, out);
   TakeVisitAnswers(in, out);
   TakeOperatorCommands(in, now, out);
+  TakeStations(in, out);
   EndTurns(now, out);
   return out;
 }
@@ -190,6 +191,12 @@ void ServerSession::TakeVisitAnswers(const TickInputs& in, Events& out) {
   }
   // A visitor's answers are few and not to be lost with a killed server.
   if (taken) out.push_back(SessionCheckpoint{});
+}
+
+void ServerSession::TakeStations(const TickInputs& in, Events& out) {
+  for (const LoopStatisticsInput& s : in.stations) {
+    if (Accepted("loop_statistics", s.node, s.refused, out)) out.push_back(StationReported{s.loop});
+  }
 }
 
 void ServerSession::EndTurns(Clock::time_point now, Events& out) {

@@ -79,6 +79,13 @@ struct OperatorCommandInput {
   controls::OperatorCommand command;  ///< accepted samples only
 };
 
+/// A station's loop statistics as taken (valid data only).
+struct LoopStatisticsInput {
+  std::string node;
+  std::string refused;  ///< why the sample check refused it ("" accepted)
+  LoopRecord loop;      ///< accepted samples only
+};
+
 /// What one tick takes, in the order it takes it.
 struct TickInputs {
   std::vector<MemberInput> members;
@@ -87,8 +94,10 @@ struct TickInputs {
   std::vector<ContactSetInput> contacts;
   std::vector<VisitAnswersInput> visits;
   std::vector<OperatorCommandInput> commands;
+  std::vector<LoopStatisticsInput> stations;
   void clear() {
     commands.clear();
+    stations.clear();
     visits.clear();
     members.clear();
     member_writers.clear();
@@ -150,6 +159,8 @@ class ServerSession {
   void TakeVisitAnswers(const TickInputs& in, Events& out);
   /// The operator's commands: another world, the tour again, a visitor's turn ended.
   void TakeOperatorCommands(const TickInputs& in, Clock::time_point now, Events& out);
+  /// Stations' loop statistics, for the log.
+  void TakeStations(const TickInputs& in, Events& out);
   /// Visitors' turns that are over: each said on the board, once.
   void EndTurns(Clock::time_point now, Events& out);
   /// What a world change, a new gravity or title did (a control's action or the operator's):

@@ -67,7 +67,7 @@ struct ControlKindRow {
   scene::ControlType kind;
 };
 using Row = std::variant<MemberRow, SceneRow, ControlRecord, OwnershipRow, EndRow, SessionState, ObjectPose, ForgetPosesRow,
-                         ControlPlace, ForgetPlacesRow, TurnRecord, AnswersRow, ControlKindRow>;
+                         ControlPlace, ForgetPlacesRow, TurnRecord, AnswersRow, ControlKindRow, LoopRecord>;
 
 std::string BoardJson(const std::vector<scene::Message>& board) {
   nlohmann::json j = nlohmann::json::array();
@@ -107,6 +107,7 @@ void OpenSchema(sqlite::Db& db) {
       db.Exec(schema::kMigrateV1ToV2, "creating the schema's version 2");
       db.Exec(schema::kMigrateV2ToV3, "creating the schema's version 3");
       db.Exec(schema::kMigrateV3ToV4, "creating the schema's version 4");
+      db.Exec(schema::kMigrateV4ToV5, "creating the schema's version 5");
       db.Exec("COMMIT", "committing the schema");
     } catch (...) {
       sqlite3_exec(db.get(), "ROLLBACK", nullptr, nullptr, nullptr);  // the first error is the one to report
@@ -128,13 +129,14 @@ void OpenSchema(sqlite::Db& db) {
   if (version < SessionLog::kSchemaVersion) {
     // Every row stays; the version is read again inside the transaction, so two servers
     // opening one old log at once migrate it once.
-    db.Exec("BEGIN IMMEDIATE", "starting the migration to schema version 4");
+    db.Exec("BEGIN IMMEDIATE", "starting the migration to schema version 5");
     try {
       const std::int64_t now = db.QueryInt("PRAGMA user_version", "reading the schema version");
       if (now == 1) db.Exec(schema::kMigrateV1ToV2, "migrating the session log to schema version 2");
       if (now <= 2) db.Exec(schema::kMigrateV2ToV3, "migrating the session log to schema version 3");
       if (now <= 3) db.Exec(schema::kMigrateV3ToV4, "migrating the session log to schema version 4");
-      db.Exec("COMMIT", "committing the migration to schema version 4");
+      if (now <= 4) db.Exec(schema::kMigrateV4ToV5, "migrating the session log to schema version 5");
+      db.Exec("COMMIT", "committing the migration to schema version 5");
     } catch (...) {
       sqlite3_exec(db.get(), "ROLLBACK", nullptr, nullptr, nullptr);
       throw;
@@ -179,7 +181,7 @@ struct SessionLog::Impl {
   // Prepared in the constructor, in the caller's thread, so a broken file fails there; the
   // writer thread owns the connection from then on.
   std::optional<sqlite::Statement> member, scene, control, owner, end, seen, state, pose, forget, place, forget_places,
-      turn, answer, kind;
+      turn, answer, kind, loop;
 
   void Prepare() {
     member.emplace(db, schema::kInsertMember, "inserting a member event");
@@ -196,6 +198,7 @@ struct SessionLog::Impl {
     turn.emplace(db, schema::kInsertTurn, "inserting a visitor's turn");
     answer.emplace(db, schema::kInsertAnswer, "inserting a questionnaire's answer");
     kind.emplace(db, schema::kUpsertControlKind, "writing a control's kind");
+    loop.emplace(db, schema::kInsertLoop, "inserting a station's loop statistics");
   }
 
   void WriterLoop() {
@@ -307,6 +310,15 @@ struct SessionLog::Impl {
           kind->Bind(1, session_id).Bind(2, ck->control_id).Bind(3, std::string_view(controls::ToString(ck->kind)));
           kind->Step();
           kind->Reset();
+        } else if (const auto* l = std::get_if<LoopRecord>(&row)) {
+          const auto n = [](std::uint64_t v) { return static_cast<std::int64_t>(v); };
+          loop->Bind(1, session_id).Bind(2, Ns(l->unix_ns)).Bind(3, l->node).Bind(4, l->rate_Hz)
+              .Bind(5, l->jitter_p50_us).Bind(6, l->jitter_p99_us).Bind(7, l->jitter_max_us).Bind(8, l->step_p50_us)
+              .Bind(9, l->step_p99_us).Bind(10, n(l->steps)).Bind(11, n(l->overruns)).Bind(12, n(l->resyncs))
+              .Bind(13, n(l->faults)).Bind(14, n(l->samples_dropped)).Bind(15, n(l->deadline_misses))
+              .Bind(16, l->sent_bytes_per_s);
+          loop->Step();
+          loop->Reset();
         } else if (const auto* e = std::get_if<EndRow>(&row)) {
           end->Bind(1, Ns(e->unix_ns)).Bind(2, session_id);
           end->Step();
@@ -420,6 +432,8 @@ void SessionLog::OnVisitAnswers(const std::string& sent_by, const controls::Visi
 void SessionLog::OnControlKinds(const scene::Scene& scene) {
   for (const auto& c : scene.controls) impl_->Push(ControlKindRow{c.id, c.type});
 }
+
+void SessionLog::OnLoopStatistics(const LoopRecord& loop) { impl_->Push(loop); }
 
 void SessionLog::ForgetControlPlaces() { impl_->Push(ForgetPlacesRow{}); }
 

@@ -37,6 +37,7 @@ void SessionLogWriter::Take(std::span<const SessionEvent> events, Clock::time_po
         log_.OnTurnEnded(TurnRecord{end >= turn_ns ? end - turn_ns : 0, end, e.member.member_id, e.member.user});
       },
       [&](const VisitAnswered& e) { log_.OnVisitAnswers(e.sent_by, e.answers, unix_now_()); },
+      [&](const StationReported& e) { log_.OnLoopStatistics(e.loop); },
       [](const auto&) {},
   };
   for (const SessionEvent& event : events) std::visit(record, event);

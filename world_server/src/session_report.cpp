@@ -260,6 +260,51 @@ void ReadVisits(sqlite::Db& db, std::int64_t id, const std::vector<ControlRecord
   report.questionnaire = ComputeQuestionnaire(answers);
 }
 
+// Version 5's loop statistics: per node, its samples summed up and its newest sample.
+std::vector<StationStats> ReadStations(sqlite::Db& db, std::int64_t id) {
+  std::vector<StationStats> out;
+  if (db.QueryInt("PRAGMA user_version", "reading the schema version") < 5) return out;
+  sqlite::Statement s(db,
+                      "SELECT a.node, a.n, a.first, a.last, a.rate_mean, a.rate_min, a.jitter_max, a.bytes_mean, "
+                      "l.unix_ns, l.rate_hz, l.jitter_p50_us, l.jitter_p99_us, l.jitter_max_us, l.step_p50_us, "
+                      "l.step_p99_us, l.steps, l.overruns, l.resyncs, l.faults, l.samples_dropped, l.deadline_misses, "
+                      "l.sent_bytes_per_s FROM (SELECT node, count(*) AS n, min(unix_ns) AS first, max(unix_ns) AS last, "
+                      "avg(rate_hz) AS rate_mean, min(rate_hz) AS rate_min, max(jitter_p99_us) AS jitter_max, "
+                      "avg(sent_bytes_per_s) AS bytes_mean, max(id) AS last_id FROM loop_statistics "
+                      "WHERE session_id = ?1 GROUP BY node) a JOIN loop_statistics l ON l.id = a.last_id ORDER BY a.node",
+                      "reading the stations' loop statistics");
+  s.Bind(1, id);
+  while (s.Step()) {
+    StationStats st;
+    st.node = s.Text(0);
+    st.samples = U64(s.Int(1));
+    st.first_unix_ns = U64(s.Int(2));
+    st.last_unix_ns = U64(s.Int(3));
+    st.rate_mean_Hz = s.Double(4);
+    st.rate_min_Hz = s.Double(5);
+    st.jitter_p99_max_us = s.Double(6);
+    st.sent_bytes_per_s_mean = s.Double(7);
+    LoopRecord& l = st.last;
+    l.node = st.node;
+    l.unix_ns = U64(s.Int(8));
+    l.rate_Hz = s.Double(9);
+    l.jitter_p50_us = s.Double(10);
+    l.jitter_p99_us = s.Double(11);
+    l.jitter_max_us = s.Double(12);
+    l.step_p50_us = s.Double(13);
+    l.step_p99_us = s.Double(14);
+    l.steps = U64(s.Int(15));
+    l.overruns = U64(s.Int(16));
+    l.resyncs = U64(s.Int(17));
+    l.faults = U64(s.Int(18));
+    l.samples_dropped = U64(s.Int(19));
+    l.deadline_misses = U64(s.Int(20));
+    l.sent_bytes_per_s = s.Double(21);
+    out.push_back(std::move(st));
+  }
+  return out;
+}
+
 }  // namespace
 
 std::vector<SessionSummary> ListSessions(const std::filesystem::path& file) {
@@ -337,6 +382,7 @@ SessionReport ReadReport(const std::filesystem::path& file, std::optional<std::i
     if (s.Step()) report.ownership_changes = U64(s.Int(0));
   }
   ReadVisits(*db, id, controls, report);
+  report.stations = ReadStations(*db, id);
   db->Exec("COMMIT", "ending the read transaction");
   return report;
 }
@@ -424,6 +470,21 @@ void PrintReport(std::ostream& out, const SessionReport& r) {
     out << Format("  %-8s %-13s %4zu %s %s\n", controls::ToString(q.kind), controls::ToString(q.question),
                   q.score.n, mean.c_str(), sd.c_str());
   }
+
+  out << "\nstations (loop statistics, about one sample a second a node; counts from the node's start, as of "
+         "its last sample): "
+      << r.stations.size() << "\n";
+  if (!r.stations.empty()) {
+    out << Format("  %-28s %7s %9s %9s %11s %8s %6s %9s %7s %10s\n", "node", "samples", "rate [Hz]", "min [Hz]",
+                  "jit p99 max", "overruns", "faults", "deadlines", "dropped", "bytes/s");
+    for (const auto& st : r.stations) {
+      out << Format("  %-28s %7zu %9.1f %9.1f %8.0f us %8llu %6llu %9llu %7llu %10.0f\n", st.node.c_str(), st.samples,
+                    st.rate_mean_Hz, st.rate_min_Hz, st.jitter_p99_max_us,
+                    static_cast<unsigned long long>(st.last.overruns), static_cast<unsigned long long>(st.last.faults),
+                    static_cast<unsigned long long>(st.last.deadline_misses),
+                    static_cast<unsigned long long>(st.last.samples_dropped), st.sent_bytes_per_s_mean);
+    }
+  }
 }
 
 void PrintReportCsv(std::ostream& out, const SessionReport& r) {
@@ -488,6 +549,24 @@ void PrintReportCsv(std::ostream& out, const SessionReport& r) {
     row("questionnaire", item, "n", std::to_string(q.score.n));
     row("questionnaire", item, "mean", Format("%.6g", q.score.mean));
     row("questionnaire", item, "sd", Format("%.6g", q.score.sd));
+  }
+  for (const auto& st : r.stations) {
+    const auto u = [](std::uint64_t v) { return std::to_string(v); };
+    row("station", st.node, "samples", std::to_string(st.samples));
+    row("station", st.node, "first_s", Format("%.3f", Seconds(s.started_unix_ns, st.first_unix_ns)));
+    row("station", st.node, "last_s", Format("%.3f", Seconds(s.started_unix_ns, st.last_unix_ns)));
+    row("station", st.node, "rate_mean_Hz", Format("%.6g", st.rate_mean_Hz));
+    row("station", st.node, "rate_min_Hz", Format("%.6g", st.rate_min_Hz));
+    row("station", st.node, "jitter_p99_max_us", Format("%.6g", st.jitter_p99_max_us));
+    row("station", st.node, "sent_bytes_per_s_mean", Format("%.6g", st.sent_bytes_per_s_mean));
+    row("station", st.node, "rate_Hz", Format("%.6g", st.last.rate_Hz));
+    row("station", st.node, "steps", u(st.last.steps));
+    row("station", st.node, "overruns", u(st.last.overruns));
+    row("station", st.node, "resyncs", u(st.last.resyncs));
+    row("station", st.node, "faults", u(st.last.faults));
+    row("station", st.node, "samples_dropped", u(st.last.samples_dropped));
+    row("station", st.node, "deadline_misses", u(st.last.deadline_misses));
+    row("station", st.node, "sent_bytes_per_s", Format("%.6g", st.last.sent_bytes_per_s));
   }
 }
 

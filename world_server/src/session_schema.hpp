@@ -11,6 +11,8 @@
 //   version 4: visit_turns (a visitor's turn ended after --visit-minutes), visit_answers (the
 //              questionnaire at its end, the paper's Fig. 16) and control_kinds (each control's
 //              kind, for the paper's Table 4 by kind of control).
+//   version 5: loop_statistics (every station's LoopStatistics sample as the world server took
+//              it: haptic nodes, screens, guides; what the operator's page showed).
 namespace handshare::server::schema {
 
 inline constexpr const char* kCreateV1 = R"sql(
@@ -159,6 +161,31 @@ CREATE INDEX visit_answers_by_session ON visit_answers(session_id, visitor);
 PRAGMA user_version = 4;
 )sql";
 
+// Version 5 on top of version 4.
+inline constexpr const char* kMigrateV4ToV5 = R"sql(
+CREATE TABLE loop_statistics(                    -- a station's loop statistics (1 Hz a node)
+  id               INTEGER PRIMARY KEY,
+  session_id       INTEGER NOT NULL REFERENCES sessions(id),
+  unix_ns          INTEGER NOT NULL,             -- when the world server took the sample
+  node             TEXT    NOT NULL,             -- haptic_node/USER, graphics_node/NAME, audio_guide/NAME
+  rate_hz          REAL    NOT NULL,             -- loop passes (haptic steps, frames) a second
+  jitter_p50_us    REAL    NOT NULL,
+  jitter_p99_us    REAL    NOT NULL,
+  jitter_max_us    REAL    NOT NULL,
+  step_p50_us      REAL    NOT NULL,
+  step_p99_us      REAL    NOT NULL,
+  steps            INTEGER NOT NULL,             -- counts: since the node started
+  overruns         INTEGER NOT NULL,
+  resyncs          INTEGER NOT NULL,
+  faults           INTEGER NOT NULL,
+  samples_dropped  INTEGER NOT NULL,
+  deadline_misses  INTEGER NOT NULL,
+  sent_bytes_per_s REAL    NOT NULL              -- over the node's last statistics period
+);
+CREATE INDEX loop_statistics_by_session ON loop_statistics(session_id, node, unix_ns);
+PRAGMA user_version = 5;
+)sql";
+
 // 0x48534C47 = "HSLG"; PRAGMAs take no parameters, so the numbers are spelled out.
 inline constexpr const char* kStampV1 = "PRAGMA application_id = 1213418567; PRAGMA user_version = 1;";
 
@@ -191,6 +218,10 @@ inline constexpr const char* kInsertAnswer =
     "VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7)";
 inline constexpr const char* kUpsertControlKind =
     "INSERT OR REPLACE INTO control_kinds(session_id, control_id, kind) VALUES (?1, ?2, ?3)";
+inline constexpr const char* kInsertLoop =
+    "INSERT INTO loop_statistics(session_id, unix_ns, node, rate_hz, jitter_p50_us, jitter_p99_us, jitter_max_us, "
+    "step_p50_us, step_p99_us, steps, overruns, resyncs, faults, samples_dropped, deadline_misses, sent_bytes_per_s) "
+    "VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8, ?9, ?10, ?11, ?12, ?13, ?14, ?15, ?16)";
 inline constexpr const char* kUpdateResumedFrom = "UPDATE sessions SET resumed_from = ?1 WHERE id = ?2";
 inline constexpr const char* kUpdateEnd = "UPDATE sessions SET ended_unix_ns = ?1 WHERE id = ?2";
 inline constexpr const char* kUpdateSeen =

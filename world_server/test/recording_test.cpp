@@ -164,6 +164,35 @@ TEST(Recording, ASampleThatDoesNotDeserializeIsNamedWithItsTopicAndOffset) {
   EXPECT_NE(error.find("bytes into its payload"), std::string::npos) << error;
 }
 
+// A recording made before LoopStatistics had deadline_misses and sent_bytes_per_s (its samples
+// 16 bytes shorter) still reads; a sample cut anywhere else is still refused.
+TEST(Recording, LoopStatisticsRecordedBeforeTheirTrafficFieldsStillRead) {
+  TempDir dir;
+  msg::LoopStatistics stats;
+  stats.node("haptic_node/alice");
+  stats.session("museum");
+  stats.samples_dropped(3);
+  std::vector<std::uint8_t> cdr = dds::Serialize(stats);
+  ASSERT_GT(cdr.size(), 20u);
+  cdr.resize(cdr.size() - 16);  // the older type's payload
+  msg::LoopStatistics decoded;
+  EXPECT_THROW(dds::Deserialize(cdr, decoded), dds::SerializationError);  // this build's type alone refuses it
+  std::vector<std::uint8_t> cut = cdr;
+  cut.resize(cut.size() - 8);
+  {
+    RecordingWriter writer(dir / "old.db", SessionStart{"museum", 7, "test", 1, kT0}, std::chrono::milliseconds(20));
+    writer.Push(Sample(dds::topics::kLoopStatistics.name, 1000, cdr));
+    writer.Finish(static_cast<std::int64_t>(kT0 + kSecond));
+  }
+  EXPECT_EQ(VerifyRecording(dir / "old.db"), 1);
+  {
+    RecordingWriter writer(dir / "cut.db", SessionStart{"museum", 7, "test", 1, kT0}, std::chrono::milliseconds(20));
+    writer.Push(Sample(dds::topics::kLoopStatistics.name, 1000, cut));
+    writer.Finish(static_cast<std::int64_t>(kT0 + kSecond));
+  }
+  EXPECT_NE(ErrorOf([&] { VerifyRecording(dir / "cut.db"); }).find("topic handshare/loop_statistics"), std::string::npos);
+}
+
 TEST(Recording, ASessionLogIsNotARecordingAndAnExistingFileIsNotOverwritten) {
   TempDir dir;
   const auto log_file = dir / "log.db";

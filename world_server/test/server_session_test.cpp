@@ -31,7 +31,8 @@ std::string KindOf(const SessionEvent& e) {
   static const char* const kNames[] = {"LineSaid",       "MemberChanged",       "RosterChanged", "SceneRevised",
                                        "SceneShown",     "SessionStateChanged", "MessageSaid",   "ControlApplied",
                                        "ControlStateChanged", "WorldEntered",   "OwnershipChanged", "BodyMoved",
-                                       "FieldChanged",   "SessionCheckpoint",   "TurnEnded",     "VisitAnswered"};
+                                       "FieldChanged",   "SessionCheckpoint",   "TurnEnded",     "VisitAnswered",
+                                       "StationReported"};
   static_assert(std::size(kNames) == std::variant_size_v<SessionEvent>);
   return kNames[e.index()];
 }

@@ -416,6 +416,81 @@ TEST(ReadReport, ALogWithoutVisitTablesReportsNone) {
   EXPECT_EQ(r.kinds[0].kind, "unknown");
 }
 
+// The stations' loop statistics (schema version 5): per node its samples, rate, worst p99
+// jitter and mean bytes per second, and the newest sample's counts; in the text and the CSV.
+TEST(ReadReport, StationsSumUpEveryNodesLoopStatistics) {
+  TempDir dir;
+  const auto file = dir / "stations.sqlite";
+  const auto loop = [](std::uint64_t t, const char* node, double rate_Hz, double jitter_p99_us, std::uint64_t overruns,
+                       std::uint64_t deadline_misses, double bytes_per_s) {
+    LoopRecord l;
+    l.unix_ns = t;
+    l.node = node;
+    l.rate_Hz = rate_Hz;
+    l.jitter_p99_us = jitter_p99_us;
+    l.overruns = overruns;
+    l.faults = 1;
+    l.deadline_misses = deadline_misses;
+    l.sent_bytes_per_s = bytes_per_s;
+    return l;
+  };
+  {
+    SessionLog log(file, SessionStart{"museum", 5, "h", 1, kT0});
+    log.OnLoopStatistics(loop(kT0 + 1 * kSecond, "haptic_node/alice", 1000.0, 40.0, 0, 0, 2000.0));
+    log.OnLoopStatistics(loop(kT0 + 2 * kSecond, "graphics_node/screen", 30.0, 900.0, 2, 1, 100.0));
+    log.OnLoopStatistics(loop(kT0 + 2 * kSecond, "haptic_node/alice", 990.0, 60.0, 3, 2, 3000.0));
+    log.End(kT0 + 3 * kSecond);
+  }
+  const SessionReport r = ReadReport(file);
+  ASSERT_EQ(r.stations.size(), 2u);
+  const StationStats& screen = r.stations[0];
+  const StationStats& alice = r.stations[1];
+  EXPECT_EQ(screen.node, "graphics_node/screen");
+  EXPECT_EQ(screen.samples, 1u);
+  EXPECT_EQ(screen.last.deadline_misses, 1u);
+  EXPECT_EQ(alice.node, "haptic_node/alice");
+  EXPECT_EQ(alice.samples, 2u);
+  EXPECT_EQ(alice.first_unix_ns, kT0 + 1 * kSecond);
+  EXPECT_EQ(alice.last_unix_ns, kT0 + 2 * kSecond);
+  EXPECT_DOUBLE_EQ(alice.rate_mean_Hz, 995.0);
+  EXPECT_DOUBLE_EQ(alice.rate_min_Hz, 990.0);
+  EXPECT_DOUBLE_EQ(alice.jitter_p99_max_us, 60.0);
+  EXPECT_DOUBLE_EQ(alice.sent_bytes_per_s_mean, 2500.0);
+  EXPECT_DOUBLE_EQ(alice.last.rate_Hz, 990.0);
+  EXPECT_EQ(alice.last.overruns, 3u);
+  EXPECT_EQ(alice.last.faults, 1u);
+  EXPECT_EQ(alice.last.deadline_misses, 2u);
+  EXPECT_DOUBLE_EQ(alice.last.sent_bytes_per_s, 3000.0);
+  std::ostringstream text, csv;
+  PrintReport(text, r);
+  PrintReportCsv(csv, r);
+  EXPECT_NE(text.str().find("stations (loop statistics"), std::string::npos) << text.str();
+  EXPECT_NE(text.str().find("haptic_node/alice"), std::string::npos) << text.str();
+  EXPECT_NE(csv.str().find("station,haptic_node/alice,deadline_misses,2\n"), std::string::npos) << csv.str();
+  EXPECT_NE(csv.str().find("station,haptic_node/alice,sent_bytes_per_s_mean,2500\n"), std::string::npos) << csv.str();
+
+  // A log of version 4 has none, and opening it to write migrates it and keeps its rows.
+  const auto old_file = dir / "v4.sqlite";
+  {
+    SessionLog log(old_file, SessionStart{"museum", 5, "h", 1, kT0});
+    log.OnSceneChange("start_menu", "Start menu", kT0);
+  }
+  sqlite3* db = nullptr;
+  ASSERT_EQ(sqlite3_open(old_file.c_str(), &db), SQLITE_OK);
+  EXPECT_EQ(sqlite3_exec(db, "DROP TABLE loop_statistics; PRAGMA user_version = 4;", nullptr, nullptr, nullptr), SQLITE_OK);
+  sqlite3_close(db);
+  EXPECT_TRUE(ReadReport(old_file).stations.empty());
+  {
+    SessionLog log(old_file, SessionStart{"museum", 5, "h", 1, kT0 + 10 * kSecond});
+    log.OnLoopStatistics(loop(kT0 + 11 * kSecond, "audio_guide/guide", 20.0, 0.0, 0, 0, 50.0));
+  }
+  EXPECT_EQ(ListSessions(old_file).size(), 2u);
+  const SessionReport migrated = ReadReport(old_file);
+  ASSERT_EQ(migrated.stations.size(), 1u);
+  EXPECT_EQ(migrated.stations[0].node, "audio_guide/guide");
+  EXPECT_EQ(ReadReport(old_file, ListSessions(old_file).front().id).worlds.size(), 1u);
+}
+
 TEST(ReadReport, MissingEmptyForeignAndCorruptFilesSayWhat) {
   TempDir dir;
   EXPECT_NE(ErrorOf([&] { ReadReport(dir / "absent.sqlite"); }).find("absent.sqlite: no such file"),

@@ -14,6 +14,7 @@
 #include <fastdds/dds/domain/DomainParticipant.hpp>
 #include <fastdds/dds/domain/DomainParticipantFactory.hpp>
 #include <fastdds/dds/publisher/DataWriter.hpp>
+#include <fastdds/dds/publisher/DataWriterListener.hpp>
 #include <fastdds/dds/publisher/Publisher.hpp>
 #include <fastdds/dds/subscriber/DataReader.hpp>
 #include <fastdds/dds/subscriber/DataReaderListener.hpp>
@@ -109,6 +110,12 @@ struct TrafficCounters {
   std::atomic<std::uint64_t> lost_by_gone_readers{0};  // readers deleted: their last lost count
 };
 
+// Deadline misses of every endpoint of one participant (Participant::DeadlinesMissed).
+struct DeadlineCounters {
+  std::atomic<std::uint64_t> requested{0};
+  std::atomic<std::uint64_t> offered_while_matched{0};
+};
+
 class ParticipantImpl {
  public:
   fdds::DomainParticipant* participant = nullptr;
@@ -122,6 +129,7 @@ class ParticipantImpl {
   std::string flow_controller;
   std::map<std::string, std::shared_ptr<TrafficCounters>> traffic;  // by topic, under mutex
   std::map<fdds::DataReader*, std::string> live_readers;            // for their lost counts
+  DeadlineCounters deadlines;
 
   std::shared_ptr<TrafficCounters> CountersFor(const std::string& topic) {
     std::lock_guard<std::mutex> lock(mutex);
@@ -161,15 +169,41 @@ class ParticipantImpl {
 
 namespace {
 
+// A writer's offered-deadline misses, counted only while a reader is matched: a stream that
+// pauses because nobody reads it (the haptic node's device states) has missed nothing.
+class DeadlineWriterListener final : public fdds::DataWriterListener {
+ public:
+  explicit DeadlineWriterListener(detail::DeadlineCounters& counters) : counters_(counters) {}
+  void on_publication_matched(fdds::DataWriter*, const fdds::PublicationMatchedStatus& s) override {
+    matched_.store(s.current_count, std::memory_order_relaxed);
+  }
+  void on_offered_deadline_missed(fdds::DataWriter*, const fdds::OfferedDeadlineMissedStatus& s) override {
+    if (matched_.load(std::memory_order_relaxed) > 0 && s.total_count_change > 0) {
+      counters_.offered_while_matched.fetch_add(static_cast<std::uint64_t>(s.total_count_change),
+                                                std::memory_order_relaxed);
+    }
+  }
+
+ private:
+  detail::DeadlineCounters& counters_;
+  std::atomic<int> matched_{0};
+};
+
 class WriterImpl final : public detail::UntypedWriter {
  public:
-  WriterImpl(std::shared_ptr<detail::ParticipantImpl> owner, fdds::DataWriter* w, std::string topic)
+  WriterImpl(std::shared_ptr<detail::ParticipantImpl> owner, fdds::Topic* topic, const fdds::DataWriterQos& qos,
+             std::string topic_name)
       : owner_(std::move(owner)),
-        w_(w),
-        topic_(std::move(topic)),
+        listener_(owner_->deadlines),
+        w_(CheckEntity(owner_->publisher->create_datawriter(topic, qos, &listener_, kListenerMask),
+                       "writer on " + topic_name)),
+        topic_(topic->get_name()),
         counters_(owner_->CountersFor(topic_)),
         type_(w_->get_type()) {}
-  ~WriterImpl() override { owner_->publisher->delete_datawriter(w_); }
+  ~WriterImpl() override {
+    w_->set_listener(nullptr);
+    owner_->publisher->delete_datawriter(w_);
+  }
   void Write(const void* sample) override {
     if (!w_->write(const_cast<void*>(sample))) throw DdsError("DDS: write on " + topic_ + " failed");
     counters_->written.fetch_add(1, std::memory_order_relaxed);
@@ -198,7 +232,10 @@ class WriterImpl final : public detail::UntypedWriter {
   }
 
  private:
+  static inline const fdds::StatusMask kListenerMask = fdds::StatusMask::publication_matched()
+                                                     << fdds::StatusMask::offered_deadline_missed();
   std::shared_ptr<detail::ParticipantImpl> owner_;
+  DeadlineWriterListener listener_;
   fdds::DataWriter* w_;
   std::string topic_;
   std::shared_ptr<detail::TrafficCounters> counters_;
@@ -210,6 +247,7 @@ class WriterImpl final : public detail::UntypedWriter {
 // the reader's owner takes them on its own thread.
 class LostWriterListener final : public fdds::DataReaderListener {
  public:
+  explicit LostWriterListener(detail::DeadlineCounters& counters) : counters_(counters) {}
   void on_subscription_matched(fdds::DataReader*, const fdds::SubscriptionMatchedStatus& s) override {
     if (s.current_count_change < 0) Push(false, s.last_publication_handle);
     if (s.current_count_change > 0) Push(true, s.last_publication_handle);
@@ -220,6 +258,9 @@ class LostWriterListener final : public fdds::DataReaderListener {
   }
   void on_requested_deadline_missed(fdds::DataReader*, const fdds::RequestedDeadlineMissedStatus& s) override {
     deadlines_missed_.store(static_cast<std::uint64_t>(s.total_count), std::memory_order_relaxed);
+    if (s.total_count_change > 0) {
+      counters_.requested.fetch_add(static_cast<std::uint64_t>(s.total_count_change), std::memory_order_relaxed);
+    }
   }
   std::uint64_t deadlines_missed() const { return deadlines_missed_.load(std::memory_order_relaxed); }
   // A reader whose owner waits on its own wake-up (Reader::OnDataAvailable): only signal.
@@ -244,6 +285,7 @@ class LostWriterListener final : public fdds::DataReaderListener {
     std::lock_guard<std::mutex> lock(mutex_);
     changes_.push_back(c);
   }
+  detail::DeadlineCounters& counters_;
   std::mutex mutex_;
   std::deque<WriterChange> changes_;
   std::atomic<std::uint64_t> deadlines_missed_{0};
@@ -254,7 +296,10 @@ class ReaderImpl final : public detail::UntypedReader {
  public:
   ReaderImpl(std::shared_ptr<detail::ParticipantImpl> owner, fdds::Topic* topic,
              const fdds::DataReaderQos& qos, std::string topic_name)
-      : owner_(std::move(owner)), topic_(std::move(topic_name)), counters_(owner_->CountersFor(topic->get_name())) {
+      : owner_(std::move(owner)),
+        topic_(std::move(topic_name)),
+        counters_(owner_->CountersFor(topic->get_name())),
+        listener_(owner_->deadlines) {
     r_ = CheckEntity(owner_->subscriber->create_datareader(topic, qos, &listener_, kListenerMask),
                      "reader on " + topic_);
     fdds::StatusCondition& condition = r_->get_statuscondition();
@@ -446,9 +491,19 @@ std::unique_ptr<detail::UntypedWriter> Participant::CreateUntypedWriter(
     }
     qos.publish_mode().flow_controller_name = impl_->flow_controller.c_str();
   }
-  fdds::DataWriter* w = CheckEntity(impl_->publisher->create_datawriter(t, qos),
-                                    "writer on " + topic + " (profile " + profile + ")");
-  return std::make_unique<WriterImpl>(impl_, w, topic);
+  return std::make_unique<WriterImpl>(impl_, t, qos, topic + " (profile " + profile + ")");
+}
+
+std::uint64_t Participant::WrittenBytes() const {
+  std::uint64_t bytes = 0;
+  std::lock_guard<std::mutex> lock(impl_->mutex);
+  for (const auto& [topic, c] : impl_->traffic) bytes += c->written_bytes.load(std::memory_order_relaxed);
+  return bytes;
+}
+
+std::uint64_t Participant::DeadlinesMissed() const {
+  return impl_->deadlines.requested.load(std::memory_order_relaxed) +
+         impl_->deadlines.offered_while_matched.load(std::memory_order_relaxed);
 }
 
 std::vector<TopicTraffic> Participant::Traffic() const {

@@ -284,6 +284,18 @@ std::string CheckMemberInfo(const msg::MemberInfo& s, std::string_view session) 
   return c.reason();
 }
 
+std::string CheckLoopStatistics(const msg::LoopStatistics& s, std::string_view session) {
+  Checker c;
+  c.Session(s.session().to_string(), session);
+  c.NonEmpty("node", s.node().to_string());
+  const std::pair<const char*, double> values[] = {
+      {"rate_Hz", s.rate_Hz()},           {"jitter_p50_us", s.jitter_p50_us()}, {"jitter_p99_us", s.jitter_p99_us()},
+      {"jitter_max_us", s.jitter_max_us()}, {"step_p50_us", s.step_p50_us()},     {"step_p99_us", s.step_p99_us()},
+      {"latency_p50_us", s.latency_p50_us()}, {"sent_bytes_per_s", s.sent_bytes_per_s()}};
+  for (const auto& [field, v] : values) c.Range(field, v, 0.0, 1e9);
+  return c.reason();
+}
+
 std::string DroppedSamples::Count(std::string_view topic, std::string_view sender, const std::string& reason) {
   ++total_;
   auto it = by_topic_.find(topic);

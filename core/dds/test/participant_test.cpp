@@ -9,6 +9,7 @@
 #include <thread>
 #include <vector>
 
+#include "handshare/dds/loop_traffic.hpp"
 #include "handshare/dds/messages.hpp"
 #include "handshare/dds/serialization.hpp"
 
@@ -80,9 +81,53 @@ TEST(DdsParticipant, AStalledDeviceStateStreamMissesItsDeadline) {
   }
   EXPECT_LE(reader.deadlines_missed(), before + 1);
   const std::uint64_t streaming = reader.deadlines_missed();
-  // Then silence for 0.45 s: at least 3 whole periods of 100 ms missed.
+  // Then silence for 0.45 s: at least 3 whole periods of 100 ms missed, by the reader and, as
+  // it is matched, by the writer; each participant's total (its loop statistics) counts them.
+  const std::uint64_t offered = a.DeadlinesMissed(), requested = b.DeadlinesMissed();
   std::this_thread::sleep_for(450ms);
   EXPECT_GE(reader.deadlines_missed(), streaming + 3);
+  EXPECT_GE(b.DeadlinesMissed(), requested + 3);
+  EXPECT_GE(a.DeadlinesMissed(), offered + 3);
+  EXPECT_EQ(b.DeadlinesMissed(), reader.deadlines_missed());
+  EXPECT_GT(a.WrittenBytes(), 51u * 4u);  // 51 samples at least, each more than its CDR header
+}
+
+// A writer nobody reads may fall silent (the haptic node stops its device states): no miss.
+TEST(DdsParticipant, AnUnreadWriterMissesNoDeadline) {
+  Participant a(211, "s1", "writer");
+  auto writer = MakeWriter<msg::DeviceState>(a, topics::kDeviceState);
+  msg::DeviceState out;
+  out.user("alice");
+  writer.Write(out);
+  std::this_thread::sleep_for(350ms);
+  EXPECT_EQ(a.DeadlinesMissed(), 0u);
+}
+
+// A node's loop statistics say the bytes its writers wrote per second of the period since the
+// previous statistics, whichever topics they went to.
+TEST(DdsParticipant, LoopTrafficIsTheBytesWrittenPerSecondOfThePeriod) {
+  Participant a(212, "s1", "writer");
+  const auto t0 = LoopTraffic::Clock::now();
+  LoopTraffic traffic(a, t0);
+  auto states = MakeWriter<msg::DeviceState>(a, topics::kDeviceState);
+  auto boards = MakeWriter<msg::MessageBoard>(a, topics::kMessageBoard);
+  msg::DeviceState state;
+  state.user("alice");
+  msg::MessageBoard board;
+  board.text("hello");
+  for (int i = 0; i < 10; ++i) states.Write(state);
+  boards.Write(board);
+  const std::uint64_t bytes = a.WrittenBytes();
+  EXPECT_GT(bytes, 10u * 4u);
+  msg::LoopStatistics out;
+  traffic.Fill(out, t0 + 2s);
+  EXPECT_DOUBLE_EQ(out.sent_bytes_per_s(), static_cast<double>(bytes) / 2.0);
+  EXPECT_EQ(out.deadline_misses(), a.DeadlinesMissed());
+  states.Write(state);
+  traffic.Fill(out, t0 + 2500ms);  // one more sample in half a second
+  EXPECT_DOUBLE_EQ(out.sent_bytes_per_s(), static_cast<double>(a.WrittenBytes() - bytes) / 0.5);
+  traffic.Fill(out, t0 + 2500ms);  // no time: no rate
+  EXPECT_EQ(out.sent_bytes_per_s(), 0.0);
 }
 
 // Deformations go through the asynchronous writer and its flow controller in 1400-byte

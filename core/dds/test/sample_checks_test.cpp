@@ -246,6 +246,25 @@ TEST(SampleChecks, DeviceStatesBoardsAndMembers) {
   EXPECT_EQ(CheckMemberInfo(m, "museum"), "view_Hz is -1 (expected 0 to 10000)");
 }
 
+// Loop statistics go to the operator's page and the session log: every number is named.
+TEST(SampleChecks, LoopStatisticsNameTheirBadNumber) {
+  msg::LoopStatistics s;
+  s.session("museum");
+  s.node("haptic_node/alice");
+  s.rate_Hz(1000.0);
+  s.sent_bytes_per_s(2.5e4);
+  EXPECT_EQ(CheckLoopStatistics(s, "museum"), "");
+  EXPECT_EQ(CheckLoopStatistics(s, "other"), "session 'museum' is not this session ('other')");
+  s.sent_bytes_per_s(-1.0);
+  EXPECT_EQ(CheckLoopStatistics(s, "museum"), "sent_bytes_per_s is -1 (expected 0 to 1e+09)");
+  s.sent_bytes_per_s(0.0);
+  s.jitter_p99_us(std::nan(""));
+  EXPECT_EQ(CheckLoopStatistics(s, "museum"), "jitter_p99_us is nan (expected 0 to 1e+09)");
+  s.jitter_p99_us(1.0);
+  s.node("");
+  EXPECT_EQ(CheckLoopStatistics(s, "museum"), "node is empty");
+}
+
 // A device's fingers and capabilities (docs/devices.md): at least one finger, no sixth; as many
 // fingers as contact points.
 TEST(SampleChecks, ADeviceHasOneToFiveFingersAndSaysWhichItHas) {

@@ -18,10 +18,13 @@
 
 namespace handshare::web_console {
 
-/// One station's loop, from its newest LoopStatistics sample.
+/// One station's loop, from its newest LoopStatistics sample: a haptic node's loop, a
+/// screen's (graphics node's) frames, a guide's (audio guide's) board loop.
 struct StationStats {
   std::string node;      ///< the sample's key, e.g. "haptic_node/alice"
   std::string user;      ///< the user part of node ("alice")
+  std::string kind;      ///< the member kind of the node's user and program ("haptic", "graphics",
+                         ///< "audio_guide"; KindOfNode until its member info came)
   std::string device;    ///< from the user's member info ("sim", "hiro", ...); "" if unknown
   double rate_Hz = 0.0;
   double jitter_p50_us = 0.0;
@@ -32,6 +35,8 @@ struct StationStats {
   std::uint64_t resyncs = 0;
   std::uint64_t faults = 0;
   std::uint64_t samples_dropped = 0;
+  std::uint64_t deadline_misses = 0;   ///< DDS deadlines missed, its readers' and writers'
+  double sent_bytes_per_s = 0.0;       ///< what its writers wrote, over its last period
   std::chrono::steady_clock::time_point received;
 };
 
@@ -186,5 +191,8 @@ std::string DeformationJson(const std::string& scene, const std::map<std::string
 
 /// The user of a station's node key: what follows the last '/', else the whole key.
 std::string UserOfNode(const std::string& node);
+/// The member kind of a station's program, by its node key's prefix: "haptic" (haptic_node/),
+/// "graphics" (graphics_node/), "audio_guide" (audio_guide/), else "".
+std::string KindOfNode(const std::string& node);
 
 }  // namespace handshare::web_console

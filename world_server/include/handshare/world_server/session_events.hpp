@@ -118,13 +118,19 @@ struct VisitAnswered {
   controls::VisitAnswers answers;
 };
 
+/// A station's loop statistics, checked, for the log.
+struct StationReported {
+  LoopRecord loop;
+};
+
 /// Control events and what they did are complete: a server killed after this point must find
 /// them on restart (the log commits now, not at its next period).
 struct SessionCheckpoint {};
 
 using SessionEvent = std::variant<LineSaid, MemberChanged, RosterChanged, SceneRevised, SceneShown,
                                   SessionStateChanged, MessageSaid, ControlApplied, ControlStateChanged, WorldEntered,
-                                  OwnershipChanged, BodyMoved, FieldChanged, SessionCheckpoint, TurnEnded, VisitAnswered>;
+                                  OwnershipChanged, BodyMoved, FieldChanged, SessionCheckpoint, TurnEnded, VisitAnswered,
+                                  StationReported>;
 
 /// A visitor made of lambdas, one per kind of event a consumer takes (and `auto` for the rest):
 /// std::visit(Overloaded{[](const BodyMoved& e) {...}, [](const auto&) {}}, event).

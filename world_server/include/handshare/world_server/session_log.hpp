@@ -60,6 +60,16 @@ struct TurnRecord {
   std::string user;
 };
 
+/// A station's loop statistics (a LoopStatistics sample, checked) as the world server took it.
+struct LoopRecord {
+  std::uint64_t unix_ns = 0;
+  std::string node;                       // haptic_node/USER, graphics_node/NAME, audio_guide/NAME
+  double rate_Hz = 0.0;
+  double jitter_p50_us = 0.0, jitter_p99_us = 0.0, jitter_max_us = 0.0;
+  double step_p50_us = 0.0, step_p99_us = 0.0;
+  std::uint64_t steps = 0, overruns = 0, resyncs = 0, faults = 0, samples_dropped = 0, deadline_misses = 0;
+  double sent_bytes_per_s = 0.0;
+};
 /// Who and where a session is: written once when the log opens.
 struct SessionStart {
   std::string name;                   // the DDS session (partition)
@@ -127,7 +137,7 @@ struct SessionLogConfig {
 class SessionLog {
  public:
   /// Schema version (PRAGMA user_version); the file also carries kApplicationId.
-  static constexpr int kSchemaVersion = 4;
+  static constexpr int kSchemaVersion = 5;
   static constexpr std::int32_t kApplicationId = 0x48534C47;  // "HSLG"
 
   /// Opens `file` (created with the schema if absent or empty), checks it is a handshare log
@@ -166,6 +176,8 @@ class SessionLog {
   void OnVisitAnswers(const std::string& sent_by, const controls::VisitAnswers& answers, std::uint64_t unix_ns);
   /// The kinds of the controls of a world the session shows (replaces a control's earlier kind).
   void OnControlKinds(const scene::Scene& scene);
+  /// A station's loop statistics (every sample: about one a second per node).
+  void OnLoopStatistics(const LoopRecord& loop);
   /// Marks the session as ended at unix_ns (once; later calls are ignored).
   void End(std::uint64_t unix_ns);
 

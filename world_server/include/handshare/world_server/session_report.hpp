@@ -107,6 +107,18 @@ struct SessionSummary {
   std::uint64_t end_unix_ns() const { return ended_unix_ns.value_or(last_seen_unix_ns); }
 };
 
+/// One station's loop statistics over the session (schema version 5): its samples, and the
+/// newest one's counts (they count from the node's start).
+struct StationStats {
+  std::string node;
+  std::size_t samples = 0;
+  std::uint64_t first_unix_ns = 0, last_unix_ns = 0;
+  double rate_mean_Hz = 0.0, rate_min_Hz = 0.0;
+  double jitter_p99_max_us = 0.0;     // the worst period's p99
+  double sent_bytes_per_s_mean = 0.0;
+  LoopRecord last;                    // the newest sample
+};
+
 struct SessionReport {
   std::filesystem::path file;
   std::size_t sessions_in_file = 0;
@@ -120,6 +132,7 @@ struct SessionReport {
   std::vector<TurnRecord> turns;             // visitors' turns that ended, by end
   std::vector<QuestionStats> questionnaire;  // 12 rows (ComputeQuestionnaire)
   std::size_t questionnaires = 0;            // visitors' questionnaires (distinct sends)
+  std::vector<StationStats> stations;        // by node; none before schema version 5
 };
 
 /// Every session in the file, oldest first.
@@ -129,10 +142,10 @@ std::vector<SessionSummary> ListSessions(const std::filesystem::path& file);
 SessionReport ReadReport(const std::filesystem::path& file, std::optional<std::int64_t> session_id = {});
 
 /// Human-readable tables. The questionnaire, Table 4 by kind and the visitors' turns come
-/// after every line older reports printed, which stay as they were.
+/// after every line older reports printed, which stay as they were; the stations after them.
 void PrintReport(std::ostream& out, const SessionReport& report);
 /// Long-format CSV, one value per line: session,section,item,field,value. Sections
-/// control_kind, questionnaire and turn follow the older ones.
+/// control_kind, questionnaire and turn follow the older ones, then station.
 void PrintReportCsv(std::ostream& out, const SessionReport& report);
 
 }  // namespace handshare::server

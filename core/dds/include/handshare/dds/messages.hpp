@@ -76,5 +76,16 @@ Reader<T> MakeReaderIfGranted(Participant& p, const topics::TopicSpec& spec,
     return {};
   }
 }
+/// The same for a writer a node can do without (its loop statistics under an older keystore).
+template <class T>
+Writer<T> MakeWriterIfGranted(Participant& p, const topics::TopicSpec& spec,
+                              const std::function<void(const std::string&)>& say, const std::string& without) {
+  try {
+    return MakeWriter<T>(p, spec);
+  } catch (const DdsError& e) {
+    say(std::string("cannot write ") + spec.name + " (" + e.what() + "): " + without + "; make the keystore again");
+    return {};
+  }
+}
 
 }  // namespace handshare::dds

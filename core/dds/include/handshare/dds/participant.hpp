@@ -177,6 +177,13 @@ class Participant {
 
   /// Every topic this participant wrote or read, by name.
   std::vector<TopicTraffic> Traffic() const;
+  /// Every byte this participant's writers wrote so far (TopicTraffic::written_bytes summed).
+  std::uint64_t WrittenBytes() const;
+  /// Deadline misses so far (QoS profiles with a deadline): its readers' requested misses (a
+  /// writer's instance that sent nothing for a whole period) and its writers' offered misses
+  /// counted while a reader was matched (a writer with nobody to read it may fall silent).
+  /// Deleted readers and writers keep their share.
+  std::uint64_t DeadlinesMissed() const;
   /// One line for a node's exit summary: "traffic: device_state out 3229; contact_set out 120
   /// in 340 lost 2; ..." (topics without the "handshare/" prefix; "none" if nothing moved).
   std::string TrafficSummary() const;

@@ -54,6 +54,9 @@ std::string CheckDeskInput(const msg::DeskInput& s, std::string_view session, co
 std::string CheckDeformation(const msg::Deformation& s, std::string_view session, const SampleBounds& b = {});
 std::string CheckMessageBoard(const msg::MessageBoard& s, std::string_view session);
 std::string CheckMemberInfo(const msg::MemberInfo& s, std::string_view session);
+/// A node's loop statistics: session, node named, every rate, time and byte rate finite,
+/// non-negative and at most 1e9.
+std::string CheckLoopStatistics(const msg::LoopStatistics& s, std::string_view session);
 
 /// Dropped samples of one node, per topic, with the first reason seen for each.
 class DroppedSamples {
