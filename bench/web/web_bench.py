@@ -298,18 +298,26 @@ def client_worker(port, first, count, conn, grace_s=1.0):
     """Viewers first .. first + count - 1 in this process: connects them, then reads through the
     window the parent sends and grace_s after it (what was sent in the window and is still on
     its way); sends back what each received and when."""
-    viewers = [connect(port, i) for i in range(first, first + count)]
     sel = selectors.DefaultSelector()
-    for v in viewers:
-        sel.register(v.sock, selectors.EVENT_READ, v)
 
-    def pump(until):
-        while time.monotonic() < until:
-            for key, _ in sel.select(timeout=0.05):
+    def pump(until, timeout=0.05):
+        while True:
+            for key, _ in sel.select(timeout=timeout):
                 v = key.data
                 if not v.closed and not v.feed(time.monotonic()):
                     sel.unregister(v.sock)
+            if time.monotonic() >= until:
+                return
+    # Each viewer reads from its connection on, while the others connect: one left unread for
+    # seconds would fill its queue at the console and be dropped, as a real stuck viewer is.
+    viewers = []
+    for i in range(first, first + count):
+        viewers.append(connect(port, i))
+        sel.register(viewers[-1].sock, selectors.EVENT_READ, viewers[-1])
+        pump(0.0, timeout=0)
     conn.send("connected")
+    while not conn.poll(0):
+        pump(time.monotonic() + 0.05)
     t0, t1 = conn.recv()
     pump(t0)
     for v in viewers:
