@@ -5,8 +5,8 @@
 #   make_keystore.sh [--session PATTERN] [--days N] DIR USER...
 #       Creates DIR (or adds what is missing to an existing one): an ECDSA P-256 CA, the
 #       governance, and one enclave per role and station: world_server, haptic/USER for each
-#       USER, spectator, audio_guide, recorder, player. Every enclave gets its key, its
-#       certificate and its permissions (least privilege, see below), signed (S/MIME) by the CA.
+#       USER, spectator, audio_guide, recorder, player, web_console. Every enclave gets its key,
+#       its certificate and its permissions (least privilege, see below), signed (S/MIME) by the CA.
 #       --session: the sessions (DDS partitions, fnmatch pattern) the grants allow; default *.
 #       --days: how long certificates and grants are valid; default 365.
 #   make_keystore.sh --revoke DIR ENCLAVE
@@ -55,6 +55,8 @@ role_publish() {
     spectator | audio_guide) echo "$T_MEMBER $T_STATS" ;;  # stats: their frames' and board loop's
     recorder) echo "" ;;
     player) echo "$ALL_TOPICS" ;;
+    # The web console (docs/web_console.md): its member entry, and the operator's actions only.
+    web_console) echo "$T_MEMBER $T_EVENT $T_VISIT $T_OPCMD" ;;
   esac
 }
 role_subscribe() {
@@ -65,6 +67,7 @@ role_subscribe() {
     audio_guide) echo "$T_BOARD $T_SCENE $T_CONTROL" ;;  # scene, controls: the sound cues
     recorder) echo "$ALL_TOPICS $T_ROSTER" ;;  # the roster: to rejoin (not recorded)
     player) echo "" ;;
+    web_console) echo "$T_MEMBER $T_SCENE $T_BOARD $T_STATS $T_DEVICE $T_OBJECT $T_DEFORM $T_CONTROL $T_EVENT" ;;  # events: Table 4 live
   esac
 }
 
@@ -275,3 +278,4 @@ make_enclave spectator spectator spectator
 make_enclave audio_guide audio_guide audio_guide
 make_enclave recorder recorder recorder
 make_enclave player player player
+make_enclave web_console web_console web_console

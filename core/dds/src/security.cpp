@@ -22,13 +22,14 @@ struct RoleEnclave {
   const char* enclave;  // nullptr: "<enclave prefix>/<station>"
   const char* per_station_prefix;
 };
-constexpr std::array<RoleEnclave, 6> kRoles{{
+constexpr std::array<RoleEnclave, 7> kRoles{{
     {"world_server", "world_server", nullptr},
     {"haptic_node", nullptr, "haptic/"},
     {"graphics_node", "spectator", nullptr},
     {"audio_guide", "audio_guide", nullptr},
     {"session_record", "recorder", nullptr},
     {"session_play", "player", nullptr},
+    {"web_console", "web_console", nullptr},
 }};
 
 std::pair<std::string, std::string> SplitRole(const std::string& name) {

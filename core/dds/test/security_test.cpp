@@ -22,6 +22,9 @@ TEST(Security, EnclaveFollowsTheRoleOfTheParticipantName) {
   EXPECT_EQ(EnclaveOf("audio_guide/audio-7"), "audio_guide");
   EXPECT_EQ(EnclaveOf("session_record"), "recorder");
   EXPECT_EQ(EnclaveOf("session_play"), "player");
+  // One identity for every console: its grant, not its --name, decides what it may write.
+  EXPECT_EQ(EnclaveOf("web_console/web-console"), "web_console");
+  EXPECT_EQ(EnclaveOf("web_console/operator-console"), "web_console");
   EXPECT_EQ(EnclaveOf("probe"), "probe");  // anything else: the enclave path itself
   EXPECT_THROW(EnclaveOf("haptic_node"), DdsError);  // a haptic identity is per user
 }
@@ -29,6 +32,7 @@ TEST(Security, EnclaveFollowsTheRoleOfTheParticipantName) {
 TEST(Security, AnnouncedNameCarriesNoStation) {
   EXPECT_EQ(AnnouncedName("haptic_node/alice"), "haptic_node");
   EXPECT_EQ(AnnouncedName("world_server"), "world_server");
+  EXPECT_EQ(AnnouncedName("web_console/operator-console"), "web_console");
 }
 
 class Keystore : public ::testing::Test {

@@ -21,7 +21,8 @@ struct SecurityFiles {
 /// The enclave of a node's participant, from the role prefix of its name: "world_server" ->
 /// "world_server", "haptic_node/alice" -> "haptic/alice", "graphics_node/..." -> "spectator",
 /// "audio_guide/..." -> "audio_guide", "session_record" -> "recorder", "session_play" ->
-/// "player"; any other name is taken as the enclave path itself.
+/// "player", "web_console/..." -> "web_console"; any other name is taken as the enclave path
+/// itself.
 std::string EnclaveOf(const std::string& participant_name);
 
 /// The name a secured participant announces in clear (DDS discovery): its role only
