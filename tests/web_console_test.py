@@ -245,6 +245,8 @@ def case_tls(h, domain):
 
 
 TIP_TOLERANCE_M = 1e-5  # the trace prints 6 significant digits (under 1 um here); 10 um is far below a fingertip
+PALM_CENTER_H = [0.0, 0.0, -0.004]  # the screens' palm box in the hand base's frame (figure/hand_figure.hpp)
+SIM_FINGERTIP_RADIUS_M = 0.008  # a simulated device's fingertips (haptic::DeviceCapabilities)
 
 
 def case_view(h, domain):
@@ -284,15 +286,28 @@ def case_view(h, domain):
         check(len(shown) == 5, f"the view draws {len(shown)} of alice's fingertips, not 5")
         worst = max(abs(a - b) for p, q in zip(shown, tips) for a, b in zip(p, q))
         check(worst <= TIP_TOLERANCE_M, f"the view's fingertips are up to {worst} m from the trace's: {shown} vs {tips}")
-        # Her palm at her hand base H (the trace's hx..qz), as the screens' hand figure puts it.
+        # Her palm where the screens' hand figure puts it: its box centred at X_WH (0, 0, -4 mm)
+        # with H the trace's hand base (hx..qz), turned as H; then her fingers' links and joints.
         palm = state.get("palms", {}).get("alice")
         check(palm is not None, f"the view draws no palm for alice: {state.get('palms')}")
-        p_WH = [base_row[a] for a in ("hx", "hy", "hz")]
         q_WH = [base_row[a] for a in ("qw", "qx", "qy", "qz")]
-        palm_off = max(abs(a - b) for a, b in zip(palm["p_WH_m"], p_WH))
-        check(palm_off <= TIP_TOLERANCE_M, f"the view's palm is {palm_off} m off her hand base: {palm} vs {p_WH}")
-        palm_turn = quaternion_angle(palm["q_WH_wxyz"], q_WH)
+        p_WP = [base_row[a] + b for a, b in zip(("hx", "hy", "hz"), rotate(q_WH, PALM_CENTER_H))]
+        palm_off = max(abs(a - b) for a, b in zip(palm["p_W_m"], p_WP))
+        check(palm_off <= TIP_TOLERANCE_M, f"the view's palm is {palm_off} m off her hand figure's: {palm} vs {p_WP}")
+        palm_turn = quaternion_angle(palm["q_WB_wxyz"], q_WH)
         check(palm_turn <= ANGLE_TOLERANCE_RAD, f"the view's palm is turned {palm_turn} rad off her hand base: {palm} vs {q_WH}")
+        figure = state["figures"]["alice"]
+        check(len(figure["boxes"]) == 16 and len(figure["spheres"]) == 15,
+              f"the view draws {len(figure['boxes'])} boxes and {len(figure['spheres'])} spheres of alice's hand, "
+              f"not her palm, 15 links and 15 joints")
+        # Each finger's last link ends at its fingertip sphere's surface (the figure's rule).
+        link_off = 0.0
+        for f, tip in enumerate(tips):
+            last = figure["boxes"][1 + 3 * f + 2]
+            axis = rotate(last["q_WB_wxyz"], [0.0, 1.0, 0.0])
+            end = [p + 0.5 * last["size_m"][1] * a for p, a in zip(last["p_W_m"], axis)]
+            link_off = max(link_off, abs(math.dist(end, tip) - SIM_FINGERTIP_RADIUS_M))
+        check(link_off <= TIP_TOLERANCE_M, f"alice's last links end {link_off} m off her fingertips' surface")
         # The board: the start menu's message, in English, then in Japanese after the switch.
         with open(os.path.join(ASSETS, "scenes", "start_menu.json")) as f:
             messages = {m["language"]: m for m in json.load(f)["messages"]}
@@ -313,10 +328,10 @@ def case_view(h, domain):
         check(not errors, f"the view logged errors: {errors}")
         shot = os.environ.get("HANDSHARE_WEB_SCREENSHOT") or os.path.join(h.work, "view.png")
         driver.save_screenshot(shot)
-        pixels = compare_with_frame(h, driver, port, frames, "start_menu", meshes, FRAME_COLOURS)
+        pixels = compare_with_frame(h, driver, port, frames, "start_menu", meshes, FRAME_COLOURS, hand_user="alice")
     finally:
         driver.quit()
-    stop_all(h, "console", "alice", "world_server")
+    stop_all(h, "console", "world_server")
     print(f"view: {state['objects']} objects, {state['meshesLoaded']} meshes from glTF, alice's 5 fingertips within "
           f"{worst:.1e} m of her trace and her palm within {palm_off:.1e} m, {palm_turn:.1e} rad; the board in "
           f"English and Japanese; {state['frames']} frames drawn; screenshot {shot}")
@@ -326,11 +341,12 @@ def case_view(h, domain):
 # What the page's canvas and a graphics node's frame from the same camera are compared by: the
 # pixels of each colour that only these objects have (the fingertips' colours, and the books'
 # and buttons' colours of the start menu, a book and its button sharing one; the blue pair is
-# left out: alice's hand lies over the blue book, and the screens draw her fingers' links over
-# it, which the page does not draw, so its visible part differs), classified by
+# left out: alice's hand lies over the blue book, and what shows of it between her links and
+# the screens' label over it puts its centroid 5.5 px off, measured with the links drawn on
+# both; her whole hand is compared by its own mask instead), classified by
 # chromaticity (r, g, b) / (r + g + b), which the two renderers' white lights leave alone, among
 # bright (max >= 60 of 255) and saturated ((max - min) / max >= 0.3) pixels: the table, the palm
-# and the screens' hand links, labels, grid and caption fall out. Each colour's mask must cover
+# and the hand's links, labels, grid and caption fall out. Each colour's mask must cover
 # at least 20 pixels in both, and its centroid lie within FRAME_TOLERANCE_PX of the other's.
 FINGERTIP_COLOURS = {"thumb": (1.0, 0.0, 0.0), "index": (0.0, 1.0, 0.0), "middle": (0.0, 0.0, 1.0),
                      "ring": (1.0, 1.0, 0.0), "little": (0.0, 1.0, 1.0)}
@@ -359,30 +375,104 @@ def colour_masks(image, colours):
     return masks
 
 
-def compare_with_frame(h, driver, port, frames, world, meshes, colours, hidden_allowed=(), ready=lambda v: True):
-    """The page from the graphics node's camera (its camera.json in the URL) against the graphics
-    node's last frame, both while alice's hand holds still (the graphics node is stopped here):
-    every colour of `colours`; those of hidden_allowed may be hidden in both (under 20 pixels:
-    a fingertip behind a held ball). Returns a line to print."""
+def frame_times(frames):
+    """The rows of a headless graphics node's frame_times.csv: [{"frame", "file", "scene",
+    "hands": {user: stamp_ns}, "objects": {id: stamp_ns}, "deformations": {id: revision}}]
+    (stamp_ns as decimal strings, as the page has them)."""
+    rows = []
+    path = os.path.join(frames, "frame_times.csv")
+    if not os.path.exists(path):
+        return rows
+    with open(path) as f:
+        next(f, None)
+        for line in f:
+            if not line.endswith("\n"):
+                break  # being written
+            frame, file, scene, _, hands, objects, fields = line.rstrip("\n").split(",")
+            split = lambda text: dict(item.split("@") for item in text.split(";") if item)
+            rows.append({"frame": int(frame), "file": os.path.join(frames, os.path.basename(file)), "scene": scene,
+                         "hands": split(hands), "objects": split(objects),
+                         "deformations": {k: int(v) for k, v in split(fields).items()}})
+    return rows
+
+
+def decode_png(data_url):
     import base64
     import io
     from PIL import Image
 
-    camera = wait_until("the graphics node's camera", 30, lambda: read_json(os.path.join(frames, "camera.json")))
-    query = urllib.parse.urlencode({"eye": ",".join(map(repr, camera["eye_W_m"])),
-                                    "target": ",".join(map(repr, camera["target_W_m"])),
-                                    "up": ",".join(map(repr, camera["up_W"])), "fov_y": repr(camera["fov_y_rad"]),
-                                    "size": f"{camera['width_px']}x{camera['height_px']}"})
-    driver.get(f"http://127.0.0.1:{port}/?{query}")
+    return Image.open(io.BytesIO(base64.b64decode(data_url.split(",", 1)[1]))).convert("RGB")
+
+
+# The hands' mask: the pixels where an image with the hands differs from the same view without
+# them (the page: its canvas drawn again with the hands hidden; a graphics node: its frame after
+# the hand's user left, nothing else having moved), by more than this in a channel of 255. It
+# holds the palm, the fingers' links and joints, and the fingertips, whatever their colour.
+HAND_DIFF_THRESHOLD = 40
+HAND_MASK_TOLERANCE_PX = 3.0  # centroids of 640 x 480: the two renderers' shading and edges
+HAND_MASK_MIN_IOU = 0.7       # without the links the page's mask is palm and fingertips only
+
+
+def difference_mask(image, background, threshold=HAND_DIFF_THRESHOLD):
+    """The pixels where two images differ by more than `threshold` in a channel."""
+    w, h = image.size
+    a, b = image.load(), background.load()
+    return {(x, y) for y in range(h) for x in range(w)
+            if max(abs(a[x, y][k] - b[x, y][k]) for k in range(3)) > threshold}
+
+
+def compare_masks(name, a, b, where, tolerance_px, min_iou):
+    """Checks two masks of one thing (the page's, the frame's): at least 20 pixels each, their
+    centroids within tolerance_px and their IoU at least min_iou. Returns (distance, IoU)."""
+    check(len(a) >= 20 and len(b) >= 20, f"{name}: {len(a)} pixels on the page, {len(b)} in {where}")
+    ca = [sum(p[k] for p in a) / len(a) for k in range(2)]
+    cb = [sum(p[k] for p in b) / len(b) for k in range(2)]
+    d, iou = math.dist(ca, cb), len(a & b) / len(a | b)
+    check(d <= tolerance_px, f"{name}: the page's centroid {ca} is {d:.1f} px from the frame's {cb} ({where})")
+    check(iou >= min_iou, f"{name}: the page's and the frame's masks overlap {iou:.2f} (IoU), under {min_iou} ({where})")
+    return d, iou
+
+
+def compare_with_frame(h, driver, port, frames, world, meshes, colours, hidden_allowed=(), ready=lambda v: True,
+                       hand_user=None):
+    """The page from the graphics node's camera (its camera.json in the URL) against the graphics
+    node's last frame, both while alice's hand holds still (the graphics node is stopped here):
+    every colour of `colours`; those of hidden_allowed may be hidden in both (under 20 pixels:
+    a fingertip behind a held ball). With hand_user, also that user's whole hand (its
+    difference mask: the page without its hands, the graphics node's frame after the user
+    left, which this stops): the frame compared is then the last that shows the hand. Returns
+    a line to print."""
+    driver.get(camera_url(port, frames))
     wait_until("the view from the graphics node's camera", 60, lambda: (lambda v: v and v["world"] == world and
                v["meshesLoaded"] == meshes and "alice" in v["hands"] and v["frames"] > 5 and ready(v))(page_view(driver)),
                lambda: str(page_view(driver)) + str(driver.get_log("browser")))
     check("bad URL" not in driver.find_element(By.ID, "status").text, driver.find_element(By.ID, "status").text)
-    png = driver.execute_script("return document.getElementById('view').toDataURL('image/png');")
-    page = Image.open(io.BytesIO(base64.b64decode(png.split(",", 1)[1]))).convert("RGB")
+    snap = driver.execute_script("return window.handshareView.snapshot();")
+    page = decode_png(snap["png"])
     page.save(os.path.join(h.work, "page_from_camera.png"))
-    check(h.stop("spectator", 20) == 0, "the spectator did not end cleanly")
-    _, frame_file, _, frame, _ = last_frame(frames)
+    hand_line = ""
+    if hand_user:
+        # The frame: the newest that shows the hand (still since before the page was read);
+        # the background: a later one without it, once the user has left.
+        shown = wait_until(f"a frame with {hand_user}'s hand", 30, lambda: [r for r in frame_times(frames)
+                                                                           if hand_user in r["hands"]])[-1]
+        check(h.stop(hand_user, 30) == 0, f"{hand_user}'s haptic node failed")
+        bare_row = wait_until(f"a frame after {hand_user} left", 30, lambda: next(
+            (r for r in frame_times(frames) if r["frame"] > shown["frame"] and hand_user not in r["hands"]), None))
+        check(h.stop("spectator", 20) == 0, "the spectator did not end cleanly")
+        from PIL import Image
+        frame_file = shown["file"]
+        frame = Image.open(frame_file).convert("RGB")
+        frame_bare = Image.open(bare_row["file"]).convert("RGB")
+        page_mask = difference_mask(page, decode_png(snap["bare"]))
+        frame_mask = difference_mask(frame, frame_bare)
+        d, iou = compare_masks(f"{hand_user}'s hand", page_mask, frame_mask, f"{frame_file} against {bare_row['file']}",
+                               HAND_MASK_TOLERANCE_PX, HAND_MASK_MIN_IOU)
+        hand_line = (f"; {hand_user}'s whole hand (palm, links, joints, fingertips: {len(page_mask)} and "
+                     f"{len(frame_mask)} px) {d:.1f} px (IoU {iou:.2f})")
+    else:
+        check(h.stop("spectator", 20) == 0, "the spectator did not end cleanly")
+        _, frame_file, _, frame, _ = last_frame(frames)
     check(page.size == frame.size, f"the page's canvas is {page.size}, the graphics node's frame {frame.size}")
     page_masks, frame_masks = colour_masks(page, colours), colour_masks(frame, colours)
     worst, lines, compared = 0.0, [], 0
@@ -399,7 +489,7 @@ def compare_with_frame(h, driver, port, frames, world, meshes, colours, hidden_a
         worst = max(worst, d)
         lines.append(f"{name} {d:.1f} px (IoU {len(a & b) / len(a | b):.2f})")
         check(d <= FRAME_TOLERANCE_PX, f"{name}: the page's centroid {ca} is {d:.1f} px from the frame's {cb} ({frame_file})")
-    return f"{compared} colours' centroids within {worst:.1f} px: " + ", ".join(lines)
+    return f"{compared} colours' centroids within {worst:.1f} px: " + ", ".join(lines) + hand_line
 
 
 SOFTWARE_WEBGL = ("--use-angle=swiftshader", "--enable-unsafe-swiftshader", "--ignore-gpu-blocklist")
@@ -570,6 +660,16 @@ def case_view_book(h, domain):
 
 
 FIELD_TOLERANCE_M = 1e-6  # the console sends whole micrometres (0.5 um) of the samples' floats; the page's float32 positions
+
+
+def camera_url(port, frames):
+    """The view's URL from a headless graphics node's camera (its camera.json)."""
+    camera = wait_until("the graphics node's camera", 30, lambda: read_json(os.path.join(frames, "camera.json")))
+    query = urllib.parse.urlencode({"eye": ",".join(map(repr, camera["eye_W_m"])),
+                                    "target": ",".join(map(repr, camera["target_W_m"])),
+                                    "up": ",".join(map(repr, camera["up_W"])), "fov_y": repr(camera["fov_y_rad"]),
+                                    "size": f"{camera['width_px']}x{camera['height_px']}"})
+    return f"http://127.0.0.1:{port}/?{query}"
 
 
 def case_view_deform(h, domain):
