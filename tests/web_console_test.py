@@ -13,11 +13,12 @@ chromium goes live over WSS and shows the world.
 
 view: the live 3-D view at / in chromium with software WebGL (SwiftShader): it draws the start
 menu (every object and control, the meshes loaded from the glTF files the console exported),
-and alice's five fingertip spheres and her palm (where three.js has them in its scene) where
+and alice's five fingertip spheres and her hand's figure (where three.js has them in its scene) where
 her haptic node's trace has her fingertips and hand base while her hand holds still; the board
 shows the start menu's message in English, and in Japanese after the switch; the page's canvas
 from a headless graphics node's camera shows the fingertips, books and buttons where the
-graphics node's frame does (colour masks' centroids within 4 px);
+graphics node's frame does (colour masks' centroids within 4 px), and her whole hand (its
+difference mask: the page without its hands, the frame after she left) within 3 px;
 HANDSHARE_WEB_SCREENSHOT=FILE saves what it drew.
 
 view_bodies: the view of the solar system while alice lifts the ball and pushes the lever to
@@ -36,7 +37,10 @@ view_deform: the view of the dinosaur world while alice presses the triceratops'
 (tests/data/tail_alice.hand), beside a headless graphics node: once the world server's field is
 still, every vertex of the tail is drawn where the graphics node draws it (X_WO p_OV + u_W, its
 --deformation-out), the page's vertex v being the world server's node v (its --dump-deformation
-mesh).
+mesh). The page's canvas, from the graphics node's camera, against its frames: while her hand
+comes down and presses, the snapshots whose stamps (her device state, the tail's revision) a
+frame shows, by the fingertips' colours; held, what she changed (her hand and the dent) and
+the dent alone, by difference masks against the page and a frame before she came.
 
 visit: the questionnaire at /visit on a phone-sized chromium. A world server whose visitors'
 turns last 0.05 minutes (--visit-minutes) and logs the session; alice's haptic node; her turn
@@ -672,33 +676,88 @@ def camera_url(port, frames):
     return f"http://127.0.0.1:{port}/?{query}"
 
 
+# Snapshots of the page (view.snapshot) taken every `period_ms` for `seconds`, the page going on
+# between them (documents arrive): [{"stamps", "hands", "png"}], one per new hands stamp.
+SNAPSHOTS_JS = """
+const [seconds, periodMs, done] = arguments;
+const until = performance.now() + 1000 * seconds;
+const shots = [];
+const take = () => {
+  const s = window.handshareView.snapshot(false);
+  const last = shots[shots.length - 1];
+  if (!last || JSON.stringify(last.stamps) !== JSON.stringify(s.stamps)) shots.push(s);
+  if (performance.now() < until) setTimeout(take, periodMs); else done(shots);
+};
+take();
+"""
+
+
+def same_moment(shot, row, user, mesh):
+    """True when a graphics node's frame (its frame_times.csv row) shows what the page's snapshot
+    shows: the user's hand from the same device state and the mesh at the same revision."""
+    return (shot["stamps"]["hands"].get(user) is not None and row["hands"].get(user) == shot["stamps"]["hands"][user]
+            and row["deformations"].get(mesh) == shot["stamps"]["deformations"].get(mesh))
+
+
+MOVING_MIN_PAIRS = 3      # matched moments while her hand comes down and presses
+MOVING_COMPARED = 6       # of them compared pixel by pixel (evenly spread)
+MOVING_MIN_TRAVEL_M = 0.02  # her index fingertip between the first and the last of them
+# The press turns the tail's faces (the dent, and the whole tail a little): its mask is where the
+# shading changed by more than this, and the two renderers shade differently (the graphics node
+# per vertex, OpenGL's fixed-function lighting; three.js per pixel, Phong), so the masks agree
+# to a few pixels only (measured 7.5 px, IoU 0.67); the vertices themselves are checked to 1 um.
+DENT_DIFF_THRESHOLD = 12
+DENT_TOLERANCE_PX = 10.0
+DENT_MIN_IOU = 0.5
+
+
 def case_view_deform(h, domain):
+    from PIL import Image
+
     session = f"it-webdeform-{os.getpid()}"
     os.environ["HANDSHARE_CACHE"] = fem_cache(h.work)
     dump = os.path.join(h.work, "deformation")
+    frames = os.path.join(h.work, "frames")
     received_file = os.path.join(h.work, "received_deformation.json")
     h.start("world_server", "world_server", "--domain", domain, "--session", session, "--scene", "dinosaur",
             "--dump-deformation", dump, "--deformation-threshold", "5e-5")
     h.wait_for_line("world_server", "models of 'dinosaur' ready", 400)
+    # 8 frames a second: of alice's device states (at least 30 a second) a frame shows about one
+    # in four, and the page's snapshots find it among them.
     h.start("spectator", "graphics_node", "--domain", domain, "--session", session, "--headless",
-            "--frames", 100000, "--fps", 2, "--out", os.path.join(h.work, "frames"), "--deformation-out", received_file)
+            "--frames", 100000, "--fps", 8, "--out", frames, "--deformation-out", received_file)
     port = start_view(h, domain, session)
     h.wait_for_line("console", "world 'dinosaur' revision 1", 30)
     tail = scene_object("dinosaur", "triceratops_tail")
+    mesh = "triceratops_tail"
     driver = start_browser(h.work, SOFTWARE_WEBGL)
+    driver.set_script_timeout(60)
     try:
-        driver.get(f"http://127.0.0.1:{port}/")
+        # The page from the graphics node's camera throughout.
+        driver.get(camera_url(port, frames))
         wait_until("the view of the dinosaur world", 60, lambda: (lambda v: v and v["world"] == "dinosaur" and
                    v["meshesLoaded"] + v["meshesFailed"] == 5 and v["frames"] > 5)(page_view(driver)),
                    lambda: str(page_view(driver)) + str(driver.get_log("browser")))
+        check(page_view(driver)["meshesFailed"] == 0, f"meshes did not load: {driver.get_log('browser')}")
+        # Before alice: the page, and a graphics node frame drawn after it.
+        before = driver.execute_script("return window.handshareView.snapshot(false);")
+        first = len(frame_times(frames))
+        before_row = wait_until("a graphics node frame before alice", 30, lambda: next(
+            (r for r in frame_times(frames)[first:] if not r["hands"]), None))
         h.start("alice", "haptic_node", "--domain", domain, "--session", session, "--user", "alice",
                 "--script", os.path.join(DATA, "tail_alice.hand"))
         h.wait_for_line("alice", "hand script starts at loop time", 120)
+        # While her hand comes down and presses (3 s reach, 0.5 s hold, 3 s press).
+        moving = driver.execute_async_script(SNAPSHOTS_JS, 8, 100)
         pressed = PressWatch(os.path.join(dump, "triceratops_tail.json"), tail["position_m"], {"alice": (0.27, 0.08)})
         held = wait_until("the tail pressed by alice, held still for 2.5 s", 120, lambda: pressed.still_for(2.5),
                           pressed.explain)
         page = driver.execute_script("const v = window.handshareView; return [v.deformations || {}, "
                                      "v.meshVertices ? v.meshVertices('triceratops_tail') : null];")
+        # Held: the page with and without her hand, against a frame drawn after it.
+        still = driver.execute_script("return window.handshareView.snapshot(true);")
+        drawn_after = len(frame_times(frames))
+        wait_until("two graphics node frames after the held page", 30, lambda: len(frame_times(frames)) >= drawn_after + 2)
         check(h.stop("spectator", 20) == 0, "the spectator did not end cleanly")
     finally:
         driver.quit()
@@ -725,9 +784,77 @@ def case_view_deform(h, domain):
         worst = max(worst, max(abs(a - b) for a, b in zip(vertices["p_WV"][3 * v:3 * v + 3], expected)))
     check(u_max >= 1e-3, f"the tail's largest displacement is {u_max * 1e3:.2f} mm: not a press")
     check(worst <= FIELD_TOLERANCE_M, f"the page draws a vertex of the tail {worst} m from the graphics node's")
+
+    # The pixels. Moving: each snapshot whose stamps a frame shows (alice's device state, the
+    # tail's revision) against that frame, by the fingertips' colours.
+    rows = frame_times(frames)
+    pairs = [(shot, row) for shot in moving
+             for row in [next((r for r in rows if same_moment(shot, r, "alice", mesh)), None)] if row]
+    check(len(pairs) >= MOVING_MIN_PAIRS, f"{len(pairs)} of the page's {len(moving)} snapshots while alice moved "
+          f"show the stamps of one of the graphics node's {len(rows)} frames, under {MOVING_MIN_PAIRS}")
+    travel = math.dist(pairs[0][0]["hands"]["alice"][1], pairs[-1][0]["hands"]["alice"][1])
+    check(travel >= MOVING_MIN_TRAVEL_M, f"her index fingertip moved {travel * 1e3:.1f} mm between the first and "
+          f"the last matched moment: not a moving hand")
+    moving_worst, compared = 0.0, 0
+    compared_pairs = pairs[::max(1, len(pairs) // MOVING_COMPARED)]  # each costs this script seconds
+    for shot, row in compared_pairs:
+        page_masks = colour_masks(decode_png(shot["png"]), FINGERTIP_COLOURS)
+        frame_masks = colour_masks(Image.open(row["file"]).convert("RGB"), FINGERTIP_COLOURS)
+        for name in FINGERTIP_COLOURS:
+            a, b = page_masks[name], frame_masks[name]
+            if len(a) < 20 and len(b) < 20:
+                continue  # behind the tail or the hand's own fingertip in both
+            d, _ = compare_masks(f"{name} at stamps {shot['stamps']}", a, b, row["file"], FRAME_TOLERANCE_PX, 0.0)
+            moving_worst, compared = max(moving_worst, d), compared + 1
+    check(compared >= 2 * len(compared_pairs), f"only {compared} fingertip masks in {len(compared_pairs)} matched moments")
+    # Held: the frame at the page's revision whose fingertips (frames.csv) are where the page
+    # drew hers (still: stamps differ, positions do not). What alice changed (her hand and the
+    # dent) against the frames before her; the dent alone (the page without her hand; the
+    # frame with the page's hand mask, grown by 3 px, left out).
+    drawn = {}
+    with open(os.path.join(frames, "frames.csv")) as f:
+        next(f)
+        for line in f:
+            frame, _, user, finger, x, y, z, _ = line.strip().split(",")
+            if user == "alice":
+                drawn.setdefault(int(frame), {})[int(finger)] = [float(x), float(y), float(z)]
+    tips = still["hands"]["alice"]
+    held_row = next((r for r in reversed(rows) if r["deformations"].get(mesh) == still["stamps"]["deformations"].get(mesh)
+                     and r["frame"] in drawn and len(drawn[r["frame"]]) == 5 and
+                     max(math.dist(drawn[r["frame"]][k], tips[k]) for k in range(5)) <= TIP_TOLERANCE_M), None)
+    check(held_row is not None, f"no graphics node frame shows the tail at revision "
+          f"{still['stamps']['deformations'].get(mesh)} with alice's fingertips where the page drew them: {tips}")
+    page_now, page_bare, page_before = decode_png(still["png"]), decode_png(still["bare"]), decode_png(before["png"])
+    for name, image in (("page_held", page_now), ("page_held_without_hands", page_bare), ("page_before", page_before)):
+        image.save(os.path.join(h.work, name + ".png"))
+    frame_now = Image.open(held_row["file"]).convert("RGB")
+    frame_before = Image.open(before_row["file"]).convert("RGB")
+    # Only near what changed on the page (the graphics node's caption and labels fall out).
+    changed_page = difference_mask(page_now, page_before)
+    check(changed_page, "alice changed nothing on the page")
+    xs, ys = [p[0] for p in changed_page], [p[1] for p in changed_page]
+    box = (min(xs) - 40, min(ys) - 40, max(xs) + 40, max(ys) + 40)
+    near = lambda mask: {p for p in mask if box[0] <= p[0] <= box[2] and box[1] <= p[1] <= box[3]}
+    changed_frame = near(difference_mask(frame_now, frame_before))
+    d_all, iou_all = compare_masks("what alice changed (her hand and the dent)", changed_page, changed_frame,
+                                   f"{held_row['file']} against {before_row['file']}", HAND_MASK_TOLERANCE_PX,
+                                   HAND_MASK_MIN_IOU)
+    hand_page = difference_mask(page_now, page_bare)
+    grown = {(x + i, y + j) for x, y in hand_page for i in range(-3, 4) for j in range(-3, 4)}
+    dent_page = {p for p in difference_mask(page_bare, page_before, DENT_DIFF_THRESHOLD) if p not in grown}
+    dent_frame = {p for p in near(difference_mask(frame_now, frame_before, DENT_DIFF_THRESHOLD)) if p not in grown}
+    d_dent, iou_dent = compare_masks("the dent", dent_page, dent_frame, held_row["file"], DENT_TOLERANCE_PX,
+                                     DENT_MIN_IOU)
     stop_all(h, "console", "alice", "world_server")
     print(f"view_deform: the tail pressed {u_max * 1e3:.2f} mm, its {count} vertices drawn within {worst:.1e} m of the "
           f"graphics node's (revision {field['revision']}), in the world server's node order ({order_off:.1e} m)")
+    print(f"view_deform: while alice's hand came down and pressed (her index fingertip {travel * 1e3:.0f} mm between the "
+          f"first and the last matched moment), {len(pairs)} of the page's "
+          f"{len(moving)} snapshots had the stamps of a graphics node frame; in {len(compared_pairs)} of them {compared} "
+          f"fingertip masks within "
+          f"{moving_worst:.1f} px; held (frame {held_row['frame']}): what she changed ({len(changed_page)} and "
+          f"{len(changed_frame)} px) {d_all:.1f} px (IoU {iou_all:.2f}), the dent alone ({len(dent_page)} and "
+          f"{len(dent_frame)} px) {d_dent:.1f} px (IoU {iou_dent:.2f})")
 
 
 def post_visit(base, body, token):
