@@ -31,7 +31,7 @@ frame does.
 view_book: the view of the start menu while alice opens the solar system's book
 (tests/data/book_alice.hand), beside a headless graphics node: once the graphics node logs it
 open at its first spread, the page draws it open with that spread's text from the scene file, in
-English, and in Japanese after the switch.
+English, and in Japanese after the switch, and the spread's picture on its left page.
 
 view_deform: the view of the dinosaur world while alice presses the triceratops' tail and holds
 (tests/data/tail_alice.hand), beside a headless graphics node: once the world server's field is
@@ -652,6 +652,23 @@ def case_view_book(h, domain):
         spread = {t["language"]: t["text"] for t in spec["pages"][max(0, book_ja["index"])]["text"]} if book_ja else {}
         check(book_ja is not None and book_ja["engaged"] and book_ja["page"] == spread.get("ja"),
               f"in Japanese the open book shows {book_ja}, not its spread's {spread.get('ja')!r}")
+        # Its picture on the left page: the scene file's image of the spread it is open at, as the
+        # console serves it (the asset's bytes), loaded at the image's size.
+        picture = wait_until("the open book's picture loaded", 20, lambda: (lambda c: c if c and c["engaged"] and
+                             c.get("picture") and c["picture"]["loaded"] else None)(
+                                 page_view(driver).get("controls", {}).get("book_solar_system")),
+                             lambda: f"the page's controls: {page_view(driver).get('controls')}")
+        image_file = os.path.join(ASSETS, spec["pages"][max(0, picture["index"])]["image"])
+        from PIL import Image
+        with Image.open(image_file) as image:
+            size = image.size
+        check(picture["picture"]["url"] == "/pictures/" + os.path.basename(image_file) and
+              (picture["picture"]["width_px"], picture["picture"]["height_px"]) == size,
+              f"the open book's left page shows {picture['picture']}, not {image_file} ({size[0]} x {size[1]})")
+        with urllib.request.urlopen(f"http://127.0.0.1:{port}{picture['picture']['url']}", timeout=10) as r:
+            served = r.read()
+        with open(image_file, "rb") as f:
+            check(served == f.read(), f"{picture['picture']['url']} is not {image_file}")
         shot = os.path.join(h.work, "view_book.png")
         driver.save_screenshot(shot)
         h.wait_for_line("world_server", "control book_solar_system by alice: scene 'solar_system'", 90)
@@ -660,7 +677,8 @@ def case_view_book(h, domain):
     finally:
         driver.quit()
     stop_all(h, "spectator", "console", "alice", "world_server")
-    print(f"view_book: the book open at its first spread with its text in English and Japanese; screenshot {shot}")
+    print(f"view_book: the book open at its first spread with its text in English and Japanese, its picture "
+          f"{picture['picture']['url']} ({size[0]} x {size[1]}) on its left page; screenshot {shot}")
 
 
 FIELD_TOLERANCE_M = 1e-6  # the console sends whole micrometres (0.5 um) of the samples' floats; the page's float32 positions

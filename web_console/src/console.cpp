@@ -209,6 +209,10 @@ int Console::Run() {
     web.files["/meshes/" + stem + ".glb"] = glb_dir / (stem + ".glb");
     exported.insert(stem);
   }
+  // The books' pictures (an open book's left page), by file name (DrawnControl's page_picture).
+  for (const auto& entry : std::filesystem::directory_iterator(common::AssetsDir() / "images")) {
+    if (entry.path().extension() == ".png") web.files["/pictures/" + entry.path().filename().string()] = entry.path();
+  }
 
   const auto state_json = [&] {
     std::lock_guard lock(mutex);

@@ -92,7 +92,9 @@ ControlView DrawnControl(const scene::ControlSpec& spec, const ControlStateIn& s
     v.size_m = {spec.size_m.x(), spec.size_m.y(), spec.size_m.z()};
     const int page = std::max(0, state.index);
     if (state.engaged && static_cast<std::size_t>(page) < spec.page_content.size()) {
-      for (const auto& language : languages) v.page_text[language] = spec.page_content[static_cast<std::size_t>(page)].TextIn(language);
+      const scene::BookPage& spread = spec.page_content[static_cast<std::size_t>(page)];
+      for (const auto& language : languages) v.page_text[language] = spread.TextIn(language);
+      if (!spread.image_uri.empty()) v.page_picture = "/pictures/" + spread.image_path.filename().string();
     }
   }
   return v;
@@ -129,6 +131,7 @@ std::string BodiesJson(const std::string& scene, const std::map<std::string, Bod
     if (c.type == "book") {
       j["size_m"] = c.size_m;
       j["page_text"] = c.page_text;
+      j["page_picture"] = c.page_picture;
     }
     drawn.push_back(std::move(j));
   }

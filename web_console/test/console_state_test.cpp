@@ -229,13 +229,19 @@ TEST(DrawnControl, AnOpenBookShowsItsPageInEachLanguage) {
   book.size_m = {0.1, 0.14, 0.02};
   book.page_content.resize(2);
   book.page_content[1].text = {{"en", "The Moon"}, {"ja", "月"}};
+  book.page_content[1].image_uri = "images/moon_mars.png";
+  book.page_content[1].image_path = "/somewhere/assets/images/moon_mars.png";
   const ControlView open = DrawnControl(book, {1, true, false, 0.0, "alice"}, {0, 0, 0}, {1, 0, 0, 0}, {"en", "ja"});
   EXPECT_EQ(open.type, "book");
+  EXPECT_EQ(open.page_picture, "/pictures/moon_mars.png") << "its picture, where the console serves it";
+  EXPECT_EQ(DrawnControl(book, {0, true, false, 0.0, "alice"}, {0, 0, 0}, {1, 0, 0, 0}, {"en"}).page_picture, "")
+      << "a spread without a picture";
   EXPECT_EQ(open.page_text.at("en"), "The Moon");
   EXPECT_EQ(open.page_text.at("ja"), "月");
   EXPECT_EQ(open.size_m[1], 0.14);
   const ControlView shut = DrawnControl(book, {1, false, false, 0.0, "alice"}, {0, 0, 0}, {1, 0, 0, 0}, {"en", "ja"});
   EXPECT_TRUE(shut.page_text.empty());
+  EXPECT_EQ(shut.page_picture, "");
   const auto j = nlohmann::json::parse(BodiesJson("start_menu", {{"ball", BodyView{{0, 0.05, 0.1}, {1, 0, 0, 0}, "alice"}}},
                                                   {open}));
   EXPECT_EQ(j["type"], "bodies");
@@ -243,6 +249,7 @@ TEST(DrawnControl, AnOpenBookShowsItsPageInEachLanguage) {
   EXPECT_EQ(j["bodies"][0]["owner"], "alice");
   EXPECT_EQ(j["bodies"][0]["p_WO_m"][2], 0.1);
   EXPECT_EQ(j["controls"][0]["page_text"]["ja"], "月");
+  EXPECT_EQ(j["controls"][0]["page_picture"], "/pictures/moon_mars.png");
   EXPECT_EQ(j["controls"][0]["engaged"], true);
 }
 

@@ -228,8 +228,48 @@ function openBook(holder, c) {
   page.position.set(0, 0, 0.0004);  // the print lies on the paper
   spread.add(page);
   spread.userData.text = text;
+  spread.userData.picture = null;
+  if (c.page_picture) {
+    // The picture on the left page, from -1.5 w + inset to -w/2 (as the screens' AddBook).
+    const [pw, ph] = [w - inset, h - 2 * inset];
+    const left = new THREE.Mesh(new THREE.PlaneBufferGeometry(pw, ph),
+                                new THREE.MeshBasicMaterial({map: picturePage(c.page_picture, pw, ph, spread)}));
+    left.name = "picture";
+    left.position.set(-w + inset / 2, 0, 0.0004);
+    spread.add(left);
+    spread.userData.picture = {url: c.page_picture, loaded: false};
+  }
   holder.add(spread);
   return spread;
+}
+
+// A left page with its picture, laid out as the screens' page texture (graphics_node's
+// ComposePage for a page without text): paper, a margin of 1/16 of its width, the picture fitted
+// into the rest, centred across, at the top margin; the page pw x ph [m].
+function picturePage(url, pw, ph, spread) {
+  const canvas = document.createElement("canvas");
+  canvas.width = 256;
+  canvas.height = Math.round(256 * Math.min(4, Math.max(0.25, ph / pw)));
+  const g = canvas.getContext("2d");
+  g.fillStyle = "#f5f0e1";
+  g.fillRect(0, 0, canvas.width, canvas.height);
+  const texture = new THREE.CanvasTexture(canvas);
+  texture.minFilter = THREE.LinearFilter;
+  const image = new Image();
+  image.onload = () => {
+    const margin = Math.max(2, Math.trunc(canvas.width / 16));
+    const innerW = Math.max(1, canvas.width - 2 * margin), roomH = Math.max(1, canvas.height - 2 * margin);
+    const scale = Math.min(innerW / image.naturalWidth, roomH / image.naturalHeight);
+    const pw_px = Math.max(1, Math.round(image.naturalWidth * scale));
+    const ph_px = Math.max(1, Math.round(image.naturalHeight * scale));
+    g.drawImage(image, margin + Math.trunc((innerW - pw_px) / 2), margin, Math.min(pw_px, innerW), ph_px);
+    texture.needsUpdate = true;
+    if (spread.userData.picture) {
+      Object.assign(spread.userData.picture, {loaded: true, width_px: image.naturalWidth, height_px: image.naturalHeight});
+    }
+  };
+  image.src = url;
+  return texture;
 }
 
 function showBodies(doc) {
@@ -253,7 +293,8 @@ function showBodies(doc) {
     // A book open at a page: its spread, made again when the page or the language changes.
     let spread = holder.getObjectByName("spread");
     const text = c.type === "book" && c.engaged ? (c.page_text[view.language] || "") : null;
-    if (spread && spread.userData.text !== text) {
+    const picture = c.type === "book" && c.engaged ? (c.page_picture || null) : null;
+    if (spread && (spread.userData.text !== text || (spread.userData.picture || {}).url !== (picture || undefined))) {
       holder.remove(spread);
       spread.traverse((n) => { if (n.isMesh) { n.geometry.dispose(); if (n.material.map) n.material.map.dispose(); n.material.dispose(); } });
       spread = null;
@@ -261,7 +302,8 @@ function showBodies(doc) {
     if (!spread && text !== null) spread = openBook(holder, c);
     const [p, q] = poseOf(holder);
     view.controls[c.id] = {type: c.type, index: c.index, engaged: c.engaged, moving: c.moving, position: c.position,
-                           user: c.user, p_WO_m: p, q_WO_wxyz: q, page: spread ? spread.userData.text : null};
+                           user: c.user, p_WO_m: p, q_WO_wxyz: q, page: spread ? spread.userData.text : null,
+                           picture: spread ? spread.userData.picture : null};
   }
 }
 

@@ -91,6 +91,9 @@ struct ControlView {
   std::array<double, 4> q_WO_wxyz{1, 0, 0, 0};
   std::array<double, 3> size_m{};  ///< a book's size (its frame C: the closed book's top at z = 0)
   std::map<std::string, std::string> page_text;  ///< an open book's page, by language
+  /// An open book's picture on its left page: its URL ("/pictures/NAME.png", the scene file's
+  /// image by its file name; the console serves the assets' images there); "" none.
+  std::string page_picture;
 };
 
 /// The state of a control as the world server sent it (ControlState), before it is drawn.
