@@ -814,7 +814,9 @@ def case_view_deform(h, domain):
     check(travel >= MOVING_MIN_TRAVEL_M, f"her index fingertip moved {travel * 1e3:.1f} mm between the first and "
           f"the last matched moment: not a moving hand")
     moving_worst, compared = 0.0, 0
-    compared_pairs = pairs[::max(1, len(pairs) // MOVING_COMPARED)]  # each costs this script seconds
+    # At most MOVING_COMPARED of them, evenly spread (each costs this script a second or two).
+    chosen = min(MOVING_COMPARED, len(pairs))
+    compared_pairs = [pairs[round(i * (len(pairs) - 1) / max(1, chosen - 1))] for i in range(chosen)]
     for shot, row in compared_pairs:
         page_masks = colour_masks(decode_png(shot["png"]), FINGERTIP_COLOURS)
         frame_masks = colour_masks(Image.open(row["file"]).convert("RGB"), FINGERTIP_COLOURS)
