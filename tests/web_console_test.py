@@ -16,11 +16,12 @@ chromium goes live over WSS and shows the world.
 
 view: the live 3-D view at / in chromium with software WebGL (SwiftShader): it draws the start
 menu (every object and control, the meshes loaded from the glTF files the console exported),
-and alice's five fingertip spheres and her palm (where three.js has them in its scene) where
+and alice's five fingertip spheres and her hand's figure (where three.js has them in its scene) where
 her haptic node's trace has her fingertips and hand base while her hand holds still; the board
 shows the start menu's message in English, and in Japanese after the switch; the page's canvas
 from a headless graphics node's camera shows the fingertips, books and buttons where the
-graphics node's frame does (colour masks' centroids within 4 px);
+graphics node's frame does (colour masks' centroids within 4 px), and her whole hand (its
+difference mask: the page without its hands, the frame after she left) within 3 px;
 HANDSHARE_WEB_SCREENSHOT=FILE saves what it drew.
 
 view_bodies: the view of the solar system while alice lifts the ball and pushes the lever to
@@ -33,13 +34,16 @@ frame does.
 view_book: the view of the start menu while alice opens the solar system's book
 (tests/data/book_alice.hand), beside a headless graphics node: once the graphics node logs it
 open at its first spread, the page draws it open with that spread's text from the scene file, in
-English, and in Japanese after the switch.
+English, and in Japanese after the switch, and the spread's picture on its left page.
 
 view_deform: the view of the dinosaur world while alice presses the triceratops' tail and holds
 (tests/data/tail_alice.hand), beside a headless graphics node: once the world server's field is
 still, every vertex of the tail is drawn where the graphics node draws it (X_WO p_OV + u_W, its
 --deformation-out), the page's vertex v being the world server's node v (its --dump-deformation
-mesh).
+mesh). The page's canvas, from the graphics node's camera, against its frames: while her hand
+comes down and presses, the snapshots whose stamps (her device state, the tail's revision) a
+frame shows, by the fingertips' colours; held, what she changed (her hand and the dent) and
+the dent alone, by difference masks against the page and a frame before she came.
 
 visit: the questionnaire at /visit on a phone-sized chromium. A world server whose visitors'
 turns last 0.05 minutes (--visit-minutes) and logs the session; alice's haptic node; her turn
@@ -354,6 +358,8 @@ def case_tls(h, domain):
 
 
 TIP_TOLERANCE_M = 1e-5  # the trace prints 6 significant digits (under 1 um here); 10 um is far below a fingertip
+PALM_CENTER_H = [0.0, 0.0, -0.004]  # the screens' palm box in the hand base's frame (figure/hand_figure.hpp)
+SIM_FINGERTIP_RADIUS_M = 0.008  # a simulated device's fingertips (haptic::DeviceCapabilities)
 
 
 def case_view(h, domain):
@@ -393,15 +399,28 @@ def case_view(h, domain):
         check(len(shown) == 5, f"the view draws {len(shown)} of alice's fingertips, not 5")
         worst = max(abs(a - b) for p, q in zip(shown, tips) for a, b in zip(p, q))
         check(worst <= TIP_TOLERANCE_M, f"the view's fingertips are up to {worst} m from the trace's: {shown} vs {tips}")
-        # Her palm at her hand base H (the trace's hx..qz), as the screens' hand figure puts it.
+        # Her palm where the screens' hand figure puts it: its box centred at X_WH (0, 0, -4 mm)
+        # with H the trace's hand base (hx..qz), turned as H; then her fingers' links and joints.
         palm = state.get("palms", {}).get("alice")
         check(palm is not None, f"the view draws no palm for alice: {state.get('palms')}")
-        p_WH = [base_row[a] for a in ("hx", "hy", "hz")]
         q_WH = [base_row[a] for a in ("qw", "qx", "qy", "qz")]
-        palm_off = max(abs(a - b) for a, b in zip(palm["p_WH_m"], p_WH))
-        check(palm_off <= TIP_TOLERANCE_M, f"the view's palm is {palm_off} m off her hand base: {palm} vs {p_WH}")
-        palm_turn = quaternion_angle(palm["q_WH_wxyz"], q_WH)
+        p_WP = [base_row[a] + b for a, b in zip(("hx", "hy", "hz"), rotate(q_WH, PALM_CENTER_H))]
+        palm_off = max(abs(a - b) for a, b in zip(palm["p_W_m"], p_WP))
+        check(palm_off <= TIP_TOLERANCE_M, f"the view's palm is {palm_off} m off her hand figure's: {palm} vs {p_WP}")
+        palm_turn = quaternion_angle(palm["q_WB_wxyz"], q_WH)
         check(palm_turn <= ANGLE_TOLERANCE_RAD, f"the view's palm is turned {palm_turn} rad off her hand base: {palm} vs {q_WH}")
+        figure = state["figures"]["alice"]
+        check(len(figure["boxes"]) == 16 and len(figure["spheres"]) == 15,
+              f"the view draws {len(figure['boxes'])} boxes and {len(figure['spheres'])} spheres of alice's hand, "
+              f"not her palm, 15 links and 15 joints")
+        # Each finger's last link ends at its fingertip sphere's surface (the figure's rule).
+        link_off = 0.0
+        for f, tip in enumerate(tips):
+            last = figure["boxes"][1 + 3 * f + 2]
+            axis = rotate(last["q_WB_wxyz"], [0.0, 1.0, 0.0])
+            end = [p + 0.5 * last["size_m"][1] * a for p, a in zip(last["p_W_m"], axis)]
+            link_off = max(link_off, abs(math.dist(end, tip) - SIM_FINGERTIP_RADIUS_M))
+        check(link_off <= TIP_TOLERANCE_M, f"alice's last links end {link_off} m off her fingertips' surface")
         # The board: the start menu's message, in English, then in Japanese after the switch.
         with open(os.path.join(ASSETS, "scenes", "start_menu.json")) as f:
             messages = {m["language"]: m for m in json.load(f)["messages"]}
@@ -422,10 +441,10 @@ def case_view(h, domain):
         check(not errors, f"the view logged errors: {errors}")
         shot = os.environ.get("HANDSHARE_WEB_SCREENSHOT") or os.path.join(h.work, "view.png")
         driver.save_screenshot(shot)
-        pixels = compare_with_frame(h, driver, port, frames, "start_menu", meshes, FRAME_COLOURS)
+        pixels = compare_with_frame(h, driver, port, frames, "start_menu", meshes, FRAME_COLOURS, hand_user="alice")
     finally:
         driver.quit()
-    stop_all(h, "console", "alice", "world_server")
+    stop_all(h, "console", "world_server")
     print(f"view: {state['objects']} objects, {state['meshesLoaded']} meshes from glTF, alice's 5 fingertips within "
           f"{worst:.1e} m of her trace and her palm within {palm_off:.1e} m, {palm_turn:.1e} rad; the board in "
           f"English and Japanese; {state['frames']} frames drawn; screenshot {shot}")
@@ -435,11 +454,12 @@ def case_view(h, domain):
 # What the page's canvas and a graphics node's frame from the same camera are compared by: the
 # pixels of each colour that only these objects have (the fingertips' colours, and the books'
 # and buttons' colours of the start menu, a book and its button sharing one; the blue pair is
-# left out: alice's hand lies over the blue book, and the screens draw her fingers' links over
-# it, which the page does not draw, so its visible part differs), classified by
+# left out: alice's hand lies over the blue book, and what shows of it between her links and
+# the screens' label over it puts its centroid 5.5 px off, measured with the links drawn on
+# both; her whole hand is compared by its own mask instead), classified by
 # chromaticity (r, g, b) / (r + g + b), which the two renderers' white lights leave alone, among
 # bright (max >= 60 of 255) and saturated ((max - min) / max >= 0.3) pixels: the table, the palm
-# and the screens' hand links, labels, grid and caption fall out. Each colour's mask must cover
+# and the hand's links, labels, grid and caption fall out. Each colour's mask must cover
 # at least 20 pixels in both, and its centroid lie within FRAME_TOLERANCE_PX of the other's.
 FINGERTIP_COLOURS = {"thumb": (1.0, 0.0, 0.0), "index": (0.0, 1.0, 0.0), "middle": (0.0, 0.0, 1.0),
                      "ring": (1.0, 1.0, 0.0), "little": (0.0, 1.0, 1.0)}
@@ -468,30 +488,104 @@ def colour_masks(image, colours):
     return masks
 
 
-def compare_with_frame(h, driver, port, frames, world, meshes, colours, hidden_allowed=(), ready=lambda v: True):
-    """The page from the graphics node's camera (its camera.json in the URL) against the graphics
-    node's last frame, both while alice's hand holds still (the graphics node is stopped here):
-    every colour of `colours`; those of hidden_allowed may be hidden in both (under 20 pixels:
-    a fingertip behind a held ball). Returns a line to print."""
+def frame_times(frames):
+    """The rows of a headless graphics node's frame_times.csv: [{"frame", "file", "scene",
+    "hands": {user: stamp_ns}, "objects": {id: stamp_ns}, "deformations": {id: revision}}]
+    (stamp_ns as decimal strings, as the page has them)."""
+    rows = []
+    path = os.path.join(frames, "frame_times.csv")
+    if not os.path.exists(path):
+        return rows
+    with open(path) as f:
+        next(f, None)
+        for line in f:
+            if not line.endswith("\n"):
+                break  # being written
+            frame, file, scene, _, hands, objects, fields = line.rstrip("\n").split(",")
+            split = lambda text: dict(item.split("@") for item in text.split(";") if item)
+            rows.append({"frame": int(frame), "file": os.path.join(frames, os.path.basename(file)), "scene": scene,
+                         "hands": split(hands), "objects": split(objects),
+                         "deformations": {k: int(v) for k, v in split(fields).items()}})
+    return rows
+
+
+def decode_png(data_url):
     import base64
     import io
     from PIL import Image
 
-    camera = wait_until("the graphics node's camera", 30, lambda: read_json(os.path.join(frames, "camera.json")))
-    query = urllib.parse.urlencode({"eye": ",".join(map(repr, camera["eye_W_m"])),
-                                    "target": ",".join(map(repr, camera["target_W_m"])),
-                                    "up": ",".join(map(repr, camera["up_W"])), "fov_y": repr(camera["fov_y_rad"]),
-                                    "size": f"{camera['width_px']}x{camera['height_px']}"})
-    driver.get(f"http://127.0.0.1:{port}/?{query}")
+    return Image.open(io.BytesIO(base64.b64decode(data_url.split(",", 1)[1]))).convert("RGB")
+
+
+# The hands' mask: the pixels where an image with the hands differs from the same view without
+# them (the page: its canvas drawn again with the hands hidden; a graphics node: its frame after
+# the hand's user left, nothing else having moved), by more than this in a channel of 255. It
+# holds the palm, the fingers' links and joints, and the fingertips, whatever their colour.
+HAND_DIFF_THRESHOLD = 40
+HAND_MASK_TOLERANCE_PX = 3.0  # centroids of 640 x 480: the two renderers' shading and edges
+HAND_MASK_MIN_IOU = 0.7       # without the links the page's mask is palm and fingertips only
+
+
+def difference_mask(image, background, threshold=HAND_DIFF_THRESHOLD):
+    """The pixels where two images differ by more than `threshold` in a channel."""
+    w, h = image.size
+    a, b = image.load(), background.load()
+    return {(x, y) for y in range(h) for x in range(w)
+            if max(abs(a[x, y][k] - b[x, y][k]) for k in range(3)) > threshold}
+
+
+def compare_masks(name, a, b, where, tolerance_px, min_iou):
+    """Checks two masks of one thing (the page's, the frame's): at least 20 pixels each, their
+    centroids within tolerance_px and their IoU at least min_iou. Returns (distance, IoU)."""
+    check(len(a) >= 20 and len(b) >= 20, f"{name}: {len(a)} pixels on the page, {len(b)} in {where}")
+    ca = [sum(p[k] for p in a) / len(a) for k in range(2)]
+    cb = [sum(p[k] for p in b) / len(b) for k in range(2)]
+    d, iou = math.dist(ca, cb), len(a & b) / len(a | b)
+    check(d <= tolerance_px, f"{name}: the page's centroid {ca} is {d:.1f} px from the frame's {cb} ({where})")
+    check(iou >= min_iou, f"{name}: the page's and the frame's masks overlap {iou:.2f} (IoU), under {min_iou} ({where})")
+    return d, iou
+
+
+def compare_with_frame(h, driver, port, frames, world, meshes, colours, hidden_allowed=(), ready=lambda v: True,
+                       hand_user=None):
+    """The page from the graphics node's camera (its camera.json in the URL) against the graphics
+    node's last frame, both while alice's hand holds still (the graphics node is stopped here):
+    every colour of `colours`; those of hidden_allowed may be hidden in both (under 20 pixels:
+    a fingertip behind a held ball). With hand_user, also that user's whole hand (its
+    difference mask: the page without its hands, the graphics node's frame after the user
+    left, which this stops): the frame compared is then the last that shows the hand. Returns
+    a line to print."""
+    driver.get(camera_url(port, frames))
     wait_until("the view from the graphics node's camera", 60, lambda: (lambda v: v and v["world"] == world and
                v["meshesLoaded"] == meshes and "alice" in v["hands"] and v["frames"] > 5 and ready(v))(page_view(driver)),
                lambda: str(page_view(driver)) + str(driver.get_log("browser")))
     check("bad URL" not in driver.find_element(By.ID, "status").text, driver.find_element(By.ID, "status").text)
-    png = driver.execute_script("return document.getElementById('view').toDataURL('image/png');")
-    page = Image.open(io.BytesIO(base64.b64decode(png.split(",", 1)[1]))).convert("RGB")
+    snap = driver.execute_script("return window.handshareView.snapshot();")
+    page = decode_png(snap["png"])
     page.save(os.path.join(h.work, "page_from_camera.png"))
-    check(h.stop("spectator", 20) == 0, "the spectator did not end cleanly")
-    _, frame_file, _, frame, _ = last_frame(frames)
+    hand_line = ""
+    if hand_user:
+        # The frame: the newest that shows the hand (still since before the page was read);
+        # the background: a later one without it, once the user has left.
+        shown = wait_until(f"a frame with {hand_user}'s hand", 30, lambda: [r for r in frame_times(frames)
+                                                                           if hand_user in r["hands"]])[-1]
+        check(h.stop(hand_user, 30) == 0, f"{hand_user}'s haptic node failed")
+        bare_row = wait_until(f"a frame after {hand_user} left", 30, lambda: next(
+            (r for r in frame_times(frames) if r["frame"] > shown["frame"] and hand_user not in r["hands"]), None))
+        check(h.stop("spectator", 20) == 0, "the spectator did not end cleanly")
+        from PIL import Image
+        frame_file = shown["file"]
+        frame = Image.open(frame_file).convert("RGB")
+        frame_bare = Image.open(bare_row["file"]).convert("RGB")
+        page_mask = difference_mask(page, decode_png(snap["bare"]))
+        frame_mask = difference_mask(frame, frame_bare)
+        d, iou = compare_masks(f"{hand_user}'s hand", page_mask, frame_mask, f"{frame_file} against {bare_row['file']}",
+                               HAND_MASK_TOLERANCE_PX, HAND_MASK_MIN_IOU)
+        hand_line = (f"; {hand_user}'s whole hand (palm, links, joints, fingertips: {len(page_mask)} and "
+                     f"{len(frame_mask)} px) {d:.1f} px (IoU {iou:.2f})")
+    else:
+        check(h.stop("spectator", 20) == 0, "the spectator did not end cleanly")
+        _, frame_file, _, frame, _ = last_frame(frames)
     check(page.size == frame.size, f"the page's canvas is {page.size}, the graphics node's frame {frame.size}")
     page_masks, frame_masks = colour_masks(page, colours), colour_masks(frame, colours)
     worst, lines, compared = 0.0, [], 0
@@ -508,7 +602,7 @@ def compare_with_frame(h, driver, port, frames, world, meshes, colours, hidden_a
         worst = max(worst, d)
         lines.append(f"{name} {d:.1f} px (IoU {len(a & b) / len(a | b):.2f})")
         check(d <= FRAME_TOLERANCE_PX, f"{name}: the page's centroid {ca} is {d:.1f} px from the frame's {cb} ({frame_file})")
-    return f"{compared} colours' centroids within {worst:.1f} px: " + ", ".join(lines)
+    return f"{compared} colours' centroids within {worst:.1f} px: " + ", ".join(lines) + hand_line
 
 
 SOFTWARE_WEBGL = ("--use-angle=swiftshader", "--enable-unsafe-swiftshader", "--ignore-gpu-blocklist")
@@ -667,6 +761,23 @@ def case_view_book(h, domain):
         spread = {t["language"]: t["text"] for t in spec["pages"][max(0, book_ja["index"])]["text"]} if book_ja else {}
         check(book_ja is not None and book_ja["engaged"] and book_ja["page"] == spread.get("ja"),
               f"in Japanese the open book shows {book_ja}, not its spread's {spread.get('ja')!r}")
+        # Its picture on the left page: the scene file's image of the spread it is open at, as the
+        # console serves it (the asset's bytes), loaded at the image's size.
+        picture = wait_until("the open book's picture loaded", 20, lambda: (lambda c: c if c and c["engaged"] and
+                             c.get("picture") and c["picture"]["loaded"] else None)(
+                                 page_view(driver).get("controls", {}).get("book_solar_system")),
+                             lambda: f"the page's controls: {page_view(driver).get('controls')}")
+        image_file = os.path.join(ASSETS, spec["pages"][max(0, picture["index"])]["image"])
+        from PIL import Image
+        with Image.open(image_file) as image:
+            size = image.size
+        check(picture["picture"]["url"] == "/pictures/" + os.path.basename(image_file) and
+              (picture["picture"]["width_px"], picture["picture"]["height_px"]) == size,
+              f"the open book's left page shows {picture['picture']}, not {image_file} ({size[0]} x {size[1]})")
+        with urllib.request.urlopen(f"http://127.0.0.1:{port}{picture['picture']['url']}", timeout=10) as r:
+            served = r.read()
+        with open(image_file, "rb") as f:
+            check(served == f.read(), f"{picture['picture']['url']} is not {image_file}")
         shot = os.path.join(h.work, "view_book.png")
         driver.save_screenshot(shot)
         h.wait_for_line("world_server", "control book_solar_system by alice: scene 'solar_system'", 90)
@@ -675,39 +786,105 @@ def case_view_book(h, domain):
     finally:
         driver.quit()
     stop_all(h, "spectator", "console", "alice", "world_server")
-    print(f"view_book: the book open at its first spread with its text in English and Japanese; screenshot {shot}")
+    print(f"view_book: the book open at its first spread with its text in English and Japanese, its picture "
+          f"{picture['picture']['url']} ({size[0]} x {size[1]}) on its left page; screenshot {shot}")
 
 
 FIELD_TOLERANCE_M = 1e-6  # the console sends whole micrometres (0.5 um) of the samples' floats; the page's float32 positions
 
 
+def camera_url(port, frames):
+    """The view's URL from a headless graphics node's camera (its camera.json)."""
+    camera = wait_until("the graphics node's camera", 30, lambda: read_json(os.path.join(frames, "camera.json")))
+    query = urllib.parse.urlencode({"eye": ",".join(map(repr, camera["eye_W_m"])),
+                                    "target": ",".join(map(repr, camera["target_W_m"])),
+                                    "up": ",".join(map(repr, camera["up_W"])), "fov_y": repr(camera["fov_y_rad"]),
+                                    "size": f"{camera['width_px']}x{camera['height_px']}"})
+    return f"http://127.0.0.1:{port}/?{query}"
+
+
+# Snapshots of the page (view.snapshot) taken every `period_ms` for `seconds`, the page going on
+# between them (documents arrive): [{"stamps", "hands", "png"}], one per new hands stamp.
+SNAPSHOTS_JS = """
+const [seconds, periodMs, done] = arguments;
+const until = performance.now() + 1000 * seconds;
+const shots = [];
+const take = () => {
+  const s = window.handshareView.snapshot(false);
+  const last = shots[shots.length - 1];
+  if (!last || JSON.stringify(last.stamps) !== JSON.stringify(s.stamps)) shots.push(s);
+  if (performance.now() < until) setTimeout(take, periodMs); else done(shots);
+};
+take();
+"""
+
+
+def same_moment(shot, row, user, mesh):
+    """True when a graphics node's frame (its frame_times.csv row) shows what the page's snapshot
+    shows: the user's hand from the same device state and the mesh at the same revision."""
+    return (shot["stamps"]["hands"].get(user) is not None and row["hands"].get(user) == shot["stamps"]["hands"][user]
+            and row["deformations"].get(mesh) == shot["stamps"]["deformations"].get(mesh))
+
+
+MOVING_MIN_PAIRS = 3      # matched moments while her hand comes down and presses
+MOVING_COMPARED = 6       # of them compared pixel by pixel (evenly spread)
+MOVING_MIN_TRAVEL_M = 0.02  # her index fingertip between the first and the last of them
+# The press turns the tail's faces (the dent, and the whole tail a little): its mask is where the
+# shading changed by more than this, and the two renderers shade differently (the graphics node
+# per vertex, OpenGL's fixed-function lighting; three.js per pixel, Phong), so the masks agree
+# to a few pixels only (measured 7.5 px, IoU 0.67); the vertices themselves are checked to 1 um.
+DENT_DIFF_THRESHOLD = 12
+DENT_TOLERANCE_PX = 10.0
+DENT_MIN_IOU = 0.5
+
+
 def case_view_deform(h, domain):
+    from PIL import Image
+
     session = f"it-webdeform-{os.getpid()}"
     os.environ["HANDSHARE_CACHE"] = fem_cache(h.work)
     dump = os.path.join(h.work, "deformation")
+    frames = os.path.join(h.work, "frames")
     received_file = os.path.join(h.work, "received_deformation.json")
     h.start("world_server", "world_server", "--domain", domain, "--session", session, "--scene", "dinosaur",
             "--dump-deformation", dump, "--deformation-threshold", "5e-5")
     h.wait_for_line("world_server", "models of 'dinosaur' ready", 400)
+    # 8 frames a second: of alice's device states (at least 30 a second) a frame shows about one
+    # in four, and the page's snapshots find it among them.
     h.start("spectator", "graphics_node", "--domain", domain, "--session", session, "--headless",
-            "--frames", 100000, "--fps", 2, "--out", os.path.join(h.work, "frames"), "--deformation-out", received_file)
+            "--frames", 100000, "--fps", 8, "--out", frames, "--deformation-out", received_file)
     port = start_view(h, domain, session)
     h.wait_for_line("console", "world 'dinosaur' revision 1", 30)
     tail = scene_object("dinosaur", "triceratops_tail")
+    mesh = "triceratops_tail"
     driver = start_browser(h.work, SOFTWARE_WEBGL)
+    driver.set_script_timeout(60)
     try:
-        driver.get(f"http://127.0.0.1:{port}/")
+        # The page from the graphics node's camera throughout.
+        driver.get(camera_url(port, frames))
         wait_until("the view of the dinosaur world", 60, lambda: (lambda v: v and v["world"] == "dinosaur" and
                    v["meshesLoaded"] + v["meshesFailed"] == 5 and v["frames"] > 5)(page_view(driver)),
                    lambda: str(page_view(driver)) + str(driver.get_log("browser")))
+        check(page_view(driver)["meshesFailed"] == 0, f"meshes did not load: {driver.get_log('browser')}")
+        # Before alice: the page, and a graphics node frame drawn after it.
+        before = driver.execute_script("return window.handshareView.snapshot(false);")
+        first = len(frame_times(frames))
+        before_row = wait_until("a graphics node frame before alice", 30, lambda: next(
+            (r for r in frame_times(frames)[first:] if not r["hands"]), None))
         h.start("alice", "haptic_node", "--domain", domain, "--session", session, "--user", "alice",
                 "--script", os.path.join(DATA, "tail_alice.hand"))
         h.wait_for_line("alice", "hand script starts at loop time", 120)
+        # While her hand comes down and presses (3 s reach, 0.5 s hold, 3 s press).
+        moving = driver.execute_async_script(SNAPSHOTS_JS, 8, 100)
         pressed = PressWatch(os.path.join(dump, "triceratops_tail.json"), tail["position_m"], {"alice": (0.27, 0.08)})
         held = wait_until("the tail pressed by alice, held still for 2.5 s", 120, lambda: pressed.still_for(2.5),
                           pressed.explain)
         page = driver.execute_script("const v = window.handshareView; return [v.deformations || {}, "
                                      "v.meshVertices ? v.meshVertices('triceratops_tail') : null];")
+        # Held: the page with and without her hand, against a frame drawn after it.
+        still = driver.execute_script("return window.handshareView.snapshot(true);")
+        drawn_after = len(frame_times(frames))
+        wait_until("two graphics node frames after the held page", 30, lambda: len(frame_times(frames)) >= drawn_after + 2)
         check(h.stop("spectator", 20) == 0, "the spectator did not end cleanly")
     finally:
         driver.quit()
@@ -734,9 +911,79 @@ def case_view_deform(h, domain):
         worst = max(worst, max(abs(a - b) for a, b in zip(vertices["p_WV"][3 * v:3 * v + 3], expected)))
     check(u_max >= 1e-3, f"the tail's largest displacement is {u_max * 1e3:.2f} mm: not a press")
     check(worst <= FIELD_TOLERANCE_M, f"the page draws a vertex of the tail {worst} m from the graphics node's")
+
+    # The pixels. Moving: each snapshot whose stamps a frame shows (alice's device state, the
+    # tail's revision) against that frame, by the fingertips' colours.
+    rows = frame_times(frames)
+    pairs = [(shot, row) for shot in moving
+             for row in [next((r for r in rows if same_moment(shot, r, "alice", mesh)), None)] if row]
+    check(len(pairs) >= MOVING_MIN_PAIRS, f"{len(pairs)} of the page's {len(moving)} snapshots while alice moved "
+          f"show the stamps of one of the graphics node's {len(rows)} frames, under {MOVING_MIN_PAIRS}")
+    travel = math.dist(pairs[0][0]["hands"]["alice"][1], pairs[-1][0]["hands"]["alice"][1])
+    check(travel >= MOVING_MIN_TRAVEL_M, f"her index fingertip moved {travel * 1e3:.1f} mm between the first and "
+          f"the last matched moment: not a moving hand")
+    moving_worst, compared = 0.0, 0
+    # At most MOVING_COMPARED of them, evenly spread (each costs this script a second or two).
+    chosen = min(MOVING_COMPARED, len(pairs))
+    compared_pairs = [pairs[round(i * (len(pairs) - 1) / max(1, chosen - 1))] for i in range(chosen)]
+    for shot, row in compared_pairs:
+        page_masks = colour_masks(decode_png(shot["png"]), FINGERTIP_COLOURS)
+        frame_masks = colour_masks(Image.open(row["file"]).convert("RGB"), FINGERTIP_COLOURS)
+        for name in FINGERTIP_COLOURS:
+            a, b = page_masks[name], frame_masks[name]
+            if len(a) < 20 and len(b) < 20:
+                continue  # behind the tail or the hand's own fingertip in both
+            d, _ = compare_masks(f"{name} at stamps {shot['stamps']}", a, b, row["file"], FRAME_TOLERANCE_PX, 0.0)
+            moving_worst, compared = max(moving_worst, d), compared + 1
+    check(compared >= 2 * len(compared_pairs), f"only {compared} fingertip masks in {len(compared_pairs)} matched moments")
+    # Held: the frame at the page's revision whose fingertips (frames.csv) are where the page
+    # drew hers (still: stamps differ, positions do not). What alice changed (her hand and the
+    # dent) against the frames before her; the dent alone (the page without her hand; the
+    # frame with the page's hand mask, grown by 3 px, left out).
+    drawn = {}
+    with open(os.path.join(frames, "frames.csv")) as f:
+        next(f)
+        for line in f:
+            frame, _, user, finger, x, y, z, _ = line.strip().split(",")
+            if user == "alice":
+                drawn.setdefault(int(frame), {})[int(finger)] = [float(x), float(y), float(z)]
+    tips = still["hands"]["alice"]
+    held_row = next((r for r in reversed(rows) if r["deformations"].get(mesh) == still["stamps"]["deformations"].get(mesh)
+                     and r["frame"] in drawn and len(drawn[r["frame"]]) == 5 and
+                     max(math.dist(drawn[r["frame"]][k], tips[k]) for k in range(5)) <= TIP_TOLERANCE_M), None)
+    check(held_row is not None, f"no graphics node frame shows the tail at revision "
+          f"{still['stamps']['deformations'].get(mesh)} with alice's fingertips where the page drew them: {tips}")
+    page_now, page_bare, page_before = decode_png(still["png"]), decode_png(still["bare"]), decode_png(before["png"])
+    for name, image in (("page_held", page_now), ("page_held_without_hands", page_bare), ("page_before", page_before)):
+        image.save(os.path.join(h.work, name + ".png"))
+    frame_now = Image.open(held_row["file"]).convert("RGB")
+    frame_before = Image.open(before_row["file"]).convert("RGB")
+    # Only near what changed on the page (the graphics node's caption and labels fall out).
+    changed_page = difference_mask(page_now, page_before)
+    check(changed_page, "alice changed nothing on the page")
+    xs, ys = [p[0] for p in changed_page], [p[1] for p in changed_page]
+    box = (min(xs) - 40, min(ys) - 40, max(xs) + 40, max(ys) + 40)
+    near = lambda mask: {p for p in mask if box[0] <= p[0] <= box[2] and box[1] <= p[1] <= box[3]}
+    changed_frame = near(difference_mask(frame_now, frame_before))
+    d_all, iou_all = compare_masks("what alice changed (her hand and the dent)", changed_page, changed_frame,
+                                   f"{held_row['file']} against {before_row['file']}", HAND_MASK_TOLERANCE_PX,
+                                   HAND_MASK_MIN_IOU)
+    hand_page = difference_mask(page_now, page_bare)
+    grown = {(x + i, y + j) for x, y in hand_page for i in range(-3, 4) for j in range(-3, 4)}
+    dent_page = {p for p in difference_mask(page_bare, page_before, DENT_DIFF_THRESHOLD) if p not in grown}
+    dent_frame = {p for p in near(difference_mask(frame_now, frame_before, DENT_DIFF_THRESHOLD)) if p not in grown}
+    d_dent, iou_dent = compare_masks("the dent", dent_page, dent_frame, held_row["file"], DENT_TOLERANCE_PX,
+                                     DENT_MIN_IOU)
     stop_all(h, "console", "alice", "world_server")
     print(f"view_deform: the tail pressed {u_max * 1e3:.2f} mm, its {count} vertices drawn within {worst:.1e} m of the "
           f"graphics node's (revision {field['revision']}), in the world server's node order ({order_off:.1e} m)")
+    print(f"view_deform: while alice's hand came down and pressed (her index fingertip {travel * 1e3:.0f} mm between the "
+          f"first and the last matched moment), {len(pairs)} of the page's "
+          f"{len(moving)} snapshots had the stamps of a graphics node frame; in {len(compared_pairs)} of them {compared} "
+          f"fingertip masks within "
+          f"{moving_worst:.1f} px; held (frame {held_row['frame']}): what she changed ({len(changed_page)} and "
+          f"{len(changed_frame)} px) {d_all:.1f} px (IoU {iou_all:.2f}), the dent alone ({len(dent_page)} and "
+          f"{len(dent_frame)} px) {d_dent:.1f} px (IoU {iou_dent:.2f})")
 
 
 def post_visit(base, body, token):

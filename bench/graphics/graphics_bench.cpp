@@ -104,7 +104,10 @@ void AddTwoHands(render::SceneView& view) {
     for (int f = 0; f < graphics::kFingers; ++f) {
       p_WE[static_cast<std::size_t>(f)] = X_WH * Eigen::Vector3d(-0.04 + 0.02 * f, f == 0 ? 0.05 : 0.10, -0.06);
     }
-    graphics::AddHandFigure(graphics::FitHandToFingertips(X_WH, p_WE), 0.008, {0.93F, 0.78F, 0.66F}, view);
+    figure::HandParts hand;
+    hand.rgb = {0.93F, 0.78F, 0.66F};
+    figure::AddHandFigure(figure::FitHandToFingertips(X_WH, p_WE), 0.008, hand);
+    graphics::AddHandParts(hand, view);
     for (int f = 0; f < graphics::kFingers; ++f) {
       view.markers.push_back(render::Sphere{p_WE[static_cast<std::size_t>(f)], 0.008, kFingerRgb[static_cast<std::size_t>(f)]});
     }

@@ -226,6 +226,16 @@ std::string SceneReplica::pose_stamps() const {
   return out;
 }
 
+std::string SceneReplica::field_revisions() const {
+  std::string out;
+  for (const std::string& id : order_) {
+    const Object& o = objects_.at(id);
+    if (!o.field || !o.field->revision()) continue;
+    out += (out.empty() ? "" : ";") + id + "@" + std::to_string(*o.field->revision());
+  }
+  return out;
+}
+
 std::optional<Eigen::Isometry3d> SceneReplica::X_WO(const std::string& object_id) const {
   const auto it = objects_.find(object_id);
   if (it == objects_.end()) return std::nullopt;

@@ -39,7 +39,6 @@
 #include "handshare/render/projection.hpp"
 #include "handshare/render/window_renderer.hpp"
 #include "handshare/scene/scene.hpp"
-#include "handshare/contact/finger_contact.hpp"  // contact::ToPose
 
 namespace handshare::graphics {
 
@@ -61,15 +60,8 @@ struct UserHand {
   Clock::time_point received;
 };
 
-constexpr render::Rgb kSkinRgb{0.86F, 0.70F, 0.58F};
-constexpr render::Rgb kHiroRgb{0.62F, 0.64F, 0.68F};  // the robot hand: brushed metal
-
 // The hand base pose of a device state (identity rotation where the quaternion is unusable).
-Eigen::Isometry3d HandPose(const msg::DeviceState& s) {
-  Eigen::Isometry3d X = Eigen::Isometry3d::Identity();
-  if (!contact::ToPose(s.p_WH_m(), s.q_WH_wxyz(), X)) X.translation() = contact::AsVector(s.p_WH_m());
-  return X;
-}
+Eigen::Isometry3d HandPose(const msg::DeviceState& s) { return figure::HandBasePose(s.p_WH_m(), s.q_WH_wxyz()); }
 
 /// Everything the view needs, updated from DDS on the render thread.
 class WorldView {
@@ -272,22 +264,19 @@ class WorldView {
     world_.AddObjects(view);
     for (const auto& [user, hand] : hands_) {
       if (hand.state.fault()) continue;  // a faulted device has no trustworthy pose
-      // The hand itself under the fingertips: a HIRO II's from its joint angles, any other
-      // fitted to the device's hand base and fingertips.
+      // The hand itself under the fingertips, by the figure's rule (figure::DrawnHand, which
+      // the web console's view draws too): a HIRO II's from its joint angles, a pen or a
+      // gripper for fewer fingers, any other fitted to the device's hand base and fingertips.
       const unsigned present = ~static_cast<unsigned>(hand.state.absent_fingers()) & 0x1Fu;
-      if (present != 0x1Fu) {
-        // A stylus or a gripper (a device with fewer fingers): what the user really holds.
-        std::array<Eigen::Vector3d, kFingers> tips;
-        for (int i = 0; i < kFingers; ++i) tips[i] = Eigen::Vector3d(hand.state.p_WE_m()[i].data());
-        AddDeviceFigure(tips, present, hand.state.fingertip_radius_m(), kSkinRgb, view);
-      } else if (hiro_ && names_.DeviceOf(user) == "hiro") {
-        AddHandFigure(HiroHandFigure(*hiro_, HandPose(hand.state), hand.state.q_hand_rad()),
-                      hand.state.fingertip_radius_m(), kHiroRgb, view);
-      } else {
-        std::array<Eigen::Vector3d, kFingers> tips;
-        for (int i = 0; i < kFingers; ++i) tips[i] = Eigen::Vector3d(hand.state.p_WE_m()[i].data());
-        AddHandFigure(FitHandToFingertips(HandPose(hand.state), tips), hand.state.fingertip_radius_m(), kSkinRgb, view);
-      }
+      figure::DeviceHand drawn;
+      drawn.p_WH_m = hand.state.p_WH_m();
+      drawn.q_WH_wxyz = hand.state.q_WH_wxyz();
+      for (int i = 0; i < kFingers; ++i) drawn.p_WE[i] = Eigen::Vector3d(hand.state.p_WE_m()[i].data());
+      drawn.absent_fingers = hand.state.absent_fingers();
+      drawn.fingertip_radius_m = hand.state.fingertip_radius_m();
+      drawn.q_hand_rad = hand.state.q_hand_rad();
+      drawn.hiro = names_.DeviceOf(user) == "hiro";
+      AddHandParts(figure::DrawnHand(drawn, hiro_ ? &*hiro_ : nullptr), view);
       if (user == desk_user) {
         std::array<Eigen::Vector3d, kFingers> tips, forces;
         for (int i = 0; i < kFingers; ++i) {
@@ -578,12 +567,13 @@ int Spectator::Run() {
     if (!index) throw std::runtime_error("cannot write " + (out_dir / "frames.csv").string());
     index << "frame,file,user,finger,x_m,y_m,z_m,radius_m\n" << std::setprecision(9);
     // frame_times.csv: what each frame shows by the senders' own stamps (the scene state's
-    // revision, each hand's device-state stamp_ns, each moving object's object-state stamp_ns),
+    // revision, each hand's device-state stamp_ns, each moving object's object-state stamp_ns,
+    // each deformed mesh's deformation revision),
     // which a replay (session_play) carries unchanged: frames of a live session and of its
     // replay are matched on them.
     times.open(out_dir / "frame_times.csv");
     if (!times) throw std::runtime_error("cannot write " + (out_dir / "frame_times.csv").string());
-    times << "frame,file,scene,revision,hands,objects\n";
+    times << "frame,file,scene,revision,hands,objects,deformations\n";
   }
 
   // The renderer before joining: OpenGL's start-up (3.8 s once on a loaded machine) would
@@ -694,7 +684,8 @@ int Spectator::Run() {
         times << sep << user << "@" << hand.state.stamp_ns();
         sep = ";";
       }
-      times << "," << world.world().pose_stamps() << "\n";
+      // Flushed with each frame: a test reads what the frames show while they are written.
+      times << "," << world.world().pose_stamps() << "," << world.world().field_revisions() << "\n" << std::flush;
       const auto ended = Clock::now();
       frame_stats.Record(due, began, ended);
       if (ended >= next_stats) {

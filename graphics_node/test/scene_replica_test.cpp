@@ -392,6 +392,7 @@ TEST(SceneReplica, DeformationsFollowTheReceiverRuleAndResetWithTheScene) {
   const DeformationField* field = world.deformation("tail");
   ASSERT_NE(field, nullptr);
   EXPECT_EQ(field->vertex_count(), Tail().vertices_m.size());
+  EXPECT_EQ(world.field_revisions(), "") << "no sample yet";
   EXPECT_EQ(world.deformation("ground"), nullptr) << "a box has no vertices to displace";
 
   msg::Deformation first = Deformation("tail", 1, true, {3, 961, 962, 5000}, std::vector<float>(12, 0.001F));
@@ -401,6 +402,7 @@ TEST(SceneReplica, DeformationsFollowTheReceiverRuleAndResetWithTheScene) {
   EXPECT_TRUE(field->displaced());
   EXPECT_EQ(field->stats().ids_out_of_range, 2U) << "962 vertices: ids 962 and 5000 are beyond";
   EXPECT_EQ(field->u_W_m()[961], Eigen::Vector3d::Constant(double(0.001F)));
+  EXPECT_EQ(world.field_revisions(), "tail@1") << "what frame_times.csv says a frame shows";
 
   // Samples for objects that are not in the scene, or have no mesh, are counted and dropped.
   world.OnDeformation(Deformation("daphnia_belly", 1, true, {0}, {1, 1, 1}));

@@ -19,6 +19,7 @@
 #include "handshare/dds/messages.hpp"
 #include "handshare/dds/name_binding.hpp"
 #include "handshare/dds/sample_checks.hpp"
+#include "handshare/hiro/hiro_model.hpp"
 #include "handshare/scene/scene.hpp"
 #include "handshare/session/control_events.hpp"
 #include "handshare/session/operator_command.hpp"
@@ -213,6 +214,10 @@ int Console::Run() {
     web.files["/meshes/" + stem + ".glb"] = glb_dir / (stem + ".glb");
     exported.insert(stem);
   }
+  // The books' pictures (an open book's left page), by file name (DrawnControl's page_picture).
+  for (const auto& entry : std::filesystem::directory_iterator(common::AssetsDir() / "images")) {
+    if (entry.path().extension() == ".png") web.files["/pictures/" + entry.path().filename().string()] = entry.path();
+  }
 
   const auto state_json = [&] {
     std::lock_guard lock(mutex);
@@ -308,6 +313,14 @@ int Console::Run() {
       std::to_string(server.port()) + " (the operator's page: /operator; the questionnaire: /visit; actions " +
       (token.empty() ? "off: no --token-file" : "need the token") + ")");
 
+  // The HIRO II's model: its users' hands are drawn from their joint angles, as the screens do
+  // (without the file, fitted to the fingertips like any other, as there).
+  std::optional<hiro::HiroModel> hiro_model;
+  try {
+    hiro_model = hiro::HiroModel::Load(common::AssetsDir() / "devices" / "hiro2.json");
+  } catch (const std::exception& e) {
+    say(std::string("HIRO II hands are fitted to their fingertips: ") + e.what());
+  }
   dds::SampleMeta meta;
   dds::DroppedSamples dropped;
   std::optional<scene::Scene> world_file;  // the current world's scene file, if the console has it
@@ -425,6 +438,7 @@ int Console::Run() {
         for (int k = 0; k < 3; ++k) b.p_WO_m[k] = object.p_WO_m()[k];
         for (int k = 0; k < 4; ++k) b.q_WO_wxyz[k] = object.q_WO_wxyz()[k];
         b.owner = object.owner().to_string();
+        b.stamp_ns = object.stamp_ns();
         bodies_changed = true;
       }
       msg::Deformation deformation;
@@ -501,6 +515,17 @@ int Console::Run() {
         h.p_WE_m.push_back({device.p_WE_m()[f][0], device.p_WE_m()[f][1], device.p_WE_m()[f][2]});
       }
       h.fingertip_radius_m = device.fingertip_radius_m();
+      h.stamp_ns = device.stamp_ns();
+      // All of the state's hand, for its figure (drawn once per hands document, HandsJson).
+      h.device.p_WH_m = device.p_WH_m();
+      h.device.q_WH_wxyz = device.q_WH_wxyz();
+      for (int f = 0; f < common::kFingers; ++f) h.device.p_WE[f] = Eigen::Vector3d(device.p_WE_m()[f].data());
+      h.device.absent_fingers = device.absent_fingers();
+      h.device.fingertip_radius_m = device.fingertip_radius_m();
+      h.device.q_hand_rad = device.q_hand_rad();
+      h.device.hiro = std::any_of(state.members.begin(), state.members.end(), [&](const auto& m) {
+        return m.second.user == h.user && m.second.kind == "haptic" && m.second.device == "hiro";
+      });
       hands_changed = true;
     }
     msg::LoopStatistics stats;
@@ -564,7 +589,7 @@ int Console::Run() {
       dirty = false;
     }
     if (hands_changed && now - last_hands >= kHandsPeriod) {
-      server.Broadcast(HandsJson(hands));
+      server.Broadcast(HandsJson(hands, hiro_model ? &*hiro_model : nullptr));
       last_hands = now;
       hands_changed = false;
     }

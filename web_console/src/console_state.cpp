@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <string>
 
 #include <Eigen/Geometry>
 #include <nlohmann/json.hpp>
@@ -23,12 +24,31 @@ const char* KindName(controls::EventKind k) {
 }
 }  // namespace
 
-std::string HandsJson(const std::map<std::string, HandView>& hands) {
+namespace {
+// A length or a unit quaternion's component to 1e-6 (a micrometre: far below a pixel), which JSON
+// then prints in a few digits.
+double Micro(double x) { return std::round(x * 1e6) * 1e-6; }
+}  // namespace
+
+std::string HandsJson(const std::map<std::string, HandView>& hands, const hiro::HiroModel* hiro_model) {
   using nlohmann::json;
   json list = json::array();
   for (const auto& [user, h] : hands) {
-    list.push_back({{"user", h.user}, {"p_WH_m", h.p_WH_m}, {"q_WH_wxyz", h.q_WH_wxyz}, {"fingers", h.fingers},
-                    {"p_WE_m", h.p_WE_m}, {"radius_m", h.fingertip_radius_m}});
+    // The figure, once per document: what the screens draw of this hand.
+    const figure::HandParts parts = figure::DrawnHand(h.device, hiro_model);
+    json boxes = json::array();
+    for (const figure::Box& b : parts.boxes) {
+      boxes.push_back({Micro(b.p_W.x()), Micro(b.p_W.y()), Micro(b.p_W.z()), Micro(b.half_extents_m.x()),
+                       Micro(b.half_extents_m.y()), Micro(b.half_extents_m.z()), Micro(b.q_WB.w()), Micro(b.q_WB.x()),
+                       Micro(b.q_WB.y()), Micro(b.q_WB.z())});
+    }
+    json spheres = json::array();
+    for (const figure::Sphere& b : parts.spheres) {
+      spheres.push_back({Micro(b.p_W.x()), Micro(b.p_W.y()), Micro(b.p_W.z()), Micro(b.radius_m)});
+    }
+    list.push_back({{"user", h.user}, {"stamp_ns", std::to_string(h.stamp_ns)}, {"p_WH_m", h.p_WH_m}, {"q_WH_wxyz", h.q_WH_wxyz},
+                    {"fingers", h.fingers}, {"p_WE_m", h.p_WE_m}, {"radius_m", h.fingertip_radius_m},
+                    {"figure", {{"rgb", parts.rgb}, {"boxes", std::move(boxes)}, {"spheres", std::move(spheres)}}}});
   }
   return json{{"type", "hands"}, {"hands", std::move(list)}}.dump(-1, ' ', false, json::error_handler_t::replace);
 }
@@ -72,7 +92,9 @@ ControlView DrawnControl(const scene::ControlSpec& spec, const ControlStateIn& s
     v.size_m = {spec.size_m.x(), spec.size_m.y(), spec.size_m.z()};
     const int page = std::max(0, state.index);
     if (state.engaged && static_cast<std::size_t>(page) < spec.page_content.size()) {
-      for (const auto& language : languages) v.page_text[language] = spec.page_content[static_cast<std::size_t>(page)].TextIn(language);
+      const scene::BookPage& spread = spec.page_content[static_cast<std::size_t>(page)];
+      for (const auto& language : languages) v.page_text[language] = spread.TextIn(language);
+      if (!spread.image_uri.empty()) v.page_picture = "/pictures/" + spread.image_path.filename().string();
     }
   }
   return v;
@@ -99,7 +121,7 @@ std::string BodiesJson(const std::string& scene, const std::map<std::string, Bod
   using nlohmann::json;
   json list = json::array();
   for (const auto& [id, b] : bodies) {
-    list.push_back({{"id", id}, {"p_WO_m", b.p_WO_m}, {"q_WO_wxyz", b.q_WO_wxyz}, {"owner", b.owner}});
+    list.push_back({{"id", id}, {"p_WO_m", b.p_WO_m}, {"q_WO_wxyz", b.q_WO_wxyz}, {"owner", b.owner}, {"stamp_ns", std::to_string(b.stamp_ns)}});
   }
   json drawn = json::array();
   for (const auto& c : controls) {
@@ -109,6 +131,7 @@ std::string BodiesJson(const std::string& scene, const std::map<std::string, Bod
     if (c.type == "book") {
       j["size_m"] = c.size_m;
       j["page_text"] = c.page_text;
+      j["page_picture"] = c.page_picture;
     }
     drawn.push_back(std::move(j));
   }

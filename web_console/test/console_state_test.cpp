@@ -6,6 +6,8 @@
 
 #include <nlohmann/json.hpp>
 
+#include "handshare/hiro/hiro_model.hpp"
+
 namespace handshare::web_console {
 namespace {
 
@@ -82,7 +84,7 @@ TEST(ConsoleState, TheViewGetsEveryObjectAndEveryFingertipTheDeviceHas) {
   EXPECT_EQ(j["world"]["view"][0]["mesh_scale"][0], 2.0);
 
   std::map<std::string, HandView> hands;
-  hands["k"] = HandView{"alice", {0.1, 0.15, 0.25}, {0.0, 0.0, 0.0, 1.0}, {1}, {{0.1, 0.2, 0.3}}, 0.008};  // a stylus
+  hands["k"] = HandView{"alice", {0.1, 0.15, 0.25}, {0.0, 0.0, 0.0, 1.0}, {1}, {{0.1, 0.2, 0.3}}, 0.008, 0, {}};  // a stylus
   const auto h = nlohmann::json::parse(HandsJson(hands));
   EXPECT_EQ(h["type"], "hands");
   EXPECT_EQ(h["hands"][0]["user"], "alice");
@@ -90,6 +92,70 @@ TEST(ConsoleState, TheViewGetsEveryObjectAndEveryFingertipTheDeviceHas) {
   EXPECT_EQ(h["hands"][0]["q_WH_wxyz"][3], 1.0);
   EXPECT_EQ(h["hands"][0]["fingers"], nlohmann::json::array({1}));
   EXPECT_EQ(h["hands"][0]["p_WE_m"][0][2], 0.3);
+}
+
+// Each hand carries its device state's stamp and the figure the screens draw (figure::DrawnHand):
+// the fitted palm and links in skin, a HIRO II user's hand from its joint angles in metal, a
+// stylus as a pen; its numbers within a micrometre of the figure's.
+TEST(ConsoleState, TheHandsDocumentCarriesEachHandsFigureAndStamp) {
+  HandView h;
+  h.user = "alice";
+  h.stamp_ns = 123456789012345ULL;
+  h.device.p_WH_m = {0.05, -0.02, 0.12};
+  h.device.q_WH_wxyz = {std::cos(0.35), 0.0, 0.0, std::sin(0.35)};
+  const Eigen::Isometry3d X_WH = figure::HandBasePose(h.device.p_WH_m, h.device.q_WH_wxyz);
+  const std::array<Eigen::Vector3d, figure::kFingers> tips_H = {
+      Eigen::Vector3d(-0.060, 0.040, -0.010), Eigen::Vector3d(-0.036, 0.100, 0.000), Eigen::Vector3d(-0.012, 0.105, 0.000),
+      Eigen::Vector3d(0.012, 0.100, 0.000), Eigen::Vector3d(0.036, 0.090, 0.000)};
+  for (int f = 0; f < figure::kFingers; ++f) h.device.p_WE[f] = X_WH * tips_H[f];
+  h.device.fingertip_radius_m = 0.008;
+  std::map<std::string, HandView> hands{{"k", h}};
+  const auto doc = nlohmann::json::parse(HandsJson(hands));
+  const auto& hand = doc["hands"][0];
+  EXPECT_EQ(hand["stamp_ns"], "123456789012345");  // a string: beyond JavaScript's exact integers
+  const figure::HandParts parts = figure::DrawnHand(h.device, nullptr);
+  const auto& fig = hand["figure"];
+  EXPECT_NEAR(fig["rgb"][0].get<double>(), figure::kSkinRgb[0], 1e-6);
+  ASSERT_EQ(fig["boxes"].size(), 16u);    // the palm and three links a finger
+  ASSERT_EQ(fig["spheres"].size(), 15u);  // three joints a finger
+  for (std::size_t i = 0; i < parts.boxes.size(); ++i) {
+    const auto& b = fig["boxes"][i];
+    const figure::Box& e = parts.boxes[i];
+    for (int k = 0; k < 3; ++k) {
+      EXPECT_NEAR(b[k].get<double>(), e.p_W[k], 5e-7) << i;
+      EXPECT_NEAR(b[3 + k].get<double>(), e.half_extents_m[k], 5e-7) << i;
+    }
+    const Eigen::Quaterniond q(b[6].get<double>(), b[7].get<double>(), b[8].get<double>(), b[9].get<double>());
+    EXPECT_LT(q.angularDistance(e.q_WB), 1e-5) << i;
+  }
+  for (std::size_t i = 0; i < parts.spheres.size(); ++i) {
+    for (int k = 0; k < 3; ++k) EXPECT_NEAR(fig["spheres"][i][k].get<double>(), parts.spheres[i].p_W[k], 5e-7) << i;
+    EXPECT_NEAR(fig["spheres"][i][3].get<double>(), parts.spheres[i].radius_m, 5e-7);
+  }
+  // The palm's box is where the fitted hand has it: X_WH times its centre in H.
+  const Eigen::Vector3d palm_W = X_WH * figure::FitHandToFingertips(X_WH, h.device.p_WE).palm_center_H;
+  for (int k = 0; k < 3; ++k) EXPECT_NEAR(fig["boxes"][0][k].get<double>(), palm_W[k], 5e-7);
+
+  // A HIRO II user's hand, with the model: drawn from its joint angles, in metal.
+  const hiro::HiroModel model = hiro::HiroModel::Load(std::string(HANDSHARE_SOURCE_ASSETS) + "/devices/hiro2.json");
+  hands["k"].device.hiro = true;
+  const auto metal = nlohmann::json::parse(HandsJson(hands, &model))["hands"][0]["figure"];
+  EXPECT_NEAR(metal["rgb"][0].get<double>(), figure::kHiroRgb[0], 1e-6);
+  const figure::HandFigure robot = figure::HiroHandFigure(model, X_WH, hands["k"].device.q_hand_rad);
+  for (int k = 0; k < 3; ++k) EXPECT_NEAR(metal["spheres"][3][k].get<double>(), robot.joints_W[1][0][k], 5e-7);
+  // A stylus: one pen, no joints.
+  hands["k"].device.absent_fingers = 0b11101;
+  const auto pen = nlohmann::json::parse(HandsJson(hands, &model))["hands"][0]["figure"];
+  EXPECT_EQ(pen["boxes"].size(), 1u);
+  EXPECT_EQ(pen["spheres"].size(), 0u);
+}
+
+// Each body carries its object state's sender stamp.
+TEST(ConsoleState, TheBodiesDocumentCarriesEachStateStamp) {
+  std::map<std::string, BodyView> bodies;
+  bodies["ball"] = BodyView{{0.0, 0.05, 0.09}, {1.0, 0.0, 0.0, 0.0}, "alice", 987654321ULL};
+  const auto doc = nlohmann::json::parse(BodiesJson("solar_system", bodies, {}));
+  EXPECT_EQ(doc["bodies"][0]["stamp_ns"], "987654321");
 }
 
 // The receiver rule of graphics_node's DeformationField: a keyframe of a new revision starts from
@@ -179,13 +245,19 @@ TEST(DrawnControl, AnOpenBookShowsItsPageInEachLanguage) {
   book.size_m = {0.1, 0.14, 0.02};
   book.page_content.resize(2);
   book.page_content[1].text = {{"en", "The Moon"}, {"ja", "月"}};
+  book.page_content[1].image_uri = "images/moon_mars.png";
+  book.page_content[1].image_path = "/somewhere/assets/images/moon_mars.png";
   const ControlView open = DrawnControl(book, {1, true, false, 0.0, "alice"}, {0, 0, 0}, {1, 0, 0, 0}, {"en", "ja"});
   EXPECT_EQ(open.type, "book");
+  EXPECT_EQ(open.page_picture, "/pictures/moon_mars.png") << "its picture, where the console serves it";
+  EXPECT_EQ(DrawnControl(book, {0, true, false, 0.0, "alice"}, {0, 0, 0}, {1, 0, 0, 0}, {"en"}).page_picture, "")
+      << "a spread without a picture";
   EXPECT_EQ(open.page_text.at("en"), "The Moon");
   EXPECT_EQ(open.page_text.at("ja"), "月");
   EXPECT_EQ(open.size_m[1], 0.14);
   const ControlView shut = DrawnControl(book, {1, false, false, 0.0, "alice"}, {0, 0, 0}, {1, 0, 0, 0}, {"en", "ja"});
   EXPECT_TRUE(shut.page_text.empty());
+  EXPECT_EQ(shut.page_picture, "");
   const auto j = nlohmann::json::parse(BodiesJson("start_menu", {{"ball", BodyView{{0, 0.05, 0.1}, {1, 0, 0, 0}, "alice"}}},
                                                   {open}));
   EXPECT_EQ(j["type"], "bodies");
@@ -193,6 +265,7 @@ TEST(DrawnControl, AnOpenBookShowsItsPageInEachLanguage) {
   EXPECT_EQ(j["bodies"][0]["owner"], "alice");
   EXPECT_EQ(j["bodies"][0]["p_WO_m"][2], 0.1);
   EXPECT_EQ(j["controls"][0]["page_text"]["ja"], "月");
+  EXPECT_EQ(j["controls"][0]["page_picture"], "/pictures/moon_mars.png");
   EXPECT_EQ(j["controls"][0]["engaged"], true);
 }
 

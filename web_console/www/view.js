@@ -5,7 +5,9 @@
 // - the moving bodies (object states) and the controls in their states, drawn where the screens
 //   draw them, from the bodies document (20/s at most);
 // - the deformed meshes, from the deformation document (10/s at most);
-// - every user's hand base (a palm) and fingertips, from the hands document (20/s at most);
+// - every user's hand as the screens draw it (the figure the console computed with the screens'
+//   rule: palm and fingers' links, a HIRO II's hand, a pen or gripper) and their fingertips,
+//   from the hands document (20/s at most);
 // - the message board in English or Japanese (the switch, or ?lang=ja).
 // A graphics node's camera may be given in the URL, to see what its frames show:
 //   ?eye=X,Y,Z&target=X,Y,Z&up=X,Y,Z&fov_y=RAD&size=WxH  (its camera.json; W and H in CSS px)
@@ -13,15 +15,19 @@ import * as THREE from "/three/build/three.module.js";
 import {GLTFLoader} from "/three/examples/jsm/loaders/GLTFLoader.js";
 
 const FINGER_RGB = [0xff0000, 0x00ff00, 0x0000ff, 0xffff00, 0x00ffff];  // thumb first, as the screens
-const SKIN_RGB = new THREE.Color(0.86, 0.70, 0.58);  // the screens' hand
-// The palm, as the screens' hand figure has it (graphics_node's hand_figure.hpp), in H.
-const PALM_CENTER_H = [0.0, 0.0, -0.004];
-const PALM_HALF_EXTENTS_H = [0.040, 0.030, 0.008];
+// The draw order of the hands, as the screens': the scene, then the hands' boxes and spheres
+// (hidden by the scene in front of them, writing no depth), then the fingertips, which so show
+// through their hand.
+const ORDER_HAND_BOX = 1, ORDER_HAND_SPHERE = 2, ORDER_FINGERTIP = 3;
 const LANGUAGES = ["en", "ja"];
 const status = document.getElementById("status");
 const params = new URLSearchParams(location.search);
 const view = {
-  world: null, revision: -1, objects: 0, meshesLoaded: 0, meshesFailed: 0, hands: {}, palms: {}, frames: 0,
+  world: null, revision: -1, objects: 0, meshesLoaded: 0, meshesFailed: 0, hands: {}, palms: {}, figures: {}, frames: 0,
+  // The senders' stamps of what is drawn: each hand's device state and each body's object state
+  // (stamp_ns, decimal strings), each mesh's deformation revision: what a graphics node's
+  // frame_times.csv says of its frames.
+  stamps: {hands: {}, bodies: {}, deformations: {}},
   bodies: {}, controls: {}, deformations: {}, board: null,
   language: LANGUAGES.includes(params.get("lang")) ? params.get("lang") : "en",
 };
@@ -135,6 +141,8 @@ function buildWorld(w) {
   view.bodies = {};
   view.controls = {};
   view.deformations = {};
+  view.stamps.bodies = {};
+  view.stamps.deformations = {};
   const group = worldGroup;
   for (const o of w.view) {
     const material = new THREE.MeshPhongMaterial({color: colour(o.rgb)});
@@ -220,20 +228,62 @@ function openBook(holder, c) {
   page.position.set(0, 0, 0.0004);  // the print lies on the paper
   spread.add(page);
   spread.userData.text = text;
+  spread.userData.picture = null;
+  if (c.page_picture) {
+    // The picture on the left page, from -1.5 w + inset to -w/2 (as the screens' AddBook).
+    const [pw, ph] = [w - inset, h - 2 * inset];
+    const left = new THREE.Mesh(new THREE.PlaneBufferGeometry(pw, ph),
+                                new THREE.MeshBasicMaterial({map: picturePage(c.page_picture, pw, ph, spread)}));
+    left.name = "picture";
+    left.position.set(-w + inset / 2, 0, 0.0004);
+    spread.add(left);
+    spread.userData.picture = {url: c.page_picture, loaded: false};
+  }
   holder.add(spread);
   return spread;
+}
+
+// A left page with its picture, laid out as the screens' page texture (graphics_node's
+// ComposePage for a page without text): paper, a margin of 1/16 of its width, the picture fitted
+// into the rest, centred across, at the top margin; the page pw x ph [m].
+function picturePage(url, pw, ph, spread) {
+  const canvas = document.createElement("canvas");
+  canvas.width = 256;
+  canvas.height = Math.round(256 * Math.min(4, Math.max(0.25, ph / pw)));
+  const g = canvas.getContext("2d");
+  g.fillStyle = "#f5f0e1";
+  g.fillRect(0, 0, canvas.width, canvas.height);
+  const texture = new THREE.CanvasTexture(canvas);
+  texture.minFilter = THREE.LinearFilter;
+  const image = new Image();
+  image.onload = () => {
+    const margin = Math.max(2, Math.trunc(canvas.width / 16));
+    const innerW = Math.max(1, canvas.width - 2 * margin), roomH = Math.max(1, canvas.height - 2 * margin);
+    const scale = Math.min(innerW / image.naturalWidth, roomH / image.naturalHeight);
+    const pw_px = Math.max(1, Math.round(image.naturalWidth * scale));
+    const ph_px = Math.max(1, Math.round(image.naturalHeight * scale));
+    g.drawImage(image, margin + Math.trunc((innerW - pw_px) / 2), margin, Math.min(pw_px, innerW), ph_px);
+    texture.needsUpdate = true;
+    if (spread.userData.picture) {
+      Object.assign(spread.userData.picture, {loaded: true, width_px: image.naturalWidth, height_px: image.naturalHeight});
+    }
+  };
+  image.src = url;
+  return texture;
 }
 
 function showBodies(doc) {
   lastBodies = doc;
   if (doc.scene !== view.world) return;
   view.bodies = {};
+  view.stamps.bodies = {};
   for (const b of doc.bodies) {
     const holder = holders.get(b.id);
     if (!holder) continue;
     setPose(holder, b.p_WO_m, b.q_WO_wxyz);
     const [p, q] = poseOf(holder);
     view.bodies[b.id] = {p_WO_m: p, q_WO_wxyz: q, owner: b.owner};
+    view.stamps.bodies[b.id] = b.stamp_ns;
   }
   view.controls = {};
   for (const c of doc.controls) {
@@ -243,7 +293,8 @@ function showBodies(doc) {
     // A book open at a page: its spread, made again when the page or the language changes.
     let spread = holder.getObjectByName("spread");
     const text = c.type === "book" && c.engaged ? (c.page_text[view.language] || "") : null;
-    if (spread && spread.userData.text !== text) {
+    const picture = c.type === "book" && c.engaged ? (c.page_picture || null) : null;
+    if (spread && (spread.userData.text !== text || (spread.userData.picture || {}).url !== (picture || undefined))) {
       holder.remove(spread);
       spread.traverse((n) => { if (n.isMesh) { n.geometry.dispose(); if (n.material.map) n.material.map.dispose(); n.material.dispose(); } });
       spread = null;
@@ -251,7 +302,8 @@ function showBodies(doc) {
     if (!spread && text !== null) spread = openBook(holder, c);
     const [p, q] = poseOf(holder);
     view.controls[c.id] = {type: c.type, index: c.index, engaged: c.engaged, moving: c.moving, position: c.position,
-                           user: c.user, p_WO_m: p, q_WO_wxyz: q, page: spread ? spread.userData.text : null};
+                           user: c.user, p_WO_m: p, q_WO_wxyz: q, page: spread ? spread.userData.text : null,
+                           picture: spread ? spread.userData.picture : null};
   }
 }
 
@@ -291,7 +343,10 @@ function showDeformation(doc) {
   lastDeformation = doc;
   if (doc.scene !== view.world) return;
   for (const o of doc.objects) {
-    if (deform(o.id, o)) view.deformations[o.id] = {revision: o.revision, vertices: o.vertex_count, displaced: o.ids.length};
+    if (deform(o.id, o)) {
+      view.deformations[o.id] = {revision: o.revision, vertices: o.vertex_count, displaced: o.ids.length};
+      view.stamps.deformations[o.id] = o.revision;
+    }
   }
 }
 
@@ -312,17 +367,72 @@ view.meshVertices = (id) => {
   return {p_MV: Array.from(p_MV), p_WV: p_WV};
 };
 
-const tips = new Map();   // "user/finger" -> its sphere, kept from one hands document to the next
-const palms = new Map();  // user -> their palm
+const tips = new Map();     // "user/finger" -> its sphere, kept from one hands document to the next
+const figures = new Map();  // user -> {group, material, boxes: [mesh], spheres: [mesh]}
+const unitBox = new THREE.BoxBufferGeometry(1, 1, 1);
+const unitSphere = new THREE.SphereBufferGeometry(1, 16, 12);
+
+// A user's hand figure as the console sent it (boxes [x, y, z, hx, hy, hz, qw, qx, qy, qz] and
+// spheres [x, y, z, r] in W, one colour): its meshes are kept and moved, more made or extra
+// ones hidden when the figure changes (a stylus has one box, a hand 16).
+function showFigure(user, fig) {
+  let f = figures.get(user);
+  if (!f) {
+    f = {group: new THREE.Group(), boxes: [], spheres: [],
+         material: new THREE.MeshPhongMaterial({color: 0xffffff, depthWrite: false})};
+    f.group.name = "figure/" + user;
+    figures.set(user, f);
+    handGroup.add(f.group);
+  }
+  f.material.color.setRGB(fig.rgb[0], fig.rgb[1], fig.rgb[2]);
+  const place = (list, geometry, order, k) => {
+    while (list.length <= k) {
+      const m = new THREE.Mesh(geometry, f.material);
+      m.renderOrder = order;
+      list.push(m);
+      f.group.add(m);
+    }
+    list[k].visible = true;
+    return list[k];
+  };
+  fig.boxes.forEach((b, k) => {
+    const m = place(f.boxes, unitBox, ORDER_HAND_BOX, k);
+    m.position.set(b[0], b[1], b[2]);
+    m.scale.set(2 * b[3], 2 * b[4], 2 * b[5]);
+    m.quaternion.set(b[7], b[8], b[9], b[6]);
+  });
+  fig.spheres.forEach((b, k) => {
+    const m = place(f.spheres, unitSphere, ORDER_HAND_SPHERE, k);
+    m.position.set(b[0], b[1], b[2]);
+    m.scale.setScalar(b[3]);
+  });
+  for (let k = fig.boxes.length; k < f.boxes.length; ++k) f.boxes[k].visible = false;
+  for (let k = fig.spheres.length; k < f.spheres.length; ++k) f.spheres[k].visible = false;
+  // What is drawn, read back from the three.js scene: each box's centre, orientation and size,
+  // each sphere's centre and radius, in W.
+  f.group.updateMatrixWorld(true);
+  const drawn = {rgb: f.material.color.toArray(), boxes: [], spheres: []};
+  for (const m of f.boxes.slice(0, fig.boxes.length)) {
+    const [p, q] = poseOf(m);
+    drawn.boxes.push({p_W_m: p, q_WB_wxyz: q, size_m: m.getWorldScale(new THREE.Vector3()).toArray()});
+  }
+  for (const m of f.spheres.slice(0, fig.spheres.length)) {
+    drawn.spheres.push({p_W_m: m.getWorldPosition(new THREE.Vector3()).toArray(), radius_m: m.scale.x});
+  }
+  return drawn;
+}
 
 function showHands(hands) {
-  // Spheres and palms are made once per fingertip and user and moved after: 20 documents a
-  // second allocate nothing on the GPU; what is gone (its user left) is removed and freed.
+  // Meshes are made once per fingertip and figure part and moved after: 20 documents a second
+  // allocate nothing on the GPU; what is gone (its user left) is removed and freed.
   const seen = new Set();
   view.hands = {};
   view.palms = {};
+  view.figures = {};
+  view.stamps.hands = {};
   for (const h of hands) {
     view.hands[h.user] = [];  // where the spheres are drawn, in W
+    view.stamps.hands[h.user] = h.stamp_ns;
     h.p_WE_m.forEach((p, k) => {
       const name = h.user + "/" + h.fingers[k];
       let tip = tips.get(name);
@@ -330,6 +440,7 @@ function showHands(hands) {
         tip = new THREE.Mesh(new THREE.SphereBufferGeometry(1, 16, 12),
                              new THREE.MeshPhongMaterial({color: FINGER_RGB[h.fingers[k]]}));
         tip.name = name;
+        tip.renderOrder = ORDER_FINGERTIP;
         tips.set(name, tip);
         handGroup.add(tip);
       }
@@ -338,22 +449,15 @@ function showHands(hands) {
       seen.add(name);
       view.hands[h.user].push(tip.getWorldPosition(new THREE.Vector3()).toArray());
     });
-    let palm = palms.get(h.user);
-    if (!palm) {
-      palm = new THREE.Group();  // at H; its box where the hand figure has the palm
-      const e = PALM_HALF_EXTENTS_H;
-      const box = new THREE.Mesh(new THREE.BoxBufferGeometry(2 * e[0], 2 * e[1], 2 * e[2]),
-                                 new THREE.MeshPhongMaterial({color: SKIN_RGB}));
-      box.position.set(PALM_CENTER_H[0], PALM_CENTER_H[1], PALM_CENTER_H[2]);
-      palm.add(box);
-      palm.name = "palm/" + h.user;
-      palms.set(h.user, palm);
-      handGroup.add(palm);
+    if (h.figure) {
+      const drawn = showFigure(h.user, h.figure);
+      view.figures[h.user] = drawn;
+      // A hand's first box is its palm (a pen or gripper has none: fewer than five fingers).
+      if (h.fingers.length === FINGER_RGB.length && drawn.boxes.length) {
+        view.palms[h.user] = {p_W_m: drawn.boxes[0].p_W_m, q_WB_wxyz: drawn.boxes[0].q_WB_wxyz};
+      }
+      seen.add("figure/" + h.user);
     }
-    setPose(palm, h.p_WH_m, h.q_WH_wxyz);
-    const [p, q] = poseOf(palm);
-    view.palms[h.user] = {p_WH_m: p, q_WH_wxyz: q};
-    seen.add("palm/" + h.user);
   }
   for (const [name, tip] of tips) {
     if (seen.has(name)) continue;
@@ -362,13 +466,31 @@ function showHands(hands) {
     tip.material.dispose();
     tips.delete(name);
   }
-  for (const [user, palm] of palms) {
-    if (seen.has("palm/" + user)) continue;
-    handGroup.remove(palm);
-    palm.traverse((n) => { if (n.isMesh) { n.geometry.dispose(); n.material.dispose(); } });
-    palms.delete(user);
+  for (const [user, f] of figures) {
+    if (seen.has("figure/" + user)) continue;
+    handGroup.remove(f.group);
+    f.material.dispose();  // the unit geometries are shared
+    figures.delete(user);
   }
 }
+
+// For tests: the canvas drawn now (as PNG data URLs), and with `bare` drawn again without the
+// hands, and the senders' stamps of what it shows (a graphics node's frame with the same stamps
+// shows the same moment), and where the fingertips are drawn.
+view.snapshot = (bare = true) => {
+  const canvas = renderer.domElement;
+  const shot = {stamps: JSON.parse(JSON.stringify(view.stamps)), hands: JSON.parse(JSON.stringify(view.hands))};
+  renderer.render(scene, camera);
+  shot.png = canvas.toDataURL("image/png");
+  if (bare) {
+    handGroup.visible = false;
+    renderer.render(scene, camera);
+    shot.bare = canvas.toDataURL("image/png");
+    handGroup.visible = true;
+    renderer.render(scene, camera);
+  }
+  return shot;
+};
 
 // The message board in the view's language (the screens show one language each; the page
 // switches), as text only.

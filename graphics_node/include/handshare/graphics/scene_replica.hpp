@@ -98,6 +98,9 @@ class SceneReplica {
   /// order (objects drawn at the scene state's pose left out): what a frame shows of moving
   /// objects, by stamps a replay carries unchanged.
   std::string pose_stamps() const;
+  /// The revision of each mesh's field that a Deformation sample gave, "id@revision" joined by
+  /// ';' in scene order (fields no sample reached left out): what a frame shows of deformations.
+  std::string field_revisions() const;
   /// The current scene's objects, in scene-state order.
   const std::vector<std::string>& object_ids() const { return order_; }
   const SceneReplicaStats& stats() const { return stats_; }

@@ -11,6 +11,7 @@
 #include <string>
 #include <vector>
 
+#include "handshare/figure/hand_figure.hpp"
 #include "handshare/scene/scene.hpp"
 
 #include "handshare/controls/control_table.hpp"
@@ -68,6 +69,8 @@ struct HandView {
   std::vector<int> fingers;                    ///< finger index of each tip (thumb 0)
   std::vector<std::array<double, 3>> p_WE_m;   ///< fingertip centres
   double fingertip_radius_m = 0.0;
+  std::uint64_t stamp_ns = 0;                  ///< the device state's sender stamp (its steady clock)
+  figure::DeviceHand device;                   ///< the device state's hand, all of it: its figure's input
 };
 
 /// A body of the current world that moves: its newest ObjectState pose, as the screens draw it.
@@ -75,6 +78,7 @@ struct BodyView {
   std::array<double, 3> p_WO_m{};
   std::array<double, 4> q_WO_wxyz{1, 0, 0, 0};
   std::string owner;  ///< the user who holds it, "" when the world server simulates it
+  std::uint64_t stamp_ns = 0;  ///< the object state's sender stamp (its writer's steady clock)
 };
 
 /// A control of the current world in its state (the world server's ControlState), drawn as the
@@ -93,6 +97,9 @@ struct ControlView {
   std::array<double, 4> q_WO_wxyz{1, 0, 0, 0};
   std::array<double, 3> size_m{};  ///< a book's size (its frame C: the closed book's top at z = 0)
   std::map<std::string, std::string> page_text;  ///< an open book's page, by language
+  /// An open book's picture on its left page: its URL ("/pictures/NAME.png", the scene file's
+  /// image by its file name; the console serves the assets' images there); "" none.
+  std::string page_picture;
 };
 
 /// The state of a control as the world server sent it (ControlState), before it is drawn.
@@ -173,11 +180,16 @@ struct ConsoleState {
 std::string ToJson(const ConsoleState& state, std::chrono::steady_clock::time_point now);
 
 /// The hands document the view reads ({"type": "hands", "hands": [...]}), sent apart from the
-/// state and more often.
-std::string HandsJson(const std::map<std::string, HandView>& hands);  // any key: the order of the list
+/// state and more often. Each hand carries its device state's stamp (a decimal string: 64 bits
+/// are beyond JavaScript's exact integers) and its figure as the
+/// screens draw it (figure::DrawnHand: the palm and the fingers' links, a HIRO II's hand with
+/// `hiro_model` for users whose device is "hiro", a pen or a gripper), its boxes and spheres in
+/// W rounded to 1 um (quaternions to 1e-6).
+std::string HandsJson(const std::map<std::string, HandView>& hands,  // any key: the order of the list
+                      const hiro::HiroModel* hiro_model = nullptr);
 
 /// The moving bodies and the controls in their states ({"type": "bodies", "scene": ...,
-/// "bodies": [{"id", "p_WO_m", "q_WO_wxyz", "owner"}], "controls": [...]}), sent apart from
+/// "bodies": [{"id", "p_WO_m", "q_WO_wxyz", "owner", "stamp_ns" (a decimal string)}], "controls": [...]}), sent apart from
 /// the state and as often as the hands.
 std::string BodiesJson(const std::string& scene, const std::map<std::string, BodyView>& bodies,
                        const std::vector<ControlView>& controls);
