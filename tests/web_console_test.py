@@ -83,6 +83,7 @@ from session_test import (ASSETS, DATA, PressWatch, check, fem_cache, held_weigh
 
 from selenium import webdriver  # noqa: E402  (python3-selenium, deploy/install_deps.sh)
 from selenium.webdriver.chrome.service import Service  # noqa: E402
+from selenium.webdriver.common.action_chains import ActionChains  # noqa: E402
 from selenium.webdriver.common.by import By  # noqa: E402
 from selenium.webdriver.support.ui import Select  # noqa: E402
 
@@ -441,6 +442,7 @@ def case_view(h, domain):
         check(not errors, f"the view logged errors: {errors}")
         shot = os.environ.get("HANDSHARE_WEB_SCREENSHOT") or os.path.join(h.work, "view.png")
         driver.save_screenshot(shot)
+        orbit = check_orbit(driver)
         pixels = compare_with_frame(h, driver, port, frames, "start_menu", meshes, FRAME_COLOURS, hand_user="alice")
     finally:
         driver.quit()
@@ -449,6 +451,41 @@ def case_view(h, domain):
           f"{worst:.1e} m of her trace and her palm within {palm_off:.1e} m, {palm_turn:.1e} rad; the board in "
           f"English and Japanese; {state['frames']} frames drawn; screenshot {shot}")
     print(f"view: against the graphics node's frame from its camera: {pixels}")
+    print(f"view: a finger and the mouse turn it about the table: {orbit}")
+
+
+def check_orbit(driver):
+    """A visitor turns the view: a one-finger drag (touch events through the DevTools protocol's
+    input, as a tablet's), then a mouse drag, each moves the camera about the table's point it
+    looks at (its distance kept), never under the table's plane; the page logs no error."""
+    def eye():
+        o = driver.execute_script("return window.handshareView.orbit();")
+        check(o is not None, "the view has no orbit controls without a camera in its URL")
+        return o["eye"], o["target"]
+    before, target = eye()
+    driver.execute_cdp_cmd("Emulation.setTouchEmulationEnabled", {"enabled": True, "maxTouchPoints": 5})
+    rect = driver.execute_script("const r = document.getElementById('view').getBoundingClientRect();"
+                                 "return [r.left + r.width / 2, r.top + r.height / 2];")
+    x, y = rect
+    driver.execute_cdp_cmd("Input.dispatchTouchEvent", {"type": "touchStart", "touchPoints": [{"x": x, "y": y}]})
+    for k in range(1, 11):
+        driver.execute_cdp_cmd("Input.dispatchTouchEvent", {"type": "touchMove", "touchPoints": [{"x": x + 20 * k, "y": y - 6 * k}]})
+    driver.execute_cdp_cmd("Input.dispatchTouchEvent", {"type": "touchEnd", "touchPoints": []})
+    touched, target_after = eye()
+    radius = math.dist(before, target)
+    check(math.dist(touched, before) > 0.05 * radius, f"a finger's drag did not turn the view: {before} -> {touched}")
+    check(abs(math.dist(touched, target_after) - radius) <= 1e-6 and target_after == target,
+          f"a finger's drag did not turn the view about its target: {before} -> {touched} about {target_after}")
+    driver.execute_cdp_cmd("Emulation.setTouchEmulationEnabled", {"enabled": False})
+    ActionChains(driver).move_to_element(driver.find_element(By.ID, "view")).click_and_hold() \
+        .move_by_offset(-150, 200).release().perform()
+    moused, target_after = eye()
+    check(math.dist(moused, touched) > 0.05 * radius, f"a mouse drag did not turn the view: {touched} -> {moused}")
+    check(moused[2] > target[2], f"the view went under the table: eye {moused}, target {target}")
+    errors = [e for e in driver.get_log("browser") if e["level"] == "SEVERE"]
+    check(not errors, f"the view logged errors while turned: {errors}")
+    return (f"eye {[round(v, 3) for v in before]} -> {[round(v, 3) for v in touched]} (finger) -> "
+            f"{[round(v, 3) for v in moused]} (mouse), {radius:.3f} m from the table's point")
 
 
 # What the page's canvas and a graphics node's frame from the same camera are compared by: the

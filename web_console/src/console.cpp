@@ -196,7 +196,9 @@ int Console::Run() {
                // three.js from Debian's libjs-three, at the paths its loader imports it from.
                {"/three/build/three.module.js", std::filesystem::path(HANDSHARE_THREE_DIR) / "build/three.module.js"},
                {"/three/examples/jsm/loaders/GLTFLoader.js",
-                std::filesystem::path(HANDSHARE_THREE_DIR) / "examples/jsm/loaders/GLTFLoader.js"}};
+                std::filesystem::path(HANDSHARE_THREE_DIR) / "examples/jsm/loaders/GLTFLoader.js"},
+               {"/three/examples/jsm/controls/OrbitControls.js",
+                std::filesystem::path(HANDSHARE_THREE_DIR) / "examples/jsm/controls/OrbitControls.js"}};
   // Every mesh of the assets exported once to glTF 2.0, through a folder of this process's
   // that the server reads at start and that goes right after.
   std::set<std::string> exported;

@@ -13,6 +13,7 @@
 //   ?eye=X,Y,Z&target=X,Y,Z&up=X,Y,Z&fov_y=RAD&size=WxH  (its camera.json; W and H in CSS px)
 import * as THREE from "/three/build/three.module.js";
 import {GLTFLoader} from "/three/examples/jsm/loaders/GLTFLoader.js";
+import {OrbitControls} from "/three/examples/jsm/controls/OrbitControls.js";
 
 const FINGER_RGB = [0xff0000, 0x00ff00, 0x0000ff, 0xffff00, 0x00ffff];  // thumb first, as the screens
 // The draw order of the hands, as the screens': the scene, then the hands' boxes and spheres
@@ -63,6 +64,20 @@ const camera = new THREE.PerspectiveCamera(cameraSpec.fov_y_rad * 180 / Math.PI,
 camera.up.set(...cameraSpec.up);
 camera.position.set(...cameraSpec.eye);
 camera.lookAt(...cameraSpec.target);
+// A visitor turns the view with one finger (or the mouse), zooms and pans with two (or the
+// wheel and the right button), about the table, never under it; a graphics node's camera in the
+// URL stays fixed (a picture to compare with its frames). three.js' OrbitControls, from
+// libjs-three like three.js itself.
+let orbit = null;
+if (params.get("eye") === null) {
+  orbit = new OrbitControls(camera, renderer.domElement);
+  orbit.target.set(...cameraSpec.target);
+  orbit.minDistance = 0.15;
+  orbit.maxDistance = 3.0;
+  orbit.maxPolarAngle = 0.47 * Math.PI;  // from the table's up (+z): down to just above its plane
+  orbit.update();
+}
+view.orbit = () => orbit ? {eye: camera.position.toArray(), target: orbit.target.toArray()} : null;
 scene.add(new THREE.AmbientLight(0xffffff, 0.45));
 const sun = new THREE.DirectionalLight(0xffffff, 0.8);
 sun.position.set(0.5, -1, 2);
