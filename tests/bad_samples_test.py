@@ -3,8 +3,8 @@
 malformed samples (NaN and infinite numbers, a 5 m dent, wrong sizes, an unknown event kind,
 another session's samples, a scene named outside the scenes folder, a board without a language,
 a member of no known kind, and well-formed ones in alice's name) at ten times a haptic node's rate on every topic the nodes read,
-while alice presses the triceratops' tail and bob stands by. The world server and bob's node
-drop what comes in alice's name from another participant than hers. No node crashes or stops; every node names and
+while alice presses the triceratops' tail and bob stands by. The world server, bob's node, the
+spectator and the web console drop what comes in alice's name from another participant than hers. No node crashes or stops; every node names and
 counts what it dropped; alice's force stays within the fingertip limit and her press goes on
 unchanged (the bad contact sets never reach her FEM solve).
 
@@ -66,6 +66,9 @@ def run(h, domain):
             "--frames", 100000, "--fps", 2, "--out", os.path.join(h.work, "frames"))
     h.start("audio_guide", "audio_guide", "--domain", domain, "--session", session,
             "--out", os.path.join(h.work, "speech"))
+    # The web console (its view draws the hands as the screens do): it too must not draw a hand
+    # in alice's name from another participant, and must live through the flood.
+    h.start("console", "web_console", "--domain", domain, "--session", session, "--listen", "127.0.0.1:0")
     h.wait_for_line("alice", "scene 'dinosaur' revision", 60)
     # bob, a second user: his node takes alice's contact sets as a peer's, so forged ones in her
     # name would reach his solve of the tail if his node did not bind her name.
@@ -91,11 +94,11 @@ def run(h, domain):
     rounds = int(re.search(r"(\d+) rounds sent", open(bad).read()).group(1))
     # The session goes on after it: alice's node still gets its world, her press still holds.
     h.wait_for_line("alice", "dropped a bad contact_set sample from 'mallory'", 10)
-    for label in ("alice", "bob", "spectator", "audio_guide", "world_server"):
+    for label in ("alice", "bob", "spectator", "audio_guide", "console", "world_server"):
         check(h.procs[label][0].poll() is None, f"{label} ended during the flood:\n{h.log(label)}")
-    for label in ("alice", "bob", "spectator", "audio_guide", "world_server"):
+    for label in ("alice", "bob", "spectator", "audio_guide", "console", "world_server"):
         h.procs[label][0].send_signal(signal.SIGTERM)
-    for label in ("alice", "bob", "spectator", "audio_guide", "world_server"):
+    for label in ("alice", "bob", "spectator", "audio_guide", "console", "world_server"):
         check(h.wait(label, 30) == 0, f"{label} did not end cleanly")
 
     # Every node named and counted what it dropped.
@@ -127,6 +130,10 @@ def run(h, domain):
                  "dropped a bad device_state sample from 'alice': user 'alice' joined from participant ",
                  "dropped a bad deformation sample", "dropped a bad object_state sample"):
         check(text in spectator, f"the spectator did not say '{text}':\n{spectator}")
+    console = h.log("console")
+    for text in ("device_state sample from 'participant ",
+                 ": user 'alice' joined from participant "):  # her hand from another participant: not drawn
+        check(text in console, f"the web console did not say '{text}':\n{console}")
     # bob's node: the forged contact sets in alice's name (from the flooding participant) are
     # dropped and named (alice's own, from her node, were taken before the flood: above).
     bob = h.log("bob")

@@ -327,6 +327,7 @@ int Console::Run() {
   dds::DroppedSamples dropped;
   std::optional<scene::Scene> world_file;  // the current world's scene file, if the console has it
   std::map<std::string, HandView> hands;   // by DeviceState instance (its user); the DDS thread's only
+  dds::NameBinding names;                  // who announced each present user (the DDS thread's only)
   bool hands_changed = false;
   // The moving parts of the current world (the DDS thread's only): bodies by object id, the
   // controls' states by control id (with the world they belong to), mesh fields by object id.
@@ -486,16 +487,26 @@ int Console::Run() {
     while (member_reader.TakeNext(info, meta)) {
       const std::string key = Hex(meta.instance);
       if (!meta.valid_data) {
-        if (meta.instance_state != dds::InstanceState::kAlive) changed |= state.members.erase(key) > 0;
+        if (meta.instance_state != dds::InstanceState::kAlive) {
+          changed |= state.members.erase(key) > 0;
+          names.OnMemberGone(meta.instance);
+        }
         continue;
       }
       if (!dropped.Accept("member_info", sender(meta), dds::CheckMemberInfo(info, session), say)) continue;
       if (info.leaving()) {
         changed |= state.members.erase(key) > 0;
+        names.OnMemberGone(meta.instance);
         continue;
       }
       state.members[key] = MemberRow{info.user().to_string(), dds::ToString(info.kind()), info.device().to_string()};
+      names.OnMember(meta.instance, info.user().to_string(), meta.writer, info.kind(), info.view_Hz(),
+                     info.device().to_string());
       changed = true;
+    }
+    dds::WriterChange member_writer;
+    while (member_reader.TakeWriterChange(member_writer)) {
+      if (!member_writer.alive) names.OnWriterLost(member_writer.writer);
     }
     msg::DeviceState device;
     while (device_reader.TakeNext(device, meta)) {
@@ -504,7 +515,11 @@ int Console::Run() {
         if (meta.instance_state != dds::InstanceState::kAlive) hands_changed |= hands.erase(key) > 0;
         continue;
       }
-      if (!dropped.Accept("device_state", sender(meta), dds::CheckDeviceState(device, session), say)) continue;
+      // A hand in a present user's name from another participant than the one that announced
+      // that user is not drawn (as the screens: dds::NameBinding).
+      std::string bad = dds::CheckDeviceState(device, session);
+      if (bad.empty()) bad = names.Check(device.user().to_string(), meta.writer);
+      if (!dropped.Accept("device_state", sender(meta), bad, say)) continue;
       HandView& h = hands[key];
       h.user = device.user().to_string();
       for (int k = 0; k < 3; ++k) h.p_WH_m[k] = device.p_WH_m()[k];
