@@ -109,18 +109,32 @@ def start_browser(work, extra_flags=(), window_size="1280,1400", phone=None):
     return webdriver.Chrome(service=service, options=options)
 
 
-def post_world(base, world, token):
-    """POST /api/world as a script would: (status, body)."""
+def post_json(base, path, body, token):
+    """POST `body` (JSON) to `path` as a script would, with the token (None: without): (status, body text)."""
     headers = {"Content-Type": "application/json"}
     if token is not None:
         headers["Authorization"] = "Bearer " + token
-    req = urllib.request.Request(base + "/api/world", data=json.dumps({"world": world}).encode(),
-                                 headers=headers, method="POST")
+    req = urllib.request.Request(base + path, data=json.dumps(body).encode(), headers=headers, method="POST")
     try:
         with urllib.request.urlopen(req, timeout=10) as r:
             return r.status, r.read().decode()
     except urllib.error.HTTPError as e:
         return e.code, e.read().decode()
+
+
+def post_world(base, world, token):
+    """POST /api/world as a script would: (status, body)."""
+    return post_json(base, "/api/world", {"world": world}, token)
+
+
+def write_token(work):
+    """A fresh operator's token in a file only its owner reads: (token, path)."""
+    token = secrets.token_urlsafe(24)
+    path = os.path.join(work, "token")
+    with open(path, "w") as f:
+        f.write(token + "\n")
+    os.chmod(path, 0o600)
+    return token, path
 
 
 # Every row of the page's stations table: its node, user and kind (data attributes), the text of
@@ -182,24 +196,25 @@ def page_row_in_log(row, rows):
 
 def send_from_page(driver, world, token):
     """Chooses `world` on the page, types the token, presses Send; returns the status the page shows."""
-    result = driver.find_element(By.ID, "goto-result")
-    driver.execute_script("arguments[0].removeAttribute('data-status'); arguments[0].textContent = '';", result)
     Select(driver.find_element(By.ID, "goto-world")).select_by_value(world)
     field = driver.find_element(By.ID, "goto-token")
     field.clear()
     field.send_keys(token)
-    driver.find_element(By.ID, "goto-send").click()
-    status = wait_until(f"the page's answer to sending {world}", 20, lambda: result.get_attribute("data-status"))
+    return click_and_wait(driver, element_id="goto-send")
+
+
+def click_and_wait(driver, element_id=None, css=None):
+    """Clicks a button of the page's actions and returns (status, text) of its answer."""
+    result = driver.find_element(By.ID, "goto-result")
+    driver.execute_script("arguments[0].removeAttribute('data-status'); arguments[0].textContent = '';", result)
+    (driver.find_element(By.ID, element_id) if element_id else driver.find_element(By.CSS_SELECTOR, css)).click()
+    status = wait_until("the page's answer", 20, lambda: result.get_attribute("data-status"))
     return int(status), result.text
 
 
 def case_operator(h, domain):
     session = f"it-web-{os.getpid()}"
-    token = secrets.token_urlsafe(24)
-    token_file = os.path.join(h.work, "token")
-    with open(token_file, "w") as f:
-        f.write(token + "\n")
-    os.chmod(token_file, 0o600)
+    token, token_file = write_token(h.work)
     log_db = os.path.join(h.work, "session.sqlite")
     h.start("world_server", "world_server", "--domain", domain, "--session", session, "--log", log_db)
     h.start("alice", "haptic_node", "--domain", domain, "--session", session, "--user", "alice",
@@ -1025,15 +1040,7 @@ def case_view_deform(h, domain):
 
 def post_visit(base, body, token):
     """POST /api/visit as a script would: (status, body)."""
-    headers = {"Content-Type": "application/json"}
-    if token is not None:
-        headers["Authorization"] = "Bearer " + token
-    req = urllib.request.Request(base + "/api/visit", data=json.dumps(body).encode(), headers=headers, method="POST")
-    try:
-        with urllib.request.urlopen(req, timeout=10) as r:
-            return r.status, r.read().decode()
-    except urllib.error.HTTPError as e:
-        return e.code, e.read().decode()
+    return post_json(base, "/api/visit", body, token)
 
 
 def fill_questionnaire(driver, visitor, answers, token):
@@ -1065,11 +1072,7 @@ VISIT_MINUTES = 0.05  # 3 s
 
 def case_visit(h, domain):
     session = f"it-webvisit-{os.getpid()}"
-    token = secrets.token_urlsafe(24)
-    token_file = os.path.join(h.work, "token")
-    with open(token_file, "w") as f:
-        f.write(token + "\n")
-    os.chmod(token_file, 0o600)
+    token, token_file = write_token(h.work)
     log_db = os.path.join(h.work, "session.sqlite")
     h.start("world_server", "world_server", "--domain", domain, "--session", session,
             "--visit-minutes", VISIT_MINUTES, "--log", log_db)
@@ -1151,19 +1154,6 @@ def case_visit(h, domain):
           f"her answers from the page in session_report's questionnaire table; screenshot {shot}")
 
 
-def post_json(base, path, body, token):
-    """POST `body` (JSON) to `path` as a script would: (status, body text)."""
-    headers = {"Content-Type": "application/json"}
-    if token is not None:
-        headers["Authorization"] = "Bearer " + token
-    req = urllib.request.Request(base + path, data=json.dumps(body).encode(), headers=headers, method="POST")
-    try:
-        with urllib.request.urlopen(req, timeout=10) as r:
-            return r.status, r.read().decode()
-    except urllib.error.HTTPError as e:
-        return e.code, e.read().decode()
-
-
 def page_table4(driver):
     """The page's Table 4 as {kind: {column: text}}, read in one script (the page redraws it)."""
     rows = driver.execute_script(
@@ -1172,22 +1162,9 @@ def page_table4(driver):
     return {kind: cells for kind, cells in rows}
 
 
-def click_and_wait(driver, element_id=None, css=None):
-    """Clicks a button of the page's actions and returns (status, text) of its answer."""
-    result = driver.find_element(By.ID, "goto-result")
-    driver.execute_script("arguments[0].removeAttribute('data-status'); arguments[0].textContent = '';", result)
-    (driver.find_element(By.ID, element_id) if element_id else driver.find_element(By.CSS_SELECTOR, css)).click()
-    status = wait_until("the page's answer", 20, lambda: result.get_attribute("data-status"))
-    return int(status), result.text
-
-
 def case_operator_tour(h, domain):
     session = f"it-webtour-{os.getpid()}"
-    token = secrets.token_urlsafe(24)
-    token_file = os.path.join(h.work, "token")
-    with open(token_file, "w") as f:
-        f.write(token + "\n")
-    os.chmod(token_file, 0o600)
+    token, token_file = write_token(h.work)
     log_db = os.path.join(h.work, "session.sqlite")
     h.start("world_server", "world_server", "--domain", domain, "--session", session, "--scene", "start_menu",
             "--log", log_db)
