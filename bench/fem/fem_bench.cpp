@@ -36,7 +36,7 @@
 // users). rel_error is the worst force error over those presses against CalculiX's neo-Hookean
 // solid, read from fem_accuracy's committed run (bench/fem/fem_stiffening_PART.csv: force_err
 // for the linear model, corrected_err with the table), not recomputed here; surface_nodes is the
-// part's compliance nodes, contacts the most nodes held in one step.
+// part's compliance nodes, contacts the most patch nodes (solver inputs) in one step.
 
 #include <benchmark/benchmark.h>
 

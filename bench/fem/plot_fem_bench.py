@@ -165,7 +165,7 @@ def tables(rows):
         print(f"| {m} | {max(v[2] for v in rows[m].values()):.2e} |")
     print()
     print("Model rows (the part's compliance nodes; error against CalculiX neo-Hooke):")
-    print("| method | nodes | most held nodes | median [us] | p99 [us] | force error |")
+    print("| method | nodes | most patch nodes | median [us] | p99 [us] | force error |")
     print("|---|---|---|---|---|---|")
     for m in sorted(k for k in rows if k.startswith("model_")):
         for n, v in sorted(rows[m].items()):
