@@ -4,11 +4,12 @@
 //
 //   fem_bench                 Google Benchmark timings of the real-time paths (600 surface
 //                             nodes; 10,000 too when its cache exists)
-//   fem_bench --csv [--cache-dir DIR] [--max-nodes N]
+//   fem_bench --csv [--cache-dir DIR] [--max-nodes N] [--model-depth-mm D] [--only-models]
 //                             rows method,surface_nodes,contacts,step_us,rel_error,p99_us,
 //                             storage_bytes on stdout (step_us is the median; storage_bytes is what
 //                             the method keeps besides the mesh: compliance, copies, tables),
-//                             progress and precompute timings on stderr
+//                             progress and precompute timings on stderr; --only-models: the model
+//                             rows alone (below)
 //
 // Models: E = 10 kPa, nu = 0.3 (soft tissue). Cubes of n^3 nodes (edge 0.1 m, bottom fixed) give
 // 116..584 free surface nodes for n = 6..12 (the paper's range), 953 (n = 15), 1,961 (n = 21,
@@ -22,16 +23,34 @@
 // step_us is the median over the steps; rel_error is against a direct sparse solve of the same
 // contacts (CHOLMOD, reduced system): forces and, for the methods that compute them, every
 // surface displacement (max of the two relative errors).
+//
+// Model rows (`model_linear_PART`, `model_stiffening_PART`, PART tail or belly): the model's
+// error, not the solver's. On the
+// real meshes of the tail and the belly (world::PrepareDeformable, as the haptic world has
+// them), the deformable contact of one haptic step as HapticWorld::StepDeformable runs it: each
+// fingertip's patch (ContactPatchFinder::Sphere, at most 16 nodes), one push-only ContactSolver
+// solve with a sticking friction patch per fingertip, and with the table each fingertip's
+// StiffeningTable::PatchGain (HapticWorld::ApplyFingerPatch). The steps cycle through
+// fem_accuracy's four presses (one and five fingers, normal and 30 degrees oblique) at
+// --model-depth-mm (4 mm: the tail is pressed 3.2-4.2 mm and the belly 4.0 mm by the scripted
+// users). rel_error is the worst force error over those presses against CalculiX's neo-Hookean
+// solid, read from fem_accuracy's committed run (bench/fem/fem_stiffening_PART.csv: force_err
+// for the linear model, corrected_err with the table), not recomputed here; surface_nodes is the
+// part's compliance nodes, contacts the most patch nodes (solver inputs) in one step.
 
 #include <benchmark/benchmark.h>
 
 #include <algorithm>
+#include <array>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
+#include <fstream>
 #include <functional>
+#include <map>
+#include <sstream>
 #include <memory>
 #include <random>
 #include <string>
@@ -48,8 +67,10 @@
 #include "handshare/fem/elementary_displacement.hpp"
 #include "handshare/fem/sparse_cholesky.hpp"
 #include "handshare/fem/static_solver.hpp"
+#include "handshare/fem/stiffening.hpp"
 #include "handshare/fem/surface_field.hpp"
 
+#include "press_parts.hpp"
 #include "rel_error.hpp"
 
 namespace {
@@ -658,16 +679,164 @@ void BenchResolution(const fs::path& cache_dir) {
   std::fprintf(stderr, "  sphere patch: F(finest) / Hertz = %.4f (block of 24 a: +5%% expected)\n", F_ref / F_hertz);
 }
 
+
+// ------------------------------------------------------------------ model rows
+
+// The worst force error, linear and corrected, over the presses of `part` at depth_mm in
+// fem_accuracy's committed comparison with the neo-Hookean solid (converged runs only).
+struct ModelError {
+  double linear = 0.0, corrected = 0.0;
+  int presses = 0;
+};
+
+ModelError CommittedModelError(const fs::path& csv, const std::string& part, double depth_mm) {
+  std::ifstream in(csv);
+  if (!in) throw std::runtime_error("cannot read " + csv.string());
+  auto split = [](const std::string& line) {
+    std::vector<std::string> cells;
+    std::stringstream ss(line);
+    std::string c;
+    while (std::getline(ss, c, ',')) cells.push_back(c);
+    return cells;
+  };
+  std::string line;
+  std::getline(in, line);
+  std::map<std::string, std::size_t> col;
+  const auto header = split(line);
+  for (std::size_t i = 0; i < header.size(); ++i) col[header[i]] = i;
+  for (const char* name : {"part", "model", "depth_mm", "converged", "force_err", "corrected_err"}) {
+    if (!col.count(name)) throw std::runtime_error(csv.string() + ": no column " + name);
+  }
+  ModelError e;
+  while (std::getline(in, line)) {
+    const auto c = split(line);
+    if (c.size() < header.size() || c[col["part"]] != part || c[col["model"]] != "neo_hooke" ||
+        std::abs(std::stod(c[col["depth_mm"]]) - depth_mm) > 1e-9 || c[col["converged"]] != "1") {
+      continue;
+    }
+    e.linear = std::max(e.linear, std::stod(c[col["force_err"]]));
+    e.corrected = std::max(e.corrected, std::stod(c[col["corrected_err"]]));
+    ++e.presses;
+  }
+  if (e.presses == 0) {
+    throw std::runtime_error(csv.string() + ": no converged neo_hooke press of " + part + " at " + std::to_string(depth_mm) + " mm");
+  }
+  return e;
+}
+
+// One haptic step's deformable contact on a part (see the file comment), the four presses at
+// depth_mm cycling, with and without the part's committed stiffening table.
+void BenchModels(const fs::path& cache_dir, double depth_mm) {
+  namespace hb = handshare::bench;
+  for (const std::string name : {"tail", "belly"}) {
+    const hb::PartSpec* spec = nullptr;
+    for (const auto& p : hb::Parts()) {
+      if (p.name == name) spec = &p;
+    }
+    const auto t0 = Clock::now();
+    hb::Part part = hb::PreparePart(*spec, HANDSHARE_SOURCE_ASSETS, cache_dir / "parts", {});
+    const fs::path table_file = hb::CommittedTable(part, spec->object_id);
+    if (table_file.empty()) throw std::runtime_error(name + ": no committed stiffening table");
+    const auto table = std::make_shared<const StiffeningTable>(*part.prepared.mesh, *part.prepared.surface,
+                                                               ReadStiffeningSamples(table_file));
+    const ModelError err = CommittedModelError(fs::path(HANDSHARE_BENCH_FEM_DIR) / ("fem_stiffening_" + name + ".csv"), name, depth_mm);
+    const auto& C = part.prepared.compliance;
+    std::fprintf(stderr, "# part %s: %d compliance nodes, table %s (%zu samples, %zu nodes covered), prepared in %.1f s; "
+                 "committed errors at %.1f mm over %d presses: linear %.2f %%, corrected %.2f %%\n",
+                 name.c_str(), C->num_nodes(), table_file.filename().c_str(), table->num_samples(), table->covered_nodes(),
+                 Since(t0), depth_mm, err.presses, 100 * err.linear, 100 * err.corrected);
+
+    // The presses: fingertips where fem_accuracy puts them, each with a sticking patch (oblique:
+    // the stick of a press 30 degrees off the normal along the row).
+    const double depth_m = 1e-3 * depth_mm;
+    struct Press {
+      std::vector<hb::Finger> fingers;
+      std::vector<FrictionPatch> patches;
+    };
+    std::vector<Press> presses;
+    for (const hb::PressSpec& ps : hb::Presses()) {
+      Press p{hb::FindFingers(part, ps.fingers), {}};
+      for (const hb::Finger& f : p.fingers) {
+        FrictionPatch fp;
+        fp.n_out = f.n_out_O;
+        if (ps.oblique) {
+          const Eigen::Vector3d row = spec->row_O.normalized();
+          fp.slide_m = std::tan(hb::kObliqueAngle_rad) * depth_m * (row - row.dot(f.n_out_O) * f.n_out_O).normalized();
+        }
+        fp.mu_static = fp.mu_kinetic = hb::kStickingMu;
+        p.patches.push_back(fp);
+      }
+      presses.push_back(std::move(p));
+    }
+    // As the haptic world sizes them (SceneModelsOptions: 4 hands, 16 nodes a fingertip).
+    constexpr int kHands = 4, kFingers = 5, kMaxPatch = 16;
+    ContactPatchFinder finder(*part.prepared.mesh, *part.prepared.surface, *C);
+    std::vector<ContactInput> in(static_cast<std::size_t>(kHands * kFingers * kMaxPatch));
+    ContactSolver solver(C, {.max_contacts = kHands * kFingers * kMaxPatch, .push_only = true,
+                             .max_friction_patches = kHands * kFingers});
+    std::array<std::pair<std::int32_t, std::int32_t>, kFingers> finger_inputs{};
+    double felt = 0.0;  // the fingertips' summed force, so that nothing is optimized away
+    int most_held = 0;
+    auto step = [&](int i, const StiffeningTable* t) {
+      const Press& p = presses[static_cast<std::size_t>(i) % presses.size()];
+      std::int32_t m = 0;
+      for (std::size_t k = 0; k < p.fingers.size(); ++k) {
+        const PatchResult r = finder.Sphere(p.fingers[k].p_O, p.fingers[k].n_out_O, hb::kFingertipRadius_m, depth_m,
+                                            ContactMode::kNormalOnly, std::span(in).subspan(static_cast<std::size_t>(m), kMaxPatch));
+        for (std::int32_t q = m; q < m + r.count; ++q) in[static_cast<std::size_t>(q)].patch = static_cast<std::int16_t>(k);
+        finger_inputs[k] = {m, r.count};
+        m += r.count;
+      }
+      solver.Solve(std::span<const ContactInput>(in.data(), static_cast<std::size_t>(m)), p.patches);
+      const auto forces = solver.forces_N();
+      for (std::size_t k = 0; k < p.fingers.size(); ++k) {
+        const auto [b, n] = finger_inputs[k];
+        Eigen::Vector3d f = Eigen::Vector3d::Zero();
+        for (std::int32_t q = b; q < b + n; ++q) f += forces[static_cast<std::size_t>(q)];
+        if (t != nullptr) {
+          f *= t->PatchGain(std::span<const ContactInput>(in.data() + b, static_cast<std::size_t>(n)),
+                            forces.subspan(static_cast<std::size_t>(b), static_cast<std::size_t>(n)), p.fingers[k].n_out_O,
+                            solver.patch_states()[k].slide_m);
+        }
+        felt += f.norm();
+      }
+      most_held = std::max(most_held, m);
+    };
+    const int nodes = C->num_nodes();
+    const double bytes = static_cast<double>(C->storage_bytes());
+    // Each row is timed twice, alternating, and the second of each kept: the first warms the caches.
+    for (int round = 0; round < 2; ++round) {
+      const Timing lin = Time([&](int i) { step(i, nullptr); }, 0.5, 20000);
+      const Timing cor = Time([&](int i) { step(i, table.get()); }, 0.5, 20000);
+      if (round == 1) {
+        Row("model_linear_" + name, nodes, most_held, lin, err.linear, bytes);
+        // The table's per-node gains: 6 floats and a flag per mesh node.
+        Row("model_stiffening_" + name, nodes, most_held, cor, err.corrected,
+            bytes + static_cast<double>(part.prepared.mesh->num_nodes()) * (6 * sizeof(float) + 4));
+      }
+    }
+    std::fprintf(stderr, "  (summed felt force over the timed steps %.3g N)\n", felt);
+  }
+}
+
 int RunCsv(int argc, char** argv) {
   fs::path cache_dir = "fem_bench_cache";
   int max_nodes = 20000;
+  double model_depth_mm = 4.0;
+  bool only_models = false;
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
     if (a == "--cache-dir" && i + 1 < argc) cache_dir = argv[++i];
     if (a == "--max-nodes" && i + 1 < argc) max_nodes = std::atoi(argv[++i]);
+    if (a == "--model-depth-mm" && i + 1 < argc) model_depth_mm = std::atof(argv[++i]);
+    if (a == "--only-models") only_models = true;
   }
   const auto t0 = Clock::now();
   std::printf("method,surface_nodes,contacts,step_us,rel_error,p99_us,storage_bytes\n");
+  if (only_models) {
+    BenchModels(cache_dir, model_depth_mm);
+    return 0;
+  }
   Limits lim;
   std::fprintf(stderr, "# cut-offs: gauss_elimination up to %lld DOF, sherman_morrison_woodbury up to %lld free DOF\n",
                static_cast<long long>(lim.gauss_max_dofs), static_cast<long long>(lim.smw_max_dofs));
@@ -682,6 +851,7 @@ int RunCsv(int argc, char** argv) {
     BenchModel(m, cache_dir, lim);
   }
   BenchResolution(cache_dir);
+  BenchModels(cache_dir, model_depth_mm);
   std::fprintf(stderr, "# total %.1f min\n", Since(t0) / 60);
   return 0;
 }

@@ -5,8 +5,9 @@ usage: /usr/bin/python3 plot_fem_bench.py BENCH.csv OUT_DIR
 
 Writes OUT_DIR/fem_fig10.png (update frequency against surface node count: the paper's Fig. 10
 and its extension to 10,000 nodes) and OUT_DIR/fem_error_vs_time.png (error against step time
-for float32/float64 storage, regularization and mesh resolution), and prints markdown tables of
-the numbers for docs/fem.md.
+for float32/float64 storage, regularization and mesh resolution, and the model rows: the linear
+model and the stiffening correction on the tail and the belly against CalculiX's neo-Hookean
+solid), and prints markdown tables of the numbers for docs/fem.md.
 """
 
 import csv
@@ -107,11 +108,28 @@ def error_vs_time(rows, out):
         ax.plot([r[0] for r in res], [r[1] for r in res], "k*-", label="fingertip patch: mesh a/h = 2, 3, 4, 6")
         for t, e, m in res:
             ax.annotate("a/h=" + m.rsplit("_", 1)[1], (t, e), fontsize=7, xytext=(4, 4), textcoords="offset points")
+    # Model error: the linear model and the stiffening correction on the scenes' parts, against
+    # CalculiX's neo-Hookean solid (worst press force error at the users' depth), timed as one
+    # haptic step's deformable contact on the part's real mesh; an arrow from linear to corrected.
+    for part, color in [("tail", "C8"), ("belly", "C9")]:
+        lin = rows.get("model_linear_" + part, {})
+        cor = rows.get("model_stiffening_" + part, {})
+        for method, d, marker, label in [("linear", lin, "D", f"model error: linear FEM, {part} (vs CalculiX neo-Hooke)"),
+                                         ("stiffening", cor, "X", f"model error: stiffening correction, {part}")]:
+            if d:
+                ax.scatter([v[1] for v in d.values()], [v[2] for v in d.values()], marker=marker, s=80, color=color,
+                           edgecolors="k", label=label, zorder=5)
+        for n in set(lin) & set(cor):
+            ax.annotate("", xy=(cor[n][1], cor[n][2]), xytext=(lin[n][1], lin[n][2]),
+                        arrowprops=dict(arrowstyle="->", color=color, lw=1.2))
+            ax.annotate(f"{part} ({n} nodes)", (lin[n][1], lin[n][2]), fontsize=7, xytext=(6, 4),
+                        textcoords="offset points")
     ax.set_xscale("log")
     ax.set_yscale("log")
     ax.set_xlabel("step time [us]")
     ax.set_ylabel("relative error")
-    ax.set_title("accuracy against run time (errors vs direct sparse solve; resolution vs finest mesh)")
+    ax.set_title("accuracy against run time (solver errors vs direct sparse solve; resolution vs finest mesh;\n"
+                 "model errors vs CalculiX neo-Hooke at the users' press depth)", fontsize=10)
     ax.grid(True, which="both", alpha=0.3)
     ax.legend(fontsize=7, loc="upper left", bbox_to_anchor=(1.01, 1.0))
     fig.tight_layout()
@@ -145,6 +163,13 @@ def tables(rows):
     print("|---|---|")
     for m in sorted(rows):
         print(f"| {m} | {max(v[2] for v in rows[m].values()):.2e} |")
+    print()
+    print("Model rows (the part's compliance nodes; error against CalculiX neo-Hooke):")
+    print("| method | nodes | most patch nodes | median [us] | p99 [us] | force error |")
+    print("|---|---|---|---|---|---|")
+    for m in sorted(k for k in rows if k.startswith("model_")):
+        for n, v in sorted(rows[m].items()):
+            print(f"| {m} | {n} | {v[0]} | {v[1]:.3g} | {v[3]:.3g} | {100 * v[2]:.1f} % |")
     print()
     print("p99 [us] and storage [bytes / N^2]:")
     table(lambda v, n: "-" if v[3] is None else f"{v[3]:.3g} / {v[4] / (n * n):.3g}")

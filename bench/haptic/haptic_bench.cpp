@@ -1,7 +1,8 @@
 // haptic_bench: time of one HapticWorld::Step (5 fingers: collision, proxy, contact solve,
 // forces) while the fingers move along trajectories that touch the object.
 //
-//   haptic_bench --csv [--cache-dir DIR] [--steps N] [--only NAME]  scenario,p50_us,p99_us,lost_share rows
+//   haptic_bench --csv [--cache-dir DIR] [--steps N] [--only NAME] [--stiffening]
+//                                                                    scenario,p50_us,p99_us,lost_share rows
 //     lost_share: share of the measured finger-steps whose proxy is more than 15 mm from its
 //     fingertip (a proxy that stopped following); it must be 0.
 //   haptic_bench [google benchmark flags]                            the same as Google Benchmarks
@@ -16,8 +17,19 @@
 //   deformable_10k_2hands  the same plus a remote hand's 5 contacts in the same solve
 //   deformable_2k_friction deformable_2k with fingertip friction (mu 0.8 static, 0.6 kinetic):
 //                          every patch held in 3-D (docs/fem.md, "Friction")
+//   deformable_tail        the dinosaur scene's triceratops tail as every node builds it
+//                          (world::BuildSceneModels: its mesh through tetgen, its material and
+//                          friction), five fingertips in a row where the tour presses it
+//   deformable_belly       the same on the water flea's belly (microscopic_belly), where
+//                          session.beating_belly presses it
+// --stiffening: the large-deformation correction on (docs/fem.md, "A correction beyond the
+// paper"): the tail and the belly with their committed tables (assets/meshes/*.stiffening.csv);
+// the cube and the plate, which have no table of their own, with a table of samples 10 mm apart
+// over their top faces whose gains are the tail table's, cycled (the same work per patch node
+// as a part's own table: the gains are read per node, whatever their values).
 // Fingertips: radius 8 mm; each follows its own circle over the object and presses 0..3 mm in and
-// out (a few percent of the steps are free), at up to about 0.1 m/s.
+// out (a few percent of the steps are free), at up to about 0.1 m/s; on the tail and the belly
+// each circles 3 mm around its press point and presses 0..4.2 mm (the scripted users' depths).
 #include <benchmark/benchmark.h>
 
 #include <algorithm>
@@ -36,6 +48,10 @@
 #include "handshare/contact/haptic_world.hpp"
 #include "handshare/fem/compliance.hpp"
 #include "handshare/fem/mesh.hpp"
+#include "handshare/fem/stiffening.hpp"
+#include "handshare/world/scene_models.hpp"
+
+#include "press_parts.hpp"
 
 namespace {
 
@@ -45,6 +61,7 @@ namespace fs = std::filesystem;
 using Clock = std::chrono::steady_clock;
 
 fs::path g_cache_dir = HANDSHARE_HAPTIC_BENCH_CACHE;
+bool g_stiffening = false;  // --stiffening
 
 double Since(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
 
@@ -149,6 +166,24 @@ std::unique_ptr<Scenario> MakeBall() {
   return s;
 }
 
+// A table for a block with no table of its own (--stiffening): samples 10 mm apart over its top
+// face z = top, normal +z, with the tail table's gains cycled over them.
+std::shared_ptr<const fem::StiffeningTable> BlockTable(const fem::TetMesh& mesh, double L, double top) {
+  const auto tail = fem::ReadStiffeningSamples(fs::path(HANDSHARE_SOURCE_ASSETS) / "meshes" / "triceratops_tail.stiffening.csv");
+  std::vector<fem::StiffeningSample> samples;
+  std::size_t k = 0;
+  for (double x = 0.0; x <= L + 1e-9; x += 0.01) {
+    for (double y = 0.0; y <= L + 1e-9; y += 0.01) {
+      fem::StiffeningSample smp = tail[k++ % tail.size()];
+      smp.p_m = Eigen::Vector3d(x, y, top);
+      smp.n_out = Eigen::Vector3d::UnitZ();
+      smp.axis = Eigen::Vector3d::UnitX();
+      samples.push_back(smp);
+    }
+  }
+  return std::make_shared<const fem::StiffeningTable>(mesh, fem::ExtractSurface(mesh), samples);
+}
+
 std::unique_ptr<Scenario> MakeDeformable(const std::string& name, bool plate, int max_patch, bool two_hands,
                                          double mu_static = 0.0, double mu_kinetic = 0.0) {
   auto s = std::make_unique<Scenario>();
@@ -180,6 +215,7 @@ std::unique_ptr<Scenario> MakeDeformable(const std::string& name, bool plate, in
   d.max_patch_nodes = max_patch;
   d.mu_static = mu_static;
   d.mu_kinetic = mu_kinetic;
+  if (g_stiffening) d.stiffening = BlockTable(*mesh, L, top);
   s->world->AddDeformable(d);
   s->world->Init();
   s->tips = [L, top](int k) { return FlatTips(k, 0.0, 0.0, L, top); };
@@ -194,6 +230,49 @@ std::unique_ptr<Scenario> MakeDeformable(const std::string& name, bool plate, in
   return s;
 }
 
+// A scene's part as every node builds it (world::BuildSceneModels), five fingertips in the row
+// fem_accuracy presses it with (bench/fem/press_parts.hpp), each circling 3 mm around its press
+// point and pressing -0.2..4.2 mm along the normal there.
+std::unique_ptr<Scenario> MakePart(const std::string& name, const std::string& part_name) {
+  namespace hb = handshare::bench;
+  const hb::PartSpec* spec = nullptr;
+  for (const auto& p : hb::Parts()) {
+    if (p.name == part_name) spec = &p;
+  }
+  const hb::Part part = hb::PreparePart(*spec, HANDSHARE_SOURCE_ASSETS, g_cache_dir / "parts", {});
+  scene::Scene sc = part.scene;
+  std::erase_if(sc.objects, [&](const scene::SceneObject& o) { return o.id != spec->object_id; });
+  sc.objects[0].deformable.stiffening_table_uri.clear();
+  sc.objects[0].deformable.stiffening_table_path.clear();
+  if (g_stiffening) {
+    sc.objects[0].deformable.stiffening_table_path = hb::CommittedTable(part, spec->object_id);
+    if (sc.objects[0].deformable.stiffening_table_path.empty()) throw std::runtime_error(part_name + ": no committed table");
+  }
+  world::SceneModelsOptions opt;
+  opt.cache_dir = g_cache_dir / "parts";
+  world::SceneModels models = world::BuildSceneModels(sc, opt);
+  auto s = std::make_unique<Scenario>();
+  s->name = name;
+  s->world = std::move(models.world);
+  const std::vector<hb::Finger> fingers = hb::FindFingers(part, kFingers);
+  const Eigen::Isometry3d X_WO = part.X_WO;
+  const double R = s->world->config().fingertip_radius_m;
+  s->tips = [fingers, X_WO, R](int k) {
+    std::array<Eigen::Vector3d, kFingers> p;
+    const double t = k * 1e-3;
+    for (int i = 0; i < kFingers; ++i) {
+      const hb::Finger& f = fingers[static_cast<std::size_t>(i)];
+      const Eigen::Vector3d t1 = f.n_out_O.unitOrthogonal(), t2 = f.n_out_O.cross(t1);
+      const double ang = 0.8 * t + 2.0 * M_PI * i / kFingers;
+      const double depth = 0.002 + 0.0022 * std::sin(3.0 * t + i);  // -0.2 .. 4.2 mm
+      p[static_cast<std::size_t>(i)] =
+          X_WO * (f.p_O + 0.003 * (std::cos(ang) * t1 + std::sin(ang) * t2) + (R - depth) * f.n_out_O);
+    }
+    return p;
+  };
+  return s;
+}
+
 std::unique_ptr<Scenario> Make(const std::string& name) {
   if (name == "rigid_mesh_20k") return MakeRigid();
   if (name == "dynamic_ball_grasp") return MakeBall();
@@ -202,11 +281,14 @@ std::unique_ptr<Scenario> Make(const std::string& name) {
   if (name == "deformable_10k_patch6") return MakeDeformable(name, true, 6, false);
   if (name == "deformable_10k_2hands") return MakeDeformable(name, true, 16, true);
   if (name == "deformable_2k_friction") return MakeDeformable(name, false, 16, false, 0.8, 0.6);
+  if (name == "deformable_tail") return MakePart(name, "tail");
+  if (name == "deformable_belly") return MakePart(name, "belly");
   return nullptr;
 }
 
 const char* kNames[] = {"rigid_mesh_20k", "dynamic_ball_grasp", "deformable_2k", "deformable_10k",
-                        "deformable_10k_patch6", "deformable_10k_2hands", "deformable_2k_friction"};
+                        "deformable_10k_patch6", "deformable_10k_2hands", "deformable_2k_friction",
+                        "deformable_tail", "deformable_belly"};
 
 struct Stats {
   double p50_us, p99_us, max_us, mean_us, contact_fraction, mean_patch;
@@ -294,6 +376,8 @@ int main(int argc, char** argv) {
       steps = std::max(100, std::atoi(argv[++i]));
     } else if (a == "--only" && i + 1 < argc) {
       only = argv[++i];
+    } else if (a == "--stiffening") {
+      g_stiffening = true;
     } else {
       rest.push_back(argv[i]);
     }

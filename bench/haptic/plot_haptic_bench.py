@@ -24,14 +24,14 @@ def main() -> int:
     p50 = [float(r["p50_us"]) for r in rows]
     p99 = [float(r["p99_us"]) for r in rows]
     x = range(len(names))
-    fig, ax = plt.subplots(figsize=(9, 4.5))
+    fig, ax = plt.subplots(figsize=(max(9.0, 0.8 * len(names)), 4.5))  # room for each name
     ax.bar([i - 0.2 for i in x], p50, width=0.4, label="p50")
     ax.bar([i + 0.2 for i in x], p99, width=0.4, label="p99")
     ax.axhline(50.0, color="red", linestyle="--", linewidth=1, label="target p99 50 us")
     ax.set_yscale("log")
     ax.set_ylabel("HapticWorld::Step, 5 fingers [us]")
     ax.set_xticks(list(x))
-    ax.set_xticklabels(names, rotation=20, ha="right")
+    ax.set_xticklabels(names, rotation=20 if len(names) <= 10 else 45, ha="right", fontsize=8 if len(names) > 10 else None)
     ax.set_title("Full haptic step (collision, proxy, contact solve, forces), 1 kHz trajectories")
     ax.legend(loc="upper left")
     fig.tight_layout()

@@ -22,11 +22,17 @@
 namespace handshare::world {
 namespace {
 
-// The dinosaur scene reduced to its tail, with these friction coefficients on its material.
-scene::Scene TailScene(double mu_static, double mu_kinetic) {
+// The dinosaur scene reduced to its tail, with these friction coefficients on its material;
+// with `stiffening`, the tail's committed stiffening table on (docs/fem.md, "A correction
+// beyond the paper").
+scene::Scene TailScene(double mu_static, double mu_kinetic, bool stiffening = false) {
   scene::Scene s = test::OneDeformable("dinosaur.json", "triceratops_tail");
   s.objects[0].deformable.mu_static = mu_static;
   s.objects[0].deformable.mu_kinetic = mu_kinetic;
+  if (stiffening) {
+    s.objects[0].deformable.stiffening_table_path =
+        std::filesystem::path(HANDSHARE_SOURCE_ASSETS) / "meshes" / "triceratops_tail.stiffening.csv";
+  }
   return s;
 }
 
@@ -405,10 +411,10 @@ struct TwoHandsResult {
 // receiver's coupling passivity controller (contact::CouplingPassivity, on as by default).
 TwoHandsResult HoldTheTailWithTwoHands(double mu_static, double mu_kinetic, double at_a = 0.35, double at_b = 0.55,
                                        double jitter_m = 0.0, int delay_ms = -1,
-                                       contact::CouplingPassivityStats* coupling = nullptr) {
+                                       contact::CouplingPassivityStats* coupling = nullptr, bool stiffening = false) {
   std::mt19937 rng(5);
   std::normal_distribution<double> noise(0.0, 1.0);
-  const scene::Scene s = TailScene(mu_static, mu_kinetic);
+  const scene::Scene s = TailScene(mu_static, mu_kinetic, stiffening);
   SceneModels alice = BuildTail(s);
   SceneModels bob = BuildTail(s);
   const Eigen::Isometry3d X_WO = s.objects[0].X_WO();
@@ -539,6 +545,27 @@ TEST(TailFriction, HandsHeldStillAcrossADelayComeToRest) {
         EXPECT_LT(r.largest_late_change_N, 1e-3) << delay << " ms, hands at " << a << " and " << b;
       }
     }
+  }
+}
+
+// Issue 47's two-user delayed press with the stiffening correction on (it scales each patch's
+// force, the hand's own and the peer's rebuilt one): the pair of HandsHeldStillAcrossADelay at
+// 0 and 50 ms still comes to rest, and the coupling's passivity observer stays within the bound
+// net.delayed_tail holds it to (-1e-4 J). The table must really be on: alice feels a different
+// force than without it (else this would only repeat the test above).
+TEST(TailFriction, HandsHeldStillAcrossADelayWithTheStiffeningTableComeToRest) {
+  for (int delay : {0, 50}) {
+    contact::CouplingPassivityStats c_lin, c;
+    const TwoHandsResult lin = HoldTheTailWithTwoHands(0.8, 0.6, 0.35, 0.55, 0.0, delay, &c_lin, false);
+    const TwoHandsResult r = HoldTheTailWithTwoHands(0.8, 0.6, 0.35, 0.55, 0.0, delay, &c, true);
+    std::printf("delay %d ms, stiffening table on: late change %.2e m %.2e N, held back %llu, granted %.2e J, "
+                "observer min %.2e J (linear %.2e J), alice %.4f N (linear %.4f N)\n",
+                delay, r.largest_late_change_m, r.largest_late_change_N, static_cast<unsigned long long>(c.held_back),
+                c.energy_granted_J, c.observer_min_J, c_lin.observer_min_J, r.alice_force_N, lin.alice_force_N);
+    EXPECT_GT(std::abs(r.alice_force_N / lin.alice_force_N - 1.0), 1e-3) << delay << " ms: the table is not applied";
+    EXPECT_LT(r.largest_late_change_m, 1e-6) << delay << " ms";
+    EXPECT_LT(r.largest_late_change_N, 1e-3) << delay << " ms";
+    EXPECT_GE(c.observer_min_J, -1e-4) << delay << " ms";
   }
 }
 
