@@ -50,7 +50,7 @@ ALL_TOPICS="$T_MEMBER $T_SCENE $T_BOARD $T_DEVICE $T_CONTACT $T_OBJECT $T_DEFORM
 # publish topics | subscribe topics of each role.
 role_publish() {
   case "$1" in
-    world_server) echo "$T_SCENE $T_BOARD $T_OBJECT $T_DEFORM $T_CONTROL $T_ROSTER" ;;
+    world_server) echo "$T_SCENE $T_BOARD $T_OBJECT $T_DEFORM $T_CONTROL $T_ROSTER $T_STATS" ;;  # stats: its tick
     haptic) echo "$T_MEMBER $T_DEVICE $T_CONTACT $T_EVENT $T_STATS" ;;
     spectator | audio_guide) echo "$T_MEMBER $T_STATS" ;;  # stats: their frames' and board loop's
     recorder) echo "" ;;

@@ -167,7 +167,8 @@ std::string UserOfNode(const std::string& node) {
 
 std::string KindOfNode(const std::string& node) {
   static const std::pair<const char*, const char*> kPrograms[] = {
-      {"haptic_node/", "haptic"}, {"graphics_node/", "graphics"}, {"audio_guide/", "audio_guide"}};
+      {"haptic_node/", "haptic"}, {"graphics_node/", "graphics"}, {"audio_guide/", "audio_guide"},
+      {"world_server/", "world_server"}};
   for (const auto& [prefix, kind] : kPrograms) {
     if (node.rfind(prefix, 0) == 0) return kind;
   }

@@ -49,11 +49,12 @@ TEST(ConsoleState, TheDocumentCarriesEveryStationAndTheWorld) {
   EXPECT_TRUE(j["console"]["actions_enabled"].get<bool>());
 }
 
-// Screens and guides are stations too: their kind comes from their program's node key.
+// Screens, guides and the world server's tick are stations too: their kind comes from their program's node key.
 TEST(ConsoleState, AStationsKindIsItsProgramsMemberKind) {
   EXPECT_EQ(KindOfNode("haptic_node/alice"), "haptic");
   EXPECT_EQ(KindOfNode("graphics_node/screen-1"), "graphics");
   EXPECT_EQ(KindOfNode("audio_guide/guide"), "audio_guide");
+  EXPECT_EQ(KindOfNode("world_server/tick"), "world_server");  // the world server's tick
   EXPECT_EQ(KindOfNode("alice"), "");
   EXPECT_EQ(KindOfNode("x/haptic_node/alice"), "");
   EXPECT_EQ(UserOfNode("graphics_node/screen-1"), "screen-1");

@@ -23,8 +23,10 @@ function cell(row, value, cls) {
   return td;
 }
 
-// A station's kind as the page names it: haptic stations first, then screens, then guides.
-const KINDS = {haptic: [0, "station"], graphics: [1, "screen"], audio_guide: [2, "guide"]};
+// A station's kind as the page names it: the world server's tick first, then haptic stations,
+// screens, guides.
+const KINDS = {world_server: [-1, "world server"], haptic: [0, "station"], graphics: [1, "screen"],
+               audio_guide: [2, "guide"]};
 
 function showStations(stations) {
   const body = $("stations").querySelector("tbody");

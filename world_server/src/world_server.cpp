@@ -14,7 +14,9 @@
 #include "handshare/common/latency_histogram.hpp"
 #include "handshare/common/overload_watch.hpp"
 #include "handshare/common/shutdown.hpp"
+#include "handshare/dds/loop_traffic.hpp"
 #include "handshare/dds/messages.hpp"
+#include "handshare/dds/pass_statistics.hpp"
 #include "handshare/node/node_main.hpp"
 #include "handshare/scene/scene.hpp"
 #include "console_log.hpp"
@@ -27,6 +29,10 @@
 namespace handshare::server {
 
 namespace {
+
+// The tick's loop statistics' node: program/name like every station's ("graphics_node/screen"),
+// the world server's one loop being its tick.
+constexpr const char* kTickStationNode = "world_server/tick";
 
 ServerSessionConfig SessionConfig(const WorldServerConfig& config) {
   ServerSessionConfig c;
@@ -151,6 +157,17 @@ int WorldServer::Run() {
     for (SessionEventSink* sink : sinks) sink->Take(events, now);
   };
 
+  // The tick as a station (LoopStatistics, once a second, like a screen's frames): the operator's
+  // page shows it, and the world server's own reader takes it into the session log like any
+  // station's. An older keystore that does not grant it only loses these statistics.
+  auto stats_writer = dds::MakeWriterIfGranted<msg::LoopStatistics>(
+      participant, dds::topics::kLoopStatistics, [this](const std::string& line) { Say(line); },
+      "the operator's page shows no statistics of the tick");
+  dds::LoopTraffic stats_traffic(participant);
+  msg::LoopStatistics stats;
+  stats.node(kTickStationNode);
+  stats.session(config_.where.session);
+
   ServerSession session(SessionConfig(config_), std::move(scene), resume ? &*resume : nullptr);
   deliver(session.Start(), Clock::now());
   TickInputs inputs;
@@ -159,6 +176,18 @@ int WorldServer::Run() {
   const auto period = std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(1.0 / config_.tick_Hz));
   auto next = Clock::now();
   Clock::time_point last_tick{};
+  dds::PassStatistics tick_stats(period, next);  // the station's: per second, ticks due at `next`
+  auto last_stats = next;
+  // Once a second: the ticks' rate, lateness (jitter: begun after due) and work (step), overruns
+  // (a tick begun a whole period late), the samples the session's checks refused, and the
+  // participant's deadline misses and bytes written. The period restarts whether or not a reader
+  // listens.
+  const auto publish_tick_statistics = [&](Clock::time_point now) {
+    tick_stats.Fill(stats, now);
+    stats.samples_dropped(session.dropped().total());
+    stats_traffic.Fill(stats, now);
+    if (stats_writer && stats_writer.matched_readers() > 0) stats_writer.Write(stats);
+  };
   common::LatencyHistogram tick_work;      // one tick's stages, start to end
   common::LatencyHistogram tick_interval;  // one tick's start to the next's (period 1 / tick_Hz)
   // Below half its rate or a 100 ms stall: said in the log (the bar: tick p99 <= 100 ms).
@@ -174,9 +203,18 @@ int WorldServer::Run() {
     intake.Take(inputs);
     deliver(session.Tick(inputs, now, std::min(dt_s, 0.1)), now);
     CheckLog();
-    tick_work.Record(std::chrono::duration<double, std::micro>(Clock::now() - now).count());
+    const auto ended = Clock::now();
+    tick_work.Record(std::chrono::duration<double, std::micro>(ended - now).count());
+    tick_stats.Record(next, now, ended);
+    if (ended - last_stats >= std::chrono::seconds(1)) {
+      publish_tick_statistics(ended);
+      last_stats = ended;
+    }
     next += period;
-    if (Clock::now() > next + 5 * period) next = Clock::now();
+    if (Clock::now() > next + 5 * period) {
+      next = Clock::now();
+      stats.resyncs(stats.resyncs() + 1);
+    }
     std::this_thread::sleep_until(next);
   }
   Say("shutting down: " + std::to_string(session.members().joined_total()) + " members joined, " +
