@@ -300,6 +300,11 @@ def case_operator(h, domain):
         h.wait_for_line("world_server", "control button_solar_system by operator-console: scene 'solar_system'", 30)
         wait_until("the page showing the solar system", 20,
                    lambda: driver.find_element(By.ID, "world").text == "solar_system")
+        # ... and every node: alice's haptic node builds it, the screen draws it, the guide sounds
+        # its cue.
+        h.wait_for_line("alice", "scene 'solar_system' revision 2", 30)
+        h.wait_for_line("screen", "scene 'solar_system' revision 2 received", 30)
+        h.wait_for_line("guide", "(world: world solar_system)", 30)
         # The refused requests were never published: the console's one control event (the
         # events of one writer arrive in order, so a refused one would have come first).
         log = h.log("world_server")
