@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <fstream>
+#include <limits>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -259,6 +260,9 @@ int Console::Run() {
     e.kind(session::ToMessage(route.kind));
     e.index(route.index);
     e.value(route.index >= 0 ? route.index : 0.0);
+    // Not a hand's touch: no distance from the control's target (the session log keeps none,
+    // and Table 4's hit errors are the visitors' only).
+    e.error_m(std::numeric_limits<double>::quiet_NaN());
     e.stamp_ns(stamp_ns());
     events.Write(e);
     say("the operator sends the session from '" + from + "' to '" + r.world + "' (control " + route.control_id + ")");
