@@ -11,6 +11,7 @@ Also: session_report reads the recording; the recording's bytes per second are p
 usage: record_replay_test.py --bin-dir DIR --domain D --work DIR   (uses domains D and D+1)
 """
 import argparse
+import csv
 import os
 import shutil
 import signal
@@ -49,11 +50,10 @@ def frame_times(folder):
     frames that show hands."""
     rows = {}
     with open(os.path.join(folder, "frame_times.csv")) as f:
-        next(f)
-        for line in f:
-            frame, file, scene, revision, hands, objects = line.rstrip("\n").split(",")
-            if hands:
-                rows[(scene, int(revision), hands)] = (os.path.join(folder, file), objects)
+        for row in csv.DictReader(f):  # by column name: the file gains columns (deformations)
+            if row["hands"]:
+                rows[(row["scene"], int(row["revision"]), row["hands"])] = (os.path.join(folder, row["file"]),
+                                                                           row["objects"])
     return rows
 
 
