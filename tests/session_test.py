@@ -189,6 +189,7 @@ class Harness:
         # the ones no live process holds.
         subprocess.run(["fastdds", "shm", "clean"], stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
         remove_orphan_ports(self.domains)
+        remove_orphan_datasharing()
 
     def print_traffic(self):
         """Prints each process's exit line of samples written ("out"), taken ("in") and reported
@@ -218,6 +219,35 @@ def remove_orphan_ports(domains):
                         os.unlink(os.path.join("/dev/shm", name))
                     except FileNotFoundError:
                         pass
+
+
+def remove_orphan_datasharing():
+    """Fast DDS' data-sharing delivery keeps one segment per writer (fast_datasharing_GUID...),
+    which a killed process leaves behind and `fastdds shm clean` does not remove (hundreds piled
+    up in /dev/shm in a day of tests). Removes those no live process has mapped or open: a live
+    one (another test's, running beside this one) keeps its own; a segment it already has stays
+    valid for it when unlinked, and none is unlinked while held."""
+    names = {f for f in os.listdir("/dev/shm") if f.startswith("fast_datasharing_")}
+    if not names:
+        return
+    held = set()
+    for pid in os.listdir("/proc"):
+        if not pid.isdigit():
+            continue
+        try:
+            with open(f"/proc/{pid}/maps") as f:
+                held.update(line.rsplit("/", 1)[1].strip() for line in f if "/dev/shm/fast_datasharing_" in line)
+            for fd in os.listdir(f"/proc/{pid}/fd"):
+                target = os.readlink(f"/proc/{pid}/fd/{fd}")
+                if target.startswith("/dev/shm/fast_datasharing_"):
+                    held.add(target[len("/dev/shm/"):])
+        except OSError:
+            pass  # the process has gone, or is not ours to read
+    for name in names - held:
+        try:
+            os.unlink(os.path.join("/dev/shm", name))
+        except OSError:
+            pass
 
 
 # --- independent checks -------------------------------------------------------------------
