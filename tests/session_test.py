@@ -230,24 +230,29 @@ def remove_orphan_datasharing():
     names = {f for f in os.listdir("/dev/shm") if f.startswith("fast_datasharing_")}
     if not names:
         return
+    for name in names - held_shm("fast_datasharing_"):
+        try:
+            os.unlink(os.path.join("/dev/shm", name))
+        except OSError:
+            pass
+
+
+def held_shm(prefix):
+    """The /dev/shm names starting with `prefix` that a live process has mapped or open."""
     held = set()
     for pid in os.listdir("/proc"):
         if not pid.isdigit():
             continue
         try:
             with open(f"/proc/{pid}/maps") as f:
-                held.update(line.rsplit("/", 1)[1].strip() for line in f if "/dev/shm/fast_datasharing_" in line)
+                held.update(line.rsplit("/", 1)[1].strip() for line in f if f"/dev/shm/{prefix}" in line)
             for fd in os.listdir(f"/proc/{pid}/fd"):
                 target = os.readlink(f"/proc/{pid}/fd/{fd}")
-                if target.startswith("/dev/shm/fast_datasharing_"):
+                if target.startswith(f"/dev/shm/{prefix}"):
                     held.add(target[len("/dev/shm/"):])
         except OSError:
             pass  # the process has gone, or is not ours to read
-    for name in names - held:
-        try:
-            os.unlink(os.path.join("/dev/shm", name))
-        except OSError:
-            pass
+    return held
 
 
 # --- independent checks -------------------------------------------------------------------
@@ -548,20 +553,7 @@ def shm_segments():
     and reused by design). Another session on this host holds its segments mapped and its
     lock files (*_el) open, so only what a dead process left behind counts."""
     names = {f for f in os.listdir("/dev/shm") if f.startswith("fastrtps_") and "port" not in f}
-    held = set()
-    for pid in os.listdir("/proc"):
-        if not pid.isdigit():
-            continue
-        try:
-            with open(f"/proc/{pid}/maps") as f:
-                held.update(line.rsplit("/", 1)[1].strip() for line in f if "/dev/shm/fastrtps_" in line)
-            for fd in os.listdir(f"/proc/{pid}/fd"):
-                target = os.readlink(f"/proc/{pid}/fd/{fd}")
-                if target.startswith("/dev/shm/fastrtps_"):
-                    held.add(target[len("/dev/shm/"):])
-        except OSError:
-            pass  # the process has gone, or is not ours to read
-    return names - held
+    return names - held_shm("fastrtps_")
 
 
 def case_signals(h, domain):

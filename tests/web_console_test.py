@@ -229,10 +229,7 @@ def case_operator(h, domain):
             "--frames", 100000, "--fps", 2, "--out", os.path.join(h.work, "frames"))
     h.start("guide", "audio_guide", "--domain", domain, "--session", session, "--name", "guide",
             "--out", os.path.join(h.work, "speech"))
-    h.start("console", "web_console", "--domain", domain, "--session", session, "--name", "operator-console",
-            "--listen", "127.0.0.1:0", "--token-file", token_file)
-    h.wait_for_line("console", "listening on http://127.0.0.1:", 30)
-    port = int(re.search(r"listening on http://127\.0\.0\.1:(\d+)", h.log("console")).group(1))
+    port = start_view(h, domain, session, "--name", "operator-console", "--token-file", token_file)
     base = f"http://127.0.0.1:{port}"
     h.wait_for_line("console", "world 'start_menu' revision 1", 30)
 
@@ -402,9 +399,7 @@ def case_view(h, domain):
     frames = os.path.join(h.work, "frames")
     h.start("spectator", "graphics_node", "--domain", domain, "--session", session, "--headless",
             "--frames", 100000, "--fps", 2, "--out", frames)
-    h.start("console", "web_console", "--domain", domain, "--session", session, "--listen", "127.0.0.1:0")
-    h.wait_for_line("console", "listening on http://127.0.0.1:", 30)
-    port = int(re.search(r"listening on http://127\.0\.0\.1:(\d+)", h.log("console")).group(1))
+    port = start_view(h, domain, session)
     h.wait_for_line("console", "world 'start_menu' revision 1", 30)
     with urllib.request.urlopen(f"http://127.0.0.1:{port}/api/state", timeout=10) as r:
         world = json.loads(r.read())["world"]
@@ -714,9 +709,9 @@ def stop_all(h, *labels):
         check(h.stop(label, 30) == 0, f"{PROGRAM_OF.get(label, label)} failed")
 
 
-def start_view(h, domain, session, port_label="console"):
-    """The console on a free port, and the port once it listens."""
-    h.start(port_label, "web_console", "--domain", domain, "--session", session, "--listen", "127.0.0.1:0")
+def start_view(h, domain, session, *args, port_label="console"):
+    """The console on a free port (`args`: more of its options), and the port once it listens."""
+    h.start(port_label, "web_console", "--domain", domain, "--session", session, "--listen", "127.0.0.1:0", *args)
     h.wait_for_line(port_label, "listening on http://127.0.0.1:", 30)
     return int(re.search(r"listening on http://127\.0\.0\.1:(\d+)", h.log(port_label)).group(1))
 
@@ -1102,10 +1097,7 @@ def case_visit(h, domain):
     check(turn_s >= VISIT_MINUTES * 60, f"alice's turn ended after {turn_s} s, before its {VISIT_MINUTES * 60} s")
     check("message board #2: Thank you, alice: your 0.05 minutes are over." in h.log("world_server"),
           "the world server did not put the turn's end on the board")
-    h.start("console", "web_console", "--domain", domain, "--session", session, "--name", "visit-console",
-            "--listen", "127.0.0.1:0", "--token-file", token_file)
-    h.wait_for_line("console", "listening on http://127.0.0.1:", 30)
-    port = int(re.search(r"listening on http://127\.0\.0\.1:(\d+)", h.log("console")).group(1))
+    port = start_view(h, domain, session, "--name", "visit-console", "--token-file", token_file)
     base = f"http://127.0.0.1:{port}"
 
     def boards():
@@ -1186,10 +1178,7 @@ def case_operator_tour(h, domain):
             "--log", log_db)
     h.wait_for_line("world_server", "message board #1", 30)
     # The console before alice: it hears every control event the world server logs.
-    h.start("console", "web_console", "--domain", domain, "--session", session, "--name", "operator-console",
-            "--listen", "127.0.0.1:0", "--token-file", token_file)
-    h.wait_for_line("console", "listening on http://127.0.0.1:", 30)
-    port = int(re.search(r"listening on http://127\.0\.0\.1:(\d+)", h.log("console")).group(1))
+    port = start_view(h, domain, session, "--name", "operator-console", "--token-file", token_file)
     base = f"http://127.0.0.1:{port}"
     h.wait_for_line("console", "world 'start_menu' revision 1", 30)
     h.wait_for_line("world_server", "member joined: user=operator-console", 30)
