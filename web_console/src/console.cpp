@@ -240,8 +240,7 @@ int Console::Run() {
       const WorldRoute* found = FindRoute(state.routes, r.world);
       if (found == nullptr) {
         if (r.world == from) return {409, ErrorJson("the session is in '" + from + "' already")};
-        const auto names = scene::SceneNames();
-        if (std::find(names.begin(), names.end(), r.world) == names.end()) {
+        if (std::find(state.worlds.begin(), state.worlds.end(), r.world) == state.worlds.end()) {
           return {404, ErrorJson("no world '" + r.world + "'")};
         }
         // No control of this world goes there: the operator's own command does (the world

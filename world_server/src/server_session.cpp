@@ -227,7 +227,7 @@ void ServerSession::TakeOperatorCommands(const TickInputs& in, Clock::time_point
         // and its first message again), and every present visitor's turn from now.
         const std::string start = config_.tour_start.empty() ? first_world_ : config_.tour_start;
         ApplyOutcome(GoToWorld(scene_, start, by, config_.load), out);
-        for (const auto& e : turns_.Restart(now)) {
+        for (const auto& e : turns_.Restart(members_.present(), now)) {
           out.push_back(TurnEnded{e.member, std::chrono::duration_cast<std::chrono::nanoseconds>(e.turn), minutes, c.user});
         }
         break;

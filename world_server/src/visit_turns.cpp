@@ -25,14 +25,17 @@ std::vector<scene::Message> TurnOverMessages(const std::string& user, std::optio
   return {en, ja};
 }
 
+namespace {
+// Screens, guides and consoles take no turn: a visitor is at a haptic station.
+bool IsVisitor(const Member& member) { return member.kind == "haptic"; }
+}  // namespace
+
 void VisitTurns::OnMember(MemberChange change, const Member& member, Clock::time_point now) {
   if (change != MemberChange::kJoined) {
     open_.erase(member.member_id);
-    visitors_.erase(member.member_id);
     return;
   }
-  if (member.kind != "haptic") return;  // screens, guides, consoles take no turn
-  visitors_.insert_or_assign(member.member_id, member);
+  if (!IsVisitor(member)) return;
   open_.try_emplace(member.member_id, Turn{member, now});
 }
 
@@ -61,12 +64,14 @@ std::optional<VisitTurns::Ended> VisitTurns::EndNow(const std::string& user, Clo
   return std::nullopt;
 }
 
-std::vector<VisitTurns::Ended> VisitTurns::Restart(Clock::time_point now) {
+std::vector<VisitTurns::Ended> VisitTurns::Restart(const std::vector<Member>& present, Clock::time_point now) {
   std::vector<Ended> out;
   for (const auto& [id, turn] : open_) out.push_back(Ended{turn.member, now - turn.start});
   std::sort(out.begin(), out.end(), [](const Ended& a, const Ended& b) { return a.turn > b.turn; });
   open_.clear();
-  for (const auto& [id, member] : visitors_) open_.emplace(id, Turn{member, now});
+  for (const Member& member : present) {
+    if (IsVisitor(member)) open_.emplace(member.member_id, Turn{member, now});
+  }
   return out;
 }
 

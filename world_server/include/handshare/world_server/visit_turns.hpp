@@ -41,9 +41,10 @@ class VisitTurns {
   /// `user`'s open turn, ended now (the operator's "end a visitor's turn"); nullopt when the
   /// user has none (not a present visitor, or its turn already ended).
   std::optional<Ended> EndNow(const std::string& user, Clock::time_point now);
-  /// Every open turn ended now, and every present visitor's turn begun again at `now` (the
-  /// operator's "restart the tour"): a visitor whose turn had ended gets a new one too.
-  std::vector<Ended> Restart(Clock::time_point now);
+  /// Every open turn ended now, and the turn of every visitor (haptic member) of `present`
+  /// begun again at `now` (the operator's "restart the tour"): a visitor whose turn had ended
+  /// gets a new one too.
+  std::vector<Ended> Restart(const std::vector<Member>& present, Clock::time_point now);
   bool enabled() const { return length_ > Clock::duration::zero(); }
 
  private:
@@ -52,8 +53,7 @@ class VisitTurns {
     Clock::time_point start;
   };
   Clock::duration length_;
-  std::map<std::string, Turn> open_;        // by member_id
-  std::map<std::string, Member> visitors_;  // the haptic members present, by member_id
+  std::map<std::string, Turn> open_;  // by member_id
 };
 
 }  // namespace handshare::server
