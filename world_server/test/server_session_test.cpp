@@ -6,6 +6,7 @@
 #include <gtest/gtest.h>
 #include <sqlite3.h>
 
+#include <algorithm>
 #include <fstream>
 #include <map>
 #include <stdexcept>
@@ -322,9 +323,11 @@ TEST_F(ServerSessionTest, TheOperatorSendsTheSessionToAWorldNoControlLinks) {
   events = session.Tick(in, now_ + std::chrono::milliseconds(34), 1.0 / 60);
   EXPECT_EQ(session.scene().name, "solar_system");
   EXPECT_TRUE(All<SceneRevised>(events).empty());
+  // (The solar system's models may say they are ready in this tick, before the command's line.)
   const auto lines = Lines(events);
-  ASSERT_FALSE(lines.empty());
-  EXPECT_NE(lines[0].find("cannot go to 'atlantis'"), std::string::npos) << lines[0];
+  EXPECT_TRUE(std::any_of(lines.begin(), lines.end(),
+                          [](const std::string& l) { return l.find("cannot go to 'atlantis'") != std::string::npos; }))
+      << ::testing::PrintToString(lines);
   EXPECT_EQ(session.dropped().total(), 2u);
 }
 
