@@ -34,6 +34,10 @@ int main(int argc, char** argv) {
       .Value("coupling-passivity", "MODE",
              "on: a passivity controller holds back what a peer's late contact would put into a shared deformable "
              "beyond what the peer put in, and closes the lag at the fade's rate; off: observe only", "on")
+      .Value("coupling", "MODE",
+             "woken: a contact set leaves after the haptic step that made it and a peer's reaches the next haptic step "
+             "(the bridge woken by the step and the readers); polled: both wait for the bridge's next tick (as before "
+             "2026-12-02; for before/after measurements)", "woken")
       .Value("trace", "FILE", "write every published device state to a CSV file", "")
       .Value("dump-deformation", "DIR", "write this node's field of each deformable it touches to DIR/<object>.json, "
              "at most every 100 ms (to compare with the world server's)", "")
@@ -65,6 +69,7 @@ int main(int argc, char** argv) {
     c.publish_Hz = o.GetDouble("publish-rate", 1.0, 1000.0);
     c.deadband_weber = o.GetDouble("deadband", 0.0, 0.5);
     c.coupling_passivity = o.GetChoice("coupling-passivity", {"on", "off"}) == "on";
+    c.coupling_on_wake = o.GetChoice("coupling", {"woken", "polled"}) == "woken";
     c.trace_file = o.GetString("trace");
     c.dump_dir = o.GetString("dump-deformation");
     c.paced_streams = o.GetChoice("streams", {"paced", "full"}) == "paced";

@@ -18,11 +18,13 @@ wrote per second (all topics; device states and contact sets apart), over its wh
 
 usage: scale.py --bin-dir BUILD [--users 8] [--spectators 8] [--seconds 60] [--fps 5]
                 [--streams paced|full] [--sweep 2,4,6,8,... [--sweep-spectators K]] [--domain 215] [--work DIR]
-                [--screen-nice N] [--busy K] [--csv FILE] [--png FILE]
+                [--screen-nice N] [--busy K] [--coupling woken|polled] [--at-rest] [--csv FILE] [--png FILE]
 --screen-nice N starts the spectators with `graphics_node --nice N` (default: the node's own, 10);
 --busy K runs K other processes that keep a core busy each (a spin loop at nice 0) from the world
 server's start to the end, as a neighbouring test or build would. The summary row counts the
 nodes that said the machine was overloaded (`overloaded`) and the spin loops' CPU (`busy_cpu_pct`).
+--coupling passes `haptic_node --coupling` (polled: the bridges as before the event-driven coupling);
+--at-rest holds every hand above its site, touching nothing.
 --sweep runs one session per user count (with as many spectators, as in the point's 8 + 8, or
 --sweep-spectators K of them) and writes one summary row per session; otherwise one session, a row per process. A bench: it
 asserts nothing (tests/scale_test.py runs one session and checks what must hold).
@@ -50,12 +52,17 @@ SITES = [
 BALL = (0.0, -0.12, 0.04)  # its centre in the commons, radius 40 mm
 
 
-def hand_script(pair, member, hold_s):
-    """The hand script of member 0 or 1 of pair `pair` (0-based)."""
+def hand_script(pair, member, hold_s, at_rest=False):
+    """The hand script of member 0 or 1 of pair `pair` (0-based); at_rest: the hand waits 4 cm
+    above its site (or 12 cm above the ball) and never touches."""
     site, a, b = SITES[pair % len(SITES)]
     dx = 0.015 * (pair // len(SITES))
     lines = [f"# bench/scale/scale.py: pair {pair + 1} ({site}), member {member + 1}"]
-    if site != "ball":
+    if at_rest:
+        x, y, z = (a if member == 0 else b)[0] if site != "ball" else BALL
+        lines += [f"start {x + dx:.4f} {y:.4f} {z + (0.04 if site != 'ball' else 0.12):.4f}", "await_world commons",
+                  f"hold {hold_s}"]
+    elif site != "ball":
         x, y, z = (a if member == 0 else b)[0]
         x += dx
         lines += [f"start {x:.4f} {y:.4f} {z + 0.04:.4f}", "await_world commons", "hold 0.5",
@@ -144,9 +151,10 @@ def wait_for(path, pattern, timeout, procs):
 
 
 def run_session(bin_dir, work, domain, users=8, spectators=8, seconds=60.0, fps=5.0, streams="paced", cache="",
-                screen_nice=None, busy=0):
+                screen_nice=None, busy=0, coupling="woken", at_rest=False):
     """Runs one session (FEM models cached in `cache`, default WORK/fem_cache) and returns {"rows": [per-process dict], "window_s": s, "logs": {label: text},
-    "load": (before, after)}. Raises RuntimeError if a process fails to start or ends early."""
+    "load": (before, after)}. Raises RuntimeError if a process fails to start or ends early.
+    coupling: the haptic nodes' `--coupling`; at_rest: no hand touches anything (hand_script)."""
     os.makedirs(work, exist_ok=True)
     session = f"scale-{os.getpid()}-{users}"
     cache = cache or os.path.join(work, "fem_cache")
@@ -162,9 +170,9 @@ def run_session(bin_dir, work, domain, users=8, spectators=8, seconds=60.0, fps=
     for k, name in enumerate(names):
         script = os.path.join(work, f"{name}.hand")
         with open(script, "w") as f:
-            f.write(hand_script(k // 2, k % 2, hold))
+            f.write(hand_script(k // 2, k % 2, hold, at_rest))
         commands[name] = [exe("haptic_node", "haptic_node"), *common, "--user", name, "--script", script,
-                          "--streams", streams]
+                          "--streams", streams, "--coupling", coupling]
     for k in range(spectators):
         commands[f"screen{k + 1}"] = [exe("graphics_node", "graphics_node"), *common, "--name", f"screen{k + 1}",
                                       "--headless", "--fps", str(fps), "--frames", str(int((seconds + 300) * fps)),
@@ -304,19 +312,22 @@ def main():
     ap.add_argument("--png", default="")
     ap.add_argument("--screen-nice", type=int, default=None)
     ap.add_argument("--busy", type=int, default=0)
+    ap.add_argument("--coupling", choices=("woken", "polled"), default="woken")
+    ap.add_argument("--at-rest", action="store_true")
     a = ap.parse_args()
     out_rows = []
     if a.sweep:
         for users in [int(u) for u in a.sweep.split(",")]:
             screens = users if a.sweep_spectators < 0 else a.sweep_spectators
             result = run_session(a.bin_dir, os.path.join(a.work, f"u{users}"), a.domain, users, screens, a.seconds, a.fps,
-                                 a.streams, screen_nice=a.screen_nice, busy=a.busy)
+                                 a.streams, screen_nice=a.screen_nice, busy=a.busy, coupling=a.coupling,
+                                 at_rest=a.at_rest)
             row = summary_row(users, screens, result)
             out_rows.append(row)
             print(", ".join(f"{c} {fmt(row.get(c))}" for c in COLUMNS), flush=True)
     else:
         result = run_session(a.bin_dir, a.work, a.domain, a.users, a.spectators, a.seconds, a.fps, a.streams,
-                             screen_nice=a.screen_nice, busy=a.busy)
+                             screen_nice=a.screen_nice, busy=a.busy, coupling=a.coupling, at_rest=a.at_rest)
         for r in result["rows"]:
             r.update(users=a.users, spectators=a.spectators, load="->".join(result["load"]))
             out_rows.append(r)

@@ -59,7 +59,34 @@ HapticBridge::HapticBridge(const HapticNodeConfig& config, Device& device, Hapti
     // The person at the desk: their input reaches the hand between ticks too (motion to photon,
     // docs/devices.md).
     if (desk_ != nullptr && desk_reader_) desk_reader_.OnDataAvailable([wake = wake_] { wake->Post(); });
+    // A new world or a control's new state is the tick's work: asked for at once, so that an
+    // idle bridge (TickPeriod) does not hold it back for its idle period.
+    auto ask_tick = [wake = wake_, asked = tick_asked_] {
+      asked->store(true, std::memory_order_release);
+      wake->Post();
+    };
+    scene_reader_.OnDataAvailable(ask_tick);
+    if (control_reader_) control_reader_.OnDataAvailable(ask_tick);
   }
+}
+
+HapticBridge::Clock::duration HapticBridge::TickPeriod() const {
+  const auto period = std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(1.0 / config_.publish_Hz));
+  // Polled, every coupling stage waits for a tick; a trace or a field dump records at each.
+  if (!config_.coupling_on_wake || trace_ != nullptr || field_dump_ || !renderer_ || desk_ != nullptr) return period;
+  if (last_sent_active_ || !peers_.sets().empty() || owned_ >= 0 || hand_over_.held() >= 0 || !held_events_.empty()) {
+    return period;
+  }
+  if (have_report_) {
+    for (const auto& f : report_.fingers) {
+      if (f.object >= 0) return period;
+    }
+  }
+  Clock::duration idle = kIdleTick;
+  if (state_rate_Hz_ > 0.0) {
+    idle = std::min(idle, std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(1.0 / state_rate_Hz_)));
+  }
+  return std::max(period, idle);
 }
 
 void HapticBridge::FollowControlStates() {
@@ -120,7 +147,11 @@ void HapticBridge::Tick() {
   if (last_tick_ns_ != 0) tick_interval_.Record(1e-3 * static_cast<double>(start_ns - last_tick_ns_));
   last_tick_ns_ = start_ns;
   ++ticks_;
-  if (std::string line = overload_.Tick(start_ns); !line.empty()) say_(line);
+  // The interval asked for is the one this state of the bridge asks (TickPeriod): an idle bridge
+  // at its idle period is on time, not slow.
+  const double asked_s = std::chrono::duration<double>(TickPeriod()).count();
+  tick_asked_->store(false, std::memory_order_release);
+  if (std::string line = overload_.Tick(start_ns, asked_s); !line.empty()) say_(line);
   FollowDeskInput();
   FollowControlStates();
   const std::uint32_t revision = scene_revision_;
@@ -145,6 +176,9 @@ void HapticBridge::Couple() {
   FollowDeskInput();
   if (!renderer_) return;
   if (renderer_->TakeMotion()) PublishDeviceState(true);
+  // A touch's end wakes the bridge (the touched object changed): its control event (a button's
+  // release) goes now, not at the next tick, which may be an idle one.
+  ForwardControlEvents();
   TakeReport();
   ReceivePeers(false);
   FollowPeerBodies(false);
@@ -358,6 +392,7 @@ void HapticBridge::PublishDeviceState(bool moved) {
   const double rate_Hz = config_.paced_streams
                              ? session::DeviceStateRate(readers, viewers.count, viewers.fastest_Hz, config_.publish_Hz)
                              : (readers > 0 ? config_.publish_Hz : 0.0);
+  state_rate_Hz_ = rate_Hz;
   // A hand that moves: its state leaves on the haptic step's wake-up (the step posts it at most
   // once a period), and the paced sends pause while it moves (until one and a half periods
   // after the last such send), so the rate stays the viewers'. A hand at rest: at the ticks,

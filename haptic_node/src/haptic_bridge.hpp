@@ -5,6 +5,8 @@
 /// the coupling stages alone (Couple()) run whenever the haptic step or the contact and object
 /// readers post the bridge's wake-up. Private to the node library: it holds DDS writers and
 /// readers.
+#include <atomic>
+#include <chrono>
 #include <cstdint>
 #include <cstdio>
 #include <deque>
@@ -76,8 +78,22 @@ class HapticBridge {
   /// or the deadline. True when woken before it: then call Couple().
   bool WaitForCoupling(Clock::time_point deadline) { return wake_->WaitUntil(deadline); }
   /// The coupling stages alone, at once: the newest report, the peers' contact sets and the
-  /// bodies' states to the haptic loop (lock-free), this hand's contact set to the deadband.
+  /// bodies' states to the haptic loop (lock-free), this hand's contact set to the deadband,
+  /// the hand's control events to the world server.
   void Couple();
+  /// How long after this tick the next is due. The bridge period (1 / publish_Hz) while anything
+  /// goes at the tick's rate: a finger touches something or a touch's last set is owed, a peer's
+  /// contacts are held, a body is owned or held for a hand-over, control events wait, a desk or a
+  /// trace or field dump is on, no world yet, or the coupling is polled. Otherwise kIdleTick, or
+  /// the viewers' device-state period if that is shorter: what arrives wakes the bridge anyway
+  /// (contact sets, object states, desk input; scene and control states ask for a tick at once,
+  /// TickAsked), so a bridge with nothing to carry no longer wakes 100 times a second
+  /// (docs/network.md, "CPU per node").
+  Clock::duration TickPeriod() const;
+  static constexpr std::chrono::milliseconds kIdleTick{50};
+  /// A scene or control state arrived since the last Tick (their readers' listeners say so
+  /// with the coupling woken): tick now rather than at the idle period's end.
+  bool TickAsked() const { return tick_asked_->load(std::memory_order_acquire); }
   /// Writes the coupling trace (HapticNodeConfig::coupling_trace_file) if one was asked for.
   void WriteCouplingTrace() const;
 
@@ -164,6 +180,7 @@ class HapticBridge {
   // Posted by the haptic step and the contact and object readers' listeners (before the
   // readers: the listeners hold it too).
   std::shared_ptr<common::Wakeup> wake_ = std::make_shared<common::Wakeup>();
+  std::shared_ptr<std::atomic<bool>> tick_asked_ = std::make_shared<std::atomic<bool>>(false);
   Device& device_;
   HapticLoop& loop_;
   std::ostream* trace_;
@@ -222,6 +239,7 @@ class HapticBridge {
   std::uint64_t device_states_published_ = 0;
   std::uint64_t device_states_on_motion_ = 0;
   std::uint64_t moved_sent_ns_ = 0;  // steady clock of the last device state sent as the hand moved
+  double state_rate_Hz_ = 0.0;       // the device states' rate at the last tick (0: no viewer)
   std::uint64_t control_events_sent_ = 0;
   std::deque<msg::ControlEvent> held_events_;  // taken, not yet written: no reader matched
   std::uint64_t held_events_dropped_ = 0;

@@ -1,5 +1,6 @@
 #include "handshare/haptic/haptic_node.hpp"
 
+#include <algorithm>
 #include <cstdio>
 #include <fstream>
 #include <functional>
@@ -167,7 +168,7 @@ int HapticNode::Run() {
   const auto* plugin = dynamic_cast<const PluginDevice*>(device.get());
   if (plugin != nullptr) say("device " + plugin->Describe());
   HapticLoop loop(*device, HapticLoopConfig{config_.rate_Hz, true});
-  auto link = std::make_unique<SessionLink>(config_, *device, loop, trace ? &trace : nullptr, say);
+  auto link = std::make_unique<SessionLink>(config_, *device, loop, trace.is_open() ? &trace : nullptr, say);
   const bool realtime = loop.Start();
   say("joined session '" + config_.where.session + "' on domain " + std::to_string(config_.where.domain_id) +
       ": device " + device->name() + ", loop " + std::to_string(static_cast<int>(config_.rate_Hz)) + " Hz" +
@@ -175,7 +176,10 @@ int HapticNode::Run() {
 
   // The bridge thread: one tick per period at absolute deadlines, re-synced after a stall;
   // between ticks it sleeps on its wake-up and runs the coupling stages whenever the haptic
-  // step or a reader posts it (a contact set or an object state goes through at once).
+  // step or a reader posts it (a contact set or an object state goes through at once). With
+  // nothing to carry at the tick's rate the period is the bridge's idle one (TickPeriod); what
+  // makes it busy again (a touch, a peer's set) or asks for a tick (a new world, a control's
+  // state) brings the next tick forward.
   const auto start = Clock::now();
   const auto period = std::chrono::duration_cast<Clock::duration>(
       std::chrono::duration<double>(1.0 / config_.publish_Hz));
@@ -188,12 +192,16 @@ int HapticNode::Run() {
       // The haptic loop runs on meanwhile.
       say(rejoin.Message("world"));
       say(rejoin.Swap(link, [&] {
-        return std::make_unique<SessionLink>(config_, *device, loop, trace ? &trace : nullptr, say);
+        return std::make_unique<SessionLink>(config_, *device, loop, trace.is_open() ? &trace : nullptr, say);
       }));
     }
-    next += period;
+    const auto due = next;
+    next += link->bridge.TickPeriod();
     if (Clock::now() > next + 5 * period) next = Clock::now();
-    while (link->bridge.WaitForCoupling(next)) link->bridge.Couple();
+    while (link->bridge.WaitForCoupling(next)) {
+      link->bridge.Couple();
+      next = std::min(next, link->bridge.TickAsked() ? Clock::now() : due + link->bridge.TickPeriod());
+    }
   }
   loop.Stop();
   link->bridge.WriteCouplingTrace();

@@ -139,6 +139,58 @@ TEST_F(BridgeCoupling, APeersContactSetWakesTheBridgeAndReachesTheNextHapticStep
   EXPECT_GT(bridge.peer_contact_loop_age().max_us(), 0.0);
 }
 
+// A bridge with nothing to carry (the hand far from the block, no peer, no viewer) asks for its
+// next tick kIdleTick after the last instead of at its 10 ms period; a control's new state asks
+// for a tick at once (its reader's listener); a peer's contact set, taken between ticks, makes
+// the bridge busy again: its period comes back. Before, the bridge ticked every 10 ms whatever
+// it had to do (docs/network.md, "CPU per node").
+TEST_F(BridgeCoupling, ABridgeWithNothingToCarryAsksForIdleTicksUntilAPeersSetArrives) {
+  const std::string session = "idle_" + std::to_string(getpid());
+  const HapticNodeConfig config = AliceIn(session);
+  dds::Participant alice_p(config.where, "haptic_node/alice");
+  dds::Participant bob_p(kDomain, session, "haptic_node/bob");
+  SimDevice device(HandScript::Default(Eigen::Vector3d(0.2, 0.2, 0.3)));  // far from the block
+  HapticLoop loop(device, HapticLoopConfig{1000.0, false});
+  HapticBridge bridge(config, device, loop, alice_p, nullptr, [](const std::string&) {});
+  const auto period = std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(1.0 / config.publish_Hz));
+  EXPECT_EQ(bridge.TickPeriod(), period) << "no world yet: the bridge ticks at its period";
+
+  auto contact_writer = dds::MakeWriter<msg::ContactSet>(bob_p, dds::topics::kContactSet);
+  auto control_writer = dds::MakeWriter<msg::ControlState>(bob_p, dds::topics::kControlState);
+  const auto give_up = Clock::now() + 60s;
+  const auto scene_writer = ServeLab(bob_p, session, bridge, give_up);
+  ASSERT_TRUE(bridge.heard_world_server()) << "no scene state in 60 s";
+  while ((contact_writer.matched_readers() == 0 || control_writer.matched_readers() == 0) && Clock::now() < give_up) {
+    std::this_thread::sleep_for(10ms);
+  }
+  ASSERT_GT(control_writer.matched_readers(), 0) << "alice's control reader never matched";
+  double t_s = 0.0;
+  loop.Step(t_s);
+  bridge.Tick();
+  while (bridge.WaitForCoupling(Clock::now())) bridge.Couple();
+  EXPECT_EQ(bridge.TickPeriod(), Clock::duration(HapticBridge::kIdleTick)) << "nothing to carry: idle ticks";
+  EXPECT_FALSE(bridge.TickAsked());
+
+  msg::ControlState control;
+  control.control_id("lever");
+  control.session(session);
+  control.scene("lab");
+  control.changes(1);
+  control.index(1);
+  control_writer.Write(control);
+  ASSERT_TRUE(bridge.WaitForCoupling(Clock::now() + 10s)) << "the control state did not wake the bridge";
+  bridge.Couple();
+  EXPECT_TRUE(bridge.TickAsked()) << "a control state is the tick's work: asked for at once";
+  bridge.Tick();
+  EXPECT_FALSE(bridge.TickAsked()) << "the tick took it";
+
+  contact_writer.Write(BobOnTheBlock(session, common::SteadyNowNs()));
+  ASSERT_TRUE(bridge.WaitForCoupling(Clock::now() + 10s)) << "bob's contact set did not wake the bridge";
+  bridge.Couple();
+  ASSERT_EQ(bridge.peer_contact_age().count(), 1u);
+  EXPECT_EQ(bridge.TickPeriod(), period) << "a peer's contacts held: the bridge ticks at its period again";
+}
+
 // The person's input from their view (DeskInput), written while the bridge sleeps between its
 // ticks, wakes it (the desk reader's listener) and reaches the desk device at once: the next
 // haptic step's reading is live and heads for the target. Before, the input waited for the

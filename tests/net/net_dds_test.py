@@ -635,6 +635,110 @@ def frictionless_tail(scene):
             o["material"].pop("mu_kinetic", None)
 
 
+def measure_delayed_tail(args, net, delays_ms=DELAYS_MS, coupling="woken", one_host=False):
+    """The delayed two-user press of case_delayed_tail, measured (nothing asserted but that each
+    run happened): one session per one-way delay in delays_ms, the haptic nodes' coupling as
+    `haptic_node --coupling` says, on net's three hosts: the world server on the first, alice and
+    bob on the second (one_host) or alice there and bob on the third. Returns
+    (results: a dict of figures per delay and user, forces, fields, fault causes)."""
+    os.makedirs(args.work, exist_ok=True)
+    os.environ["HANDSHARE_ASSETS"] = session_test.edited_assets(args.work, frictionless_tail)
+    server_exe, node_exe = dinosaur_ready(args)
+    results, forces, fields = [], [], []
+    fault_causes = {}  # (delay, user): the node's "faulted steps by cause" line, if it had faults
+    a, b, c = net.hosts
+    for delay_ms in delays_ms:
+        for seed, h in enumerate((a, b, c), start=1):
+            h.clear_delay()
+            if delay_ms > 0:
+                h.delay(delay_ms, jitter_ms=0, seed=seed)
+        session = f"net-delay-{delay_ms}-{os.getpid()}-{coupling}"
+        common = ["--domain", args.domain, "--session", session]
+        traces = {u: os.path.join(args.work, f"{u}_{delay_ms}ms.csv") for u in ("alice", "bob")}
+        for f in traces.values():
+            if os.path.exists(f):
+                os.remove(f)
+        dumps = {who: os.path.join(args.work, f"field_{delay_ms}ms", who) for who in ("server", "alice", "bob")}
+        for d in dumps.values():
+            shutil.rmtree(d, ignore_errors=True)
+        server = a.start(f"world_server_{delay_ms}ms", [server_exe, *common, "--scene", "dinosaur",
+                                                       "--dump-deformation", dumps["server"],
+                                                       "--deformation-threshold", "1e-6", "--duration", 120],
+                         args.work)
+        watch = FieldWatch(dumps, "triceratops_tail", TAIL_VERTICES)
+        nodes = {}
+        try:
+            server.wait_for("models of 'dinosaur' ready", 60)
+            for host, user in ((b, "alice"), (b if one_host else c, "bob")):
+                nodes[user] = host.start(f"{user}_{delay_ms}ms",
+                                         [node_exe, *common, "--user", user, "--device", "hiro", "--script",
+                                          os.path.join(DATA, f"delay_{user}.hand"), "--trace", traces[user],
+                                          "--dump-deformation", dumps[user], "--coupling", coupling,
+                                          "--duration", 90], args.work)
+            starts = script_starts(nodes)
+            for user in nodes:
+                # The fields are compared while the session runs (each dump is replaced).
+                session_test.wait_until(f"{user}'s trace past the still window ({delay_ms} ms)", 90,
+                                        lambda u=user: watch.poll() or ((rows := session_test.read_trace(traces[u]))
+                                        and rows[-1]["t_s"] - starts[u] >= STILL_WINDOW[1] + 0.2))
+            stop_session(server, nodes, f" at {delay_ms} ms")
+        except Failure:
+            print_logs((server, *nodes.values()))
+            raise
+        # When the inputs stopped changing: the last moment either fingertip (the arm settling
+        # after bob's last move) moved more than INPUT_STILL_M in 0.1 s, in script time.
+        inputs_stop = max(last_move(session_test.read_trace(traces[u]), starts[u], (15.0, STILL_WINDOW[1]))
+                          for u in ("alice", "bob"))
+        for user in ("alice", "bob"):
+            rows = session_test.read_trace(traces[user])
+            t0 = starts[user]
+
+            def window(w, rows=rows, t0=t0):
+                sel = [r for r in rows if w[0] <= r["t_s"] - t0 < w[1]]
+                check(len(sel) > 50, f"{user}'s trace has {len(sel)} rows in script time {w} at {delay_ms} ms")
+                return sel
+
+            def mean(sel, f):
+                return sum(f(r) for r in sel) / len(sel)
+            w3, w4 = (window(w) for w in STIFFNESS_WINDOWS[user])
+            f3, f4 = mean(w3, session_test.net_fz), mean(w4, session_test.net_fz)
+            z3, z4 = mean(w3, lambda r: r["z1"]), mean(w4, lambda r: r["z1"])
+            check(z3 - z4 > 2e-4, f"{user}'s fingertip went {1e3 * (z3 - z4):.3f} mm deeper at {delay_ms} ms")
+            still = window(STILL_WINDOW)
+            dt = (still[-1]["t_s"] - still[0]["t_s"]) / (len(still) - 1)
+            fz = [session_test.net_fz(r) for r in still]
+            # The field comparisons on this user's script time (the trace stamps both clocks).
+            offset = rows[-1]["stamp_ns"] * 1e-9 - rows[-1]["t_s"] + t0
+            diffs = [(t - offset, d, big) for t, u, d, big in watch.rows if u == user]
+            fields += [(delay_ms, user, t, d, big) for t, d, big in diffs]
+            at_rest = [d for t, d, _ in diffs if STILL_WINDOW[0] <= t < STILL_WINDOW[1]]
+            check(len(at_rest) >= 10, f"{len(at_rest)} comparisons of {user}'s field with the server's while "
+                                      f"both held still at {delay_ms} ms")
+            # Converged: from when on every comparison is within FIELD_BOUND_M.
+            after = [(t, d) for t, d, _ in diffs if inputs_stop <= t < STILL_WINDOW[1]]
+            converged = max([t for t, d in after if d > FIELD_BOUND_M], default=inputs_stop) - inputs_stop
+            summary = loop_summary(nodes[user].log(), user)
+            causes = re.search(rf"\[haptic_node {user}\] faulted steps by cause: (.*)", nodes[user].log())
+            fault_causes[(delay_ms, user)] = causes.group(1) if causes else "no causes printed"
+            passivity = coupling_summary(nodes[user].log(), user)
+            check(passivity is not None, f"{user}'s node printed no coupling-passivity line at {delay_ms} ms")
+            check(passivity["on"], f"{user}'s coupling-passivity controller is not on by default")
+            results.append({"delay_ms": delay_ms, "user": user, "k_N_per_m": (f4 - f3) / (z3 - z4),
+                            "force_N": mean(still, session_test.net_fz), "hf_rms_N": hf_rms(fz, dt),
+                            "swing_N": max(fz) - min(fz), "observer_min_J": passivity["observer_min_J"],
+                            "held_back": int(passivity["held_back"]), "drift_max_mm": passivity["drift_max_mm"],
+                            "granted_J": passivity["granted_J"], "field_diff_rest_m": max(at_rest),
+                            "field_converged_s": converged, "inputs_stop_s": inputs_stop,
+                            "field_max_m": max(big for _, _, big in diffs),
+                            "energy_sent_J": passivity["sent_J"], "energy_received_J": passivity["received_J"],
+                            "faults": int(summary["faults"]), "rate_limited": int(summary["rate_limited"]),
+                            "loop_Hz": summary["rate_Hz"], "coupling_steps": int(passivity["steps"]),
+                            "channels": int(passivity["channels"])})
+            forces += [(delay_ms, user, r["t_s"] - t0, session_test.net_fz(r)) for r in rows
+                       if 0.0 <= r["t_s"] - t0 <= STILL_WINDOW[1]]
+    return results, forces, fields, fault_causes
+
+
 def case_delayed_tail(args):
     """Two users at HIRO II devices (the simulated plant: each user's fingertip a mass held at the
     scripted hand by a spring-damper, so the force each feels moves their fingertip) press the
@@ -653,100 +757,8 @@ def case_delayed_tail(args):
     slipped as the other hand pressed, which changed from session to session at any delay
     (alice 92-167 N/m in one run's five sessions, at 0 ms too), so it would not isolate what the
     delay does. Friction across a delay is TailFriction's, in one process."""
-    os.makedirs(args.work, exist_ok=True)
-    os.environ["HANDSHARE_ASSETS"] = session_test.edited_assets(args.work, frictionless_tail)
-    server_exe, node_exe = dinosaur_ready(args)
-    results, forces, fields = [], [], []
-    fault_causes = {}  # (delay, user): the node's "faulted steps by cause" line, if it had faults
     with Network(3, nfq_delay=args.nfq_delay) as net:
-        a, b, c = net.hosts
-        for delay_ms in DELAYS_MS:
-            for seed, h in enumerate((a, b, c), start=1):
-                h.clear_delay()
-                if delay_ms > 0:
-                    h.delay(delay_ms, jitter_ms=0, seed=seed)
-            session = f"net-delay-{delay_ms}-{os.getpid()}"
-            common = ["--domain", args.domain, "--session", session]
-            traces = {u: os.path.join(args.work, f"{u}_{delay_ms}ms.csv") for u in ("alice", "bob")}
-            for f in traces.values():
-                if os.path.exists(f):
-                    os.remove(f)
-            dumps = {who: os.path.join(args.work, f"field_{delay_ms}ms", who) for who in ("server", "alice", "bob")}
-            for d in dumps.values():
-                shutil.rmtree(d, ignore_errors=True)
-            server = a.start(f"world_server_{delay_ms}ms", [server_exe, *common, "--scene", "dinosaur",
-                                                           "--dump-deformation", dumps["server"],
-                                                           "--deformation-threshold", "1e-6", "--duration", 120],
-                             args.work)
-            watch = FieldWatch(dumps, "triceratops_tail", TAIL_VERTICES)
-            nodes = {}
-            try:
-                server.wait_for("models of 'dinosaur' ready", 60)
-                for host, user in ((b, "alice"), (c, "bob")):
-                    nodes[user] = host.start(f"{user}_{delay_ms}ms",
-                                             [node_exe, *common, "--user", user, "--device", "hiro", "--script",
-                                              os.path.join(DATA, f"delay_{user}.hand"), "--trace", traces[user],
-                                              "--dump-deformation", dumps[user], "--duration", 90], args.work)
-                starts = script_starts(nodes)
-                for user in nodes:
-                    # The fields are compared while the session runs (each dump is replaced).
-                    session_test.wait_until(f"{user}'s trace past the still window ({delay_ms} ms)", 90,
-                                            lambda u=user: watch.poll() or ((rows := session_test.read_trace(traces[u]))
-                                            and rows[-1]["t_s"] - starts[u] >= STILL_WINDOW[1] + 0.2))
-                stop_session(server, nodes, f" at {delay_ms} ms")
-            except Failure:
-                print_logs((server, *nodes.values()))
-                raise
-            # When the inputs stopped changing: the last moment either fingertip (the arm settling
-            # after bob's last move) moved more than INPUT_STILL_M in 0.1 s, in script time.
-            inputs_stop = max(last_move(session_test.read_trace(traces[u]), starts[u], (15.0, STILL_WINDOW[1]))
-                              for u in ("alice", "bob"))
-            for user in ("alice", "bob"):
-                rows = session_test.read_trace(traces[user])
-                t0 = starts[user]
-
-                def window(w, rows=rows, t0=t0):
-                    sel = [r for r in rows if w[0] <= r["t_s"] - t0 < w[1]]
-                    check(len(sel) > 50, f"{user}'s trace has {len(sel)} rows in script time {w} at {delay_ms} ms")
-                    return sel
-
-                def mean(sel, f):
-                    return sum(f(r) for r in sel) / len(sel)
-                w3, w4 = (window(w) for w in STIFFNESS_WINDOWS[user])
-                f3, f4 = mean(w3, session_test.net_fz), mean(w4, session_test.net_fz)
-                z3, z4 = mean(w3, lambda r: r["z1"]), mean(w4, lambda r: r["z1"])
-                check(z3 - z4 > 2e-4, f"{user}'s fingertip went {1e3 * (z3 - z4):.3f} mm deeper at {delay_ms} ms")
-                still = window(STILL_WINDOW)
-                dt = (still[-1]["t_s"] - still[0]["t_s"]) / (len(still) - 1)
-                fz = [session_test.net_fz(r) for r in still]
-                # The field comparisons on this user's script time (the trace stamps both clocks).
-                offset = rows[-1]["stamp_ns"] * 1e-9 - rows[-1]["t_s"] + t0
-                diffs = [(t - offset, d, big) for t, u, d, big in watch.rows if u == user]
-                fields += [(delay_ms, user, t, d, big) for t, d, big in diffs]
-                at_rest = [d for t, d, _ in diffs if STILL_WINDOW[0] <= t < STILL_WINDOW[1]]
-                check(len(at_rest) >= 10, f"{len(at_rest)} comparisons of {user}'s field with the server's while "
-                                          f"both held still at {delay_ms} ms")
-                # Converged: from when on every comparison is within FIELD_BOUND_M.
-                after = [(t, d) for t, d, _ in diffs if inputs_stop <= t < STILL_WINDOW[1]]
-                converged = max([t for t, d in after if d > FIELD_BOUND_M], default=inputs_stop) - inputs_stop
-                summary = loop_summary(nodes[user].log(), user)
-                causes = re.search(rf"\[haptic_node {user}\] faulted steps by cause: (.*)", nodes[user].log())
-                fault_causes[(delay_ms, user)] = causes.group(1) if causes else "no causes printed"
-                coupling = coupling_summary(nodes[user].log(), user)
-                check(coupling is not None, f"{user}'s node printed no coupling-passivity line at {delay_ms} ms")
-                check(coupling["on"], f"{user}'s coupling-passivity controller is not on by default")
-                results.append({"delay_ms": delay_ms, "user": user, "k_N_per_m": (f4 - f3) / (z3 - z4),
-                                "force_N": mean(still, session_test.net_fz), "hf_rms_N": hf_rms(fz, dt),
-                                "swing_N": max(fz) - min(fz), "observer_min_J": coupling["observer_min_J"],
-                                "held_back": int(coupling["held_back"]), "drift_max_mm": coupling["drift_max_mm"],
-                                "granted_J": coupling["granted_J"], "field_diff_rest_m": max(at_rest),
-                                "field_converged_s": converged, "inputs_stop_s": inputs_stop,
-                                "field_max_m": max(big for _, _, big in diffs),
-                                "energy_sent_J": coupling["sent_J"], "energy_received_J": coupling["received_J"],
-                                "faults": int(summary["faults"]), "rate_limited": int(summary["rate_limited"]),
-                                "loop_Hz": summary["rate_Hz"]})
-                forces += [(delay_ms, user, r["t_s"] - t0, session_test.net_fz(r)) for r in rows
-                           if 0.0 <= r["t_s"] - t0 <= STILL_WINDOW[1]]
+        results, forces, fields, fault_causes = measure_delayed_tail(args, net)
     columns = list(results[0].keys())
     with open(os.path.join(args.work, "delayed_tail.csv"), "w") as f:
         f.write(",".join(columns) + "\n")

@@ -9,12 +9,14 @@
 namespace handshare::common {
 namespace {
 
-// Ticks every period_s from t_s for duration_s; returns the lines the watch said, and moves t_s.
-std::vector<std::string> TickFor(OverloadWatch& watch, double& t_s, double period_s, double duration_s) {
+// Ticks every period_s from t_s for duration_s, each interval asked to be asked_s long (0: the
+// watch's rate); returns the lines the watch said, and moves t_s.
+std::vector<std::string> TickFor(OverloadWatch& watch, double& t_s, double period_s, double duration_s,
+                                 double asked_s = 0.0) {
   std::vector<std::string> said;
   const double end_s = t_s + duration_s;
   for (; t_s < end_s - 1e-12; t_s += period_s) {
-    std::string line = watch.Tick(static_cast<std::uint64_t>(t_s * 1e9) + 1'000'000'000ULL);
+    std::string line = watch.Tick(static_cast<std::uint64_t>(t_s * 1e9) + 1'000'000'000ULL, asked_s);
     if (!line.empty()) said.push_back(line);
   }
   return said;
@@ -27,6 +29,36 @@ TEST(OverloadWatch, AThreadThatKeepsItsRateSaysNothing) {
   EXPECT_TRUE(TickFor(watch, t_s, 0.018, 10.0).empty()) << "55 Hz is above the 50 Hz bound";
   EXPECT_FALSE(watch.overloaded());
   EXPECT_EQ(watch.Summary(), "no overload");
+}
+
+// The bridge with nothing to carry asks for a tick every 50 ms (HapticBridge::kIdleTick): at that
+// period it is on time, not a bridge at 20 Hz of 100; starved to a quarter of what it asks, or
+// one interval 100 ms over it, it is overloaded as a busy bridge would be.
+TEST(OverloadWatch, AThreadAskingForLongerIntervalsIsJudgedByWhatItAsked) {
+  OverloadWatch watch("the bridge", {});
+  double t_s = 0.0;
+  EXPECT_TRUE(TickFor(watch, t_s, 0.050, 10.0, 0.050).empty()) << "idle ticks on time";
+  EXPECT_TRUE(TickFor(watch, t_s, 0.010, 3.0).empty()) << "busy again at 100 Hz";
+  EXPECT_FALSE(watch.overloaded());
+  const std::vector<std::string> starved = TickFor(watch, t_s, 0.200, 4.0, 0.050);
+  ASSERT_EQ(starved.size(), 1U);
+  EXPECT_NE(starved[0].find("the machine is overloaded: the bridge ran at"), std::string::npos) << starved[0];
+  EXPECT_NE(starved[0].find("(longest interval 200 ms)"), std::string::npos) << starved[0];
+  // Starved evenly, without a late interval: a quarter of the idle ticks asked for.
+  OverloadWatch slow("the bridge", {.rate_Hz = 100.0, .min_rate_Hz = 50.0, .max_interval_s = 1.0, .window_s = 2.0});
+  double t1 = 0.0;
+  const std::vector<std::string> quarter = TickFor(slow, t1, 0.200, 4.0, 0.050);
+  ASSERT_EQ(quarter.size(), 1U);
+  EXPECT_NE(quarter[0].find("ran at 25.0 Hz of 100"), std::string::npos) << quarter[0];
+  const std::vector<std::string> back = TickFor(watch, t_s, 0.050, 5.0, 0.050);
+  ASSERT_EQ(back.size(), 1U);
+  EXPECT_NE(back[0].find("keeps its rate again (100.0 Hz of 100"), std::string::npos) << back[0];
+  // One idle interval 60 ms late (110 ms for 50): under the 90 ms a 100 Hz tick may run over.
+  double t2 = 0.0;
+  OverloadWatch once("the bridge", {});
+  TickFor(once, t2, 0.050, 1.0, 0.050);
+  EXPECT_EQ(once.Tick(static_cast<std::uint64_t>((t2 + 0.060) * 1e9) + 1'000'000'000ULL, 0.050), "");
+  EXPECT_FALSE(once.overloaded());
 }
 
 TEST(OverloadWatch, AStarvedThreadSaysSoOnceAndAgainWhenItRecovers) {

@@ -6,7 +6,11 @@
 ///
 /// Over windows of window_s, a thread is overloaded when it ran fewer ticks than min_rate_Hz or
 /// one of its intervals was longer than max_interval_s; it is well again after a whole window
-/// within both. Tick() returns the line to log when that changes (empty otherwise), so a node
+/// within both. A thread that asks for longer intervals while it has little to do (the bridge's
+/// idle ticks) says so with each tick: the rate is then its share of the ticks it asked for
+/// (times rate_Hz), and an interval is late by what it ran over the one asked for (past
+/// max_interval_s less one period at rate_Hz); with every interval asked at 1 / rate_Hz both
+/// read as above. Tick() returns the line to log when that changes (empty otherwise), so a node
 /// prints one line when an overload starts and one when it ends, not one per tick. Not
 /// real-time: the thread's own, once a tick.
 #include <cstdint>
@@ -26,8 +30,9 @@ class OverloadWatch {
   /// what: the thread, as the line names it ("the bridge", "the tick").
   OverloadWatch(std::string what, OverloadLimits limits);
 
-  /// One tick at now_ns (steady clock). The line to log if the state changed, else "".
-  std::string Tick(std::uint64_t now_ns);
+  /// One tick at now_ns (steady clock), the interval since the last asked to be asked_s long
+  /// (0: 1 / rate_Hz). The line to log if the state changed, else "".
+  std::string Tick(std::uint64_t now_ns, double asked_s = 0.0);
   /// The thread was busy with work of its own since its last tick (the bridge building a world's
   /// models, 1.1 s for the dinosaur): that gap says nothing of the machine. The next window
   /// starts at now_ns; an overload under way stays one (its time counts on).
@@ -48,6 +53,8 @@ class OverloadWatch {
   std::uint64_t since_ns_ = 0;  // when the current overload began
   int ticks_ = 0;
   double longest_s_ = 0.0;
+  double most_over_s_ = 0.0;  // the most an interval ran over the one asked, this window
+  double asked_sum_s_ = 0.0;  // the intervals asked for, this window
   bool overloaded_ = false;
   int episodes_ = 0;
   double overloaded_s_ = 0.0;
