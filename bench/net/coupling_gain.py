@@ -13,8 +13,16 @@ displacement back (and per second of coupling), the energy the channels absorbed
 (E_tx + E_grant - E_rx, from the node's exit line; per second of coupling), its observer's lowest
 value, the largest position drift it made, and what it granted at rest.
 
+Then the hand-over of tests/net/net_dds_test.py's handover case (alice lifts the Moon's ball,
+bob grasps it, alice lets go, the server hands it to bob) at 0 and 50 ms one-way, polled and
+woken alternately: when the server handed it over and when bob's node could have it (seconds
+after alice's hand began to open), how far the ball went from where alice held it until then
+and until bob lifted it, the speed it was handed over at, bob's held weight against m g and his
+lift.
+
 usage: coupling_gain.py --bin-dir BUILD --nfq-delay BUILD/tests/nfq_delay --work DIR
-                        [--pairs N] [--domain D] [--csv OUT.csv] [--png OUT.png]
+                        [--pairs N] [--handover-pairs N] [--domain D] [--csv OUT.csv] [--png OUT.png]
+                        [--handover-csv OUT.csv]
 (run as root: it builds network namespaces; the haptic loops run SCHED_FIFO when permitted)
 """
 import argparse
@@ -31,6 +39,10 @@ from netharness import Network  # noqa: E402
 COLUMNS = ("run", "utc", "load1", "placement", "coupling", "user", "k_N_per_m", "force_N", "hf_rms_N", "swing_N",
            "held_back", "held_back_per_s", "absorbed_J", "absorbed_J_per_s", "observer_min_J", "drift_max_mm",
            "granted_J", "coupling_s", "field_converged_s", "loop_Hz", "faults")
+
+
+HANDOVER_COLUMNS = ("run", "utc", "load1", "delay_ms", "coupling", "t_handed_s", "t_bob_s", "hold_far_mm", "far_mm",
+                    "handed_speed_m_per_s", "weight_error_pct", "rise_mm")
 
 
 def row_of(run, placement, coupling, r):
@@ -82,8 +94,10 @@ def main():
     ap.add_argument("--pairs", type=int, default=3, help="before/after pairs per placement")
     ap.add_argument("--csv", default="")
     ap.add_argument("--png", default="")
+    ap.add_argument("--handover-pairs", type=int, default=2)
+    ap.add_argument("--handover-csv", default="")
     args = ap.parse_args()
-    rows = []
+    rows, handovers = [], []
     with Network(3, nfq_delay=args.nfq_delay) as net:
         for run in range(args.pairs):
             for placement in ("one host", "namespaces"):
@@ -101,6 +115,27 @@ def main():
                               f"({x['held_back_per_s']:.1f}/s)  absorbed {1e3 * x['absorbed_J_per_s']:.4f} mJ/s  "
                               f"observer min {x['observer_min_J']:.2e} J  drift {x['drift_max_mm']:.3f} mm",
                               flush=True)
+        for run in range(args.handover_pairs):
+            for delay_ms in (0, 50):
+                order = ("polled", "woken") if run % 2 == 0 else ("woken", "polled")
+                for coupling in order:
+                    m = net_dds_test.measure_handover(args, net, delay_ms, coupling)
+                    x = {"run": run, "utc": datetime.datetime.utcnow().strftime("%H:%M:%S"),
+                         "load1": os.getloadavg()[0], "delay_ms": delay_ms, "coupling": coupling,
+                         "t_handed_s": m["t_handed_s"], "t_bob_s": m["t_bob_s"], "hold_far_mm": 1e3 * m["hold_far_m"],
+                         "far_mm": 1e3 * m["far_m"], "handed_speed_m_per_s": m["handed_speed"],
+                         "weight_error_pct": 100.0 * (m["weight_N"] / m["mg_N"] - 1.0), "rise_mm": 1e3 * m["rise_m"]}
+                    handovers.append(x)
+                    print(f"{x['utc']} load {x['load1']:.2f} hand-over {delay_ms:3d} ms {coupling:6s} handed at "
+                          f"{x['t_handed_s']:.3f} s, bob's at {x['t_bob_s']:.3f} s, held within {x['hold_far_mm']:.3f} mm, "
+                          f"until his lift {x['far_mm']:.3f} mm, handed at {x['handed_speed_m_per_s']:.1e} m/s, "
+                          f"weight {x['weight_error_pct']:+.2f} %, lift {x['rise_mm']:.1f} mm", flush=True)
+    if args.handover_csv:
+        with open(args.handover_csv, "w", newline="") as f:
+            w = csv.DictWriter(f, fieldnames=HANDOVER_COLUMNS)
+            w.writeheader()
+            for r in handovers:
+                w.writerow({k: (f"{v:.6g}" if isinstance(v, float) else v) for k, v in r.items()})
     if args.csv:
         with open(args.csv, "w", newline="") as f:
             w = csv.DictWriter(f, fieldnames=COLUMNS)

@@ -825,54 +825,47 @@ def read_poses(path, object_id):
     return rows
 
 
-def case_handover(args):
-    """A body handed from one owner to another across a 50 ms one-way delay (three hosts: world
-    server; alice; bob). On the Moon alice lifts the ball 5 cm and holds it; bob's hand grasps it
-    there too; alice lets go. The world server hands it to bob after its release grace, and bob's
-    node simulates it from when that reaches it: a round trip and more after alice's hand opened.
-    Asserted: the hand-over happened (alice -> bob, handed_over); until bob's node can have the
-    ball (the hand-over plus a round trip) every pose the server published stays within
-    HANDOVER_HOLD_M of where alice held it (remote hands put no force on a rigid body: unheld, it
-    would fall out of bob's fingers meanwhile), and the first state published as bob's is at rest
-    (the hand-over carries no kinetic energy into bob's node); until bob lifts, within
-    HANDOVER_BOUND_M (his grip settles it); bob's hand then carries its weight (m g within
-    WEIGHT_TOLERANCE, from his loop's impulse) and lifts it 3 cm. Writes handover_poses.csv (the
-    ball's published poses) to --work."""
+def measure_handover(args, net, delay_ms=HANDOVER_DELAY_MS, coupling="woken"):
+    """case_handover's session on net's three hosts with delay_ms one-way on arrival at each and
+    the haptic nodes' coupling as `haptic_node --coupling` says; returns its figures (times from
+    the moment alice's hand began to open, distances from where she held the ball). Asserts only
+    that the session ran."""
     os.makedirs(args.work, exist_ok=True)
     server_exe, node_exe = exe(args.bin_dir, "world_server"), exe(args.bin_dir, "haptic_node")
     ball = session_test.scene_object("solar_system", "ball")
-    session = f"net-handover-{os.getpid()}"
+    session = f"net-handover-{os.getpid()}-{delay_ms}-{coupling}"
     common = ["--domain", args.domain, "--session", session]
     poses_csv = os.path.join(args.work, "handover_poses.csv")
     traces = {u: os.path.join(args.work, f"handover_{u}.csv") for u in ("alice", "bob")}
     for f in (poses_csv, *traces.values()):
         if os.path.exists(f):
             os.remove(f)
-    with Network(3, nfq_delay=args.nfq_delay) as net:
-        a, b, c = net.hosts
-        for seed, h in enumerate((a, b, c), start=1):
-            h.delay(HANDOVER_DELAY_MS, jitter_ms=0, seed=seed)
-        server = a.start("world_server", [server_exe, *common, "--scene", "solar_system", "--pose-trace", poses_csv,
-                                          "--duration", 120], args.work)
-        nodes = {}
-        try:
-            server.wait_for("models of 'solar_system' ready", 60)
-            for host, user in ((b, "alice"), (c, "bob")):
-                nodes[user] = host.start(user, [node_exe, *common, "--user", user, "--device", "sim", "--script",
-                                                os.path.join(DATA, f"handover_{user}.hand"), "--trace", traces[user],
-                                                "--duration", 90], args.work)
-            starts = script_starts(nodes)
-            server.wait_for("object 'ball': owner '' -> 'alice' (granted)", 30)
-            t_handed = server.wait_for("object 'ball': owner 'alice' -> 'bob'", 60)
-            session_test.wait_until("bob's trace past his lift", 60,
-                                    lambda: (rows := session_test.read_trace(traces["bob"]))
-                                    and rows[-1]["t_s"] - starts["bob"] >= 17.6)
-            hold_line = re.search(r"let go of 'ball' while 'bob' grasps it", nodes["alice"].log())
-            stop_session(server, nodes)
-        except Failure:
-            print_logs((server, *nodes.values()))
-            raise
-        ws_log = server.log()
+    a, b, c = net.hosts
+    for seed, h in enumerate((a, b, c), start=1):
+        h.clear_delay()
+        if delay_ms > 0:
+            h.delay(delay_ms, jitter_ms=0, seed=seed)
+    server = a.start("world_server", [server_exe, *common, "--scene", "solar_system", "--pose-trace", poses_csv,
+                                      "--duration", 120], args.work)
+    nodes = {}
+    try:
+        server.wait_for("models of 'solar_system' ready", 60)
+        for host, user in ((b, "alice"), (c, "bob")):
+            nodes[user] = host.start(user, [node_exe, *common, "--user", user, "--device", "sim", "--script",
+                                            os.path.join(DATA, f"handover_{user}.hand"), "--trace", traces[user],
+                                            "--coupling", coupling, "--duration", 90], args.work)
+        starts = script_starts(nodes)
+        server.wait_for("object 'ball': owner '' -> 'alice' (granted)", 30)
+        t_handed = server.wait_for("object 'ball': owner 'alice' -> 'bob'", 60)
+        session_test.wait_until("bob's trace past his lift", 60,
+                                lambda: (rows := session_test.read_trace(traces["bob"]))
+                                and rows[-1]["t_s"] - starts["bob"] >= 17.6)
+        hold_line = re.search(r"let go of 'ball' while 'bob' grasps it", nodes["alice"].log())
+        stop_session(server, nodes)
+    except Failure:
+        print_logs((server, *nodes.values()))
+        raise
+    ws_log = server.log()
     reason = re.search(r"object 'ball': owner 'alice' -> 'bob' \((\w+)\)", ws_log).group(1)
     rows = {u: session_test.read_trace(traces[u]) for u in ("alice", "bob")}
 
@@ -891,7 +884,7 @@ def case_handover(args):
     far = max(through, key=lambda r: math.dist(r[2], p_held))
     # Until bob's node can have it (the hand-over plus a round trip), the ball is alice's node's
     # or the server's to keep where her hand left it.
-    t_bob = t_handed + 2e-3 * HANDOVER_DELAY_MS
+    t_bob = t_handed + 2e-3 * delay_ms
     hold_far = max(math.dist(p, p_held) for t, _, p, _ in through if t < t_bob)
     # The energy the hand-over carries into bob's node: the state the server first publishes as
     # his (his node cannot have simulated the body before it gets that state, and starts from it).
@@ -913,23 +906,45 @@ def case_handover(args):
         for t, o, p, v in poses:
             f.write(f"{t - t_release:.4f},{o},{p[0]:.6f},{p[1]:.6f},{p[2]:.6f},{v:.5f}\n")
     os.replace(poses_csv + ".tmp", poses_csv)
+    return {"ball": ball, "p_held": p_held, "hold_line": hold_line, "t_handed_s": t_handed - t_release,
+            "t_bob_s": t_bob - t_release, "t_lift_s": t_lift - t_release, "hold_far_m": hold_far, "handed_speed": handed_speed,
+            "far_m": math.dist(far[2], p_held), "far_owner": far[1], "far_t_s": far[0] - t_release,
+            "fastest": fastest, "weight_N": weight, "mg_N": mg, "rise_m": rise, "reason": reason}
+
+
+def case_handover(args):
+    """A body handed from one owner to another across a 50 ms one-way delay (three hosts: world
+    server; alice; bob). On the Moon alice lifts the ball 5 cm and holds it; bob's hand grasps it
+    there too; alice lets go. The world server hands it to bob after its release grace, and bob's
+    node simulates it from when that reaches it: a round trip and more after alice's hand opened.
+    Asserted: the hand-over happened (alice -> bob, handed_over); until bob's node can have the
+    ball (the hand-over plus a round trip) every pose the server published stays within
+    HANDOVER_HOLD_M of where alice held it (remote hands put no force on a rigid body: unheld, it
+    would fall out of bob's fingers meanwhile), and the first state published as bob's is at rest
+    (the hand-over carries no kinetic energy into bob's node); until bob lifts, within
+    HANDOVER_BOUND_M (his grip settles it); bob's hand then carries its weight (m g within
+    WEIGHT_TOLERANCE, from his loop's impulse) and lifts it 3 cm. Writes handover_poses.csv (the
+    ball's published poses) to --work."""
+    with Network(3, nfq_delay=args.nfq_delay) as net:
+        m = measure_handover(args, net)
+    ball, p_held, mg, weight, rise = m["ball"], m["p_held"], m["mg_N"], m["weight_N"], m["rise_m"]
     print(f"hand-over: alice -> bob on three hosts, {HANDOVER_DELAY_MS} ms one-way on arrival at each, the Moon's ball")
-    print(f"  alice held it at z = {p_held[2]:.4f} m and let go (her node {'held it still for bob' if hold_line else 'did not hold it'}); "
-          f"the server handed it over ({reason}) {t_handed - t_release:.2f} s after her hand began to open")
-    print(f"  until bob's node had it ({t_bob - t_release:.2f} s): farthest {1e3 * hold_far:.2f} mm from where alice held it; "
-          f"first published as bob's at {handed_speed:.2e} m/s ({0.5 * ball['mass_kg'] * handed_speed ** 2:.1e} J of "
+    print(f"  alice held it at z = {p_held[2]:.4f} m and let go (her node {'held it still for bob' if m['hold_line'] else 'did not hold it'}); "
+          f"the server handed it over ({m['reason']}) {m['t_handed_s']:.2f} s after her hand began to open")
+    print(f"  until bob's node had it ({m['t_bob_s']:.2f} s): farthest {1e3 * m['hold_far_m']:.2f} mm from where alice held it; "
+          f"first published as bob's at {m['handed_speed']:.2e} m/s ({0.5 * ball['mass_kg'] * m['handed_speed'] ** 2:.1e} J of "
           f"kinetic energy handed over)")
-    print(f"  until bob lifted it ({t_lift - t_release:.2f} s): farthest {1e3 * math.dist(far[2], p_held):.2f} mm from where "
-          f"alice held it ({far[1]}'s pose at {far[0] - t_release:.2f} s), fastest {fastest:.3f} m/s")
+    print(f"  until bob lifted it ({m['t_lift_s']:.2f} s): farthest {1e3 * m['far_m']:.2f} mm from where "
+          f"alice held it ({m['far_owner']}'s pose at {m['far_t_s']:.2f} s), fastest {m['fastest']:.3f} m/s")
     print(f"  bob's hand held {weight:.4f} N (m g = {mg:.4f} N) and lifted it {1e3 * rise:.1f} mm (his hand: 30 mm)")
-    check(reason == "handed_over", f"the ball went from alice to bob by '{reason}', not a hand-over")
-    check(hold_far <= HANDOVER_HOLD_M,
-          f"before bob's node had the ball it went {1e3 * hold_far:.2f} mm from where alice held it "
+    check(m["reason"] == "handed_over", f"the ball went from alice to bob by '{m['reason']}', not a hand-over")
+    check(m["hold_far_m"] <= HANDOVER_HOLD_M,
+          f"before bob's node had the ball it went {1e3 * m['hold_far_m']:.2f} mm from where alice held it "
           f"(> {1e3 * HANDOVER_HOLD_M:.0f} mm): it fell")
-    check(handed_speed <= 1e-6, f"the ball was handed over moving at {handed_speed:.4f} m/s, not at rest")
-    check(math.dist(far[2], p_held) <= HANDOVER_BOUND_M,
-          f"through the hand-over the ball went {1e3 * math.dist(far[2], p_held):.1f} mm from where alice held it "
-          f"(> {1e3 * HANDOVER_BOUND_M:.0f} mm; {far[1]}'s pose {far[0] - t_release:.2f} s after she let go)")
+    check(m["handed_speed"] <= 1e-6, f"the ball was handed over moving at {m['handed_speed']:.4f} m/s, not at rest")
+    check(m["far_m"] <= HANDOVER_BOUND_M,
+          f"through the hand-over the ball went {1e3 * m['far_m']:.1f} mm from where alice held it "
+          f"(> {1e3 * HANDOVER_BOUND_M:.0f} mm; {m['far_owner']}'s pose {m['far_t_s']:.2f} s after she let go)")
     check(abs(weight - mg) <= WEIGHT_TOLERANCE * mg, f"bob's hand held {weight:.4f} N, not the ball's {mg:.4f} N")
     check(abs(rise - 0.03) <= HANDOVER_BOUND_M, f"bob's lift moved the ball {1e3 * rise:.1f} mm, not his hand's 30 mm")
 
