@@ -1,4 +1,4 @@
-#!/usr/bin/env python3
+#!/usr/bin/python3
 """What the event-driven coupling gains a jointly pressed tail: tests/net/net_dds_test.py's
 delayed_tail press (alice and bob at simulated HIRO IIs press the triceratops tail, each 1 mm
 deeper in turn while the other holds still, then both hold) at 0 ms between the nodes, with the

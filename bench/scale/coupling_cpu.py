@@ -7,8 +7,8 @@ sitting, in three settings:
   pressing  2 users pressing the tail side by side (scale.py's pair 1), and 1 screen;
   scale     scale.py's 8 users in pairs + 8 screens + the audio guide.
 Per session and kind of process (haptic node, world server, spectator, audio guide) the mean
-CPU over the measured window (% of one core), with the haptic nodes' bridge rate and the
-contact sets they sent. A bench: it asserts nothing.
+CPU over the measured window (% of one core) and its main thread's (a haptic node's bridge, the
+world server's tick), with the haptic nodes' bridge rate and the contact sets they sent. A bench: it asserts nothing.
 
 usage: coupling_cpu.py --bin-dir BUILD [--pairs 2] [--seconds 30] [--scale-seconds 40]
                        [--settings rest,pressing,scale] [--work DIR] [--csv OUT] [--png OUT]
@@ -26,6 +26,7 @@ import scale  # noqa: E402
 SETTINGS = {"rest": dict(users=2, spectators=1, at_rest=True), "pressing": dict(users=2, spectators=1),
             "scale": dict(users=8, spectators=8)}
 COLUMNS = ("run", "utc", "setting", "coupling", "kind", "processes", "cpu_pct", "cpu_pct_min", "cpu_pct_max",
+           "main_cpu_pct",
            "bridge_Hz", "contact_sets", "device_states", "load")
 
 
@@ -38,7 +39,8 @@ def summarise(run, setting, coupling, result):
         cpu = [r["cpu_pct"] or 0.0 for r in mine]
         row = {"run": run, "utc": datetime.datetime.utcnow().strftime("%H:%M:%S"), "setting": setting,
                "coupling": coupling, "kind": kind, "processes": len(mine), "cpu_pct": sum(cpu) / len(cpu),
-               "cpu_pct_min": min(cpu), "cpu_pct_max": max(cpu), "load": "->".join(result["load"])}
+               "cpu_pct_min": min(cpu), "cpu_pct_max": max(cpu), "load": "->".join(result["load"]),
+               "main_cpu_pct": sum(r["main_cpu_pct"] or 0.0 for r in mine) / len(mine)}
         if kind == "haptic":
             row["bridge_Hz"] = sum(r.get("bridge_Hz", 0.0) for r in mine) / len(mine)
             row["contact_sets"] = sum(r.get("contact_sets", 0) for r in mine)

@@ -81,10 +81,10 @@ def hand_script(pair, member, hold_s, at_rest=False):
     return "\n".join(lines) + "\n"
 
 
-def cpu_seconds(pid):
-    """User + system CPU seconds of a live process, or None."""
+def cpu_seconds(pid, tid=None):
+    """User + system CPU seconds of a live process (or of its thread tid), or None."""
     try:
-        with open(f"/proc/{pid}/stat") as f:
+        with open(f"/proc/{pid}/stat" if tid is None else f"/proc/{pid}/task/{tid}/stat") as f:
             fields = f.read().rsplit(")", 1)[1].split()
         return (int(fields[11]) + int(fields[12])) / os.sysconf("SC_CLK_TCK")
     except (OSError, IndexError, ValueError):
@@ -198,11 +198,13 @@ def run_session(bin_dir, work, domain, users=8, spectators=8, seconds=60.0, fps=
         time.sleep(6.0)  # the scripts' reach to their sites (at most 5.5 s after the world): not measured
         load_before = open("/proc/loadavg").read().split()[0]
         cpu0 = {label: cpu_seconds(p.pid) for label, p in procs.items()}
+        main0 = {label: cpu_seconds(p.pid, p.pid) for label, p in procs.items()}
         spin0 = [cpu_seconds(p.pid) for p in spinners]
         t0 = time.monotonic()
         time.sleep(seconds)  # the measured window
         window = time.monotonic() - t0
         cpu1 = {label: cpu_seconds(p.pid) for label, p in procs.items()}
+        main1 = {label: cpu_seconds(p.pid, p.pid) for label, p in procs.items()}
         spin_pct = sum(100.0 * (cpu_seconds(p.pid) - c) / window for p, c in zip(spinners, spin0))
         rss = {label: rss_mb(p.pid) for label, p in procs.items()}
         load_after = open("/proc/loadavg").read().split()[0]
@@ -237,6 +239,9 @@ def run_session(bin_dir, work, domain, users=8, spectators=8, seconds=60.0, fps=
         kB_s = lambda topics: sum(t["kB"] for topic, t in traffic.items() if topic in topics) / run_s  # noqa: E731
         row = {"node": label, "kind": kind, "exit": procs[label].returncode,
                "cpu_pct": 100.0 * (cpu1[label] - cpu0[label]) / window if cpu1[label] is not None else None,
+               # The main thread's share: a haptic node's bridge, the world server's tick.
+               "main_cpu_pct": 100.0 * (main1[label] - main0[label]) / window
+               if main1[label] is not None and main0[label] is not None else None,
                "rss_mb": rss[label],
                "reliable_lost": sum(t["lost"] for topic, t in traffic.items() if topic in RELIABLE),
                "best_effort_lost": sum(t["lost"] for topic, t in traffic.items() if topic not in RELIABLE),
