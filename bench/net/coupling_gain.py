@@ -58,6 +58,14 @@ def row_of(run, placement, coupling, r):
             "faults": r["faults"]}
 
 
+def write_csv(path, columns, rows):
+    with open(path, "w", newline="") as f:
+        w = csv.DictWriter(f, fieldnames=columns)
+        w.writeheader()
+        for r in rows:
+            w.writerow({k: (f"{v:.6g}" if isinstance(v, float) else v) for k, v in r.items()})
+
+
 def plot(rows, out):
     import matplotlib
     matplotlib.use("Agg")
@@ -131,17 +139,9 @@ def main():
                           f"until his lift {x['far_mm']:.3f} mm, handed at {x['handed_speed_m_per_s']:.1e} m/s, "
                           f"weight {x['weight_error_pct']:+.2f} %, lift {x['rise_mm']:.1f} mm", flush=True)
     if args.handover_csv:
-        with open(args.handover_csv, "w", newline="") as f:
-            w = csv.DictWriter(f, fieldnames=HANDOVER_COLUMNS)
-            w.writeheader()
-            for r in handovers:
-                w.writerow({k: (f"{v:.6g}" if isinstance(v, float) else v) for k, v in r.items()})
+        write_csv(args.handover_csv, HANDOVER_COLUMNS, handovers)
     if args.csv:
-        with open(args.csv, "w", newline="") as f:
-            w = csv.DictWriter(f, fieldnames=COLUMNS)
-            w.writeheader()
-            for r in rows:
-                w.writerow({k: (f"{v:.6g}" if isinstance(v, float) else v) for k, v in r.items()})
+        write_csv(args.csv, COLUMNS, rows)
     if args.png:
         plot(rows, args.png)
     return 0

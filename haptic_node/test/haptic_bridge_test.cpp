@@ -90,6 +90,22 @@ dds::Writer<msg::SceneState> ServeLab(dds::Participant& server, const std::strin
   return writer;
 }
 
+// Alice's node (a simulated hand far from the block: it touches nothing) and bob's participant,
+// in one session of the test's domain.
+struct AliceAndBob {
+  explicit AliceAndBob(const std::string& session)
+      : config(AliceIn(session)), alice_p(config.where, "haptic_node/alice"),
+        bob_p(kDomain, session, "haptic_node/bob"), device(HandScript::Default(Eigen::Vector3d(0.2, 0.2, 0.3))),
+        loop(device, HapticLoopConfig{1000.0, false}),
+        bridge(config, device, loop, alice_p, nullptr, [](const std::string&) {}) {}
+  HapticNodeConfig config;
+  dds::Participant alice_p;
+  dds::Participant bob_p;
+  SimDevice device;
+  HapticLoop loop;
+  HapticBridge bridge;
+};
+
 class BridgeCoupling : public ::testing::Test {
  protected:
   void SetUp() override {
@@ -107,12 +123,10 @@ class BridgeCoupling : public ::testing::Test {
 // bridge as it was: peers taken at its ticks only) the wait runs to its deadline and fails.
 TEST_F(BridgeCoupling, APeersContactSetWakesTheBridgeAndReachesTheNextHapticStep) {
   const std::string session = "coupling_" + std::to_string(getpid());
-  const HapticNodeConfig config = AliceIn(session);
-  dds::Participant alice_p(config.where, "haptic_node/alice");
-  dds::Participant bob_p(kDomain, session, "haptic_node/bob");
-  SimDevice device(HandScript::Default(Eigen::Vector3d(0.2, 0.2, 0.3)));  // far from the block
-  HapticLoop loop(device, HapticLoopConfig{1000.0, false});
-  HapticBridge bridge(config, device, loop, alice_p, nullptr, [](const std::string&) {});
+  AliceAndBob ab(session);
+  dds::Participant& bob_p = ab.bob_p;
+  HapticLoop& loop = ab.loop;
+  HapticBridge& bridge = ab.bridge;
 
   // Bob's side plays the world server too: the scene, then his contact set.
   auto contact_writer = dds::MakeWriter<msg::ContactSet>(bob_p, dds::topics::kContactSet);
@@ -146,12 +160,11 @@ TEST_F(BridgeCoupling, APeersContactSetWakesTheBridgeAndReachesTheNextHapticStep
 // it had to do (docs/network.md, "CPU per node").
 TEST_F(BridgeCoupling, ABridgeWithNothingToCarryAsksForIdleTicksUntilAPeersSetArrives) {
   const std::string session = "idle_" + std::to_string(getpid());
-  const HapticNodeConfig config = AliceIn(session);
-  dds::Participant alice_p(config.where, "haptic_node/alice");
-  dds::Participant bob_p(kDomain, session, "haptic_node/bob");
-  SimDevice device(HandScript::Default(Eigen::Vector3d(0.2, 0.2, 0.3)));  // far from the block
-  HapticLoop loop(device, HapticLoopConfig{1000.0, false});
-  HapticBridge bridge(config, device, loop, alice_p, nullptr, [](const std::string&) {});
+  AliceAndBob ab(session);
+  const HapticNodeConfig& config = ab.config;
+  dds::Participant& bob_p = ab.bob_p;
+  HapticLoop& loop = ab.loop;
+  HapticBridge& bridge = ab.bridge;
   const auto period = std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(1.0 / config.publish_Hz));
   EXPECT_EQ(bridge.TickPeriod(), period) << "no world yet: the bridge ticks at its period";
 
