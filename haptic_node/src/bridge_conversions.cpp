@@ -211,4 +211,21 @@ bool ToContactSet(const ContactReport& report, const world::SceneModels& models,
   return active || out.simulating() || grasped >= 0;
 }
 
+SentReference ToSentReference(const ContactReport& report, const msg::ContactSet& sent, std::int32_t owned,
+                              const session::DeadbandConfig& deadband, std::uint64_t sent_ns) {
+  SentReference r;
+  r.valid = true;
+  r.report = report;
+  r.simulated = sent.simulating() ? owned : -1;
+  r.sent_ns = sent_ns;
+  r.weber = deadband.weber;
+  r.force_floor_N = deadband.force_floor_N;
+  r.displacement_floor_m = deadband.displacement_floor_m;
+  r.position_m = deadband.position_m;
+  r.angle_rad = deadband.angle_rad;
+  r.max_reckoning_s = session::kMaxReckoning_s;
+  r.max_displacement_m = dds::SampleBounds{}.max_displacement_m;  // as ToContactSet clamps
+  return r;
+}
+
 }  // namespace handshare::haptic

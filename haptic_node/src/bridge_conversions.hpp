@@ -16,6 +16,7 @@
 #include "handshare/dds/messages.hpp"
 #include "handshare/haptic/haptic_snapshot.hpp"
 #include "handshare/haptic/scene_renderer.hpp"
+#include "handshare/session/contact_deadband.hpp"
 #include "handshare/session/peer_contacts.hpp"
 #include "handshare/world/scene_models.hpp"
 
@@ -99,5 +100,11 @@ RemoteContacts ToRemoteContacts(const session::PeerContacts& peers, const world:
 /// reporting its body's pose after letting go, until the server frees it).
 bool ToContactSet(const ContactReport& report, const world::SceneModels& models, std::int32_t owned,
                   double radius_m, msg::ContactSet& out);
+
+/// What the haptic step judges its next reports by (SceneRenderer::SetSentReference), once
+/// `sent`, made from `report` with `owned` as ToContactSet's, went out through `deadband` at
+/// sent_ns.
+SentReference ToSentReference(const ContactReport& report, const msg::ContactSet& sent, std::int32_t owned,
+                              const session::DeadbandConfig& deadband, std::uint64_t sent_ns);
 
 }  // namespace handshare::haptic

@@ -440,6 +440,9 @@ void HapticBridge::PublishContactSet() {
     contacts_msg_.stamp_ns(now_ns);
     contacts_msg_.seq(contacts_msg_.seq() + 1);
     contact_writer_.Write(contacts_msg_);
+    // What went, for the haptic step to judge its next reports by: a held press then wakes
+    // this thread when the deadband may send, not after every step.
+    renderer_->SetSentReference(ToSentReference(report_, contacts_msg_, owned_, deadband_.config(), now_ns));
     if (!config_.coupling_trace_file.empty()) {
       trace_rows_.Add({'w', contacts_msg_.seq(), report_.step_ns, now_ns, common::SteadyNowNs()});
     }

@@ -1,6 +1,7 @@
 #include "handshare/haptic/scene_renderer.hpp"
 
 #include <algorithm>
+#include <cmath>
 
 #include "handshare/common/clock.hpp"
 
@@ -82,6 +83,62 @@ void SceneRenderer::ReleaseAll() noexcept {
   PostReport(r);
 }
 
+namespace {
+double Distance(const contact::Vec3& a, const contact::Vec3& b) noexcept {
+  return (contact::AsVector(a) - contact::AsVector(b)).norm();
+}
+/// session::PastWeber's test, on the values the contact set carries: |now - sent| beyond
+/// max(weber |sent|, floor), less a part in 10^9 for the rounding of another order of sums.
+bool PastWeber(const Eigen::Vector3d& sent, const Eigen::Vector3d& now, double weber, double floor) noexcept {
+  return (now - sent).norm() > (1.0 - 1e-9) * std::max(weber * sent.norm(), floor);
+}
+/// The imposed displacement as dds::EncodeFingerContact sends it (clamped to max_m).
+Eigen::Vector3d AsSent(const contact::Vec3& u, double max_m) noexcept {
+  const Eigen::Vector3d v = contact::AsVector(u);
+  const double n = v.norm();
+  return n > max_m ? Eigen::Vector3d(v * (max_m / n)) : v;
+}
+const ContactReport::Body* FindBody(const ContactReport& r, std::int32_t object) noexcept {
+  for (int b = 0; b < r.num_bodies; ++b) {
+    if (r.bodies[b].object == object) return &r.bodies[b];
+  }
+  return nullptr;
+}
+}  // namespace
+
+bool WorthAWakeUp(const SentReference& sent, const ContactReport& now, std::uint64_t now_ns) noexcept {
+  if (!sent.valid || !(sent.weber > 0.0)) return true;
+  for (int f = 0; f < kFingers; ++f) {
+    const contact::FingerContact& a = sent.report.fingers[f];
+    const contact::FingerContact& b = now.fingers[f];
+    if (a.object != b.object || (b.active() && a.node != b.node)) return true;
+    if (!b.active()) continue;
+    // A finger on a dynamic body: which body the hand claims depends on the forces on it
+    // (ClaimedBody: a grasp, the strongest touch), so every report may change the claim.
+    if (FindBody(now, b.object) != nullptr) return true;
+    if (b.node < 0) continue;  // a fixed rigid body or a control: only that the finger is there counts
+    if (PastWeber(contact::AsVector(a.f_O_N), contact::AsVector(b.f_O_N), sent.weber, sent.force_floor_N) ||
+        PastWeber(AsSent(a.u_O_m, sent.max_displacement_m), AsSent(b.u_O_m, sent.max_displacement_m), sent.weber,
+                  sent.displacement_floor_m) ||
+        Distance(a.p_OC_m, b.p_OC_m) > (1.0 - 1e-9) * sent.position_m) {
+      return true;
+    }
+  }
+  if (sent.simulated < 0) return false;
+  // The simulated body against where receivers reckon it: half the deadband's thresholds, as
+  // the bridge offers the report a little later than the step made it (a longer reckoning).
+  const ContactReport::Body* was = FindBody(sent.report, sent.simulated);
+  const ContactReport::Body* is = FindBody(now, sent.simulated);
+  if (was == nullptr || is == nullptr) return true;
+  const double age_s = now_ns > sent.sent_ns ? 1e-9 * static_cast<double>(now_ns - sent.sent_ns) : 0.0;
+  const double t = std::clamp(age_s, 0.0, sent.max_reckoning_s);
+  const Eigen::Vector3d reckoned = contact::AsVector(was->p_WO_m) + t * contact::AsVector(was->v_WO_m_per_s);
+  if ((reckoned - contact::AsVector(is->p_WO_m)).norm() > 0.5 * sent.position_m) return true;
+  double dot = 0.0;
+  for (int k = 0; k < 4; ++k) dot += was->q_WO_wxyz[k] * is->q_WO_wxyz[k];
+  return 2.0 * std::acos(std::min(1.0, std::abs(dot))) > 0.5 * sent.angle_rad;
+}
+
 void SceneRenderer::PostReport(const ContactReport& r) noexcept {
   if (!wake_) return;
   bool changed = false;
@@ -89,7 +146,17 @@ void SceneRenderer::PostReport(const ContactReport& r) noexcept {
     changed |= r.fingers[f].object != touched_[f];
     touched_[f] = r.fingers[f].object;
   }
-  if (changed || report_wake_.load(std::memory_order_relaxed)) wake_->Post();
+  if (changed) {
+    wake_->Post();
+    return;
+  }
+  if (!report_wake_.load(std::memory_order_relaxed)) return;
+  sent_in_.Read(sent_);  // the bridge's newest, if any is new
+  if (WorthAWakeUp(sent_, r, r.step_ns)) {
+    wake_->Post();
+  } else {
+    wakes_spared_.fetch_add(1, std::memory_order_relaxed);
+  }
 }
 
 void SceneRenderer::PostMotion(const DeviceReading& reading, std::uint64_t now_ns) noexcept {

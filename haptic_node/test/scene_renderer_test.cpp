@@ -11,6 +11,7 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <random>
 #include <string>
 #include <nlohmann/json.hpp>
 
@@ -19,6 +20,7 @@
 #include "handshare/common/clock.hpp"
 #include "handshare/common/wakeup.hpp"
 #include "handshare/scene/scene.hpp"
+#include "handshare/session/contact_deadband.hpp"
 #include "handshare/session/peer_contacts.hpp"
 #include "handshare/testing/allocation_counter.hpp"
 
@@ -474,6 +476,70 @@ TEST(SceneRenderer, TheStepWakesTheBridgeForAReportWorthOffering) {
   step();
   EXPECT_EQ(wake->posts(), 7u) << "the touch ended";
   EXPECT_EQ(allocations, 0);
+}
+
+// While a peer shares the block, the step wakes the bridge only for a report whose contact set
+// the deadband may send (WorthAWakeUp against the set the bridge last sent): the index fingertip
+// goes down into the block and wanders in depth and along the surface at random, with stretches
+// held still. The oracle is the bridge's own path run beside it (ToContactSet -> the real
+// ContactSetDeadband at its defaults): every set the deadband sends for a perceptible change
+// was posted by its step (keepalives are the bridge's ticks'). Before, the step posted after
+// every step while the peer shared the object; a still press now posts nothing.
+TEST(SceneRenderer, ASharedPressWakesTheBridgeOnlyForAReportTheDeadbandMaySend) {
+  WokenLab lab("spare");
+  SceneRenderer& r = lab.renderer;
+  const std::shared_ptr<common::Wakeup>& wake = lab.wake;
+  DeviceReading& hand = lab.hand;
+  const double top_m = 0.02 + lab.options.fingertip_radius_m;  // the fingertip's centre touching the top
+  hand.p_WE[1] = Eigen::Vector3d(-0.1, 0.0, top_m + 0.002);
+  for (int i = 0; i < 5; ++i) lab.Step();
+  r.SetReportWake(true);  // a peer's loop solves the block with this hand's contacts
+  session::ContactSetDeadband deadband;
+  msg::ContactSet set;
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<double> unit(-1.0, 1.0);
+  double depth_m = -0.002, x_m = -0.1, speed = 0.0;
+  int steps = 0, posted = 0, sent = 0, sent_perceptible = 0, missed = 0, held_posts = 0, held_steps = 0;
+  for (int i = 0; i < 4000; ++i) {
+    // Every 200 steps a new stretch: held still, or moving at up to 2 mm/s in depth.
+    if (i % 200 == 0) speed = (i / 200) % 2 == 0 ? 0.0 : 2e-3 * unit(rng);
+    const bool held = i >= 200 && speed == 0.0;
+    depth_m = std::clamp(depth_m + (i < 200 ? 2.5e-5 : speed * 1e-3), 0.0005, 0.004);
+    if (i < 200) depth_m = std::min(depth_m, -0.002 + 2.5e-5 * (i + 1));
+    if (!held && i >= 200) x_m = std::clamp(x_m + 1e-6 * unit(rng), -0.105, -0.095);
+    hand.p_WE[1] = Eigen::Vector3d(x_m, 0.0, top_m - depth_m);
+    const std::uint64_t before = wake->posts();
+    lab.Step();
+    while (wake->WaitUntil(common::Wakeup::Clock::now())) {
+    }
+    const bool step_posted = wake->posts() > before;
+    ContactReport report;
+    ASSERT_TRUE(r.TakeReport(report));
+    ++steps;
+    posted += step_posted;
+    if (held) {
+      ++held_steps;
+      held_posts += step_posted;
+    }
+    ToContactSet(report, r.models(), -1, lab.options.fingertip_radius_m, set);
+    session::DeadbandReason why = session::DeadbandReason::kNone;
+    if (!deadband.Offer(set, report.step_ns, &why)) continue;
+    ++sent;
+    if (why != session::DeadbandReason::kKeepalive) {
+      ++sent_perceptible;
+      if (!step_posted) ++missed;
+    }
+    r.SetSentReference(ToSentReference(report, set, -1, deadband.config(), report.step_ns));
+  }
+  std::printf("posted after %d of %d steps (%d of %d held still); the deadband sent %d sets, %d for a perceptible "
+              "change\n", posted, steps, held_posts, held_steps, sent, sent_perceptible);
+  EXPECT_EQ(missed, 0) << "of " << sent_perceptible << " sets sent for a perceptible change";
+  EXPECT_GT(sent_perceptible, 20) << "the wandering press changed perceptibly now and then";
+  EXPECT_LT(posted, steps / 4) << "posts of " << steps << " steps (before: every step)";
+  EXPECT_GT(held_steps, 500);
+  EXPECT_LE(held_posts, held_steps / 50) << "a press held still wakes (almost) nothing";
+  EXPECT_GT(r.wakes_spared(), 0u);
+  EXPECT_EQ(lab.allocations, 0);
 }
 
 // --dump-deformation: the haptic thread's snapshot of its solve's loads, turned into a field by

@@ -96,6 +96,34 @@ struct DeformableLoads {
   } items[kMaxObjects];
 };
 
+/// What the bridge last sent, for the haptic step to judge its own reports by (SceneRenderer::
+/// SetSentReference): the report that made the contact set the bridge sent last, the body that
+/// set simulates, when it went, and the deadband's thresholds (session::DeadbandConfig's, as
+/// plain numbers: this layer has no middleware). Trivially copyable.
+struct SentReference {
+  bool valid = false;           ///< false: nothing sent yet (every report is worth a wake-up)
+  ContactReport report;         ///< the report the sent set was made from
+  std::int32_t simulated = -1;  ///< the body the set simulates (the hand owns it), or -1
+  std::uint64_t sent_ns = 0;    ///< steady clock [ns]
+  double weber = 0.0;           ///< 0: the deadband is off, every set goes out
+  double force_floor_N = 0.0;
+  double displacement_floor_m = 0.0;
+  double position_m = 0.0;
+  double angle_rad = 0.0;
+  double max_reckoning_s = 0.0;
+  double max_displacement_m = 0.0;  ///< the imposed displacement's clamp on the wire
+};
+
+/// Whether the deadband may send the contact set of `now`, judged against the sent set's report
+/// by the deadband's own tests on the values the set carries (session::PerceptibleChange:
+/// Weber's law with its floor on each finger's force and imposed displacement, the contact
+/// point, a finger on or off or on another object or node), the simulated body against where
+/// receivers reckon it at half the deadband's thresholds, and always while a finger touches a
+/// dynamic body (the claim on it depends on the forces). So no change the deadband would send
+/// goes without a wake-up, and a still press, which it would not send, wakes nothing. Pure,
+/// noexcept, no allocation: the haptic thread's.
+bool WorthAWakeUp(const SentReference& sent, const ContactReport& now, std::uint64_t now_ns) noexcept;
+
 class SceneRenderer final : public ForceRenderer {
  public:
   /// Builds the models of `scene` (deformables from the compliance cache). Periodic motions and
@@ -115,13 +143,22 @@ class SceneRenderer final : public ForceRenderer {
   const std::string& IdOf(std::int32_t object) const noexcept;
   bool TakeReport(ContactReport& out) noexcept { return reports_.Read(out); }
   /// The bridge's wake-up: the haptic step posts it (a non-blocking futex wake, no lock, no
-  /// allocation) when a finger starts or stops touching an object, and after every step while
-  /// SetReportWake(true), so a report that may be worth sending reaches the bridge within the
-  /// step that made it. Not thread-safe: call before SetRenderer; nullptr: never posted.
+  /// allocation) when a finger starts or stops touching an object, and while SetReportWake(true)
+  /// after every step whose report the deadband may send, so such a report reaches the bridge
+  /// within the step that made it. Not thread-safe: call before SetRenderer; nullptr: never posted.
   void SetWakeup(std::shared_ptr<common::Wakeup> wake) noexcept { wake_ = std::move(wake); }
-  /// Bridge side, any time: post after every step (a peer's loop solves an object with this
-  /// hand's contacts: every report is offered to the deadband), or only on touch changes.
+  /// Bridge side, any time: post after every step whose report the deadband may send (a peer's
+  /// loop solves an object with this hand's contacts; SetSentReference), or only on touch changes.
   void SetReportWake(bool every_step) noexcept { report_wake_.store(every_step, std::memory_order_relaxed); }
+  /// Bridge side, after each contact set it sends: what it sent. While SetReportWake(true) the
+  /// step then posts only for a report WorthAWakeUp against it (a held press: none), instead of
+  /// after every step; the bridge's ticks still offer every tick's report (keepalives).
+  void SetSentReference(const SentReference& sent) noexcept {
+    sent_in_.WriteSlot() = sent;
+    sent_in_.Publish();
+  }
+  /// Steps whose report a peer would read but that posted no wake-up (WorthAWakeUp false).
+  std::uint64_t wakes_spared() const noexcept { return wakes_spared_.load(std::memory_order_relaxed); }
   /// Bridge side, any time: post the wake-up, too, when the hand (its base or a fingertip it
   /// has) has moved more than threshold_m since the last such post, and no sooner than
   /// min_gap_ns after it. The post comes one step after the step that moved the hand, so the
@@ -203,6 +240,9 @@ class SceneRenderer final : public ForceRenderer {
   std::atomic<std::uint64_t> dropped_events_{0};
   std::shared_ptr<common::Wakeup> wake_;
   std::atomic<bool> report_wake_{false};
+  common::TripleBuffer<SentReference> sent_in_;  // bridge -> haptic thread
+  SentReference sent_;                           // the haptic thread's newest copy
+  std::atomic<std::uint64_t> wakes_spared_{0};
   std::array<std::int32_t, kFingers> touched_{-1, -1, -1, -1, -1};  // each finger's object at the last report
   // The motion wake (SetMotionWake): the bridge's settings, the haptic thread's state.
   std::atomic<double> motion_wake_m_{0.0};
