@@ -18,7 +18,6 @@ std::string OverloadWatch::Tick(std::uint64_t now_ns, double asked_s) {
   const double interval_s = now_ns > last_ns_ ? 1e-9 * static_cast<double>(now_ns - last_ns_) : 0.0;
   if (overloaded_) overloaded_s_ += interval_s;
   last_ns_ = now_ns;
-  ++ticks_;
   longest_s_ = std::max(longest_s_, interval_s);
   most_over_s_ = std::max(most_over_s_, interval_s - asked);
   asked_sum_s_ += asked;
@@ -31,7 +30,6 @@ std::string OverloadWatch::Tick(std::uint64_t now_ns, double asked_s) {
   const bool slow = span_s >= limits_.window_s && rate_Hz < limits_.min_rate_Hz;
   const double longest_ms = 1e3 * longest_s_;
   window_start_ns_ = now_ns;
-  ticks_ = 0;
   longest_s_ = 0.0;
   most_over_s_ = 0.0;
   asked_sum_s_ = 0.0;
@@ -59,7 +57,6 @@ void OverloadWatch::Restart(std::uint64_t now_ns) {
   if (window_start_ns_ == 0) return;  // no tick yet: the first tick starts the window
   if (overloaded_ && now_ns > last_ns_) overloaded_s_ += 1e-9 * static_cast<double>(now_ns - last_ns_);
   window_start_ns_ = last_ns_ = now_ns;
-  ticks_ = 0;
   longest_s_ = 0.0;
   most_over_s_ = 0.0;
   asked_sum_s_ = 0.0;

@@ -51,7 +51,6 @@ class OverloadWatch {
   std::uint64_t window_start_ns_ = 0;
   std::uint64_t last_ns_ = 0;
   std::uint64_t since_ns_ = 0;  // when the current overload began
-  int ticks_ = 0;
   double longest_s_ = 0.0;
   double most_over_s_ = 0.0;  // the most an interval ran over the one asked, this window
   double asked_sum_s_ = 0.0;  // the intervals asked for, this window
