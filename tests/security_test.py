@@ -59,7 +59,7 @@ import urllib.error
 import urllib.request
 
 import session_test
-from session_test import Failure, Harness, check, fem_cache, run_cases, wait_until
+from session_test import CONSOLE_POLL_S, Failure, Harness, check, fem_cache, run_cases, wait_until
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 ROOT = os.path.join(HERE, "..")
@@ -509,15 +509,23 @@ def console_state(port):
 
 
 def post_action(port, path, body, token):
-    """POST an action (/api/world, /api/command) as a script would: (status, body)."""
-    req = urllib.request.Request(f"http://127.0.0.1:{port}{path}", data=json.dumps(body).encode(),
-                                 headers={"Content-Type": "application/json", "Authorization": "Bearer " + token},
-                                 method="POST")
-    try:
-        with urllib.request.urlopen(req, timeout=10) as r:
-            return r.status, r.read().decode()
-    except urllib.error.HTTPError as e:
-        return e.code, e.read().decode()
+    """POST an action (/api/world, /api/command) as a script would: (status, body). A refusal
+    for the console's request rate (429) is asked again after the Retry-After it names, twice
+    at most."""
+    for attempt in range(3):
+        req = urllib.request.Request(f"http://127.0.0.1:{port}{path}", data=json.dumps(body).encode(),
+                                     headers={"Content-Type": "application/json", "Authorization": "Bearer " + token},
+                                     method="POST")
+        try:
+            with urllib.request.urlopen(req, timeout=10) as r:
+                return r.status, r.read().decode()
+        except urllib.error.HTTPError as e:
+            status, text, wait_s = e.code, e.read().decode(), e.headers.get("Retry-After")
+        if status != 429 or attempt == 2:
+            return status, text
+        check(wait_s is not None and wait_s.isdigit(), f"a 429 from the console without a Retry-After: {text}")
+        print(f"console: {path} refused for the request rate ({text}); asking again in {wait_s} s")
+        time.sleep(int(wait_s))
 
 
 def shows_session(port):
@@ -574,7 +582,8 @@ def case_web_console(h, domain):
         port = int(re.search(r"listening on http://127\.0\.0\.1:(\d+)", h.log("console")).group(1))
         try:
             state = wait_until("the secured console showing the start menu, alice's station and alice", 30,
-                               lambda: shows_session(port), lambda: json.dumps(console_state(port)))
+                               lambda: shows_session(port), lambda: json.dumps(console_state(port)),
+                               poll_s=CONSOLE_POLL_S)
             break
         except Failure:
             if attempt == 2:
@@ -589,7 +598,8 @@ def case_web_console(h, domain):
     check(status == 202, f"the world change through the secured console got {status} ({body}), not 202")
     h.wait_for_line("world_server", "control button_solar_system by sec-console: scene 'solar_system'", 30)
     wait_until("the secured console showing the solar system", 30,
-               lambda: ((console_state(port) or {}).get("world") or {}).get("scene") == "solar_system")
+               lambda: ((console_state(port) or {}).get("world") or {}).get("scene") == "solar_system",
+               poll_s=CONSOLE_POLL_S)
     # An operator's command (its own topic, operator_command) reaches the world server too.
     status, body = post_action(port, "/api/command", {"command": "restart_tour"}, token)
     check(status == 202, f"the tour's restart through the secured console got {status} ({body}), not 202")

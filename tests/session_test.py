@@ -66,6 +66,7 @@ def check(cond, what):
 
 
 POLL_S = 0.02  # how often a wait looks again
+CONSOLE_POLL_S = 0.1  # how often a wait asks the web console (within its 20 requests a second)
 BACKSTOP_S = 900  # the longest a node may live (the test ends it long before)
 
 
@@ -81,10 +82,11 @@ def thread_nices(pid):
     return nices
 
 
-def wait_until(what, timeout, probe, explain=None):
+def wait_until(what, timeout, probe, explain=None, poll_s=POLL_S):
     """Polls probe() until it returns something true, and returns that. Waits are for facts
     the processes make observable (a log line, a file, a trace row); the timeout only bounds
-    how long a broken run takes to fail. explain() adds context to the failure."""
+    how long a broken run takes to fail. explain() adds context to the failure. A probe that
+    asks a rate-limited server (the web console: 20 requests a second) polls more slowly."""
     end = time.monotonic() + timeout
     while True:
         value = probe()
@@ -92,7 +94,7 @@ def wait_until(what, timeout, probe, explain=None):
             return value
         if time.monotonic() >= end:
             raise Failure(f"{what}: not within {timeout} s" + (f"\n{explain()}" if explain else ""))
-        time.sleep(POLL_S)
+        time.sleep(poll_s)
 
 
 def obj_vertices(path):

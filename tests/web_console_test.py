@@ -78,7 +78,7 @@ import urllib.request
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 sys.path.insert(0, HERE)
-from session_test import (ASSETS, DATA, PressWatch, check, fem_cache, held_weights, last_frame, last_trace_row,  # noqa: E402
+from session_test import (ASSETS, CONSOLE_POLL_S, DATA, PressWatch, check, fem_cache, held_weights, last_frame, last_trace_row,  # noqa: E402
                           read_inp_nodes, read_json, read_trace, run_cases, scene_object, settled_since, wait_until)
 
 from selenium import webdriver  # noqa: E402  (python3-selenium, deploy/install_deps.sh)
@@ -1104,7 +1104,7 @@ def case_visit(h, domain):
         with urllib.request.urlopen(base + "/api/state", timeout=10) as r:
             b = json.loads(r.read())["boards"]
         return b if "en" in b and "Thank you, alice" in b["en"]["text"] else None
-    b = wait_until("the console's board saying alice's turn is over", 30, boards)
+    b = wait_until("the console's board saying alice's turn is over", 30, boards, poll_s=CONSOLE_POLL_S)
     check("alice" in b["ja"]["text"] and "終わりました" in b["ja"]["text"],
           f"the Japanese board does not say the turn is over: {b['ja']}")
 

@@ -1,6 +1,7 @@
 #include "handshare/web_console/request_checks.hpp"
 
 #include <algorithm>
+#include <cmath>
 #include <fstream>
 #include <sstream>
 #include <stdexcept>
@@ -223,6 +224,12 @@ bool TokenBucket::Full(Clock::time_point now) const {
   return tokens_ + std::max(0.0, elapsed_s) * rate_per_s_ >= burst_;
 }
 
+int TokenBucket::SecondsToNextToken(Clock::time_point now) const {
+  const double elapsed_s = std::max(0.0, std::chrono::duration<double>(now - last_).count());
+  const double missing = 1.0 - std::min(burst_, tokens_ + elapsed_s * rate_per_s_);
+  return std::max(1, static_cast<int>(std::ceil(missing / rate_per_s_)));
+}
+
 RateLimiter::RateLimiter(double rate_per_s, double burst, std::size_t max_addresses)
     : rate_per_s_(rate_per_s), burst_(burst), max_addresses_(max_addresses) {}
 
@@ -236,6 +243,13 @@ bool RateLimiter::Allow(const std::string& address, TokenBucket::Clock::time_poi
     it = buckets_.emplace(address, TokenBucket(rate_per_s_, burst_, now)).first;
   }
   return it->second.Take(now);
+}
+
+int RateLimiter::RetryAfterS(const std::string& address, TokenBucket::Clock::time_point now) const {
+  const auto it = buckets_.find(address);
+  // An address refused for a full table: a bucket is forgotten once it is full again.
+  if (it == buckets_.end()) return std::max(1, static_cast<int>(std::ceil(burst_ / rate_per_s_)));
+  return it->second.SecondsToNextToken(now);
 }
 
 }  // namespace handshare::web_console

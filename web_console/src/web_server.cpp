@@ -271,7 +271,9 @@ class HttpSession : public std::enable_shared_from_this<HttpSession<Stream>> {
     ++server_.requests_count_;
     const auto now = std::chrono::steady_clock::now();
     if (!server_.requests_.Allow(remote_, now)) {
-      return Send(server_.Reply(req, http::status::too_many_requests, ErrorJson("too many requests"), "application/json"));
+      Response res = server_.Reply(req, http::status::too_many_requests, ErrorJson("too many requests"), "application/json");
+      res.set(http::field::retry_after, std::to_string(server_.requests_.RetryAfterS(remote_, now)));
+      return Send(std::move(res));
     }
     if (websocket::is_upgrade(req)) return Upgrade(std::move(req));
     Send(server_.Respond(req, remote_, kIsTls<Stream>));
@@ -451,9 +453,11 @@ Response WebServer::Impl::Respond(const Request& req, const std::string& remote,
 }
 
 Response WebServer::Impl::Act(const Request& req, const std::string& remote, bool tls, const std::string& path) {
-  if (!actions_.Allow(remote, std::chrono::steady_clock::now())) {
-    return Reply(req, http::status::too_many_requests, ErrorJson("too many actions from this address"),
-                 "application/json");
+  if (const auto now = std::chrono::steady_clock::now(); !actions_.Allow(remote, now)) {
+    Response res = Reply(req, http::status::too_many_requests, ErrorJson("too many actions from this address"),
+                         "application/json");
+    res.set(http::field::retry_after, std::to_string(actions_.RetryAfterS(remote, now)));
+    return res;
   }
   if (config_.token.empty()) {
     return Reply(req, http::status::forbidden,

@@ -153,5 +153,21 @@ TEST(RateLimiter, BurstThenRatePerAddress) {
   EXPECT_TRUE(limiter.Allow("c", t0 + 10s));     // the idle ones are forgotten
 }
 
+TEST(RateLimiter, ARefusalSaysWhenToAskAgain) {
+  using namespace std::chrono_literals;
+  const auto t0 = TokenBucket::Clock::time_point{} + 100s;
+  RateLimiter limiter(/*rate_per_s=*/0.2, /*burst=*/2.0, /*max_addresses=*/1);  // a token every 5 s
+  EXPECT_TRUE(limiter.Allow("a", t0));
+  EXPECT_TRUE(limiter.Allow("a", t0));
+  EXPECT_FALSE(limiter.Allow("a", t0));
+  EXPECT_EQ(limiter.RetryAfterS("a", t0), 5);
+  EXPECT_EQ(limiter.RetryAfterS("a", t0 + 3500ms), 2);  // 1.5 s rounded up
+  EXPECT_FALSE(limiter.Allow("a", t0 + 4900ms));
+  EXPECT_EQ(limiter.RetryAfterS("a", t0 + 4900ms), 1);  // never 0: asked again at once it is refused
+  EXPECT_TRUE(limiter.Allow("a", t0 + 5s));
+  EXPECT_FALSE(limiter.Allow("b", t0 + 5s));            // table full of a busy address
+  EXPECT_EQ(limiter.RetryAfterS("b", t0 + 5s), 10);     // a full bucket's refill at most
+}
+
 }  // namespace
 }  // namespace handshare::web_console

@@ -231,8 +231,28 @@ TEST_F(WebServerTest, ActionsAreRateLimitedRefusedOnesIncluded) {
   int limited = 0;
   for (int i = 0; i < 8; ++i) limited += PostWorld(R"({"world":"dinosaur"})", "0123456789abcdef-guess").result_int() == 429u;
   EXPECT_EQ(limited, 3);  // a burst of 5, then 12 a minute
-  EXPECT_EQ(PostWorld(R"({"world":"dinosaur"})", kToken).result_int(), 429u);
+  const auto refused = PostWorld(R"({"world":"dinosaur"})", kToken);
+  EXPECT_EQ(refused.result_int(), 429u);
+  EXPECT_EQ(refused[http::field::retry_after], "5");  // a script knows how long to wait
   EXPECT_EQ(actions_, 0);
+}
+
+TEST_F(WebServerTest, PollingFasterThanTheRequestsRateIsToldWhenToAskAgain) {
+  Start();
+  // 20 requests a second with a burst of 40: 100 GETs back to back run out of tokens unless
+  // they take 3 s.
+  http::response<http::string_body> last;
+  int refused = 0;
+  for (int i = 0; i < 100; ++i) {
+    auto res = Request(http::verb::get, "/api/state");
+    if (res.result_int() == 429u) {
+      ++refused;
+      last = std::move(res);
+    }
+  }
+  EXPECT_GT(refused, 0);
+  EXPECT_EQ(last[http::field::retry_after], "1");
+  EXPECT_EQ(last.body(), R"({"error":"too many requests"})");
 }
 
 TEST_F(WebServerTest, WithoutATokenActionsAreOff) {

@@ -74,6 +74,8 @@ class TokenBucket {
   bool Take(Clock::time_point now);
   /// Full again (an idle client's bucket can be forgotten).
   bool Full(Clock::time_point now) const;
+  /// Whole seconds until a token is there (at least 1): a refusal's Retry-After.
+  int SecondsToNextToken(Clock::time_point now) const;
 
  private:
   double rate_per_s_;
@@ -88,6 +90,8 @@ class RateLimiter {
  public:
   RateLimiter(double rate_per_s, double burst, std::size_t max_addresses = 1024);
   bool Allow(const std::string& address, TokenBucket::Clock::time_point now);
+  /// After a refusal: whole seconds until `address` may ask again (RFC 9110's Retry-After).
+  int RetryAfterS(const std::string& address, TokenBucket::Clock::time_point now) const;
 
  private:
   double rate_per_s_;
