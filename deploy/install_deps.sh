@@ -5,7 +5,7 @@ set -euo pipefail
 
 PACKAGES=(
   # toolchain
-  build-essential cmake ninja-build pkg-config git
+  build-essential cmake ninja-build pkg-config git lld
   # middleware: Fast DDS 2.9 and its IDL generator
   libfastrtps-dev libfastcdr-dev fastddsgen fastdds-tools
   # numerics: Eigen, CHOLMOD (SuiteSparse), an optimized BLAS
